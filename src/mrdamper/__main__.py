@@ -1,0 +1,5 @@
+"""Allow ``python -m mrdamper``."""
+
+from mrdamper.cli.main import main
+
+main()

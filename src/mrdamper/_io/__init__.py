@@ -1,0 +1,10 @@
+"""Private file helpers shared by writers: atomic writes that never overwrite silently."""
+
+from mrdamper._io.atomic import (
+    atomic_write_bytes,
+    atomic_write_text,
+    atomic_write_with,
+    check_writable,
+)
+
+__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_with", "check_writable"]

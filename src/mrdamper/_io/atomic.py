@@ -1,0 +1,55 @@
+"""Atomic file writes: write to a temporary file beside the target, then rename over it."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from mrdamper.errors import OutputExistsError
+
+__all__ = ["check_writable", "atomic_write_bytes", "atomic_write_text", "atomic_write_with"]
+
+
+def check_writable(path: str | os.PathLike[str], force: bool) -> Path:
+    """Return ``path`` as a Path; raise :class:`OutputExistsError` if it exists and not ``force``."""
+    p = Path(path)
+    if p.exists() and not force:
+        raise OutputExistsError(f"{p}: already exists; pass force=True (CLI: --force) to overwrite")
+    if p.exists() and p.is_dir():
+        raise OutputExistsError(f"{p}: is a directory, expected a file path")
+    return p
+
+
+def atomic_write_with(
+    path: str | os.PathLike[str], writer: Callable[[Path], None], *, force: bool = False
+) -> Path:
+    """Call ``writer(tmp_path)`` then atomically move ``tmp_path`` to ``path``.
+
+    A failure or interruption leaves no partial file at ``path`` (and removes the temporary).
+    """
+    p = check_writable(path, force)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".part", dir=p.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        writer(tmp_path)
+        if p.exists() and not force:  # re-check: another process may have written meanwhile
+            raise OutputExistsError(f"{p}: appeared while writing; pass force=True to overwrite")
+        os.replace(tmp_path, p)
+    except BaseException:
+        tmp_path.unlink(missing_ok=True)
+        raise
+    return p
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, force: bool = False) -> Path:
+    """Write ``data`` to ``path`` atomically; refuse to overwrite unless ``force``."""
+    return atomic_write_with(path, lambda tmp: tmp.write_bytes(data), force=force)
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str, *, force: bool = False) -> Path:
+    """Write UTF-8 ``text`` to ``path`` atomically; refuse to overwrite unless ``force``."""
+    return atomic_write_bytes(path, text.encode("utf-8"), force=force)

@@ -1,0 +1,77 @@
+"""Exception types raised by mrdamper.
+
+Every error names the offending field, the value found and what was expected, so that a
+user can fix the input without reading the source.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "MrDamperError",
+    "DataValidationError",
+    "UnitError",
+    "SchemaError",
+    "OutOfRangeError",
+    "IdentificationError",
+    "SimulationDivergedError",
+    "OutputExistsError",
+]
+
+
+class MrDamperError(Exception):
+    """Base class of every error raised on purpose by mrdamper."""
+
+
+class DataValidationError(MrDamperError, ValueError):
+    """Input data are malformed: wrong length, NaN, non-uniform time, missing column, ...
+
+    Parameters
+    ----------
+    field : str
+        Name of the offending field or column (e.g. ``"t"``, ``"F"``).
+    message : str
+        What was found and what was expected.
+    """
+
+    def __init__(self, field: str, message: str) -> None:
+        self.field = field
+        super().__init__(f"{field}: {message}")
+
+
+class UnitError(DataValidationError):
+    """A unit string is unknown or does not fit the quantity of its column."""
+
+
+class SchemaError(MrDamperError, ValueError):
+    """A saved file does not follow the expected schema or schema version."""
+
+
+class OutOfRangeError(MrDamperError, ValueError):
+    """A scheduling signal leaves the range a model was identified on."""
+
+
+class IdentificationError(MrDamperError, RuntimeError):
+    """Identification failed: singular regression, no convergence, too few samples, ..."""
+
+
+class SimulationDivergedError(MrDamperError, RuntimeError):
+    """A free-run simulation diverged or became non-finite.
+
+    Parameters
+    ----------
+    model : str
+        Model kind, e.g. ``"p15"``.
+    sample : int
+        Index of the first sample where the state was non-finite or exceeded the bound.
+    message : str
+        Details.
+    """
+
+    def __init__(self, model: str, sample: int, message: str) -> None:
+        self.model = model
+        self.sample = sample
+        super().__init__(f"{model}: simulation diverged at sample {sample}: {message}")
+
+
+class OutputExistsError(MrDamperError, FileExistsError):
+    """An output file already exists and overwriting was not requested (use ``force``)."""

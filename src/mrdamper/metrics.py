@@ -1,0 +1,87 @@
+"""Goodness-of-fit indices for force predictions: pure functions of two arrays.
+
+The paper's indices are SSSE (eq 23), which despite its name is the root-mean-square error in
+force units, and ESR (eq 24), the mean squared error divided by the variance of the measured force.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from mrdamper.errors import DataValidationError
+
+__all__ = ["esr", "ssse", "nrmse", "fit_percent", "Scores", "score_arrays"]
+
+
+def _pair(measured: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    F = np.asarray(measured, dtype=float)
+    Fh = np.asarray(predicted, dtype=float)
+    if F.shape != Fh.shape or F.ndim != 1:
+        raise DataValidationError(
+            "predicted", f"shape {Fh.shape} does not match measured shape {F.shape} (1-D expected)"
+        )
+    if F.size == 0:
+        raise DataValidationError("measured", "empty array")
+    if not np.all(np.isfinite(Fh)):
+        raise DataValidationError("predicted", "contains non-finite values")
+    return F, Fh
+
+
+def ssse(measured: ArrayLike, predicted: ArrayLike) -> float:
+    """Paper eq. (23): ``sqrt(mean((F - F_hat)**2))`` [N] (an RMS error)."""
+    F, Fh = _pair(measured, predicted)
+    return float(np.sqrt(np.mean((F - Fh) ** 2)))
+
+
+def esr(measured: ArrayLike, predicted: ArrayLike) -> float:
+    """Paper eq. (24): ``mean((F - F_hat)**2) / var(F)`` [-] (error-to-signal ratio)."""
+    F, Fh = _pair(measured, predicted)
+    var = float(np.var(F))
+    if var == 0.0:
+        raise DataValidationError("measured", "force has zero variance; ESR is undefined")
+    return float(np.mean((F - Fh) ** 2) / var)
+
+
+def nrmse(measured: ArrayLike, predicted: ArrayLike) -> float:
+    """RMS error divided by the standard deviation of the measured force [-] (``sqrt(ESR)``)."""
+    return float(np.sqrt(esr(measured, predicted)))
+
+
+def fit_percent(measured: ArrayLike, predicted: ArrayLike) -> float:
+    """Normalised fit ``100 * (1 - ||F - F_hat|| / ||F - mean(F)||)`` [%] (100 is perfect)."""
+    return float(100.0 * (1.0 - nrmse(measured, predicted)))
+
+
+@dataclass(frozen=True)
+class Scores:
+    """All indices for one prediction.
+
+    Attributes
+    ----------
+    esr : float
+        Error-to-signal ratio [-] (paper eq. 24).
+    ssse : float
+        Root-mean-square error [N] (paper eq. 23).
+    nrmse : float
+        RMS error over standard deviation of the measured force [-].
+    fit : float
+        Normalised fit [%].
+    """
+
+    esr: float
+    ssse: float
+    nrmse: float
+    fit: float
+
+    def to_dict(self) -> dict[str, float]:
+        """Return the indices as a plain dict."""
+        return asdict(self)
+
+
+def score_arrays(measured: ArrayLike, predicted: ArrayLike) -> Scores:
+    """Compute every index for one measured / predicted force pair."""
+    e = esr(measured, predicted)
+    return Scores(esr=e, ssse=ssse(measured, predicted), nrmse=float(np.sqrt(e)), fit=100 * (1 - float(np.sqrt(e))))

@@ -1,0 +1,29 @@
+"""Damper model families: estimators that identify them and immutable fitted models."""
+
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    SimulationResult,
+    check_input_range,
+)
+from mrdamper.models.registry import (
+    available_models,
+    get_estimator,
+    load_model,
+    model_class,
+    model_from_dict,
+    register,
+)
+
+__all__ = [
+    "Estimator",
+    "FittedModel",
+    "SimulationResult",
+    "available_models",
+    "check_input_range",
+    "get_estimator",
+    "load_model",
+    "model_class",
+    "model_from_dict",
+    "register",
+]

@@ -1,0 +1,314 @@
+"""The contract every damper model follows: estimators hold settings, fitted models are values.
+
+* An :class:`Estimator` stores settings only. ``fit(data)`` validates, identifies and returns a
+  :class:`FittedModel`; it never mutates the input records.
+* A :class:`FittedModel` is a frozen dataclass: parameters, the electrical input it uses
+  (``"i"`` or ``"voltage"``), the input range it was identified on, and provenance. It predicts the
+  force of any :class:`~mrdamper.data.Experiment` in free run (from the record's x, v and electrical
+  input only; the measured force is never fed back), saves to versioned JSON and loads back
+  bit-identically.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+import json
+import math
+import time
+import warnings
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+import pandas as pd
+
+from mrdamper._io import atomic_write_text
+from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
+from mrdamper.errors import OutOfRangeError, SchemaError
+from mrdamper.metrics import Scores, score_arrays
+
+__all__ = [
+    "SCHEMA_NAME",
+    "SCHEMA_VERSION",
+    "RangePolicy",
+    "Estimator",
+    "FittedModel",
+    "SimulationResult",
+    "check_input_range",
+    "encode_value",
+    "decode_value",
+]
+
+SCHEMA_NAME = "mrdamper.model"
+SCHEMA_VERSION = 1
+
+RangePolicy = Literal["error", "warn", "clip", "ignore"]
+
+
+def check_input_range(
+    values: np.ndarray,
+    bounds: tuple[float, float],
+    policy: RangePolicy,
+    *,
+    field_name: str = "i",
+    model: str = "model",
+    tolerance: float = 1e-9,
+) -> np.ndarray:
+    """Apply an out-of-range policy to a scheduling / electrical input signal.
+
+    Parameters
+    ----------
+    values : ndarray
+        The signal (e.g. coil current [A]).
+    bounds : (float, float)
+        Range the model was identified on.
+    policy : {"error", "warn", "clip", "ignore"}
+        What to do when values leave ``bounds`` by more than ``tolerance`` times the range width.
+    field_name, model : str
+        Used in the message.
+
+    Returns
+    -------
+    ndarray
+        ``values`` (clipped under ``"clip"``).
+    """
+    lo, hi = float(bounds[0]), float(bounds[1])
+    slack = tolerance * max(hi - lo, 1.0)
+    vmin, vmax = float(np.min(values)), float(np.max(values))
+    if vmin >= lo - slack and vmax <= hi + slack:
+        return values
+    msg = (
+        f"{field_name}: {model} was identified on [{lo:g}, {hi:g}] but the record spans "
+        f"[{vmin:g}, {vmax:g}]"
+    )
+    if policy == "error":
+        raise OutOfRangeError(msg + "; pass range_policy='clip', 'warn' or 'ignore' to proceed")
+    if policy == "warn":
+        warnings.warn(msg + " (extrapolating)", RuntimeWarning, stacklevel=3)
+        return values
+    if policy == "clip":
+        return np.clip(values, lo, hi)
+    if policy == "ignore":
+        return values
+    raise OutOfRangeError(f"range_policy: expected error/warn/clip/ignore, got {policy!r}")
+
+
+# ----------------------------------------------------------------------------- JSON encoding
+def encode_value(value: Any) -> Any:
+    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly)."""
+    if isinstance(value, np.ndarray):
+        return {"__ndarray__": value.ravel().tolist(), "dtype": str(value.dtype), "shape": list(value.shape)}
+    if isinstance(value, (np.floating, float)):
+        f = float(value)
+        if not math.isfinite(f):
+            return {"__float__": repr(f)}
+        return f
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (list, tuple)):
+        return [encode_value(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): encode_value(v) for k, v in value.items()}
+    return value
+
+
+def decode_value(value: Any) -> Any:
+    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed)."""
+    if isinstance(value, dict):
+        if "__ndarray__" in value:
+            arr = np.array(value["__ndarray__"], dtype=value.get("dtype", "float64"))
+            return arr.reshape(value["shape"])
+        if "__float__" in value:
+            return float(value["__float__"])
+        return {k: decode_value(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [decode_value(v) for v in value]
+    return value
+
+
+# ----------------------------------------------------------------------------- results
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """Free-run prediction of one record, with its scores.
+
+    Attributes
+    ----------
+    experiment : Experiment
+        The record simulated.
+    F_pred : ndarray
+        Predicted force [N].
+    model_kind : str
+        Kind of the model that produced it.
+    elapsed : float
+        Wall-clock simulation time [s].
+    """
+
+    experiment: Experiment
+    F_pred: np.ndarray
+    model_kind: str
+    elapsed: float = 0.0
+
+    @property
+    def scores(self) -> Scores:
+        """ESR, SSSE, NRMSE and fit of ``F_pred`` against the measured force."""
+        return score_arrays(self.experiment.F, self.F_pred)
+
+    def to_frame(self) -> pd.DataFrame:
+        """Channels of the record plus ``F_pred`` [N]."""
+        df = self.experiment.to_frame()
+        df["F_pred"] = self.F_pred
+        return df
+
+    def plot(self, ax: Any = None) -> Any:
+        """Plot measured and predicted force against time; returns the Axes."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots(figsize=(7, 3))
+        e = self.experiment
+        ax.plot(e.t, e.F, lw=0.8, label="measured")
+        ax.plot(e.t, self.F_pred, lw=0.8, label=f"{self.model_kind} (ESR {self.scores.esr:.3g})")
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("F [N]")
+        ax.legend(loc="best")
+        return ax
+
+
+# ----------------------------------------------------------------------------- base classes
+@dataclass(frozen=True)
+class FittedModel(abc.ABC):
+    """An identified damper model: an immutable value.
+
+    Subclasses are frozen dataclasses that add their parameters as fields, set ``kind`` and
+    implement :meth:`predict`. The common fields come last so subclasses can give them defaults.
+
+    Attributes
+    ----------
+    input : {"i", "voltage"}
+        Electrical input channel the model reads from an Experiment.
+    input_range : (float, float)
+        Range of that input seen during identification [A] or [V].
+    range_policy : {"error", "warn", "clip", "ignore"}
+        What :meth:`predict` does when a record leaves ``input_range``.
+    provenance : mapping
+        Facts about the identification: training record names, settings, cost, time, version.
+    """
+
+    kind: ClassVar[str] = "abstract"
+
+    input: ElectricalSource = "i"
+    input_range: tuple[float, float] = (0.0, 0.0)
+    range_policy: RangePolicy = "error"
+    provenance: Mapping[str, Any] = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "input_range", tuple(float(b) for b in self.input_range))
+
+    # --- to implement -------------------------------------------------------------------
+    @abc.abstractmethod
+    def predict(self, experiment: Experiment) -> np.ndarray:
+        """Free-run force prediction [N] for one record (uses x, v and the electrical input)."""
+
+    # --- shared behaviour ---------------------------------------------------------------
+    def electrical_input(self, experiment: Experiment) -> np.ndarray:
+        """The record's electrical input after applying ``range_policy``."""
+        return check_input_range(
+            experiment.electrical(self.input),
+            self.input_range,
+            self.range_policy,
+            field_name=self.input,
+            model=self.kind,
+        )
+
+    def with_range_policy(self, policy: RangePolicy) -> FittedModel:
+        """Copy of the model with another out-of-range policy."""
+        return dataclasses.replace(self, range_policy=policy)
+
+    def simulate(self, experiment: Experiment) -> SimulationResult:
+        """Free-run simulation of ``experiment``, timed, as a :class:`SimulationResult`."""
+        t0 = time.perf_counter()
+        F = self.predict(experiment)
+        return SimulationResult(experiment, F, self.kind, time.perf_counter() - t0)
+
+    def score(self, experiment: Experiment) -> Scores:
+        """ESR, SSSE, NRMSE and fit of the free-run prediction of ``experiment``."""
+        return score_arrays(experiment.F, self.predict(experiment))
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """Model-specific parameters (every dataclass field except the common ones)."""
+        common = {f.name for f in dataclasses.fields(FittedModel)}
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in common}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dict with schema name and version."""
+        return {
+            "schema": SCHEMA_NAME,
+            "schema_version": SCHEMA_VERSION,
+            "kind": self.kind,
+            "input": self.input,
+            "input_range": list(self.input_range),
+            "range_policy": self.range_policy,
+            "parameters": encode_value(self.parameters),
+            "provenance": encode_value(dict(self.provenance)),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> FittedModel:
+        """Rebuild a model saved by :meth:`to_dict` (checks schema, version and kind)."""
+        _check_schema(data)
+        if data["kind"] != cls.kind:
+            raise SchemaError(f"kind: file holds {data['kind']!r}, expected {cls.kind!r}")
+        params = decode_value(data["parameters"])
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(params) - names
+        if unknown:
+            raise SchemaError(f"parameters: unknown field(s) {sorted(unknown)} for {cls.kind!r}")
+        return cls(
+            input=data["input"],
+            input_range=tuple(data["input_range"]),
+            range_policy=data.get("range_policy", "error"),
+            provenance=decode_value(data.get("provenance", {})),
+            **params,
+        )
+
+    def save(self, path: str | Path, *, force: bool = False) -> Path:
+        """Write the model as JSON, atomically; refuse to overwrite unless ``force``."""
+        text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
+        return atomic_write_text(path, text + "\n", force=force)
+
+
+class Estimator(abc.ABC):
+    """Identifies one model family. Holds settings only; ``fit`` returns a FittedModel.
+
+    Subclasses are (mutable, non-frozen) dataclasses whose fields are the settings, plus a class
+    attribute ``kind`` matching the fitted model's ``kind``.
+    """
+
+    kind: ClassVar[str] = "abstract"
+
+    @abc.abstractmethod
+    def fit(self, data: Experiment | Iterable[Experiment]) -> FittedModel:
+        """Identify the model from one record or a collection of records."""
+
+    @staticmethod
+    def _as_set(data: Experiment | Iterable[Experiment]) -> ExperimentSet:
+        exps = as_experiment_set(data, name="training")
+        if len(exps) == 0:
+            raise SchemaError("data: no training records given")
+        return exps
+
+
+def _check_schema(data: Mapping[str, Any]) -> None:
+    if data.get("schema") != SCHEMA_NAME:
+        raise SchemaError(f"schema: expected {SCHEMA_NAME!r}, got {data.get('schema')!r}")
+    ver = data.get("schema_version")
+    if ver != SCHEMA_VERSION:
+        raise SchemaError(f"schema_version: expected {SCHEMA_VERSION}, got {ver!r}")
+    for key in ("kind", "input", "input_range", "parameters"):
+        if key not in data:
+            raise SchemaError(f"{key}: missing from model file")

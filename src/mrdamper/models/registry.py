@@ -1,0 +1,95 @@
+"""Name-to-class registry of model families, loaded lazily (no import-time side effects).
+
+Each model module registers its estimator and fitted-model classes with :func:`register`. The
+map below says which module defines which kind, so ``get_estimator("lpv")`` imports only
+``mrdamper.models.lpv``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+from pathlib import Path
+from typing import Any
+
+from mrdamper.errors import SchemaError
+from mrdamper.models.base import Estimator, FittedModel, _check_schema
+
+__all__ = ["register", "available_models", "get_estimator", "model_class", "load_model", "model_from_dict"]
+
+#: kind -> module that defines it. Order is the default display order.
+_MODULES: dict[str, str] = {
+    "lpv": "mrdamper.models.lpv",
+    "lti": "mrdamper.models.lpv",
+    "p15": "mrdamper.models.phenomenological",
+    "sp1": "mrdamper.models.semiphenomenological",
+    "sp2": "mrdamper.models.semiphenomenological",
+    "sp3": "mrdamper.models.semiphenomenological",
+    "sp4": "mrdamper.models.semiphenomenological",
+    "spencer": "mrdamper.models.spencer",
+    "bingham": "mrdamper.models.bingham",
+}
+
+_ESTIMATORS: dict[str, type[Estimator]] = {}
+_FITTED: dict[str, type[FittedModel]] = {}
+
+
+def register(estimator: type[Estimator], fitted: type[FittedModel]) -> None:
+    """Register an estimator / fitted-model pair under ``fitted.kind``."""
+    kind = fitted.kind
+    if estimator.kind != kind:
+        raise ValueError(f"kind: estimator says {estimator.kind!r}, model says {kind!r}")
+    _ESTIMATORS[kind] = estimator
+    _FITTED[kind] = fitted
+
+
+def _load(kind: str) -> None:
+    if kind in _FITTED:
+        return
+    if kind not in _MODULES:
+        raise SchemaError(f"model: unknown kind {kind!r}; expected one of {sorted(_MODULES)}")
+    importlib.import_module(_MODULES[kind])
+    if kind not in _FITTED:
+        raise SchemaError(f"model: module {_MODULES[kind]} did not register {kind!r}")
+
+
+def available_models() -> list[str]:
+    """Kinds whose modules import on this installation, in default display order."""
+    out = []
+    for kind in _MODULES:
+        try:
+            _load(kind)
+        except (ImportError, SchemaError):
+            continue
+        out.append(kind)
+    return out
+
+
+def get_estimator(kind: str, **settings: Any) -> Estimator:
+    """Instantiate the estimator of ``kind`` with ``settings``."""
+    _load(kind)
+    return _ESTIMATORS[kind](**settings)
+
+
+def model_class(kind: str) -> type[FittedModel]:
+    """The fitted-model class of ``kind``."""
+    _load(kind)
+    return _FITTED[kind]
+
+
+def model_from_dict(data: dict[str, Any]) -> FittedModel:
+    """Rebuild any saved model from its dict (dispatch on ``kind``)."""
+    _check_schema(data)
+    return model_class(data["kind"]).from_dict(data)
+
+
+def load_model(path: str | Path) -> FittedModel:
+    """Load a model saved with :meth:`FittedModel.save`."""
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{p}: model file not found") from None
+    except json.JSONDecodeError as exc:
+        raise SchemaError(f"{p}: not valid JSON ({exc})") from None
+    return model_from_dict(data)
