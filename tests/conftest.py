@@ -1,0 +1,45 @@
+"""Shared fixtures. Real-data tests read ``../shared/data`` beside the repository and skip with a
+clear reason where it is absent (CI always has it)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import matplotlib
+import pytest
+
+matplotlib.use("Agg")
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+SHARED_DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO_ROOT.parent / "shared" / "data"))
+
+
+def _require(path: Path) -> Path:
+    if not path.exists():
+        pytest.skip(f"real measured data not found at {path} (set MRDAMPER_SHARED_DATA to its folder)")
+    return path
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """Folder holding the shared measured data sets."""
+    return _require(SHARED_DATA)
+
+
+@pytest.fixture(scope="session")
+def quiroz_unfiltered_dir(shared_data: Path) -> Path:
+    """Folder of the 30 unfiltered constant-current sine records (Quiroz 2022)."""
+    return _require(shared_data / "quiroz2022_utfsm" / "sine_unfiltered")
+
+
+@pytest.fixture(scope="session")
+def quiroz_filtered_dir(shared_data: Path) -> Path:
+    """Folder of the 30 author-filtered constant-current sine records (Quiroz 2022)."""
+    return _require(shared_data / "quiroz2022_utfsm" / "sine_filtered")
+
+
+@pytest.fixture(scope="session")
+def dyke_csv(shared_data: Path) -> Path:
+    """The Dyke (1996) random-excitation record with command voltage."""
+    return _require(shared_data / "dyke1996_nees" / "ranran_50.csv")
