@@ -1,1 +1,25 @@
-"""analysis subpackage."""
+"""Force-velocity analysis: three-zone regression (eq. 17), laws across current (eq. 18) and the
+LPV scheduling input ``u(v, i)`` (eqs. 19-22)."""
+
+from mrdamper.analysis.laws import (
+    ZoneLaws,
+    ZoneLawWarning,
+    fit_zone_laws,
+    zone_fits_binned,
+    zone_fits_by_level,
+)
+from mrdamper.analysis.scheduling import Reading, scheduling_input_arrays
+from mrdamper.analysis.zones import ZoneFit, fit_zones, segment_plateaus
+
+__all__ = [
+    "Reading",
+    "ZoneFit",
+    "ZoneLawWarning",
+    "ZoneLaws",
+    "fit_zone_laws",
+    "fit_zones",
+    "scheduling_input_arrays",
+    "segment_plateaus",
+    "zone_fits_binned",
+    "zone_fits_by_level",
+]
