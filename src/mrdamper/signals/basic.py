@@ -1,0 +1,92 @@
+"""Deterministic basic signals: constant and sine, plus the uniform time grid."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mrdamper.errors import DataValidationError
+from mrdamper.signals._common import check_positive, n_samples, time_grid
+
+__all__ = ["constant", "sine", "time_grid", "n_samples"]
+
+
+def constant(fs: float, duration: float, *, value: float) -> np.ndarray:
+    """Constant signal (e.g. a constant coil current [A]).
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    duration : float
+        Record length [s].
+    value : float
+        The value, in the unit of the quantity.
+
+    Returns
+    -------
+    ndarray
+        ``round(duration * fs)`` copies of ``value``.
+
+    Examples
+    --------
+    >>> constant(1000.0, 0.003, value=0.5).tolist()
+    [0.5, 0.5, 0.5]
+    """
+    v = float(value)
+    if not math.isfinite(v):
+        raise DataValidationError("value", f"expected a finite number, got {value!r}")
+    return np.full(n_samples(fs, duration), v)
+
+
+def sine(
+    fs: float,
+    duration: float,
+    *,
+    amplitude: float,
+    frequency: float,
+    offset: float = 0.0,
+    phase: float = 0.0,
+) -> np.ndarray:
+    """``offset + amplitude * sin(2 pi frequency t + phase)`` on the grid ``t = k / fs``.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    duration : float
+        Record length [s].
+    amplitude : float
+        Amplitude (>= 0), in the unit of the quantity (e.g. [m] or [A]).
+    frequency : float
+        Frequency [Hz], below the Nyquist rate ``fs / 2``.
+    offset : float
+        Mean value.
+    phase : float
+        Phase at t = 0 [rad].
+
+    Returns
+    -------
+    ndarray
+        The sine, one value per sample.
+
+    Examples
+    --------
+    >>> x = sine(1000.0, 1.0, amplitude=0.005, frequency=3.0)
+    >>> round(float(x.max()), 6)
+    0.005
+    """
+    fs = check_positive("fs", fs, "Hz")
+    f = check_positive("frequency", frequency, "Hz")
+    if f >= fs / 2:
+        raise DataValidationError(
+            "frequency", f"{f:g} Hz is not below the Nyquist frequency fs/2 = {fs / 2:g} Hz"
+        )
+    a, off, ph = float(amplitude), float(offset), float(phase)
+    if not (math.isfinite(a) and a >= 0):
+        raise DataValidationError("amplitude", f"expected a finite value >= 0, got {amplitude!r}")
+    if not (math.isfinite(off) and math.isfinite(ph)):
+        raise DataValidationError("offset/phase", f"expected finite values, got {offset!r}, {phase!r}")
+    t = time_grid(fs, duration)
+    return off + a * np.sin(2.0 * np.pi * f * t + ph)
