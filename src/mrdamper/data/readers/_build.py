@@ -1,0 +1,227 @@
+"""Turn raw source columns into a validated :class:`~mrdamper.data.Experiment`.
+
+Shared by every file reader: numeric checks, unit conversion (once, through
+:mod:`mrdamper.data.units`), the declared-rate time base, velocity derivation and provenance.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
+from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_columns
+from mrdamper.data.units import to_si
+from mrdamper.errors import DataValidationError
+
+__all__ = ["ReadOptions", "numeric_column", "build_experiment"]
+
+#: Keyword arguments every file reader accepts (documented in each reader).
+ReadOptions = dict[str, Any]
+
+
+def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
+    """Return ``values`` as float64 or raise naming the column and the first non-numeric entry.
+
+    Missing entries (empty CSV fields, ``NaN``) stay NaN and are handled by ``nan_policy``.
+    Booleans, complex numbers and text are refused.
+    """
+    arr = np.asarray(values)
+    if arr.dtype.kind in "iuf":
+        return np.array(arr, dtype=np.float64).ravel()
+    if arr.dtype.kind == "b":
+        raise DataValidationError(name, f"holds booleans in {source}; expected numbers")
+    if arr.dtype.kind == "c":
+        raise DataValidationError(name, f"holds complex numbers in {source}; expected real numbers")
+    import pandas as pd
+
+    ser = pd.Series(arr.ravel(), dtype=object)
+    num = pd.to_numeric(ser, errors="coerce")
+    bad = np.flatnonzero(num.isna().to_numpy() & ser.notna().to_numpy())
+    bad = [k for k in bad if str(ser.iloc[k]).strip().lower() not in ("", "nan")]
+    if bad:
+        k = int(bad[0])
+        raise DataValidationError(
+            name,
+            f"non-numeric value {ser.iloc[k]!r} at data row {k} of {source} "
+            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',')",
+        )
+    return num.to_numpy(dtype=np.float64, na_value=np.nan)
+
+
+def _regenerate_time(t: np.ndarray | None, n: int, fs: Any, source: str) -> tuple[np.ndarray, str]:
+    if isinstance(fs, bool) or not isinstance(fs, (int, float, np.integer, np.floating)):
+        raise DataValidationError("fs", f"expected a sampling rate [Hz] as a number, got {fs!r}")
+    fs = float(fs)
+    if not (np.isfinite(fs) and fs > 0):
+        raise DataValidationError("fs", f"expected a positive, finite sampling rate [Hz], got {fs}")
+    if t is None:
+        return np.arange(n) / fs, f"time generated as k / {fs:g} Hz (no time column)"
+    ok = np.isfinite(t)
+    if not ok.any():
+        raise DataValidationError("t", f"time column of {source} has no finite value")
+    k0 = int(np.flatnonzero(ok)[0])
+    t0 = float(t[k0]) - k0 / fs
+    tn = t0 + np.arange(n) / fs
+    dev = float(np.max(np.abs(t[ok] - tn[ok])))
+    if dev > 0.5 / fs:
+        k = int(np.argmax(np.abs(np.where(ok, t - tn, 0.0))))
+        raise DataValidationError(
+            "t",
+            f"time column of {source} departs from t0 + k/{fs:g} by {dev:.6g} s "
+            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong",
+        )
+    return tn, (
+        f"time regenerated as t0 + k / {fs:g} Hz; largest deviation of the file's time column "
+        f"{dev:.3g} s ({dev * fs:.3g} sample intervals)"
+    )
+
+
+def _missing(channel: str, what: str, headers: list[str], source: str, hint: str = "") -> DataValidationError:
+    return DataValidationError(
+        channel,
+        f"no {what} column in {source} (found {headers}; recognised names: "
+        f"{list(COLUMN_ALIASES[channel])}); map one with columns={{'<name>': {channel!r}}}{hint}",
+    )
+
+
+def build_experiment(
+    raw: Mapping[str, Any],
+    *,
+    path: str | os.PathLike[str],
+    columns: Mapping[str, str] | None = None,
+    units: Mapping[str, str] | None = None,
+    nan_policy: NanPolicy = "raise",
+    max_gap: int = 5,
+    resample_fs: float | None = None,
+    fs: float | None = None,
+    derive_velocity: bool | float = False,
+    name: str | None = None,
+    metadata: Mapping[str, Any] | None = None,
+    time_tolerance: float = DEFAULT_TIME_TOLERANCE,
+    stored_metadata: Mapping[str, Any] | None = None,
+) -> Experiment:
+    """Build an Experiment from ``{source column: values}``; see :func:`~mrdamper.data.readers.read_csv`.
+
+    Parameters
+    ----------
+    raw : mapping
+        Source column name -> values (any array-like, in source units).
+    path : path-like
+        Source file, recorded as ``metadata["source"]``.
+    stored_metadata : mapping, optional
+        Metadata saved in the file itself (Parquet written by mrdamper); ``metadata`` wins.
+
+    Other Parameters
+    ----------------
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance
+        As for :func:`~mrdamper.data.readers.read_csv`.
+    """
+    src = str(path)
+    headers = [str(h) for h in raw]
+    specs: dict[str, ColumnSpec] = resolve_columns(headers, columns=columns, units=units, source=src)
+    n_rows = {len(np.ravel(np.asarray(v))) for v in raw.values()}
+    if len(n_rows) > 1:
+        lengths = {h: len(np.ravel(np.asarray(v))) for h, v in raw.items()}
+        raise DataValidationError("columns", f"columns of {src} differ in length: {lengths}")
+    n = n_rows.pop() if n_rows else 0
+    if n == 0:
+        raise DataValidationError("file", f"{src} has no data rows")
+
+    if fs is not None and resample_fs is not None:
+        raise DataValidationError(
+            "fs", "give either fs (declared rate, time regenerated) or resample_fs (interpolation), not both"
+        )
+    if "t" not in specs and fs is None:
+        raise _missing("t", "time", headers, src, " or declare the rate with fs=")
+    if "x" not in specs:
+        raise _missing("x", "displacement", headers, src)
+    if "F" not in specs:
+        raise _missing("F", "force", headers, src)
+    if "i" not in specs and "voltage" not in specs:
+        raise DataValidationError(
+            "i",
+            f"no electrical input in {src}: found {headers}; need a current column (names "
+            f"{list(COLUMN_ALIASES['i'])}) or a voltage column (names {list(COLUMN_ALIASES['voltage'])})",
+        )
+    derive = _check_derive(derive_velocity)
+    if "v" not in specs and derive is None:
+        raise _missing(
+            "v",
+            "velocity",
+            headers,
+            src,
+            ", or pass derive_velocity=True (or a cut-off [Hz]) to compute it from x; see "
+            "mrdamper.data.preprocessing.velocity_from_displacement",
+        )
+    if "v" in specs and derive is not None:
+        raise DataValidationError(
+            "derive_velocity",
+            f"{src} has a velocity column {specs['v'].source!r}; derive_velocity applies only when "
+            "velocity is missing (use preprocessing.velocity_from_displacement to recompute it)",
+        )
+
+    arrays: dict[str, np.ndarray] = {}
+    for ch, spec in specs.items():
+        values = numeric_column(spec.source, raw[spec.source], src)
+        arrays[ch] = to_si(values, spec.unit, channel=ch, column=spec.source)
+
+    notes: list[str] = []
+    if fs is not None:
+        arrays["t"], note = _regenerate_time(arrays.get("t"), n, fs, src)
+        notes.append(note)
+    if derive is not None:
+        arrays["v"] = np.zeros(n)  # placeholder, replaced below once time and x are repaired
+
+    meta: dict[str, Any] = dict(stored_metadata or {})
+    meta["source"] = src
+    meta["columns"] = {ch: spec.source for ch, spec in specs.items()}
+    meta["units"] = {ch: spec.unit for ch, spec in specs.items()}
+    ignored = [h for h in headers if h not in meta["columns"].values()]
+    if ignored:
+        meta["ignored_columns"] = ignored
+    meta.update(metadata or {})
+    if notes:
+        meta["repairs"] = tuple(meta.get("repairs", ())) + tuple(notes)
+    rec_name = name if name is not None else os.path.splitext(os.path.basename(src))[0]
+    try:
+        exp = Experiment.from_arrays(
+            **arrays,
+            name=rec_name,
+            metadata=meta,
+            nan_policy=nan_policy,
+            max_gap=max_gap,
+            resample_fs=resample_fs,
+            time_tolerance=time_tolerance,
+        )
+    except DataValidationError as exc:
+        if exc.field == "t" and "not uniform" in str(exc) and fs is None:
+            raise DataValidationError(
+                "t",
+                f"{src}: {str(exc)[3:]}; if the file's time column is only rounded (printed with "
+                "few digits), declare the rate with fs= to regenerate it",
+            ) from None
+        raise
+    if derive is not None:
+        from mrdamper.data.preprocessing import velocity_from_displacement
+
+        exp = velocity_from_displacement(exp, cutoff=None if derive is True else float(derive))
+    return exp
+
+
+def _check_derive(derive_velocity: Any) -> bool | float | None:
+    if derive_velocity is False or derive_velocity is None:
+        return None
+    if derive_velocity is True:
+        return True
+    if isinstance(derive_velocity, (int, float, np.integer, np.floating)) and not isinstance(
+        derive_velocity, bool
+    ):
+        if np.isfinite(derive_velocity) and derive_velocity > 0:
+            return float(derive_velocity)
+    raise DataValidationError(
+        "derive_velocity", f"expected False, True or a positive cut-off [Hz], got {derive_velocity!r}"
+    )

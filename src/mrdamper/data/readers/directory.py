@@ -1,0 +1,221 @@
+"""Read a folder of records into an ExperimentSet, with metadata parsed from file names, and
+the generic :func:`read` that dispatches on the file suffix."""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from mrdamper.data.experiment import Experiment
+from mrdamper.data.experiment_set import ExperimentSet
+from mrdamper.data.readers.csv_reader import read_csv
+from mrdamper.data.readers.mat_reader import read_mat
+from mrdamper.data.readers.parquet_reader import read_parquet
+from mrdamper.data.units import UNITS
+from mrdamper.errors import DataValidationError
+
+__all__ = ["DEFAULT_PATTERN", "SUFFIX_READERS", "read", "read_file", "read_directory", "parse_file_name"]
+
+#: File-name pattern of the constant-current sine records (``sine_5mm_3Hz_0.5A.csv``).
+DEFAULT_PATTERN = (
+    r"sine_(?P<condition>(?P<amplitude_mm>[\d.]+)mm_(?P<frequency>[\d.]+)Hz)_(?P<current>[\d.]+)A\.csv"
+)
+
+#: File suffix (lower case) -> reader.
+SUFFIX_READERS: dict[str, Any] = {
+    ".csv": read_csv,
+    ".txt": read_csv,
+    ".tsv": read_csv,
+    ".dat": read_csv,
+    ".parquet": read_parquet,
+    ".pq": read_parquet,
+    ".mat": read_mat,
+}
+
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+#: Group-name suffix -> factor to SI (``amplitude_mm`` -> ``amplitude`` [m]); "/" becomes "_per_".
+_SUFFIX_FACTORS: dict[str, float] = {
+    u.replace("/", "_per_"): f for table in UNITS.values() for u, f in table.items()
+}
+_SUFFIX_FACTORS["Hz"] = 1.0
+
+
+def parse_file_name(file_name: str, pattern: str | re.Pattern[str]) -> dict[str, Any] | None:
+    """Return the metadata encoded in ``file_name`` by the named groups of ``pattern``.
+
+    The whole name must match. Group values that look like numbers become floats; a group name
+    ending in ``_<unit>`` of the unit table (``_mm``, ``_kN``, ``_mm_per_s`` for mm/s, ``_Hz``)
+    is stored without the suffix and converted to SI (``amplitude_mm="5"`` gives
+    ``amplitude=0.005``). Groups that did not take part in the match are left out.
+
+    Returns
+    -------
+    dict or None
+        The metadata, or None if the name does not match.
+
+    Examples
+    --------
+    >>> parse_file_name("sine_5mm_3Hz_0.5A.csv", DEFAULT_PATTERN)
+    {'condition': '5mm_3Hz', 'amplitude': 0.005, 'frequency': 3.0, 'current': 0.5}
+    """
+    rx = _compile(pattern)
+    m = rx.fullmatch(file_name)
+    if m is None:
+        return None
+    out: dict[str, Any] = {}
+    for key, text in m.groupdict().items():
+        if text is None:
+            continue
+        factor = None
+        for suffix, f in _SUFFIX_FACTORS.items():
+            if key.endswith("_" + suffix) and len(key) > len(suffix) + 1:
+                key, factor = key[: -len(suffix) - 1], f
+                break
+        if _NUMBER.fullmatch(text):
+            value: Any = float(text) * (factor if factor is not None else 1.0)
+        elif factor is not None:
+            raise DataValidationError(
+                key, f"file name {file_name!r} gives {text!r}, expected a number (unit suffix in group name)"
+            )
+        else:
+            value = text
+        out[key] = value
+    return out
+
+
+def _compile(pattern: str | re.Pattern[str]) -> re.Pattern[str]:
+    if isinstance(pattern, re.Pattern):
+        return pattern
+    try:
+        return re.compile(pattern)
+    except re.error as exc:
+        raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
+
+
+def _natural_key(text: str) -> list[Any]:
+    return [(0, float(tok), "") if tok[0].isdigit() else (1, 0.0, tok) for tok in re.findall(r"\d+(?:\.\d+)?|\D+", text)]
+
+
+def read_file(path: str | os.PathLike[str], **kwargs: Any) -> Experiment:
+    """Read one file with the reader for its suffix (see :data:`SUFFIX_READERS`).
+
+    Raises
+    ------
+    DataValidationError
+        If the suffix is not known.
+    """
+    p = Path(path)
+    reader = SUFFIX_READERS.get(p.suffix.lower())
+    if reader is None:
+        raise DataValidationError(
+            "path", f"{p}: unknown file type {p.suffix!r}; expected one of {sorted(SUFFIX_READERS)}"
+        )
+    return reader(p, **kwargs)
+
+
+def read_directory(
+    path: str | os.PathLike[str],
+    pattern: str | re.Pattern[str] = DEFAULT_PATTERN,
+    *,
+    recursive: bool = False,
+    name: str | None = None,
+    metadata: Mapping[str, Any] | None = None,
+    **read_kwargs: Any,
+) -> ExperimentSet:
+    """Read every file of a folder whose name matches ``pattern`` into an ExperimentSet.
+
+    Parameters
+    ----------
+    path : path-like
+        The folder.
+    pattern : str or compiled regex
+        Regular expression that the whole file name must match; its named groups become record
+        metadata (see :func:`parse_file_name`). Files that do not match are skipped. The default
+        reads the constant-current sine records ``sine_{amplitude}mm_{frequency}Hz_{current}A.csv``
+        into ``condition``, ``amplitude`` [m], ``frequency`` [Hz] and ``current`` [A].
+    recursive : bool
+        Also search sub-folders (names are then relative paths without suffix).
+    name : str, optional
+        Name of the set (default: the folder name).
+    metadata : mapping, optional
+        Metadata added to every record; values parsed from a file name take precedence.
+    **read_kwargs
+        Passed to the file reader (``units``, ``columns``, ``nan_policy``, ``fs``, ...).
+
+    Returns
+    -------
+    ExperimentSet
+        Records in natural order of their names (numbers compared as numbers:
+        ``sine_2mm`` before ``sine_10mm``); each record's name is its file stem.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder does not exist.
+    DataValidationError
+        If ``path`` is not a folder, the pattern is invalid, or no file matches it; errors of a
+        file's reader are raised as they are (their message names the file).
+
+    Examples
+    --------
+    >>> s = read_directory("data/quiroz2022_utfsm/sine_unfiltered")  # doctest: +SKIP
+    >>> s.filter(current=0.5, frequency=3.0).names  # doctest: +SKIP
+    ['sine_5mm_3Hz_0.5A']
+    """
+    root = Path(path)
+    if not root.exists():
+        raise FileNotFoundError(f"{root}: no such folder")
+    if not root.is_dir():
+        raise DataValidationError("path", f"{root} is not a folder")
+    rx = _compile(pattern)
+    files = root.rglob("*") if recursive else root.iterdir()
+    found: list[tuple[str, Path, dict[str, Any]]] = []
+    others: list[str] = []
+    for f in files:
+        if not f.is_file():
+            continue
+        meta = parse_file_name(f.name, rx)
+        if meta is None:
+            others.append(f.name)
+            continue
+        rel = f.relative_to(root).with_suffix("")
+        found.append((rel.as_posix(), f, meta))
+    if not found:
+        raise DataValidationError(
+            "pattern",
+            f"no file in {root} matches {rx.pattern!r} (files found: {sorted(others)[:5]}"
+            f"{' ...' if len(others) > 5 else ''})",
+        )
+    found.sort(key=lambda item: _natural_key(item[0]))
+    records = []
+    for rec_name, f, meta in found:
+        merged = {**dict(metadata or {}), **meta}
+        records.append(read_file(f, name=rec_name, metadata=merged, **read_kwargs))
+    return ExperimentSet(records, name=name or root.name)
+
+
+def read(path: str | os.PathLike[str], **kwargs: Any) -> Experiment | ExperimentSet:
+    """Read a file (by suffix) or a folder (with :func:`read_directory`).
+
+    Parameters
+    ----------
+    path : path-like
+        A ``.csv/.txt/.tsv/.dat``, ``.parquet/.pq`` or ``.mat`` file, or a folder.
+    **kwargs
+        Passed to the reader (for a folder: ``pattern``, ``recursive`` and reader options).
+
+    Returns
+    -------
+    Experiment or ExperimentSet
+        One record for a file, a set for a folder.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"{p}: no such file or folder")
+    if p.is_dir():
+        return read_directory(p, **kwargs)
+    return read_file(p, **kwargs)
