@@ -27,7 +27,7 @@ def test_aprbs_levels_in_range_and_min_hold(seed: int, low: float, width: float,
     x = aprbs(1000.0, 4.0, low=low, high=low + width, min_hold=min_hold, seed=seed)
     assert x.size == 4000
     assert x.min() >= low and x.max() <= low + width
-    hold = int(round(min_hold * 1000))
+    hold = round(min_hold * 1000)
     lengths = _run_lengths(x)
     assert np.all(lengths[:-1] >= hold)
     assert np.all(lengths[:-1] % hold == 0)

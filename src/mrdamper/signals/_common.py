@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import math
-from typing import Union
 
 import numpy as np
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["SeedLike", "n_samples", "time_grid", "as_rng", "as_seed_sequence", "child_seeds", "check_positive", "check_range", "hold_samples"]
+__all__ = ["SeedLike", "as_rng", "as_seed_sequence", "check_positive", "check_range", "child_seeds", "hold_samples", "n_samples", "time_grid"]
 
 #: What a ``seed`` argument accepts: a non-negative int or a :class:`numpy.random.SeedSequence`.
-SeedLike = Union[int, np.integer, np.random.SeedSequence]
+SeedLike = int | np.integer | np.random.SeedSequence
 
 
 def check_positive(name: str, value: float, unit: str) -> float:
@@ -44,7 +43,7 @@ def n_samples(fs: float, duration: float) -> int:
     """
     fs = check_positive("fs", fs, "Hz")
     duration = check_positive("duration", duration, "s")
-    n = int(round(duration * fs))
+    n = round(duration * fs)
     if n < 2:
         raise DataValidationError(
             "duration", f"{duration:g} s at fs={fs:g} Hz gives {n} sample(s); at least 2 are needed"
@@ -78,7 +77,7 @@ def time_grid(fs: float, duration: float) -> np.ndarray:
 def hold_samples(name: str, period: float, fs: float) -> int:
     """A hold / clock period [s] as a whole number (>= 1) of samples at ``fs`` [Hz]."""
     period = check_positive(name, period, "s")
-    k = int(round(period * fs))
+    k = round(period * fs)
     if k < 1:
         raise DataValidationError(
             name, f"{period:g} s is shorter than one sample at fs={fs:g} Hz (1/fs = {1 / fs:g} s)"

@@ -11,9 +11,9 @@ import numpy as np
 
 from mrdamper.signals._common import (
     SeedLike,
-    child_seeds,
     check_positive,
     check_range,
+    child_seeds,
     hold_samples,
     n_samples,
 )

@@ -9,7 +9,7 @@ import numpy as np
 from mrdamper.errors import DataValidationError
 from mrdamper.signals._common import check_positive, n_samples, time_grid
 
-__all__ = ["constant", "sine", "time_grid", "n_samples"]
+__all__ = ["constant", "n_samples", "sine", "time_grid"]
 
 
 def constant(fs: float, duration: float, *, value: float) -> np.ndarray:

@@ -15,9 +15,9 @@ import numpy as np
 from mrdamper.errors import DataValidationError
 from mrdamper.signals._common import (
     SeedLike,
-    child_seeds,
     check_positive,
     check_range,
+    child_seeds,
     hold_samples,
     n_samples,
 )

@@ -44,14 +44,14 @@ from mrdamper.signals._common import (
 )
 
 __all__ = [
+    "DEFAULT_STROKE",
     "ISO_8608_CLASSES",
     "N0",
-    "DEFAULT_STROKE",
+    "band_variance",
+    "long_road_profile",
+    "road_profile",
     "spatial_psd",
     "temporal_psd",
-    "band_variance",
-    "road_profile",
-    "long_road_profile",
 ]
 
 #: Reference spatial frequency of ISO 8608 [cycles/m].
@@ -149,7 +149,7 @@ def _synthesise(
 def _taper(x: np.ndarray, fs: float, taper: float) -> np.ndarray:
     if taper < 0 or not math.isfinite(taper):
         raise DataValidationError("taper", f"expected a finite value >= 0 [s], got {taper!r}")
-    m = int(round(taper * fs))
+    m = round(taper * fs)
     if m == 0:
         return x
     if 2 * m > x.size:
@@ -303,9 +303,9 @@ def long_road_profile(
         raise DataValidationError(
             "crossfade", f"expected 0 <= crossfade < section_duration={sec:g} s, got {crossfade!r}"
         )
-    L = int(round(sec * fs))
-    c = int(round(crossfade * fs))
-    n_sec = max(1, int(round(n / L)))  # a remainder shorter than half a section joins the last one
+    L = round(sec * fs)
+    c = round(crossfade * fs)
+    n_sec = max(1, round(n / L))  # a remainder shorter than half a section joins the last one
     edges = [k * L for k in range(n_sec)] + [n]
     seeds = child_seeds(seed, n_sec + 1)
     rng = np.random.default_rng(seeds[0])

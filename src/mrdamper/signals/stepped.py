@@ -9,7 +9,7 @@ import numpy as np
 from mrdamper.errors import DataValidationError
 from mrdamper.signals._common import check_range, n_samples
 
-__all__ = ["stepped_current", "StepDirection"]
+__all__ = ["StepDirection", "stepped_current"]
 
 StepDirection = Literal["up", "down", "up-down"]
 
