@@ -1,1 +1,54 @@
-"""study subpackage."""
+"""The comparison study: protocols, the runner (models x records), result tables and the HTML report.
+
+Examples
+--------
+>>> from mrdamper.study import run_study, doe_protocol   # doctest: +SKIP
+>>> from mrdamper.rig.doe import table_ii                # doctest: +SKIP
+>>> res = run_study(table_ii(seed=0, scale=0.1), doe_protocol(), models=["lpv", "sp1"])  # doctest: +SKIP
+>>> res.summary                                          # doctest: +SKIP
+>>> res.write("study-out")                               # doctest: +SKIP
+"""
+
+from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.executor import make_executor
+from mrdamper.study.protocol import (
+    DEFAULT_MODELS,
+    ModelSpec,
+    Protocol,
+    Selection,
+    Split,
+    doe_protocol,
+    dyke_protocol,
+    load_protocol,
+    preset_protocol,
+    protocol_from_dict,
+    quiroz_protocol,
+)
+from mrdamper.study.result import Showcase, StudyResult
+from mrdamper.study.runner import run_study
+from mrdamper.study.splits import Fold, make_folds
+from mrdamper.study.tables import headline, summarize
+
+__all__ = [
+    "DEFAULT_MODELS",
+    "AnalysisOutcome",
+    "Fold",
+    "ModelSpec",
+    "Protocol",
+    "Selection",
+    "Showcase",
+    "Split",
+    "StudyResult",
+    "doe_protocol",
+    "dyke_protocol",
+    "headline",
+    "load_protocol",
+    "make_executor",
+    "make_folds",
+    "preset_protocol",
+    "protocol_from_dict",
+    "quiroz_protocol",
+    "run_analysis",
+    "run_study",
+    "summarize",
+]

@@ -1,0 +1,186 @@
+"""Model comparison figures: box plots of ESR and SSSE per model with the mean written under each
+box (paper Figs. 7 and 8), force against time for all models (Fig. 9) and the F-v plane for all
+models (Fig. 10)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError
+
+__all__ = ["plot_force_time", "plot_fv_models", "plot_index_boxes"]
+
+_INDEX_LABELS = {"esr": "ESR [-]", "ssse": "SSSE [N]", "nrmse": "NRMSE [-]", "fit_pct": "fit [%]"}
+
+
+def plot_index_boxes(
+    results: pd.DataFrame,
+    index: str = "esr",
+    *,
+    order: Sequence[str] | None = None,
+    ax: Any = None,
+    log: bool | None = None,
+) -> Any:
+    """Paper Figs. 7 (ESR) and 8 (SSSE): one box per model, its mean written under the box.
+
+    Parameters
+    ----------
+    results : DataFrame
+        Per-record table with columns ``model``, ``status`` and ``index``; only rows with
+        status ``"ok"`` enter the boxes. A model without any successful row gets an empty slot
+        marked "failed".
+    index : {"esr", "ssse", "nrmse", "fit_pct"}
+        Column drawn.
+    order : sequence of str, optional
+        Model labels in display order (default: order of appearance).
+    ax : Axes, optional
+        Where to draw; a new figure when None.
+    log : bool, optional
+        Logarithmic y axis; default when the means span more than two decades.
+
+    Returns
+    -------
+    Axes
+        One box per model (x tick labels = models) and one text per model (``mean <value>``).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> df = pd.DataFrame({"model": ["a", "a", "b", "b"], "status": "ok", "esr": [0.1, 0.2, 0.3, 0.5]})
+    >>> ax = plot_index_boxes(df, "esr")
+    >>> [t.get_text() for t in ax.get_xticklabels()]
+    ['a', 'b']
+    """
+    for col in ("model", "status", index):
+        if col not in results.columns:
+            raise DataValidationError(col, f"results table has no column {col!r} (columns: {list(results.columns)})")
+    from mrdamper.plotting._common import model_color, new_axes
+
+    labels = list(order) if order is not None else list(dict.fromkeys(results["model"]))
+    if not labels:
+        raise DataValidationError("results", "no model rows to plot")
+    ax = new_axes(ax, (max(4.5, 0.9 * len(labels) + 2), 4.2))
+    ok = results[results["status"] == "ok"]
+    data = [ok.loc[ok["model"] == m, index].to_numpy(dtype=float) for m in labels]
+    means = [float(np.mean(d)) if d.size else float("nan") for d in data]
+    pos = np.arange(1, len(labels) + 1)
+    filled = [k for k, d in enumerate(data) if d.size]
+    if filled:
+        bp = ax.boxplot([data[k] for k in filled], positions=pos[filled], widths=0.6, patch_artist=True,
+                        medianprops={"color": "k"}, flierprops={"markersize": 3})
+        for k, patch in zip(filled, bp["boxes"]):
+            patch.set_facecolor(model_color(labels[k], k))
+            patch.set_alpha(0.55)
+    ax.set_xticks(pos)
+    ax.set_xticklabels(labels)
+    ax.set_xlim(0.4, len(labels) + 0.6)
+    finite = [m for m in means if np.isfinite(m) and m > 0]
+    if log is None:
+        log = bool(finite) and max(finite) / min(finite) > 100
+    if log:
+        ax.set_yscale("log")
+    for p, m in zip(pos, means):
+        text = "failed" if not np.isfinite(m) else f"mean {m:.3g}"
+        ax.annotate(text, (p, 0), xycoords=("data", "axes fraction"), xytext=(0, -26),
+                    textcoords="offset points", ha="center", va="top", fontsize=8)
+    ax.set_ylabel(_INDEX_LABELS.get(index, index))
+    ax.set_title(f"{index.upper() if index in ('esr', 'ssse') else index} per model (mean under each box)")
+    ax.grid(True, axis="y", lw=0.3)
+    return ax
+
+
+def _predictions(predictions: Mapping[str, Any], n: int) -> dict[str, np.ndarray]:
+    from mrdamper.plotting._common import check_same_length
+
+    if not predictions:
+        raise DataValidationError("predictions", "expected at least one model label -> force array, got none")
+    return {k: check_same_length(f"predictions[{k!r}]", v, n) for k, v in predictions.items()}
+
+
+def plot_force_time(
+    experiment: Experiment,
+    predictions: Mapping[str, Any],
+    *,
+    ax: Any = None,
+    window: Sequence[float] | None = None,
+) -> Any:
+    """Paper Fig. 9: measured force and every model's free-run force against time.
+
+    Parameters
+    ----------
+    experiment : Experiment
+        The record.
+    predictions : mapping
+        Model label -> predicted force [N] (one value per sample).
+    ax : Axes, optional
+        Where to draw; a new figure when None.
+    window : (float, float), optional
+        Time span drawn [s]; the whole record when None.
+
+    Returns
+    -------
+    Axes
+        Lines: ``measured`` then one per model, labelled by model.
+    """
+    from mrdamper.plotting._common import model_color, new_axes, window_mask
+
+    preds = _predictions(predictions, experiment.n)
+    mask = window_mask(experiment.t, window)
+    ax = new_axes(ax, (9, 4))
+    t = experiment.t[mask]
+    ax.plot(t, experiment.F[mask], lw=1.6, color="0.15", label="measured")
+    for k, (label, F) in enumerate(preds.items()):
+        ax.plot(t, F[mask], lw=0.8, color=model_color(label, k), label=label)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("F [N]")
+    ax.set_title(f"Measured and computed damper force ({experiment.name})")
+    ax.grid(True, lw=0.3)
+    ax.legend(loc="upper right", fontsize=7, ncol=2)
+    return ax
+
+
+def plot_fv_models(
+    experiment: Experiment,
+    predictions: Mapping[str, Any],
+    *,
+    ax: Any = None,
+    window: Sequence[float] | None = None,
+) -> Any:
+    """Paper Fig. 10: the force-velocity plane, measured and every model.
+
+    Parameters
+    ----------
+    experiment : Experiment
+        The record.
+    predictions : mapping
+        Model label -> predicted force [N].
+    ax : Axes, optional
+        Where to draw; a new figure when None.
+    window : (float, float), optional
+        Time span drawn [s]; the whole record when None.
+
+    Returns
+    -------
+    Axes
+        Lines: ``measured`` then one per model.
+    """
+    from mrdamper.plotting._common import model_color, new_axes, window_mask
+
+    preds = _predictions(predictions, experiment.n)
+    mask = window_mask(experiment.t, window)
+    ax = new_axes(ax, (6, 4.8))
+    v = experiment.v[mask]
+    ax.plot(v, experiment.F[mask], lw=1.4, color="0.15", label="measured")
+    for k, (label, F) in enumerate(preds.items()):
+        ax.plot(v, F[mask], lw=0.7, color=model_color(label, k), label=label, alpha=0.85)
+    ax.set_xlabel("v [m/s]")
+    ax.set_ylabel("F [N]")
+    ax.set_title(f"F-v plane, measured and computed ({experiment.name})")
+    ax.grid(True, lw=0.3)
+    ax.legend(loc="upper left", fontsize=7, ncol=2)
+    return ax

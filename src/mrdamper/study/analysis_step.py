@@ -1,0 +1,130 @@
+"""The force-velocity analysis step of a study (paper III-C): zone fits per level and laws across current.
+
+Records with metadata ``current`` (constant-current tests such as the Quiroz sine records) are
+grouped by it; otherwise each record's electrical input is cut into constant plateaus (the
+stepped-current SC experiments 6-8 of Table II). The outcome feeds Figs. 1-3 of the report and,
+where an estimator takes them, the LPV model's laws.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from mrdamper.data import ExperimentSet
+
+__all__ = ["AnalysisOutcome", "fv_curves", "run_analysis"]
+
+#: Largest number of (v, F) points kept per level for the F-v map figure.
+_MAX_POINTS = 4000
+
+
+@dataclass(frozen=True, eq=False)
+class AnalysisOutcome:
+    """Result of the F-v analysis of one fold.
+
+    Attributes
+    ----------
+    fits : tuple of ZoneFit
+        Three-zone fits, one per level, sorted by level.
+    laws : ZoneLaws or None
+        Laws across current, or None when they could not be fitted (see ``error``).
+    by : str
+        ``"current"`` (metadata) or ``"plateaus"`` (segmented stepped input).
+    curves : dict
+        ``level -> (v [m/s], F [N])`` samples per level (subsampled) for the F-v map.
+    error : str
+        Why the analysis (or the laws) failed; empty on success.
+    notes : str
+        Warnings raised by the analysis (e.g. a central slope that is not the steepest).
+    """
+
+    fits: tuple[Any, ...] = ()
+    laws: Any = None
+    by: str = ""
+    curves: dict[float, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    error: str = ""
+    notes: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """True when laws across current were fitted."""
+        return self.laws is not None
+
+
+def _thin(v: np.ndarray, F: np.ndarray, n: int = _MAX_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    if v.size <= n:
+        return v, F
+    step = int(np.ceil(v.size / n))
+    return v[::step], F[::step]
+
+
+def fv_curves(records: ExperimentSet, source: str = "i", by: str | None = None) -> dict[float, tuple[np.ndarray, np.ndarray]]:
+    """Pool (v, F) samples per electrical level, as the analysis groups them.
+
+    Parameters
+    ----------
+    records : ExperimentSet
+        Constant-level records (metadata ``current``) or stepped-input records.
+    source : {"i", "voltage"}
+        Electrical channel for plateau segmentation.
+    by : {"current", "plateaus"}, optional
+        Grouping; default ``"current"`` when every record has metadata ``current``.
+    """
+    from mrdamper.analysis import segment_plateaus
+
+    by = by or ("current" if all("current" in e.metadata for e in records) else "plateaus")
+    pools: dict[float, list[tuple[np.ndarray, np.ndarray]]] = {}
+    if by == "current":
+        for e in records:
+            pools.setdefault(float(e.metadata["current"]), []).append((e.v, e.F))
+    else:
+        sig = [e.electrical(source) for e in records]  # type: ignore[arg-type]
+        span = max(float(np.ptp(s)) for s in sig) if sig else 0.0
+        tol = max(0.02 * span, 1e-9)
+        for e, s in zip(records, sig):
+            for a, b, lev in segment_plateaus(s, e.dt, tolerance=tol, min_duration=1.0, settle=0.2):
+                key = next((k for k in pools if abs(k - lev) <= tol), lev)
+                pools.setdefault(key, []).append((e.v[a:b], e.F[a:b]))
+    return {
+        lev: _thin(np.concatenate([p[0] for p in pools[lev]]), np.concatenate([p[1] for p in pools[lev]]))
+        for lev in sorted(pools)
+    }
+
+
+def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> AnalysisOutcome:
+    """Zone fits per level and laws across level; failures are reported, never raised.
+
+    Parameters
+    ----------
+    records : ExperimentSet
+        Analysis records of one fold.
+    source : {"i", "voltage"}
+        Electrical channel.
+    degree : int
+        Polynomial degree of the slope and intercept laws (2 in the paper).
+    """
+    if len(records) == 0:
+        return AnalysisOutcome(error="no analysis records selected")
+    try:
+        from mrdamper.analysis import fit_zone_laws, zone_fits_by_level
+    except ImportError as exc:  # pragma: no cover - analysis ships with the package
+        return AnalysisOutcome(error=f"analysis unavailable: {exc}")
+    by = "current" if all("current" in e.metadata for e in records) else "plateaus"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fits: Sequence[Any] = ()
+        curves: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        try:
+            curves = fv_curves(records, source, by)
+            fits = zone_fits_by_level(records, by=by, source=source)  # type: ignore[arg-type]
+            laws = fit_zone_laws(fits, degree=degree, strict=False)
+            error = ""
+        except Exception as exc:  # noqa: BLE001 - the study goes on without laws; the report says why
+            laws, error = None, f"{type(exc).__name__}: {exc}"
+    notes = " | ".join(dict.fromkeys(str(w.message).replace("\n", " ")[:200] for w in caught))
+    return AnalysisOutcome(tuple(fits), laws, by, curves, error, notes)

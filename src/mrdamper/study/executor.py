@@ -1,0 +1,229 @@
+"""A small executor abstraction so one study code path runs in-process, on local processes or on Dask.
+
+Three implementations share one interface (:class:`StudyExecutor`):
+
+* :class:`SerialExecutor` runs each task at submission, in the calling process (``workers=1``).
+* :class:`ProcessExecutor` uses :class:`concurrent.futures.ProcessPoolExecutor`. Records are
+  shared once through ``.npy`` files in a private temporary folder (memory-mapped by the workers)
+  instead of being pickled into every task.
+* :class:`DaskExecutor` submits to a ``dask.distributed`` scheduler; records are scattered once.
+
+Records travel as plain arrays and a metadata dict (``Experiment`` holds a read-only mapping that
+does not pickle) and are rebuilt, validated, in the worker.
+"""
+
+from __future__ import annotations
+
+import abc
+import concurrent.futures as cf
+import multiprocessing
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError
+
+__all__ = [
+    "DaskExecutor",
+    "ProcessExecutor",
+    "SerialExecutor",
+    "StudyExecutor",
+    "default_workers",
+    "make_executor",
+    "resolve_record",
+]
+
+
+def default_workers() -> int:
+    """Default number of local worker processes: ``min(2, cpu count)``."""
+    return max(1, min(2, os.cpu_count() or 1))
+
+
+@dataclass(frozen=True)
+class PackedRecord:
+    """A record as plain picklable data: arrays by channel, name and metadata."""
+
+    name: str
+    metadata: dict[str, Any]
+    arrays: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class DiskRecord:
+    """A record stored as ``.npy`` files (one per channel) in a shared folder."""
+
+    name: str
+    metadata: dict[str, Any]
+    paths: dict[str, str]
+
+
+def pack(e: Experiment) -> PackedRecord:
+    """Picklable form of an Experiment."""
+    return PackedRecord(e.name, dict(e.metadata), {c: np.asarray(getattr(e, c)) for c in e.channel_names})
+
+
+def resolve_record(handle: Any) -> Experiment:
+    """Rebuild an :class:`Experiment` from whatever handle a task received."""
+    if isinstance(handle, Experiment):
+        return handle
+    if isinstance(handle, PackedRecord):
+        return Experiment(**handle.arrays, name=handle.name, metadata=handle.metadata)
+    if isinstance(handle, DiskRecord):
+        arrays = {c: np.load(p, mmap_mode="r") for c, p in handle.paths.items()}
+        return Experiment(**arrays, name=handle.name, metadata=handle.metadata)
+    raise DataValidationError("record", f"unexpected record handle of type {type(handle).__name__}")
+
+
+class StudyExecutor(abc.ABC):
+    """Common interface of the study executors."""
+
+    #: Human description shown in the report (e.g. ``"2 local processes"``).
+    description: str = ""
+
+    def share(self, e: Experiment) -> Any:
+        """Make a record available to tasks; returns the handle to pass as a task argument."""
+        return e
+
+    @abc.abstractmethod
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Any:
+        """Schedule ``fn(*args)``; returns a future with ``result()`` and ``cancel()``."""
+
+    @abc.abstractmethod
+    def wait_first(self, pending: Iterable[Any]) -> tuple[set[Any], set[Any]]:
+        """Block until at least one of ``pending`` is done; return ``(done, not_done)``."""
+
+    def close(self, cancel: bool = False) -> None:
+        """Release workers and temporary files; ``cancel`` drops queued tasks."""
+
+
+class SerialExecutor(StudyExecutor):
+    """Runs every task in the calling process at submission time."""
+
+    description = "in-process (1 worker)"
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> cf.Future[Any]:
+        fut: cf.Future[Any] = cf.Future()
+        try:
+            fut.set_result(fn(*args))
+        except Exception as exc:  # noqa: BLE001 - tasks catch their own errors; this is a safety net
+            fut.set_exception(exc)
+        return fut
+
+    def wait_first(self, pending: Iterable[Any]) -> tuple[set[Any], set[Any]]:
+        done, not_done = cf.wait(set(pending), return_when=cf.FIRST_COMPLETED)
+        return set(done), set(not_done)
+
+
+def _ping() -> int:
+    return os.getpid()
+
+
+class ProcessExecutor(StudyExecutor):
+    """Local worker processes; records shared through memory-mapped ``.npy`` files.
+
+    Parameters
+    ----------
+    workers : int
+        Number of processes (>= 1).
+    """
+
+    def __init__(self, workers: int) -> None:
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise DataValidationError("workers", f"expected a positive integer, got {workers!r}")
+        methods = multiprocessing.get_all_start_methods()
+        ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+        self._pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        # start the workers now, before any progress-display thread exists in this process
+        list(self._pool.map(_ping, range(workers)))
+        self._dir = Path(tempfile.mkdtemp(prefix="mrdamper-study-"))
+        self._count = 0
+        self.description = f"{workers} local process{'es' if workers > 1 else ''}"
+
+    def share(self, e: Experiment) -> DiskRecord:
+        self._count += 1
+        paths = {}
+        for c in e.channel_names:
+            p = self._dir / f"r{self._count:05d}_{c}.npy"
+            np.save(p, np.asarray(getattr(e, c)))
+            paths[c] = str(p)
+        return DiskRecord(e.name, dict(e.metadata), paths)
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> cf.Future[Any]:
+        return self._pool.submit(fn, *args)
+
+    def wait_first(self, pending: Iterable[Any]) -> tuple[set[Any], set[Any]]:
+        done, not_done = cf.wait(set(pending), return_when=cf.FIRST_COMPLETED)
+        return set(done), set(not_done)
+
+    def close(self, cancel: bool = False) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=cancel)
+        shutil.rmtree(self._dir, ignore_errors=True)
+
+
+class DaskExecutor(StudyExecutor):
+    """Tasks on a ``dask.distributed`` cluster.
+
+    Parameters
+    ----------
+    scheduler : str or distributed.Client
+        Scheduler address (``"tcp://host:8786"``) or an existing client (not closed by
+        :meth:`close`).
+    """
+
+    def __init__(self, scheduler: Any) -> None:
+        try:
+            import distributed
+        except ImportError:  # pragma: no cover - depends on the installation
+            raise ImportError(
+                "a Dask scheduler was given but dask.distributed is not installed; "
+                "install the 'distributed' extra: pip install 'mrdamper[distributed]'"
+            ) from None
+        self._distributed = distributed
+        if isinstance(scheduler, distributed.Client):
+            self._client = scheduler
+            self._own = False
+        elif isinstance(scheduler, str) and scheduler:
+            self._client = distributed.Client(scheduler)
+            self._own = True
+        else:
+            raise DataValidationError("scheduler", f"expected an address string or a Client, got {scheduler!r}")
+        self.description = f"Dask scheduler {self._client.scheduler.address}"
+
+    def share(self, e: Experiment) -> Any:
+        return self._client.scatter(pack(e), hash=False)
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Any:
+        return self._client.submit(fn, *args, pure=False)
+
+    def wait_first(self, pending: Iterable[Any]) -> tuple[set[Any], set[Any]]:
+        res = self._distributed.wait(list(pending), return_when="FIRST_COMPLETED")
+        return set(res.done), set(res.not_done)
+
+    def close(self, cancel: bool = False) -> None:
+        if self._own:
+            self._client.close()
+
+
+def make_executor(workers: int | None = None, scheduler: Any = None) -> StudyExecutor:
+    """Pick the executor: Dask when ``scheduler`` is given, else processes, or in-process for 1.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local processes; default :func:`default_workers`. ``1`` runs in the calling process.
+    scheduler : str or distributed.Client, optional
+        Dask scheduler address or client; overrides ``workers``.
+    """
+    if scheduler is not None:
+        return DaskExecutor(scheduler)
+    n = default_workers() if workers is None else workers
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise DataValidationError("workers", f"expected a positive integer, got {workers!r}")
+    return SerialExecutor() if n == 1 else ProcessExecutor(n)

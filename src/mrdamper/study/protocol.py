@@ -1,0 +1,570 @@
+"""Study protocols: which records train the analysis and the models, which are scored, which models run.
+
+A :class:`Protocol` is a frozen value. It can be built in Python, taken from the presets
+(:func:`doe_protocol`, :func:`quiroz_protocol`, :func:`dyke_protocol`) or loaded from a small JSON or
+TOML file with :func:`load_protocol` (schema in ``docs/study.md``). How records are turned into
+training and scoring sets (folds) lives in :mod:`mrdamper.study.splits`.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import json
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Literal
+
+import tomllib
+
+from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.data.experiment_set import _equal
+from mrdamper.errors import SchemaError
+
+__all__ = [
+    "DEFAULT_MODELS",
+    "PRESETS",
+    "PROTOCOL_SCHEMA",
+    "PROTOCOL_SCHEMA_VERSION",
+    "ModelSpec",
+    "Protocol",
+    "Selection",
+    "Split",
+    "doe_protocol",
+    "dyke_protocol",
+    "load_protocol",
+    "preset_protocol",
+    "protocol_from_dict",
+    "quiroz_protocol",
+]
+
+PROTOCOL_SCHEMA = "mrdamper.protocol"
+PROTOCOL_SCHEMA_VERSION = 1
+
+#: Models run by default, in display order; kinds that are not installed are left out.
+DEFAULT_MODELS: tuple[str, ...] = ("lpv", "p15", "sp1", "sp2", "sp3", "sp4", "lti", "spencer", "bingham")
+
+SplitKind = Literal["fixed", "leave-one-group-out", "time"]
+RangePolicyName = Literal["error", "warn", "clip", "ignore"]
+
+
+def _frozen_mapping(value: Any, field_name: str) -> Mapping[str, Any]:
+    if value is None:
+        return MappingProxyType({})
+    if not isinstance(value, Mapping):
+        raise SchemaError(f"{field_name}: expected a table/object of key = value, got {value!r}")
+    out: dict[str, Any] = {}
+    for k, v in value.items():
+        out[str(k)] = tuple(v) if isinstance(v, list) else v
+    return MappingProxyType(out)
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Which records of a data set take a role (analysis, training or scoring).
+
+    A record is selected when every condition holds. An empty selection selects every record.
+
+    Parameters
+    ----------
+    match : mapping
+        Metadata ``key: value`` pairs the record must have; a list value accepts any member.
+    names : sequence of str
+        Shell-style globs on the record name (``"exp1_*"``); the record must match at least one.
+        Empty: any name.
+    exclude : mapping
+        Metadata ``key: value`` pairs that reject a record.
+    group_by : str, optional
+        Metadata key used with ``take``.
+    take : int, optional
+        Keep only the first ``take`` selected records of each ``group_by`` value (in data order),
+        e.g. the first replicate of each experiment.
+
+    Examples
+    --------
+    >>> Selection(match={"experiment": [6, 7, 8]}, group_by="experiment", take=1).describe()
+    'experiment in [6, 7, 8]; first 1 per experiment'
+    """
+
+    match: Mapping[str, Any] = field(default_factory=dict)
+    names: tuple[str, ...] = ()
+    exclude: Mapping[str, Any] = field(default_factory=dict)
+    group_by: str | None = None
+    take: int | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "match", _frozen_mapping(self.match, "match"))
+        object.__setattr__(self, "exclude", _frozen_mapping(self.exclude, "exclude"))
+        if isinstance(self.names, str):
+            object.__setattr__(self, "names", (self.names,))
+        object.__setattr__(self, "names", tuple(self.names))
+        for g in self.names:
+            if not isinstance(g, str) or not g:
+                raise SchemaError(f"names: expected non-empty glob strings, got {g!r}")
+        if self.take is not None:
+            if isinstance(self.take, bool) or not isinstance(self.take, int) or self.take < 1:
+                raise SchemaError(f"take: expected a positive integer, got {self.take!r}")
+            if not self.group_by:
+                raise SchemaError("group_by: 'take' needs a metadata key to group by, got none")
+
+    def _accepts(self, e: Experiment) -> bool:
+        for key, want in self.match.items():
+            if key not in e.metadata:
+                return False
+            options = want if isinstance(want, tuple) else (want,)
+            if not any(_equal(e.metadata[key], w) for w in options):
+                return False
+        for key, bad in self.exclude.items():
+            if key in e.metadata:
+                options = bad if isinstance(bad, tuple) else (bad,)
+                if any(_equal(e.metadata[key], w) for w in options):
+                    return False
+        return not self.names or any(fnmatch.fnmatchcase(e.name, g) for g in self.names)
+
+    def select(self, data: ExperimentSet) -> ExperimentSet:
+        """Return the selected records, in data order."""
+        chosen = [e for e in data if self._accepts(e)]
+        if self.take is not None and self.group_by:
+            counts: dict[Any, int] = {}
+            kept = []
+            for e in chosen:
+                g = e.metadata.get(self.group_by)
+                if counts.get(g, 0) < self.take:
+                    kept.append(e)
+                counts[g] = counts.get(g, 0) + 1
+            chosen = kept
+        return ExperimentSet(chosen, name=data.name)
+
+    def describe(self) -> str:
+        """One-line human description."""
+        parts = [f"{k} in {list(v)}" if isinstance(v, tuple) else f"{k} = {v!r}" for k, v in self.match.items()]
+        parts += [f"{k} not in {list(v)}" if isinstance(v, tuple) else f"{k} != {v!r}" for k, v in self.exclude.items()]
+        if self.names:
+            parts.append("name matches " + " or ".join(self.names))
+        if self.take is not None:
+            parts.append(f"first {self.take} per {self.group_by}")
+        return "; ".join(parts) if parts else "all records"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe form (the protocol file layout)."""
+        out: dict[str, Any] = {}
+        if self.match:
+            out["match"] = {k: list(v) if isinstance(v, tuple) else v for k, v in self.match.items()}
+        if self.names:
+            out["names"] = list(self.names)
+        if self.exclude:
+            out["exclude"] = {k: list(v) if isinstance(v, tuple) else v for k, v in self.exclude.items()}
+        if self.group_by is not None:
+            out["group_by"] = self.group_by
+        if self.take is not None:
+            out["take"] = self.take
+        return out
+
+
+@dataclass(frozen=True)
+class Split:
+    """How training and scoring sets are formed from the selected records.
+
+    Parameters
+    ----------
+    kind : {"fixed", "leave-one-group-out", "time"}
+        ``"fixed"``: one fold; the selections are used as they are. ``"leave-one-group-out"``:
+        one fold per group; the group's records are scored, the other groups' records train.
+        ``"time"``: every selected record is cut in time; the first ``fraction`` of its samples
+        trains, the rest is scored.
+    key : str, optional
+        Metadata key defining the groups (leave-one-group-out).
+    name_regex : str, optional
+        Alternative to ``key``: the group is the first capture group (or whole match) of this
+        regular expression searched in the record name.
+    fraction : float
+        Training fraction of each record for ``"time"`` [-], in (0, 1).
+    """
+
+    kind: SplitKind = "fixed"
+    key: str | None = None
+    name_regex: str | None = None
+    fraction: float = 0.7
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("fixed", "leave-one-group-out", "time"):
+            raise SchemaError(
+                f"split.kind: expected 'fixed', 'leave-one-group-out' or 'time', got {self.kind!r}"
+            )
+        if self.kind == "leave-one-group-out" and not (self.key or self.name_regex):
+            raise SchemaError("split.key: leave-one-group-out needs 'key' or 'name_regex', got neither")
+        if self.name_regex is not None:
+            try:
+                re.compile(self.name_regex)
+            except re.error as exc:
+                raise SchemaError(f"split.name_regex: invalid regular expression {self.name_regex!r} ({exc})") from None
+        if isinstance(self.fraction, bool) or not isinstance(self.fraction, (int, float)) or not 0.0 < float(self.fraction) < 1.0:
+            raise SchemaError(f"split.fraction: expected a number in (0, 1), got {self.fraction!r}")
+
+    def group_of(self, e: Experiment) -> Any:
+        """Group value of a record (leave-one-group-out)."""
+        if self.name_regex is not None:
+            m = re.search(self.name_regex, e.name)
+            if m is None:
+                raise SchemaError(f"split.name_regex: record name {e.name!r} does not match {self.name_regex!r}")
+            return m.group(1) if m.groups() else m.group(0)
+        if self.key is None or self.key not in e.metadata:
+            raise SchemaError(f"split.key: record {e.name!r} has no metadata {self.key!r}")
+        return e.metadata[self.key]
+
+    def describe(self) -> str:
+        """One-line human description."""
+        if self.kind == "fixed":
+            return "one fold (fixed training and scoring sets)"
+        if self.kind == "time":
+            return f"each record cut in time: first {self.fraction:.0%} trains, last {1 - self.fraction:.0%} is scored"
+        by = f"metadata {self.key!r}" if self.key else f"name pattern {self.name_regex!r}"
+        return f"leave one group out, groups by {by}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe form."""
+        out: dict[str, Any] = {"kind": self.kind}
+        if self.key is not None:
+            out["key"] = self.key
+        if self.name_regex is not None:
+            out["name_regex"] = self.name_regex
+        if self.kind == "time":
+            out["fraction"] = float(self.fraction)
+        return out
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """One model to run: registry kind, estimator settings and the label used in tables.
+
+    Parameters
+    ----------
+    kind : str
+        Registry kind (``"lpv"``, ``"sp1"``, ...).
+    settings : mapping
+        Keyword settings of the estimator (``get_estimator(kind, **settings)``).
+    label : str, optional
+        Name in tables and figures; defaults to ``kind``. Labels must be unique in a protocol.
+    """
+
+    kind: str
+    settings: Mapping[str, Any] = field(default_factory=dict)
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.kind, str) or not self.kind:
+            raise SchemaError(f"models.kind: expected a registry kind string, got {self.kind!r}")
+        object.__setattr__(self, "settings", MappingProxyType(dict(self.settings or {})))
+        if not self.label:
+            object.__setattr__(self, "label", self.kind)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe form."""
+        out: dict[str, Any] = {"kind": self.kind}
+        if self.settings:
+            out["settings"] = dict(self.settings)
+        if self.label != self.kind:
+            out["label"] = self.label
+        return out
+
+
+def _as_spec(item: Any) -> ModelSpec:
+    if isinstance(item, ModelSpec):
+        return item
+    if isinstance(item, str):
+        return ModelSpec(item)
+    if isinstance(item, Mapping):
+        unknown = set(item) - {"kind", "settings", "label"}
+        if unknown:
+            raise SchemaError(f"models: unknown key(s) {sorted(unknown)}; expected kind, settings, label")
+        if "kind" not in item:
+            raise SchemaError(f"models: entry {dict(item)!r} has no 'kind'")
+        return ModelSpec(item["kind"], item.get("settings") or {}, item.get("label") or "")
+    raise SchemaError(f"models: expected a kind string or a table with 'kind', got {item!r}")
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """A complete comparison protocol.
+
+    Parameters
+    ----------
+    name : str
+        Short name shown in the report.
+    analysis : Selection, optional
+        Records for the force-velocity analysis (zones and laws across current, paper III-C);
+        ``None`` skips the analysis.
+    train : Selection
+        Records that identify the models.
+    score : Selection
+        Records that are scored.
+    split : Split
+        How folds are formed (see :class:`Split`).
+    models : sequence of ModelSpec or str
+        Models to run; an empty sequence means :data:`DEFAULT_MODELS` (those installed).
+    input : {"i", "voltage"}
+        Electrical input every model reads (added to settings unless a model sets it).
+    exclude_trained : bool
+        If true (default), records used for training or analysis in a fold are not scored in
+        that fold, so every score is on unseen data.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Out-of-range policy applied to every fitted model before scoring; extrapolation is
+        reported in the ``note`` column.
+    showcase : str, optional
+        Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10); default: the
+        first scored record.
+    hysteresis_record : str, optional
+        Glob of the record of the LTI hysteresis figure (Fig. 4); default: the first scored
+        record of the analysis selection, else the showcase.
+    description : str
+        Free text shown in the report.
+    """
+
+    name: str = "study"
+    analysis: Selection | None = None
+    train: Selection = field(default_factory=Selection)
+    score: Selection = field(default_factory=Selection)
+    split: Split = field(default_factory=Split)
+    models: tuple[ModelSpec, ...] = ()
+    input: Literal["i", "voltage"] = "i"
+    exclude_trained: bool = True
+    range_policy: RangePolicyName = "warn"
+    showcase: str | None = None
+    hysteresis_record: str | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        specs = tuple(_as_spec(m) for m in self.models)
+        object.__setattr__(self, "models", specs)
+        labels = [s.label for s in specs]
+        dup = sorted({x for x in labels if labels.count(x) > 1})
+        if dup:
+            raise SchemaError(f"models: duplicate label(s) {dup}; give each entry a distinct 'label'")
+        if self.input not in ("i", "voltage"):
+            raise SchemaError(f"input: expected 'i' or 'voltage', got {self.input!r}")
+        if self.range_policy not in ("error", "warn", "clip", "ignore"):
+            raise SchemaError(f"range_policy: expected error, warn, clip or ignore, got {self.range_policy!r}")
+        for name in ("analysis", "train", "score"):
+            val = getattr(self, name)
+            if val is not None and not isinstance(val, Selection):
+                raise SchemaError(f"{name}: expected a Selection, got {type(val).__name__}")
+        if not isinstance(self.split, Split):
+            raise SchemaError(f"split: expected a Split, got {type(self.split).__name__}")
+
+    def resolved_models(self) -> tuple[ModelSpec, ...]:
+        """The model specs to run: the protocol's, or the installed default models."""
+        if self.models:
+            return self.models
+        from mrdamper.models import available_models
+
+        have = set(available_models())
+        return tuple(ModelSpec(k) for k in DEFAULT_MODELS if k in have)
+
+    def with_models(self, models: Sequence[ModelSpec | str | Mapping[str, Any]]) -> Protocol:
+        """Copy with another model list."""
+        from dataclasses import replace
+
+        return replace(self, models=tuple(_as_spec(m) for m in models))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe form; :func:`protocol_from_dict` reads it back."""
+        out: dict[str, Any] = {
+            "schema": PROTOCOL_SCHEMA,
+            "schema_version": PROTOCOL_SCHEMA_VERSION,
+            "name": self.name,
+            "description": self.description,
+            "input": self.input,
+            "analysis": None if self.analysis is None else self.analysis.to_dict(),
+            "train": self.train.to_dict(),
+            "score": self.score.to_dict(),
+            "split": self.split.to_dict(),
+            "exclude_trained": self.exclude_trained,
+            "range_policy": self.range_policy,
+            "models": [m.to_dict() for m in self.models],
+        }
+        if self.showcase is not None:
+            out["showcase"] = self.showcase
+        if self.hysteresis_record is not None:
+            out["hysteresis_record"] = self.hysteresis_record
+        return out
+
+    def to_json(self) -> str:
+        """The protocol as indented JSON text."""
+        return json.dumps(self.to_dict(), indent=2)
+
+
+_TOP_KEYS = {
+    "schema", "schema_version", "name", "description", "input", "analysis", "train", "score",
+    "split", "exclude_trained", "range_policy", "models", "showcase", "hysteresis_record",
+}
+_SEL_KEYS = {"match", "names", "exclude", "group_by", "take"}
+_SPLIT_KEYS = {"kind", "key", "name_regex", "fraction"}
+
+
+def _selection(value: Any, where: str) -> Selection:
+    if value is None:
+        return Selection()
+    if not isinstance(value, Mapping):
+        raise SchemaError(f"{where}: expected a table/object, got {value!r}")
+    unknown = set(value) - _SEL_KEYS
+    if unknown:
+        raise SchemaError(f"{where}: unknown key(s) {sorted(unknown)}; expected {sorted(_SEL_KEYS)}")
+    names = value.get("names", ())
+    return Selection(
+        match=value.get("match") or {},
+        names=(names,) if isinstance(names, str) else tuple(names),
+        exclude=value.get("exclude") or {},
+        group_by=value.get("group_by"),
+        take=value.get("take"),
+    )
+
+
+def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
+    """Build a :class:`Protocol` from its dict form (a parsed JSON or TOML protocol file).
+
+    Raises
+    ------
+    SchemaError
+        Unknown keys, wrong schema name or version, or invalid values; the message names the key.
+    """
+    if not isinstance(data, Mapping):
+        raise SchemaError(f"protocol: expected a table/object at top level, got {type(data).__name__}")
+    unknown = set(data) - _TOP_KEYS
+    if unknown:
+        raise SchemaError(f"protocol: unknown key(s) {sorted(unknown)}; expected some of {sorted(_TOP_KEYS)}")
+    if data.get("schema", PROTOCOL_SCHEMA) != PROTOCOL_SCHEMA:
+        raise SchemaError(f"schema: expected {PROTOCOL_SCHEMA!r}, got {data.get('schema')!r}")
+    if data.get("schema_version", PROTOCOL_SCHEMA_VERSION) != PROTOCOL_SCHEMA_VERSION:
+        raise SchemaError(
+            f"schema_version: expected {PROTOCOL_SCHEMA_VERSION}, got {data.get('schema_version')!r}"
+        )
+    split = data.get("split") or {}
+    if not isinstance(split, Mapping):
+        raise SchemaError(f"split: expected a table/object, got {split!r}")
+    bad = set(split) - _SPLIT_KEYS
+    if bad:
+        raise SchemaError(f"split: unknown key(s) {sorted(bad)}; expected {sorted(_SPLIT_KEYS)}")
+    models = data.get("models", [])
+    if not isinstance(models, (list, tuple)):
+        raise SchemaError(f"models: expected a list, got {models!r}")
+    excl = data.get("exclude_trained", True)
+    if not isinstance(excl, bool):
+        raise SchemaError(f"exclude_trained: expected true or false, got {excl!r}")
+    return Protocol(
+        name=str(data.get("name", "study")),
+        description=str(data.get("description", "")),
+        input=data.get("input", "i"),
+        analysis=None if data.get("analysis") is None else _selection(data["analysis"], "analysis"),
+        train=_selection(data.get("train"), "train"),
+        score=_selection(data.get("score"), "score"),
+        split=Split(**dict(split)),
+        models=tuple(_as_spec(m) for m in models),
+        exclude_trained=excl,
+        range_policy=data.get("range_policy", "warn"),
+        showcase=data.get("showcase"),
+        hysteresis_record=data.get("hysteresis_record"),
+    )
+
+
+def load_protocol(path: str | Path) -> Protocol:
+    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the path does not exist and is not a preset name.
+    SchemaError
+        If the file cannot be parsed or does not follow the schema (see ``docs/study.md``).
+    """
+    if isinstance(path, str) and path in PRESETS:
+        return preset_protocol(path)
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})")
+    text = p.read_text(encoding="utf-8")
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".toml":
+            data = tomllib.loads(text)
+        elif suffix == ".json":
+            data = json.loads(text)
+        else:
+            raise SchemaError(f"{p}: protocol file must end in .json or .toml, got {suffix!r}")
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SchemaError(f"{p}: cannot parse protocol file ({exc})") from None
+    return protocol_from_dict(data)
+
+
+# ----------------------------------------------------------------------------- presets
+def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
+    """The default protocol on the Table II design of experiments (virtual rig or a real rig).
+
+    * Force-velocity analysis: the first replicate of each stepped-current experiment (6-8).
+    * Identification: the first replicate of the varying-current experiments 1-3 (ICPS, APRBS,
+      PRBS; 30 s each). The long road-profile experiments 4-5 (600 s) are kept for validation
+      only, which keeps identification time bounded.
+    * Scoring: every other record of experiments 1-8; records used for the analysis or the
+      identification are never scored (``exclude_trained``).
+    """
+    return Protocol(
+        name="doe",
+        description=(
+            "Table II design of experiments. F-v analysis on the first replicate of the stepped-current "
+            "experiments 6-8; identification on the first replicate of experiments 1-3; every remaining "
+            "record (replicates 2.. of 1-3 and 6-8, all of the long-road experiments 4-5) is scored."
+        ),
+        analysis=Selection(match={"experiment": (6, 7, 8)}, group_by="experiment", take=1),
+        train=Selection(match={"experiment": (1, 2, 3)}, group_by="experiment", take=1),
+        score=Selection(),
+        split=Split("fixed"),
+        models=tuple(models),
+        hysteresis_record="*exp8*",
+    )
+
+
+def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
+    """Leave-one-condition-out on the Quiroz constant-current sine records.
+
+    Each fold holds out one amplitude/frequency condition (all five currents) and trains the
+    analysis and the models on the other conditions. The condition is read from the file name
+    (``sine_5mm_3Hz_0.5A`` -> ``5mm_3Hz``).
+    """
+    return Protocol(
+        name="quiroz-loco",
+        description="Quiroz (2022) sine records: leave one amplitude/frequency condition out, all currents.",
+        analysis=Selection(),
+        train=Selection(),
+        score=Selection(),
+        split=Split("leave-one-group-out", name_regex=r"(\d+(?:\.\d+)?mm_\d+(?:\.\d+)?Hz)"),
+        models=tuple(models),
+    )
+
+
+def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
+    """Dyke (1996) random-excitation record: first 70 % of each record trains, last 30 % is scored.
+
+    The electrical input is the command voltage; the force-velocity analysis is skipped (the
+    voltage switches on a 10 ms grid, there are no constant-current records).
+    """
+    return Protocol(
+        name="dyke-70-30",
+        description="Dyke (1996) white-noise record, input = command voltage; first 70 % trains, last 30 % scored.",
+        analysis=None,
+        train=Selection(),
+        score=Selection(),
+        split=Split("time", fraction=0.7),
+        input="voltage",
+        models=tuple(models),
+    )
+
+
+PRESETS = {"doe": doe_protocol, "quiroz": quiroz_protocol, "dyke": dyke_protocol}
+
+
+def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
+    """A preset protocol by name: ``"doe"``, ``"quiroz"`` or ``"dyke"``."""
+    if name not in PRESETS:
+        raise SchemaError(f"protocol: unknown preset {name!r}; expected one of {sorted(PRESETS)}")
+    return PRESETS[name](models)

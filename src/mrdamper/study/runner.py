@@ -1,0 +1,311 @@
+"""Run a comparison study: every model of a protocol fitted on every fold and scored on its records.
+
+Fits and simulations are tasks on an executor (in-process, local processes or Dask; see
+:mod:`mrdamper.study.executor`). A model's simulations start as soon as its fit is done. A model that
+fails to fit, diverges or leaves its range stays in the results as rows with a status and the error.
+Rows are ordered by fold, model and record whatever the completion order, so the same inputs and
+seed give the same table (timing columns aside).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import fnmatch
+import inspect
+import platform
+import time
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.errors import SchemaError
+from mrdamper.study._tasks import fit_task, simulate_task
+from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.executor import StudyExecutor, make_executor
+from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec, doe_protocol
+from mrdamper.study.result import Showcase, StudyResult
+from mrdamper.study.splits import Fold, make_folds, roles_frame
+from mrdamper.study.tables import RESULT_COLUMNS
+
+__all__ = ["META_COLUMNS", "run_study"]
+
+#: Record metadata copied into the results table when present.
+META_COLUMNS: tuple[str, ...] = ("experiment", "replicate", "pattern", "condition", "current", "amplitude", "frequency")
+
+_LAW_SETTINGS = ("laws", "zone_laws")
+
+
+def _estimator_fields(est: Any) -> set[str]:
+    if dataclasses.is_dataclass(est):
+        return {f.name for f in dataclasses.fields(est)}
+    return set(inspect.signature(type(est)).parameters)
+
+
+def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict[str, Any]:
+    """Estimator settings of ``spec`` with the protocol's input, the study seed and the fold's laws."""
+    from mrdamper.models import get_estimator
+
+    try:
+        est = get_estimator(spec.kind, **dict(spec.settings))
+    except TypeError as exc:
+        raise SchemaError(f"models.{spec.label}.settings: {exc}") from None
+    fields = _estimator_fields(est)
+    out = dict(spec.settings)
+    if "input" in fields and "input" not in out:
+        out["input"] = protocol.input
+    if "seed" in fields and "seed" not in out:
+        out["seed"] = seed
+    if laws is not None:
+        for key in _LAW_SETTINGS:
+            if key in fields and key not in out:
+                out[key] = laws
+    return out
+
+
+def _pick(records: Iterable[Experiment], pattern: str | None) -> Experiment | None:
+    for e in records:
+        if pattern is None or fnmatch.fnmatchcase(e.name, pattern):
+            return e
+    return None
+
+
+def _predict_all(models: Mapping[str, Any], e: Experiment, policy: str) -> dict[str, Any]:
+    """Label -> predicted force [N] or the error text, for the figures."""
+    import warnings
+
+    out: dict[str, Any] = {}
+    for label, m in models.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                F = np.asarray(m.with_range_policy(policy).predict(e), dtype=float)
+                out[label] = F if np.all(np.isfinite(F)) else "non-finite prediction"
+            except Exception as exc:  # noqa: BLE001 - shown in the figure legend, never fatal
+                out[label] = f"{type(exc).__name__}: {exc}"
+    return out
+
+
+def _progress(enabled: bool) -> Any:
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(
+        TextColumn("{task.description:<12}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+        console=Console(stderr=True), disable=not enabled, transient=False,
+    )
+
+
+def run_study(
+    data: ExperimentSet | Iterable[Experiment],
+    protocol: Protocol | None = None,
+    models: Sequence[str | ModelSpec | Mapping[str, Any]] | None = None,
+    *,
+    workers: int | None = None,
+    scheduler: Any = None,
+    seed: int = 0,
+    progress: bool = True,
+) -> StudyResult:
+    """Fit every model of ``protocol`` on each fold of ``data`` and score it on the fold's records.
+
+    Parameters
+    ----------
+    data : ExperimentSet or iterable of Experiment
+        All records of the study (never modified).
+    protocol : Protocol, optional
+        Roles of the records and models; default :func:`~mrdamper.study.protocol.doe_protocol`.
+    models : sequence, optional
+        Overrides the protocol's models: kinds (``"lpv"``), :class:`ModelSpec` or dicts.
+    workers : int, optional
+        Local worker processes (default ``min(2, cpu)``); ``1`` runs in this process.
+    scheduler : str or distributed.Client, optional
+        Dask scheduler address or client; when given, tasks run there instead.
+    seed : int
+        Passed as ``seed`` to every estimator that takes one (unless its settings set it).
+    progress : bool
+        Show a progress bar (on standard error).
+
+    Returns
+    -------
+    StudyResult
+        Results, summary, fitted models, analysis and figure data; ``.write(out_dir)`` saves all.
+
+    Raises
+    ------
+    SchemaError
+        Unknown model kind or setting, or a protocol that leaves a fold without training or
+        scoring records. Model failures do not raise: they are rows with a status.
+    """
+    t_start = time.perf_counter()
+    data = as_experiment_set(data, name="data")
+    protocol = protocol or doe_protocol()
+    if models is not None:
+        protocol = protocol.with_models([_as_spec(m) for m in models])
+    specs = protocol.resolved_models()
+    if not specs:
+        raise SchemaError("models: no model to run (none given and no default model is installed)")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise SchemaError(f"seed: expected an integer, got {seed!r}")
+    folds = make_folds(data, protocol)
+    analyses: dict[str, AnalysisOutcome] = {}
+    for fold in folds:
+        if protocol.analysis is None:
+            analyses[fold.name] = AnalysisOutcome(error="no force-velocity analysis in this protocol")
+        else:
+            analyses[fold.name] = run_analysis(fold.analysis, protocol.input)
+    settings = {
+        (fi, si): _settings(spec, protocol, int(seed), analyses[fold.name].laws)
+        for fi, fold in enumerate(folds)
+        for si, spec in enumerate(specs)
+    }
+    fit_out: dict[tuple[int, int], dict[str, Any]] = {}
+    sim_out: dict[tuple[int, int, int], dict[str, Any]] = {}
+    executor = make_executor(workers, scheduler)
+    try:
+        _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
+    except BaseException:
+        executor.close(cancel=True)
+        raise
+    executor.close()
+    results, fits = _tables(folds, specs, fit_out, sim_out)
+    fitted = _fitted_models(folds, specs, fit_out)
+    showcase, hysteresis = _showcases(folds, specs, fitted, protocol)
+    info = {
+        "seed": int(seed),
+        "executor": executor.description,
+        "wall_time_s": time.perf_counter() - t_start,
+        "n_records": len(data),
+        "n_folds": len(folds),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+    }
+    return StudyResult(
+        protocol=protocol, specs=specs, results=results, fits=fits, roles=roles_frame(folds),
+        models=fitted, analyses=analyses, showcase=showcase, hysteresis=hysteresis, info=info,
+    )
+
+
+def _execute(
+    ex: StudyExecutor,
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    settings: Mapping[tuple[int, int], dict[str, Any]],
+    protocol: Protocol,
+    fit_out: dict[tuple[int, int], dict[str, Any]],
+    sim_out: dict[tuple[int, int, int], dict[str, Any]],
+    show: bool,
+) -> None:
+    handles: dict[int, Any] = {}
+
+    def handle(e: Experiment) -> Any:
+        if id(e) not in handles:
+            handles[id(e)] = ex.share(e)
+        return handles[id(e)]
+
+    n_sims = sum(len(f.score) for f in folds) * len(specs)
+    pending: dict[Any, tuple[int, ...]] = {}
+    for fi, fold in enumerate(folds):
+        train = [handle(e) for e in fold.train]
+        for si, spec in enumerate(specs):
+            pending[ex.submit(fit_task, spec.kind, settings[(fi, si)], train)] = (fi, si)
+    with _progress(show) as bar:
+        t_fit = bar.add_task("fitting", total=len(folds) * len(specs))
+        t_sim = bar.add_task("simulating", total=n_sims)
+        while pending:
+            done, _ = ex.wait_first(list(pending))
+            for fut in done:
+                tag = pending.pop(fut)
+                try:
+                    res = fut.result()
+                except Exception as exc:  # noqa: BLE001 - a worker died or a task could not be delivered
+                    res = {"status": "fit-failed" if len(tag) == 2 else "sim-failed", "model": None,
+                           "error": f"worker error: {type(exc).__name__}: {exc}", "note": "",
+                           "fit_time_s": float("nan"), "sim_time_s": float("nan")}
+                if len(tag) == 2:
+                    fi, si = tag
+                    fit_out[(fi, si)] = res
+                    bar.advance(t_fit)
+                    if res["status"] == "ok":
+                        for ri, e in enumerate(folds[fi].score):
+                            fut2 = ex.submit(simulate_task, res["model"], handle(e), protocol.range_policy)
+                            pending[fut2] = (fi, si, ri)
+                    else:
+                        bar.advance(t_sim, len(folds[fi].score))
+                else:
+                    sim_out[tag] = res  # type: ignore[index]
+                    bar.advance(t_sim)
+
+
+def _tables(
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    fit_out: Mapping[tuple[int, int], dict[str, Any]],
+    sim_out: Mapping[tuple[int, int, int], dict[str, Any]],
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    nan = float("nan")
+    rows: list[dict[str, Any]] = []
+    fit_rows: list[dict[str, Any]] = []
+    meta_present = [k for k in META_COLUMNS if any(k in e.metadata for f in folds for e in f.score)]
+    for fi, fold in enumerate(folds):
+        for si, spec in enumerate(specs):
+            fr = fit_out[(fi, si)]
+            fit_rows.append({
+                "fold": fold.name, "model": spec.label, "kind": spec.kind, "status": fr["status"],
+                "fit_time_s": fr["fit_time_s"], "n_train": len(fold.train),
+                "train_samples": int(sum(e.n for e in fold.train)),
+                "note": fr.get("note", ""), "error": fr.get("error", ""),
+            })
+            for ri, e in enumerate(fold.score):
+                row: dict[str, Any] = {"fold": fold.name, "model": spec.label, "kind": spec.kind, "record": e.name,
+                                       "fit_time_s": fr["fit_time_s"]}
+                if fr["status"] != "ok":
+                    row.update(status=fr["status"], esr=nan, ssse=nan, nrmse=nan, fit_pct=nan, sim_time_s=nan,
+                               note=fr.get("note", ""), error=fr.get("error", ""))
+                else:
+                    sr = sim_out[(fi, si, ri)]
+                    row.update({k: sr.get(k, nan) for k in ("status", "esr", "ssse", "nrmse", "fit_pct", "sim_time_s")})
+                    row["note"], row["error"] = sr.get("note", ""), sr.get("error", "")
+                for k in meta_present:
+                    row[k] = e.metadata.get(k)
+                rows.append(row)
+    results = pd.DataFrame(rows, columns=[*RESULT_COLUMNS, *meta_present])
+    return results, pd.DataFrame(fit_rows)
+
+
+def _fitted_models(
+    folds: list[Fold], specs: Sequence[ModelSpec], fit_out: Mapping[tuple[int, int], dict[str, Any]]
+) -> dict[tuple[str, str], Any]:
+    from mrdamper.models import model_from_dict
+
+    out: dict[tuple[str, str], Any] = {}
+    for fi, fold in enumerate(folds):
+        for si, spec in enumerate(specs):
+            res = fit_out[(fi, si)]
+            if res["status"] == "ok" and res.get("model") is not None:
+                out[(fold.name, spec.label)] = model_from_dict(res["model"])
+    return out
+
+
+def _showcases(
+    folds: list[Fold], specs: Sequence[ModelSpec], fitted: Mapping[tuple[str, str], Any], protocol: Protocol
+) -> tuple[Showcase | None, Showcase | None]:
+    """Predictions of every model on the figure records (Figs. 4, 6, 9, 10)."""
+    show = hyst = None
+    for pattern, is_hyst in ((protocol.showcase, False), (protocol.hysteresis_record, True)):
+        for fold in folds:
+            e = _pick(fold.score, pattern)
+            if e is None:
+                continue
+            ms = {s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted}
+            kinds = {s.label: s.kind for s in specs}
+            sc = Showcase(fold=fold.name, record=e, predictions=_predict_all(ms, e, protocol.range_policy), kinds=kinds)
+            if is_hyst:
+                hyst = sc
+            else:
+                show = sc
+            break
+    if hyst is None:
+        hyst = show
+    return show, hyst
