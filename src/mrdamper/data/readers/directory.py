@@ -42,6 +42,7 @@ _SUFFIX_FACTORS: dict[str, float] = {
     u.replace("/", "_per_"): f for table in UNITS.values() for u, f in table.items()
 }
 _SUFFIX_FACTORS["Hz"] = 1.0
+_SUFFIXES_LONGEST_FIRST = sorted(_SUFFIX_FACTORS, key=len, reverse=True)
 
 
 def parse_file_name(file_name: str, pattern: str | re.Pattern[str]) -> dict[str, Any] | None:
@@ -71,9 +72,9 @@ def parse_file_name(file_name: str, pattern: str | re.Pattern[str]) -> dict[str,
         if text is None:
             continue
         factor = None
-        for suffix, f in _SUFFIX_FACTORS.items():
+        for suffix in _SUFFIXES_LONGEST_FIRST:
             if key.endswith("_" + suffix) and len(key) > len(suffix) + 1:
-                key, factor = key[: -len(suffix) - 1], f
+                key, factor = key[: -len(suffix) - 1], _SUFFIX_FACTORS[suffix]
                 break
         if _NUMBER.fullmatch(text):
             value: Any = float(text) * (factor if factor is not None else 1.0)
