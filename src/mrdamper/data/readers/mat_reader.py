@@ -20,6 +20,8 @@ from mrdamper.errors import DataValidationError, MrDamperError
 
 __all__ = ["read_mat", "mat_version"]
 
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
 
 def mat_version(path: str | os.PathLike[str]) -> str:
     """Return ``"v4"``, ``"v5"`` (v5/v6/v7) or ``"v7.3"`` for a MATLAB file.
@@ -37,6 +39,10 @@ def mat_version(path: str | os.PathLike[str]) -> str:
     try:
         major, _minor = matfile_version(str(p))
     except Exception as exc:  # scipy raises ValueError / MatReadError for non-MAT content
+        with p.open("rb") as fh:
+            head = fh.read(520)
+        if head[:8] == _HDF5_SIGNATURE or head[512:520] == _HDF5_SIGNATURE:
+            return "v7.3"  # HDF5 without the MATLAB text header (e.g. written by h5py)
         raise DataValidationError("file", f"{p} is not a MATLAB .mat file ({exc})") from None
     return {0: "v4", 1: "v5", 2: "v7.3"}.get(major, f"unknown ({major})")
 
