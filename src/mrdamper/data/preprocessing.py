@@ -63,9 +63,10 @@ def _zero_phase_lowpass(values: np.ndarray, cutoff: float, fs: float, order: int
 
 
 def dominant_frequency(x: Any, fs: float, *, min_share: float = 0.5) -> float:
-    """Frequency [Hz] of the largest spectral peak of ``x`` (mean removed, Hann window).
+    """Frequency [Hz] of the largest spectral peak of ``x``.
 
-    The peak position is refined by parabolic interpolation of the log power.
+    The peak is located in the Hann-windowed spectrum (mean removed), then refined to the
+    frequency of the best least-squares sine fit within one bin of it.
 
     Parameters
     ----------
@@ -98,13 +99,22 @@ def dominant_frequency(x: Any, fs: float, *, min_share: float = 0.5) -> float:
             f"has no dominant frequency (largest peak holds {share:.0%} of the power, expected at "
             f"least {min_share:.0%}); give the period or frequency explicitly",
         )
-    delta = 0.0
-    if 1 <= k < p.size - 1 and min(p[k - 1], p[k + 1]) > 0:
-        a, b, c = np.log(p[k - 1]), np.log(p[k]), np.log(p[k + 1])
-        den = a - 2 * b + c
-        if den != 0:
-            delta = float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
-    return float((k + delta) * fs / n)
+    # Refine within +-1 bin: the frequency whose least-squares sine (with offset) leaves the
+    # smallest residual. Unlike interpolating the windowed spectrum, this is unbiased for short
+    # records holding a non-integer number of cycles.
+    from scipy.optimize import minimize_scalar
+
+    t = np.arange(n) / fs
+
+    def residual(f: float) -> float:
+        basis = np.column_stack((np.ones(n), np.sin(2 * np.pi * f * t), np.cos(2 * np.pi * f * t)))
+        coef, *_ = np.linalg.lstsq(basis, x, rcond=None)
+        return float(np.sum((x - basis @ coef) ** 2))
+
+    bin_hz = fs / n
+    lo, hi = max(k - 1, 0.5) * bin_hz, (k + 1) * bin_hz
+    res = minimize_scalar(residual, bounds=(lo, hi), method="bounded", options={"xatol": 1e-7 * hi})
+    return float(res.x)
 
 
 def estimate_velocity_cutoff(exp: Experiment) -> float:
