@@ -102,10 +102,16 @@ def test_remove_offsets_over_whole_cycles() -> None:
         assert out.metadata["offsets"]["x"] == pytest.approx(0.0012, abs=2e-5)
         assert out.metadata["offsets"]["F"] == pytest.approx(-35.0, abs=1.5)
         np.testing.assert_allclose(out.x + out.metadata["offsets"]["x"], x)
-    out = remove_offsets(e.replace(metadata={"frequency": f}), channels="F")
+    # A nominal frequency that is slightly off does not move the window: x is measured.
+    out = remove_offsets(e.replace(metadata={"frequency": 1.02 * f}), channels="F")
     assert out.metadata["offsets"] == {"F": pytest.approx(-35.0, abs=1.5)}
-    assert "metadata frequency" in out.metadata["processing"][-1]
+    assert "spectrum of x, 2 Hz" in out.metadata["processing"][-1]
     np.testing.assert_array_equal(out.x, e.x)
+    # Without a dominant frequency in x, the metadata frequency is used.
+    flat = e.replace(x=np.random.default_rng(2).standard_normal(n), metadata={"frequency": f})
+    out = remove_offsets(flat, channels="F")
+    assert "x has no dominant frequency" in out.metadata["processing"][-1]
+    assert out.metadata["offsets"]["F"] == pytest.approx(-35.0, abs=1e-6)
     assert dominant_frequency(x, FS) == pytest.approx(f, rel=0.01)
 
 

@@ -237,9 +237,11 @@ def remove_offsets(
     channels : sequence of str
         Channels to correct (any of ``x, v, F, i, voltage``).
     period : float, optional
-        Excitation period [s]. Default: ``1 / metadata["frequency"]`` if present, else the
-        period of the dominant spectral peak of x (:func:`dominant_frequency`; raises for
-        excitation without a dominant frequency).
+        Excitation period [s]. Default: measured from x, the period of its dominant spectral
+        peak (:func:`dominant_frequency`), because a nominal frequency can be off (the shared
+        sine records run about 1.7 % faster than their file names say, and over many cycles
+        that misplaces the window by a sizeable part of a cycle). If x has no dominant frequency,
+        ``1 / metadata["frequency"]`` is used; without it, the error is raised.
 
     Returns
     -------
@@ -255,10 +257,22 @@ def remove_offsets(
             raise DataValidationError(ch, f"record {exp.name!r} has no {ch!r} channel")
     if period is None:
         f = exp.metadata.get("frequency")
-        if isinstance(f, (int, float, np.integer, np.floating)) and not isinstance(f, bool) and f > 0:
-            period, how = 1.0 / float(f), "metadata frequency"
+        f_meta = (
+            float(f)
+            if isinstance(f, (int, float, np.integer, np.floating)) and not isinstance(f, bool) and f > 0
+            else None
+        )
+        try:
+            f_x = dominant_frequency(exp.x, exp.fs)
+        except DataValidationError:
+            if f_meta is None:
+                raise
+            period, how = 1.0 / f_meta, "metadata frequency; x has no dominant frequency"
         else:
-            period, how = 1.0 / dominant_frequency(exp.x, exp.fs), "spectrum of x"
+            period = 1.0 / f_x
+            how = f"spectrum of x, {f_x:.6g} Hz"
+            if f_meta is not None:
+                how += f"; nominal metadata frequency {f_meta:g} Hz"
     else:
         period, how = _positive("period", period), "given"
     per_samples = period * exp.fs
