@@ -1,0 +1,125 @@
+"""Writing a generated design of experiments to disk: one CSV per record plus a manifest."""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from pathlib import Path
+from typing import Any
+
+from mrdamper._io import atomic_write_text
+from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.errors import OutputExistsError
+from mrdamper.models.base import FittedModel
+
+__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "write_doe", "write_records"]
+
+#: File name of the manifest written beside the records.
+MANIFEST_NAME = "manifest.csv"
+#: Manifest columns, in order.
+MANIFEST_COLUMNS: tuple[str, ...] = (
+    "name", "experiment", "replicate", "pattern", "displacement", "duration", "max_frequency",
+    "samples", "seed", "file",
+)
+
+
+def _write_csv(record: Experiment, path: Path, force: bool) -> None:
+    from mrdamper.data.writers import write_csv
+
+    write_csv(record, path, force=force)
+
+
+def _check_out_dir(out_dir: Path, force: bool) -> None:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise OutputExistsError(f"{out_dir}: exists and is not a directory")
+    if out_dir.is_dir() and any(out_dir.iterdir()) and not force:
+        raise OutputExistsError(
+            f"{out_dir}: directory exists and is not empty; pass force=True (CLI: --force) to "
+            f"write into it (files of the same name are overwritten, others are left alone)"
+        )
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float):
+        return repr(value)
+    return "" if value is None else str(value)
+
+
+def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, force: bool = False) -> Path:
+    """Write every record as ``<name>.csv`` (SI columns) and ``manifest.csv`` into ``out_dir``.
+
+    Parameters
+    ----------
+    records : ExperimentSet
+        Records with DoE metadata (missing keys leave empty manifest cells).
+    out_dir : path-like
+        Output folder; created if missing.
+    force : bool
+        Write into an existing, non-empty folder (overwriting files of the same name).
+
+    Returns
+    -------
+    Path
+        The manifest file.
+
+    Raises
+    ------
+    OutputExistsError
+        If ``out_dir`` is a non-empty folder (or a file) and ``force`` is false.
+    """
+    out = Path(out_dir)
+    _check_out_dir(out, force)
+    out.mkdir(parents=True, exist_ok=True)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(MANIFEST_COLUMNS)
+    for rec in records:
+        file = f"{rec.name}.csv"
+        _write_csv(rec, out / file, force)
+        meta = dict(rec.metadata)
+        row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
+        w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
+    return atomic_write_text(out / MANIFEST_NAME, buf.getvalue(), force=force)
+
+
+def write_doe(
+    out_dir: str | os.PathLike[str],
+    seed: int = 0,
+    scale: float = 1.0,
+    fs: float = 1000.0,
+    force: bool = False,
+    damper: FittedModel | None = None,
+) -> Path:
+    """Generate the Table II DoE (:func:`~mrdamper.rig.doe.table_ii`) and write it to ``out_dir``.
+
+    One CSV per record (columns ``t, x, v, i, F`` in SI units, written atomically by
+    :func:`mrdamper.data.writers.write_csv`) and ``manifest.csv`` (name, experiment, replicate,
+    pattern, displacement, duration [s], max_frequency [Hz], samples, seed, file). The same
+    arguments give byte-identical files.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Output folder; must be absent or empty unless ``force``.
+    seed : int
+        Root seed.
+    scale : float
+        Duration factor.
+    fs : float
+        Sampling rate [Hz].
+    force : bool
+        Write into a non-empty folder, overwriting files of the same name.
+    damper : FittedModel, optional
+        Damper under test (default: the shipped reference damper).
+
+    Returns
+    -------
+    Path
+        The manifest file.
+    """
+    from mrdamper.rig.doe import table_ii
+
+    _check_out_dir(Path(out_dir), force)  # fail before the (long) generation
+    records = table_ii(seed=seed, scale=scale, fs=fs, damper=damper)
+    return write_records(records, out_dir, force=force)

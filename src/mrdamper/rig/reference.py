@@ -1,0 +1,73 @@
+"""Shipped reference dampers: calibrated model files in ``mrdamper/rig/parameters/*.json``.
+
+``quiroz2022`` is the Spencer (modified Bouc-Wen) model calibrated on the Quiroz (UTFSM, 2022)
+constant-current sine records, 0-1 A (input ``i``); ``spencer1997`` is the published prototype
+damper of Spencer et al. (1997), driven by command voltage 0-2.25 V (input ``voltage``). How they
+were calibrated is described in ``docs/calibration.md``.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from typing import Any
+
+from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
+from mrdamper.models.registry import load_model
+
+__all__ = ["DEFAULT_REFERENCE", "REFERENCE_DAMPERS", "available_reference_dampers", "reference_damper"]
+
+#: Names of the reference dampers the package is meant to ship.
+REFERENCE_DAMPERS: tuple[str, ...] = ("quiroz2022", "spencer1997")
+
+#: The damper the virtual rig uses when none is given.
+DEFAULT_REFERENCE = "quiroz2022"
+
+
+def _parameters_dir() -> Any:  # importlib Traversable
+    return resources.files("mrdamper.rig").joinpath("parameters")
+
+
+def available_reference_dampers() -> list[str]:
+    """Names of the reference dampers whose parameter file is installed."""
+    folder = _parameters_dir()
+    return [n for n in REFERENCE_DAMPERS if folder.joinpath(f"{n}.json").is_file()]
+
+
+def reference_damper(name: str = DEFAULT_REFERENCE) -> FittedModel:
+    """Load a shipped reference damper model.
+
+    Parameters
+    ----------
+    name : {"quiroz2022", "spencer1997"}
+        Which damper.
+
+    Returns
+    -------
+    FittedModel
+        The model (a :class:`~mrdamper.models.spencer.SpencerModel`), loaded with
+        :func:`mrdamper.models.load_model`.
+
+    Raises
+    ------
+    DataValidationError
+        For an unknown name.
+    FileNotFoundError
+        If the parameter file is not installed.
+
+    Examples
+    --------
+    >>> damper = reference_damper()  # doctest: +SKIP
+    >>> damper.kind, damper.input, damper.input_range  # doctest: +SKIP
+    ('spencer', 'i', (0.0, 1.0))
+    """
+    if name not in REFERENCE_DAMPERS:
+        raise DataValidationError("name", f"unknown reference damper {name!r}; expected one of {list(REFERENCE_DAMPERS)}")
+    res = _parameters_dir().joinpath(f"{name}.json")
+    if not res.is_file():
+        raise FileNotFoundError(
+            f"reference damper {name!r}: parameter file parameters/{name}.json is not installed "
+            f"(installed: {available_reference_dampers()})"
+        )
+    with resources.as_file(res) as path:
+        return load_model(path)
