@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 import scipy.io
 
-from mrdamper.data import Experiment, read, read_csv, read_mat, read_parquet, write_csv, write_parquet
+from mrdamper.data import (
+    Experiment,
+    read,
+    read_csv,
+    read_mat,
+    read_parquet,
+    write_csv,
+    write_parquet,
+)
 from mrdamper.data.readers import read_directory
 from mrdamper.errors import DataValidationError, OutputExistsError, UnitError
 
@@ -68,7 +76,7 @@ def test_writer_unit_errors(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("writer", [write_csv, write_parquet])
-def test_writers_never_overwrite_without_force(tmp_path: Path, writer) -> None:  # noqa: ANN001
+def test_writers_never_overwrite_without_force(tmp_path: Path, writer) -> None:
     e = _record()
     p = tmp_path / "rec.out"
     writer(e, p)

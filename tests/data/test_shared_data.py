@@ -10,7 +10,11 @@ import pytest
 
 from mrdamper.data import read, read_directory
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE
-from mrdamper.data.preprocessing import apply_drive_lag, dominant_frequency, velocity_from_displacement
+from mrdamper.data.preprocessing import (
+    apply_drive_lag,
+    dominant_frequency,
+    velocity_from_displacement,
+)
 from mrdamper.errors import DataValidationError
 
 pytestmark = pytest.mark.realdata
@@ -26,14 +30,14 @@ RATES = {
 
 
 @pytest.fixture(scope="module", params=["sine_unfiltered", "sine_filtered"])
-def quiroz(request: pytest.FixtureRequest, shared_data: Path):  # noqa: ANN201
+def quiroz(request: pytest.FixtureRequest, shared_data: Path):
     folder = shared_data / "quiroz2022_utfsm" / request.param
     if not folder.exists():
         pytest.skip(f"{folder} not found")
     return request.param, folder, read_directory(folder)
 
 
-def test_quiroz_folder_contents(quiroz) -> None:  # noqa: ANN001
+def test_quiroz_folder_contents(quiroz) -> None:
     kind, folder, s = quiroz
     assert len(s) == 30
     assert len(list(folder.glob("*.csv"))) == 30  # every CSV matched the default pattern
@@ -48,7 +52,7 @@ def test_quiroz_folder_contents(quiroz) -> None:  # noqa: ANN001
             assert e.metadata["units"] == {"t": "s", "x": "m", "v": "m/s", "F": "N", "i": "A"}
 
 
-def test_quiroz_time_is_uniform_within_default_tolerance(quiroz) -> None:  # noqa: ANN001
+def test_quiroz_time_is_uniform_within_default_tolerance(quiroz) -> None:
     _, _, s = quiroz
     for e in s:
         assert e.time_tolerance == DEFAULT_TIME_TOLERANCE  # read without loosening anything
@@ -57,7 +61,7 @@ def test_quiroz_time_is_uniform_within_default_tolerance(quiroz) -> None:  # noq
         assert "repairs" not in e.metadata
 
 
-def test_quiroz_ranges(quiroz) -> None:  # noqa: ANN001
+def test_quiroz_ranges(quiroz) -> None:
     kind, _, s = quiroz
     for e in s:
         amp = e.metadata["amplitude"]
@@ -69,7 +73,7 @@ def test_quiroz_ranges(quiroz) -> None:  # noqa: ANN001
         assert np.all(np.diff(spans) > 0), f"{kind} {cond}: force span not increasing with current"
 
 
-def test_quiroz_excitation_frequency(quiroz) -> None:  # noqa: ANN001
+def test_quiroz_excitation_frequency(quiroz) -> None:
     _, _, s = quiroz
     ratios = np.array([dominant_frequency(e.x, e.fs) / e.metadata["frequency"] for e in s])
     # Every record runs 1.5-1.9 % faster than its nominal frequency on the stated time base

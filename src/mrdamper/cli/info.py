@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import re
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -18,7 +18,7 @@ import typer
 from mrdamper.data.experiment import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError
 
-__all__ = ["register", "summarize", "detect_problems", "CURRENT_RANGE"]
+__all__ = ["CURRENT_RANGE", "detect_problems", "register", "summarize"]
 
 #: Coil current range of the rig [A] (paper Section IV); values outside are flagged.
 CURRENT_RANGE = (0.0, 4.0)
@@ -180,21 +180,35 @@ def _print_table(rows: list[dict[str, Any]], title: str) -> None:
 
 
 def info(
-    paths: list[Path] = typer.Argument(None, help="Data files or folders (CSV, Parquet, MAT)."),
-    pattern: str = typer.Option(
-        None,
-        "--pattern",
-        help="Regex for file names in folders; named groups become metadata. Default: the "
-        "sine-record pattern if any file matches it, else every CSV/Parquet/MAT file.",
-    ),
-    units: list[str] = typer.Option(None, "--units", help="Column unit, e.g. --units x=mm --units F=kN."),
-    columns: list[str] = typer.Option(None, "--column", help="Map a header to a channel, e.g. --column Force_kN=F."),
-    fs: float = typer.Option(None, "--fs", help="Declared sampling rate [Hz]; regenerates a rounded time column."),
-    nan_policy: str = typer.Option(
-        "interpolate", "--nan-policy", help="raise | drop-edges | interpolate (repairs are listed)."
-    ),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
-    example: bool = typer.Option(False, "--example", help="Describe the built-in example (virtual rig, Table II)."),
+    paths: Annotated[
+        list[Path] | None, typer.Argument(help="Data files or folders (CSV, Parquet, MAT).")
+    ] = None,
+    pattern: Annotated[
+        str | None,
+        typer.Option(
+            "--pattern",
+            help="Regex for file names in folders; named groups become metadata. Default: the "
+            "sine-record pattern if any file matches it, else every CSV/Parquet/MAT file.",
+        ),
+    ] = None,
+    units: Annotated[
+        list[str] | None, typer.Option("--units", help="Column unit, e.g. --units x=mm --units F=kN.")
+    ] = None,
+    columns: Annotated[
+        list[str] | None,
+        typer.Option("--column", help="Map a header to a channel, e.g. --column Force_kN=F."),
+    ] = None,
+    fs: Annotated[
+        float | None,
+        typer.Option("--fs", help="Declared sampling rate [Hz]; regenerates a rounded time column."),
+    ] = None,
+    nan_policy: Annotated[
+        str, typer.Option("--nan-policy", help="raise | drop-edges | interpolate (repairs are listed).")
+    ] = "interpolate",
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+    example: Annotated[
+        bool, typer.Option("--example", help="Describe the built-in example (virtual rig, Table II).")
+    ] = False,
 ) -> None:
     """Describe records: size, rate, ranges, current levels and detected problems."""
     if example:

@@ -17,13 +17,13 @@ from mrdamper.data.experiment import Experiment
 from mrdamper.errors import DataValidationError
 
 __all__ = [
-    "velocity_from_displacement",
-    "estimate_velocity_cutoff",
-    "dominant_frequency",
+    "apply_drive_lag",
     "decimate",
+    "dominant_frequency",
+    "estimate_velocity_cutoff",
     "remove_offsets",
     "trim",
-    "apply_drive_lag",
+    "velocity_from_displacement",
 ]
 
 _SIGNAL_CHANNELS = ("x", "v", "F", "i", "voltage")
@@ -276,12 +276,12 @@ def remove_offsets(
     else:
         period, how = _positive("period", period), "given"
     per_samples = period * exp.fs
-    cycles = int(math.floor((exp.n - 1) / per_samples + 1e-9))
+    cycles = math.floor((exp.n - 1) / per_samples + 1e-9)
     if cycles < 1:
         raise DataValidationError(
             "period", f"{period:g} s is longer than record {exp.name!r} ({exp.duration:g} s)"
         )
-    length = int(round(cycles * per_samples))
+    length = round(cycles * per_samples)
     start = (exp.n - length) // 2
     offsets = dict(exp.metadata.get("offsets", {}))
     changes: dict[str, np.ndarray] = {}

@@ -25,15 +25,15 @@ import numpy as np
 from mrdamper.errors import UnitError
 
 __all__ = [
-    "UNITS",
-    "UNIT_ALIASES",
     "CHANNEL_QUANTITY",
     "SI_UNIT",
+    "UNITS",
+    "UNIT_ALIASES",
     "canonical_unit",
-    "si_factor",
-    "to_si",
     "from_si",
     "parse_unit_assignments",
+    "si_factor",
+    "to_si",
 ]
 
 #: Physical quantity of each standard channel.

@@ -22,7 +22,7 @@ from mrdamper.data.experiment import Experiment
 from mrdamper.data.units import CHANNEL_QUANTITY, SI_UNIT, canonical_unit, from_si
 from mrdamper.errors import UnitError
 
-__all__ = ["write_csv", "write_parquet", "to_unit_frame"]
+__all__ = ["to_unit_frame", "write_csv", "write_parquet"]
 
 
 def to_unit_frame(experiment: Experiment, units: Mapping[str, str] | None = None) -> pd.DataFrame:

@@ -17,7 +17,7 @@ from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_c
 from mrdamper.data.units import to_si
 from mrdamper.errors import DataValidationError
 
-__all__ = ["ReadOptions", "numeric_column", "build_experiment"]
+__all__ = ["ReadOptions", "build_experiment", "numeric_column"]
 
 #: Keyword arguments every file reader accepts (documented in each reader).
 ReadOptions = dict[str, Any]
@@ -40,10 +40,10 @@ def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
 
     ser = pd.Series(arr.ravel(), dtype=object)
     num = pd.to_numeric(ser, errors="coerce")
-    bad = np.flatnonzero(num.isna().to_numpy() & ser.notna().to_numpy())
-    bad = [k for k in bad if str(ser.iloc[k]).strip().lower() not in ("", "nan")]
+    suspects = np.flatnonzero(num.isna().to_numpy() & ser.notna().to_numpy())
+    bad = [int(k) for k in suspects if str(ser.iloc[k]).strip().lower() not in ("", "nan")]
     if bad:
-        k = int(bad[0])
+        k = bad[0]
         raise DataValidationError(
             name,
             f"non-numeric value {ser.iloc[k]!r} at data row {k} of {source} "
@@ -217,11 +217,12 @@ def _check_derive(derive_velocity: Any) -> bool | float | None:
         return None
     if derive_velocity is True:
         return True
-    if isinstance(derive_velocity, (int, float, np.integer, np.floating)) and not isinstance(
-        derive_velocity, bool
+    if (
+        isinstance(derive_velocity, (int, float, np.integer, np.floating))
+        and np.isfinite(derive_velocity)
+        and derive_velocity > 0
     ):
-        if np.isfinite(derive_velocity) and derive_velocity > 0:
-            return float(derive_velocity)
+        return float(derive_velocity)
     raise DataValidationError(
         "derive_velocity", f"expected False, True or a positive cut-off [Hz], got {derive_velocity!r}"
     )

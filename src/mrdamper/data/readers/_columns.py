@@ -16,7 +16,7 @@ from typing import Any
 from mrdamper.data.units import CHANNEL_QUANTITY, SI_UNIT, canonical_unit, si_factor
 from mrdamper.errors import DataValidationError, UnitError
 
-__all__ = ["COLUMN_ALIASES", "ColumnSpec", "split_header", "resolve_columns"]
+__all__ = ["COLUMN_ALIASES", "ColumnSpec", "resolve_columns", "split_header"]
 
 #: Standard channel -> accepted header names (the bracketed unit, if any, is removed first).
 #: One-letter names match with their exact case (``v`` is velocity, ``V`` is voltage;

@@ -17,7 +17,7 @@ from mrdamper.data.readers.parquet_reader import read_parquet
 from mrdamper.data.units import UNITS
 from mrdamper.errors import DataValidationError
 
-__all__ = ["DEFAULT_PATTERN", "SUFFIX_READERS", "read", "read_file", "read_directory", "parse_file_name"]
+__all__ = ["DEFAULT_PATTERN", "SUFFIX_READERS", "parse_file_name", "read", "read_directory", "read_file"]
 
 #: File-name pattern of the constant-current sine records (``sine_5mm_3Hz_0.5A.csv``).
 DEFAULT_PATTERN = (

@@ -18,7 +18,7 @@ from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPoli
 from mrdamper.data.readers._build import build_experiment
 from mrdamper.errors import DataValidationError, MrDamperError
 
-__all__ = ["read_mat", "mat_version"]
+__all__ = ["mat_version", "read_mat"]
 
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -38,7 +38,7 @@ def mat_version(path: str | os.PathLike[str]) -> str:
         raise DataValidationError("file", f"{p} is empty; expected a MATLAB .mat file")
     try:
         major, _minor = matfile_version(str(p))
-    except Exception as exc:  # scipy raises ValueError / MatReadError for non-MAT content
+    except Exception as exc:  # noqa: BLE001 - scipy raises ValueError / MatReadError for non-MAT content
         with p.open("rb") as fh:
             head = fh.read(520)
         if head[:8] == _HDF5_SIGNATURE or head[512:520] == _HDF5_SIGNATURE:
@@ -65,7 +65,7 @@ def _read_v5(p: Path, struct: str | None) -> tuple[dict[str, np.ndarray], list[s
 
     try:
         mat = loadmat(str(p), simplify_cells=True)
-    except Exception as exc:
+    except Exception as exc:  # noqa: BLE001
         raise DataValidationError("file", f"{p} could not be read as a MATLAB v5 file ({exc})") from None
     variables = {k: v for k, v in mat.items() if not k.startswith("__")}
     if struct is not None:

@@ -12,7 +12,7 @@ from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPoli
 from mrdamper.data.readers._build import build_experiment
 from mrdamper.errors import DataValidationError, MrDamperError
 
-__all__ = ["read_parquet", "PARQUET_METADATA_KEY"]
+__all__ = ["PARQUET_METADATA_KEY", "read_parquet"]
 
 #: Key of the file-level key/value metadata where :func:`~mrdamper.data.write_parquet` stores
 #: the record name and JSON-safe metadata.
@@ -77,7 +77,7 @@ def read_parquet(
     pq = _pyarrow()
     try:
         table = pq.read_table(p)
-    except Exception as exc:  # pyarrow raises ArrowInvalid / OSError for non-Parquet input
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises ArrowInvalid / OSError for non-Parquet input
         raise DataValidationError("file", f"{p} could not be read as Parquet: {exc}") from None
     stored: dict[str, Any] = {}
     stored_name = None
