@@ -528,7 +528,8 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
     """Leave-one-condition-out on the Quiroz constant-current sine records.
 
     Each fold holds out one amplitude/frequency condition (all five currents) and trains the
-    analysis and the models on the other conditions. The condition is read from the file name
+    analysis and the models on the other conditions. The condition is the metadata ``condition``
+    that the folder reader takes from the file name
     (``sine_5mm_3Hz_0.5A`` -> ``5mm_3Hz``).
     """
     return Protocol(
@@ -537,7 +538,7 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
         analysis=Selection(),
         train=Selection(),
         score=Selection(),
-        split=Split("leave-one-group-out", name_regex=r"(\d+(?:\.\d+)?mm_\d+(?:\.\d+)?Hz)"),
+        split=Split("leave-one-group-out", key="condition"),
         models=tuple(models),
     )
 
