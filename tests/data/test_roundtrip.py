@@ -99,6 +99,10 @@ def test_parquet_round_trip_with_metadata(tmp_path: Path) -> None:
     assert back.metadata["source"] == str(p)
     assert read(p).name == "rec"
     assert read_parquet(p, name="other", metadata={"current": 0.5}).metadata["current"] == 0.5
+    from mrdamper.data.preprocessing import trim
+
+    q = write_parquet(trim(e, 0.3, 0.5), tmp_path / "trimmed.parquet")
+    assert read_parquet(q).metadata["processing"] == ("trimmed to [0.3, 0.5] s",)
 
 
 def test_parquet_unit_round_trip(tmp_path: Path) -> None:

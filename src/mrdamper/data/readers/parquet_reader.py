@@ -90,8 +90,9 @@ def read_parquet(
         stored = dict(info.get("metadata", {}))
         for key in ("source", "columns", "units", "ignored_columns"):
             stored.pop(key, None)  # provenance of the original file; this file is the source now
-        if "repairs" in stored:
-            stored["repairs"] = tuple(stored["repairs"])
+        for key in ("repairs", "processing"):  # tuples in memory, lists in JSON
+            if isinstance(stored.get(key), list):
+                stored[key] = tuple(stored[key])
         stored_name = info.get("name")
     raw = {str(c): table.column(c).to_numpy(zero_copy_only=False) for c in table.column_names}
     return build_experiment(
