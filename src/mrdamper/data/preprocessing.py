@@ -126,6 +126,16 @@ def estimate_velocity_cutoff(exp: Experiment) -> float:
       below which 99 % of the (non-DC) power of x lies; broadband excitation keeps its band.
 
     The result is capped at 0.45 fs.
+
+    Parameters
+    ----------
+    exp : Experiment
+        The record (its x and ``metadata["frequency"]`` are used).
+
+    Returns
+    -------
+    float
+        Cut-off frequency [Hz].
     """
     f = exp.metadata.get("frequency")
     if isinstance(f, (int, float, np.integer, np.floating)) and not isinstance(f, bool) and f > 0:

@@ -85,6 +85,13 @@ def canonical_unit(unit: Any, *, column: str = "unit") -> str:
 
     Unit strings are case sensitive (``mA`` is not ``MA``).
 
+    Parameters
+    ----------
+    unit : str
+        Unit as written by the user or in a file header.
+    column : str
+        Column name used in error messages.
+
     Raises
     ------
     UnitError
@@ -166,7 +173,24 @@ def to_si(values: Any, unit: Any, *, channel: str, column: str | None = None) ->
 
 
 def from_si(values: Any, unit: Any, *, channel: str, column: str | None = None) -> np.ndarray:
-    """Convert SI ``values`` of ``channel`` to ``unit`` (inverse of :func:`to_si`)."""
+    """Convert SI ``values`` of ``channel`` to ``unit`` (inverse of :func:`to_si`).
+
+    Parameters
+    ----------
+    values : array_like
+        Values in the SI unit of ``channel``.
+    unit : str
+        Target unit.
+    channel : str
+        Standard channel the values belong to.
+    column : str, optional
+        Column name for error messages.
+
+    Returns
+    -------
+    ndarray
+        float64 values in ``unit`` (a new array).
+    """
     f = si_factor(channel, unit, column=column)
     arr = np.array(values, dtype=np.float64, copy=True)
     if f != 1.0:
@@ -179,6 +203,11 @@ def parse_unit_assignments(items: Any) -> dict[str, str]:
 
     Units are checked against the table; keys are not (they may be channel or source column
     names; the reader checks them).
+
+    Parameters
+    ----------
+    items : iterable of str, mapping or None
+        ``"column=unit"`` strings (as given on the command line) or a mapping.
 
     Raises
     ------

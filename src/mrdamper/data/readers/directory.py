@@ -104,6 +104,18 @@ def _natural_key(text: str) -> list[Any]:
 def read_file(path: str | os.PathLike[str], **kwargs: Any) -> Experiment:
     """Read one file with the reader for its suffix (see :data:`SUFFIX_READERS`).
 
+    Parameters
+    ----------
+    path : path-like
+        The file (``.csv/.txt/.tsv/.dat``, ``.parquet/.pq`` or ``.mat``).
+    **kwargs
+        Options of that reader (see :func:`~mrdamper.data.readers.read_csv`).
+
+    Returns
+    -------
+    Experiment
+        The record in SI units.
+
     Raises
     ------
     DataValidationError
