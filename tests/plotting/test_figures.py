@@ -55,7 +55,7 @@ def test_fv_map_one_trace_per_level() -> None:
 def test_zone_fit_draws_data_three_zones_and_limits() -> None:
     v, F = _fv(1.0)
     fit = fit_zones(v, F, level=1.0)
-    fig, ax = plt.subplots()
+    _, ax = plt.subplots()
     assert plot_zone_fit(v, F, fit, ax=ax) is ax
     labels = [ln.get_label() for ln in ax.get_lines()]
     assert labels[0] == "measured" and [lab.split(":")[0] for lab in labels[1:4]] == ["zone I", "zone II", "zone III"]

@@ -122,7 +122,7 @@ def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> 
 
 
 def test_interrupted_write_leaves_nothing_that_looks_complete(result, tmp_path, monkeypatch) -> None:
-    import mrdamper.study.report as report
+    from mrdamper.study import report
 
     def boom(*args, **kwargs):
         raise KeyboardInterrupt
