@@ -115,6 +115,28 @@ def test_debug_shows_the_exception(tmp_path: Path) -> None:
         main(["--debug", "info", str(tmp_path / "missing.csv")])
 
 
+def test_example_wiring(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    # Stand-in for the rig's DoE module: checks the call, independent of the rig's state.
+    import sys
+    import types
+
+    from mrdamper.data import ExperimentSet
+
+    calls: list[dict] = []
+    t = np.arange(100) / 1000.0
+
+    def table_ii(**kw: float) -> ExperimentSet:
+        calls.append(kw)
+        return ExperimentSet([Experiment(t=t, x=t, v=t + 1, F=np.sin(40 * t) * 100, i=0.5 + 0 * t, name="exp1_rep01")])
+
+    monkeypatch.setitem(sys.modules, "mrdamper.rig.doe", types.SimpleNamespace(table_ii=table_ii))
+    [row] = _json(capsys, "--example")
+    assert calls == [{"seed": 0, "scale": 0.1}]
+    assert row["name"] == "exp1_rep01" and row["levels"] == [0.5]
+    main(["info", "--example"])
+    assert "Table II" in capsys.readouterr().out
+
+
 def test_example(capsys: pytest.CaptureFixture[str]) -> None:
     try:
         importlib.import_module("mrdamper.rig.doe")
