@@ -206,3 +206,23 @@ def test_directory_of_mixed_formats(tmp_path: Path) -> None:
     for e in s:
         np.testing.assert_array_equal(e.F, base.F)
         assert np.all(e.i == e.metadata["current"])
+
+
+def test_missing_optional_libraries_name_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    from mrdamper.errors import MrDamperError
+
+    e = _record()
+    p73 = tmp_path / "rec73.mat"
+    _write_mat73(p73, {c: getattr(e, c) for c in e.channel_names})
+    pq = write_parquet(e, tmp_path / "rec.parquet")
+    monkeypatch.setitem(sys.modules, "h5py", None)  # import h5py now raises ImportError
+    with pytest.raises(MrDamperError, match=r"mrdamper\[mat73\]"):
+        read_mat(p73)
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    with pytest.raises(MrDamperError, match=r"mrdamper\[parquet\]"):
+        read_parquet(pq)
+    with pytest.raises(MrDamperError, match=r"mrdamper\[parquet\]"):
+        write_parquet(e, tmp_path / "other.parquet")

@@ -81,7 +81,7 @@ def _read_v5(p: Path, struct: str | None) -> tuple[dict[str, np.ndarray], list[s
 def _read_v73(p: Path, struct: str | None) -> tuple[dict[str, np.ndarray], list[str]]:
     try:
         import h5py
-    except ImportError:  # pragma: no cover - depends on the installation
+    except ImportError:
         raise MrDamperError(
             f"file: {p} is a MATLAB v7.3 (HDF5) file; reading it needs h5py: install the "
             "'mat73' extra (pip install 'mrdamper[mat73]')"

@@ -22,7 +22,7 @@ PARQUET_METADATA_KEY = b"mrdamper"
 def _pyarrow() -> Any:
     try:
         import pyarrow.parquet as pq
-    except ImportError:  # pragma: no cover - depends on the installation
+    except ImportError:
         raise MrDamperError(
             "parquet: reading and writing Parquet needs pyarrow; install the 'parquet' extra "
             "(pip install 'mrdamper[parquet]')"
