@@ -1,0 +1,382 @@
+"""Numba kernels of the LPV input-output model (paper eqs. 7-9), on plain arrays.
+
+Model, for one record, with ``a_j(rho) = sum_p alpha[j-1, p] rho**p`` and
+``b_j(rho) = sum_p beta[j-1, p] rho**p`` (frozen-coefficient form, reading notes item 4)::
+
+    y[k] = -sum_{j=1..n} a_j(rho[k]) y[k-j] + sum_{j=1..n} b_j(rho[k]) u[k-j]
+
+with zero initial conditions (``y[k] = u[k] = 0`` for ``k < 0``) in free run. The regression
+vector of sample ``k`` is ordered ``[-rho^p y[k-j] (j-major, p-minor), rho^p u[k-j], rho^p (offset)]``
+so that ``theta = [alpha.ravel(), beta.ravel(), delta]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "gram_pass",
+    "build_regressors",
+    "simulate_record",
+    "simulate_sensitivity",
+    "first_order_lag",
+]
+
+_BLOCK = 512
+
+
+@njit(cache=True)
+def _fill_row(row, pw, y, u, rho, k, n_m, n_p, with_const, scale):  # pragma: no cover - numba
+    r = rho[k]
+    pw[0] = scale
+    for p in range(1, n_p):
+        pw[p] = pw[p - 1] * r
+    c = 0
+    for j in range(1, n_m + 1):
+        yk = -y[k - j]
+        for p in range(n_p):
+            row[c] = yk * pw[p]
+            c += 1
+    for j in range(1, n_m + 1):
+        uk = u[k - j]
+        for p in range(n_p):
+            row[c] = uk * pw[p]
+            c += 1
+    if with_const:
+        for p in range(n_p):
+            row[c] = pw[p]
+            c += 1
+
+
+@njit(cache=True)
+def _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw):  # pragma: no cover - numba
+    """Columns of samples ``a:b`` of the regression, transposed into ``bt[:, :b-a]``."""
+    L = b - a
+    P = bt.shape[0]
+    pw = np.empty((n_p, L))
+    for q in range(L):
+        pw[0, q] = sw
+    for p in range(1, n_p):
+        for q in range(L):
+            pw[p, q] = pw[p - 1, q] * rho[a + q]
+    c = 0
+    for j in range(1, n_m + 1):
+        for p in range(n_p):
+            for q in range(L):
+                bt[c, q] = -pw[p, q] * y[a + q - j]
+            c += 1
+    for j in range(1, n_m + 1):
+        for p in range(n_p):
+            for q in range(L):
+                bt[c, q] = pw[p, q] * u[a + q - j]
+            c += 1
+    if with_const:
+        for p in range(n_p):
+            for q in range(L):
+                bt[c, q] = pw[p, q]
+            c += 1
+    for q in range(L):
+        yb[q] = y[a + q] * sw
+    return P
+
+
+@njit(cache=True)
+def gram_pass(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no cover - numba
+    """Accumulate ``X^T W X``, ``X^T W y`` and ``y^T W y`` without materialising ``X``.
+
+    The regression is filled block by block (``_BLOCK`` samples, column-wise so the fill
+    vectorises) and each block is added to the Gram matrix with one matrix product.
+
+    Parameters
+    ----------
+    y, u, rho : float64[:]
+        Records concatenated (output, LPV input, scheduling variable).
+    starts : int64[:]
+        Record boundaries, length ``R + 1``; record r is ``starts[r]:starts[r+1]``.
+    weights : float64[:]
+        Weight of each record's equations (length R).
+    n_m, n_p : int
+        Model order and number of polynomial terms (``n_rho + 1``).
+    with_const : bool
+        Add ``n_p`` offset columns ``rho**p``.
+
+    Returns
+    -------
+    G, g, yy, n_eq
+    """
+    P = 2 * n_m * n_p + (n_p if with_const else 0)
+    G = np.zeros((P, P))
+    g = np.zeros(P)
+    yy = 0.0
+    n_eq = 0
+    bt = np.empty((P, _BLOCK))
+    yb = np.empty(_BLOCK)
+    for r in range(starts.size - 1):
+        sw = np.sqrt(weights[r])
+        a = starts[r] + n_m
+        while a < starts[r + 1]:
+            b = min(a + _BLOCK, starts[r + 1])
+            L = b - a
+            _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw)
+            if L == _BLOCK:
+                G += bt @ bt.T
+                g += bt @ yb
+                yy += yb @ yb
+            else:
+                part = np.ascontiguousarray(bt[:, :L])
+                G += part @ part.T
+                g += part @ yb[:L]
+                yy += yb[:L] @ yb[:L]
+            n_eq += L
+            a = b
+    return G, g, yy, n_eq
+
+
+@njit(cache=True)
+def build_regressors(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no cover - numba
+    """Materialise the weighted regression matrix ``X`` and target (QR fall-back, benchmarks)."""
+    P = 2 * n_m * n_p + (n_p if with_const else 0)
+    n_eq = 0
+    for r in range(starts.size - 1):
+        n_eq += max(starts[r + 1] - starts[r] - n_m, 0)
+    X = np.empty((n_eq, P))
+    t = np.empty(n_eq)
+    pw = np.empty(n_p)
+    i = 0
+    for r in range(starts.size - 1):
+        sw = np.sqrt(weights[r])
+        for k in range(starts[r] + n_m, starts[r + 1]):
+            _fill_row(X[i], pw, y, u, rho, k, n_m, n_p, with_const, sw)
+            t[i] = y[k] * sw
+            i += 1
+    return X, t
+
+
+def simulate_record(u, rho, alpha, beta, bound):
+    """Free-run output of one record from zero initial conditions (dispatcher).
+
+    Orders ``n_m <= 4`` with ``n_rho <= 2`` run in a fused kernel with the coefficients held in
+    registers (zero-padded to ``n_m = 4``, ``n_rho = 2``; the padding adds exact zeros); other
+    shapes run in the generic chunked kernel. Same return values as :func:`_simulate_generic`.
+    """
+    n_m, n_p = alpha.shape
+    if n_m <= 4 and n_p <= 3:
+        al = np.zeros((4, 3))
+        be = np.zeros((4, 3))
+        al[:n_m, :n_p] = alpha
+        be[:n_m, :n_p] = beta
+        return _simulate_fused43(u, rho, al, be, float(bound))
+    return _simulate_generic(u, rho, alpha, beta, float(bound))
+
+
+@njit(cache=True)
+def _simulate_fused43(u, rho, al, be, bound):  # pragma: no cover - numba
+    """Fused recursion for ``n_m = 4``, ``n_p = 3`` (zero-padded coefficients)."""
+    n = u.size
+    y = np.empty(n)
+    for k in range(min(4, n)):
+        r = rho[k]
+        acc = 0.0
+        for j in range(k):
+            aj = al[j, 0] + r * (al[j, 1] + r * al[j, 2])
+            bj = be[j, 0] + r * (be[j, 1] + r * be[j, 2])
+            acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+        if not (abs(acc) <= bound):
+            y[k:] = 0.0
+            return y, k
+        y[k] = acc
+    a10, a11, a12 = al[0, 0], al[0, 1], al[0, 2]
+    a20, a21, a22 = al[1, 0], al[1, 1], al[1, 2]
+    a30, a31, a32 = al[2, 0], al[2, 1], al[2, 2]
+    a40, a41, a42 = al[3, 0], al[3, 1], al[3, 2]
+    b10, b11, b12 = be[0, 0], be[0, 1], be[0, 2]
+    b20, b21, b22 = be[1, 0], be[1, 1], be[1, 2]
+    b30, b31, b32 = be[2, 0], be[2, 1], be[2, 2]
+    b40, b41, b42 = be[3, 0], be[3, 1], be[3, 2]
+    checked = 4
+    for k in range(4, n):
+        r = rho[k]
+        w = (
+            (b10 + r * (b11 + r * b12)) * u[k - 1]
+            + (b20 + r * (b21 + r * b22)) * u[k - 2]
+            + (b30 + r * (b31 + r * b32)) * u[k - 3]
+            + (b40 + r * (b41 + r * b42)) * u[k - 4]
+        )
+        acc = (
+            ((w - (a40 + r * (a41 + r * a42)) * y[k - 4]) - (a30 + r * (a31 + r * a32)) * y[k - 3])
+            - (a20 + r * (a21 + r * a22)) * y[k - 2]
+        ) - (a10 + r * (a11 + r * a12)) * y[k - 1]
+        y[k] = acc
+        if (k & 255) == 0 or k == n - 1:
+            # a diverging run grows without bound or turns NaN; check the last stretch
+            for q in range(max(checked, 4), k + 1):
+                if not (abs(y[q]) <= bound):
+                    y[q:] = 0.0
+                    return y, q
+            checked = k + 1
+    return y, -1
+
+
+@njit(cache=True)
+def _simulate_generic(u, rho, alpha, beta, bound):  # pragma: no cover - numba
+    """Free-run output of one record from zero initial conditions, any order.
+
+    Works in chunks of ``_BLOCK`` samples: the time-varying coefficients and the input part
+    ``w[k] = sum_j b_j(rho[k]) u[k-j]`` are computed for a chunk with loops over ``k`` (which
+    vectorise, in small buffers that stay in cache), then the scalar recursion
+    ``y[k] = w[k] - sum_j a_j(rho[k]) y[k-j]`` runs. Only the output is allocated at full length.
+
+    Returns
+    -------
+    y : float64[:]
+        Output (without offset).
+    bad : int
+        Index of the first sample whose output is non-finite or exceeds ``bound`` in magnitude,
+        or -1 when the run stayed bounded (``y`` is then complete).
+    """
+    n = u.size
+    n_m, n_p = alpha.shape
+    y = np.empty(n)
+    # start-up: fewer than n_m past samples exist (zero initial conditions)
+    for k in range(min(n_m, n)):
+        r = rho[k]
+        acc = 0.0
+        for j in range(k):
+            aj = 0.0
+            bj = 0.0
+            for p in range(n_p - 1, -1, -1):
+                aj = aj * r + alpha[j, p]
+                bj = bj * r + beta[j, p]
+            acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+        if not (abs(acc) <= bound):
+            y[k:] = 0.0
+            return y, k
+        y[k] = acc
+    A = np.empty((n_m, _BLOCK))
+    w = np.empty(_BLOCK)
+    bq = np.empty(_BLOCK)
+    pw = np.empty((n_p, _BLOCK))
+    s = n_m
+    while s < n:
+        e = min(s + _BLOCK, n)
+        L = e - s
+        for q in range(L):
+            w[q] = 0.0
+            pw[0, q] = 1.0
+        for p in range(1, n_p):
+            for q in range(L):
+                pw[p, q] = pw[p - 1, q] * rho[s + q]
+        for j in range(n_m):
+            a0 = alpha[j, 0]
+            b0 = beta[j, 0]
+            for q in range(L):
+                A[j, q] = a0
+                bq[q] = b0
+            for p in range(1, n_p):
+                ap = alpha[j, p]
+                bp = beta[j, p]
+                for q in range(L):
+                    A[j, q] += ap * pw[p, q]
+                    bq[q] += bp * pw[p, q]
+            off = s - 1 - j
+            for q in range(L):
+                w[q] += bq[q] * u[off + q]
+        if n_m == 1:
+            for q in range(L):
+                k = s + q
+                y[k] = w[q] - A[0, q] * y[k - 1]
+        elif n_m == 2:
+            for q in range(L):
+                k = s + q
+                y[k] = (w[q] - A[1, q] * y[k - 2]) - A[0, q] * y[k - 1]
+        elif n_m == 3:
+            for q in range(L):
+                k = s + q
+                y[k] = ((w[q] - A[2, q] * y[k - 3]) - A[1, q] * y[k - 2]) - A[0, q] * y[k - 1]
+        else:
+            for q in range(L):
+                k = s + q
+                acc = w[q]
+                for j in range(n_m - 1, -1, -1):
+                    acc -= A[j, q] * y[k - 1 - j]
+                y[k] = acc
+        for k in range(s, e):
+            if not (abs(y[k]) <= bound):
+                y[k:] = 0.0
+                return y, k
+        s = e
+    return y, -1
+
+
+@njit(cache=True)
+def simulate_sensitivity(u, rho, alpha, beta, bound):  # pragma: no cover - numba
+    """Free-run output and its derivatives with respect to ``theta = [alpha, beta]``.
+
+    The sensitivities of an LPV input-output model are its regressors (built from the simulated
+    output) filtered by the same time-varying denominator:
+    ``J[k] = phi_k(y_hat) - sum_l a_l(rho[k]) J[k-l]``.
+
+    Returns
+    -------
+    y : float64[:]
+    J : float64[:, :]
+        ``dy/dtheta``, shape ``(n, 2 * n_m * n_p)``.
+    bad : int
+        First diverged sample or -1.
+    """
+    n = u.size
+    n_m, n_p = alpha.shape
+    P = 2 * n_m * n_p
+    y = np.zeros(n)
+    J = np.zeros((n, P))
+    a = np.empty(n_m)
+    pw = np.empty(n_p)
+    for k in range(n):
+        r = rho[k]
+        pw[0] = 1.0
+        for p in range(1, n_p):
+            pw[p] = pw[p - 1] * r
+        acc = 0.0
+        for j in range(n_m):
+            aj = 0.0
+            bj = 0.0
+            for p in range(n_p):
+                aj += alpha[j, p] * pw[p]
+                bj += beta[j, p] * pw[p]
+            a[j] = aj
+            if k - 1 - j >= 0:
+                acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+        if not (abs(acc) <= bound):
+            return y, J, k
+        y[k] = acc
+        c = 0
+        for j in range(n_m):
+            yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
+            for p in range(n_p):
+                J[k, c] = yv * pw[p]
+                c += 1
+        for j in range(n_m):
+            uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
+            for p in range(n_p):
+                J[k, c] = uv * pw[p]
+                c += 1
+        for ll in range(n_m):
+            if k - 1 - ll < 0:
+                break
+            al = a[ll]
+            for c in range(P):
+                J[k, c] -= al * J[k - 1 - ll, c]
+    return y, J, -1
+
+
+@njit(cache=True)
+def first_order_lag(w, dt, eta):  # pragma: no cover - numba
+    """Exact zero-order-hold discretisation of ``dr/dt = -eta (r - w)``, ``r[0] = w[0]``."""
+    n = w.size
+    r = np.empty(n)
+    e = np.exp(-eta * dt)
+    r[0] = w[0]
+    for k in range(1, n):
+        r[k] = e * r[k - 1] + (1.0 - e) * w[k - 1]
+    return r

@@ -1,0 +1,497 @@
+"""LPV input-output damper model (paper eqs. 7-9, 16-22) and its LTI counterpart.
+
+Discrete transfer function of order ``n_m`` whose coefficients are polynomials of degree ``n_rho``
+in the scheduling variable ``rho`` (frozen-coefficient form, reading notes items 3-4)::
+
+    F[k] = y[k] + F0
+    y[k] = -sum_{j=1..n_m} a_j(rho[k]) y[k-j] + sum_{j=1..n_m} b_j(rho[k]) u[k-j]     (b0 = 0)
+    a_j(rho) = sum_p alpha[j-1, p] rho^p,   b_j(rho) = sum_p beta[j-1, p] rho^p
+
+``rho`` is the electrical input (``input="i"`` coil current [A], or ``"voltage"`` [V]), optionally
+through a first-order drive lag ``d rho/dt = -eta (rho - input)``. ``u`` is the scheduling input of
+:mod:`mrdamper.analysis` built from the model's :class:`~mrdamper.analysis.ZoneLaws`
+(``input_signal="u"``), or the raw velocity (``input_signal="v"``, ablation). The model works at
+its own sampling rate ``fs``; records at another rate are resampled on the way in and the force is
+interpolated back. Free run starts from rest (zero initial conditions) in every record.
+
+The LTI model (kind ``"lti"``) is the same structure with ``n_rho = 0`` (no scheduling of the
+coefficients; paper Fig. 4).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+import pandas as pd
+from scipy import signal as sps
+
+from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
+from mrdamper.analysis.scheduling import Reading
+from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
+from mrdamper.models import _lpv_fit
+from mrdamper.models import _lpv_kernels as K
+from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.registry import register
+
+__all__ = ["LPVModel", "LPVEstimator", "LTIModel", "LTIEstimator", "select_order"]
+
+InputSignal = Literal["u", "v"]
+
+
+# ----------------------------------------------------------------------------- signal helpers
+def _to_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
+    """Resample ``x`` from ``fs_in`` to ``fs_out`` [Hz] (anti-aliased polyphase for integer ratios)."""
+    if abs(fs_in - fs_out) <= 1e-9 * fs_out:
+        return x
+    q = fs_in / fs_out
+    if abs(q - round(q)) < 1e-9 and round(q) >= 2:
+        return sps.resample_poly(x, 1, int(round(q)), padtype="line")
+    n = int(np.floor((x.size - 1) * fs_out / fs_in + 1e-9)) + 1
+    return np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x)
+
+
+def _back_to_record(y: np.ndarray, fs_model: float, exp: Experiment) -> np.ndarray:
+    if abs(exp.fs - fs_model) <= 1e-9 * fs_model:
+        return y
+    tm = np.arange(y.size) / fs_model
+    return np.interp(np.arange(exp.n) * exp.dt, tm, y)
+
+
+def _distinct_levels(rho: np.ndarray, tol: float) -> int:
+    r = np.sort(rho)
+    return int(1 + np.count_nonzero(np.diff(r) > tol))
+
+
+# ----------------------------------------------------------------------------- fitted models
+@dataclass(frozen=True)
+class LPVModel(FittedModel):
+    """Identified LPV input-output damper model (immutable).
+
+    Attributes
+    ----------
+    alpha, beta : ndarray, shape (n_m, n_rho + 1)
+        Denominator / numerator polynomial coefficients (eq. 9): row ``j-1`` holds ``a_j`` /
+        ``b_j``; column p multiplies ``rho**p``. ``beta`` maps ``u`` [m/s] to force [N].
+    offset : float
+        Output force offset ``F0`` [N].
+    fs : float
+        Sampling rate the discrete model runs at [Hz].
+    input_signal : {"u", "v"}
+        LPV input: the scheduling input of the zone laws, or the raw velocity.
+    reading : {"continuous", "literal"}
+        Reading of eq. (22) used to build ``u``.
+    zone_laws : ZoneLaws or None
+        Laws used to build ``u`` (None when ``input_signal="v"``).
+    eta : float or None
+        Drive-lag rate of the scheduling filter [1/s]; None: ``rho`` is the electrical input.
+    rho_range : (float, float)
+        Range of ``rho`` seen in training.
+    force_bound : float
+        Free-run output magnitude regarded as divergence [N].
+    """
+
+    kind: ClassVar[str] = "lpv"
+
+    alpha: np.ndarray = field(default_factory=lambda: np.zeros((1, 1)))
+    beta: np.ndarray = field(default_factory=lambda: np.zeros((1, 1)))
+    offset: float = 0.0
+    fs: float = 1.0
+    input_signal: InputSignal = "u"
+    reading: Reading = "continuous"
+    zone_laws: ZoneLaws | None = None
+    eta: float | None = None
+    rho_range: tuple[float, float] = (0.0, 0.0)
+    force_bound: float = 1e9
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        set_ = object.__setattr__
+        for name in ("alpha", "beta"):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            if arr.ndim != 2:
+                raise DataValidationError(name, f"expected a 2-D (n_m, n_rho+1) array, got shape {arr.shape}")
+            arr.setflags(write=False)
+            set_(self, name, arr)
+        if self.alpha.shape != self.beta.shape:
+            raise DataValidationError("beta", f"shape {self.beta.shape} differs from alpha {self.alpha.shape}")
+        if isinstance(self.zone_laws, Mapping):
+            set_(self, "zone_laws", ZoneLaws.from_dict(self.zone_laws))
+        if self.input_signal not in ("u", "v"):
+            raise DataValidationError("input_signal", f"expected 'u' or 'v', got {self.input_signal!r}")
+        if self.input_signal == "u" and self.zone_laws is None:
+            raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
+        if not self.fs > 0:
+            raise DataValidationError("fs", f"expected a positive rate [Hz], got {self.fs}")
+        set_(self, "offset", float(self.offset))
+        set_(self, "fs", float(self.fs))
+        set_(self, "rho_range", tuple(float(b) for b in self.rho_range))
+        if self.eta is not None:
+            set_(self, "eta", float(self.eta))
+
+    # --- structure -----------------------------------------------------------------------
+    @property
+    def n_m(self) -> int:
+        """Model order (number of lags)."""
+        return int(self.alpha.shape[0])
+
+    @property
+    def n_rho(self) -> int:
+        """Polynomial degree of the coefficients in ``rho``."""
+        return int(self.alpha.shape[1] - 1)
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """Model parameters, with the zone laws as a plain dict (JSON-safe)."""
+        p = super().parameters
+        p["zone_laws"] = None if self.zone_laws is None else self.zone_laws.to_dict()
+        return p
+
+    def a(self, rho: Any) -> np.ndarray:
+        """Denominator coefficients ``a_1..a_n`` at ``rho``; shape ``rho.shape + (n_m,)``."""
+        r = np.asarray(rho, dtype=float)
+        return (r[..., None, None] ** np.arange(self.n_rho + 1) * self.alpha).sum(-1)
+
+    def b(self, rho: Any) -> np.ndarray:
+        """Numerator coefficients ``b_1..b_n`` at ``rho`` [N s/m]; shape ``rho.shape + (n_m,)``."""
+        r = np.asarray(rho, dtype=float)
+        return (r[..., None, None] ** np.arange(self.n_rho + 1) * self.beta).sum(-1)
+
+    # --- signals -------------------------------------------------------------------------
+    def scheduling_variable(self, experiment: Experiment) -> np.ndarray:
+        """``rho`` at the record's own rate (range policy applied to the electrical input)."""
+        e = self.electrical_input(experiment)
+        if self.eta is not None:
+            e = K.first_order_lag(np.ascontiguousarray(e, dtype=np.float64), experiment.dt, self.eta)
+        return np.asarray(e, dtype=np.float64)
+
+    def model_signals(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
+        """``(u, rho)`` at the model rate ``fs`` for one record."""
+        rho = _to_rate(self.scheduling_variable(experiment), experiment.fs, self.fs)
+        v = _to_rate(np.asarray(experiment.v), experiment.fs, self.fs)
+        if self.input_signal == "v":
+            u = v
+        elif self.zone_laws is None:  # excluded by __post_init__; kept for type narrowing
+            raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
+        else:
+            u = self.zone_laws.scheduling_input(v, rho, reading=self.reading)
+        return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(rho, dtype=np.float64)
+
+    def predict(self, experiment: Experiment) -> np.ndarray:
+        """Free-run force [N] from the record's velocity and electrical input.
+
+        Raises
+        ------
+        SimulationDivergedError
+            If the output becomes non-finite or exceeds ``force_bound``.
+        """
+        u, rho = self.model_signals(experiment)
+        y, bad = K.simulate_record(u, rho, self.alpha, self.beta, self.force_bound)
+        if bad >= 0:
+            raise SimulationDivergedError(
+                self.kind, int(bad),
+                f"|y| exceeded {self.force_bound:.3g} N or became non-finite in record "
+                f"{experiment.name!r} (model rate {self.fs:g} Hz); frozen poles: "
+                f"max |z| = {self.max_pole_modulus():.4f} over rho in {self.rho_range}",
+            )
+        return _back_to_record(y + self.offset, self.fs, experiment)
+
+    # --- stability -----------------------------------------------------------------------
+    def frozen_poles(self, rho: Any = None, n_grid: int = 51) -> np.ndarray:
+        """Poles of the frozen-``rho`` denominators; shape ``(len(rho), n_m)``.
+
+        ``rho`` defaults to ``n_grid`` points over ``rho_range``.
+        """
+        grid = np.linspace(*self.rho_range, n_grid) if rho is None else np.atleast_1d(np.asarray(rho, float))
+        return _lpv_fit.frozen_poles(self.alpha, grid)
+
+    def max_pole_modulus(self, n_grid: int = 51) -> float:
+        """Largest frozen-pole modulus over ``rho_range`` [-] (< 1: frozen-stable)."""
+        p = self.frozen_poles(n_grid=n_grid)
+        return float(np.max(np.abs(p))) if p.size else 0.0
+
+    def is_frozen_stable(self, n_grid: int = 51) -> bool:
+        """True when every frozen-``rho`` model on the grid has all poles inside the unit circle.
+
+        Frozen stability is necessary, not sufficient, for stability under fast-varying ``rho``.
+        """
+        return self.max_pole_modulus(n_grid) < 1.0
+
+    def coefficients_frame(self) -> pd.DataFrame:
+        """Table of ``alpha`` and ``beta`` (rows ``a_j`` / ``b_j``, columns ``rho^p``)."""
+        rows = [("a", j + 1, *self.alpha[j]) for j in range(self.n_m)]
+        rows += [("b", j + 1, *self.beta[j]) for j in range(self.n_m)]
+        return pd.DataFrame(rows, columns=["coef", "lag", *[f"rho^{p}" for p in range(self.n_rho + 1)]])
+
+
+@dataclass(frozen=True)
+class LTIModel(LPVModel):
+    """The LPV structure without scheduling of the coefficients (``n_rho = 0``)."""
+
+    kind: ClassVar[str] = "lti"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.alpha.shape[1] != 1:
+            raise DataValidationError("alpha", f"an LTI model has n_rho = 0; got {self.alpha.shape[1] - 1}")
+
+
+# ----------------------------------------------------------------------------- estimators
+@dataclass
+class LPVEstimator(Estimator):
+    """Identify an :class:`LPVModel` from training records (settings only).
+
+    Parameters
+    ----------
+    n_m : int
+        Model order.
+    n_rho : int
+        Polynomial degree of the coefficients in ``rho``.
+    input : {"i", "voltage"}
+        Electrical input used as scheduling variable.
+    eta : float, optional
+        Drive-lag rate [1/s] of a first-order filter on the electrical input (e.g. command
+        voltage). None: ``rho`` is the electrical input itself.
+    input_signal : {"u", "v"}
+        LPV input: the zone-law scheduling input (paper) or the raw velocity (ablation).
+    reading : {"continuous", "literal"}
+        Reading of eq. (22).
+    zone_laws : ZoneLaws, optional
+        Laws to use; by default they are fitted on the training records.
+    laws_by : {"auto", "current", "plateaus", "bins"}
+        How the laws are fitted: records grouped by metadata ``current``, constant plateaus of
+        the electrical input, or bins of ``rho``. ``"auto"``: ``"current"`` if every record has it,
+        else ``"bins"``.
+    laws_degree : int
+        Degree of the slope/intercept laws (2 in the paper).
+    n_bins : int
+        Number of ``rho`` bins for ``laws_by="bins"``.
+    fs : float, optional
+        Model rate [Hz]; default: the common rate of the training records.
+    offset : bool
+        Estimate an output force offset ``F0``.
+    weighting : {"esr", "sse"}
+        ``"esr"`` weights each record by ``1 / (n var F)`` so all records count equally (as in
+        the mean ESR); ``"sse"`` weights every sample equally.
+    refine : bool
+        Output-error refinement (free-run error) from the least-squares start.
+    max_nfev : int
+        Iteration budget of the refinement.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Stored in the fitted model.
+    """
+
+    kind: ClassVar[str] = "lpv"
+    model_cls: ClassVar[type[LPVModel]] = LPVModel
+
+    n_m: int = 3
+    n_rho: int = 2
+    input: Literal["i", "voltage"] = "i"
+    eta: float | None = None
+    input_signal: InputSignal = "u"
+    reading: Reading = "continuous"
+    zone_laws: ZoneLaws | None = None
+    laws_by: Literal["auto", "current", "plateaus", "bins"] = "auto"
+    laws_degree: int = 2
+    n_bins: int = 5
+    fs: float | None = None
+    offset: bool = True
+    weighting: Literal["esr", "sse"] = "esr"
+    refine: bool = True
+    max_nfev: int = 60
+    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+
+    def _validate(self) -> None:
+        for name in ("n_m", "n_rho", "laws_degree", "n_bins", "max_nfev"):
+            val = getattr(self, name)
+            if not isinstance(val, (int, np.integer)) or isinstance(val, bool) or val < 0:
+                raise DataValidationError(name, f"expected a non-negative integer, got {val!r}")
+        if self.n_m < 1:
+            raise DataValidationError("n_m", f"expected an order of at least 1, got {self.n_m}")
+        choices = {
+            "input": ("i", "voltage"), "input_signal": ("u", "v"), "reading": ("continuous", "literal"),
+            "laws_by": ("auto", "current", "plateaus", "bins"), "weighting": ("esr", "sse"),
+            "range_policy": ("error", "warn", "clip", "ignore"),
+        }
+        for name, ok in choices.items():
+            if getattr(self, name) not in ok:
+                raise DataValidationError(name, f"expected one of {ok}, got {getattr(self, name)!r}")
+        if self.eta is not None and not (np.isfinite(self.eta) and self.eta > 0):
+            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s], got {self.eta!r}")
+        if self.fs is not None and not (np.isfinite(self.fs) and self.fs > 0):
+            raise DataValidationError("fs", f"expected a positive model rate [Hz], got {self.fs!r}")
+
+    def _laws(self, exps: Sequence[Experiment], rhos: list[np.ndarray]) -> ZoneLaws | None:
+        if self.input_signal == "v":
+            return None
+        if self.zone_laws is not None:
+            return self.zone_laws
+        by = self.laws_by
+        if by == "auto":
+            by = "current" if all("current" in e.metadata for e in exps) else "bins"
+        if by == "bins":
+            fits = zone_fits_binned([e.v for e in exps], [e.F for e in exps], rhos, n_bins=self.n_bins)
+            return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
+        return fit_zone_laws(exps, degree=self.laws_degree, by=by, source=self.input)
+
+    def fit(self, data: Experiment | Iterable[Experiment]) -> LPVModel:
+        """Identify the model from one record or a collection (records keep their own start)."""
+        t_start = time.perf_counter()
+        self._validate()
+        exps = self._as_set(data)
+        rates = sorted({e.fs for e in exps})
+        fs = float(self.fs) if self.fs is not None else rates[0]
+        if self.fs is None and len(rates) > 1:
+            raise DataValidationError(
+                "fs", f"training records have different sampling rates {rates} Hz; set fs= to the model rate"
+            )
+        raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
+        in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
+        rhos = [K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r for r, e in zip(raw, exps)]
+        laws = self._laws(exps, rhos)
+        proto = self.model_cls(
+            alpha=np.zeros((self.n_m, self.n_rho + 1)), beta=np.zeros((self.n_m, self.n_rho + 1)),
+            fs=fs, input_signal=self.input_signal, reading=self.reading, zone_laws=laws, eta=self.eta,
+            input=self.input, input_range=in_range, range_policy="ignore",
+        )
+        F, U, R, w = [], [], [], []
+        for e in exps:
+            u, rho = proto.model_signals(e)
+            Fr = np.ascontiguousarray(_to_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
+            e.require_samples(self.n_m + 2, "LPV identification")
+            F.append(Fr)
+            U.append(u)
+            R.append(rho)
+            var = float(np.var(Fr))
+            w.append(1.0 / (Fr.size * var) if self.weighting == "esr" and var > 0 else 1.0)
+        weights = np.asarray(w)
+        weights = weights / weights.mean()
+        rho_all = np.concatenate(R)
+        rho_range = (float(rho_all.min()), float(rho_all.max()))
+        n_lev = _distinct_levels(rho_all, 1e-9 * max(1.0, abs(rho_range[1])))
+        if n_lev < self.n_rho + 1:
+            raise IdentificationError(
+                f"{self.kind}: rho takes {n_lev} distinct value(s) in the training data; degree "
+                f"n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current levels or lower n_rho)"
+            )
+        rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
+        ls = _lpv_fit.ls_identify(rec, self.n_m, self.n_rho + 1, self.offset)
+        f_scale = max(float(np.max(np.abs(np.concatenate(F)))), 1.0)
+        bound = 1e3 * f_scale
+        theta, F0 = ls.theta, ls.offset
+        prov: dict[str, Any] = {
+            "training_records": list(exps.names), "n_samples": int(sum(a.size for a in F)),
+            "settings": _settings_dict(self), "ls_solver": ls.solver, "ls_condition_number": ls.cond,
+        }
+        ls_cost = _cost(rec, theta, F0, self.n_m, self.n_rho + 1, bound)
+        prov["ls_free_run_cost"] = ls_cost
+        if self.refine:
+            th_r, f0_r, sol = _lpv_fit.refine_output_error(
+                rec, theta, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev
+            )
+            oe_cost = _cost(rec, th_r, f0_r, self.n_m, self.n_rho + 1, bound)
+            prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
+            if oe_cost < ls_cost:
+                theta, F0 = th_r, f0_r
+            else:
+                prov["oe_note"] = "refinement did not lower the free-run cost; least-squares model kept"
+        alpha, beta = _lpv_fit.split_theta(theta, self.n_m, self.n_rho + 1)
+        model = self.model_cls(
+            alpha=alpha, beta=beta, offset=F0, fs=fs, input_signal=self.input_signal, reading=self.reading,
+            zone_laws=laws, eta=self.eta, rho_range=rho_range, force_bound=bound, input=self.input,
+            input_range=in_range, range_policy=self.range_policy, provenance=prov,
+        )
+        pmax = model.max_pole_modulus()
+        prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0, fit_seconds=time.perf_counter() - t_start)
+        if pmax >= 1.0:
+            warnings.warn(
+                f"{self.kind}: identified model is not frozen-stable over rho in {rho_range} "
+                f"(max frozen pole modulus {pmax:.4f})", RuntimeWarning, stacklevel=2,
+            )
+        return model
+
+
+def _cost(rec: _lpv_fit.Records, theta: np.ndarray, F0: float, n_m: int, n_p: int, bound: float) -> float:
+    alpha, beta = _lpv_fit.split_theta(theta, n_m, n_p)
+    total = 0.0
+    for r in range(len(rec.u)):
+        y, bad = K.simulate_record(rec.u[r], rec.rho[r], alpha, beta, bound)
+        if bad >= 0:
+            return float("inf")
+        e = y + F0 - rec.F[r]
+        total += rec.weights[r] * float(e @ e)
+    return total
+
+
+def _settings_dict(est: Estimator) -> dict[str, Any]:
+    out = {}
+    for f in dataclasses.fields(est):  # type: ignore[arg-type]
+        val = getattr(est, f.name)
+        out[f.name] = "given" if isinstance(val, ZoneLaws) else val
+    return out
+
+
+@dataclass
+class LTIEstimator(LPVEstimator):
+    """Identify an :class:`LTIModel`: the LPV estimator with ``n_rho = 0``."""
+
+    kind: ClassVar[str] = "lti"
+    model_cls: ClassVar[type[LPVModel]] = LTIModel
+    n_rho: int = 0
+
+    def _validate(self) -> None:
+        super()._validate()
+        if self.n_rho != 0:
+            raise DataValidationError("n_rho", f"an LTI model has n_rho = 0, got {self.n_rho}")
+
+
+register(LPVEstimator, LPVModel)
+register(LTIEstimator, LTIModel)
+
+
+# ----------------------------------------------------------------------------- order selection
+def select_order(
+    train: Experiment | Iterable[Experiment],
+    validation: Experiment | Iterable[Experiment],
+    *,
+    orders: Sequence[int] = (1, 2, 3, 4),
+    rho_degrees: Sequence[int] = (0, 1, 2),
+    **settings: Any,
+) -> pd.DataFrame:
+    """Fit every ``(n_m, n_rho)`` on ``train`` and score it in free run on ``validation``.
+
+    Returns
+    -------
+    DataFrame
+        One row per candidate: ``n_m, n_rho, n_params, train_esr, val_esr, val_ssse``
+        (mean over records), ``max_frozen_pole`` and ``error`` (message when the fit or a
+        simulation failed; scores are NaN then). Sorted by ``val_esr``.
+    """
+    from mrdamper.data import as_experiment_set
+
+    tr = as_experiment_set(train, name="train")
+    va = as_experiment_set(validation, name="validation")
+    rows = []
+    for n_m in orders:
+        for n_rho in rho_degrees:
+            row: dict[str, Any] = {"n_m": n_m, "n_rho": n_rho, "n_params": 2 * n_m * (n_rho + 1)}
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    m = LPVEstimator(n_m=n_m, n_rho=n_rho, **settings).fit(tr)
+                    row["train_esr"] = float(np.mean([m.score(e).esr for e in tr]))
+                    sc = [m.score(e) for e in va]
+                row.update(
+                    val_esr=float(np.mean([s.esr for s in sc])), val_ssse=float(np.mean([s.ssse for s in sc])),
+                    max_frozen_pole=m.max_pole_modulus(), error="",
+                )
+            except (IdentificationError, SimulationDivergedError, DataValidationError) as exc:
+                row.update(train_esr=np.nan, val_esr=np.nan, val_ssse=np.nan, max_frozen_pole=np.nan, error=str(exc))
+            rows.append(row)
+    return pd.DataFrame(rows).sort_values("val_esr", na_position="last").reset_index(drop=True)
