@@ -33,3 +33,8 @@ class TanhDamper(FittedModel):
 @pytest.fixture()
 def damper() -> TanhDamper:
     return TanhDamper(input="i", input_range=(0.0, 1.0))
+
+
+@pytest.fixture(scope="session")
+def damper_cls() -> type[TanhDamper]:
+    return TanhDamper

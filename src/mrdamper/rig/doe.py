@@ -267,11 +267,11 @@ def table_ii(
     >>> len(doe), doe[0].name  # doctest: +SKIP
     (61, 'exp1_rep01')
     """
+    scale = _check_scale(scale, TABLE_II)
     if rig is None:
-        rig = VirtualRig(damper=damper, fs=fs)
+        rig = VirtualRig(damper=damper, fs=check_positive("fs", fs, "Hz"))
     elif damper is not None:
         raise DataValidationError("damper", "give either damper or rig, not both")
-    scale = _check_scale(scale, TABLE_II)
     rows = [(spec, r) for spec in TABLE_II for r in range(1, spec.replicates + 1)]
     wanted = None if experiments is None else {int(k) for k in experiments}
     if wanted is not None and not wanted <= {s.experiment for s in TABLE_II}:
