@@ -7,14 +7,14 @@ user can fix the input without reading the source.
 from __future__ import annotations
 
 __all__ = [
-    "MrDamperError",
     "DataValidationError",
-    "UnitError",
-    "SchemaError",
-    "OutOfRangeError",
     "IdentificationError",
-    "SimulationDivergedError",
+    "MrDamperError",
+    "OutOfRangeError",
     "OutputExistsError",
+    "SchemaError",
+    "SimulationDivergedError",
+    "UnitError",
 ]
 
 

@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["esr", "ssse", "nrmse", "fit_percent", "Scores", "score_arrays"]
+__all__ = ["Scores", "esr", "fit_percent", "nrmse", "score_arrays", "ssse"]
 
 
 def _pair(measured: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.ndarray]:

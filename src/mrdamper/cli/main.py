@@ -60,7 +60,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     try:
-        app(args=args, prog_name="mrdamper", standalone_mode=False)
+        rc = app(args=args, prog_name="mrdamper", standalone_mode=False)
+        if isinstance(rc, int) and rc:
+            sys.exit(rc)
     except (MrDamperError, FileNotFoundError, NotADirectoryError, PermissionError) as exc:
         if debug:
             raise

@@ -11,17 +11,14 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 
 from mrdamper.errors import DataValidationError
 
-if TYPE_CHECKING:  # pragma: no cover
-    from matplotlib.axes import Axes
-
-__all__ = ["Experiment", "CHANNELS", "ElectricalSource", "NanPolicy"]
+__all__ = ["CHANNELS", "ElectricalSource", "Experiment", "NanPolicy"]
 
 #: Channel names and their SI units, in the order they are stored and written.
 CHANNELS: dict[str, str] = {"t": "s", "x": "m", "v": "m/s", "i": "A", "voltage": "V", "F": "N"}

@@ -34,13 +34,13 @@ from mrdamper.metrics import Scores, score_arrays
 __all__ = [
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
-    "RangePolicy",
     "Estimator",
     "FittedModel",
+    "RangePolicy",
     "SimulationResult",
     "check_input_range",
-    "encode_value",
     "decode_value",
+    "encode_value",
 ]
 
 SCHEMA_NAME = "mrdamper.model"

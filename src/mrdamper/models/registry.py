@@ -15,7 +15,7 @@ from typing import Any
 from mrdamper.errors import SchemaError
 from mrdamper.models.base import Estimator, FittedModel, _check_schema
 
-__all__ = ["register", "available_models", "get_estimator", "model_class", "load_model", "model_from_dict"]
+__all__ = ["available_models", "get_estimator", "load_model", "model_class", "model_from_dict", "register"]
 
 #: kind -> module that defines it. Order is the default display order.
 _MODULES: dict[str, str] = {
