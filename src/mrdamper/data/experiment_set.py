@@ -167,7 +167,19 @@ def _equal(a: Any, b: Any) -> bool:
 
 
 def as_experiment_set(data: Experiment | Iterable[Experiment], name: str = "set") -> ExperimentSet:
-    """Accept one Experiment, an iterable of them or an ExperimentSet; return an ExperimentSet."""
+    """Accept one Experiment, an iterable of them or an ExperimentSet; return an ExperimentSet.
+
+    Parameters
+    ----------
+    data : Experiment or iterable of Experiment
+        The record(s). An ExperimentSet is returned as is.
+    name : str
+        Name given to a newly built set.
+
+    Returns
+    -------
+    ExperimentSet
+    """
     if isinstance(data, ExperimentSet):
         return data
     if isinstance(data, Experiment):
