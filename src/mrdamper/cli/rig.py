@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
@@ -39,14 +40,15 @@ def _damper(spec: str | None):  # type: ignore[no-untyped-def]
 
 @rig_app.command("doe")
 def doe(
-    out: Path = typer.Option(..., "--out", help="Output folder (must be absent or empty unless --force)."),
-    seed: int = typer.Option(0, "--seed", min=0, help="Root seed; the same seed gives byte-identical files."),
-    scale: float = typer.Option(1.0, "--scale", help="Duration factor (0.1: 3 s and 60 s records)."),
-    fs: float = typer.Option(1000.0, "--fs", help="Sampling rate [Hz]."),
-    damper: str = typer.Option(
-        None, "--damper", help="Reference damper name (quiroz2022, spencer1997) or a model JSON file."
-    ),
-    force: bool = typer.Option(False, "--force", help="Write into a non-empty folder, overwriting."),
+    out: Annotated[Path, typer.Option("--out", help="Output folder (must be absent or empty unless --force).")],
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Root seed; the same seed gives byte-identical files.")] = 0,
+    scale: Annotated[float, typer.Option("--scale", help="Duration factor (0.1: 3 s and 60 s records).")] = 1.0,
+    fs: Annotated[float, typer.Option("--fs", help="Sampling rate [Hz].")] = 1000.0,
+    damper: Annotated[
+        str | None,
+        typer.Option("--damper", help="Reference damper name (quiroz2022, spencer1997) or a model JSON file."),
+    ] = None,
+    force: Annotated[bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")] = False,
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig and write CSV files + manifest.csv."""
     from mrdamper.rig.doe import table_ii
