@@ -26,7 +26,6 @@ from collections.abc import Callable
 import numpy as np
 from scipy import signal as sps
 
-from mrdamper.data import Experiment
 from mrdamper.rig import ServoActuator, VirtualRig, available_reference_dampers, reference_damper
 from mrdamper.rig.doe import TABLE_II, table_ii
 from mrdamper.rig.driver import CurrentDriver
@@ -76,7 +75,7 @@ def part1(seed: int, fs: float) -> None:
     print(f"{'rest of the rig (total - damper) [s]':<44}{max(total - t_damper, 0.0):>16.2f}")
     print(f"{'peer: rig time of the tests [s]':<44}{rig_time:>16.0f}")
     print(f"{'faster than real time (ratio)':<44}{rig_time / total:>16.1f}")
-    print(f"{'target < 10 s met':<44}{str(total < 10.0):>16}")
+    print(f"{'target < 10 s met':<44}{total < 10.0!s:>16}")
 
 
 def _sum_of_cosines(n: int, fs: float, fmin: float, fmax: float, rng: np.random.Generator) -> np.ndarray:
