@@ -63,6 +63,14 @@ def _thin(v: np.ndarray, F: np.ndarray, n: int = _MAX_POINTS) -> tuple[np.ndarra
     return v[::step], F[::step]
 
 
+def plateau_options(records: ExperimentSet) -> dict[str, float]:
+    """Plateau settings scaled to the records: the analysis defaults (1 s plateaus, 0.2 s settling)
+    for records of 12 s or more, proportionally shorter for shortened records (``scale`` < 1)."""
+    shortest = min((e.duration for e in records), default=12.0)
+    min_duration = min(1.0, shortest / 12.0)
+    return {"min_duration": min_duration, "settle": min(0.2, min_duration / 5.0)}
+
+
 def fv_curves(records: ExperimentSet, source: str = "i", by: str | None = None) -> dict[float, tuple[np.ndarray, np.ndarray]]:
     """Pool (v, F) samples per electrical level, as the analysis groups them.
 
@@ -86,8 +94,9 @@ def fv_curves(records: ExperimentSet, source: str = "i", by: str | None = None) 
         sig = [e.electrical(source) for e in records]  # type: ignore[arg-type]
         span = max(float(np.ptp(s)) for s in sig) if sig else 0.0
         tol = max(0.02 * span, 1e-9)
+        opts = plateau_options(records)
         for e, s in zip(records, sig):
-            for a, b, lev in segment_plateaus(s, e.dt, tolerance=tol, min_duration=1.0, settle=0.2):
+            for a, b, lev in segment_plateaus(s, e.dt, tolerance=tol, **opts):
                 key = next((k for k in pools if abs(k - lev) <= tol), lev)
                 pools.setdefault(key, []).append((e.v[a:b], e.F[a:b]))
     return {
@@ -121,7 +130,8 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
         curves: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         try:
             curves = fv_curves(records, source, by)
-            fits = zone_fits_by_level(records, by=by, source=source)  # type: ignore[arg-type]
+            opts = plateau_options(records) if by == "plateaus" else {}
+            fits = zone_fits_by_level(records, by=by, source=source, **opts)  # type: ignore[arg-type]
             laws = fit_zone_laws(fits, degree=degree, strict=False)
             error = ""
         except Exception as exc:  # noqa: BLE001 - the study goes on without laws; the report says why
