@@ -93,7 +93,7 @@ def test_study_with_a_protocol_file(tmp_path, capsys) -> None:
         "models": [{"kind": "sp2", "label": "SP-2"}],
     }))
     out = tmp_path / "out"
-    code, stdout, stderr = _run(["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1",
+    code, _, stderr = _run(["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1",
                                  "--no-progress"], capsys)
     assert code == 0, stderr
     res = pd.read_csv(out / "results.csv")
