@@ -117,19 +117,48 @@ class ZoneFit:
         return ax
 
 
-def _basis(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    return np.column_stack((np.ones_like(v), v, np.minimum(v - lo, 0.0), np.maximum(v - hi, 0.0)))
+class _Profile:
+    """Residual sum of squares of the hinge regression for any breakpoint pair, in O(log n).
 
+    The Gram matrix of the basis ``[1, v, min(v - lo, 0), max(v - hi, 0)]`` and its right-hand
+    side are sums of ``1, v, v^2, F, v F`` over the zones, read from prefix sums over sorted ``v``.
+    """
 
-def _sse(v: np.ndarray, F: np.ndarray, lo: float, hi: float) -> tuple[float, np.ndarray]:
-    X = _basis(v, lo, hi)
-    G = X.T @ X
-    try:
-        coef = np.linalg.solve(G, X.T @ F)
-    except np.linalg.LinAlgError:
-        coef = np.linalg.lstsq(X, F, rcond=None)[0]
-    r = F - X @ coef
-    return float(r @ r), coef
+    def __init__(self, v: np.ndarray, F: np.ndarray) -> None:
+        order = np.argsort(v, kind="stable")
+        self.v = v[order]
+        f = F[order]
+        z = np.zeros(1)
+        self.S0 = np.arange(v.size + 1, dtype=float)
+        self.S1 = np.concatenate((z, np.cumsum(self.v)))
+        self.S2 = np.concatenate((z, np.cumsum(self.v**2)))
+        self.T0 = np.concatenate((z, np.cumsum(f)))
+        self.T1 = np.concatenate((z, np.cumsum(self.v * f)))
+        self.FF = float(f @ f)
+        self.n = v.size
+
+    def solve(self, lo: float, hi: float) -> tuple[float, np.ndarray]:
+        n = self.n
+        a = int(np.searchsorted(self.v, lo, side="left"))  # v < lo: [0, a)
+        b = int(np.searchsorted(self.v, hi, side="right"))  # v > hi: [b, n)
+        S0, S1, S2, T0, T1 = self.S0, self.S1, self.S2, self.T0, self.T1
+        l0, l1, l2, lt0, lt1 = S0[a], S1[a], S2[a], T0[a], T1[a]
+        u0, u1, u2 = S0[n] - S0[b], S1[n] - S1[b], S2[n] - S2[b]
+        ut0, ut1 = T0[n] - T0[b], T1[n] - T1[b]
+        G = np.array(
+            [
+                [S0[n], S1[n], l1 - lo * l0, u1 - hi * u0],
+                [S1[n], S2[n], l2 - lo * l1, u2 - hi * u1],
+                [l1 - lo * l0, l2 - lo * l1, l2 - 2 * lo * l1 + lo * lo * l0, 0.0],
+                [u1 - hi * u0, u2 - hi * u1, 0.0, u2 - 2 * hi * u1 + hi * hi * u0],
+            ]
+        )
+        g = np.array([T0[n], T1[n], lt1 - lo * lt0, ut1 - hi * ut0])
+        try:
+            coef = np.linalg.solve(G, g)
+        except np.linalg.LinAlgError:
+            coef = np.linalg.lstsq(G, g, rcond=None)[0]
+        return max(self.FF - float(coef @ g), 0.0), coef
 
 
 def fit_zones(
@@ -139,7 +168,7 @@ def fit_zones(
     symmetric: bool = True,
     level: float | None = None,
     min_fraction: float = 0.03,
-    grid: int = 40,
+    grid: int = 60,
 ) -> ZoneFit:
     """Fit the continuous three-zone law of eq. (17) to force-velocity data.
 
@@ -197,6 +226,7 @@ def fit_zones(
             f"(got {int(np.sum(v < 0))} negative, {int(np.sum(v > 0))} positive of {v.size})",
         )
     vs = np.sort(v)
+    prof = _Profile(v, F)
     if symmetric:
         a = np.sort(np.abs(v))
         # the outer zones together hold samples with |v| > b; each needs n_min on its own side
@@ -206,11 +236,11 @@ def fit_zones(
         if not b_max > b_min:
             raise IdentificationError("fit_zones: no symmetric breakpoint leaves enough samples in every zone")
         cand = np.linspace(b_min, b_max, grid)
-        sse = np.array([_sse(v, F, -b, b)[0] for b in cand])
+        sse = np.array([prof.solve(-b, b)[0] for b in cand])
         k = int(np.argmin(sse))
         lo_b, hi_b = cand[max(k - 1, 0)], cand[min(k + 1, grid - 1)]
         res = optimize.minimize_scalar(
-            lambda b: _sse(v, F, -b, b)[0], bounds=(lo_b, hi_b), method="bounded",
+            lambda b: prof.solve(-b, b)[0], bounds=(lo_b, hi_b), method="bounded",
             options={"xatol": 1e-9 * max(abs(b_max), 1e-12)},
         )
         b = float(res.x) if res.fun <= sse[k] else float(cand[k])
@@ -223,25 +253,27 @@ def fit_zones(
             for hi_c in q_hi:
                 if hi_c <= lo_c or np.sum(v < lo_c) < n_min or np.sum(v > hi_c) < n_min:
                     continue
-                s = _sse(v, F, lo_c, hi_c)[0]
+                s = prof.solve(lo_c, hi_c)[0]
                 if s < best[0]:
                     best = (s, lo_c, hi_c)
         if not np.isfinite(best[0]):
             raise IdentificationError("fit_zones: no breakpoint pair leaves enough samples in every zone")
 
-        def prof(p: np.ndarray) -> float:
+        def objective(p: np.ndarray) -> float:
             lo_p, hi_p = float(p[0]), float(p[1])
             if hi_p <= lo_p or np.sum(v < lo_p) < n_min or np.sum(v > hi_p) < n_min:
                 return best[0] * 10 + 1.0
-            return _sse(v, F, lo_p, hi_p)[0]
+            return prof.solve(lo_p, hi_p)[0]
 
         res = optimize.minimize(
-            prof, np.array(best[1:]), method="Nelder-Mead",
+            objective, np.array(best[1:]), method="Nelder-Mead",
             options={"xatol": 1e-9 * (vs[-1] - vs[0]), "fatol": 1e-12 * best[0]},
         )
         lo, hi = (float(res.x[0]), float(res.x[1])) if res.fun <= best[0] else (best[1], best[2])
-    sse_final, coef = _sse(v, F, lo, hi)
+    _, coef = prof.solve(lo, hi)
     a0, b1, d1, d3 = (float(x) for x in coef)
+    resid = F - (a0 + b1 * v + d1 * np.minimum(v - lo, 0.0) + d3 * np.maximum(v - hi, 0.0))
+    sse_final = float(resid @ resid)
     m = (b1 + d1, b1, b1 + d3)
     c = (a0 - d1 * lo, a0, a0 - d3 * hi)
     var = float(np.sum((F - F.mean()) ** 2))

@@ -145,12 +145,16 @@ def refine_output_error(
     offset: bool,
     bound: float,
     max_nfev: int,
+    solver: str = "gauss-newton",
 ) -> tuple[np.ndarray, float, optimize.OptimizeResult]:
     """Minimise the weighted free-run (simulation) error from a least-squares start.
 
-    Uses ``scipy.optimize.least_squares`` (trust region reflective) with the analytic Jacobian
-    of :func:`~mrdamper.models._lpv_kernels.simulate_sensitivity`. A candidate whose free run
-    diverges gets large finite residuals so that the trust region shrinks.
+    ``solver="gauss-newton"`` (default): Levenberg-Marquardt on the Gauss-Newton normal equations
+    ``J^T J``, ``J^T e`` accumulated by :func:`~mrdamper.models._lpv_kernels.oe_normal_equations`
+    in one pass per record without storing the Jacobian. ``solver="least_squares"``:
+    ``scipy.optimize.least_squares`` (MINPACK Levenberg-Marquardt) with the analytic Jacobian of
+    :func:`~mrdamper.models._lpv_kernels.simulate_sensitivity` (slower: it stores and factors
+    ``J``). A candidate whose free run diverges is rejected (infinite cost / large residuals).
     """
     P = 2 * n_m * n_p
     sw = np.sqrt(rec.weights)
@@ -181,11 +185,88 @@ def refine_output_error(
         return out
 
     x0 = np.r_[theta0, F0] if offset else theta0.copy()
+    if solver == "gauss-newton":
+        return _levenberg_marquardt(rec, x0, n_m, n_p, offset=offset, F0=F0, bound=bound, max_iter=max_nfev)
     sol = optimize.least_squares(
-        lambda p: evaluate(p)[0], x0, jac=lambda p: evaluate(p)[1], method="trf",
+        lambda p: evaluate(p)[0], x0, jac=lambda p: evaluate(p)[1], method="lm",
         x_scale="jac", max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10,
     )
     theta = sol.x[:P].copy()
     f0 = float(sol.x[P]) if offset else F0
     return theta, f0, sol
 
+
+
+def _normal_eq(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float):
+    P = 2 * n_m * n_p
+    alpha, beta = split_theta(x, n_m, n_p)
+    f0 = float(x[P]) if offset else F0
+    Q = P + 1 if offset else P
+    H = np.zeros((Q, Q))
+    g = np.zeros(Q)
+    cost = 0.0
+    for r in range(len(rec.u)):
+        c, gr, Hr, bad = K.oe_normal_equations(
+            rec.u[r], rec.rho[r], alpha, beta, rec.F[r], f0, float(rec.weights[r]), bound, offset
+        )
+        if bad >= 0:
+            return np.inf, g, H
+        cost += c
+        g += gr
+        H += Hr
+    return cost, g, H
+
+
+def _free_run_cost(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float) -> float:
+    P = 2 * n_m * n_p
+    alpha, beta = split_theta(x, n_m, n_p)
+    f0 = float(x[P]) if offset else F0
+    total = 0.0
+    for r in range(len(rec.u)):
+        y, bad = K.simulate_record(rec.u[r], rec.rho[r], alpha, beta, bound)
+        if bad >= 0:
+            return np.inf
+        e = y + f0 - rec.F[r]
+        total += rec.weights[r] * float(e @ e)
+    return total
+
+
+def _levenberg_marquardt(rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=1e-7):
+    P = 2 * n_m * n_p
+    x = x0.copy()
+    cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
+    if not np.isfinite(cost):
+        raise IdentificationError("lpv: the free run of the least-squares start diverges; cannot refine")
+    lam = 1e-4
+    nfev, status = 1, 0
+    for _ in range(max_iter):
+        d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+        Hs = H / np.outer(d, d)
+        gs = g / d
+        step_ok = False
+        while lam < 1e12:
+            try:
+                c, low = scipy.linalg.cho_factor(Hs + lam * np.eye(Hs.shape[0]), check_finite=False)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            dx = -scipy.linalg.cho_solve((c, low), gs, check_finite=False) / d
+            xn = x + dx
+            cn = _free_run_cost(rec, xn, n_m, n_p, offset, F0, bound)
+            nfev += 1
+            if cn < cost:
+                rel = (cost - cn) / cost
+                x = xn
+                cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
+                lam = max(lam / 3.0, 1e-12)
+                step_ok = True
+                break
+            lam *= 4.0
+        if not step_ok:
+            status = 2  # no decrease possible: at a (local) minimum within precision
+            break
+        if rel < tol:
+            status = 1
+            break
+    sol = optimize.OptimizeResult(x=x, cost=cost, nfev=nfev, status=status)
+    return x[:P].copy(), (float(x[P]) if offset else F0), sol

@@ -380,3 +380,91 @@ def first_order_lag(w, dt, eta):  # pragma: no cover - numba
     for k in range(1, n):
         r[k] = e * r[k - 1] + (1.0 - e) * w[k - 1]
     return r
+
+
+@njit(cache=True)
+def oe_normal_equations(u, rho, alpha, beta, F, offset, weight, bound, with_offset):  # pragma: no cover
+    """Weighted free-run cost, gradient and Gauss-Newton matrix of one record.
+
+    Residual ``e[k] = y_hat[k] + offset - F[k]``; the sensitivity rows are propagated with only
+    the last ``n_m`` kept (the Jacobian is never stored) and accumulated block-wise.
+
+    Returns
+    -------
+    cost : float
+        ``weight * sum(e^2)``.
+    g : float64[:]
+        ``weight * J^T e`` (length ``2 n_m n_p`` plus one with the offset).
+    H : float64[:, :]
+        ``weight * J^T J``.
+    bad : int
+        First diverged sample or -1 (cost, g, H are then meaningless).
+    """
+    n = u.size
+    n_m, n_p = alpha.shape
+    P = 2 * n_m * n_p
+    Q = P + 1 if with_offset else P
+    H = np.zeros((Q, Q))
+    g = np.zeros(Q)
+    cost = 0.0
+    y = np.zeros(n)
+    hist = np.zeros((n_m, P))  # hist[l] = J row of sample k-1-l
+    a = np.empty(n_m)
+    pw = np.empty(n_p)
+    bt = np.empty((Q, _BLOCK))
+    eb = np.empty(_BLOCK)
+    sw = np.sqrt(weight)
+    fill = 0
+    row = np.empty(P)
+    for k in range(n):
+        r = rho[k]
+        pw[0] = 1.0
+        for p in range(1, n_p):
+            pw[p] = pw[p - 1] * r
+        acc = 0.0
+        for j in range(n_m):
+            aj = 0.0
+            bj = 0.0
+            for p in range(n_p):
+                aj += alpha[j, p] * pw[p]
+                bj += beta[j, p] * pw[p]
+            a[j] = aj
+            if k - 1 - j >= 0:
+                acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+        if not (abs(acc) <= bound):
+            return np.inf, g, H, k
+        y[k] = acc
+        c = 0
+        for j in range(n_m):
+            yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
+            for p in range(n_p):
+                row[c] = yv * pw[p]
+                c += 1
+        for j in range(n_m):
+            uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
+            for p in range(n_p):
+                row[c] = uv * pw[p]
+                c += 1
+        for ll in range(n_m):
+            al = a[ll]
+            for c in range(P):
+                row[c] -= al * hist[ll, c]
+        for ll in range(n_m - 1, 0, -1):
+            for c in range(P):
+                hist[ll, c] = hist[ll - 1, c]
+        for c in range(P):
+            hist[0, c] = row[c]
+        e = acc + offset - F[k]
+        cost += e * e
+        for c in range(P):
+            bt[c, fill] = row[c] * sw
+        if with_offset:
+            bt[P, fill] = sw
+        eb[fill] = e * sw
+        fill += 1
+        if fill == _BLOCK or k == n - 1:
+            part = np.ascontiguousarray(bt[:, :fill])
+            H += part @ part.T
+            g += part @ eb[:fill]
+            fill = 0
+    return weight * cost, g, H, -1

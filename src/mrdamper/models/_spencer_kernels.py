@@ -257,38 +257,40 @@ def _stage(s, S, h, k, K, out_s, out_S):
 
 
 @njit(cache=True)
-def _sens_rhs(xx, xd, e, s, S, p, f, Js, Jp, dS):
+def _sens_rhs(xx, xd, e, s, S, p, cols, f, Js, Jp, dS):
     C = _rhs_jac(xx, xd, e, s[0], s[1], s[2], p, f, Js, Jp)
-    P = S.shape[1]
+    m = S.shape[1]
     for i in range(3):
-        for j in range(P):
-            dS[i, j] = Js[i, 0] * S[0, j] + Js[i, 1] * S[1, j] + Js[i, 2] * S[2, j] + Jp[i, j]
+        for j in range(m):
+            dS[i, j] = Js[i, 0] * S[0, j] + Js[i, 1] * S[1, j] + Js[i, 2] * S[2, j] + Jp[i, cols[j]]
     return C
 
 
 @njit(cache=True)
-def simulate_sens(x, v, e, dt, p, nsub, y0, z0, u0):
-    """Free-run force of one record and its derivatives with respect to every parameter.
+def simulate_sens(x, v, e, dt, p, nsub, y0, z0, u0, cols):
+    """Free-run force of one record and its derivatives with respect to chosen parameters.
 
-    Same arguments as :func:`simulate`. Returns ``(F, G, status, sample)`` where ``G[k, j]`` is
-    dF[k]/dp[j] [N per parameter unit], integrated as forward sensitivities with the state.
+    Same arguments as :func:`simulate`, plus ``cols`` (int64 array): indices of the parameters to
+    differentiate. Returns ``(F, G, status, sample)`` where ``G[k, j]`` is dF[k]/dp[cols[j]]
+    [N per parameter unit], integrated as forward sensitivities together with the state.
     """
     n = x.size
     P = p.size
+    m = cols.size
     F = np.zeros(n)
-    G = np.zeros((n, P))
+    G = np.zeros((n, m))
     s = np.array([y0, z0, u0])
-    S = np.zeros((3, P))
+    S = np.zeros((3, m))
     f1 = np.empty(3)
     f2 = np.empty(3)
     f3 = np.empty(3)
     f4 = np.empty(3)
-    K1_ = np.empty((3, P))
-    K2_ = np.empty((3, P))
-    K3_ = np.empty((3, P))
-    K4_ = np.empty((3, P))
+    K1_ = np.empty((3, m))
+    K2_ = np.empty((3, m))
+    K3_ = np.empty((3, m))
+    K4_ = np.empty((3, m))
     st = np.empty(3)
-    St = np.empty((3, P))
+    St = np.empty((3, m))
     Js = np.empty((3, 3))
     Jp = np.empty((3, P))
     dFs = np.empty(3)
@@ -297,8 +299,8 @@ def simulate_sens(x, v, e, dt, p, nsub, y0, z0, u0):
     h = dt * hf
     for k in range(n):
         F[k] = _force_jac(x[k], v[k], s[0], s[1], s[2], p, dFs, dFp)
-        for j in range(P):
-            G[k, j] = dFs[0] * S[0, j] + dFs[1] * S[1, j] + dFs[2] * S[2, j] + dFp[j]
+        for j in range(m):
+            G[k, j] = dFs[0] * S[0, j] + dFs[1] * S[1, j] + dFs[2] * S[2, j] + dFp[cols[j]]
         if k == n - 1:
             break
         dx = x[k + 1] - x[k]
@@ -311,18 +313,18 @@ def simulate_sens(x, v, e, dt, p, nsub, y0, z0, u0):
             xa, va, ea = x[k] + t0 * dx, v[k] + t0 * dv, e[k] + t0 * de
             xm, vm, em = x[k] + tm * dx, v[k] + tm * dv, e[k] + tm * de
             xb, vb, eb = x[k] + t1 * dx, v[k] + t1 * dv, e[k] + t1 * de
-            C = _sens_rhs(xa, va, ea, s, S, p, f1, Js, Jp, K1_)
+            C = _sens_rhs(xa, va, ea, s, S, p, cols, f1, Js, Jp, K1_)
             if not C > 0.0:
                 return F, G, STATUS_BAD_DAMPING, k
             _stage(s, S, 0.5 * h, f1, K1_, st, St)
-            _sens_rhs(xm, vm, em, st, St, p, f2, Js, Jp, K2_)
+            _sens_rhs(xm, vm, em, st, St, p, cols, f2, Js, Jp, K2_)
             _stage(s, S, 0.5 * h, f2, K2_, st, St)
-            _sens_rhs(xm, vm, em, st, St, p, f3, Js, Jp, K3_)
+            _sens_rhs(xm, vm, em, st, St, p, cols, f3, Js, Jp, K3_)
             _stage(s, S, h, f3, K3_, st, St)
-            _sens_rhs(xb, vb, eb, st, St, p, f4, Js, Jp, K4_)
+            _sens_rhs(xb, vb, eb, st, St, p, cols, f4, Js, Jp, K4_)
             for i in range(3):
                 s[i] += h / 6.0 * (f1[i] + 2.0 * f2[i] + 2.0 * f3[i] + f4[i])
-                for j in range(P):
+                for j in range(m):
                     S[i, j] += h / 6.0 * (K1_[i, j] + 2.0 * K2_[i, j] + 2.0 * K3_[i, j] + K4_[i, j])
         if _bad_state(s[0], s[1], s[2], x[k + 1]):
             return F, G, STATUS_DIVERGED, k + 1

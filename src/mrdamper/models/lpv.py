@@ -392,8 +392,11 @@ class LPVEstimator(Estimator):
         ls_cost = _cost(rec, theta, F0, self.n_m, self.n_rho + 1, bound)
         prov["ls_free_run_cost"] = ls_cost
         if self.refine:
+            theta0, shrink = _stable_start(theta, self.n_m, self.n_rho + 1, rho_range, rec, F0, bound)
+            if shrink != 1.0:
+                prov["oe_start_pole_scaling"] = shrink
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec, theta, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev
+                rec, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev
             )
             oe_cost = _cost(rec, th_r, f0_r, self.n_m, self.n_rho + 1, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
@@ -415,6 +418,30 @@ class LPVEstimator(Estimator):
                 f"(max frozen pole modulus {pmax:.4f})", RuntimeWarning, stacklevel=2,
             )
         return model
+
+
+def _stable_start(
+    theta: np.ndarray, n_m: int, n_p: int, rho_range: tuple[float, float], rec: _lpv_fit.Records,
+    F0: float, bound: float,
+) -> tuple[np.ndarray, float]:
+    """Start for the refinement whose free run stays bounded on the training records.
+
+    An equation-error estimate can be frozen-unstable. Scaling ``a_j`` by ``lambda**j`` scales
+    every frozen pole by ``lambda``, so ``lambda = 0.98 / max|pole|`` (then smaller, if the
+    time-varying run still diverges) gives a frozen-stable start with the same pole pattern.
+    """
+    alpha, beta = _lpv_fit.split_theta(theta, n_m, n_p)
+    pmax = float(np.max(np.abs(_lpv_fit.frozen_poles(alpha, np.linspace(*rho_range, 51)))))
+    lam = 1.0 if pmax < 0.999 else 0.98 / pmax
+    for _ in range(20):
+        al = alpha * (lam ** np.arange(1, n_m + 1))[:, None]
+        th = np.r_[al.ravel(), beta.ravel()]
+        if np.isfinite(_cost(rec, th, F0, n_m, n_p, bound)):
+            return th, lam
+        lam *= 0.95
+    raise IdentificationError(
+        "lpv: no bounded free run found from the least-squares estimate; try a lower order n_m"
+    )
 
 
 def _cost(rec: _lpv_fit.Records, theta: np.ndarray, F0: float, n_m: int, n_p: int, bound: float) -> float:

@@ -1,0 +1,395 @@
+"""Identification machinery of the Spencer model (private; used by ``SpencerEstimator.fit``).
+
+* Records are simulated separately from their own rest state; residuals are stacked.
+* Unknowns are scaled (``p = scale * q``) so the optimiser works on numbers of order one.
+* The Jacobian comes from forward sensitivities integrated with the state by the RK4 kernel.
+* The first start is a data-driven guess: a weighted linear regression
+  ``F ~ (fa + fb e) tanh(v / v_eps) + (ca + cb e) v + k x + f0`` mapped onto the model at an
+  assumed yield displacement and damper ratio ``c1 / c0``; further starts vary those two
+  assumptions and jitter the result with a seeded generator.
+* Each start runs a short screening fit; the best continues to convergence.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from mrdamper.data import ExperimentSet
+from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.models import _spencer_kernels as _k
+from mrdamper.models.spencer import DEFAULT_BOUNDS, PARAMETER_NAMES, auto_substeps
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.models.spencer import SpencerEstimator
+
+__all__ = ["identify", "COND_WARNING"]
+
+#: Condition number of J^T J (scaled unknowns) above which the fit is reported ill-conditioned.
+COND_WARNING = 1e10
+#: Residual value per sample returned for parameter sets whose simulation fails.
+_PENALTY = 1e3
+_IDX = {n: k for k, n in enumerate(PARAMETER_NAMES)}
+
+
+@dataclass(frozen=True)
+class _Record:
+    name: str
+    x: np.ndarray
+    v: np.ndarray
+    e: np.ndarray
+    F: np.ndarray
+    dt: float
+    weight: float
+    vmax: float
+    emin: float
+    emax: float
+    sl: slice
+
+
+def _check_settings(est: SpencerEstimator) -> None:
+    if est.input not in ("i", "voltage"):
+        raise DataValidationError("input", f"expected 'i' or 'voltage', got {est.input!r}")
+    for name in ("n_starts", "max_nfev", "screen_nfev"):
+        v = getattr(est, name)
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise DataValidationError(name, f"expected a positive integer, got {v!r}")
+    if isinstance(est.substeps, bool) or not isinstance(est.substeps, (int, np.integer)) or est.substeps < 0:
+        raise DataValidationError("substeps", f"expected an integer >= 0 (0 = automatic), got {est.substeps!r}")
+    choices = {
+        "weighting": ("record", "none"),
+        "jacobian": ("sensitivity", "2-point", "3-point"),
+        "fix_eta": ("auto", "never", "always"),
+        "range_policy": ("error", "warn", "clip", "ignore"),
+    }
+    for name, allowed in choices.items():
+        if getattr(est, name) not in allowed:
+            raise DataValidationError(name, f"expected one of {allowed}, got {getattr(est, name)!r}")
+    for name in ("start", "fixed", "bounds"):
+        mapping = getattr(est, name)
+        if mapping is None:
+            continue
+        if not isinstance(mapping, Mapping):
+            raise DataValidationError(name, f"expected a mapping of parameter names, got {type(mapping).__name__}")
+        unknown = sorted(set(mapping) - set(PARAMETER_NAMES))
+        if unknown:
+            raise DataValidationError(name, f"unknown parameter(s) {unknown}; expected names from {list(PARAMETER_NAMES)}")
+    for name, value in {**(est.start or {}), **(est.fixed or {})}.items():
+        if not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(float(value)):
+            raise DataValidationError(name, f"start/fixed value must be a finite number, got {value!r}")
+    for name, b in (est.bounds or {}).items():
+        try:
+            lo, hi = float(b[0]), float(b[1])
+        except (TypeError, ValueError, IndexError):
+            raise DataValidationError(f"bounds[{name!r}]", f"expected (low, high), got {b!r}") from None
+        if not lo < hi:
+            raise DataValidationError(f"bounds[{name!r}]", f"expected low < high, got ({lo}, {hi})")
+
+
+def _records(est: SpencerEstimator, exps: ExperimentSet) -> list[_Record]:
+    recs = []
+    offset = 0
+    n_rec = len(exps)
+    total = sum(e.n for e in exps)
+    F_all_std = float(np.std(np.concatenate([e.F for e in exps])))
+    for exp in exps:
+        e = np.ascontiguousarray(exp.electrical(est.input), dtype=np.float64)
+        exp.require_samples(10, "Spencer identification")
+        sd = float(np.std(exp.F))
+        if est.weighting == "record":
+            if sd == 0.0:
+                raise DataValidationError("F", f"record {exp.name!r} has constant force; per-record weighting needs variance")
+            w = 1.0 / (sd * math.sqrt(exp.n * n_rec))
+        else:
+            if F_all_std == 0.0:
+                raise DataValidationError("F", "the training force has zero variance")
+            w = 1.0 / (F_all_std * math.sqrt(total))
+        recs.append(_Record(
+            exp.name, np.ascontiguousarray(exp.x), np.ascontiguousarray(exp.v), e,
+            np.ascontiguousarray(exp.F), exp.dt, w, float(np.max(np.abs(exp.v))),
+            float(np.min(e)), float(np.max(e)), slice(offset, offset + exp.n),
+        ))
+        offset += exp.n
+    return recs
+
+
+def _regression(recs: list[_Record]) -> np.ndarray:
+    """Weighted least squares of F on [tanh(v/v_eps), e tanh, v, e v, x, 1]."""
+    rows, rhs = [], []
+    for r in recs:
+        veps = 0.05 * max(r.vmax, 1e-9)
+        s = np.tanh(r.v / veps)
+        X = np.column_stack([s, r.e * s, r.v, r.e * r.v, r.x, np.ones_like(r.x)])
+        rows.append(X * r.weight)
+        rhs.append(r.F * r.weight)
+    X = np.vstack(rows)
+    y = np.concatenate(rhs)
+    # the electrical columns are exactly collinear with the others when e is one constant value
+    coef, *_ = np.linalg.lstsq(X, y, rcond=1e-10)
+    return coef
+
+
+def _map_start(reg: np.ndarray, yield_disp: float, ratio: float, A: float, n: float,
+               force_scale: float) -> dict[str, float]:
+    """Map Bingham-like regression coefficients onto Spencer parameters."""
+    fa, fb, ca, cb, k, f0 = (float(c) for c in reg)
+    zss = max(abs(A), 1e-12) * yield_disp
+    factor = (1.0 + ratio) / ratio
+    small_f = 1e-3 * force_scale
+    alpha_a = max(fa, small_f) * factor / zss
+    return {
+        "alpha_a": alpha_a,
+        "alpha_b": max(fb, 0.0) * factor / zss,
+        "c0a": max(ca, 1e-3 * force_scale) * factor,
+        "c0b": max(cb, 0.0) * factor,
+        "c1a": ratio * max(ca, 1e-3 * force_scale) * factor,
+        "c1b": ratio * max(cb, 0.0) * factor,
+        "k0": 0.02 * alpha_a,
+        "k1": k,
+        "x0": 0.0,
+        "beta": abs(A) / (2.0 * zss**n),
+        "gamma": abs(A) / (2.0 * zss**n),
+        "A": A,
+        "n": n,
+        "eta": 100.0,
+        "f0": f0,
+    }
+
+
+class _Objective:
+    """Weighted free-run residuals and their sensitivity Jacobian in scaled unknowns."""
+
+    def __init__(self, recs: list[_Record], p_fixed: np.ndarray, free: np.ndarray,
+                 scale: np.ndarray, substeps: int) -> None:
+        self.recs = recs
+        self.p_fixed = p_fixed
+        self.free = free
+        self.scale = scale
+        self.substeps = substeps
+        self.n = recs[-1].sl.stop
+        self.nfev = 0
+        self.njev = 0
+        self.failures = 0
+        self.last_failure = ""
+
+    def params(self, q: np.ndarray) -> np.ndarray:
+        p = self.p_fixed.copy()
+        p[self.free] = q * self.scale
+        return p
+
+    def nsub(self, p: np.ndarray, r: _Record) -> int:
+        if self.substeps > 0:
+            return self.substeps
+        return auto_substeps(p, r.dt, r.vmax, r.emin, r.emax)
+
+    def residuals(self, q: np.ndarray) -> np.ndarray:
+        self.nfev += 1
+        p = self.params(q)
+        out = np.empty(self.n)
+        for r in self.recs:
+            F, status, sample = _k.simulate(r.x, r.v, r.e, r.dt, p, self.nsub(p, r), r.x[0], 0.0, r.e[0])
+            if status != _k.STATUS_OK:
+                self.failures += 1
+                self.last_failure = f"record {r.name!r}: status {status} at sample {sample}"
+                return np.full(self.n, _PENALTY)
+            out[r.sl] = r.weight * (F - r.F)
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        self.njev += 1
+        p = self.params(q)
+        J = np.empty((self.n, self.free.size))
+        for r in self.recs:
+            _, G, status, _ = _k.simulate_sens(
+                r.x, r.v, r.e, r.dt, p, self.nsub(p, r), r.x[0], 0.0, r.e[0], self.free
+            )
+            if status != _k.STATUS_OK:
+                J[r.sl] = 0.0
+                continue
+            J[r.sl] = G * (r.weight * self.scale)
+        return J
+
+
+def _constant_input(recs: list[_Record]) -> bool:
+    return all(r.emax - r.emin <= 1e-12 * max(1.0, abs(r.emax)) for r in recs)
+
+
+def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, dict[str, Any]]:
+    """Run the identification; return the parameter vector and the common model fields."""
+    _check_settings(est)
+    recs = _records(est, exps)
+    notes: list[str] = []
+    fixed: dict[str, float] = {"x0": 0.0, "A": 1.0}
+    fixed.update({k: float(v) for k, v in (est.fixed or {}).items()})
+    start_user = {k: float(v) for k, v in (est.start or {}).items()}
+    constant = _constant_input(recs)
+    if "eta" not in fixed and (est.fix_eta == "always" or (est.fix_eta == "auto" and constant)):
+        fixed["eta"] = start_user.get("eta", 100.0)
+        if constant:
+            notes.append("eta fixed: the electrical input is constant within every record")
+    bounds = dict(DEFAULT_BOUNDS)
+    bounds.update({k: (float(b[0]), float(b[1])) for k, b in (est.bounds or {}).items()})
+
+    force_scale = float(np.mean([np.std(r.F) for r in recs]))
+    reg = _regression(recs)
+    A = fixed.get("A", start_user.get("A", 1.0))
+    n0 = fixed.get("n", start_user.get("n", 2.0))
+    xmax = max(float(np.max(np.abs(r.x - np.mean(r.x)))) for r in recs)
+    yield0 = max(0.05 * xmax, 1e-5)
+    ratio0 = 10.0
+
+    def build(yield_disp: float, ratio: float) -> np.ndarray:
+        d = _map_start(reg, yield_disp, ratio, A, n0, force_scale)
+        d.update(start_user)
+        d.update(fixed)
+        return np.array([d[nm] for nm in PARAMETER_NAMES], dtype=float)
+
+    free_names = [nm for nm in PARAMETER_NAMES if nm not in fixed]
+    if not free_names:
+        raise DataValidationError("fixed", "every parameter is fixed; nothing to identify")
+    free = np.array([_IDX[nm] for nm in free_names], dtype=np.int64)
+    lo = np.array([bounds[nm][0] for nm in free_names])
+    hi = np.array([bounds[nm][1] for nm in free_names])
+    base = build(yield0, ratio0)
+    for nm, value in fixed.items():
+        b = bounds[nm]
+        if not b[0] <= value <= b[1]:
+            notes.append(f"fixed {nm}={value:g} lies outside its default bounds {b}")
+
+    floors = _scale_floors(recs, force_scale)
+    scale = np.maximum(np.abs(base[free]), np.array([floors[nm] for nm in free_names]))
+    obj = _Objective(recs, base.copy(), free, scale, int(est.substeps))
+    q_lo, q_hi = lo / scale, hi / scale
+
+    rng = np.random.default_rng(est.seed)
+    starts = [base]
+    for _ in range(est.n_starts - 1):
+        yd = yield0 * math.exp(rng.uniform(-1.5, 1.5))
+        ra = ratio0 * math.exp(rng.uniform(-1.2, 1.2))
+        p = build(yd, ra)
+        jitter = np.exp(0.15 * rng.standard_normal(p.size))
+        for j, nm in enumerate(PARAMETER_NAMES):
+            if nm not in fixed and nm not in start_user and nm not in ("n", "k1", "f0", "x0"):
+                p[j] *= jitter[j]
+        starts.append(p)
+
+    method = est.jacobian
+    jac = obj.jacobian if method == "sensitivity" else method
+    kw = dict(bounds=(q_lo, q_hi), method="trf", x_scale=1.0, ftol=est.ftol, xtol=est.xtol, gtol=est.gtol)
+
+    runs: list[dict[str, Any]] = []
+    results = []
+    for k, p0 in enumerate(starts):
+        q0 = _strictly_inside(p0[free] / scale, q_lo, q_hi)
+        r0 = obj.residuals(q0)
+        if obj.last_failure and np.all(r0 == _PENALTY):
+            runs.append({"start": k, "cost": math.inf, "status": "start diverged", "detail": obj.last_failure})
+            obj.last_failure = ""
+            continue
+        nfev = est.screen_nfev if est.n_starts > 1 else est.max_nfev
+        res = least_squares(obj.residuals, q0, jac=jac, max_nfev=nfev, **kw)
+        runs.append({"start": k, "cost": float(res.cost), "nfev": int(res.nfev), "status": int(res.status)})
+        results.append(res)
+    finite = [r for r in results if np.isfinite(r.cost) and r.cost < 0.25 * _PENALTY**2 * obj.n]
+    if not finite:
+        raise IdentificationError(
+            f"spencer: every one of {len(starts)} start(s) diverged or failed "
+            f"(last failure: {obj.last_failure or 'n/a'}); give 'start' values or wider 'bounds'"
+        )
+    best = min(finite, key=lambda r: r.cost)
+    final = best
+    if est.n_starts > 1:
+        final = least_squares(obj.residuals, best.x, jac=jac, max_nfev=est.max_nfev, **kw)
+        if not final.cost <= best.cost:
+            final = best
+    if not np.all(np.isfinite(final.x)) or not math.isfinite(final.cost):
+        raise IdentificationError(f"spencer: optimiser returned a non-finite result ({final.message})")
+    p_hat = obj.params(final.x)
+
+    sv = np.linalg.svd(final.jac, compute_uv=False)
+    cond = float((sv[0] / sv[-1]) ** 2) if sv[-1] > 0 else math.inf
+    ill = not cond < COND_WARNING
+    at_bounds = [free_names[j] for j in np.flatnonzero(final.active_mask)]
+    converged = bool(final.status > 0)
+    if ill:
+        warnings.warn(
+            f"spencer: identification is ill-conditioned (cond(J^T J) = {cond:.3g} in scaled "
+            "unknowns); some parameters are not determined by these records",
+            RuntimeWarning, stacklevel=3,
+        )
+    if not converged:
+        warnings.warn(
+            f"spencer: optimiser stopped before convergence ({final.message}); raise max_nfev",
+            RuntimeWarning, stacklevel=3,
+        )
+    resid = obj.residuals(final.x)
+    rec_esr = {}
+    for r in recs:
+        err = resid[r.sl] / r.weight
+        rec_esr[r.name] = float(np.mean(err**2) / np.var(r.F))
+    emin = min(r.emin for r in recs)
+    emax = max(r.emax for r in recs)
+    provenance = {
+        "method": "bounded nonlinear least squares on the free-run simulation error "
+        "(scipy.optimize.least_squares, trf); records simulated separately from rest",
+        "jacobian": "forward sensitivities (RK4)" if method == "sensitivity" else f"finite differences ({method})",
+        "records": [r.name for r in recs],
+        "n_samples": int(obj.n),
+        "weighting": est.weighting,
+        "input": est.input,
+        "fixed": fixed,
+        "free": free_names,
+        "bounds": {nm: list(bounds[nm]) for nm in free_names},
+        "starts": runs,
+        "seed": int(est.seed),
+        "cost": float(final.cost),
+        "mean_record_esr": float(np.mean(list(rec_esr.values()))),
+        "record_esr": rec_esr,
+        "nfev_total": int(obj.nfev),
+        "njev_total": int(obj.njev),
+        "status": int(final.status),
+        "message": str(final.message),
+        "converged": converged,
+        "optimality": float(final.optimality),
+        "cond_JTJ": cond,
+        "ill_conditioned": ill,
+        "at_bounds": at_bounds,
+        "simulation_failures": int(obj.failures),
+        "substeps": int(est.substeps) if est.substeps > 0 else "automatic",
+        "notes": notes,
+    }
+    common = {
+        "input": est.input,
+        "input_range": (emin, emax),
+        "range_policy": est.range_policy,
+        "provenance": provenance,
+    }
+    return p_hat, common
+
+
+def _scale_floors(recs: list[_Record], force_scale: float) -> dict[str, float]:
+    vs = max(max(r.vmax for r in recs), 1e-9)
+    xs = max(max(float(np.max(np.abs(r.x))) for r in recs), 1e-9)
+    es = max(max(abs(r.emin), abs(r.emax)) for r in recs) or 1.0
+    damp = 1e-2 * force_scale / vs
+    stiff = 1e-2 * force_scale / xs
+    return {
+        "c0a": damp, "c0b": damp / es, "c1a": damp, "c1b": damp / es, "k0": stiff, "k1": stiff,
+        "x0": xs, "alpha_a": stiff, "alpha_b": stiff / es, "gamma": 1.0, "beta": 1.0, "A": 1.0,
+        "n": 1.0, "eta": 10.0, "f0": 1e-2 * force_scale,
+    }
+
+
+def _strictly_inside(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    q = q.copy()
+    width = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
+    pad = np.minimum(1e-6 * np.maximum(np.abs(q), 1.0), 0.01 * width)
+    q = np.maximum(q, lo + pad)
+    q = np.minimum(q, hi - pad)
+    return q

@@ -1,0 +1,205 @@
+"""Bingham plastic reference model of an MR damper, current dependent.
+
+``F = fc(e) * sign(v) + c0(e) * v + f0`` with ``fc`` and ``c0`` polynomials of degree ``degree``
+in the electrical input e (coil current ``i`` [A] or command ``voltage`` [V]). With
+``v_eps > 0`` the sign is smoothed to ``tanh(v / v_eps)``. The model is static (no state), so its
+free-run prediction is a direct evaluation; it is identified by linear least squares over all
+records.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.registry import register
+
+__all__ = ["BinghamModel", "BinghamEstimator"]
+
+
+def _coefficients(name: str, values: Any) -> tuple[float, ...]:
+    if isinstance(values, (str, bytes)) or not isinstance(values, (Sequence, np.ndarray)):
+        raise DataValidationError(name, f"expected a sequence of polynomial coefficients, got {values!r}")
+    out = []
+    for k, v in enumerate(values):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)):
+            raise DataValidationError(name, f"coefficient {k} must be a finite number, got {v!r}")
+        out.append(float(v))
+    if not out:
+        raise DataValidationError(name, "expected at least one coefficient")
+    return tuple(out)
+
+
+@dataclass(frozen=True, kw_only=True)
+class BinghamModel(FittedModel):
+    """Bingham plastic model with current-dependent yield force and viscous damping.
+
+    Parameters
+    ----------
+    fc : tuple of float
+        Yield (friction) force polynomial in the electrical input, lowest degree first:
+        ``fc(e) = fc[0] + fc[1] e + ...`` [N], [N/U], ... (U = A or V).
+    c0 : tuple of float
+        Viscous damping polynomial, lowest degree first [N s/m], [N s/(m U)], ...
+    f0 : float
+        Force offset [N].
+    v_eps : float
+        Smoothing velocity of the sign [m/s]; 0 uses the exact sign.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mrdamper.data import Experiment
+    >>> t = np.arange(100) * 1e-3
+    >>> v = np.sin(2 * np.pi * 5 * t) * 0.1
+    >>> e = Experiment(t=t, x=0 * t, v=v, F=0 * t, i=0 * t + 1.0, name="demo")
+    >>> m = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), f0=0.0, input_range=(0, 1))
+    >>> round(float(m.predict(e)[50]), 6)  # v = 0.1 m/s at 1 A: 600 N + 3000 N s/m * 0.1 m/s
+    900.0
+    """
+
+    kind: ClassVar[str] = "bingham"
+
+    fc: tuple[float, ...]
+    c0: tuple[float, ...]
+    f0: float = 0.0
+    v_eps: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "fc", _coefficients("fc", self.fc))
+        object.__setattr__(self, "c0", _coefficients("c0", self.c0))
+        for name in ("f0", "v_eps"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)):
+                raise DataValidationError(name, f"expected a finite number, got {v!r}")
+            object.__setattr__(self, name, float(v))
+        if self.v_eps < 0:
+            raise DataValidationError("v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}")
+        if self.input not in ("i", "voltage"):
+            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+
+    def sign(self, v: np.ndarray) -> np.ndarray:
+        """``sign(v)`` or ``tanh(v / v_eps)`` [-]."""
+        return np.sign(v) if self.v_eps == 0.0 else np.tanh(v / self.v_eps)
+
+    def predict(self, experiment: Experiment) -> np.ndarray:
+        """Force [N] from the record's velocity and electrical input.
+
+        Raises
+        ------
+        DataValidationError
+            If the record lacks the model's electrical input channel.
+        OutOfRangeError
+            If the input leaves ``input_range`` and ``range_policy == "error"``.
+        """
+        if not isinstance(experiment, Experiment):
+            raise DataValidationError("experiment", f"expected an Experiment, got {type(experiment).__name__}")
+        e = self.electrical_input(experiment)
+        v = experiment.v
+        fc = np.polynomial.polynomial.polyval(e, self.fc)
+        c0 = np.polynomial.polynomial.polyval(e, self.c0)
+        return fc * self.sign(v) + c0 * v + self.f0
+
+
+@dataclass
+class BinghamEstimator(Estimator):
+    """Identify a :class:`BinghamModel` by linear least squares over all records (settings only).
+
+    Parameters
+    ----------
+    input : {"i", "voltage"}
+        Electrical input channel.
+    degree : int
+        Polynomial degree of ``fc`` and ``c0`` in the input; needs at least ``degree + 1``
+        distinct input levels in the data.
+    v_eps : float
+        Sign smoothing velocity [m/s] (0: exact sign).
+    weighting : {"record", "none"}
+        ``"record"`` weights each record by ``1 / (std(F) sqrt(N_record))`` so records count
+        equally; ``"none"`` weights samples equally.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Range policy of the fitted model.
+    """
+
+    kind: ClassVar[str] = "bingham"
+
+    input: Literal["i", "voltage"] = "i"
+    degree: int = 2
+    v_eps: float = 0.0
+    weighting: Literal["record", "none"] = "record"
+    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+
+    def fit(self, data: Experiment | Iterable[Experiment]) -> BinghamModel:
+        """Identify the model.
+
+        Raises
+        ------
+        DataValidationError
+            Bad settings or a record without the chosen input channel.
+        IdentificationError
+            The regression is rank deficient (e.g. fewer input levels than ``degree + 1``).
+        """
+        if self.input not in ("i", "voltage"):
+            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+        if isinstance(self.degree, bool) or not isinstance(self.degree, (int, np.integer)) or self.degree < 0:
+            raise DataValidationError("degree", f"expected an integer >= 0, got {self.degree!r}")
+        if not (isinstance(self.v_eps, (int, float)) and math.isfinite(self.v_eps) and self.v_eps >= 0):
+            raise DataValidationError("v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}")
+        if self.weighting not in ("record", "none"):
+            raise DataValidationError("weighting", f"expected 'record' or 'none', got {self.weighting!r}")
+        exps = self._as_set(data)
+        probe = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps)
+        deg = int(self.degree)
+        rows, rhs, inputs = [], [], []
+        for exp in exps:
+            e = exp.electrical(self.input)
+            s = probe.sign(exp.v)
+            powers = np.vander(e, deg + 1, increasing=True)
+            X = np.hstack([powers * s[:, None], powers * exp.v[:, None], np.ones((exp.n, 1))])
+            w = 1.0
+            if self.weighting == "record":
+                sd = float(np.std(exp.F))
+                if sd == 0.0:
+                    raise DataValidationError("F", f"record {exp.name!r} has constant force; use weighting='none'")
+                w = 1.0 / (sd * math.sqrt(exp.n))
+            rows.append(X * w)
+            rhs.append(exp.F * w)
+            inputs.append(e)
+        X = np.vstack(rows)
+        y = np.concatenate(rhs)
+        coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)
+        if rank < X.shape[1]:
+            levels = np.unique(np.round(np.concatenate(inputs), 9)).size
+            raise IdentificationError(
+                f"bingham: regression is rank deficient (rank {rank} of {X.shape[1]}); degree={deg} "
+                f"needs at least {deg + 1} distinct '{self.input}' levels and moving records "
+                f"(found {levels} level(s))"
+            )
+        e_all = np.concatenate(inputs)
+        pred = X @ coef
+        provenance = {
+            "method": "linear least squares",
+            "records": [e.name for e in exps],
+            "n_samples": int(X.shape[0]),
+            "weighting": self.weighting,
+            "degree": deg,
+            "cond_X": float(sv[0] / sv[-1]),
+            "weighted_rms_residual": float(np.sqrt(np.mean((y - pred) ** 2))),
+        }
+        return BinghamModel(
+            fc=tuple(coef[: deg + 1]), c0=tuple(coef[deg + 1 : 2 * deg + 2]), f0=float(coef[-1]),
+            v_eps=float(self.v_eps), input=self.input,
+            input_range=(float(e_all.min()), float(e_all.max())),
+            range_policy=self.range_policy, provenance=provenance,
+        )
+
+
+register(BinghamEstimator, BinghamModel)
