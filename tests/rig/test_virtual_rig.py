@@ -109,3 +109,13 @@ def test_validation(damper, commands) -> None:
         rig.run(x, 2 * i, seed=0)
     with pytest.raises(DataValidationError, match="F"):  # load-cell overload is reported
         VirtualRig(damper=damper.__class__(c0=1e6, input_range=(0.0, 1.0))).run(x, i, seed=0)
+
+
+def test_velocity_is_what_the_measured_data_pipeline_computes(damper, commands) -> None:
+    from mrdamper.data.preprocessing import velocity_from_displacement
+
+    rec = VirtualRig(damper=damper).run(*commands, seed=4)
+    again = velocity_from_displacement(rec, cutoff=rec.metadata["velocity_cutoff"])
+    np.testing.assert_allclose(rec.v, again.v, rtol=0, atol=1e-12)
+    with pytest.raises(DataValidationError, match="velocity_cutoff"):
+        VirtualRig(damper=damper, fs=80.0).run(commands[0][:800], commands[1][:800], seed=0)

@@ -224,8 +224,7 @@ def make_record(spec: DoeSequence, replicate: int, record_seed: int, rig: Virtua
         "current_range": (lo, hi),
     }
     name = f"exp{spec.experiment}_rep{int(replicate):02d}"
-    rec = rig.run(x_cmd, i_cmd, seed=s_rig, name=name, metadata=meta)
-    return rec.replace(metadata={**rec.metadata, "seed": int(record_seed)})
+    return rig.run(x_cmd, i_cmd, seed=s_rig, name=name, metadata=meta, seed_label=int(record_seed))
 
 
 def table_ii(
@@ -340,7 +339,7 @@ def constant_current_sweep(
             i_cmd = constant(rig.fs, duration, value=float(level))
             meta = {"pattern": "constant", "current": float(level), "replicate": r,
                     "duration": float(duration), "max_frequency": float(max_frequency)}
-            rec = rig.run(x_cmd, i_cmd, seed=s_rig, name=f"cc_{float(level):g}A_rep{r:02d}", metadata=meta)
-            out.append(rec.replace(metadata={**rec.metadata, "seed": int(seeds[k])}))
+            out.append(rig.run(x_cmd, i_cmd, seed=s_rig, name=f"cc_{float(level):g}A_rep{r:02d}",
+                               metadata=meta, seed_label=int(seeds[k])))
             k += 1
     return ExperimentSet(out, name=f"constant_current_seed{seed}")

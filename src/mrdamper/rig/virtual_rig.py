@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 from typing import Any, cast
 
 import numpy as np
+from scipy.signal import butter, sosfiltfilt
 
 from mrdamper.data import Experiment
-from mrdamper.data.preprocessing import velocity_from_displacement
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 from mrdamper.rig.actuator import ServoActuator
@@ -46,6 +46,30 @@ def _command(name: str, values: Any) -> np.ndarray:
     if bad.size:
         raise DataValidationError(name, f"non-finite value at sample {int(bad[0])}")
     return arr
+
+
+#: Order of one pass of the velocity low-pass (applied forward and backward).
+VELOCITY_FILTER_ORDER = 4
+
+
+def _velocity(x: np.ndarray, fs: float, cutoff: float) -> np.ndarray:
+    """Velocity [m/s] as measured-data preprocessing computes it.
+
+    Same steps as :func:`mrdamper.data.preprocessing.velocity_from_displacement`: zero-phase
+    Butterworth low-pass of x, then central differences (one-sided at the ends); done here on the
+    bare arrays so a rig run builds its record once.
+    """
+    if not cutoff < fs / 2:
+        raise DataValidationError(
+            "velocity_cutoff", f"{cutoff:g} Hz is not below the Nyquist frequency {fs / 2:g} Hz"
+        )
+    sos = butter(VELOCITY_FILTER_ORDER, cutoff, btype="low", fs=fs, output="sos")
+    padlen = 3 * (2 * len(sos) + 1)
+    if x.size <= padlen:
+        raise DataValidationError(
+            "x_command", f"{x.size} samples are too few for the velocity filter (need more than {padlen})"
+        )
+    return np.gradient(sosfiltfilt(sos, x), 1.0 / fs)
 
 
 def _seed_label(seed: SeedLike) -> Any:
@@ -126,6 +150,7 @@ class VirtualRig:
         seed: SeedLike,
         name: str = "rig",
         metadata: Mapping[str, Any] | None = None,
+        seed_label: int | str | None = None,
     ) -> Experiment:
         """Run one test and return the measured record.
 
@@ -142,6 +167,9 @@ class VirtualRig:
         metadata : mapping, optional
             Extra metadata; the rig adds ``source="virtual rig"``, ``seed``, ``damper`` (kind),
             ``fs`` and the drawn variation (``force_gain``, ``force_drift``, ``force_offset``).
+        seed_label : int or str, optional
+            Value stored as metadata ``seed`` (default: ``seed`` itself, or a description of it for
+            a SeedSequence). The DoE stores the record seed the run's SeedSequence derives from.
 
         Returns
         -------
@@ -181,10 +209,14 @@ class VirtualRig:
         meta: dict[str, Any] = dict(metadata or {})
         meta.update(
             source="virtual rig",
-            seed=_seed_label(seed),
+            seed=_seed_label(seed) if seed_label is None else seed_label,
             damper=self.model.kind,
             fs=fs,
             **drawn.to_metadata(),
         )
-        raw = Experiment(t=t, x=x_meas, v=zeros, F=F_meas, name=name, metadata=meta, **{ch: e_meas})
-        return velocity_from_displacement(raw, cutoff=self.velocity_cutoff)
+        v_meas = _velocity(x_meas, fs, self.velocity_cutoff)
+        note = (f"v = central difference of x after zero-phase Butterworth low-pass (order "
+                f"{VELOCITY_FILTER_ORDER}, {self.velocity_cutoff:g} Hz)")
+        meta["processing"] = (*tuple(meta.get("processing", ())), note)
+        meta["velocity_cutoff"] = self.velocity_cutoff
+        return Experiment(t=t, x=x_meas, v=v_meas, F=F_meas, name=name, metadata=meta, **{ch: e_meas})
