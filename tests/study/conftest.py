@@ -118,3 +118,14 @@ def small_doe(fs: float = 200.0, reps: int = 3, seed: int = 0) -> ExperimentSet:
 @pytest.fixture(scope="session")
 def doe() -> ExperimentSet:
     return small_doe()
+
+
+@pytest.fixture(scope="session")
+def rig_damper():
+    """The shipped reference damper when installed, else a toy damper (rig mechanics still real)."""
+    try:
+        from mrdamper.rig import reference_damper
+
+        return reference_damper()
+    except (ImportError, FileNotFoundError):
+        return ToyModel(theta=np.array([300.0, 900.0, 800.0]), input_range=(0.0, 1.0))
