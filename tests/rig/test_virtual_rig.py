@@ -118,4 +118,4 @@ def test_velocity_is_what_the_measured_data_pipeline_computes(damper, commands) 
     again = velocity_from_displacement(rec, cutoff=rec.metadata["velocity_cutoff"])
     np.testing.assert_allclose(rec.v, again.v, rtol=0, atol=1e-12)
     with pytest.raises(DataValidationError, match="velocity_cutoff"):
-        VirtualRig(damper=damper, fs=80.0).run(commands[0][:800], commands[1][:800], seed=0)
+        VirtualRig(damper=damper, fs=80.0)

@@ -123,6 +123,11 @@ class VirtualRig:
     def __post_init__(self) -> None:
         object.__setattr__(self, "fs", check_positive("fs", self.fs, "Hz"))
         object.__setattr__(self, "velocity_cutoff", check_positive("velocity_cutoff", self.velocity_cutoff, "Hz"))
+        if not self.velocity_cutoff < self.fs / 2:
+            raise DataValidationError(
+                "velocity_cutoff",
+                f"{self.velocity_cutoff:g} Hz is not below the Nyquist frequency {self.fs / 2:g} Hz",
+            )
         if self.damper is None:
             from mrdamper.rig.reference import reference_damper
 
