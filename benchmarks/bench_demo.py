@@ -37,7 +37,7 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
         cmd.append("--quick")
     env = dict(os.environ, MPLBACKEND="Agg")
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         print(proc.stdout, proc.stderr, sep="\n", file=sys.stderr)
@@ -66,7 +66,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench-demo-") as tmp:
         root = Path(tmp)
         subprocess.run([sys.executable, "-m", "mrdamper", "demo", "--quick", "--out", str(root / "warm"),
-                        "--no-progress", "--workers", "1"], capture_output=True, env=dict(os.environ, MPLBACKEND="Agg"))
+                        "--no-progress", "--workers", "1"], capture_output=True, env=dict(os.environ, MPLBACKEND="Agg"),
+                       check=True)
         rows = [run("quick", w, root) for w in args.quick_workers]
         if not args.no_full:
             rows += [run("full", w, root) for w in args.full_workers]

@@ -146,3 +146,24 @@ def test_report_renders_in_a_headless_browser(result, tmp_path) -> None:
 
     img = mpimg.imread(io.BytesIO(shot.read_bytes()), format="png")
     assert img.size > 0 and float(np.std(img)) > 0.01  # not a blank page
+
+
+def test_interrupt_during_the_run_stops_workers_and_cleans_up(doe, monkeypatch) -> None:
+    import mrdamper.study.executor as ex
+
+    made = []
+    real = ex.ProcessExecutor.__init__
+
+    def spy(self, workers):
+        real(self, workers)
+        made.append(self)
+
+    def interrupted(self, pending):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ex.ProcessExecutor, "__init__", spy)
+    monkeypatch.setattr(ex.ProcessExecutor, "wait_first", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_study(doe, doe_protocol(), MODELS, workers=2, progress=False)
+    (executor,) = made
+    assert not executor._dir.exists()

@@ -163,7 +163,16 @@ class ProcessExecutor(StudyExecutor):
         return set(done), set(not_done)
 
     def close(self, cancel: bool = False) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=cancel)
+        if cancel:
+            # interrupted: drop queued tasks and stop running ones instead of waiting for them
+            # (ProcessPoolExecutor has no public way to stop a running task)
+            procs = list(getattr(self._pool, "_processes", {}).values())
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            for p in procs:
+                if p.is_alive():
+                    p.terminate()
+        else:
+            self._pool.shutdown(wait=True)
         shutil.rmtree(self._dir, ignore_errors=True)
 
 
