@@ -43,7 +43,8 @@ joined: filtering and differentiation stop at record edges):
 4. ``form="free"`` (default, the paper's plain least squares) or ``form="stable"``: bounded least
    squares (:func:`scipy.optimize.lsq_linear`) with every Bernstein coefficient of ``w3`` and
    ``w2`` below zero and of ``w5`` at most zero, which is sufficient for ``w3 < 0``, ``w2 < 0``,
-   ``w5 <= 0`` on the whole training input range.
+   ``w5 <= 0`` on the whole training input range; ``form="monotone"`` adds ``w4 <= 0`` so that
+   ``g`` is increasing (no bistable branch, a saturating static force-velocity curve).
 
 After the fit every training record is simulated. A divergence is recorded in
 ``provenance["training_divergence"]`` (record name -> sample), and with ``stable_only=True`` it
@@ -66,8 +67,8 @@ Examples
 --------
 >>> import numpy as np
 >>> from mrdamper import Experiment
->>> W = np.array([[1500, 600, 0], [-2.0, 0, 0], [-1e-3, 0, 0], [1e-7, 0, 0], [-1e-13, 0, 0]])
->>> m = P15Model(W=tuple(W.ravel()), input_range=(0.0, 1.0), force_bound=1e4, max_step=1e-4)
+>>> W = np.array([[1500, 2000, 0], [-2e-3, -1e-3, 0], [-1e-6, 0, 0], [2e-6, 0, 0], [-1e-12, 0, 0]])
+>>> m = P15Model(W=tuple(W.ravel()), input_range=(0.0, 1.0), force_bound=1e5, max_step=1e-4)
 >>> t = np.arange(1000) / 1000.0
 >>> v = 0.1 * np.sin(2 * np.pi * 2 * t)
 >>> e = Experiment(t=t, x=0 * t, v=v, F=0 * t, i=0.5 + 0 * t)
@@ -223,14 +224,15 @@ class P15Estimator(Estimator):
     ----------
     input : {"i", "voltage"}
         Electrical input channel.
-    cutoff : float or "auto"
+    cutoff : float, "auto" or None
         Low-pass cut-off [Hz] of the zero-phase derivative filter; ``"auto"``: ``min(fs / 10,
-        100)`` per record.
+        100)`` per record; ``None``: no filter (noise-free synthetic data only).
     filter_order : int
         Butterworth order (the filter runs forward and backward: twice the order, zero phase).
-    form : {"free", "stable"}
-        Plain least squares (the paper) or sign-constrained least squares (``w3 < 0``,
-        ``w2 < 0``, ``w5 <= 0`` over the training input range).
+    form : {"free", "stable", "monotone"}
+        Plain least squares (the paper, default); ``"stable"``: sign-constrained least squares
+        (``w3 < 0``, ``w2 < 0``, ``w5 <= 0`` over the training input range); ``"monotone"``:
+        additionally ``w4 <= 0``, so ``g(F)`` is increasing and the model has no bistable branch.
     offset : bool
         Identify the force offset ``f0`` [N] (default) or fix it to 0.
     stable_only : bool
@@ -239,7 +241,7 @@ class P15Estimator(Estimator):
     """
 
     input: ElectricalSource = "i"
-    cutoff: float | Literal["auto"] = "auto"
+    cutoff: float | Literal["auto"] | None = "auto"
     filter_order: int = 4
     form: Literal["free", "stable", "monotone"] = "free"
     offset: bool = True
@@ -351,7 +353,7 @@ class P15Estimator(Estimator):
     def _check_settings(self) -> None:
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
-        if self.cutoff != "auto" and (
+        if self.cutoff is not None and self.cutoff != "auto" and (
             isinstance(self.cutoff, bool) or not isinstance(self.cutoff, (int, float)) or not self.cutoff > 0
         ):
             raise DataValidationError("cutoff", f"expected 'auto' or a positive frequency [Hz], got {self.cutoff!r}")
@@ -366,6 +368,13 @@ class P15Estimator(Estimator):
     def _regressors(self, e: Experiment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Filtered force (target), input and the five regressor signals of one record, trimmed."""
         i = e.electrical(self.input)
+        if self.cutoff is None:
+            dF = np.gradient(e.F, e.dt)
+            ddF = np.gradient(dF, e.dt)
+            sl = slice(2, e.n - 2)
+            F = e.F[sl]
+            cols = np.stack([e.v[sl], dF[sl], ddF[sl], F**3, F**5], axis=1)
+            return F, np.asarray(i[sl]), cols
         fc = _cutoff(self.cutoff, e.fs)
         if not fc < 0.5 * e.fs:
             raise DataValidationError(
@@ -385,7 +394,9 @@ class P15Estimator(Estimator):
         return F, np.asarray(i[sl]), cols
 
 
-def _cutoff(setting: float | str, fs: float) -> float:
+def _cutoff(setting: float | str | None, fs: float) -> float | None:
+    if setting is None:
+        return None
     return float(min(fs / 10.0, 100.0)) if setting == "auto" else float(setting)
 
 
