@@ -227,8 +227,27 @@ def _fig_metadata(fmt: str) -> dict[str, Any]:
     return {}
 
 
+def _umask() -> int:
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except OSError:
+        pass
+    return 0o022
+
+
+def _usual_permissions(folder: Path) -> None:
+    """Give the finished folder the permissions of an ordinary folder (temporary files are private)."""
+    mask = _umask()
+    folder.chmod(0o777 & ~mask)
+    for p in folder.rglob("*"):
+        p.chmod((0o777 if p.is_dir() else 0o666) & ~mask)
+
+
 def _swap_into_place(tmp: Path, out: Path, force: bool) -> None:
     """Move the finished folder ``tmp`` to ``out`` (replacing an empty one, or any one if ``force``)."""
+    _usual_permissions(tmp)
     if not out.exists():
         os.replace(tmp, out)
         return
