@@ -1,0 +1,198 @@
+"""LPV / LTI input-output models: known-answer identification, bad input, JSON round trip,
+range policy, divergence detection, order selection."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from mrdamper import (
+    DataValidationError,
+    Experiment,
+    IdentificationError,
+    OutOfRangeError,
+    SchemaError,
+    SimulationDivergedError,
+    get_estimator,
+    load_model,
+)
+from mrdamper.analysis import ZoneLaws
+from mrdamper.models import _lpv_kernels as K
+from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel, select_order
+
+FS = 200.0
+ALPHA = np.array([[-1.2, 0.30, -0.10], [0.45, -0.10, 0.05]])  # a_j(rho), rho in [0, 1]
+BETA = np.array([[900.0, 1500.0, -400.0], [-500.0, -700.0, 300.0]])  # b_j(rho) [N s/m]
+
+
+def _record(rho_level, seed, n=1500, name=None, varying=False, laws=None, offset=0.0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / FS
+    v = 0.1 * np.sin(2 * np.pi * 1.3 * t) + 0.03 * rng.standard_normal(n)
+    i = np.full(n, float(rho_level))
+    if varying:
+        i = np.clip(0.5 + 0.5 * np.sin(2 * np.pi * 0.37 * t), 0.0, 1.0)
+    u = v if laws is None else laws.scheduling_input(v, i)
+    y, bad = K.simulate_record(u, i, ALPHA, BETA, 1e12)
+    assert bad == -1
+    return Experiment(t=t, x=np.cumsum(v) / FS, v=v, F=y + offset, i=i, name=name or f"r{seed}",
+                      metadata={"current": float(rho_level)})
+
+
+def _train(laws=None, offset=0.0):
+    recs = [_record(lev, k, laws=laws, offset=offset) for k, lev in enumerate((0.0, 0.5, 1.0))]
+    recs.append(_record(0.0, 9, varying=True, name="varying", laws=laws, offset=offset))
+    return recs
+
+
+def _known_laws() -> ZoneLaws:
+    gm = np.array([[800.0, 2000.0, 0.0], [15000.0, 40000.0, 0.0], [900.0, 1800.0, 0.0]])
+    return ZoneLaws(gm, np.zeros((3, 3)), (0.01, 0.01), (-0.01, -0.01), True, (0.0, 1.0),
+                    [0.0, 1.0], gm[:, :2].T, np.zeros((2, 3)), [-0.01, -0.02], [0.01, 0.02])
+
+
+@pytest.mark.parametrize("refine", [False, True])
+def test_identifies_known_lpv_coefficients(refine) -> None:
+    est = LPVEstimator(n_m=2, n_rho=2, input_signal="v", offset=False, refine=refine)
+    m = est.fit(_train())
+    np.testing.assert_allclose(m.alpha, ALPHA, rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(m.beta, BETA, rtol=1e-8, atol=1e-6)
+    assert m.provenance["ls_solver"] in ("cholesky", "qr")
+    assert m.provenance["frozen_stable"] is True
+    e = _record(0.3, 42, name="test")
+    assert m.score(e).esr < 1e-12
+
+
+def test_identifies_through_known_scheduling_input_with_offset() -> None:
+    laws = _known_laws()
+    m = LPVEstimator(n_m=2, n_rho=2, zone_laws=laws, refine=True).fit(_train(laws, offset=-92.0))
+    assert m.offset == pytest.approx(-92.0, abs=1e-5)
+    np.testing.assert_allclose(m.alpha, ALPHA, rtol=1e-7, atol=1e-8)
+    assert m.zone_laws is laws
+
+
+def test_estimator_does_not_mutate_input_and_lti_kind() -> None:
+    recs = _train()
+    before = [r.F.copy() for r in recs]
+    m = get_estimator("lti", n_m=2, input_signal="v").fit(recs)
+    assert isinstance(m, LTIModel) and m.kind == "lti" and m.n_rho == 0
+    for r, b in zip(recs, before):
+        np.testing.assert_array_equal(r.F, b)
+    # the LTI model cannot follow the scheduled dynamics as well as the LPV model
+    lpv = get_estimator("lpv", n_m=2, n_rho=2, input_signal="v").fit(recs)
+    e = _record(1.0, 77)
+    assert lpv.score(e).esr < m.score(e).esr
+
+
+def test_json_round_trip_is_bit_identical(tmp_path) -> None:
+    laws = _known_laws()
+    m = LPVEstimator(n_m=2, n_rho=2, zone_laws=laws, refine=False).fit(_train(laws))
+    path = m.save(tmp_path / "lpv.json")
+    again = load_model(path)
+    e = _record(0.7, 5)
+    np.testing.assert_array_equal(again.predict(e), m.predict(e))
+    assert isinstance(again.zone_laws, ZoneLaws)
+    with pytest.raises(FileExistsError):
+        m.save(path)
+    m.save(path, force=True)
+
+
+def test_range_policy_on_scheduling_variable() -> None:
+    m = LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(_train())
+    hot = _record(1.5, 3)
+    with pytest.raises(OutOfRangeError, match="i"):
+        m.predict(hot)
+    with pytest.warns(RuntimeWarning, match="extrapolating"):
+        m.with_range_policy("warn").predict(hot)
+    clipped = m.with_range_policy("clip").predict(hot)
+    at_max = m.predict(hot.replace(i=np.ones(hot.n)))
+    np.testing.assert_array_equal(clipped, at_max)
+
+
+def test_divergence_is_detected() -> None:
+    m = LPVModel(alpha=np.array([[-1.05]]), beta=np.array([[1.0]]), fs=FS, input_signal="v",
+                 rho_range=(0.0, 1.0), input_range=(0.0, 1.0), force_bound=1e6)
+    assert not m.is_frozen_stable()
+    with pytest.raises(SimulationDivergedError, match="diverged at sample"):
+        m.predict(_record(0.5, 1))
+
+
+@pytest.mark.parametrize(
+    ("settings", "field"),
+    [
+        ({"n_m": 0}, "n_m"),
+        ({"n_rho": -1}, "n_rho"),
+        ({"input_signal": "w"}, "input_signal"),
+        ({"reading": "free"}, "reading"),
+        ({"eta": -3.0}, "eta"),
+        ({"fs": 0.0}, "fs"),
+    ],
+)
+def test_bad_settings(settings, field) -> None:
+    with pytest.raises(DataValidationError, match=field):
+        LPVEstimator(**{"input_signal": "v", **settings}).fit(_train())
+
+
+def test_bad_data() -> None:
+    recs = [_record(0.5, k) for k in range(3)]  # one current level only
+    with pytest.raises(IdentificationError, match="distinct"):
+        LPVEstimator(n_rho=2, input_signal="v").fit(recs)
+    other_rate = _record(0.0, 1)
+    t = np.arange(other_rate.n) / 1000.0
+    with pytest.raises(DataValidationError, match="fs"):
+        LPVEstimator(input_signal="v").fit(_train() + [other_rate.replace(t=t, name="fast")])
+    with pytest.raises(SchemaError):
+        LPVEstimator(input_signal="v").fit([])
+    with pytest.raises(DataValidationError, match="n_rho"):
+        get_estimator("lti", n_rho=1)._validate()
+
+
+def test_resampling_to_model_rate() -> None:
+    m = LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(_train())
+    slow = _record(0.4, 8, n=3000)
+    fast_t = np.arange(5 * slow.n - 4) / (5 * FS)
+    fast = Experiment(t=fast_t, x=np.interp(fast_t, slow.t, slow.x), v=np.interp(fast_t, slow.t, slow.v),
+                      F=np.interp(fast_t, slow.t, slow.F), i=np.full(fast_t.size, 0.4), name="fast")
+    assert m.predict(fast).size == fast.n
+    assert m.score(fast).esr < 0.05  # interpolated white-ish input: only an approximation
+
+
+def test_drive_lag_scheduling_variable() -> None:
+    t = np.arange(1000) / FS
+    volt = np.where((t % 1.0) < 0.5, 0.0, 2.0)
+    e = Experiment(t=t, x=0 * t, v=np.sin(t), F=np.sin(t), voltage=volt, name="v")
+    m = LPVModel(alpha=np.zeros((1, 2)), beta=np.zeros((1, 2)), fs=FS, input_signal="v", input="voltage",
+                 eta=50.0, input_range=(0.0, 2.0))
+    rho = m.scheduling_variable(e)
+    k = int(np.argmax(volt > 0)) + 1
+    assert rho[k] == pytest.approx(2.0 * (1 - np.exp(-50.0 / FS)))
+    assert np.all(rho <= 2.0) and np.all(rho >= 0.0)
+
+
+def test_select_order_table() -> None:
+    recs = _train()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        tab = select_order(recs[:3], recs[3:], orders=(1, 2), rho_degrees=(0, 2), input_signal="v", refine=False)
+    assert set(tab.columns) >= {"n_m", "n_rho", "val_esr", "max_frozen_pole", "error"}
+    best = tab.iloc[0]
+    assert (best.n_m, best.n_rho) == (2, 2)
+    assert best.val_esr < 1e-10
+
+
+@pytest.mark.slow
+@pytest.mark.realdata
+def test_quiroz_one_fold_accuracy(quiroz_unfiltered_dir) -> None:
+    """Leave-one-condition-out fold 5 mm / 3 Hz: free-run test ESR of the refined LPV model."""
+    from mrdamper.data.readers import read_directory
+
+    s = read_directory(quiroz_unfiltered_dir)
+    train = s.where(lambda e: e.metadata["condition"] != "5mm_3Hz")
+    test = s.filter(condition="5mm_3Hz")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        m = LPVEstimator(fs=200.0).fit(train)
+    esr = np.mean([m.score(e).esr for e in test])
+    assert esr < 0.04
