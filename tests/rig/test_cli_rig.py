@@ -35,7 +35,8 @@ def test_rig_doe_writes_files_and_refuses_to_overwrite(
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("error:") and "--force" in err and len(err.strip().splitlines()) == 1
-    main(["rig", "doe", "--out", str(out), "--seed", "3", "--scale", "0.07", "--fs", "200", "--force"])
+    main(["rig", "doe", "--out", str(out), "--seed", "3", "--scale", "0.07", "--fs", "200", "--force",
+          "--workers", "2"])
     assert (out / "exp1_rep01.csv").read_bytes() == first
 
 

@@ -94,6 +94,19 @@ def test_same_seed_same_bytes_and_subsets_keep_seeds(doe, damper_cls) -> None:
     assert rebuilt.F.tobytes() == rec.F.tobytes()
 
 
+def test_worker_processes_give_the_same_bytes(doe, damper_cls) -> None:
+    d = damper_cls(input="i", input_range=(0.0, 1.0))
+    par = table_ii(seed=0, scale=SCALE, damper=d, experiments=[4, 8], workers=2)
+    assert par.names == [e.name for e in doe if e.metadata["experiment"] in (4, 8)]
+    for e in par:
+        ref = doe[e.name]
+        assert dict(e.metadata) == dict(ref.metadata)
+        for ch in ("t", "x", "v", "i", "F"):
+            assert getattr(e, ch).tobytes() == getattr(ref, ch).tobytes()
+    with pytest.raises(DataValidationError, match="workers"):
+        table_ii(seed=0, scale=SCALE, damper=d, experiments=[8], workers=0)
+
+
 def test_bad_arguments(damper_cls) -> None:
     d = damper_cls(input="i", input_range=(0.0, 1.0))
     with pytest.raises(DataValidationError, match="scale"):

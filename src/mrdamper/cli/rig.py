@@ -1,6 +1,7 @@
 """``mrdamper rig``: the virtual test rig from the command line.
 
-``mrdamper rig doe --out DIR [--seed N] [--scale S] [--fs HZ] [--damper NAME|FILE] [--force]``
+``mrdamper rig doe --out DIR [--seed N] [--scale S] [--fs HZ] [--damper NAME|FILE] [--workers W]
+[--force]``
 generates the paper's Table II design of experiments and writes one CSV per record plus
 ``manifest.csv``.
 """
@@ -48,6 +49,7 @@ def doe(
         str | None,
         typer.Option("--damper", help="Reference damper name (quiroz2022, spencer1997) or a model JSON file."),
     ] = None,
+    workers: Annotated[int, typer.Option("--workers", min=1, help="Worker processes (same files for any number).")] = 1,
     force: Annotated[bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")] = False,
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig and write CSV files + manifest.csv."""
@@ -56,7 +58,7 @@ def doe(
 
     _check_out_dir(out, force)
     t0 = time.perf_counter()
-    records = table_ii(seed=seed, scale=scale, fs=fs, damper=_damper(damper))
+    records = table_ii(seed=seed, scale=scale, fs=fs, damper=_damper(damper), workers=workers)
     t1 = time.perf_counter()
     manifest = write_records(records, out, force=force)
     t2 = time.perf_counter()
