@@ -22,7 +22,7 @@ from mrdamper.analysis.zones import ZoneFit, fit_zones, segment_plateaus
 from mrdamper.data import Experiment, as_experiment_set
 from mrdamper.errors import DataValidationError, IdentificationError
 
-__all__ = ["ZoneLaws", "ZoneLawWarning", "fit_zone_laws", "zone_fits_by_level", "zone_fits_binned"]
+__all__ = ["ZoneLawWarning", "ZoneLaws", "fit_zone_laws", "zone_fits_binned", "zone_fits_by_level"]
 
 GroupBy = Literal["current", "plateaus"]
 

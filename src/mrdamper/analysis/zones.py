@@ -323,8 +323,8 @@ def segment_plateaus(
         raise DataValidationError("dt", f"expected a positive interval [s], got {dt}")
     out: list[tuple[int, int, float]] = []
     start = 0
-    n_settle = int(round(settle / dt))
-    n_min = max(2, int(round(min_duration / dt)))
+    n_settle = round(settle / dt)
+    n_min = max(2, round(min_duration / dt))
     for k in range(1, s.size + 1):
         if k == s.size or abs(s[k] - s[start]) > tolerance:
             a = start + n_settle

@@ -27,10 +27,10 @@ from mrdamper.errors import DataValidationError, SimulationDivergedError
 
 __all__ = [
     "StateSpaceMatrices",
-    "state_space",
-    "to_control",
     "frozen_stability",
     "simulate_state_space",
+    "state_space",
+    "to_control",
 ]
 
 

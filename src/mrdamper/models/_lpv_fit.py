@@ -14,7 +14,7 @@ from scipy import optimize
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
 
-__all__ = ["Records", "LSResult", "ls_identify", "refine_output_error", "frozen_poles", "split_theta"]
+__all__ = ["LSResult", "Records", "frozen_poles", "ls_identify", "refine_output_error", "split_theta"]
 
 #: Condition number of the column-scaled Gram matrix above which the QR fall-back is used.
 GRAM_COND_LIMIT = 1e8

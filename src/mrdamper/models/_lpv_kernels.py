@@ -16,11 +16,11 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "gram_pass",
     "build_regressors",
+    "first_order_lag",
+    "gram_pass",
     "simulate_record",
     "simulate_sensitivity",
-    "first_order_lag",
 ]
 
 _BLOCK = 512

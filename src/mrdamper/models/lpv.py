@@ -40,7 +40,7 @@ from mrdamper.models import _lpv_kernels as K
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
-__all__ = ["LPVModel", "LPVEstimator", "LTIModel", "LTIEstimator", "select_order"]
+__all__ = ["LPVEstimator", "LPVModel", "LTIEstimator", "LTIModel", "select_order"]
 
 InputSignal = Literal["u", "v"]
 
@@ -52,7 +52,7 @@ def _to_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
         return x
     q = fs_in / fs_out
     if abs(q - round(q)) < 1e-9 and round(q) >= 2:
-        return sps.resample_poly(x, 1, int(round(q)), padtype="line")
+        return sps.resample_poly(x, 1, round(q), padtype="line")
     n = int(np.floor((x.size - 1) * fs_out / fs_in + 1e-9)) + 1
     return np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x)
 
