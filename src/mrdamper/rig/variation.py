@@ -112,7 +112,7 @@ class ReplicateVariation:
     def draw(self, damper: FittedModel, rng: np.random.Generator) -> DrawnVariation:
         """Draw one run's variation (always consumes the same number of random values)."""
         g0, g1, off = rng.standard_normal(3) * (self.gain_std, self.drift_std, self.offset_std)
-        changes: dict[str, float] = {}
+        changes: dict[str, Any] = {}
         rel: dict[str, float] = {}
         params = damper.parameters
         for name in sorted(self.parameter_std):

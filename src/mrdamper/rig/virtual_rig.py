@@ -206,7 +206,8 @@ class VirtualRig:
         drawn = self.variation.draw(self.model, np.random.default_rng(s_var))
         ch = self.electrical_channel
         zeros = np.zeros(n)
-        plant = Experiment(t=t, x=x_true, v=v_true, F=zeros, name=name, **{ch: e_true})
+        elec: dict[str, Any] = {ch: e_true}
+        plant = Experiment(t=t, x=x_true, v=v_true, F=zeros, name=name, **elec)
         F_true = drawn.apply(np.asarray(drawn.damper.predict(plant), dtype=np.float64), t)
         x_meas = self.sensors.displacement.measure(x_true, np.random.default_rng(s_x))
         F_meas = self.sensors.force.measure(F_true, np.random.default_rng(s_f))
@@ -224,4 +225,5 @@ class VirtualRig:
                 f"{VELOCITY_FILTER_ORDER}, {self.velocity_cutoff:g} Hz)")
         meta["processing"] = (*tuple(meta.get("processing", ())), note)
         meta["velocity_cutoff"] = self.velocity_cutoff
-        return Experiment(t=t, x=x_meas, v=v_meas, F=F_meas, name=name, metadata=meta, **{ch: e_meas})
+        measured: dict[str, Any] = {ch: e_meas}
+        return Experiment(t=t, x=x_meas, v=v_meas, F=F_meas, name=name, metadata=meta, **measured)
