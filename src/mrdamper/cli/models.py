@@ -1,0 +1,259 @@
+"""``mrdamper fit``, ``mrdamper simulate`` and ``mrdamper score``: models from the command line.
+
+* ``fit MODEL DATA... --out model.json`` identifies any registered model kind on the records in
+  the given files / folders and saves it as JSON (never overwriting without ``--force``).
+  Options given on the command line become estimator settings; a setting the model does not
+  take is an error that lists the settings it does take.
+* ``simulate model.json DATA --out predicted.csv`` writes ``t``, measured ``F`` and predicted
+  ``F_pred`` [s, N, N] of one record, atomically.
+* ``score model.json DATA... [--json]`` prints ESR and SSSE (paper eqs 24 and 23) per record and
+  their mean. A record whose simulation diverges is listed as such; the command then exits 1.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models.registry import get_estimator, load_model
+
+__all__ = ["register", "read_records", "estimator_settings", "parse_settings"]
+
+#: Regex for any record file in a folder (used when the sine-record pattern matches nothing).
+_ANY_RECORD_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
+_RANGE_POLICIES = ("error", "warn", "clip", "ignore")
+
+
+# ----------------------------------------------------------------------------- helpers
+def read_records(paths: list[Path], pattern: str | None = None, fs: float | None = None) -> list[Experiment]:
+    """Read files and folders into a list of records (folders: ``pattern`` or a default).
+
+    Folders use ``pattern`` when given; otherwise the sine-record pattern if any file name matches
+    it (its named groups become metadata), else every CSV / Parquet / MAT file.
+    ``fs`` [Hz] regenerates each record's time base as ``n / fs`` (for rounded time columns).
+    """
+    from mrdamper.data.readers import DEFAULT_PATTERN, parse_file_name, read_directory, read_file
+
+    kw: dict[str, Any] = {} if fs is None else {"fs": fs}
+    out: list[Experiment] = []
+    for p in paths:
+        if not p.exists():
+            raise FileNotFoundError(f"{p}: no such file or folder")
+        if p.is_dir():
+            pat = pattern
+            if pat is None:
+                hit = any(parse_file_name(f.name, DEFAULT_PATTERN) for f in p.iterdir())
+                pat = DEFAULT_PATTERN if hit else _ANY_RECORD_FILE
+            out.extend(read_directory(p, pat, **kw))
+        else:
+            out.append(read_file(p, **kw))
+    names = [e.name for e in out]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise DataValidationError("DATA", f"record names repeat across the inputs: {dup}")
+    return out
+
+
+def estimator_settings(kind: str) -> list[str]:
+    """Names of the settings the estimator of ``kind`` accepts."""
+    est = type(get_estimator(kind))
+    if dataclasses.is_dataclass(est):
+        return [f.name for f in dataclasses.fields(est) if f.init]
+    params = inspect.signature(est).parameters
+    return [n for n, p in params.items() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+
+
+def parse_settings(items: list[str] | None) -> dict[str, Any]:
+    """Parse ``KEY=VALUE`` strings; values are read as JSON (numbers, true/false, null, lists)
+    and fall back to plain strings."""
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        key = key.strip().replace("-", "_")
+        if not sep or not key:
+            raise DataValidationError("--set", f"expected KEY=VALUE, got {item!r}")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
+
+
+def _choose_input(records: list[Experiment]) -> str:
+    if all(e.i is not None for e in records):
+        return "i"
+    if all(e.voltage is not None for e in records):
+        return "voltage"
+    raise DataValidationError(
+        "--input", "the records do not all share one electrical channel ('i' or 'voltage'); choose --input"
+    )
+
+
+def _check_policy(policy: str) -> str:
+    if policy not in _RANGE_POLICIES:
+        raise DataValidationError("--range-policy", f"expected one of {list(_RANGE_POLICIES)}, got {policy!r}")
+    return policy
+
+
+# ----------------------------------------------------------------------------- commands
+def fit(
+    model: Annotated[
+        str, typer.Argument(help="Model kind: lpv, lti, p15, sp1, sp2, sp3, sp4, spencer, bingham.")
+    ],
+    data: Annotated[list[Path], typer.Argument(help="Training data files or folders.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output model file (JSON).")],
+    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
+    input_: Annotated[
+        str | None,
+        typer.Option("--input", help="Electrical input: i | voltage (default: the channel every record has)."),
+    ] = None,
+    order: Annotated[int | None, typer.Option("--order", help="Model order (models that take one).")] = None,
+    rho_degree: Annotated[
+        int | None, typer.Option("--rho-degree", help="Polynomial degree in the scheduling variable.")
+    ] = None,
+    refine: Annotated[
+        bool | None, typer.Option("--refine/--no-refine", help="Nonlinear refinement after the linear fit.")
+    ] = None,
+    seed: Annotated[int | None, typer.Option("--seed", help="Seed of any random start.")] = None,
+    n_starts: Annotated[int | None, typer.Option("--n-starts", help="Number of multi-start runs.")] = None,
+    offset: Annotated[
+        bool | None, typer.Option("--offset/--no-offset", help="Identify a constant force offset.")
+    ] = None,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option("--set", help="Any other estimator setting, KEY=VALUE (JSON value), repeatable."),
+    ] = None,
+    pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
+    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+) -> None:
+    """Identify MODEL on the records in DATA and save it as JSON."""
+    from mrdamper._io import check_writable
+
+    accepted = estimator_settings(model)  # unknown kind: SchemaError naming the known kinds
+    check_writable(out, force)  # fail before a long fit
+    records = read_records(list(data), pattern, fs)
+    given: dict[str, Any] = {
+        "input": input_ or _choose_input(records),
+        "order": order,
+        "rho_degree": rho_degree,
+        "refine": refine,
+        "seed": seed,
+        "n_starts": n_starts,
+        "offset": offset,
+    }
+    given = {k: v for k, v in given.items() if v is not None}
+    given.update(parse_settings(settings))
+    unknown = [k for k in given if k not in accepted]
+    if unknown:
+        flag = unknown[0].replace("_", "-")
+        raise DataValidationError(
+            f"--{flag}", f"model {model!r} does not take the setting {unknown[0]!r}; its settings are {accepted}"
+        )
+    fitted = get_estimator(model, **given).fit(records)
+    path = fitted.save(out, force=force)
+    typer.echo(f"{model}: identified on {len(records)} record(s); wrote {path}")
+
+
+def simulate(
+    model_file: Annotated[Path, typer.Argument(help="Model file written by 'mrdamper fit'.")],
+    data: Annotated[Path, typer.Argument(help="One data file.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV: t, F, F_pred.")],
+    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
+    range_policy: Annotated[
+        str | None, typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's).")
+    ] = None,
+    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+) -> None:
+    """Free-run simulation of one record; writes t [s], measured F [N] and predicted F_pred [N]."""
+    from mrdamper._io import atomic_write_text, check_writable
+
+    check_writable(out, force)
+    m = load_model(model_file)
+    if range_policy is not None:
+        m = m.with_range_policy(_check_policy(range_policy))
+    if data.is_dir():
+        raise DataValidationError("DATA", f"{data} is a folder; simulate takes one record file")
+    [exp] = read_records([data], fs=fs)
+    res = m.simulate(exp)
+    frame = res.to_frame()[["t", "F", "F_pred"]]
+    path = atomic_write_text(out, frame.to_csv(index=False, float_format="%.10g"), force=force)
+    s = res.scores
+    typer.echo(f"{exp.name}: ESR {s.esr:.4g}, SSSE {s.ssse:.4g} N; wrote {path}")
+
+
+def score(
+    model_file: Annotated[Path, typer.Argument(help="Model file written by 'mrdamper fit'.")],
+    data: Annotated[list[Path], typer.Argument(help="Data files or folders.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+    range_policy: Annotated[
+        str | None, typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's).")
+    ] = None,
+    pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
+    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+) -> None:
+    """ESR and SSSE of the model's free-run prediction for each record, and their mean."""
+    m = load_model(model_file)
+    if range_policy is not None:
+        m = m.with_range_policy(_check_policy(range_policy))
+    records = read_records(list(data), pattern, fs)
+    rows: list[dict[str, Any]] = []
+    for e in records:
+        try:
+            s = m.score(e)
+            rows.append({"record": e.name, "esr": s.esr, "ssse": s.ssse})
+        except SimulationDivergedError as exc:
+            rows.append({"record": e.name, "esr": None, "ssse": None, "diverged_at_sample": exc.sample})
+    ok = [r for r in rows if r["esr"] is not None]
+    mean = {
+        "esr": sum(r["esr"] for r in ok) / len(ok) if ok else None,
+        "ssse": sum(r["ssse"] for r in ok) / len(ok) if ok else None,
+        "n_scored": len(ok),
+        "n_diverged": len(rows) - len(ok),
+    }
+    result = {"model": m.kind, "model_file": str(model_file), "records": rows, "mean": mean}
+    if as_json:
+        typer.echo(json.dumps(result, indent=2))
+    else:
+        _print_scores(result)
+    if mean["n_diverged"]:
+        sys.exit(1)
+
+
+def _print_scores(result: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(title=escape(f"{result['model']}: {result['model_file']}"))
+    table.add_column("record")
+    table.add_column("ESR [-]", justify="right")
+    table.add_column("SSSE [N]", justify="right")
+    for r in result["records"]:
+        if r["esr"] is None:
+            table.add_row(escape(r["record"]), f"diverged at sample {r['diverged_at_sample']}", "-")
+        else:
+            table.add_row(escape(r["record"]), f"{r['esr']:.4g}", f"{r['ssse']:.4g}")
+    mean = result["mean"]
+    label = f"mean of {mean['n_scored']}" + (f" ({mean['n_diverged']} diverged)" if mean["n_diverged"] else "")
+    table.add_row(
+        escape(label),
+        "-" if mean["esr"] is None else f"{mean['esr']:.4g}",
+        "-" if mean["ssse"] is None else f"{mean['ssse']:.4g}",
+        style="bold",
+    )
+    Console(width=120).print(table)
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``fit``, ``simulate`` and ``score`` commands to ``app``."""
+    app.command("fit")(fit)
+    app.command("simulate")(simulate)
+    app.command("score")(score)
