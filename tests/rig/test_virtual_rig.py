@@ -119,3 +119,20 @@ def test_velocity_is_what_the_measured_data_pipeline_computes(damper, commands) 
     np.testing.assert_allclose(rec.v, again.v, rtol=0, atol=1e-12)
     with pytest.raises(DataValidationError, match="velocity_cutoff"):
         VirtualRig(damper=damper, fs=80.0)
+
+
+def test_non_finite_damper_force_is_reported(damper, commands) -> None:
+    from dataclasses import dataclass
+
+    from mrdamper.errors import SimulationDivergedError
+
+    @dataclass(frozen=True, kw_only=True)
+    class Exploding(type(damper)):  # type: ignore[misc]
+        def predict(self, experiment):  # type: ignore[no-untyped-def]
+            F = super().predict(experiment)
+            F[500:] = np.inf
+            return F
+
+    with pytest.raises(SimulationDivergedError) as info:
+        VirtualRig(damper=Exploding(input_range=(0.0, 1.0))).run(*commands, seed=0)
+    assert info.value.sample == 500

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
 from mrdamper.data import Experiment
-from mrdamper.errors import DataValidationError
+from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.base import FittedModel
 from mrdamper.rig.actuator import ServoActuator
 from mrdamper.rig.driver import CurrentDriver
@@ -208,7 +208,15 @@ class VirtualRig:
         zeros = np.zeros(n)
         elec: dict[str, Any] = {ch: e_true}
         plant = Experiment(t=t, x=x_true, v=v_true, F=zeros, name=name, **elec)
-        F_true = drawn.apply(np.asarray(drawn.damper.predict(plant), dtype=np.float64), t)
+        F_model = np.asarray(drawn.damper.predict(plant), dtype=np.float64)
+        if F_model.shape != (n,):
+            raise DataValidationError(
+                "damper", f"{self.model.kind}.predict returned shape {F_model.shape}, expected ({n},)"
+            )
+        bad = np.flatnonzero(~np.isfinite(F_model))
+        if bad.size:
+            raise SimulationDivergedError(self.model.kind, int(bad[0]), "non-finite damper force on the virtual rig")
+        F_true = drawn.apply(F_model, t)
         x_meas = self.sensors.displacement.measure(x_true, np.random.default_rng(s_x))
         F_meas = self.sensors.force.measure(F_true, np.random.default_rng(s_f))
         e_meas = self.sensors.electrical.measure(e_true, np.random.default_rng(s_i))
