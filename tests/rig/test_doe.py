@@ -11,7 +11,7 @@ import pytest
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.rig import VirtualRig
 from mrdamper.rig.doe import TABLE_II, constant_current_sweep, make_record, table_ii
-from mrdamper.rig.doe_io import MANIFEST_COLUMNS, write_doe, write_records
+from mrdamper.rig.doe_io import MANIFEST_COLUMNS, read_doe, write_doe, write_records
 from mrdamper.signals.aprbs import run_starts
 
 SCALE = 0.1
@@ -141,6 +141,13 @@ def test_write_records_byte_identical_and_no_overwrite(doe, tmp_path: Path) -> N
     assert len(lines) == 1 + len(sub)
     first = dict(zip(MANIFEST_COLUMNS, lines[1].split(",")))
     assert first["file"] == "exp3_rep01.csv" and int(first["seed"]) == sub[0].metadata["seed"]
+    back = read_doe(a)
+    assert back.names == sub.names
+    for e, ref in zip(back, sub):
+        for ch in ("t", "x", "v", "i", "F"):
+            np.testing.assert_array_equal(getattr(e, ch), getattr(ref, ch))  # exact float round trip
+        for key in ("experiment", "replicate", "pattern", "displacement", "seed", "source"):
+            assert e.metadata[key] == ref.metadata[key]
     with pytest.raises(OutputExistsError, match="not empty"):
         write_records(sub, a)
     write_records(sub, a, force=True)
@@ -167,3 +174,13 @@ def test_write_doe_writes_every_record_and_refuses_to_overwrite(damper, tmp_path
     np.testing.assert_array_equal(frame["F"].to_numpy(), rebuilt.F)
     with pytest.raises(OutputExistsError):
         write_doe(out, seed=4, scale=0.07, damper=damper)
+
+
+def test_read_doe_reports_problems(doe, tmp_path: Path) -> None:
+    sub = doe.filter(experiment=3)[:2]
+    write_records(sub, tmp_path / "d")
+    with pytest.raises(FileNotFoundError, match="manifest"):
+        read_doe(tmp_path)
+    (tmp_path / "d" / "exp3_rep02.csv").unlink()
+    with pytest.raises(FileNotFoundError, match="exp3_rep02"):
+        read_doe(tmp_path / "d")

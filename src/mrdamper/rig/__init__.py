@@ -4,7 +4,8 @@
   :class:`~mrdamper.models.FittedModel`; ``run(x_command, i_command, seed=...)`` gives an
   :class:`~mrdamper.data.Experiment`.
 * :func:`reference_damper`: the shipped calibrated reference dampers.
-* :mod:`mrdamper.rig.doe`: :func:`table_ii`, :func:`constant_current_sweep`, :func:`write_doe`.
+* :mod:`mrdamper.rig.doe`: :func:`table_ii`, :func:`constant_current_sweep`, :func:`make_record`.
+* :mod:`mrdamper.rig.doe_io`: :func:`write_doe`, :func:`write_records`, :func:`read_doe`.
 """
 
 from mrdamper.rig.actuator import ServoActuator

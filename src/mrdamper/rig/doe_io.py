@@ -123,3 +123,67 @@ def write_doe(
     _check_out_dir(Path(out_dir), force)  # fail before the (long) generation
     records = table_ii(seed=seed, scale=scale, fs=fs, damper=damper)
     return write_records(records, out_dir, force=force)
+
+
+_MANIFEST_TYPES: dict[str, type] = {
+    "experiment": int, "replicate": int, "pattern": str, "displacement": str, "duration": float,
+    "max_frequency": float, "samples": int, "seed": int,
+}
+
+
+def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:
+    """Read a folder written by :func:`write_doe` / ``mrdamper rig doe`` back into an ExperimentSet.
+
+    The manifest gives the record files, names and metadata (``experiment``, ``replicate``,
+    ``pattern``, ``displacement``, ``duration``, ``max_frequency``, ``seed``;
+    ``source="virtual rig"``); each CSV is read with :func:`mrdamper.data.readers.read_csv`.
+
+    Parameters
+    ----------
+    folder : path-like
+        The output folder of a DoE run.
+
+    Returns
+    -------
+    ExperimentSet
+        Records in manifest order.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder has no ``manifest.csv`` or a listed file is missing.
+    DataValidationError
+        If the manifest lacks a column, a cell has the wrong type, or a record's sample count
+        differs from the manifest.
+    """
+    from mrdamper.data.readers import read_csv
+    from mrdamper.errors import DataValidationError
+
+    root = Path(folder)
+    manifest = root / MANIFEST_NAME
+    if not manifest.is_file():
+        raise FileNotFoundError(f"{manifest}: no DoE manifest (write one with mrdamper rig doe)")
+    with manifest.open(newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    missing = [c for c in MANIFEST_COLUMNS if rows and c not in rows[0]]
+    if missing:
+        raise DataValidationError("manifest", f"{manifest}: missing column(s) {missing}")
+    records = []
+    for k, row in enumerate(rows):
+        meta: dict[str, Any] = {"source": "virtual rig"}
+        for col, typ in _MANIFEST_TYPES.items():
+            try:
+                meta[col] = typ(row[col])
+            except ValueError:
+                raise DataValidationError(
+                    col, f"{manifest} row {k + 1}: {row[col]!r} is not a valid {typ.__name__}"
+                ) from None
+        samples = meta.pop("samples")
+        path = root / row["file"]
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: listed in {manifest} but missing")
+        rec = read_csv(path, name=row["name"], metadata=meta)
+        if rec.n != samples:
+            raise DataValidationError("samples", f"{path}: {rec.n} samples, manifest says {samples}")
+        records.append(rec)
+    return ExperimentSet(records, name=root.name)
