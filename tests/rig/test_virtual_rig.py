@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, OutOfRangeError
@@ -136,3 +138,14 @@ def test_non_finite_damper_force_is_reported(damper, commands) -> None:
     with pytest.raises(SimulationDivergedError) as info:
         VirtualRig(damper=Exploding(input_range=(0.0, 1.0))).run(*commands, seed=0)
     assert info.value.sample == 500
+
+
+# the damper fixture is an immutable value, so sharing it across examples is safe
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 2**40), fmax=st.floats(1.0, 8.0), high=st.floats(0.1, 1.0))
+def test_any_seed_gives_a_valid_in_stroke_record(damper, seed: int, fmax: float, high: float) -> None:
+    x = road_profile(FS, 3.0, seed=seed, max_frequency=fmax)
+    i = aprbs(FS, 3.0, low=0.0, high=high, min_hold=0.1, seed=seed + 1)
+    rec = VirtualRig(damper=damper).run(x, i, seed=seed)
+    assert np.max(np.abs(rec.x)) <= 0.02 + 1e-4
+    assert np.all(np.isfinite(rec.F)) and rec.i.min() >= 0.0
