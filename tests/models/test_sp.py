@@ -69,7 +69,7 @@ def _synthetic(kind: str, **kw: float) -> Experiment:
 def test_known_answer_noise_free(kind: str) -> None:
     true = TRUE[kind]
     data = [_synthetic(kind, seed=1), _synthetic(kind, seed=2)]
-    fitted = ESTIMATORS[kind](seed=0).fit(data)
+    fitted = ESTIMATORS[kind](seed=0, n_starts=2).fit(data)
     assert type(fitted) is type(true)
     np.testing.assert_allclose(fitted.S, true.S, rtol=1e-6, atol=1e-6 * np.max(np.abs(true.S)))
     assert fitted.f0 == pytest.approx(true.f0, abs=1e-6 * 1500)
@@ -124,10 +124,13 @@ def test_json_round_trip_is_bit_identical(kind: str, tmp_path: Path) -> None:
 
 
 def test_same_seed_same_bytes() -> None:
-    e = _synthetic("sp1")
-    a = SP1Estimator(seed=11).fit(e)
-    b = SP1Estimator(seed=11).fit(e)
+    e = _synthetic("sp1", n=2000)
+    rng = np.random.default_rng(2)
+    e = e.replace(F=e.F + rng.normal(0.0, 30.0, e.n))  # noise: the optimum is not exact
+    a = SP1Estimator(seed=11, n_starts=2).fit(e)
+    b = SP1Estimator(seed=11, n_starts=2).fit(e)
     assert a.S == b.S and a.f0 == b.f0
+    assert a.to_dict()["parameters"] == b.to_dict()["parameters"]
 
 
 def test_registry_maps_kinds() -> None:

@@ -17,15 +17,16 @@ import inspect
 import json
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, cast
 
 import typer
 
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models.base import RangePolicy
 from mrdamper.models.registry import get_estimator, load_model
 
-__all__ = ["register", "read_records", "estimator_settings", "parse_settings"]
+__all__ = ["estimator_settings", "parse_settings", "read_records", "register"]
 
 #: Regex for any record file in a folder (used when the sine-record pattern matches nothing).
 _ANY_RECORD_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
@@ -97,10 +98,10 @@ def _choose_input(records: list[Experiment]) -> str:
     )
 
 
-def _check_policy(policy: str) -> str:
+def _check_policy(policy: str) -> RangePolicy:
     if policy not in _RANGE_POLICIES:
         raise DataValidationError("--range-policy", f"expected one of {list(_RANGE_POLICIES)}, got {policy!r}")
-    return policy
+    return cast(RangePolicy, policy)
 
 
 # ----------------------------------------------------------------------------- commands

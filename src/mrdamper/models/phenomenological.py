@@ -97,7 +97,7 @@ from mrdamper.models._p15_kernels import p15_simulate
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
-__all__ = ["P15Model", "P15Estimator"]
+__all__ = ["P15Estimator", "P15Model"]
 
 #: Upper limit of RK4 sub-steps per sampling interval.
 MAX_SUBSTEPS = 2000
@@ -375,12 +375,12 @@ class P15Estimator(Estimator):
             F = e.F[sl]
             cols = np.stack([e.v[sl], dF[sl], ddF[sl], F**3, F**5], axis=1)
             return F, np.asarray(i[sl]), cols
-        fc = _cutoff(self.cutoff, e.fs)
+        fc = float(_cutoff(self.cutoff, e.fs) or 0.0)
         if not fc < 0.5 * e.fs:
             raise DataValidationError(
                 "cutoff", f"{fc:g} Hz is not below the Nyquist frequency {0.5 * e.fs:g} Hz of record {e.name!r}"
             )
-        trim = int(math.ceil(3.0 * e.fs / fc))
+        trim = math.ceil(3.0 * e.fs / fc)
         if e.n <= 2 * trim + 3 * self.filter_order:
             return np.empty(0), np.empty(0), np.empty((0, 5))
         sos = butter(self.filter_order, fc, btype="low", fs=e.fs, output="sos")

@@ -76,14 +76,14 @@ from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
 __all__ = [
-    "SP1Model",
-    "SP2Model",
-    "SP3Model",
-    "SP4Model",
     "SP1Estimator",
+    "SP1Model",
     "SP2Estimator",
+    "SP2Model",
     "SP3Estimator",
+    "SP3Model",
     "SP4Estimator",
+    "SP4Model",
 ]
 
 #: Names of the five components of the SP map, in kernel order.
@@ -156,8 +156,8 @@ class _SPModel(FittedModel):
             Displacement [m], velocity [m/s], electrical input [A or V].
         """
         comp, power = self.layout_arrays()
-        arrs = [np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, i)]
-        return sp_force(*arrs, comp, power, np.asarray(self.S, dtype=np.float64), self.f0)
+        xa, va, ia = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, i))
+        return sp_force(xa, va, ia, comp, power, np.asarray(self.S, dtype=np.float64), self.f0)
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N]: direct evaluation on the record's x, v and electrical input."""
