@@ -73,7 +73,7 @@ def fit_and_score(
             model = get_estimator(kind, **settings).fit(train)
             if range_policy is not None:
                 model = model.with_range_policy(range_policy)
-    except Exception as exc:  # reported as a row, never dropped
+    except Exception as exc:  # noqa: BLE001 - any failure is reported as a row, never dropped
         return [{"model": kind, "record": "(fit)", "esr": np.nan, "ssse": np.nan,
                  "fit_s": time.perf_counter() - t0, "error": f"{type(exc).__name__}: {exc}"}]
     fit_s = time.perf_counter() - t0
@@ -84,7 +84,7 @@ def fit_and_score(
                 warnings.simplefilter("ignore")
                 sc = model.score(e)
             rows.append({"model": kind, "record": e.name, "esr": sc.esr, "ssse": sc.ssse, "fit_s": fit_s, "error": ""})
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001 - reported as a row
             rows.append({"model": kind, "record": e.name, "esr": np.nan, "ssse": np.nan, "fit_s": fit_s,
                          "error": f"{type(exc).__name__}: {exc}"})
     return rows
@@ -105,14 +105,14 @@ def quiroz(models: list[str]) -> pd.DataFrame:
 
 def _dyke_parts() -> tuple[Experiment, Experiment]:
     e = read_csv(DATA / "dyke1996_nees" / "ranran_50.csv", fs=DYKE_FS)
-    cut = int(round(0.7 * e.n))
+    cut = round(0.7 * e.n)
     return e.slice(0, cut, name="dyke_train"), e.slice(cut, None, name="dyke_test")
 
 
 def choose_eta(train: Experiment) -> tuple[float, int, pd.DataFrame]:
     """Drive-lag rate and model-rate decimation of the LPV model, from the training part only
     (inner split: first 80 % fits, last 20 % validates)."""
-    cut = int(round(0.8 * train.n))
+    cut = round(0.8 * train.n)
     fit_part, val_part = train.slice(0, cut, name="eta_fit"), train.slice(cut, None, name="eta_val")
     rows = []
     for dec in DECIMATION_GRID:
