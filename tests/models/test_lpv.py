@@ -53,9 +53,9 @@ def _known_laws() -> ZoneLaws:
                     [0.0, 1.0], gm[:, :2].T, np.zeros((2, 3)), [-0.01, -0.02], [0.01, 0.02])
 
 
-@pytest.mark.parametrize("refine", [False, True])
-def test_identifies_known_lpv_coefficients(refine) -> None:
-    est = LPVEstimator(n_m=2, n_rho=2, input_signal="v", offset=False, refine=refine)
+@pytest.mark.parametrize(("refine", "solver"), [(False, "gauss-newton"), (True, "gauss-newton"), (True, "least_squares")])
+def test_identifies_known_lpv_coefficients(refine, solver) -> None:
+    est = LPVEstimator(n_m=2, n_rho=2, input_signal="v", offset=False, refine=refine, oe_solver=solver)
     m = est.fit(_train())
     np.testing.assert_allclose(m.alpha, ALPHA, rtol=1e-8, atol=1e-9)
     np.testing.assert_allclose(m.beta, BETA, rtol=1e-8, atol=1e-6)

@@ -283,6 +283,9 @@ class LPVEstimator(Estimator):
         Output-error refinement (free-run error) from the least-squares start.
     max_nfev : int
         Iteration budget of the refinement.
+    oe_solver : {"gauss-newton", "least_squares"}
+        Refinement solver: Levenberg-Marquardt on kernel-accumulated normal equations (fast), or
+        ``scipy.optimize.least_squares`` with the stored analytic Jacobian (slower).
     range_policy : {"error", "warn", "clip", "ignore"}
         Stored in the fitted model.
     """
@@ -305,6 +308,7 @@ class LPVEstimator(Estimator):
     weighting: Literal["esr", "sse"] = "esr"
     refine: bool = True
     max_nfev: int = 60
+    oe_solver: Literal["gauss-newton", "least_squares"] = "gauss-newton"
     range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
 
     def _validate(self) -> None:
@@ -317,6 +321,7 @@ class LPVEstimator(Estimator):
         choices = {
             "input": ("i", "voltage"), "input_signal": ("u", "v"), "reading": ("continuous", "literal"),
             "laws_by": ("auto", "current", "plateaus", "bins"), "weighting": ("esr", "sse"),
+            "oe_solver": ("gauss-newton", "least_squares"),
             "range_policy": ("error", "warn", "clip", "ignore"),
         }
         for name, ok in choices.items():
@@ -396,7 +401,8 @@ class LPVEstimator(Estimator):
             if shrink != 1.0:
                 prov["oe_start_pole_scaling"] = shrink
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev
+                rec, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
+                solver=self.oe_solver,
             )
             oe_cost = _cost(rec, th_r, f0_r, self.n_m, self.n_rho + 1, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
