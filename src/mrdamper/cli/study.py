@@ -17,7 +17,7 @@ import typer
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError, OutputExistsError, SchemaError
 
-__all__ = ["register", "study", "demo", "guess_protocol", "load_data", "print_summary", "QUICK_SCALE", "DEMO_OUT"]
+__all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "guess_protocol", "load_data", "print_summary", "register", "study"]
 
 #: Duration scale of the Table II records in ``demo --quick`` (30 s -> 3 s, 600 s -> 60 s).
 QUICK_SCALE = 0.1
@@ -145,17 +145,18 @@ def print_summary(res: Any, out: Path | None = None) -> None:
     for row in failed.itertuples(index=False):
         console.print(f"[yellow]{row.model}[/] did not fit ({row.fold}): {row.error}", markup=True, highlight=False)
     hl = res.headline()
-    console.print(f"[bold]Headline:[/] {hl['text']}", highlight=False)
-    console.print("The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical model (SP-1).",
+    console.print(f"[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): {hl['text']}",
                   highlight=False)
+    console.print("The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
+                  "model (SP-1).", highlight=False)
     if out is not None:
         console.print(f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, {out}/results.csv)",
                       highlight=False)
 
 
 def study(
-    data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),
-    out: Path = typer.Option(..., "--out", help="Output folder (must not exist or be empty, unless --force)."),
+    data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),  # noqa: B008
+    out: Path = typer.Option(..., "--out", help="Output folder (must not exist or be empty, unless --force)."),  # noqa: B008
     protocol: str = typer.Option(
         None, "--protocol", help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: guessed from the records."
     ),
@@ -183,7 +184,7 @@ def study(
 
 
 def demo(
-    out: Path = typer.Option(DEMO_OUT, "--out", help="Output folder (default ./mrdamper-demo; never replaced without --force)."),
+    out: Path = typer.Option(DEMO_OUT, "--out", help="Output folder (default ./mrdamper-demo; never replaced without --force)."),  # noqa: B008
     quick: bool = typer.Option(False, "--quick", help=f"Shortened records (durations x {QUICK_SCALE}) for a run under a minute."),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     models: str = typer.Option(None, "--models", help="Comma-separated model kinds (default: all installed)."),

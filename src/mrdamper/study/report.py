@@ -78,7 +78,8 @@ def _protocol_section(res: StudyResult) -> str:
 def _summary_section(res: StudyResult, summary: pd.DataFrame) -> str:
     hl = res.headline()
     cls = "headline" if hl.get("available") else "warn"
-    out = [f'<p class="{cls}"><b>Headline.</b> {_e(hl["text"])}</p>']
+    out = [f'<p class="{cls}"><b>Headline</b> (LPV against the best of the paper\'s classical models, '
+           f'P-15 and SP-1..SP-4). {_e(hl["text"])}</p>']
     cols = ["model", "n_ok", "n_failed", "esr_mean", "esr_median", "esr_q1", "esr_q3",
             "ssse_mean", "ssse_median", "ssse_q1", "ssse_q3", "esr_gain_of_best_pct", "ssse_gain_of_best_pct",
             "fit_time_s", "sim_time_s"]
@@ -86,7 +87,8 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame) -> str:
     out.append('<p class="small">ESR (eq. 24) [-] and SSSE (eq. 23, an RMS error) [N] over the rows with status '
                "<code>ok</code>. <code>*_gain_of_best_pct</code>: improvement of the model with the lowest mean over "
                "this model, 100 (mean - best) / mean, as the paper states its 51 % and 36.8 %. Times in seconds, "
-               "summed over folds and records.</p>")
+               "summed over folds and records. On the virtual rig the damper itself is a Spencer model: the "
+               "<code>spencer</code> estimator has the true structure there and is a reference, not a competitor.</p>")
     return "\n".join(out)
 
 

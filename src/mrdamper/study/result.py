@@ -109,7 +109,7 @@ class StudyResult:
         return summarize(self.results, self.labels)
 
     def headline(self, model: str = "lpv") -> dict[str, Any]:
-        """``model`` against the best classical model, as the paper states it."""
+        """``model`` against the best of the paper's classical models (P-15, SP-1..SP-4)."""
         return headline(self.summary, model)
 
     def to_frame(self) -> pd.DataFrame:
