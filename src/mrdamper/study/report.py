@@ -78,8 +78,9 @@ def _protocol_section(res: StudyResult) -> str:
 def _summary_section(res: StudyResult, summary: pd.DataFrame) -> str:
     hl = res.headline()
     cls = "headline" if hl.get("available") else "warn"
-    out = [f'<p class="{cls}"><b>Headline</b> (LPV against the best of the paper\'s classical models, '
-           f'P-15 and SP-1..SP-4). {_e(hl["text"])}</p>']
+    text = ('<b>Headline</b> (LPV against the best of the paper\'s classical models, P-15 and SP-1..SP-4). '
+            + _e(hl["text"]))
+    out = [f'<p class="{cls}">{text}</p>']
     cols = ["model", "n_ok", "n_failed", "esr_mean", "esr_median", "esr_q1", "esr_q3",
             "ssse_mean", "ssse_median", "ssse_q1", "ssse_q3", "esr_gain_of_best_pct", "ssse_gain_of_best_pct",
             "fit_time_s", "sim_time_s"]

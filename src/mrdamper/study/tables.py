@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["CLASSICAL_EXCLUDED", "RESULT_COLUMNS", "TIMING_COLUMNS", "headline", "improvement_pct", "summarize"]
+__all__ = ["PAPER_CLASSICAL", "RESULT_COLUMNS", "TIMING_COLUMNS", "headline", "improvement_pct", "summarize"]
 
 #: Columns of ``results.csv`` in order (record metadata columns follow).
 RESULT_COLUMNS: tuple[str, ...] = (
