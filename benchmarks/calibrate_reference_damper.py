@@ -30,7 +30,7 @@ OUT_DIR = REPO / "src" / "mrdamper" / "rig" / "parameters"
 _NAME = re.compile(r"sine_(?P<amp>[\d.]+)mm_(?P<freq>[\d.]+)Hz_(?P<cur>[\d.]+)A\.csv$")
 
 #: Estimator settings of the shipped calibration (documented in docs/calibration.md).
-CALIBRATION_SETTINGS = dict(input="i", n_starts=3, seed=0, weighting="record", screen_nfev=12, max_nfev=200)
+CALIBRATION_SETTINGS = dict(input="i", n_starts=3, seed=0, weighting="record")
 
 
 def read_quiroz(folder: str | Path) -> ExperimentSet:

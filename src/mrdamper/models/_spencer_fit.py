@@ -33,8 +33,15 @@ __all__ = ["identify", "COND_WARNING"]
 
 #: Condition number of J^T J (scaled unknowns) above which the fit is reported ill-conditioned.
 COND_WARNING = 1e10
+#: First-start assumptions: yield displacement as a fraction of the median record amplitude,
+#: ratio c1 / c0 and Bouc-Wen exponent (n = 1 is the smooth, mildly stiff end of the range).
+YIELD_FRACTION = 0.02
+RATIO_START = 20.0
+N_START = 1.0
 #: Residual value per sample returned for parameter sets whose simulation fails.
 _PENALTY = 1e3
+#: Scaling of the unknowns inside least_squares (they are already scaled by their start values).
+X_SCALE: Any = 1.0
 _IDX = {n: k for k, n in enumerate(PARAMETER_NAMES)}
 
 
@@ -239,10 +246,10 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
     force_scale = float(np.mean([np.std(r.F) for r in recs]))
     reg = _regression(recs)
     A = fixed.get("A", start_user.get("A", 1.0))
-    n0 = fixed.get("n", start_user.get("n", 2.0))
-    xmax = max(float(np.max(np.abs(r.x - np.mean(r.x)))) for r in recs)
-    yield0 = max(0.05 * xmax, 1e-5)
-    ratio0 = 10.0
+    n0 = fixed.get("n", start_user.get("n", N_START))
+    amp = float(np.median([np.max(np.abs(r.x - np.mean(r.x))) for r in recs]))
+    yield0 = max(YIELD_FRACTION * amp, 1e-6)
+    ratio0 = RATIO_START
 
     def build(yield_disp: float, ratio: float) -> np.ndarray:
         d = _map_start(reg, yield_disp, ratio, A, n0, force_scale)
@@ -281,7 +288,7 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
 
     method = est.jacobian
     jac = obj.jacobian if method == "sensitivity" else method
-    kw = dict(bounds=(q_lo, q_hi), method="trf", x_scale=1.0, ftol=est.ftol, xtol=est.xtol, gtol=est.gtol)
+    kw = dict(bounds=(q_lo, q_hi), method="trf", x_scale=X_SCALE, ftol=est.ftol, xtol=est.xtol, gtol=est.gtol)
 
     runs: list[dict[str, Any]] = []
     results = []
