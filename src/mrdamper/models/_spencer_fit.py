@@ -40,6 +40,9 @@ RATIO_START = 20.0
 N_START = 1.0
 #: Residual value per sample returned for parameter sets whose simulation fails.
 _PENALTY = 1e3
+#: Parameters fixed when the estimator's ``fixed`` is None: k1 x0 duplicates f0, and A is
+#: redundant with the scale of z.
+DEFAULT_FIXED = {"x0": 0.0, "A": 1.0}
 #: Scaling of the unknowns inside least_squares (they are already scaled by their start values).
 X_SCALE: Any = 1.0
 _IDX = {n: k for k, n in enumerate(PARAMETER_NAMES)}
@@ -232,8 +235,10 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
     _check_settings(est)
     recs = _records(est, exps)
     notes: list[str] = []
-    fixed: dict[str, float] = {"x0": 0.0, "A": 1.0}
-    fixed.update({k: float(v) for k, v in (est.fixed or {}).items()})
+    if est.fixed is None:
+        fixed: dict[str, float] = dict(DEFAULT_FIXED)
+    else:  # an explicit mapping replaces the defaults
+        fixed = {k: float(v) for k, v in est.fixed.items()}
     start_user = {k: float(v) for k, v in (est.start or {}).items()}
     constant = _constant_input(recs)
     if "eta" not in fixed and (est.fix_eta == "always" or (est.fix_eta == "auto" and constant)):
