@@ -20,8 +20,8 @@ import time
 import warnings
 
 import pandas as pd
-
 from calibrate_reference_damper import CALIBRATION_SETTINGS, DEFAULT_DATA, read_quiroz
+
 from mrdamper.data import ExperimentSet
 from mrdamper.models.spencer import SpencerEstimator
 

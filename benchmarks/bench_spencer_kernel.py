@@ -100,7 +100,7 @@ def main() -> None:
         sd = float(np.std(ref))
         F = model.predict(exp)
         err_k = float(np.sqrt(np.mean((F - ref) ** 2)) / sd)
-        t_k = best_time(lambda: model.predict(exp))
+        t_k = best_time(lambda m=model, x=exp: m.predict(x))
         chosen = None
         for rtol in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10):
             Fp = peer(model, exp, rtol)
@@ -110,7 +110,7 @@ def main() -> None:
                 break
         if chosen is None:
             chosen = (1e-10, err_p)
-        t_p = best_time(lambda: peer(model, exp, chosen[0]), repeat=2)
+        t_p = best_time(lambda m=model, x=exp, r=chosen[0]: peer(m, x, r), repeat=2)
         rows.append({
             "case": label, "samples": exp.n, "substeps": model.substeps_for(exp),
             "kernel_s": t_k, "kernel_err": err_k, "lsoda_rtol": chosen[0], "lsoda_s": t_p,

@@ -24,8 +24,8 @@ from mrdamper.errors import (
     SchemaError,
     SimulationDivergedError,
 )
-from mrdamper.models import get_estimator, load_model, model_class
 from mrdamper.models import _spencer_kernels as K
+from mrdamper.models import get_estimator, load_model, model_class
 from mrdamper.models.spencer import (
     PARAMETER_NAMES,
     SpencerEstimator,

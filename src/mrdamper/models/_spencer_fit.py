@@ -29,7 +29,7 @@ from mrdamper.models.spencer import DEFAULT_BOUNDS, PARAMETER_NAMES, auto_subste
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.models.spencer import SpencerEstimator
 
-__all__ = ["identify", "COND_WARNING"]
+__all__ = ["COND_WARNING", "identify"]
 
 #: Condition number of J^T J (scaled unknowns) above which the fit is reported ill-conditioned.
 COND_WARNING = 1e10

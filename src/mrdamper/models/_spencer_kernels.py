@@ -22,11 +22,11 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "PARAM_NAMES",
     "N_PARAMS",
-    "STATUS_OK",
-    "STATUS_DIVERGED",
+    "PARAM_NAMES",
     "STATUS_BAD_DAMPING",
+    "STATUS_DIVERGED",
+    "STATUS_OK",
     "simulate",
     "simulate_sens",
 ]

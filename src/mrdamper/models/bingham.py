@@ -21,7 +21,7 @@ from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
-__all__ = ["BinghamModel", "BinghamEstimator"]
+__all__ = ["BinghamEstimator", "BinghamModel"]
 
 
 def _coefficients(name: str, values: Any) -> tuple[float, ...]:

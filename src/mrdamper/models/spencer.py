@@ -41,11 +41,11 @@ from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
 __all__ = [
-    "SpencerModel",
-    "SpencerEstimator",
+    "DEFAULT_BOUNDS",
     "PARAMETER_NAMES",
     "PARAMETER_UNITS",
-    "DEFAULT_BOUNDS",
+    "SpencerEstimator",
+    "SpencerModel",
     "auto_substeps",
     "spencer1997",
 ]
