@@ -183,8 +183,9 @@ class SimulationResult:
 class FittedModel(abc.ABC):
     """An identified damper model: an immutable value.
 
-    Subclasses are frozen dataclasses that add their parameters as fields, set ``kind`` and
-    implement :meth:`predict`. The common fields come last so subclasses can give them defaults.
+    Subclasses are frozen dataclasses (``@dataclass(frozen=True, kw_only=True)``, since the
+    common fields below have defaults and come first in the field order) that add their
+    parameters as fields, set ``kind`` and implement :meth:`predict`.
 
     Attributes
     ----------
