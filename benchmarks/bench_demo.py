@@ -11,12 +11,15 @@ Usage::
 
 Each case runs the real command line in a fresh process (imports and compiled-kernel cache loads
 included) into a temporary folder, after one untimed warm-up of ``--quick`` that fills the numba
-cache. The table also prints the study's own wall time and the slowest models from summary.csv.
+cache. The table also prints the study's own wall time, the slowest models from summary.csv and a
+digest of results.csv without its timing columns (equal digests: the same numbers whatever the
+number of workers).
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import subprocess
@@ -43,6 +46,8 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
         print(proc.stdout, proc.stderr, sep="\n", file=sys.stderr)
         raise SystemExit(f"{mode} demo with {workers} worker(s) failed (exit {proc.returncode})")
     study = json.loads((out / "study.json").read_text())
+    res = pd.read_csv(out / "results.csv").drop(columns=["fit_time_s", "sim_time_s"])
+    digest = hashlib.sha1(res.to_csv(index=False).encode()).hexdigest()[:12]
     summ = pd.read_csv(out / "summary.csv")
     slow = summ.assign(t=summ["fit_time_s"] + summ["sim_time_s"]).sort_values("t", ascending=False).head(3)
     return {
@@ -53,6 +58,7 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
         "target_s": TARGETS[mode],
         "slowest": ", ".join(f"{r.model} {r.fit_time_s:.0f}+{r.sim_time_s:.0f} s" for r in slow.itertuples()),
         "headline": study["headline"].get("text", ""),
+        "results_sha1": digest,
     }
 
 
@@ -77,11 +83,15 @@ def main() -> None:
         base = df.loc[sel & (df["workers"] == df.loc[sel, "workers"].min()), "wall_s"].iloc[0]
         df.loc[sel, "speedup_vs_fewest_workers"] = base / df.loc[sel, "wall_s"]
     df["within_target"] = df["wall_s"] < df["target_s"]
-    cols = ["mode", "workers", "wall_s", "study_s", "target_s", "within_target", "speedup_vs_fewest_workers", "slowest"]
+    cols = ["mode", "workers", "wall_s", "study_s", "target_s", "within_target", "speedup_vs_fewest_workers",
+            "results_sha1", "slowest"]
     with pd.option_context("display.width", 200, "display.max_colwidth", 80):
         print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.2f}"))
     for r in rows:
         print(f"{r['mode']} / {r['workers']} worker(s): {r['headline']}")
+    for mode in df["mode"].unique():
+        same = df.loc[df["mode"] == mode, "results_sha1"].nunique() == 1
+        print(f"{mode}: results.csv without timing columns identical across worker counts: {'yes' if same else 'NO'}")
 
 
 if __name__ == "__main__":

@@ -28,6 +28,13 @@ DOE_FILE_PATTERN = r"exp(?P<experiment>\d+)_rep(?P<replicate>\d+)\.(csv|parquet)
 _ANY_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
 
 
+def _headless() -> None:
+    """Draw figures off-screen: the commands only write files."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
 def _check_out(out: Path, force: bool) -> None:
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{out}: exists and is not a folder; choose another --out")
@@ -174,6 +181,7 @@ def study(
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
     _check_out(out, force)
+    _headless()
     kinds = _models(models)
     records = load_data(data, pattern)
     proto = load_protocol(protocol) if protocol is not None else preset_protocol(guess_protocol(records))
@@ -201,6 +209,7 @@ def demo(
     from mrdamper.study import doe_protocol, run_study
 
     _check_out(out, force)
+    _headless()
     kinds = _models(models)
     sc = scale if scale is not None else (QUICK_SCALE if quick else 1.0)
     if not (isinstance(sc, float) and 0.0 < sc <= 1.0):
