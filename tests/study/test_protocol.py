@@ -118,3 +118,17 @@ def test_load_protocol_errors(tmp_path) -> None:
         load_protocol(yaml)
     assert load_protocol("quiroz").split.key == "condition"
     assert json.loads(load_protocol("dyke").to_json())["input"] == "voltage"
+
+
+def test_per_kind_settings_are_defaults_that_model_entries_override(tmp_path) -> None:
+    p = Protocol(models=["lpv", ModelSpec("lpv", {"fs": 500.0}, label="lpv-500"), "sp1"],
+                 settings={"lpv": {"fs": 200.0, "n_m": 2}})
+    assert p.settings_for(p.models[0]) == {"fs": 200.0, "n_m": 2}
+    assert p.settings_for(p.models[1]) == {"fs": 500.0, "n_m": 2}
+    assert p.settings_for(p.models[2]) == {}
+    path = tmp_path / "p.json"
+    path.write_text(p.to_json())
+    assert load_protocol(path).settings_for(load_protocol(path).models[1]) == {"fs": 500.0, "n_m": 2}
+    with pytest.raises(SchemaError, match="settings: expected a table"):
+        protocol_from_dict({"settings": {"lpv": 3}})
+    assert load_protocol("dyke").range_policy == "clip"

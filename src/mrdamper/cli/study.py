@@ -59,37 +59,38 @@ def _manifest_metadata(folder: Path) -> dict[str, dict[str, Any]]:
     return out
 
 
-def load_data(path: Path, pattern: str | None = None) -> ExperimentSet:
+def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> ExperimentSet:
     """Read the study's records from a file or a folder.
 
     Folders: with ``pattern`` the file names must match it (named groups become metadata);
     without it, a folder holding ``manifest.csv`` is read as a design-of-experiments folder
     (``exp{n}_rep{k}`` files, manifest columns added as metadata), otherwise the sine-record
-    pattern is tried and then every CSV / Parquet / MAT file.
+    pattern is tried and then every CSV / Parquet / MAT file. ``read_kw`` go to the file reader
+    (e.g. ``fs`` to regenerate a rounded time column).
     """
     from mrdamper.data.readers import DEFAULT_PATTERN, read_directory, read_file
 
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file or folder")
     if path.is_file():
-        e = read_file(path)
+        e = read_file(path, **read_kw)
         return ExperimentSet([e], name=path.stem)
     if pattern is not None:
         try:
             re.compile(pattern)
         except re.error as exc:
             raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
-        return read_directory(path, pattern)
+        return read_directory(path, pattern, **read_kw)
     extra = _manifest_metadata(path)
     if extra:
-        data = read_directory(path, DOE_FILE_PATTERN)
+        data = read_directory(path, DOE_FILE_PATTERN, **read_kw)
         return ExperimentSet([e.replace(metadata={**dict(e.metadata), **extra.get(e.name, {})}) for e in data], name=data.name)
     try:
-        return read_directory(path, DEFAULT_PATTERN)
+        return read_directory(path, DEFAULT_PATTERN, **read_kw)
     except DataValidationError as exc:
         if exc.field != "pattern":
             raise
-    return read_directory(path, _ANY_FILE)
+    return read_directory(path, _ANY_FILE, **read_kw)
 
 
 def guess_protocol(data: ExperimentSet) -> str:
@@ -171,6 +172,9 @@ def study(
     workers: int = typer.Option(None, "--workers", help="Local worker processes (default min(2, CPUs); 1 = in-process)."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:8786); replaces --workers."),
     pattern: str = typer.Option(None, "--pattern", help="Regex for file names in a folder; named groups become metadata."),
+    fs: float = typer.Option(
+        None, "--fs", help="Declared sampling rate [Hz]: regenerates a rounded time column (e.g. the Dyke record: 3004.8)."
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed given to every estimator that takes one."),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
@@ -183,7 +187,7 @@ def study(
     _check_out(out, force)
     _headless()
     kinds = _models(models)
-    records = load_data(data, pattern)
+    records = load_data(data, pattern, **({} if fs is None else {"fs": fs}))
     proto = load_protocol(protocol) if protocol is not None else preset_protocol(guess_protocol(records))
     typer.echo(f"{len(records)} records from {data}; protocol {proto.name!r}", err=True)
     res = run_study(records, proto, kinds, workers=workers, scheduler=scheduler, seed=seed, progress=not no_progress)

@@ -11,18 +11,15 @@ Examples
 
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import make_executor
+from mrdamper.study.presets import doe_protocol, dyke_protocol, preset_protocol, quiroz_protocol
 from mrdamper.study.protocol import (
     DEFAULT_MODELS,
     ModelSpec,
     Protocol,
     Selection,
     Split,
-    doe_protocol,
-    dyke_protocol,
     load_protocol,
-    preset_protocol,
     protocol_from_dict,
-    quiroz_protocol,
 )
 from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.runner import run_study

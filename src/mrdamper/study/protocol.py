@@ -1,7 +1,7 @@
 """Study protocols: which records train the analysis and the models, which are scored, which models run.
 
 A :class:`Protocol` is a frozen value. It can be built in Python, taken from the presets
-(:func:`doe_protocol`, :func:`quiroz_protocol`, :func:`dyke_protocol`) or loaded from a small JSON or
+(:mod:`mrdamper.study.presets`) or loaded from a small JSON or
 TOML file with :func:`load_protocol` (schema in ``docs/study.md``). How records are turned into
 training and scoring sets (folds) lives in :mod:`mrdamper.study.splits`.
 """
@@ -25,19 +25,14 @@ from mrdamper.errors import SchemaError
 
 __all__ = [
     "DEFAULT_MODELS",
-    "PRESETS",
     "PROTOCOL_SCHEMA",
     "PROTOCOL_SCHEMA_VERSION",
     "ModelSpec",
     "Protocol",
     "Selection",
     "Split",
-    "doe_protocol",
-    "dyke_protocol",
     "load_protocol",
-    "preset_protocol",
     "protocol_from_dict",
-    "quiroz_protocol",
 ]
 
 PROTOCOL_SCHEMA = "mrdamper.protocol"
@@ -312,6 +307,9 @@ class Protocol:
     range_policy : {"error", "warn", "clip", "ignore"}
         Out-of-range policy applied to every fitted model before scoring; extrapolation is
         reported in the ``note`` column.
+    settings : mapping
+        Default estimator settings per kind (``{"lpv": {"fs": 200.0}}``), applied to every model
+        of that kind unless the model entry sets the same key.
     showcase : str, optional
         Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10); default: the
         first scored record.
@@ -331,6 +329,7 @@ class Protocol:
     input: Literal["i", "voltage"] = "i"
     exclude_trained: bool = True
     range_policy: RangePolicyName = "warn"
+    settings: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     showcase: str | None = None
     hysteresis_record: str | None = None
     description: str = ""
@@ -352,6 +351,15 @@ class Protocol:
                 raise SchemaError(f"{name}: expected a Selection, got {type(val).__name__}")
         if not isinstance(self.split, Split):
             raise SchemaError(f"split: expected a Split, got {type(self.split).__name__}")
+        if not isinstance(self.settings, Mapping) or not all(isinstance(v, Mapping) for v in self.settings.values()):
+            raise SchemaError(f"settings: expected a table of kind = {{setting = value}}, got {self.settings!r}")
+        object.__setattr__(
+            self, "settings", MappingProxyType({str(k): MappingProxyType(dict(v)) for k, v in self.settings.items()})
+        )
+
+    def settings_for(self, spec: ModelSpec) -> dict[str, Any]:
+        """Estimator settings of ``spec``: the protocol's defaults for its kind, then its own."""
+        return {**dict(self.settings.get(spec.kind, {})), **dict(spec.settings)}
 
     def resolved_models(self) -> tuple[ModelSpec, ...]:
         """The model specs to run: the protocol's, or the installed default models."""
@@ -384,6 +392,8 @@ class Protocol:
             "range_policy": self.range_policy,
             "models": [m.to_dict() for m in self.models],
         }
+        if self.settings:
+            out["settings"] = {k: dict(v) for k, v in self.settings.items()}
         if self.showcase is not None:
             out["showcase"] = self.showcase
         if self.hysteresis_record is not None:
@@ -397,7 +407,7 @@ class Protocol:
 
 _TOP_KEYS = {
     "schema", "schema_version", "name", "description", "input", "analysis", "train", "score",
-    "split", "exclude_trained", "range_policy", "models", "showcase", "hysteresis_record",
+    "split", "exclude_trained", "range_policy", "models", "settings", "showcase", "hysteresis_record",
 }
 _SEL_KEYS = {"match", "names", "exclude", "group_by", "take"}
 _SPLIT_KEYS = {"kind", "key", "name_regex", "fraction"}
@@ -463,6 +473,7 @@ def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
         models=tuple(_as_spec(m) for m in models),
         exclude_trained=excl,
         range_policy=data.get("range_policy", "warn"),
+        settings=data.get("settings") or {},
         showcase=data.get("showcase"),
         hysteresis_record=data.get("hysteresis_record"),
     )
@@ -478,6 +489,8 @@ def load_protocol(path: str | Path) -> Protocol:
     SchemaError
         If the file cannot be parsed or does not follow the schema (see ``docs/study.md``).
     """
+    from mrdamper.study.presets import PRESETS, preset_protocol
+
     if isinstance(path, str) and path in PRESETS:
         return preset_protocol(path)
     p = Path(path)
@@ -495,77 +508,3 @@ def load_protocol(path: str | Path) -> Protocol:
     except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
         raise SchemaError(f"{p}: cannot parse protocol file ({exc})") from None
     return protocol_from_dict(data)
-
-
-# ----------------------------------------------------------------------------- presets
-def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
-    """The default protocol on the Table II design of experiments (virtual rig or a real rig).
-
-    * Force-velocity analysis: the first replicate of each stepped-current experiment (6-8).
-    * Identification: the first replicate of the varying-current experiments 1-3 (ICPS, APRBS,
-      PRBS; 30 s each). The long road-profile experiments 4-5 (600 s) are kept for validation
-      only, which keeps identification time bounded.
-    * Scoring: every other record of experiments 1-8; records used for the analysis or the
-      identification are never scored (``exclude_trained``).
-    """
-    return Protocol(
-        name="doe",
-        description=(
-            "Table II design of experiments. F-v analysis on the first replicate of the stepped-current "
-            "experiments 6-8; identification on the first replicate of experiments 1-3; every remaining "
-            "record (replicates 2.. of 1-3 and 6-8, all of the long-road experiments 4-5) is scored."
-        ),
-        analysis=Selection(match={"experiment": (6, 7, 8)}, group_by="experiment", take=1),
-        train=Selection(match={"experiment": (1, 2, 3)}, group_by="experiment", take=1),
-        score=Selection(),
-        split=Split("fixed"),
-        models=tuple(models),
-        hysteresis_record="*exp8*",
-    )
-
-
-def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
-    """Leave-one-condition-out on the Quiroz constant-current sine records.
-
-    Each fold holds out one amplitude/frequency condition (all five currents) and trains the
-    analysis and the models on the other conditions. The condition is the metadata ``condition``
-    that the folder reader takes from the file name
-    (``sine_5mm_3Hz_0.5A`` -> ``5mm_3Hz``).
-    """
-    return Protocol(
-        name="quiroz-loco",
-        description="Quiroz (2022) sine records: leave one amplitude/frequency condition out, all currents.",
-        analysis=Selection(),
-        train=Selection(),
-        score=Selection(),
-        split=Split("leave-one-group-out", key="condition"),
-        models=tuple(models),
-    )
-
-
-def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
-    """Dyke (1996) random-excitation record: first 70 % of each record trains, last 30 % is scored.
-
-    The electrical input is the command voltage; the force-velocity analysis is skipped (the
-    voltage switches on a 10 ms grid, there are no constant-current records).
-    """
-    return Protocol(
-        name="dyke-70-30",
-        description="Dyke (1996) white-noise record, input = command voltage; first 70 % trains, last 30 % scored.",
-        analysis=None,
-        train=Selection(),
-        score=Selection(),
-        split=Split("time", fraction=0.7),
-        input="voltage",
-        models=tuple(models),
-    )
-
-
-PRESETS = {"doe": doe_protocol, "quiroz": quiroz_protocol, "dyke": dyke_protocol}
-
-
-def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
-    """A preset protocol by name: ``"doe"``, ``"quiroz"`` or ``"dyke"``."""
-    if name not in PRESETS:
-        raise SchemaError(f"protocol: unknown preset {name!r}; expected one of {sorted(PRESETS)}")
-    return PRESETS[name](models)

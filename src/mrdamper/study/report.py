@@ -59,7 +59,8 @@ def _protocol_section(res: StudyResult) -> str:
         ("split", p.split.describe()),
         ("records used in training are not scored", "yes" if p.exclude_trained else "no"),
         ("out-of-range policy when scoring", p.range_policy),
-        ("models", ", ".join(f"{s.label} ({s.kind}{', ' + str(dict(s.settings)) if s.settings else ''})" for s in res.specs)),
+        ("models", ", ".join(
+            f"{s.label} ({s.kind}{', ' + str(p.settings_for(s)) if p.settings_for(s) else ''})" for s in res.specs)),
     ]
     out = ['<table class="left">'] + [f"<tr><th>{_e(k)}</th><td>{_e(v)}</td></tr>" for k, v in rows] + ["</table>"]
     roles = res.roles.groupby(["fold", "role"], sort=False).agg(records=("record", "count"), samples=("samples", "sum"))

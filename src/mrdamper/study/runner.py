@@ -25,7 +25,8 @@ from mrdamper.errors import SchemaError
 from mrdamper.study._tasks import fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
-from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec, doe_protocol
+from mrdamper.study.presets import doe_protocol
+from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
 from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
@@ -53,12 +54,12 @@ def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict
     """Estimator settings of ``spec`` with the protocol's input, the study seed and the fold's laws."""
     from mrdamper.models import get_estimator
 
+    out = protocol.settings_for(spec)
     try:
-        est = get_estimator(spec.kind, **dict(spec.settings))
+        est = get_estimator(spec.kind, **out)
     except TypeError as exc:
         raise SchemaError(f"models.{spec.label}.settings: {exc}") from None
     fields = _estimator_fields(est)
-    out = dict(spec.settings)
     if "input" in fields and "input" not in out:
         out["input"] = protocol.input
     if "seed" in fields and "seed" not in out:
