@@ -50,6 +50,7 @@ def fit_task(kind: str, settings: Mapping[str, Any], records: Sequence[Any]) -> 
     from mrdamper.models import get_estimator
 
     t0 = time.perf_counter()
+    out: dict[str, Any]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:

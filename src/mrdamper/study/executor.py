@@ -74,10 +74,10 @@ def resolve_record(handle: Any) -> Experiment:
     if isinstance(handle, Experiment):
         return handle
     if isinstance(handle, PackedRecord):
-        return Experiment(**handle.arrays, name=handle.name, metadata=handle.metadata)
+        return Experiment(**handle.arrays, name=handle.name, metadata=handle.metadata)  # type: ignore[arg-type]
     if isinstance(handle, DiskRecord):
         arrays = {c: np.load(p, mmap_mode="r") for c, p in handle.paths.items()}
-        return Experiment(**arrays, name=handle.name, metadata=handle.metadata)
+        return Experiment(**arrays, name=handle.name, metadata=handle.metadata)  # type: ignore[arg-type]
     raise DataValidationError("record", f"unexpected record handle of type {type(handle).__name__}")
 
 

@@ -88,9 +88,9 @@ def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
             if g not in order:
                 order.append(g)
         for g in order:
-            tr = train.where(lambda e, g=g: split.group_of(e) != g)
-            an = analysis.where(lambda e, g=g: split.group_of(e) != g)
-            sc = score.where(lambda e, g=g: split.group_of(e) == g)
+            tr = ExperimentSet([e for e in train if split.group_of(e) != g], name=data.name)
+            an = ExperimentSet([e for e in analysis if split.group_of(e) != g], name=data.name)
+            sc = ExperimentSet([e for e in score if split.group_of(e) == g], name=data.name)
             if protocol.exclude_trained:
                 sc = _without(sc, set(tr.names) | set(an.names))
             folds.append(Fold(f"{label}={g}", an, tr, sc))
