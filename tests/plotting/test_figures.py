@@ -113,3 +113,13 @@ def test_force_time_and_fv_all_models() -> None:
     assert ax.get_xlabel() == "v [m/s]"
     with pytest.raises(DataValidationError, match="predictions"):
         plot_force_time(e, {})
+
+
+def test_a_wild_model_does_not_hide_the_others() -> None:
+    e = _record()
+    ax = plot_force_time(e, {"good": e.F * 0.98, "wild": e.F * 50})
+    lo, hi = ax.get_ylim()
+    assert hi < 3 * e.F.max() and lo > 3 * e.F.min()  # measured span widened by half of it
+    assert any("beyond the axes: wild" in t.get_text() for t in ax.texts)
+    ax = plot_fv_models(e, {"wild": e.F * 50}, clip_margin=None)
+    assert ax.get_ylim()[1] >= 50 * e.F.max()

@@ -102,12 +102,26 @@ def _predictions(predictions: Mapping[str, Any], n: int) -> dict[str, np.ndarray
     return {k: check_same_length(f"predictions[{k!r}]", v, n) for k, v in predictions.items()}
 
 
+def _clip_to_measured(ax: Any, F: np.ndarray, preds: Mapping[str, np.ndarray], mask: np.ndarray, margin: float) -> list[str]:
+    """Limit the force axis to the measured span (+ ``margin`` of it); return models drawn beyond it."""
+    lo, hi = float(F[mask].min()), float(F[mask].max())
+    pad = margin * max(hi - lo, 1e-9)
+    lo, hi = lo - pad, hi + pad
+    ax.set_ylim(lo, hi)
+    beyond = [k for k, v in preds.items() if float(v[mask].min()) < lo or float(v[mask].max()) > hi]
+    if beyond:
+        ax.text(0.01, 0.98, "beyond the axes: " + ", ".join(beyond), transform=ax.transAxes, fontsize=7,
+                va="top", color="tab:red")
+    return beyond
+
+
 def plot_force_time(
     experiment: Experiment,
     predictions: Mapping[str, Any],
     *,
     ax: Any = None,
     window: Sequence[float] | None = None,
+    clip_margin: float | None = 0.5,
 ) -> Any:
     """Paper Fig. 9: measured force and every model's free-run force against time.
 
@@ -121,6 +135,10 @@ def plot_force_time(
         Where to draw; a new figure when None.
     window : (float, float), optional
         Time span drawn [s]; the whole record when None.
+    clip_margin : float or None
+        Limit the force axis to the measured span widened by this fraction of it, so one wildly
+        wrong model does not hide the others (models that leave the axes are named in the plot);
+        None lets the axis fit every line.
 
     Returns
     -------
@@ -136,6 +154,8 @@ def plot_force_time(
     ax.plot(t, experiment.F[mask], lw=1.6, color="0.15", label="measured")
     for k, (label, F) in enumerate(preds.items()):
         ax.plot(t, F[mask], lw=0.8, color=model_color(label, k), label=label)
+    if clip_margin is not None:
+        _clip_to_measured(ax, experiment.F, preds, mask, clip_margin)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("F [N]")
     ax.set_title(f"Measured and computed damper force ({experiment.name})")
@@ -150,6 +170,7 @@ def plot_fv_models(
     *,
     ax: Any = None,
     window: Sequence[float] | None = None,
+    clip_margin: float | None = 0.5,
 ) -> Any:
     """Paper Fig. 10: the force-velocity plane, measured and every model.
 
@@ -163,6 +184,8 @@ def plot_fv_models(
         Where to draw; a new figure when None.
     window : (float, float), optional
         Time span drawn [s]; the whole record when None.
+    clip_margin : float or None
+        As in :func:`plot_force_time`.
 
     Returns
     -------
@@ -178,6 +201,8 @@ def plot_fv_models(
     ax.plot(v, experiment.F[mask], lw=1.4, color="0.15", label="measured")
     for k, (label, F) in enumerate(preds.items()):
         ax.plot(v, F[mask], lw=0.7, color=model_color(label, k), label=label, alpha=0.85)
+    if clip_margin is not None:
+        _clip_to_measured(ax, experiment.F, preds, mask, clip_margin)
     ax.set_xlabel("v [m/s]")
     ax.set_ylabel("F [N]")
     ax.set_title(f"F-v plane, measured and computed ({experiment.name})")
