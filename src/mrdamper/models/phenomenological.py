@@ -87,13 +87,13 @@ from dataclasses import asdict, dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from scipy.optimize import lsq_linear
+from scipy.optimize import least_squares, lsq_linear
 from scipy.signal import butter, sosfiltfilt
 
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models._p15_kernels import p15_simulate
+from mrdamper.models._p15_kernels import p15_sensitivities, p15_simulate
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
@@ -238,6 +238,14 @@ class P15Estimator(Estimator):
     stable_only : bool
         Raise :class:`IdentificationError` if a free-run simulation of a training record
         diverges (default: record it in provenance and return the model).
+    refine : bool
+        After the equation-error fit, minimise the free-run (output) error by nonlinear least
+        squares with forward-sensitivity Jacobians and the same sign bounds as ``form``.
+    max_nfev : int
+        Evaluation budget of the refinement.
+    refine_samples : int
+        Largest number of residual samples of the refinement (every k-th sample of each
+        simulated record; the simulation itself always runs on every sample).
     """
 
     input: ElectricalSource = "i"
@@ -246,6 +254,9 @@ class P15Estimator(Estimator):
     form: Literal["free", "stable", "monotone"] = "free"
     offset: bool = True
     stable_only: bool = False
+    refine: bool = False
+    max_nfev: int = 20
+    refine_samples: int = 20000
 
     kind: ClassVar[str] = "p15"
 
@@ -300,28 +311,29 @@ class P15Estimator(Estimator):
             )
         if cond > _COND_WARN:
             warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=2)
+        lb, ub = _form_bounds(self.form, X.shape[1])
         if self.form == "free":
             theta = np.linalg.solve(gram, Xs.T @ ys)
         else:
-            lb, ub = np.full(X.shape[1], -np.inf), np.full(X.shape[1], np.inf)
-            ub[3:6] = -1e-9  # w2 Bernstein coefficients < 0
-            ub[6:9] = -1e-9  # w3 < 0
-            ub[12:15] = 0.0  # w5 <= 0
-            if self.form == "monotone":
-                ub[9:12] = 0.0  # w4 <= 0: g(F) increasing, no bistable branch
             theta = lsq_linear(Xs, ys, bounds=(lb, ub), method="bvls").x
-        coef = theta * ynorm / norms
-        W = _bernstein_to_monomial(coef[:15].reshape(5, 3), lo, hi)
-        f0 = float(coef[15]) if self.offset else 0.0
-        resid = float(np.sqrt(np.mean((X @ coef - y) ** 2)))
+        scale = ynorm / norms
+        M = _coef_map(lo, hi)
+        W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+        f0 = float(theta[15] * scale[15]) if self.offset else 0.0
+        resid = float(np.sqrt(np.mean((X @ (theta * scale) - y) ** 2)))
         span = float(max(np.ptp(e.F) for e in exps))
+        refined: dict[str, Any] = {}
+        if self.refine:
+            theta, refined = _refine(theta, scale, M, (lb, ub), exps, self, 10.0 * span, lo, hi)
+            W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+            f0 = float(theta[15] * scale[15]) if self.offset else 0.0
         model = P15Model(
             W=tuple(W.ravel()),
             f0=f0,
             input=self.input,
             input_range=(lo, hi),
             force_bound=10.0 * span,
-            max_step=_max_step(W, f0, lo, hi, exps),
+            max_step=_max_step(W, lo, hi, exps),
         )
         divergence, esr = _simulate_training(model, exps)
         w3_grid = model.coefficients(np.linspace(lo, hi, 201))[2]
@@ -333,6 +345,7 @@ class P15Estimator(Estimator):
             "cutoff_hz": {e.name: _cutoff(self.cutoff, e.fs) for e in exps},
             "condition_number": cond,
             "equation_error_rms": resid,
+            "refinement": refined,
             "w3_range": [float(w3_grid.min()), float(w3_grid.max())],
             "w3_crosses_zero": bool(w3_grid.min() <= 0 <= w3_grid.max()),
             "training_divergence": divergence,
@@ -361,7 +374,11 @@ class P15Estimator(Estimator):
             raise DataValidationError("filter_order", f"expected an integer in 1..8, got {self.filter_order!r}")
         if self.form not in ("free", "stable", "monotone"):
             raise DataValidationError("form", f"expected 'free', 'stable' or 'monotone', got {self.form!r}")
-        for name in ("offset", "stable_only"):
+        for name in ("max_nfev", "refine_samples"):
+            val = getattr(self, name)
+            if isinstance(val, bool) or not isinstance(val, int) or val < 1:
+                raise DataValidationError(name, f"expected a positive integer, got {val!r}")
+        for name in ("offset", "stable_only", "refine"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise DataValidationError(name, f"expected True or False, got {getattr(self, name)!r}")
 
@@ -418,18 +435,29 @@ def _check_levels(i: np.ndarray, lo: float, hi: float, source: str) -> None:
         )
 
 
-def _bernstein_to_monomial(B: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Rows of Bernstein coefficients on ``s = (i - lo) / (hi - lo)`` to monomials in ``i``."""
+def _coef_map(lo: float, hi: float) -> np.ndarray:
+    """Linear map (15 x 15) from Bernstein coefficients on ``s = (i - lo) / (hi - lo)`` (row-major
+    5 x 3) to the monomial coefficients ``W`` in ``i``."""
     R = hi - lo
-    a0 = B[:, 0]
-    a1 = -2 * B[:, 0] + 2 * B[:, 1]
-    a2 = B[:, 0] - 2 * B[:, 1] + B[:, 2]
-    return np.stack(
-        [a0 - a1 * lo / R + a2 * lo**2 / R**2, a1 / R - 2 * a2 * lo / R**2, a2 / R**2], axis=1
-    )
+    # Bernstein (b0, b1, b2) -> power basis in s (a0, a1, a2) -> power basis in i
+    to_s = np.array([[1.0, 0.0, 0.0], [-2.0, 2.0, 0.0], [1.0, -2.0, 1.0]])
+    to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
+    return np.kron(np.eye(5), to_i @ to_s)
 
 
-def _max_step(W: np.ndarray, f0: float, lo: float, hi: float, exps: Iterable[Experiment]) -> float:
+def _form_bounds(form: str, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the scaled Bernstein coefficients that impose the sign constraints of ``form``."""
+    lb, ub = np.full(n, -np.inf), np.full(n, np.inf)
+    if form != "free":
+        ub[3:6] = -1e-9  # w2 Bernstein coefficients < 0
+        ub[6:9] = -1e-9  # w3 < 0
+        ub[12:15] = 0.0  # w5 <= 0
+    if form == "monotone":
+        ub[9:12] = 0.0  # w4 <= 0: g(F) increasing, no bistable branch
+    return lb, ub
+
+
+def _max_step(W: np.ndarray, lo: float, hi: float, exps: Iterable[Experiment]) -> float:
     """Step [s] keeping ``h |lambda| <= 0.5`` for the linearised ODE over input range and force span."""
     Fmin = min(float(np.min(e.F)) for e in exps)
     Fmax = max(float(np.max(e.F)) for e in exps)
@@ -444,6 +472,81 @@ def _max_step(W: np.ndarray, f0: float, lo: float, hi: float, exps: Iterable[Exp
         lam = np.maximum(np.abs((-b + disc) / 2), np.abs((-b - disc) / 2))
     lmax = float(np.nanmax(lam)) if np.any(np.isfinite(lam)) else math.inf
     return 0.5 / lmax if lmax > 0 else math.inf
+
+
+def _refine(
+    theta0: np.ndarray, scale: np.ndarray, M: np.ndarray, bounds: tuple[np.ndarray, np.ndarray],
+    exps: Iterable[Experiment], est: P15Estimator, bound: float, lo: float, hi: float,
+) -> tuple[np.ndarray, dict[str, Any]]:
+    """Output-error refinement: least squares on the free-run simulation error of every training
+    record, Jacobian from forward sensitivities, same sign bounds as the equation-error fit."""
+    recs = list(exps)
+    n_total = sum(e.n for e in recs)
+    stride = max(1, math.ceil(n_total / est.refine_samples))
+    idx = [np.arange(0, e.n, stride) for e in recs]
+    states = [initial_state(e) for e in recs]
+    Fs = float(np.std(np.concatenate([e.F for e in recs]))) or 1.0
+    n_par = theta0.size
+    lb, ub = bounds
+    x0 = np.clip(theta0, lb, ub)
+
+    def substeps(theta: np.ndarray) -> list[int]:
+        W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+        ms = _max_step(W, lo, hi, recs)
+        return [int(min(MAX_SUBSTEPS, max(1, math.ceil(e.dt / ms)))) if math.isfinite(ms) else 1 for e in recs]
+
+    # Sub-steps are fixed at max(8, twice the starting model's need): a step into a stiffer region
+    # (h |lambda| > 0.5 at that step) counts as divergence, which bounds the cost of each
+    # evaluation and keeps the integration accurate.
+    budget = [min(MAX_SUBSTEPS, max(8, 2 * n)) for n in substeps(x0)]
+
+    def run(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+        f0 = float(theta[15] * scale[15]) if est.offset else 0.0
+        need = substeps(theta)
+        res, jac = [], []
+        for e, k, (F0, G0), n_sub, nb in zip(recs, idx, states, need, budget):
+            if n_sub > nb:
+                res.append(np.full(k.size, bound / Fs))
+                jac.append(np.zeros((k.size, n_par)))
+                continue
+            n_sub = nb
+            i = np.ascontiguousarray(e.electrical(est.input))
+            F, J, bad = p15_sensitivities(np.ascontiguousarray(e.v), i, e.dt, W, f0, F0, G0, n_sub, bound,
+                                          bool(est.offset))
+            if bad >= 0:  # diverged: a large, finite residual so the solver rejects the step
+                F[bad:] = bound
+                J[bad:] = 0.0
+            res.append((F[k] - e.F[k]) / Fs)
+            Jt = np.empty((k.size, n_par))
+            Jt[:, :15] = (J[k, :15] @ M) * scale[:15]
+            if est.offset:
+                Jt[:, 15] = J[k, 15] * scale[15]
+            jac.append(Jt / Fs)
+        return np.concatenate(res), np.concatenate(jac)
+
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def cached(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = theta.tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = run(theta)
+        return cache[key]
+
+    r0 = cached(x0)[0]
+    sol = least_squares(lambda th: cached(th)[0], x0, jac=lambda th: cached(th)[1], bounds=(lb, ub),
+                        method="trf", x_scale="jac", max_nfev=est.max_nfev)
+    info = {
+        "rms_before": float(np.sqrt(np.mean(r0**2)) * Fs),
+        "rms_after": float(np.sqrt(2 * sol.cost / sol.fun.size) * Fs),
+        "nfev": int(sol.nfev),
+        "status": int(sol.status),
+        "sample_stride": int(stride),
+    }
+    if not info["rms_after"] <= info["rms_before"]:
+        return x0, {**info, "kept": "equation-error fit"}
+    return sol.x, info
 
 
 def _simulate_training(model: P15Model, exps: Iterable[Experiment]) -> tuple[dict[str, Any], dict[str, float]]:
