@@ -301,7 +301,9 @@ class P15Estimator(Estimator):
             raise IdentificationError(f"data: regressor {j} of p15 is identically zero; nothing to identify")
         ynorm = float(np.linalg.norm(y)) or 1.0
         Xs, ys = X / norms, y / ynorm
-        gram = Xs.T @ Xs
+        # einsum without BLAS: the same bytes whatever the BLAS thread count (a fitted P-15 can be
+        # chaotic, so rounding differences would otherwise show in its free run)
+        gram = np.einsum("ij,ik->jk", Xs, Xs)
         ev = np.linalg.eigvalsh(gram)
         cond = float(np.sqrt(ev[-1] / ev[0])) if ev[0] > 0 else math.inf
         if not cond < _COND_FAIL:
@@ -313,19 +315,19 @@ class P15Estimator(Estimator):
             warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=2)
         lb, ub = _form_bounds(self.form, X.shape[1])
         if self.form == "free":
-            theta = np.linalg.solve(gram, Xs.T @ ys)
+            theta = np.linalg.solve(gram, np.einsum("ij,i->j", Xs, ys))
         else:
             theta = lsq_linear(Xs, ys, bounds=(lb, ub), method="bvls").x
         scale = ynorm / norms
         M = _coef_map(lo, hi)
-        W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+        W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
         f0 = float(theta[15] * scale[15]) if self.offset else 0.0
         resid = float(np.sqrt(np.mean((X @ (theta * scale) - y) ** 2)))
         span = float(max(np.ptp(e.F) for e in exps))
         refined: dict[str, Any] = {}
         if self.refine:
             theta, refined = _refine(theta, scale, M, (lb, ub), exps, self, 10.0 * span, lo, hi)
-            W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+            W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
             f0 = float(theta[15] * scale[15]) if self.offset else 0.0
         model = P15Model(
             W=tuple(W.ravel()),
@@ -491,7 +493,7 @@ def _refine(
     x0 = np.clip(theta0, lb, ub)
 
     def substeps(theta: np.ndarray) -> list[int]:
-        W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+        W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
         ms = _max_step(W, lo, hi, recs)
         return [int(min(MAX_SUBSTEPS, max(1, math.ceil(e.dt / ms)))) if math.isfinite(ms) else 1 for e in recs]
 
@@ -501,7 +503,7 @@ def _refine(
     budget = [min(MAX_SUBSTEPS, max(8, 2 * n)) for n in substeps(x0)]
 
     def run(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        W = (M @ (theta[:15] * scale[:15])).reshape(5, 3)
+        W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
         f0 = float(theta[15] * scale[15]) if est.offset else 0.0
         need = substeps(theta)
         res, jac = [], []
