@@ -127,3 +127,13 @@ def test_score_reports_divergence_and_exits_1(tmp_path: Path, data_dir: Path, ca
 def test_missing_data_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert _exit_code(["fit", "sp2", str(tmp_path / "nope"), "--out", str(tmp_path / "m.json")]) == 2
     assert "no such file or folder" in capsys.readouterr().err
+
+
+def test_generic_options_map_to_the_estimator_names() -> None:
+    from mrdamper.cli.models import _setting_name, estimator_settings
+
+    assert _setting_name("order", ["n_m", "n_rho", "input"]) == "n_m"
+    assert _setting_name("rho_degree", ["n_m", "n_rho"]) == "n_rho"
+    assert _setting_name("order", ["order", "n_m"]) == "order"
+    assert _setting_name("order", estimator_settings("sp1")) == "order"  # then refused by fit
+    assert "n_starts" in estimator_settings("sp1") and "form" in estimator_settings("p15")

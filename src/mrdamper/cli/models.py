@@ -88,6 +88,18 @@ def parse_settings(items: list[str] | None) -> dict[str, Any]:
     return out
 
 
+#: Command-line option -> estimator setting names it may stand for, in order of preference.
+_ALIASES: dict[str, tuple[str, ...]] = {"order": ("order", "n_m"), "rho_degree": ("rho_degree", "n_rho")}
+
+
+def _setting_name(option: str, accepted: list[str]) -> str:
+    """The estimator's name for a generic option (``--order`` is ``n_m`` for the LPV model)."""
+    for name in _ALIASES.get(option, (option,)):
+        if name in accepted:
+            return name
+    return option
+
+
 def _choose_input(records: list[Experiment]) -> str:
     if all(e.i is not None for e in records):
         return "i"
@@ -116,9 +128,12 @@ def fit(
         str | None,
         typer.Option("--input", help="Electrical input: i | voltage (default: the channel every record has)."),
     ] = None,
-    order: Annotated[int | None, typer.Option("--order", help="Model order (models that take one).")] = None,
+    order: Annotated[
+        int | None, typer.Option("--order", help="Model order (setting 'order' or 'n_m').")
+    ] = None,
     rho_degree: Annotated[
-        int | None, typer.Option("--rho-degree", help="Polynomial degree in the scheduling variable.")
+        int | None,
+        typer.Option("--rho-degree", help="Degree in the scheduling variable (setting 'rho_degree' or 'n_rho')."),
     ] = None,
     refine: Annotated[
         bool | None, typer.Option("--refine/--no-refine", help="Nonlinear refinement after the linear fit.")
@@ -150,7 +165,7 @@ def fit(
         "n_starts": n_starts,
         "offset": offset,
     }
-    given = {k: v for k, v in given.items() if v is not None}
+    given = {_setting_name(k, accepted): v for k, v in given.items() if v is not None}
     given.update(parse_settings(settings))
     unknown = [k for k in given if k not in accepted]
     if unknown:
