@@ -13,6 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mrdamper import DataValidationError, Experiment, IdentificationError, OutOfRangeError
 from mrdamper.models import get_estimator, load_model, model_class
@@ -240,3 +242,28 @@ def test_real_data_held_out_condition(kind: str, quiroz_unfiltered_dir: Path) ->
     fitted = ESTIMATORS[kind](seed=0).fit(train)
     esr = np.mean([fitted.score(e).esr for e in test])
     assert esr < 0.15
+
+
+# ----------------------------------------------------------------------------- properties
+_finite = st.floats(-1e3, 1e3, allow_nan=False)
+
+
+@settings(max_examples=50, deadline=None)
+@given(S=st.lists(_finite, min_size=15, max_size=15), x=_finite, v=_finite, i=st.floats(0.0, 1.0))
+def test_sp1_is_odd_in_motion_without_offset(S: list[float], x: float, v: float, i: float) -> None:
+    """With f0 = 0 every SP map is odd in (x, v): a symmetric damper (tanh is odd)."""
+    m = SP1Model(S=tuple(S), input_range=(0.0, 1.0))
+    xs, vs, iis = np.array([x * 1e-5]), np.array([v * 1e-3]), np.array([i])
+    assert m.force(-xs, -vs, iis)[0] == -m.force(xs, vs, iis)[0]
+
+
+@settings(max_examples=30, deadline=None)
+@given(amp=st.floats(1e-3, 2e-2), freq=st.floats(0.5, 5.0), i=st.floats(0.0, 1.0))
+def test_sp3_dissipates_energy_over_a_cycle(amp: float, freq: float, i: float) -> None:
+    """A plausible SP-3 (positive amplitude and damping) absorbs energy over a closed sine cycle."""
+    t = np.linspace(0.0, 1.0 / freq, 2001)
+    x = amp * np.sin(2 * np.pi * freq * t)
+    v = amp * 2 * np.pi * freq * np.cos(2 * np.pi * freq * t)
+    F = TRUE["sp3"].force(x, v, np.full_like(t, i))
+    work = np.trapezoid(F * v, t)
+    assert work > 0
