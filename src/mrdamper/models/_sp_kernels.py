@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["sp_force", "sp_force_jacobian", "N_COMPONENTS"]
+__all__ = ["N_COMPONENTS", "sp_force", "sp_force_jacobian"]
 
 #: Number of components of the SP map (A, a, b, c, d).
 N_COMPONENTS = 5
