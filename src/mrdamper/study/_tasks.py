@@ -2,6 +2,7 @@
 
 Both run in worker processes (or in-process) and never raise for a model's failure: they return a
 plain dict with a ``status`` and the error text, so the failure becomes a row of the results.
+Both run with single-threaded BLAS (see :mod:`mrdamper.study._threads`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from mrdamper.errors import (
     OutOfRangeError,
     SimulationDivergedError,
 )
+from mrdamper.study._threads import single_threaded_blas
 from mrdamper.study.executor import resolve_record
 
 __all__ = ["fit_task", "simulate_task"]
@@ -51,7 +53,7 @@ def fit_task(kind: str, settings: Mapping[str, Any], records: Sequence[Any]) -> 
 
     t0 = time.perf_counter()
     out: dict[str, Any]
-    with warnings.catch_warnings(record=True) as caught:
+    with single_threaded_blas(), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             train = ExperimentSet([resolve_record(h) for h in records], name="training")
@@ -81,7 +83,7 @@ def simulate_task(model: Mapping[str, Any], record: Any, range_policy: str) -> d
 
     nan = float("nan")
     out: dict[str, Any] = {"esr": nan, "ssse": nan, "nrmse": nan, "fit_pct": nan, "sim_time_s": nan, "error": ""}
-    with warnings.catch_warnings(record=True) as caught:
+    with single_threaded_blas(), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             exp = resolve_record(record)
