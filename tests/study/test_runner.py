@@ -88,6 +88,9 @@ def test_write_outputs_and_report(result, tmp_path) -> None:
     assert len(res) == len(result.results) and list(res.columns[:13]) == list(result.results.columns[:13])
     summ = pd.read_csv(out / "summary.csv")
     assert list(summ["model"]) == MODELS
+    import json
+
+    assert [m["kind"] for m in json.loads((out / "protocol.json").read_text())["models"]] == MODELS
     m = load_model(out / "models" / "all" / "toy.json")
     e = result.showcase.record
     assert np.array_equal(m.predict(e), result.models[("all", "toy")].predict(e))

@@ -47,6 +47,13 @@ def _table(df: pd.DataFrame, floatfmt: str = "{:.4g}", cls: str = "") -> str:
     return f'<table class="{cls}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
 
 
+def _model_text(p: Any, spec: Any) -> str:
+    settings = p.settings_for(spec)
+    extra = [spec.kind] if spec.label != spec.kind else []
+    extra += [f"{k}={v!r}" for k, v in settings.items()]
+    return spec.label + (f" ({', '.join(extra)})" if extra else "")
+
+
 def _protocol_section(res: StudyResult) -> str:
     p = res.protocol
     rows = [
@@ -59,8 +66,7 @@ def _protocol_section(res: StudyResult) -> str:
         ("split", p.split.describe()),
         ("records used in training are not scored", "yes" if p.exclude_trained else "no"),
         ("out-of-range policy when scoring", p.range_policy),
-        ("models", ", ".join(
-            f"{s.label} ({s.kind}{', ' + str(p.settings_for(s)) if p.settings_for(s) else ''})" for s in res.specs)),
+        ("models", ", ".join(_model_text(p, s) for s in res.specs)),
     ]
     out = ['<table class="left">'] + [f"<tr><th>{_e(k)}</th><td>{_e(v)}</td></tr>" for k, v in rows] + ["</table>"]
     roles = res.roles.groupby(["fold", "role"], sort=False).agg(records=("record", "count"), samples=("samples", "sum"))

@@ -152,6 +152,7 @@ def run_study(
     specs = protocol.resolved_models()
     if not specs:
         raise SchemaError("models: no model to run (none given and no default model is installed)")
+    protocol = protocol.with_models(specs)  # the saved protocol lists the models actually run
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise SchemaError(f"seed: expected an integer, got {seed!r}")
     folds = make_folds(data, protocol)
