@@ -93,13 +93,26 @@ def test_study_with_a_protocol_file(tmp_path, capsys) -> None:
         "models": [{"kind": "sp2", "label": "SP-2"}],
     }))
     out = tmp_path / "out"
-    code, _, stderr = _run(["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1",
-                                 "--no-progress"], capsys)
+    code, _, stderr = _run(["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1"], capsys)
     assert code == 0, stderr
+    assert "fitting" in stderr and "simulating" in stderr  # progress bars on standard error
     res = pd.read_csv(out / "results.csv")
     assert list(res["model"].unique()) == ["SP-2"] and len(res) == 3
     assert res["record"].str.startswith("sine_5mm").all()
     assert json.loads((out / "protocol.json").read_text())["name"] == "train-on-10mm"
+
+
+def test_study_on_a_dask_scheduler_address(tmp_path, capsys) -> None:
+    distributed = pytest.importorskip("distributed")
+    data = tmp_path / "sine"
+    _write_sine_folder(data)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cl:
+        code, _, stderr = _run(["study", str(data), "--out", str(tmp_path / "out"), "--models", "sp2",
+                                "--scheduler", cl.scheduler_address, "--no-progress"], capsys)
+    assert code == 0, stderr
+    study = json.loads((tmp_path / "out" / "study.json").read_text())
+    assert study["executor"] == f"Dask scheduler {cl.scheduler_address}"
+    assert len(pd.read_csv(tmp_path / "out" / "results.csv")) == 6
 
 
 def test_demo_quick_on_the_virtual_rig(tmp_path, capsys, monkeypatch) -> None:
