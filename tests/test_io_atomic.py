@@ -25,3 +25,14 @@ def test_failure_leaves_nothing(tmp_path) -> None:
     with pytest.raises(KeyboardInterrupt):
         atomic_write_with(tmp_path / "b.txt", boom)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_written_files_get_the_umask_mode(tmp_path) -> None:
+    import os
+
+    umask = os.umask(0o022)
+    try:
+        p = atomic_write_text(tmp_path / "c.txt", "x")
+    finally:
+        os.umask(umask)
+    assert (p.stat().st_mode & 0o777) == 0o644

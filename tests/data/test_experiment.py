@@ -107,3 +107,12 @@ def test_set_filter_groups_split_logo() -> None:
     assert s["r3"].name == "r3"
     with pytest.raises(DataValidationError, match="duplicate"):
         ExperimentSet([recs[0], recs[0]])
+
+
+def test_pickle_round_trip_revalidates() -> None:
+    import pickle
+
+    e = _rec(name="p", current=0.5)
+    back = pickle.loads(pickle.dumps(e))
+    assert back.name == "p" and dict(back.metadata) == {"current": 0.5}
+    assert np.array_equal(back.F, e.F) and not back.F.flags.writeable

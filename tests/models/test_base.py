@@ -85,3 +85,9 @@ def test_encode_decode_values() -> None:
     back = decode_value(json.loads(json.dumps(encode_value(v))))
     assert np.array_equal(back["a"], v["a"]) and back["a"].shape == (2, 3)
     assert back["b"][1] == float("inf") and back["c"] == 2.5
+
+
+def test_known_kinds_lists_every_family() -> None:
+    from mrdamper.models import known_kinds
+
+    assert known_kinds() == ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham"]

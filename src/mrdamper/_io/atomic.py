@@ -35,6 +35,7 @@ def atomic_write_with(
     os.close(fd)
     tmp_path = Path(tmp)
     try:
+        _apply_default_mode(tmp_path)
         writer(tmp_path)
         if p.exists() and not force:  # re-check: another process may have written meanwhile
             raise OutputExistsError(f"{p}: appeared while writing; pass force=True to overwrite")
@@ -43,6 +44,13 @@ def atomic_write_with(
         tmp_path.unlink(missing_ok=True)
         raise
     return p
+
+
+def _apply_default_mode(path: Path) -> None:
+    """Give a ``mkstemp`` file (created 0600) the mode a plain ``open`` would: 0666 minus umask."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(path, 0o666 & ~umask)
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, force: bool = False) -> Path:

@@ -120,11 +120,11 @@ def _models(models: str | None) -> list[str] | None:
     kinds = [m.strip() for m in models.split(",") if m.strip()]
     if not kinds:
         raise SchemaError(f"models: expected a comma-separated list of kinds such as lpv,sp1, got {models!r}")
-    from mrdamper.models.registry import _MODULES
+    from mrdamper.models import known_kinds
 
-    unknown = [k for k in kinds if k not in _MODULES]
+    unknown = [k for k in kinds if k not in known_kinds()]
     if unknown:
-        raise SchemaError(f"models: unknown kind(s) {unknown}; expected some of {list(_MODULES)}")
+        raise SchemaError(f"models: unknown kind(s) {unknown}; expected some of {known_kinds()}")
     return kinds
 
 

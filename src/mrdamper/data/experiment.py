@@ -124,6 +124,12 @@ class Experiment:
                 )
         _check_time_base(self.t, self.time_tolerance)
 
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
+        """Pickle support (for worker processes): rebuild through the validating constructor."""
+        state = {c: getattr(self, c) for c in self.channel_names}
+        state.update(name=self.name, metadata=dict(self.metadata), time_tolerance=self.time_tolerance)
+        return (_rebuild_experiment, (state,))
+
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_arrays(
@@ -289,6 +295,10 @@ class Experiment:
             f"Experiment(name={self.name!r}, n={self.n}, fs={self.fs:g} Hz, "
             f"duration={self.duration:g} s, input={el!r})"
         )
+
+
+def _rebuild_experiment(state: dict[str, Any]) -> Experiment:
+    return Experiment(**state)
 
 
 def _check_time_base(t: np.ndarray, tol: float) -> None:

@@ -9,6 +9,7 @@ from mrdamper.models.base import (
 from mrdamper.models.registry import (
     available_models,
     get_estimator,
+    known_kinds,
     load_model,
     model_class,
     model_from_dict,
@@ -22,6 +23,7 @@ __all__ = [
     "available_models",
     "check_input_range",
     "get_estimator",
+    "known_kinds",
     "load_model",
     "model_class",
     "model_from_dict",

@@ -15,7 +15,15 @@ from typing import Any
 from mrdamper.errors import SchemaError
 from mrdamper.models.base import Estimator, FittedModel, _check_schema
 
-__all__ = ["available_models", "get_estimator", "load_model", "model_class", "model_from_dict", "register"]
+__all__ = [
+    "available_models",
+    "get_estimator",
+    "known_kinds",
+    "load_model",
+    "model_class",
+    "model_from_dict",
+    "register",
+]
 
 #: kind -> module that defines it. Order is the default display order.
 _MODULES: dict[str, str] = {
@@ -51,6 +59,11 @@ def _load(kind: str) -> None:
     importlib.import_module(_MODULES[kind])
     if kind not in _FITTED:
         raise SchemaError(f"model: module {_MODULES[kind]} did not register {kind!r}")
+
+
+def known_kinds() -> list[str]:
+    """Every model kind this version defines, in default display order (nothing imported)."""
+    return list(_MODULES)
 
 
 def available_models() -> list[str]:
