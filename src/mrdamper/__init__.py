@@ -1,10 +1,30 @@
 """mrdamper: identify, compare and export control-oriented models of MR dampers.
 
 The public API is listed in ``__all__``; everything else is private. Importing the package has no
-side effects and loads no model module until one is asked for.
+side effects. Names from the numba-backed parts (analysis, virtual rig, control export) are
+re-exported lazily, so ``import mrdamper`` stays fast and loads no model module until one is asked
+for.
+
+Examples
+--------
+>>> import mrdamper
+>>> "lpv" in mrdamper.known_kinds()
+True
 """
 
-from mrdamper.data import Experiment, ExperimentSet
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from mrdamper.data import (
+    Experiment,
+    ExperimentSet,
+    read,
+    read_directory,
+    write_csv,
+    write_parquet,
+)
 from mrdamper.errors import (
     DataValidationError,
     IdentificationError,
@@ -22,10 +42,40 @@ from mrdamper.models import (
     SimulationResult,
     available_models,
     get_estimator,
+    known_kinds,
     load_model,
 )
+from mrdamper.study import Protocol, StudyResult, load_protocol, run_study
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.analysis import ZoneFit, ZoneLaws, fit_zone_laws, fit_zones
+    from mrdamper.control import state_space, to_control
+    from mrdamper.rig import VirtualRig, reference_damper
+    from mrdamper.rig.doe import table_ii
 
 __version__ = "0.1.0"
+
+#: Lazily imported public names: name -> defining module.
+_LAZY: dict[str, str] = {
+    "ZoneFit": "mrdamper.analysis",
+    "ZoneLaws": "mrdamper.analysis",
+    "fit_zone_laws": "mrdamper.analysis",
+    "fit_zones": "mrdamper.analysis",
+    "VirtualRig": "mrdamper.rig",
+    "reference_damper": "mrdamper.rig",
+    "table_ii": "mrdamper.rig.doe",
+    "state_space": "mrdamper.control",
+    "to_control": "mrdamper.control",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'mrdamper' has no attribute {name!r}")
+
 
 __all__ = [
     "DataValidationError",
@@ -37,17 +87,35 @@ __all__ = [
     "MrDamperError",
     "OutOfRangeError",
     "OutputExistsError",
+    "Protocol",
     "SchemaError",
     "Scores",
     "SimulationDivergedError",
     "SimulationResult",
+    "StudyResult",
     "UnitError",
+    "VirtualRig",
+    "ZoneFit",
+    "ZoneLaws",
     "__version__",
     "available_models",
     "esr",
     "fit_percent",
+    "fit_zone_laws",
+    "fit_zones",
     "get_estimator",
+    "known_kinds",
     "load_model",
+    "load_protocol",
     "nrmse",
+    "read",
+    "read_directory",
+    "reference_damper",
+    "run_study",
     "ssse",
+    "state_space",
+    "table_ii",
+    "to_control",
+    "write_csv",
+    "write_parquet",
 ]
