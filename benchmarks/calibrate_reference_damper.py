@@ -29,7 +29,7 @@ OUT_DIR = REPO / "src" / "mrdamper" / "rig" / "parameters"
 _NAME = re.compile(r"sine_(?P<amp>[\d.]+)mm_(?P<freq>[\d.]+)Hz_(?P<cur>[\d.]+)A\.csv$")
 
 #: Estimator settings of the shipped calibration (documented in docs/calibration.md).
-CALIBRATION_SETTINGS = dict(input="i", n_starts=3, seed=0, weighting="record")
+CALIBRATION_SETTINGS = {"input": "i", "n_starts": 3, "seed": 0, "weighting": "record"}
 
 
 def read_quiroz(folder: str | Path) -> ExperimentSet:

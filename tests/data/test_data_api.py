@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import inspect
 
-import mrdamper.data as data
+from mrdamper import data
 from mrdamper.data import preprocessing, readers, units, writers
 
 

@@ -41,10 +41,11 @@ CAL_MEAN_ESR = 0.03
 CAL_MAX_ESR = 0.08
 
 #: A Quiroz-sized damper in the A = 1 convention (z in metres), used for synthetic records.
-TRUE = dict(
-    c0a=800.0, c0b=5000.0, k0=500.0, c1a=20000.0, c1b=150000.0, k1=700.0, x0=0.0,
-    alpha_a=8.0e5, alpha_b=5.0e6, gamma=2.0e6, beta=2.5e6, A=1.0, n=2.0, eta=60.0, f0=5.0,
-)
+TRUE = {
+    "c0a": 800.0, "c0b": 5000.0, "k0": 500.0, "c1a": 20000.0, "c1b": 150000.0, "k1": 700.0,
+    "x0": 0.0, "alpha_a": 8.0e5, "alpha_b": 5.0e6, "gamma": 2.0e6, "beta": 2.5e6, "A": 1.0,
+    "n": 2.0, "eta": 60.0, "f0": 5.0,
+}
 
 
 def _record(seed: int = 1, fs: float = 1000.0, duration: float = 3.0, input_: str = "i",

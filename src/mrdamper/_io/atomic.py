@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mrdamper.errors import OutputExistsError
 
-__all__ = ["check_writable", "atomic_write_bytes", "atomic_write_text", "atomic_write_with"]
+__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_with", "check_writable"]
 
 
 def check_writable(path: str | os.PathLike[str], force: bool) -> Path:
@@ -23,7 +23,7 @@ def check_writable(path: str | os.PathLike[str], force: bool) -> Path:
 
 
 def atomic_write_with(
-    path: str | os.PathLike[str], writer: Callable[[Path], None], *, force: bool = False
+    path: str | os.PathLike[str], writer: Callable[[Path], object], *, force: bool = False
 ) -> Path:
     """Call ``writer(tmp_path)`` then atomically move ``tmp_path`` to ``path``.
 

@@ -336,7 +336,8 @@ def fit_zone_laws(
     ZoneLawWarning
         When a per-level fit has a central slope ``m2`` that is not the biggest.
     """
-    items = list(data) if not isinstance(data, Experiment) else [data]
+    items: list[Any] = list(data) if not isinstance(data, Experiment) else [data]
+    fits: list[ZoneFit]
     if items and all(isinstance(f, ZoneFit) for f in items):
         fits = sorted(items, key=lambda f: (f.level is None, f.level))
         if any(f.level is None for f in fits):

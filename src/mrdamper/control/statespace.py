@@ -157,7 +157,11 @@ def frozen_stability(model: Any, n_grid: int = 51, rho: Any = None) -> pd.DataFr
         circle). Frozen stability is necessary, not sufficient, under fast-varying ``rho``.
     """
     _check_model(model)
-    grid = np.linspace(*model.rho_range, n_grid) if rho is None else np.atleast_1d(np.asarray(rho, float))
+    if rho is None:
+        rho_lo, rho_hi = model.rho_range
+        grid = np.linspace(rho_lo, rho_hi, n_grid)
+    else:
+        grid = np.atleast_1d(np.asarray(rho, float))
     mods = [float(np.max(np.abs(state_space(model, r).poles))) for r in grid]
     return pd.DataFrame({"rho": grid, "max_pole_modulus": mods, "stable": np.array(mods) < 1.0})
 

@@ -293,7 +293,10 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
 
     method = est.jacobian
     jac = obj.jacobian if method == "sensitivity" else method
-    kw = dict(bounds=(q_lo, q_hi), method="trf", x_scale=X_SCALE, ftol=est.ftol, xtol=est.xtol, gtol=est.gtol)
+    kw = {
+        "bounds": (q_lo, q_hi), "method": "trf", "x_scale": X_SCALE,
+        "ftol": est.ftol, "xtol": est.xtol, "gtol": est.gtol,
+    }
 
     runs: list[dict[str, Any]] = []
     results = []

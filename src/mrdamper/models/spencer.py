@@ -172,7 +172,9 @@ class SpencerModel(FittedModel):
     @classmethod
     def from_vector(cls, p: np.ndarray, **common: Any) -> SpencerModel:
         """Build a model from a vector in :data:`PARAMETER_NAMES` order plus common fields."""
-        values = {n: float(v) for n, v in zip(PARAMETER_NAMES, np.asarray(p, dtype=float))}
+        values: dict[str, Any] = {
+            n: float(v) for n, v in zip(PARAMETER_NAMES, np.asarray(p, dtype=float))
+        }
         return cls(**values, **common)
 
     # ------------------------------------------------------------------ simulation
@@ -283,22 +285,22 @@ def spencer1997(**common: Any) -> SpencerModel:
     **common
         Overrides of the common fields (``range_policy``, ``provenance``, ...).
     """
-    values: dict[str, Any] = dict(
-        c0a=21.0e2, c0b=3.50e2, k0=46.9e2, c1a=283.0e2, c1b=2.95e2, k1=5.00e2, x0=14.3e-2,
-        alpha_a=140.0e2, alpha_b=695.0e2, gamma=363.0e4, beta=363.0e4, A=301.0, n=2.0,
-        eta=190.0, f0=0.0,
-    )
-    settings: dict[str, Any] = dict(
-        input="voltage",
-        input_range=(0.0, 2.25),
-        range_policy="error",
-        provenance={
+    values: dict[str, Any] = {
+        "c0a": 21.0e2, "c0b": 3.50e2, "k0": 46.9e2, "c1a": 283.0e2, "c1b": 2.95e2,
+        "k1": 5.00e2, "x0": 14.3e-2, "alpha_a": 140.0e2, "alpha_b": 695.0e2,
+        "gamma": 363.0e4, "beta": 363.0e4, "A": 301.0, "n": 2.0, "eta": 190.0, "f0": 0.0,
+    }
+    settings: dict[str, Any] = {
+        "input": "voltage",
+        "input_range": (0.0, 2.25),
+        "range_policy": "error",
+        "provenance": {
             "source": "Spencer, Dyke, Sain & Carlson (1997), Phenomenological model of a "
             "magnetorheological damper, J. Eng. Mech. 123(3):230-238, Table 1 (generalized model)",
             "units": "converted from N, cm, s, V to SI",
             "identified": False,
         },
-    )
+    }
     settings.update(common)
     return SpencerModel(**values, **settings)
 
