@@ -90,4 +90,4 @@ def test_encode_decode_values() -> None:
 def test_known_kinds_lists_every_family() -> None:
     from mrdamper.models import known_kinds
 
-    assert known_kinds() == ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham"]
+    assert known_kinds() == ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]

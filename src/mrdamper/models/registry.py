@@ -36,6 +36,7 @@ _MODULES: dict[str, str] = {
     "sp4": "mrdamper.models.semiphenomenological",
     "spencer": "mrdamper.models.spencer",
     "bingham": "mrdamper.models.bingham",
+    "narx": "mrdamper.models.narx",
 }
 
 _ESTIMATORS: dict[str, type[Estimator]] = {}

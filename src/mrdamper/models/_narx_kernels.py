@@ -1,0 +1,166 @@
+"""Numba kernels of the polynomial NARX model, on plain arrays.
+
+Layout shared by every kernel (one record at a time; records are never concatenated):
+
+* ``S`` float64 ``(n_signals, N)``: the record's scaled signals, row 0 the force ``f = F / F_s``
+  (the other rows are x, v, the electrical input and tanh(v / v0), already scaled).
+* ``base`` int64 ``(n_base, 2)``: base variable ``b`` is ``S[base[b, 0], k - base[b, 1]]`` at
+  sample ``k`` (signal row, lag >= 0; force rows always have lag >= 1).
+* ``slots`` int64 ``(n_terms, D)``: monomial ``t`` is the product of the base variables listed in
+  ``slots[t]``; ``-1`` marks an empty slot (the constant term has only empty slots).
+* Model: ``f[k] = sum_t theta[t] * prod_s b[slots[t, s]]`` for ``k >= p`` (``p`` the largest lag);
+  samples ``0 .. p-1`` are initial conditions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["fill_candidates", "free_run", "free_run_sensitivity", "gram_select"]
+
+
+@njit(cache=True)
+def _base_values(S, base, k, out):  # pragma: no cover - numba
+    for b in range(base.shape[0]):
+        out[b] = S[base[b, 0], k - base[b, 1]]
+
+
+@njit(cache=True)
+def _term(bv, slots, t):  # pragma: no cover - numba
+    val = 1.0
+    for s in range(slots.shape[1]):
+        j = slots[t, s]
+        if j >= 0:
+            val *= bv[j]
+    return val
+
+
+@njit(cache=True)
+def fill_candidates(S, base, slots, k0, k1, out):  # pragma: no cover - numba
+    """Rows ``k0 .. k1-1`` of the regression matrix into ``out[: k1 - k0]`` (terms as columns)."""
+    bv = np.empty(base.shape[0])
+    for q in range(k1 - k0):
+        _base_values(S, base, k0 + q, bv)
+        for t in range(slots.shape[0]):
+            out[q, t] = _term(bv, slots, t)
+
+
+@njit(cache=True)
+def free_run(S, base, slots, theta, p, bound):  # pragma: no cover - numba
+    """Simulate ``S[0, p:]`` in place from ``S[0, :p]``; first diverging sample or -1.
+
+    A sample diverges when its scaled force is not finite or exceeds ``bound`` in magnitude;
+    the simulation stops there (later samples are left untouched).
+    """
+    bv = np.empty(base.shape[0])
+    n = S.shape[1]
+    for k in range(p, n):
+        _base_values(S, base, k, bv)
+        acc = 0.0
+        for t in range(slots.shape[0]):
+            acc += theta[t] * _term(bv, slots, t)
+        if not np.isfinite(acc) or abs(acc) > bound:
+            return k
+        S[0, k] = acc
+    return -1
+
+
+@njit(cache=True)
+def free_run_sensitivity(S, base, slots, theta, p, bound):  # pragma: no cover - numba
+    """Free run as :func:`free_run` plus ``J[k, j] = d f[k] / d theta[j]``.
+
+    The sensitivity obeys ``J[k] = phi(k) + sum_t theta_t sum_{s: force slot}
+    (prod_{s' != s} b_{s'}) J[k - lag_s]`` (the chain rule through the fed-back force).
+    Returns ``(J, bad)``; rows from ``bad`` on are zero when the run diverged.
+    """
+    n = S.shape[1]
+    T = slots.shape[0]
+    D = slots.shape[1]
+    J = np.zeros((n, T))
+    bv = np.empty(base.shape[0])
+    for k in range(p, n):
+        _base_values(S, base, k, bv)
+        acc = 0.0
+        for t in range(T):
+            phi = _term(bv, slots, t)
+            acc += theta[t] * phi
+            J[k, t] += phi
+            for s in range(D):
+                j = slots[t, s]
+                if j < 0 or base[j, 0] != 0:
+                    continue
+                partial = theta[t]
+                for s2 in range(D):
+                    j2 = slots[t, s2]
+                    if s2 != s and j2 >= 0:
+                        partial *= bv[j2]
+                lag = base[j, 1]
+                for c in range(T):
+                    J[k, c] += partial * J[k - lag, c]
+        if not np.isfinite(acc) or abs(acc) > bound:
+            for kk in range(k, n):
+                for c in range(T):
+                    J[kk, c] = 0.0
+            return J, k
+        S[0, k] = acc
+    return J, -1
+
+
+@njit(cache=True)
+def gram_select(A, n_max, err_tol, colin_tol):  # pragma: no cover - numba
+    """Forward orthogonal least squares (OLS-ERR) term selection on an augmented Gram matrix.
+
+    Parameters
+    ----------
+    A : float64[:, :]
+        ``[[Phi^T Phi, Phi^T y], [y^T Phi, y^T y]]`` with unit diagonal on the candidate block
+        (columns normalised); overwritten.
+    n_max : int
+        Largest number of terms to select.
+    err_tol : float
+        Stop when the unexplained fraction ``||r||^2 / ||y||^2`` falls below it.
+    colin_tol : float
+        A candidate is skipped when its part orthogonal to the selected terms has squared norm
+        below ``colin_tol`` (relative to its own norm: near-collinear).
+
+    Returns
+    -------
+    order : int64[:]
+        Selected candidate indices in selection order.
+    err : float64[:]
+        Error reduction ratio of each selected term (fraction of ``||y||^2`` it explains).
+    """
+    M = A.shape[0] - 1
+    yy0 = A[M, M]
+    chosen = np.zeros(M, dtype=np.bool_)
+    order = np.empty(n_max, dtype=np.int64)
+    err = np.empty(n_max)
+    n_sel = 0
+    while n_sel < n_max:
+        if A[M, M] <= err_tol * yy0:
+            break
+        best = -1
+        best_err = 0.0
+        for j in range(M):
+            if chosen[j] or A[j, j] <= colin_tol:
+                continue
+            e = A[j, M] * A[j, M] / (A[j, j] * yy0)
+            if e > best_err:
+                best_err = e
+                best = j
+        if best < 0:
+            break
+        chosen[best] = True
+        order[n_sel] = best
+        err[n_sel] = best_err
+        n_sel += 1
+        piv = A[best, best]
+        col = A[:, best].copy()
+        for r in range(M + 1):
+            if r != best and (r == M or not chosen[r]):
+                f = col[r] / piv
+                for c in range(M + 1):
+                    if c == M or not chosen[c]:
+                        A[r, c] -= f * col[c]
+    return order[:n_sel], err[:n_sel]

@@ -1,0 +1,542 @@
+"""Polynomial NARX damper model: a black-box peer of the paper's models (kind ``"narx"``).
+
+Model, at its own sampling rate ``fs`` and in scaled units (``f = F / F_s``, ``x / x_s``,
+``v / v_s``, ``e / e_s`` with ``e`` the electrical input, plus ``w = tanh(v / v0)``)::
+
+    f[k] = sum_t theta_t * phi_t[k]
+
+where each regressor ``phi_t`` is a monomial of total degree <= ``degree`` (the constant
+included) in the base variables ``f[k-1..k-n_a]`` and ``x, v, e, w`` at lags ``0..n_b``; at most
+``output_degree`` of its factors are past forces (``1``: the force enters affinely, which keeps
+the free run far better behaved than powers of the fed-back force).
+
+Identification (:class:`NARXEstimator`):
+
+1. Equation error, term selection: every candidate monomial is evaluated on the measured
+   signals of each record (records stay separate; each record's squared errors are weighted by
+   ``1 / (N var(F))`` so records count equally, as in the mean ESR). Forward orthogonal least squares with the
+   error reduction ratio (OLS-ERR, Billings' forward regression) picks the terms one at a time,
+   each time the candidate whose part orthogonal to the terms already chosen explains the most of
+   the force, until ``n_terms`` terms or until the unexplained fraction falls below ``err_tol``.
+   The selection runs on the column-normalised Gram matrix, so the candidate matrix is never
+   held in memory; near-collinear candidates are skipped.
+2. Equation error, coefficients: linear least squares on the chosen columns (SVD), with a
+   condition-number check (:class:`~mrdamper.errors.IdentificationError` above ``cond_max``).
+3. Optional output-error refinement (``refine=True``): the coefficients of the chosen terms are
+   refined by minimising the weighted free-run (simulation) error of every training record with a
+   trust-region least-squares solver and exact sensitivities from the kernel. The refined
+   coefficients are kept only if they lower the free-run training cost.
+
+Free run: the first ``p = max(n_a, n_b)`` samples of a record's force (at the model rate) are the
+initial conditions; from sample ``p`` on the measured force is never used. A record at another
+rate is resampled to ``fs`` on the way in and the prediction interpolated back.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+import time
+import warnings
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from scipy import optimize
+from scipy import signal as sps
+
+from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
+from mrdamper.models import _narx_kernels as K
+from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.registry import register
+
+__all__ = ["NARXEstimator", "NARXModel", "candidate_structure"]
+
+#: Signal rows of the kernels' ``S`` array (``e`` is the model's electrical input).
+SIGNALS: tuple[str, ...] = ("F", "x", "v", "e", "tanh_v")
+_BLOCK = 2048
+
+
+# ----------------------------------------------------------------------------- structure
+def _int_setting(name: str, value: Any, lo: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise DataValidationError(name, f"expected an integer >= {lo}, got {value!r}")
+    return int(value)
+
+
+def candidate_structure(
+    n_a: int, n_b: int, degree: int, output_degree: int = 1, use_tanh: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """Base variables and every candidate monomial of a polynomial NARX model.
+
+    Parameters
+    ----------
+    n_a : int
+        Number of past forces ``F[k-1..k-n_a]`` (>= 1).
+    n_b : int
+        Largest input lag: x, v, e (and tanh(v / v0)) enter at lags ``0..n_b``.
+    degree : int
+        Largest total degree of a monomial (>= 1).
+    output_degree : int
+        Largest number of past-force factors in a monomial (>= 1).
+    use_tanh : bool
+        Include ``tanh(v / v0)`` at lags ``0..n_b`` among the base variables.
+
+    Returns
+    -------
+    base : ndarray of int64, shape (n_base, 2)
+        ``(signal row, lag)`` of every base variable (rows index :data:`SIGNALS`).
+    slots : ndarray of int64, shape (n_candidates, degree)
+        Base-variable indices of every monomial, ``-1`` for an empty slot; row 0 is the constant.
+    """
+    n_a = _int_setting("n_a", n_a, 1)
+    n_b = _int_setting("n_b", n_b, 0)
+    degree = _int_setting("degree", degree, 1)
+    output_degree = _int_setting("output_degree", output_degree, 1)
+    base = [(0, lag) for lag in range(1, n_a + 1)]
+    for sig in (1, 2, 3, 4) if use_tanh else (1, 2, 3):
+        base += [(sig, lag) for lag in range(n_b + 1)]
+    slots = []
+    for d in range(degree + 1):
+        for combo in itertools.combinations_with_replacement(range(len(base)), d):
+            if sum(1 for j in combo if base[j][0] == 0) <= output_degree:
+                slots.append(list(combo) + [-1] * (degree - d))
+    return np.array(base, dtype=np.int64), np.array(slots, dtype=np.int64).reshape(-1, degree)
+
+
+def _to_rate(y: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
+    """Resample ``y`` from ``fs_in`` to ``fs_out`` [Hz] (polyphase, anti-aliased, for integer ratios)."""
+    if abs(fs_in - fs_out) <= 1e-9 * fs_out:
+        return np.asarray(y, dtype=np.float64)
+    q = fs_in / fs_out
+    if abs(q - round(q)) < 1e-9 and round(q) >= 2:
+        return np.asarray(sps.resample_poly(y, 1, round(q), padtype="line"), dtype=np.float64)
+    n = int(np.floor((y.size - 1) * fs_out / fs_in + 1e-9)) + 1
+    return np.interp(np.arange(n) / fs_out, np.arange(y.size) / fs_in, y)
+
+
+# ----------------------------------------------------------------------------- fitted model
+@dataclass(frozen=True, kw_only=True, eq=False)
+class NARXModel(FittedModel):
+    """Identified polynomial NARX damper model (immutable).
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate the discrete model runs at [Hz].
+    base : ndarray of int, shape (n_base, 2)
+        Base variables as ``(signal row, lag)``; signal rows index
+        ``("F", "x", "v", "e", "tanh_v")``, lags in samples at ``fs``.
+    terms : ndarray of int, shape (n_terms, degree)
+        Base-variable indices of each selected monomial, ``-1`` for an empty slot.
+    theta : ndarray of float, shape (n_terms,)
+        Coefficients in scaled units (see :meth:`coefficients` for SI units).
+    scales : ndarray of float, shape (5,)
+        Scale of each signal row: F [N], x [m], v [m/s], e [A] or [V], tanh_v [-] (1).
+    v0 : float
+        Velocity of the ``tanh(v / v0)`` feature [m/s].
+    force_bound : float
+        Free-run force magnitude regarded as divergence [N].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mrdamper.data import Experiment
+    >>> t = np.arange(200) * 1e-3
+    >>> v = 0.1 * np.sin(2 * np.pi * 5 * t)
+    >>> e = Experiment(t=t, x=0 * t, v=v, F=0 * t, i=0 * t + 0.5, name="demo")
+    >>> m = NARXModel(fs=1000.0, base=[[0, 1], [2, 0]], terms=[[0], [1]], theta=[0.5, 1.0],
+    ...               scales=[1000.0, 1.0, 0.1, 1.0, 1.0], v0=0.01, input_range=(0, 1))
+    >>> m.term_names
+    ['F[k-1]', 'v[k]']
+    >>> F = m.predict(e)  # F[k] = 0.5 F[k-1] + 1000 N / (0.1 m/s) * v[k]
+    >>> bool(np.isclose(F[10], 0.5 * F[9] + 1e4 * v[10]))
+    True
+    """
+
+    kind: ClassVar[str] = "narx"
+
+    fs: float
+    base: np.ndarray
+    terms: np.ndarray
+    theta: np.ndarray
+    scales: np.ndarray
+    v0: float = 1.0
+    force_bound: float = 1e9
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        set_ = object.__setattr__
+        base = np.array(self.base, dtype=np.int64).reshape(-1, 2)
+        terms = np.array(self.terms, dtype=np.int64)
+        theta = np.array(self.theta, dtype=np.float64)
+        scales = np.array(self.scales, dtype=np.float64)
+        if terms.ndim != 2 or terms.shape[0] == 0:
+            raise DataValidationError("terms", f"expected a 2-D (n_terms, degree) array, got shape {terms.shape}")
+        if theta.shape != (terms.shape[0],):
+            raise DataValidationError("theta", f"expected shape ({terms.shape[0]},) to match terms, got {theta.shape}")
+        if scales.shape != (len(SIGNALS),) or not np.all(np.isfinite(scales)) or np.any(scales <= 0):
+            raise DataValidationError("scales", f"expected {len(SIGNALS)} positive finite scales, got {scales.tolist()}")
+        if not np.all(np.isfinite(theta)):
+            raise DataValidationError("theta", "expected finite coefficients")
+        if base.size and (np.any(base[:, 0] < 0) or np.any(base[:, 0] >= len(SIGNALS)) or np.any(base[:, 1] < 0)):
+            raise DataValidationError("base", f"expected (signal 0..{len(SIGNALS) - 1}, lag >= 0) rows, got {base.tolist()}")
+        if base.size and np.any((base[:, 0] == 0) & (base[:, 1] < 1)):
+            raise DataValidationError("base", "past forces need a lag >= 1 (F[k] cannot explain itself)")
+        if np.any(terms < -1) or np.any(terms >= base.shape[0]):
+            raise DataValidationError("terms", f"expected indices -1..{base.shape[0] - 1}, got {terms.tolist()}")
+        for name in ("fs", "v0", "force_bound"):
+            val = getattr(self, name)
+            if isinstance(val, bool) or not isinstance(val, (int, float, np.integer, np.floating)) or not float(val) > 0 or not math.isfinite(float(val)):
+                raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
+            set_(self, name, float(val))
+        if self.input not in ("i", "voltage"):
+            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+        for name, arr in (("base", base), ("terms", terms), ("theta", theta), ("scales", scales)):
+            arr.setflags(write=False)
+            set_(self, name, arr)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal when every field except provenance is equal (arrays compared element-wise)."""
+        if type(other) is not type(self):
+            return NotImplemented
+        for f in dataclasses.fields(self):
+            if f.name == "provenance":
+                continue
+            a, b = getattr(self, f.name), getattr(other, f.name)
+            if isinstance(a, np.ndarray):
+                if a.dtype != b.dtype or not np.array_equal(a, b):
+                    return False
+            elif a != b:
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+    # --- structure -----------------------------------------------------------------------
+    @property
+    def max_lag(self) -> int:
+        """Number of initial samples ``p`` (largest lag, at least 1) at the model rate."""
+        return max(1, int(self.base[:, 1].max()) if self.base.size else 1)
+
+    def _base_name(self, j: int) -> str:
+        sig, lag = int(self.base[j, 0]), int(self.base[j, 1])
+        name = self.input if sig == 3 else SIGNALS[sig]
+        return f"{name}[k-{lag}]" if lag else f"{name}[k]"
+
+    @property
+    def term_names(self) -> list[str]:
+        """Readable names of the selected monomials (``"1"`` for the constant)."""
+        return ["*".join(self._base_name(int(j)) for j in row if j >= 0) or "1" for row in self.terms]
+
+    def coefficients(self) -> dict[str, float]:
+        """Coefficient of each monomial in SI units (force [N] from unscaled signals)."""
+        out = {}
+        for name, row, th in zip(self.term_names, self.terms, self.theta, strict=True):
+            denom = 1.0
+            for j in row:
+                if j >= 0:
+                    denom *= self.scales[self.base[j, 0]]
+            out[name] = float(th * self.scales[0] / denom)
+        return out
+
+    # --- signals -------------------------------------------------------------------------
+    def scaled_signals(self, experiment: Experiment) -> np.ndarray:
+        """Scaled signal rows ``(F, x, v, e, tanh_v)`` at the model rate, shape (5, N)."""
+        if not isinstance(experiment, Experiment):
+            raise DataValidationError("experiment", f"expected an Experiment, got {type(experiment).__name__}")
+        e = self.electrical_input(experiment)
+        rows = [_to_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)
+                for a in (experiment.F, experiment.x, experiment.v, e)]
+        rows.append(np.tanh(rows[2] / self.v0))
+        S = np.vstack(rows)
+        S /= self.scales[:, None]
+        if S.shape[1] <= self.max_lag:
+            raise DataValidationError(
+                "F", f"record {experiment.name!r} has {S.shape[1]} samples at {self.fs:g} Hz; "
+                f"expected more than the {self.max_lag} initial-condition samples")
+        return np.ascontiguousarray(S)
+
+    def _back(self, f: np.ndarray, experiment: Experiment) -> np.ndarray:
+        F = f * self.scales[0]
+        if abs(experiment.fs - self.fs) <= 1e-9 * self.fs:
+            return F
+        return np.interp(np.arange(experiment.n) * experiment.dt, np.arange(F.size) / self.fs, F)
+
+    def predict(self, experiment: Experiment) -> np.ndarray:
+        """Free-run force [N]: the measured force sets only the first ``max_lag`` samples.
+
+        Raises
+        ------
+        SimulationDivergedError
+            If the force becomes non-finite or exceeds ``force_bound`` (sample at the model rate).
+        DataValidationError
+            If the record lacks the model's electrical input or is too short.
+        """
+        S = self.scaled_signals(experiment)
+        bound = self.force_bound / self.scales[0]
+        bad = K.free_run(S, self.base, self.terms, self.theta, self.max_lag, bound)
+        if bad >= 0:
+            raise SimulationDivergedError(
+                self.kind, int(bad),
+                f"|F| exceeded {self.force_bound:.3g} N or became non-finite in record "
+                f"{experiment.name!r} (model rate {self.fs:g} Hz)")
+        return self._back(S[0], experiment)
+
+    def one_step_predict(self, experiment: Experiment) -> np.ndarray:
+        """One-step-ahead force [N]: past forces are the measured ones (equation error view)."""
+        S = self.scaled_signals(experiment)
+        p = self.max_lag
+        Phi = np.empty((S.shape[1] - p, self.terms.shape[0]))
+        K.fill_candidates(S, self.base, self.terms, p, S.shape[1], Phi)
+        f = S[0].copy()
+        f[p:] = Phi @ self.theta
+        return self._back(f, experiment)
+
+
+# ----------------------------------------------------------------------------- estimator
+@dataclass
+class NARXEstimator(Estimator):
+    """Identify a :class:`NARXModel` (settings only; see the module docstring for the method).
+
+    Parameters
+    ----------
+    input : {"i", "voltage"}
+        Electrical input channel.
+    n_a : int
+        Number of past forces.
+    n_b : int
+        Largest lag of x, v, e and tanh(v / v0) (present value included).
+    degree : int
+        Largest total degree of a monomial.
+    output_degree : int
+        Largest number of past-force factors in a monomial.
+    use_tanh : bool
+        Add ``tanh(v / v0)`` features.
+    v0 : float or None
+        Velocity of the tanh feature [m/s]; None: 5 % of the largest training |v|.
+    n_terms : int
+        Largest number of selected terms.
+    err_tol : float
+        Stop selecting when the unexplained (one-step) fraction of the force falls below it [-].
+    colin_tol : float
+        Candidates whose part orthogonal to the chosen terms keeps less than this fraction of
+        their squared norm are skipped [-].
+    refine : bool
+        Refine the coefficients on the free-run (output) error of the training records.
+    refine_max_nfev : int
+        Budget of residual evaluations of the refinement.
+    fs : float or None
+        Model rate [Hz]; None: the lowest training record rate.
+    cond_max : float
+        Largest accepted condition number of the chosen (normalised) regression matrix [-].
+    bound_factor : float
+        Free-run divergence bound as a multiple of the largest training |F| [-].
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Range policy of the fitted model.
+    """
+
+    kind: ClassVar[str] = "narx"
+
+    input: Literal["i", "voltage"] = "i"
+    n_a: int = 2
+    n_b: int = 1
+    degree: int = 3
+    output_degree: int = 1
+    use_tanh: bool = True
+    v0: float | None = None
+    n_terms: int = 12
+    err_tol: float = 1e-10
+    colin_tol: float = 1e-8
+    refine: bool = True
+    refine_max_nfev: int = 40
+    fs: float | None = None
+    cond_max: float = 1e8
+    bound_factor: float = 10.0
+    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+
+    def _check(self) -> None:
+        if self.input not in ("i", "voltage"):
+            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+        _int_setting("n_terms", self.n_terms, 1)
+        _int_setting("refine_max_nfev", self.refine_max_nfev, 1)
+        for name in ("err_tol", "colin_tol"):
+            val = getattr(self, name)
+            if not isinstance(val, (int, float)) or isinstance(val, bool) or not 0 <= val < 1:
+                raise DataValidationError(name, f"expected a number in [0, 1), got {val!r}")
+        for name in ("v0", "fs", "cond_max", "bound_factor"):
+            val = getattr(self, name)
+            if val is None and name in ("v0", "fs"):
+                continue
+            if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val) or val <= 0:
+                raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
+        if self.bound_factor <= 1:
+            raise DataValidationError("bound_factor", f"expected > 1, got {self.bound_factor!r}")
+
+    def fit(self, data: Experiment | Iterable[Experiment]) -> NARXModel:
+        """Identify the model from one record or several (each keeps its initial conditions).
+
+        Raises
+        ------
+        DataValidationError
+            Bad settings, a missing channel, a constant-force or too-short record.
+        IdentificationError
+            Fewer equations than candidates, nothing selectable, or ill-conditioned regression.
+        """
+        t_start = time.perf_counter()
+        self._check()
+        exps = self._as_set(data)
+        base, cand = candidate_structure(self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh)
+        fs = float(self.fs) if self.fs is not None else min(e.fs for e in exps)
+        e_all = np.concatenate([e.electrical(self.input) for e in exps])
+        v_max = max(float(np.max(np.abs(e.v))) for e in exps)
+        v0 = float(self.v0) if self.v0 is not None else 0.05 * v_max
+        if not v0 > 0:
+            raise DataValidationError("v", "every training record has zero velocity; expected motion")
+        F_max = max(float(np.max(np.abs(e.F))) for e in exps)
+        raw = [F_max] + [max(float(np.max(np.abs(getattr(e, c) if c != "e" else e.electrical(self.input))))
+                             for e in exps) for c in ("x", "v", "e")] + [1.0]
+        scales = np.array([s if s > 0 else 1.0 for s in raw])
+        probe = NARXModel(
+            fs=fs, base=base, terms=cand[:1], theta=np.zeros(1), scales=scales, v0=v0,
+            force_bound=self.bound_factor * max(F_max, 1e-300), input=self.input,
+            input_range=(float(e_all.min()), float(e_all.max())), range_policy="ignore")
+        p = probe.max_lag
+        records, weights = [], []
+        for e in exps:
+            S = probe.scaled_signals(e)
+            sd = float(np.std(S[0, p:]))
+            if sd == 0.0:
+                raise DataValidationError("F", f"record {e.name!r} has constant force; expected a moving damper")
+            records.append(S)
+            weights.append(1.0 / (sd * sd * (S.shape[1] - p)))
+        n_eq = sum(S.shape[1] - p for S in records)
+        if n_eq <= cand.shape[0]:
+            raise IdentificationError(
+                f"narx: {n_eq} equations for {cand.shape[0]} candidate terms; expected more "
+                "samples (longer records) or a smaller structure (n_a, n_b, degree)")
+        order, err = self._select(records, weights, base, cand, p)
+        terms = cand[order]
+        theta, cond = self._least_squares(records, weights, base, terms, p)
+        model = _replace(probe, terms=terms, theta=theta, range_policy=self.range_policy)
+        cost_ls = _free_run_cost(model, records, weights, p)
+        cost, nfev, refined = cost_ls, 0, False
+        if self.refine:
+            theta_r, cost_r, nfev = self._refine(model, records, weights, p)
+            if cost_r < cost_ls:
+                model, cost, refined = _replace(model, theta=theta_r), cost_r, True
+        prov = {
+            "method": "OLS-ERR forward selection + least squares" + (" + output-error refinement" if refined else ""),
+            "records": [e.name for e in exps],
+            "n_equations": int(n_eq), "n_candidates": int(cand.shape[0]),
+            "settings": {"n_a": self.n_a, "n_b": self.n_b, "degree": self.degree,
+                         "output_degree": self.output_degree, "use_tanh": self.use_tanh,
+                         "n_terms": self.n_terms, "refine": self.refine},
+            "err": [float(x) for x in err], "err_total": float(np.sum(err)),
+            "cond": float(cond), "free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost),
+            "refined": refined, "refine_nfev": int(nfev),
+            "fit_time_s": time.perf_counter() - t_start,
+        }
+        return _replace(model, provenance=prov)
+
+    # --- steps ---------------------------------------------------------------------------
+    def _select(self, records: list[np.ndarray], weights: list[float], base: np.ndarray,
+                cand: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+        """OLS-ERR selection on the weighted, column-normalised augmented Gram matrix."""
+        M = cand.shape[0]
+        A = np.zeros((M + 1, M + 1))
+        blk = np.empty((_BLOCK, M + 1))
+        for S, w in zip(records, weights, strict=True):
+            sw = math.sqrt(w)
+            for k0 in range(p, S.shape[1], _BLOCK):
+                k1 = min(k0 + _BLOCK, S.shape[1])
+                B = blk[: k1 - k0]
+                K.fill_candidates(S, base, cand, k0, k1, B[:, :M])
+                B[:, M] = S[0, k0:k1]
+                B *= sw
+                A += B.T @ B
+        d = np.sqrt(np.diag(A)).copy()
+        usable = d[:M] > 0
+        d[d == 0] = 1.0
+        A /= d[:, None] * d[None, :]
+        A[~np.append(usable, True), :] = 0.0  # constant-zero candidates: never selectable
+        order, err = K.gram_select(A, min(int(self.n_terms), M), float(self.err_tol), float(self.colin_tol))
+        if order.size == 0:
+            raise IdentificationError("narx: no candidate term explains the force (all collinear or zero)")
+        return np.asarray(order), np.asarray(err)
+
+    def _least_squares(self, records: list[np.ndarray], weights: list[float], base: np.ndarray,
+                       terms: np.ndarray, p: int) -> tuple[np.ndarray, float]:
+        rows, rhs = [], []
+        for S, w in zip(records, weights, strict=True):
+            Phi = np.empty((S.shape[1] - p, terms.shape[0]))
+            K.fill_candidates(S, base, terms, p, S.shape[1], Phi)
+            rows.append(Phi * math.sqrt(w))
+            rhs.append(S[0, p:] * math.sqrt(w))
+        X, y = np.vstack(rows), np.concatenate(rhs)
+        norms = np.linalg.norm(X, axis=0)
+        Xn = X / norms
+        coef, _, rank, sv = np.linalg.lstsq(Xn, y, rcond=None)
+        cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
+        if rank < X.shape[1] or cond > self.cond_max:
+            raise IdentificationError(
+                f"narx: regression of the {X.shape[1]} selected terms is ill-conditioned "
+                f"(condition number {cond:.3g}, expected <= cond_max={self.cond_max:g}); "
+                "raise colin_tol or lower n_terms")
+        return coef / norms, cond
+
+    def _refine(self, model: NARXModel, records: list[np.ndarray], weights: list[float],
+                p: int) -> tuple[np.ndarray, float, int]:
+        bound = model.force_bound / model.scales[0]
+        meas = [S[0].copy() for S in records]
+
+        def residual_and_jac(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            res, jac = [], []
+            for S, f, w in zip(records, meas, weights, strict=True):
+                Sw = S.copy()
+                J, bad = K.free_run_sensitivity(Sw, model.base, model.terms, theta, p, bound)
+                if bad >= 0:
+                    Sw[0, bad:] = np.sign(Sw[0, bad - 1] if bad > 0 else 1.0) * bound
+                sw = math.sqrt(w)
+                res.append(sw * (Sw[0, p:] - f[p:]))
+                jac.append(sw * J[p:])
+            return np.concatenate(res), np.vstack(jac)
+
+        cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+        def evaluate(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            key = theta.tobytes()
+            if key not in cache:
+                cache.clear()
+                cache[key] = residual_and_jac(theta)
+            return cache[key]
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sol = optimize.least_squares(
+                lambda th: evaluate(th)[0], model.theta.copy(), jac=lambda th: evaluate(th)[1],
+                method="trf", x_scale="jac", max_nfev=int(self.refine_max_nfev))
+        theta = np.asarray(sol.x, dtype=np.float64)
+        return theta, _free_run_cost(_replace(model, theta=theta), records, weights, p), int(sol.nfev)
+
+
+def _replace(model: NARXModel, **changes: Any) -> NARXModel:
+    return dataclasses.replace(model, **changes)
+
+
+def _free_run_cost(model: NARXModel, records: list[np.ndarray], weights: list[float], p: int) -> float:
+    """Weighted free-run squared error (sum over records of ESR-like terms); inf if diverged."""
+    bound = model.force_bound / model.scales[0]
+    cost = 0.0
+    for S, w in zip(records, weights, strict=True):
+        Sw = S.copy()
+        if K.free_run(Sw, model.base, model.terms, model.theta, p, bound) >= 0:
+            return math.inf
+        cost += w * float(np.sum((Sw[0, p:] - S[0, p:]) ** 2))
+    return cost
+
+
+register(NARXEstimator, NARXModel)
