@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,10 +18,18 @@ from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_c
 from mrdamper.data.units import to_si
 from mrdamper.errors import DataValidationError
 
-__all__ = ["ReadOptions", "build_experiment", "numeric_column"]
+__all__ = ["ReadOptions", "build_experiment", "existing_file", "numeric_column"]
 
 #: Keyword arguments every file reader accepts (documented in each reader).
 ReadOptions = dict[str, Any]
+
+
+def existing_file(path: str | os.PathLike[str]) -> Path:
+    """Return ``path`` as a Path; raise :class:`FileNotFoundError` if nothing is there."""
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"{p}: no such file")
+    return p
 
 
 def numeric_column(name: str, values: Any, source: str) -> np.ndarray:

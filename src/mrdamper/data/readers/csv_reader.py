@@ -5,13 +5,12 @@ from __future__ import annotations
 import csv
 import os
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
-from mrdamper.data.readers._build import build_experiment
+from mrdamper.data.readers._build import build_experiment, existing_file
 from mrdamper.errors import DataValidationError
 
 __all__ = ["read_csv", "sniff_delimiter"]
@@ -134,9 +133,7 @@ def read_csv(
     >>> from mrdamper.data.readers import read_csv
     >>> e = read_csv("rig.csv", columns={"Force_kN": "F"}, units={"F": "kN", "x": "mm"})  # doctest: +SKIP
     """
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file")
+    p = existing_file(path)
     if p.is_dir():
         raise DataValidationError("path", f"{p} is a directory; use read_directory")
     with p.open("r", encoding="utf-8-sig", errors="replace") as fh:

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
-from mrdamper.data.readers._build import build_experiment
+from mrdamper.data.readers._build import build_experiment, existing_file
 from mrdamper.errors import DataValidationError, MrDamperError
 
 __all__ = ["mat_version", "read_mat"]
@@ -150,9 +150,7 @@ def read_mat(
     MrDamperError
         For a v7.3 file when h5py is not installed (names the ``mat73`` extra).
     """
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file")
+    p = existing_file(path)
     version = mat_version(p)
     if version == "v7.3":
         raw, skipped = _read_v73(p, struct)

@@ -5,11 +5,10 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
-from mrdamper.data.readers._build import build_experiment
+from mrdamper.data.readers._build import build_experiment, existing_file
 from mrdamper.errors import DataValidationError, MrDamperError
 
 __all__ = ["PARQUET_METADATA_KEY", "read_parquet"]
@@ -71,9 +70,7 @@ def read_parquet(
     MrDamperError
         If pyarrow is not installed.
     """
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file")
+    p = existing_file(path)
     pq = _pyarrow()
     try:
         table = pq.read_table(p)
