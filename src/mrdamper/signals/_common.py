@@ -8,7 +8,19 @@ import numpy as np
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["SeedLike", "as_rng", "as_seed_sequence", "check_positive", "check_range", "child_seeds", "hold_samples", "n_samples", "time_grid"]
+__all__ = [
+    "SeedLike",
+    "as_rng",
+    "as_seed_sequence",
+    "check_int_at_least",
+    "check_positive",
+    "check_range",
+    "child_seeds",
+    "hold_samples",
+    "n_samples",
+    "sample_grid",
+    "time_grid",
+]
 
 #: What a ``seed`` argument accepts: a non-negative int or a :class:`numpy.random.SeedSequence`.
 SeedLike = int | np.integer | np.random.SeedSequence
@@ -35,6 +47,13 @@ def check_range(name: str, low: float, high: float, unit: str) -> tuple[float, f
     return lo, hi
 
 
+def check_int_at_least(name: str, value: int, minimum: int) -> int:
+    """Return ``value`` as int or raise naming ``name`` if it is not an integer >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise DataValidationError(name, f"expected an int >= {minimum}, got {value!r}")
+    return int(value)
+
+
 def n_samples(fs: float, duration: float) -> int:
     """Number of samples of a record of ``duration`` [s] sampled at ``fs`` [Hz].
 
@@ -49,6 +68,11 @@ def n_samples(fs: float, duration: float) -> int:
             "duration", f"{duration:g} s at fs={fs:g} Hz gives {n} sample(s); at least 2 are needed"
         )
     return n
+
+
+def sample_grid(fs: float, duration: float) -> tuple[int, float]:
+    """Validated sample count (:func:`n_samples`) and sampling rate ``fs`` [Hz] as a float."""
+    return n_samples(fs, duration), check_positive("fs", fs, "Hz")
 
 
 def time_grid(fs: float, duration: float) -> np.ndarray:

@@ -11,11 +11,10 @@ import numpy as np
 
 from mrdamper.signals._common import (
     SeedLike,
-    check_positive,
     check_range,
     child_seeds,
     hold_samples,
-    n_samples,
+    sample_grid,
 )
 from mrdamper.signals.prbs import mls, prbs_order_for
 
@@ -68,8 +67,7 @@ def aprbs(
     >>> bool(i.min() >= 0.0 and i.max() <= 1.0)
     True
     """
-    n = n_samples(fs, duration)
-    fs = check_positive("fs", fs, "Hz")
+    n, fs = sample_grid(fs, duration)
     lo, hi = check_range("low/high", low, high, "unit of the signal")
     hold = hold_samples("min_hold", min_hold, fs)
     n_clocks = -(-n // hold)

@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from mrdamper.errors import DataValidationError
 from mrdamper.signals._common import (
     SeedLike,
-    check_positive,
+    check_int_at_least,
     check_range,
     child_seeds,
     hold_samples,
-    n_samples,
+    sample_grid,
 )
 from mrdamper.signals.prbs import mls, prbs_order_for
 
@@ -66,12 +65,10 @@ def icps(
     >>> set(i.tolist()) <= {0.0, 0.25, 0.5, 0.75, 1.0}
     True
     """
-    n = n_samples(fs, duration)
-    fs = check_positive("fs", fs, "Hz")
+    n, fs = sample_grid(fs, duration)
     lo, hi = check_range("low/high", low, high, "A")
     hold = hold_samples("clock_period", clock_period, fs)
-    if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) or n_levels < 2:
-        raise DataValidationError("n_levels", f"expected an int >= 2, got {n_levels!r}")
+    n_levels = check_int_at_least("n_levels", n_levels, 2)
     n_clocks = -(-n // hold)
     bits_seed, level_seed = child_seeds(seed, 2)
     if n_levels == 2:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals._common import SeedLike, as_rng, check_positive, hold_samples, n_samples
+from mrdamper.signals._common import SeedLike, as_rng, hold_samples, sample_grid
 from mrdamper.signals._signal_kernels import lfsr_bits
 
 __all__ = ["PRIMITIVE_TAPS", "mls", "prbs", "prbs_order_for"]
@@ -150,8 +150,7 @@ def prbs(
     >>> i.shape, sorted(set(i.tolist()))
     ((2000,), [0.0, 1.0])
     """
-    n = n_samples(fs, duration)
-    fs = check_positive("fs", fs, "Hz")
+    n, fs = sample_grid(fs, duration)
     hold = hold_samples("clock_period", clock_period, fs)
     lo, hi = (float(levels[0]), float(levels[1]))
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo == hi:

@@ -40,7 +40,7 @@ from mrdamper.signals._common import (
     check_positive,
     check_range,
     child_seeds,
-    n_samples,
+    sample_grid,
 )
 
 __all__ = [
@@ -233,8 +233,7 @@ def road_profile(
     >>> round(float(abs(x).max()), 6)
     0.018
     """
-    n = n_samples(fs, duration)
-    fs = check_positive("fs", fs, "Hz")
+    n, fs = sample_grid(fs, duration)
     fmin, fmax = _check_band(fs, min_frequency, max_frequency)
     v = check_positive("speed", speed, "m/s")
     x = _synthesise(n, fs, _gd0(road_class), v, fmin, fmax, as_rng(seed))
@@ -289,8 +288,7 @@ def long_road_profile(
     >>> x.size
     120000
     """
-    n = n_samples(fs, duration)
-    fs = check_positive("fs", fs, "Hz")
+    n, fs = sample_grid(fs, duration)
     fmin, fmax = _check_band(fs, min_frequency, max_frequency)
     sec = check_positive("section_duration", section_duration, "s")
     vlo, vhi = check_range("speed_range", speed_range[0], speed_range[1], "m/s")

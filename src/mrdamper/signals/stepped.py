@@ -7,7 +7,7 @@ from typing import Literal
 import numpy as np
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals._common import check_range, n_samples
+from mrdamper.signals._common import check_int_at_least, check_range, n_samples
 
 __all__ = ["StepDirection", "stepped_current"]
 
@@ -52,8 +52,7 @@ def stepped_current(
     """
     n = n_samples(fs, duration)
     lo, hi = check_range("low/high", low, high, "A")
-    if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) or n_levels < 2:
-        raise DataValidationError("n_levels", f"expected an int >= 2, got {n_levels!r}")
+    n_levels = check_int_at_least("n_levels", n_levels, 2)
     levels = np.linspace(lo, hi, int(n_levels))
     if direction == "up":
         steps = levels
