@@ -115,6 +115,40 @@ def _clip_to_measured(ax: Any, F: np.ndarray, preds: Mapping[str, np.ndarray], m
     return beyond
 
 
+def _measured_and_models(
+    experiment: Experiment,
+    predictions: Mapping[str, Any],
+    abscissa: np.ndarray,
+    *,
+    ax: Any,
+    window: Sequence[float] | None,
+    clip_margin: float | None,
+    figsize: tuple[float, float],
+    widths: tuple[float, float],
+    alpha: float | None = None,
+) -> Any:
+    """Draw the measured force, then every model's force, against ``abscissa`` (one per sample).
+
+    Shared by :func:`plot_force_time` (abscissa ``t``) and :func:`plot_fv_models` (``v``);
+    ``widths`` are the line widths of the measured and the model lines [pt]. Sets the force
+    label and the grid; the caller adds the abscissa label, the title and the legend.
+    """
+    from mrdamper.plotting._common import model_color, new_axes, window_mask
+
+    preds = _predictions(predictions, experiment.n)
+    mask = window_mask(experiment.t, window)
+    ax = new_axes(ax, figsize)
+    xs = abscissa[mask]
+    ax.plot(xs, experiment.F[mask], lw=widths[0], color="0.15", label="measured")
+    for k, (label, F) in enumerate(preds.items()):
+        ax.plot(xs, F[mask], lw=widths[1], color=model_color(label, k), label=label, alpha=alpha)
+    if clip_margin is not None:
+        _clip_to_measured(ax, experiment.F, preds, mask, clip_margin)
+    ax.set_ylabel("F [N]")
+    ax.grid(True, lw=0.3)
+    return ax
+
+
 def plot_force_time(
     experiment: Experiment,
     predictions: Mapping[str, Any],
@@ -145,21 +179,12 @@ def plot_force_time(
     Axes
         Lines: ``measured`` then one per model, labelled by model.
     """
-    from mrdamper.plotting._common import model_color, new_axes, window_mask
-
-    preds = _predictions(predictions, experiment.n)
-    mask = window_mask(experiment.t, window)
-    ax = new_axes(ax, (9, 4))
-    t = experiment.t[mask]
-    ax.plot(t, experiment.F[mask], lw=1.6, color="0.15", label="measured")
-    for k, (label, F) in enumerate(preds.items()):
-        ax.plot(t, F[mask], lw=0.8, color=model_color(label, k), label=label)
-    if clip_margin is not None:
-        _clip_to_measured(ax, experiment.F, preds, mask, clip_margin)
+    ax = _measured_and_models(
+        experiment, predictions, experiment.t, ax=ax, window=window, clip_margin=clip_margin,
+        figsize=(9, 4), widths=(1.6, 0.8),
+    )
     ax.set_xlabel("t [s]")
-    ax.set_ylabel("F [N]")
     ax.set_title(f"Measured and computed damper force ({experiment.name})")
-    ax.grid(True, lw=0.3)
     ax.legend(loc="upper right", fontsize=7, ncol=2)
     return ax
 
@@ -192,20 +217,11 @@ def plot_fv_models(
     Axes
         Lines: ``measured`` then one per model.
     """
-    from mrdamper.plotting._common import model_color, new_axes, window_mask
-
-    preds = _predictions(predictions, experiment.n)
-    mask = window_mask(experiment.t, window)
-    ax = new_axes(ax, (6, 4.8))
-    v = experiment.v[mask]
-    ax.plot(v, experiment.F[mask], lw=1.4, color="0.15", label="measured")
-    for k, (label, F) in enumerate(preds.items()):
-        ax.plot(v, F[mask], lw=0.7, color=model_color(label, k), label=label, alpha=0.85)
-    if clip_margin is not None:
-        _clip_to_measured(ax, experiment.F, preds, mask, clip_margin)
+    ax = _measured_and_models(
+        experiment, predictions, experiment.v, ax=ax, window=window, clip_margin=clip_margin,
+        figsize=(6, 4.8), widths=(1.4, 0.7), alpha=0.85,
+    )
     ax.set_xlabel("v [m/s]")
-    ax.set_ylabel("F [N]")
     ax.set_title(f"F-v plane, measured and computed ({experiment.name})")
-    ax.grid(True, lw=0.3)
     ax.legend(loc="upper left", fontsize=7, ncol=2)
     return ax
