@@ -15,6 +15,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
+from mrdamper.cli._records import read_paths
 from mrdamper.data.experiment import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError
 
@@ -26,8 +27,6 @@ CURRENT_RANGE = (0.0, 4.0)
 MIN_FORCE_STD = 1.0
 #: Most distinct values for an electrical input to be shown as levels rather than a range.
 MAX_LEVELS = 8
-
-_ANY_RECORD_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
 
 
 def _longest_run(mask: np.ndarray) -> int:
@@ -108,24 +107,6 @@ def _parse_pairs(items: list[str] | None, option: str) -> dict[str, str]:
             raise DataValidationError(option, f"expected KEY=VALUE, got {item!r}")
         out[key.strip()] = value.strip()
     return out
-
-
-def _load(paths: list[Path], pattern: str | None, read_kw: dict[str, Any]) -> list[Experiment]:
-    from mrdamper.data.readers import DEFAULT_PATTERN, parse_file_name, read_directory, read_file
-
-    records: list[Experiment] = []
-    for p in paths:
-        if not p.exists():
-            raise FileNotFoundError(f"{p}: no such file or folder")
-        if p.is_dir():
-            pat = pattern
-            if pat is None:
-                matches = any(parse_file_name(f.name, DEFAULT_PATTERN) for f in p.iterdir())
-                pat = DEFAULT_PATTERN if matches else _ANY_RECORD_FILE
-            records.extend(read_directory(p, pat, **read_kw))
-        else:
-            records.append(read_file(p, **read_kw))
-    return records
 
 
 def _example() -> list[Experiment]:
@@ -229,7 +210,7 @@ def info(
             read_kw["columns"] = _parse_pairs(columns, "column")
         if fs is not None:
             read_kw["fs"] = fs
-        records = _load(list(paths), pattern, read_kw)
+        records = read_paths(list(paths), pattern, read_kw)
         title = ", ".join(str(p) for p in paths)
     rows = [summarize(e) for e in records]
     if as_json:

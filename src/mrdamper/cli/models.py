@@ -21,6 +21,7 @@ from typing import Annotated, Any, cast
 
 import typer
 
+from mrdamper.cli._records import read_paths
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.base import RangePolicy
@@ -28,8 +29,6 @@ from mrdamper.models.registry import get_estimator, load_model
 
 __all__ = ["estimator_settings", "parse_settings", "read_records", "register"]
 
-#: Regex for any record file in a folder (used when the sine-record pattern matches nothing).
-_ANY_RECORD_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
 _RANGE_POLICIES = ("error", "warn", "clip", "ignore")
 
 
@@ -41,21 +40,7 @@ def read_records(paths: list[Path], pattern: str | None = None, fs: float | None
     it (its named groups become metadata), else every CSV / Parquet / MAT file.
     ``fs`` [Hz] regenerates each record's time base as ``n / fs`` (for rounded time columns).
     """
-    from mrdamper.data.readers import DEFAULT_PATTERN, parse_file_name, read_directory, read_file
-
-    kw: dict[str, Any] = {} if fs is None else {"fs": fs}
-    out: list[Experiment] = []
-    for p in paths:
-        if not p.exists():
-            raise FileNotFoundError(f"{p}: no such file or folder")
-        if p.is_dir():
-            pat = pattern
-            if pat is None:
-                hit = any(parse_file_name(f.name, DEFAULT_PATTERN) for f in p.iterdir())
-                pat = DEFAULT_PATTERN if hit else _ANY_RECORD_FILE
-            out.extend(read_directory(p, pat, **kw))
-        else:
-            out.append(read_file(p, **kw))
+    out = read_paths(paths, pattern, {} if fs is None else {"fs": fs})
     names = [e.name for e in out]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:

@@ -14,6 +14,7 @@ from typing import Any
 
 import typer
 
+from mrdamper.cli._records import ANY_RECORD_FILE
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError, OutputExistsError, SchemaError
 
@@ -25,7 +26,6 @@ QUICK_SCALE = 0.1
 DEMO_OUT = Path("mrdamper-demo")
 #: File names of a design-of-experiments folder (``exp1_rep01.csv``), as ``mrdamper rig doe`` writes.
 DOE_FILE_PATTERN = r"exp(?P<experiment>\d+)_rep(?P<replicate>\d+)\.(csv|parquet)"
-_ANY_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
 
 
 def _headless() -> None:
@@ -90,7 +90,7 @@ def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> Experim
     except DataValidationError as exc:
         if exc.field != "pattern":
             raise
-    return read_directory(path, _ANY_FILE, **read_kw)
+    return read_directory(path, ANY_RECORD_FILE, **read_kw)
 
 
 def guess_protocol(data: ExperimentSet) -> str:
