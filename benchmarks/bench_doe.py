@@ -22,9 +22,9 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from collections.abc import Callable
 
 import numpy as np
+from _timing import best_time
 from scipy import signal as sps
 
 from mrdamper.rig import ServoActuator, VirtualRig, available_reference_dampers, reference_damper
@@ -32,15 +32,6 @@ from mrdamper.rig.doe import TABLE_II, table_ii
 from mrdamper.rig.driver import CurrentDriver
 from mrdamper.signals import mls, road_profile
 from mrdamper.signals.road import ISO_8608_CLASSES, N0
-
-
-def _best(fn: Callable[[], object], repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def _damper():  # type: ignore[no-untyped-def]
@@ -117,32 +108,32 @@ def _prbs_python(order: int, taps: tuple[int, ...], state: int, n_bits: int) -> 
 def part2(fs: float, repeat: int) -> None:
     rows = []
     n30 = int(30 * fs)
-    ours = _best(lambda: road_profile(fs, 30.0, seed=0, max_frequency=5.5, taper=0.0, fill=None,
-                                      road_class="A"), repeat)
-    peer = _best(lambda: _sum_of_cosines(n30, fs, 0.2, 5.5, np.random.default_rng(0)), repeat)
+    ours = best_time(lambda: road_profile(fs, 30.0, seed=0, max_frequency=5.5, taper=0.0, fill=None,
+                                          road_class="A"), repeat)
+    peer = best_time(lambda: _sum_of_cosines(n30, fs, 0.2, 5.5, np.random.default_rng(0)), repeat)
     rows.append(("road profile 30 s (FFT vs sum of cosines)", ours, peer))
 
     x = road_profile(fs, 600.0, seed=1, max_frequency=5.5)
     act = ServoActuator()
     act.track(x[:100], fs)
-    ours = _best(lambda: act.track(x, fs), repeat)
+    ours = best_time(lambda: act.track(x, fs), repeat)
     wn = 2 * np.pi * act.bandwidth
     sys = sps.StateSpace([[0, 1], [-wn * wn, -2 * act.damping * wn]], [[0], [wn * wn]], [[1, 0], [0, 1]], [[0], [0]])
     t = np.arange(x.size) / fs
-    peer = _best(lambda: sps.lsim(sys, x, t, X0=[x[0], 0.0], interp=False), repeat)
+    peer = best_time(lambda: sps.lsim(sys, x, t, X0=[x[0], 0.0], interp=False), repeat)
     rows.append(("actuator 600 s (recursion vs scipy lsim)", ours, peer))
 
     drv = CurrentDriver()
     i = np.clip(np.abs(x) * 50, 0, 1)
     drv.drive(i[:100], fs)
-    ours = _best(lambda: drv.drive(i, fs), repeat)
+    ours = best_time(lambda: drv.drive(i, fs), repeat)
     a = np.exp(-1 / (fs * drv.time_constant))
-    peer = _best(lambda: sps.lfilter([0, 1 - a], [1, -a], i, zi=[a * i[0]])[0], repeat)
+    peer = best_time(lambda: sps.lfilter([0, 1 - a], [1, -a], i, zi=[a * i[0]])[0], repeat)
     rows.append(("driver lag 600 s (recursion vs lfilter)", ours, peer))
 
     mls(16, seed=0, n_bits=10)
-    ours = _best(lambda: mls(16, seed=0, n_bits=65535), repeat)
-    peer = _best(lambda: _prbs_python(16, (16, 15, 13, 4), 1, 65535), repeat)
+    ours = best_time(lambda: mls(16, seed=0, n_bits=65535), repeat)
+    peer = best_time(lambda: _prbs_python(16, (16, 15, 13, 4), 1, 65535), repeat)
     rows.append(("PRBS order 16, one period (numba vs Python)", ours, peer))
 
     print()

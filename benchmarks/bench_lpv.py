@@ -24,6 +24,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from _timing import best_time
 from scipy import signal
 
 from mrdamper.models import _lpv_fit
@@ -33,15 +34,6 @@ N = 1_000_000
 REPEATS = 9
 ALPHA = np.array([[-1.5, 0.10, 0.01], [0.70, -0.05, 0.0], [-0.10, 0.0, 0.0]])
 BETA = np.array([[1.0, 0.5, 0.1], [0.5, 0.1, 0.0], [0.1, 0.0, 0.0]])
-
-
-def _min_time(fn, repeats: int = REPEATS) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def _interleaved(fa, fb, repeats: int = REPEATS) -> tuple[float, float]:
@@ -79,7 +71,7 @@ def bench_least_squares() -> tuple[str, float, float, float, float]:
     starts = np.array([0, N], dtype=np.int64)
     w = np.ones(1)
     _lpv_fit._solve(y[:1000], u[:1000], rho[:1000], np.array([0, 1000], dtype=np.int64), w, 3, 3, False)
-    t_build = _min_time(lambda: K.build_regressors(y, u, rho, starts, w, 3, 3, False), 3)
+    t_build = best_time(lambda: K.build_regressors(y, u, rho, starts, w, 3, 3, False), 3)
     X, t = K.build_regressors(y, u, rho, starts, w, 3, 3, False)
     res: dict[str, np.ndarray] = {}
 

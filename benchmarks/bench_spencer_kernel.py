@@ -16,11 +16,11 @@ Usage::
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from _timing import best_time
 from scipy.integrate import solve_ivp
 
 from mrdamper.data import Experiment
@@ -54,15 +54,6 @@ def peer(model: SpencerModel, exp: Experiment, rtol: float, max_step: float = np
     c0, c1, al = p[0] + p[1] * u, p[3] + p[4] * u, p[7] + p[8] * u
     yd = (al * z + c0 * v + p[2] * (x - y)) / (c0 + c1)
     return c1 * yd + p[5] * (x - p[6]) + p[14]
-
-
-def best_time(fn, repeat: int = 5) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def cases() -> list[tuple[str, SpencerModel, Experiment]]:
