@@ -39,7 +39,7 @@ PROTOCOL_SCHEMA = "mrdamper.protocol"
 PROTOCOL_SCHEMA_VERSION = 1
 
 #: Models run by default, in display order; kinds that are not installed are left out.
-DEFAULT_MODELS: tuple[str, ...] = ("lpv", "p15", "sp1", "sp2", "sp3", "sp4", "lti", "spencer", "bingham")
+DEFAULT_MODELS: tuple[str, ...] = ("lpv", "p15", "sp1", "sp2", "sp3", "sp4", "lti", "spencer", "bingham", "narx")
 
 SplitKind = Literal["fixed", "leave-one-group-out", "time"]
 RangePolicyName = Literal["error", "warn", "clip", "ignore"]
