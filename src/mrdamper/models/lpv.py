@@ -354,7 +354,9 @@ class LPVEstimator(Estimator):
         fs = float(self.fs) if self.fs is not None else rates[0]
         if self.fs is None and len(rates) > 1:
             raise DataValidationError(
-                "fs", f"training records have different sampling rates {rates} Hz; set fs= to the model rate"
+                "fs",
+                f"training records have different sampling rates {rates} Hz; set fs= to the model "
+                f"rate (command line: --set fs={rates[0]:g})",
             )
         raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
         in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
