@@ -1,0 +1,233 @@
+"""Numba kernel of the causal LPV inverse (plain arrays only; see :mod:`mrdamper.control.inverse`).
+
+At sample ``k`` the LPV output is a polynomial in the present scheduling value ``rho[k]`` once
+the past (``y[k-j]``, ``u[k-j]``, j >= 1) is fixed::
+
+    F(rho) = F0 + sum_p c_p rho^p,   c_p = sum_j beta[j-1, p] u[k-j] - alpha[j-1, p] y[k-j]
+
+The kernel picks, in an interval ``[lo_k, hi_k]``: the previous ``rho`` when its force is within
+``tol`` of ``F_desired[k]``; else the exact solution ``F = F_desired`` nearest the previous
+``rho``; else the nearest edge of the band ``|F - F_desired| <= tol``. Solutions are found by
+bisecting (to machine precision) the sign changes on a uniform grid. Without any such ``rho`` the minimum of
+``|F - F_desired|`` lies at an end of the interval or at a stationary point of ``F``; those are
+bisected from the sign changes of ``F'`` on the same grid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["lpv_inverse"]
+
+#: LPV input modes: u = v, continuous reading of eq. 22, literal reading.
+MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
+
+_N_BISECT = 200
+
+
+@njit(cache=True)
+def _poly(c, r):  # pragma: no cover - numba
+    acc = 0.0
+    for p in range(c.size - 1, -1, -1):
+        acc = acc * r + c[p]
+    return acc
+
+
+@njit(cache=True)
+def _dpoly(c, r):  # pragma: no cover - numba
+    acc = 0.0
+    for p in range(c.size - 1, 0, -1):
+        acc = acc * r + p * c[p]
+    return acc
+
+
+@njit(cache=True)
+def _bisect(c, target, deriv, a, b):  # pragma: no cover - numba
+    """Root of ``poly(c) - target`` (or of the derivative) in ``[a, b]`` given a sign change."""
+    fa = _dpoly(c, a) if deriv else _poly(c, a) - target
+    for _ in range(_N_BISECT):
+        m = 0.5 * (a + b)
+        if m <= a or m >= b:
+            break
+        fm = _dpoly(c, m) if deriv else _poly(c, m) - target
+        if fm == 0.0:
+            return m
+        if (fm < 0.0) == (fa < 0.0):
+            a, fa = m, fm
+        else:
+            b = m
+    return 0.5 * (a + b)
+
+
+@njit(cache=True)
+def _nearest_root(c, target, lo, hi, prev, n_grid):  # pragma: no cover - numba
+    """Root of ``poly(c) - target`` in ``[lo, hi]`` nearest ``prev`` (NaN when no sign change)."""
+    h = (hi - lo) / n_grid
+    best = np.nan
+    best_d = np.inf
+    ga = _poly(c, lo) - target
+    if ga == 0.0:
+        best = lo
+        best_d = abs(lo - prev)
+    for q in range(n_grid):
+        a = lo + q * h
+        b = hi if q == n_grid - 1 else lo + (q + 1) * h
+        gb = _poly(c, b) - target
+        r = np.nan
+        if gb == 0.0:
+            r = b
+        elif ga != 0.0 and (ga < 0.0) != (gb < 0.0):
+            r = _bisect(c, target, False, a, b)
+        if not np.isnan(r):
+            d = abs(r - prev)
+            if d < best_d:
+                best, best_d = r, d
+        ga = gb
+    return best
+
+
+@njit(cache=True)
+def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # pragma: no cover - numba
+    """Admissible ``r`` in ``[lo, hi]`` with ``|poly(c)(r) - target| <= tol`` nearest ``prev``.
+
+    ``prev`` itself is kept when it meets the band; otherwise the exact solution (root of
+    ``poly - target``) nearest ``prev``; when there is none, the nearest edge of the band (a root
+    of ``poly - (target -/+ tol)``). Landing on the exact solution rather than on the band edge
+    lets the next samples hold it. Without any such point the minimiser of ``|poly - target|`` is returned (an end of the interval or a stationary
+    point of the polynomial).
+
+    Returns
+    -------
+    r : float
+    exact : bool
+        True when ``|poly(c)(r) - target| <= tol`` is met.
+    """
+    g_prev = _poly(c, prev) - target
+    if abs(g_prev) <= tol:
+        return prev, True
+    if hi <= lo:
+        return lo, False
+    r0 = _nearest_root(c, target, lo, hi, prev, n_grid)
+    if not np.isnan(r0):
+        return r0, True
+    r1 = _nearest_root(c, target - tol, lo, hi, prev, n_grid)
+    r2 = _nearest_root(c, target + tol, lo, hi, prev, n_grid)
+    ok1, ok2 = not np.isnan(r1), not np.isnan(r2)
+    if ok1 or ok2:
+        if not ok2 or (ok1 and abs(r1 - prev) <= abs(r2 - prev)):
+            return r1, True
+        return r2, True
+    # no admissible solution: |g| is smallest at an end or at a stationary point of g
+    best = lo
+    best_g = abs(_poly(c, lo) - target)
+    gh = abs(_poly(c, hi) - target)
+    if gh < best_g:
+        best, best_g = hi, gh
+    h = (hi - lo) / n_grid
+    da = _dpoly(c, lo)
+    for q in range(n_grid):
+        a = lo + q * h
+        b = hi if q == n_grid - 1 else lo + (q + 1) * h
+        db = _dpoly(c, b)
+        if da != 0.0 and db != 0.0 and (da < 0.0) != (db < 0.0):
+            r = _bisect(c, target, True, a, b)
+            gr = abs(_poly(c, r) - target)
+            if gr < best_g:
+                best, best_g = r, gr
+        da = db
+    return best, False
+
+
+@njit(cache=True)
+def _u_of(v, r, mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
+    """LPV input ``u`` [m/s] from ``v`` and ``rho`` (zone laws, eqs. 19-22)."""
+    if mode == MODE_V:
+        return v
+    hi = mu_high[0] * r + mu_high[1]
+    lo = mu_low[0] * r + mu_low[1]
+    m1 = _poly(gm[0], r)
+    m2 = _poly(gm[1], r)
+    m3 = _poly(gm[2], r)
+    if v < lo:
+        if mode == MODE_CONTINUOUS:
+            return lo + m1 / m2 * (v - lo)
+        return (m1 * v + _poly(gc[0], r)) / m2
+    if v > hi:
+        if mode == MODE_CONTINUOUS:
+            return hi + m3 / m2 * (v - hi)
+        return (m3 * v + _poly(gc[2], r)) / m2
+    return v
+
+
+@njit(cache=True)
+def lpv_inverse(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0, n_grid, tol):  # pragma: no cover - numba
+    """Causal, one-pass inverse of the LPV input-output model.
+
+    Parameters
+    ----------
+    v, F_desired : float64[:]
+        Velocity [m/s] and desired force [N] at the model rate.
+    alpha, beta : float64[:, :]
+        Model coefficients, shape ``(n_m, n_rho + 1)``.
+    offset : float
+        Force offset ``F0`` [N].
+    lo, hi : float
+        Admissible range of the electrical input.
+    lag : float
+        ``exp(-eta dt)`` of the drive lag, or -1 for none. With a lag the command ``w`` in
+        ``[lo, hi]`` reaches ``rho[k] = lag rho[k-1] + (1 - lag) w[k-1]``, so ``rho[k]`` is confined
+        to ``[lag rho[k-1] + (1-lag) lo, lag rho[k-1] + (1-lag) hi]``, and ``rho[1] = rho[0]``
+        (the lag starts at rest, ``rho[0] = w[0]``).
+    mode : int
+        0: ``u = v``; 1 / 2: continuous / literal reading of eq. 22 with the laws
+        ``gm``, ``gc`` (3, d + 1), ``mu_high``, ``mu_low`` (2,).
+    rho0 : float
+        ``rho`` before the first sample (tie-breaking only).
+    n_grid : int
+        Grid intervals of the per-sample search.
+    tol : float
+        Force tolerance [N]: the previous ``rho`` is held while it meets the target within ``tol``.
+
+    Returns
+    -------
+    rho, F : float64[:]
+        Chosen scheduling values and the model force they give [N].
+    saturated : bool[:]
+        True where no admissible ``rho`` reaches ``F_desired`` exactly.
+    """
+    n = v.size
+    n_m, n_p = alpha.shape
+    y = np.zeros(n)
+    u = np.zeros(n)
+    rho = np.zeros(n)
+    F = np.zeros(n)
+    sat = np.zeros(n, dtype=np.bool_)
+    c = np.zeros(n_p)
+    prev = rho0
+    for k in range(n):
+        for p in range(n_p):
+            acc = 0.0
+            for j in range(n_m):
+                q = k - 1 - j
+                if q >= 0:
+                    acc += beta[j, p] * u[q] - alpha[j, p] * y[q]
+            c[p] = acc
+        c[0] += offset
+        a, b = lo, hi
+        if lag >= 0.0 and k >= 1:
+            if k == 1:
+                a = b = rho[0]
+            else:
+                a = lag * rho[k - 1] + (1.0 - lag) * lo
+                b = lag * rho[k - 1] + (1.0 - lag) * hi
+                a = max(a, lo)
+                b = min(b, hi)
+        r, exact = solve_interval(c, F_desired[k], a, b, min(max(prev, a), b), n_grid, tol)
+        rho[k] = r
+        F[k] = _poly(c, r)
+        y[k] = F[k] - offset
+        sat[k] = not exact
+        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
+        prev = r
+    return rho, F, sat
