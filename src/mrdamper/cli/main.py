@@ -23,6 +23,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "mrdamper.cli.models",
     "mrdamper.cli.rig",
     "mrdamper.cli.study",
+    "mrdamper.cli.export",
 )
 
 app = typer.Typer(
