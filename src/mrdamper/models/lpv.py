@@ -29,7 +29,6 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 import pandas as pd
-from scipy import signal as sps
 
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.scheduling import Reading
@@ -37,6 +36,7 @@ from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _lpv_fit
 from mrdamper.models import _lpv_kernels as K
+from mrdamper.models._rates import to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
@@ -46,24 +46,6 @@ InputSignal = Literal["u", "v"]
 
 
 # ----------------------------------------------------------------------------- signal helpers
-def _to_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
-    """Resample ``x`` from ``fs_in`` to ``fs_out`` [Hz] (anti-aliased polyphase for integer ratios)."""
-    if abs(fs_in - fs_out) <= 1e-9 * fs_out:
-        return x
-    q = fs_in / fs_out
-    if abs(q - round(q)) < 1e-9 and round(q) >= 2:
-        return sps.resample_poly(x, 1, round(q), padtype="line")
-    n = int(np.floor((x.size - 1) * fs_out / fs_in + 1e-9)) + 1
-    return np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x)
-
-
-def _back_to_record(y: np.ndarray, fs_model: float, exp: Experiment) -> np.ndarray:
-    if abs(exp.fs - fs_model) <= 1e-9 * fs_model:
-        return y
-    tm = np.arange(y.size) / fs_model
-    return np.interp(np.arange(exp.n) * exp.dt, tm, y)
-
-
 def _distinct_levels(rho: np.ndarray, tol: float) -> int:
     r = np.sort(rho)
     return int(1 + np.count_nonzero(np.diff(r) > tol))
@@ -173,8 +155,8 @@ class LPVModel(FittedModel):
 
     def model_signals(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
         """``(u, rho)`` at the model rate ``fs`` for one record."""
-        rho = _to_rate(self.scheduling_variable(experiment), experiment.fs, self.fs)
-        v = _to_rate(np.asarray(experiment.v), experiment.fs, self.fs)
+        rho = to_model_rate(self.scheduling_variable(experiment), experiment.fs, self.fs)
+        v = to_model_rate(np.asarray(experiment.v), experiment.fs, self.fs)
         if self.input_signal == "v":
             u = v
         elif self.zone_laws is None:  # excluded by __post_init__; kept for type narrowing
@@ -200,7 +182,7 @@ class LPVModel(FittedModel):
                 f"{experiment.name!r} (model rate {self.fs:g} Hz); frozen poles: "
                 f"max |z| = {self.max_pole_modulus():.4f} over rho in {self.rho_range}",
             )
-        return _back_to_record(y + self.offset, self.fs, experiment)
+        return to_record_rate(y + self.offset, self.fs, experiment)
 
     # --- stability -----------------------------------------------------------------------
     def frozen_poles(self, rho: Any = None, n_grid: int = 51) -> np.ndarray:
@@ -370,7 +352,7 @@ class LPVEstimator(Estimator):
         F, U, R, w = [], [], [], []
         for e in exps:
             u, rho = proto.model_signals(e)
-            Fr = np.ascontiguousarray(_to_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
+            Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             e.require_samples(self.n_m + 2, "LPV identification")
             F.append(Fr)
             U.append(u)

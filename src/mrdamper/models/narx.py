@@ -45,11 +45,11 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 from scipy import optimize
-from scipy import signal as sps
 
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _narx_kernels as K
+from mrdamper.models._rates import to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
@@ -105,17 +105,6 @@ def candidate_structure(
             if sum(1 for j in combo if base[j][0] == 0) <= output_degree:
                 slots.append(list(combo) + [-1] * (degree - d))
     return np.array(base, dtype=np.int64), np.array(slots, dtype=np.int64).reshape(-1, degree)
-
-
-def _to_rate(y: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
-    """Resample ``y`` from ``fs_in`` to ``fs_out`` [Hz] (polyphase, anti-aliased, for integer ratios)."""
-    if abs(fs_in - fs_out) <= 1e-9 * fs_out:
-        return np.asarray(y, dtype=np.float64)
-    q = fs_in / fs_out
-    if abs(q - round(q)) < 1e-9 and round(q) >= 2:
-        return np.asarray(sps.resample_poly(y, 1, round(q), padtype="line"), dtype=np.float64)
-    n = int(np.floor((y.size - 1) * fs_out / fs_in + 1e-9)) + 1
-    return np.interp(np.arange(n) / fs_out, np.arange(y.size) / fs_in, y)
 
 
 # ----------------------------------------------------------------------------- fitted model
@@ -249,7 +238,7 @@ class NARXModel(FittedModel):
         if not isinstance(experiment, Experiment):
             raise DataValidationError("experiment", f"expected an Experiment, got {type(experiment).__name__}")
         e = self.electrical_input(experiment)
-        rows = [_to_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)
+        rows = [to_model_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)
                 for a in (experiment.F, experiment.x, experiment.v, e)]
         rows.append(np.tanh(rows[2] / self.v0))
         S = np.vstack(rows)
@@ -261,10 +250,7 @@ class NARXModel(FittedModel):
         return np.ascontiguousarray(S)
 
     def _back(self, f: np.ndarray, experiment: Experiment) -> np.ndarray:
-        F = f * self.scales[0]
-        if abs(experiment.fs - self.fs) <= 1e-9 * self.fs:
-            return F
-        return np.interp(np.arange(experiment.n) * experiment.dt, np.arange(F.size) / self.fs, F)
+        return to_record_rate(f * self.scales[0], self.fs, experiment)
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N]: the measured force sets only the first ``max_lag`` samples.
