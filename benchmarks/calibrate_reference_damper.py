@@ -13,53 +13,30 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 import time
 from pathlib import Path
 
 import pandas as pd
 
-from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.data import ExperimentSet, read_directory
 from mrdamper.models.spencer import SpencerEstimator, SpencerModel, spencer1997
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = REPO.parent / "shared" / "data" / "quiroz2022_utfsm" / "sine_unfiltered"
 OUT_DIR = REPO / "src" / "mrdamper" / "rig" / "parameters"
-_NAME = re.compile(r"sine_(?P<amp>[\d.]+)mm_(?P<freq>[\d.]+)Hz_(?P<cur>[\d.]+)A\.csv$")
 
 #: Estimator settings of the shipped calibration (documented in docs/calibration.md).
 CALIBRATION_SETTINGS = {"input": "i", "n_starts": 3, "seed": 0, "weighting": "record"}
 
 
 def read_quiroz(folder: str | Path) -> ExperimentSet:
-    """Read the Quiroz sine CSVs (SI columns t, x, v, i, F) with metadata from the file names.
-
-    Uses :func:`mrdamper.data.readers.read_directory` when it is available, otherwise a plain
-    pandas reader (the files are already in SI units with a uniform time base).
-    """
-    folder = Path(folder)
-    exps = []
-    for path in sorted(folder.glob("sine_*.csv")):
-        m = _NAME.search(path.name)
-        if m is None:
-            continue
-        df = pd.read_csv(path)
-        meta = {
-            "amplitude": float(m["amp"]) * 1e-3,
-            "frequency": float(m["freq"]),
-            "current": float(m["cur"]),
-            "condition": f"{m['amp']}mm_{m['freq']}Hz",
-            "pattern": "sine",
-            "source": "quiroz2022_utfsm/" + folder.name,
-        }
-        exps.append(Experiment(
-            t=df["t"].to_numpy(), x=df["x"].to_numpy(), v=df["v"].to_numpy(),
-            F=df["F"].to_numpy(), i=df["i"].to_numpy(), name=path.stem, metadata=meta,
-        ))
-    if not exps:
+    """Read the Quiroz sine CSVs with metadata (amplitude, frequency, current, condition) from
+    the file names, through :func:`mrdamper.data.readers.read_directory`."""
+    data = read_directory(folder)
+    if len(data) == 0:
         raise FileNotFoundError(f"{folder}: no sine_*.csv records found")
-    return ExperimentSet(exps, name=folder.name)
+    return data
 
 
 def esr_table(model: SpencerModel, data: ExperimentSet) -> pd.DataFrame:
