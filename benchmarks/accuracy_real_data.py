@@ -20,11 +20,13 @@ Run::
 
     python benchmarks/accuracy_real_data.py                 # both protocols, every model
     python benchmarks/accuracy_real_data.py --models lpv lti sp1 --protocol quiroz
+    python benchmarks/accuracy_real_data.py --models p15 --set p15.method=equation-error
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import os
 import sys
 import time
@@ -47,15 +49,21 @@ DECIMATION_GRID = (1, 2, 5)
 ETA_GRID = (50.0, 100.0, 150.0, 250.0, 400.0)
 
 
+#: Extra estimator settings per kind from ``--set KIND.KEY=VALUE`` (empty: estimator defaults).
+EXTRA: dict[str, dict[str, Any]] = {}
+
+
 def settings_for(kind: str, protocol: str, eta: float | None = None, decimation: int = 1) -> dict[str, Any]:
     """Estimator settings per kind and protocol (defaults plus the data set's input)."""
-    s: dict[str, Any] = {}
+    s: dict[str, Any] = dict(EXTRA.get(kind, {}))
     if protocol == "dyke":
         s["input"] = "voltage"
     if kind in ("lpv", "lti"):
         s["fs"] = QUIROZ_FS if protocol == "quiroz" else DYKE_FS / decimation
         if protocol == "dyke":
             s["eta"] = eta
+    if kind == "p15" and protocol == "dyke":
+        s["eta"] = eta  # the coefficients follow the drive-lagged command voltage, as LPV's rho
     return s
 
 
@@ -164,7 +172,19 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--models", nargs="*", default=None, help="model kinds (default: every available)")
     ap.add_argument("--protocol", choices=("quiroz", "dyke", "both"), default="both")
     ap.add_argument("--csv", type=Path, default=None, help="also write the per-record rows to this CSV")
+    ap.add_argument("--set", dest="extra", action="append", default=[], metavar="KIND.KEY=VALUE",
+                    help="extra estimator setting, e.g. p15.method=equation-error (repeatable)")
     args = ap.parse_args(argv)
+    for item in args.extra:
+        key, sep, raw = item.partition("=")
+        kind, dot, name = key.partition(".")
+        if not (sep and dot and kind and name):
+            ap.error(f"--set: expected KIND.KEY=VALUE, got {item!r}")
+        try:
+            value = ast.literal_eval(raw)
+        except (ValueError, SyntaxError):
+            value = raw
+        EXTRA.setdefault(kind, {})[name] = value
     models = args.models or available_models()
     pd.set_option("display.width", 200)
     print(f"models: {models}\n")

@@ -19,8 +19,8 @@ region reflective; Jacobian from the exact discrete sensitivities of the compile
 2. **Free run**: every record simulated whole from the model's rest state (as in prediction),
    with the sensitivity of that rest state to the coefficients.
 
-Each record's residuals are weighted by ``1 / (std(F) sqrt(n n_records))``: the cost is half the
-mean per-record ESR. Residuals use at most ``max_samples`` samples (every k-th); the simulation
+Each record's residuals are weighted by ``1 / (std(F) sqrt(n n_records))`` (``n`` the residual
+samples used): the cost is half the mean per-record ESR over those samples. Residuals use at most ``max_samples`` samples (every k-th); the simulation
 always runs on every sample.
 """
 
@@ -109,7 +109,7 @@ class _Rec:
     F: np.ndarray
     Ff: np.ndarray
     Gf: np.ndarray
-    weight: float
+    std: float
     n_sub: int
 
 
@@ -174,16 +174,17 @@ class _Problem:
                                  st, en, F0, G0, S0, with_jac, self.offset)
             idx = np.concatenate([np.arange(a, b) for a, b in zip(st, en)])
             idx = idx[::stride] if stride > 1 else idx
-            rr = (F[idx] - r.F[idx]) * r.weight
+            # each record's squared residuals sum to its ESR over the samples used, / n_records
+            weight = 1.0 / (r.std * math.sqrt(idx.size * len(self.recs)))
+            rr = (F[idx] - r.F[idx]) * weight
             failed = bad >= 0
             if np.any(failed):
                 self.failures += 1
                 for a, b, k in zip(st[failed], en[failed], bad[failed]):
-                    sel = (idx >= k) & (idx < b)
-                    rr[sel] = _PENALTY * r.weight * r.F.std() if np.isfinite(r.F.std()) else _PENALTY
+                    rr[(idx >= k) & (idx < b)] = _PENALTY * weight * r.std
             res.append(rr)
             if with_jac:
-                Jr = J[idx] * chain[None, :] * r.weight
+                Jr = J[idx] * chain[None, :] * weight
                 if np.any(failed):
                     for a, b, k in zip(st[failed], en[failed], bad[failed]):
                         Jr[(idx >= k) & (idx < b)] = 0.0
@@ -202,15 +203,13 @@ def identify_output_error(
     provenance dictionary.
     """
     t0 = time.perf_counter()
-    n_rec = len(exps)
     recs = []
     for e, ff, gf in zip(exps, Ff, Gf):
         Fstd = float(np.std(e.F)) or 1.0
-        weight = 1.0 / (Fstd * math.sqrt(e.n * n_rec))
         n_sub = max(1, math.ceil(e.dt / max_step - 1e-12))
         recs.append(_Rec(e, np.ascontiguousarray(e.v), np.ascontiguousarray(e.electrical(source)),
                          np.ascontiguousarray(e.F), np.ascontiguousarray(ff), np.ascontiguousarray(gf),
-                         weight, n_sub))
+                         Fstd, n_sub))
     f_scale = float(max(np.std(e.F) for e in exps)) or 1.0
     prob = _Problem(recs, lo, hi, bound, f_scale, offset, max_samples)
     # start: magnitudes of the equation-error Bernstein coefficients with the positive signs,

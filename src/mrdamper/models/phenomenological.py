@@ -64,6 +64,8 @@ True
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 import time
 import warnings
@@ -73,11 +75,12 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models._p15_eqerr import check_levels, equation_error, filtered_state
 from mrdamper.models._p15_fit import BERNSTEIN_TO_POWER, identify_output_error, rest_state, to_monomial
+from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._p15_implicit import p15i_run
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import Estimator, FittedModel
@@ -105,12 +108,18 @@ class P15Model(FittedModel):
         Largest accepted ``|F|`` during simulation [N] (10 x the training force span).
     max_step : float
         Largest integration step [s] (``inf``: one step per sample).
+    eta : float or None
+        Rate [1/s] of an optional first-order drive lag ``d rho/dt = -eta (rho - input)`` (exact
+        zero-order-hold discretisation, ``rho(t0) = input(t0)``); the coefficients are then
+        quadratics in ``rho`` (for records whose electrical input is a command voltage, as in the
+        LPV model). ``None``: the input itself.
     """
 
     W: tuple[float, ...] = (0.0,) * 15
     f0: float = 0.0
     force_bound: float = 1e6
     max_step: float = math.inf
+    eta: float | None = None
 
     kind: ClassVar[str] = "p15"
 
@@ -125,6 +134,8 @@ class P15Model(FittedModel):
             raise DataValidationError("force_bound", f"expected a positive force [N], got {self.force_bound}")
         if not self.max_step > 0:
             raise DataValidationError("max_step", f"expected a positive step [s], got {self.max_step}")
+        if self.eta is not None and not (math.isfinite(self.eta) and self.eta > 0):
+            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
         object.__setattr__(self, "W", W)
         object.__setattr__(self, "f0", float(self.f0))
         object.__setattr__(self, "force_bound", float(self.force_bound))
@@ -195,7 +206,7 @@ class P15Model(FittedModel):
 
     def simulate_steps(self, experiment: Experiment, n_sub: int) -> np.ndarray:
         """Free-run force [N] with ``n_sub`` integration steps per sample (see :meth:`predict`)."""
-        i = np.ascontiguousarray(self.electrical_input(experiment), dtype=np.float64)
+        i = _lagged(np.asarray(self.electrical_input(experiment), dtype=np.float64), experiment.dt, self.eta)
         w3 = self.coefficients(i)[2]
         bad_w3 = np.flatnonzero((w3 == 0) | (np.sign(w3) != np.sign(w3[0])))
         if bad_w3.size:
@@ -248,7 +259,9 @@ class P15Estimator(Estimator):
     stable_only : bool
         Raise :class:`IdentificationError` if a training record's free run diverges.
     max_step : float
-        Largest integration step [s] of the fitted model (default 0.5 ms).
+        Largest integration step [s] used by the fit and given to the model (default 2.5 ms: two
+        steps per sample at 200 Hz, one at 1 kHz and above), refined after the fit if the step
+        check asks for it (``step_tolerance``).
     segment : float
         Duration [s] of the multiple-shooting segments.
     segment_stride : int
@@ -262,6 +275,12 @@ class P15Estimator(Estimator):
     step_tolerance : float
         Largest accepted change of a training record's free run when the integration step is
         halved, in ESR units (mean squared change over the variance of the measured force).
+        Above it the fit halves the model's step (at most ``step_refinements`` times) and checks
+        again; a warning names the model and the discrepancy if it still fails.
+    step_refinements : int
+        How many times the fit may halve the model's step to meet ``step_tolerance``.
+    eta : float or None
+        Drive-lag rate [1/s] of the electrical input (see :class:`P15Model`); ``None``: none.
     """
 
     input: ElectricalSource = "i"
@@ -271,14 +290,16 @@ class P15Estimator(Estimator):
     filter_order: int = 4
     offset: bool = True
     stable_only: bool = False
-    max_step: float = 5e-4
-    segment: float = 0.05
+    max_step: float = 2.5e-3
+    segment: float = 0.2
     segment_stride: int = 1
     shoot_nfev: int = 30
     max_nfev: int = 20
     max_samples: int = 20000
     jacobian: Literal["sensitivity", "2-point", "3-point"] = "sensitivity"
     step_tolerance: float = 1e-4
+    step_refinements: int = 3
+    eta: float | None = None
 
     kind: ClassVar[str] = "p15"
 
@@ -296,10 +317,14 @@ class P15Estimator(Estimator):
         """
         t_start = time.perf_counter()
         self._check_settings()
-        exps = self._as_set(data)
-        i_all = np.concatenate([e.electrical(self.input) for e in exps])
+        raw = self._as_set(data)
+        i_all = np.concatenate([e.electrical(self.input) for e in raw])
+        # the range of the raw input also holds every lagged input (a convex combination of it)
         lo, hi = float(np.min(i_all)), float(np.max(i_all))
-        check_levels(i_all, lo, hi, self.input)
+        exps = raw if self.eta is None else ExperimentSet(
+            [e.replace(**{self.input: _lagged(e.electrical(self.input), e.dt, self.eta)}) for e in raw]
+        )
+        check_levels(np.concatenate([e.electrical(self.input) for e in exps]), lo, hi, self.input)
         form = self.form if self.method == "equation-error" else "monotone"
         B, f0, ee_info = equation_error(list(exps), self.input, lo, hi, form=form, offset=self.offset,
                                         cutoff=self.cutoff, order=self.filter_order)
@@ -316,17 +341,14 @@ class P15Estimator(Estimator):
             )
         W = to_monomial(B, lo, hi)
         model = P15Model(W=tuple(W.ravel()), f0=f0, input=self.input, input_range=(lo, hi),
-                         force_bound=bound, max_step=self.max_step)
-        divergence, esr = _simulate_training(model, exps)
-        step = step_halving_check(
-            "p15", [e for e in exps if e.name not in divergence],
-            lambda e, k: model.simulate_steps(e, k * model.substeps(e.dt)), self.step_tolerance,
-        )
+                         force_bound=bound, max_step=self.max_step, eta=self.eta)
+        divergence, esr = _simulate_training(model, raw)
+        model, step = self._checked_step(model, [e for e in raw if e.name not in divergence])
         w3_grid = model.coefficients(np.linspace(lo, hi, 201))[2]
         provenance: dict[str, Any] = {
             "estimator": type(self).__name__,
             "settings": asdict(self),
-            "training_records": list(exps.names),
+            "training_records": list(raw.names),
             **ee_info,
             "output_error": oe_info,
             "stability": model.stability_certificate(),
@@ -347,7 +369,30 @@ class P15Estimator(Estimator):
         return P15Model(**{**model.parameters, "input": self.input, "input_range": (lo, hi)},
                         provenance=provenance)
 
+    def _checked_step(self, model: P15Model, records: list[Experiment]) -> tuple[P15Model, dict[str, Any]]:
+        """Halve the model's step until halving it again changes no training free run by more than
+        ``step_tolerance`` (at most ``step_refinements`` times); warn if that is not reached."""
+        history = []
+        for k in range(self.step_refinements + 1):
+            last = k == self.step_refinements
+            with warnings.catch_warnings():
+                if not last:
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                check = step_halving_check(
+                    "p15", records, functools.partial(_run_refined, model), self.step_tolerance)
+            history.append({"max_step": model.max_step, "max_discrepancy": check["max_discrepancy"]})
+            if check["passed"] or last:
+                break
+            model = dataclasses.replace(model, max_step=0.5 * min(model.max_step, min(e.dt for e in records)))
+        return model, {**check, "history": history, "max_step": model.max_step}
+
     def _check_settings(self) -> None:
+        if self.eta is not None and (isinstance(self.eta, bool) or not isinstance(self.eta, (int, float))
+                                     or not (math.isfinite(self.eta) and self.eta > 0)):
+            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+        if isinstance(self.step_refinements, bool) or not isinstance(self.step_refinements, int) or not (
+                0 <= self.step_refinements <= 10):
+            raise DataValidationError("step_refinements", f"expected an integer in 0..10, got {self.step_refinements!r}")
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
         if self.method not in ("output-error", "equation-error"):
@@ -373,6 +418,17 @@ class P15Estimator(Estimator):
         for name in ("offset", "stable_only"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise DataValidationError(name, f"expected True or False, got {getattr(self, name)!r}")
+
+
+def _run_refined(model: P15Model, e: Experiment, k: int) -> np.ndarray:
+    """Free run of ``e`` with ``k`` times the model's integration steps per sample."""
+    return model.simulate_steps(e, k * model.substeps(e.dt))
+
+
+def _lagged(e: np.ndarray, dt: float, eta: float | None) -> np.ndarray:
+    """The input through the drive lag ``eta`` [1/s] (unchanged for ``None``), contiguous float64."""
+    e = np.ascontiguousarray(e, dtype=np.float64)
+    return e if eta is None else first_order_lag(e, dt, eta)
 
 
 def _simulate_training(model: P15Model, exps: Iterable[Experiment]) -> tuple[dict[str, Any], dict[str, float]]:
