@@ -148,10 +148,18 @@ def test_refining_the_integration_step_does_not_change_the_free_run() -> None:
 
 def test_step_check_warns_and_records_a_coarse_step() -> None:
     data = _currents_records(n=1500, fs=500.0)
-    with pytest.warns(RuntimeWarning, match="p15: halving the integration step changes the free run"):
-        fitted = P15Estimator(max_step=2e-3, shoot_nfev=2, max_nfev=0, step_tolerance=1e-12).fit(data)
-    check = fitted.provenance["step_check"]
+    settings = {"max_step": 2e-3, "shoot_nfev": 2, "max_nfev": 0}
+    with pytest.warns(RuntimeWarning, match="^p15: halving the integration step changes the free run"):
+        coarse = P15Estimator(**settings, step_tolerance=1e-12, step_refinements=0).fit(data)
+    check = coarse.provenance["step_check"]
     assert not check["passed"] and check["max_discrepancy"] > 1e-12
+    assert coarse.max_step == 2e-3
+    # allowed to refine, the fit halves the model's step until the check passes (a second-order
+    # scheme: halving the step divides the discrepancy by about 16)
+    refined = P15Estimator(**settings, step_tolerance=check["max_discrepancy"] / 4).fit(data)
+    rcheck = refined.provenance["step_check"]
+    assert rcheck["passed"] and len(rcheck["history"]) == 2
+    assert refined.max_step == pytest.approx(1e-3) and refined.W == coarse.W
 
 
 def test_free_run_starts_from_rest_and_ignores_the_measured_force() -> None:
