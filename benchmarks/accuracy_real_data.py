@@ -49,13 +49,13 @@ DECIMATION_GRID = (1, 2, 5)
 ETA_GRID = (50.0, 100.0, 150.0, 250.0, 400.0)
 
 
-#: Extra estimator settings per kind from ``--set KIND.KEY=VALUE`` (empty: estimator defaults).
+#: Extra estimator settings per kind from ``--set KIND.KEY=VALUE`` (override the ones below).
 EXTRA: dict[str, dict[str, Any]] = {}
 
 
 def settings_for(kind: str, protocol: str, eta: float | None = None, decimation: int = 1) -> dict[str, Any]:
     """Estimator settings per kind and protocol (defaults plus the data set's input)."""
-    s: dict[str, Any] = dict(EXTRA.get(kind, {}))
+    s: dict[str, Any] = {}
     if protocol == "dyke":
         s["input"] = "voltage"
     if kind in ("lpv", "lti"):
@@ -64,7 +64,7 @@ def settings_for(kind: str, protocol: str, eta: float | None = None, decimation:
             s["eta"] = eta
     if kind == "p15" and protocol == "dyke":
         s["eta"] = eta  # the coefficients follow the drive-lagged command voltage, as LPV's rho
-    return s
+    return {**s, **EXTRA.get(kind, {})}
 
 
 def fit_and_score(
