@@ -133,6 +133,25 @@ def test_output_error_fit_is_stable_on_the_whole_identified_range() -> None:
     assert max(float(np.max(r.real)) for r in lam) < 0
 
 
+def test_coefficients_are_held_at_the_edges_outside_the_identified_range() -> None:
+    """The fitted model stores Bernstein coefficients and evaluates them at the input clipped to
+    the identified range, so (C1) also holds for extrapolated inputs (with a warning policy)."""
+    fitted, data = _noisy_fit()
+    assert fitted.basis == "bernstein"
+    lo, hi = fitted.input_range
+    np.testing.assert_array_equal(fitted.coefficients(hi + 0.5), fitted.coefficients(hi))
+    np.testing.assert_array_equal(fitted.coefficients(lo - 0.5), fitted.coefficients(lo))
+    # inside the range the power-basis form gives the same coefficients
+    ii = np.linspace(lo, hi, 7)
+    mono = fitted.monomial()
+    power = np.stack([mono[j, 0] + mono[j, 1] * ii + mono[j, 2] * ii**2 for j in range(5)])
+    np.testing.assert_allclose(power, fitted.coefficients(ii), rtol=1e-9, atol=0)
+    beyond = data[0].replace(i=np.full(data[0].n, hi + 0.2))
+    with pytest.warns(RuntimeWarning, match="extrapolating"):
+        F = fitted.with_range_policy("warn").predict(beyond)
+    assert np.all(np.isfinite(F))
+
+
 def test_refining_the_integration_step_does_not_change_the_free_run() -> None:
     """The fitted model's own step against 2x, 4x and 8x finer steps: the change is far below
     the fit's tolerance (1e-4 in ESR units; measured ~1e-9), and the fit's own check passed."""

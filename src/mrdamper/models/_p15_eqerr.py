@@ -26,6 +26,7 @@ from scipy.optimize import lsq_linear
 from scipy.signal import butter, sosfiltfilt
 
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
 
 __all__ = ["check_levels", "cutoff_hz", "equation_error", "filtered_state"]
@@ -63,7 +64,7 @@ def filtered_state(e: Experiment, cutoff: float | str | None, order: int) -> tup
     return Ff, np.gradient(Ff, e.dt)
 
 
-def regressors(e: Experiment, source: str, cutoff: float | str | None, order: int
+def regressors(e: Experiment, source: ElectricalSource, cutoff: float | str | None, order: int
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Filtered force (target), input and the five regressor signals of one record, trimmed."""
     i = e.electrical(source)
@@ -109,7 +110,7 @@ def _form_bounds(form: str, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def equation_error(
-    exps: Sequence[Experiment], source: str, lo: float, hi: float, *, form: str, offset: bool,
+    exps: Sequence[Experiment], source: ElectricalSource, lo: float, hi: float, *, form: str, offset: bool,
     cutoff: float | str | None, order: int,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Least squares of the P-15 relation on filtered derivatives.

@@ -36,9 +36,10 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.models._p15_implicit import p15i_run
 
-__all__ = ["BERNSTEIN_TO_POWER", "SIGNS", "identify_output_error", "rest_state", "to_monomial"]
+__all__ = ["BERNSTEIN_TO_POWER", "SIGNS", "bernstein_basis", "identify_output_error", "rest_state", "to_monomial"]
 
 #: Sign of each paper coefficient w_j relative to the positive quadratic (w1, c, m, a, b).
 SIGNS = np.array([1.0, -1.0, -1.0, -1.0, -1.0])
@@ -56,28 +57,34 @@ def to_monomial(B: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return np.einsum("jk,rk->rj", M, B)
 
 
-def rest_state(W: np.ndarray, f0: float, v0: float, i0: float) -> float:
-    """Force [N] at rest (``F' = F'' = 0``) for velocity ``v0`` [m/s] and input ``i0``.
+def bernstein_basis(i: float | np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Bernstein basis ``(1-s)^2, 2s(1-s), s^2`` at ``s = (i - lo) / (hi - lo)`` clipped to [0, 1]."""
+    s = np.clip((np.asarray(i, dtype=float) - lo) / (hi - lo), 0.0, 1.0)
+    return np.stack([(1 - s) ** 2, 2 * s * (1 - s), s * s])
+
+
+def rest_state(w: np.ndarray, f0: float, v0: float) -> float:
+    """Force [N] at rest (``F' = F'' = 0``) for coefficients ``w = (w1 .. w5)`` and velocity ``v0``.
 
     The root of ``F - f0 - w1 v0 - w4 F^3 - w5 F^5 = 0``. When ``g(F) = F - w4 F^3 - w5 F^5`` is
     increasing (``w4, w5 <= 0``, guaranteed by the output-error fit) there is exactly one real
     root. Otherwise the real root with ``g'(F) > 0`` closest to zero is taken (the one that is
     stable when ``w2, w3 < 0``), or the real root closest to zero if none has ``g' > 0``.
     """
-    w = W[:, 0] + W[:, 1] * i0 + W[:, 2] * i0**2
     u = f0 + w[0] * v0
     coef = np.array([-w[4], 0.0, -w[3], 0.0, 1.0, -u])
     roots = np.roots(coef)
     real = np.sort(roots[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots))].real)
     if real.size == 0:
         return float(u)
-    # polish with Newton on the quintic (np.roots is only accurate to a few ulps of the largest root)
+
     def h(F: np.ndarray) -> np.ndarray:
         return F - u - w[3] * F**3 - w[4] * F**5
 
     def gp(F: np.ndarray) -> np.ndarray:
         return 1.0 - 3.0 * w[3] * F**2 - 5.0 * w[4] * F**4
 
+    # polish with Newton (np.roots is accurate only to a few ulps of the largest root)
     for _ in range(3):
         d = gp(real)
         real = np.where(d != 0, real - h(real) / np.where(d != 0, d, 1.0), real)
@@ -89,8 +96,7 @@ def rest_state(W: np.ndarray, f0: float, v0: float, i0: float) -> float:
 def _rest_sensitivity(B: np.ndarray, f0: float, lo: float, hi: float, v0: float, i0: float, F0: float,
                       m: int) -> np.ndarray:
     """d F_rest / d (Bernstein coefficients of w, row-major; then f0)."""
-    s = (i0 - lo) / (hi - lo)
-    phi = np.array([(1 - s) ** 2, 2 * s * (1 - s), s * s])
+    phi = bernstein_basis(i0, lo, hi)
     w = B @ phi
     gp = 1.0 - 3.0 * w[3] * F0**2 - 5.0 * w[4] * F0**4
     regs = np.array([v0, 0.0, 0.0, F0**3, F0**5]) / gp
@@ -164,7 +170,7 @@ class _Problem:
             seg_len = max(4, round(seg[0] / r.e.dt))
             st, en = self.segments(r, mode, seg_len, max(seg_len, seg_len * seg[1]))
             if mode == "free":
-                F0 = np.array([rest_state(to_monomial(B, self.lo, self.hi), f0, r.v[0], r.i[0])])
+                F0 = np.array([rest_state(B @ bernstein_basis(r.i[0], self.lo, self.hi), f0, r.v[0])])
                 G0 = np.zeros(1)
                 S0 = _rest_sensitivity(B, f0, self.lo, self.hi, r.v[0], r.i[0], F0[0], m)[None, :]
             else:
@@ -193,7 +199,7 @@ class _Problem:
 
 
 def identify_output_error(
-    exps: Sequence[Experiment], source: str, lo: float, hi: float, B0: np.ndarray, f00: float, *,
+    exps: Sequence[Experiment], source: ElectricalSource, lo: float, hi: float, B0: np.ndarray, f00: float, *,
     Ff: Sequence[np.ndarray], Gf: Sequence[np.ndarray], offset: bool, max_step: float, segment: float,
     segment_stride: int, shoot_nfev: int, max_nfev: int, max_samples: int, jacobian: str, bound: float,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:

@@ -22,7 +22,9 @@ with the stage's Newton matrix, solved in closed form.
 
 Coefficients: ``w_j(i) = sum_k C[j, k] phi_k(i)`` with ``phi`` the monomials ``1, i, i^2``
 (``basis = 0``) or the Bernstein polynomials ``(1-s)^2, 2 s (1-s), s^2`` of
-``s = (i - lo) / (hi - lo)`` (``basis = 1``).
+``s = (i - lo) / (hi - lo)`` clipped to ``[0, 1]`` (``basis = 1``: the coefficients are held at
+their edge values outside ``[lo, hi]``, where positive Bernstein coefficients no longer imply
+positive quadratics).
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ def _basis(ii: float, basis: int, lo: float, hi: float, out: np.ndarray) -> None
         out[1] = ii
         out[2] = ii * ii
     else:
-        s = (ii - lo) / (hi - lo)
+        s = min(1.0, max(0.0, (ii - lo) / (hi - lo)))
         out[0] = (1.0 - s) * (1.0 - s)
         out[1] = 2.0 * s * (1.0 - s)
         out[2] = s * s
@@ -142,7 +144,7 @@ def p15i_run(
     f0 : float
         Force offset [N].
     basis : int
-        0 monomials in ``i``, 1 Bernstein polynomials on ``[lo, hi]``.
+        0 monomials in ``i``, 1 Bernstein polynomials on ``[lo, hi]`` (input clipped to it).
     n_sub : int
         Integration steps per sampling interval.
     bound : float
@@ -174,7 +176,6 @@ def p15i_run(
     g = GAMMA
     h = dt / n_sub
     hg = h * g
-    phi = np.empty(3)
     w1 = np.empty(5)
     w2 = np.empty(5)
     d1 = np.empty(m)

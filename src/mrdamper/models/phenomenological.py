@@ -78,9 +78,15 @@ import numpy as np
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models._p15_eqerr import check_levels, equation_error, filtered_state
-from mrdamper.models._p15_fit import BERNSTEIN_TO_POWER, identify_output_error, rest_state, to_monomial
 from mrdamper.models._lpv_kernels import first_order_lag
+from mrdamper.models._p15_eqerr import check_levels, equation_error, filtered_state
+from mrdamper.models._p15_fit import (
+    BERNSTEIN_TO_POWER,
+    bernstein_basis,
+    identify_output_error,
+    rest_state,
+    to_monomial,
+)
 from mrdamper.models._p15_implicit import p15i_run
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import Estimator, FittedModel
@@ -99,9 +105,9 @@ class P15Model(FittedModel):
     Attributes
     ----------
     W : tuple of 15 float
-        Row-major 5 x 3 coefficients, ``w_j(i) = W[3(j-1)] + W[3(j-1)+1] i + W[3(j-1)+2] i^2``.
-        Units: w1 [N s/m], w2 [s], w3 [s^2], w4 [1/N^2], w5 [1/N^4], each per input unit to the
-        power of the term.
+        Row-major 5 x 3 coefficients of ``w_1 .. w_5`` in the basis ``basis``. Units: w1 [N s/m],
+        w2 [s], w3 [s^2], w4 [1/N^2], w5 [1/N^4] (in the power basis, each per input unit to the
+        power of the term).
     f0 : float
         Force offset [N].
     force_bound : float
@@ -113,6 +119,13 @@ class P15Model(FittedModel):
         zero-order-hold discretisation, ``rho(t0) = input(t0)``); the coefficients are then
         quadratics in ``rho`` (for records whose electrical input is a command voltage, as in the
         LPV model). ``None``: the input itself.
+    basis : {"power", "bernstein"}
+        ``"power"``: ``w_j(i) = W[3(j-1)] + W[3(j-1)+1] i + W[3(j-1)+2] i^2``. ``"bernstein"``
+        (what the estimator returns): ``W[3(j-1) + k]`` multiplies the Bernstein polynomial
+        ``B_k(s)`` (``(1-s)^2, 2s(1-s), s^2``) of ``s = (i - lo) / (hi - lo)`` on ``input_range``,
+        with ``s`` clipped to [0, 1]: the coefficients are held at their edge values outside the
+        identified range (where a quadratic could otherwise lose its sign), and positivity is exact
+        in floating point.
     """
 
     W: tuple[float, ...] = (0.0,) * 15
@@ -120,6 +133,7 @@ class P15Model(FittedModel):
     force_bound: float = 1e6
     max_step: float = math.inf
     eta: float | None = None
+    basis: Literal["power", "bernstein"] = "power"
 
     kind: ClassVar[str] = "p15"
 
@@ -136,6 +150,11 @@ class P15Model(FittedModel):
             raise DataValidationError("max_step", f"expected a positive step [s], got {self.max_step}")
         if self.eta is not None and not (math.isfinite(self.eta) and self.eta > 0):
             raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+        if self.basis not in ("power", "bernstein"):
+            raise DataValidationError("basis", f"expected 'power' or 'bernstein', got {self.basis!r}")
+        if self.basis == "bernstein" and not self.input_range[1] > self.input_range[0]:
+            raise DataValidationError(
+                "input_range", f"the Bernstein basis needs lo < hi, got {self.input_range}")
         object.__setattr__(self, "W", W)
         object.__setattr__(self, "f0", float(self.f0))
         object.__setattr__(self, "force_bound", float(self.force_bound))
@@ -143,14 +162,23 @@ class P15Model(FittedModel):
 
     @property
     def W_matrix(self) -> np.ndarray:
-        """Coefficients as a (5, 3) array: row j-1 holds ``w_j``'s constant, linear, quadratic term."""
+        """Stored coefficients as a (5, 3) array (row j-1: ``w_j`` in the model's ``basis``)."""
         return np.asarray(self.W, dtype=np.float64).reshape(5, 3)
 
     def coefficients(self, i: np.ndarray | float) -> np.ndarray:
         """``w_1 .. w_5`` at input ``i`` [A or V]; shape ``(5,) + shape(i)``."""
         ii = np.asarray(i, dtype=float)
         Wm = self.W_matrix
+        if self.basis == "bernstein":
+            phi = bernstein_basis(ii, *self.input_range)
+            return np.stack([Wm[j, 0] * phi[0] + Wm[j, 1] * phi[1] + Wm[j, 2] * phi[2] for j in range(5)])
         return np.stack([Wm[j, 0] + Wm[j, 1] * ii + Wm[j, 2] * ii**2 for j in range(5)])
+
+    def monomial(self) -> np.ndarray:
+        """Power-basis coefficients (5 x 3, ``w_j = c0 + c1 i + c2 i^2``), valid on ``input_range``."""
+        if self.basis == "power":
+            return self.W_matrix
+        return to_monomial(self.W_matrix, *self.input_range)
 
     def bernstein(self) -> np.ndarray:
         """Bernstein coefficients (5 x 3) of ``w1, c = -w2, m = -w3, a = -w4, b = -w5`` on
@@ -159,10 +187,13 @@ class P15Model(FittedModel):
         lo, hi = self.input_range
         if not hi > lo:
             raise DataValidationError("input_range", f"expected lo < hi, got {self.input_range}")
-        R = hi - lo
-        to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
-        M = to_i @ BERNSTEIN_TO_POWER  # Bernstein -> monomial
-        B = np.linalg.solve(M, self.W_matrix.T).T
+        if self.basis == "bernstein":
+            B = self.W_matrix
+        else:
+            R = hi - lo
+            to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
+            M = to_i @ BERNSTEIN_TO_POWER  # Bernstein -> monomial
+            B = np.linalg.solve(M, self.W_matrix.T).T
         return B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None]
 
     def stability_certificate(self) -> dict[str, Any]:
@@ -172,19 +203,23 @@ class P15Model(FittedModel):
         -------
         dict
             ``min_bernstein``: smallest Bernstein coefficient of each of ``w1, c, m, a, b``,
-            relative to the largest magnitude of the same quadratic (rounding of the monomial
-            form is ~1e-12); ``stable_by_construction``: ``m, c`` positive and ``a, b``
-            non-negative on the range (``g`` strictly increasing); ``passive``: also ``w1 > 0``.
+            relative to the largest magnitude of the same quadratic; ``stable_by_construction``:
+            ``m, c`` positive and ``a, b`` non-negative on the range (``g`` strictly increasing;
+            exact for ``basis="bernstein"``, up to ~1e-12 rounding of the power basis otherwise);
+            ``passive``: also ``w1 > 0``; ``outside_range``: how the coefficients continue beyond
+            the range (held at the edge values for the Bernstein basis, so the conditions hold for
+            every input).
         """
         B = self.bernstein()
         rel = {}
         for name, row in zip(("w1", "c", "m", "a", "b"), B):
             top = float(np.max(np.abs(row))) or 1.0
             rel[name] = float(np.min(row) / top)
-        tol = -1e-9
+        tol = 0.0 if self.basis == "bernstein" else -1e-9
         stable = rel["m"] > 0 and rel["c"] > 0 and rel["a"] >= tol and rel["b"] >= tol
         return {"min_bernstein": rel, "stable_by_construction": bool(stable),
-                "passive": bool(stable and rel["w1"] > 0)}
+                "passive": bool(stable and rel["w1"] > 0),
+                "outside_range": "held at edge values" if self.basis == "bernstein" else "quadratic extrapolation"}
 
     def substeps(self, dt: float) -> int:
         """Integration steps per sampling interval ``dt`` [s] (at most :data:`MAX_SUBSTEPS`)."""
@@ -217,9 +252,11 @@ class P15Model(FittedModel):
                 f"(w3 from {w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
             )
         v = np.ascontiguousarray(experiment.v, dtype=np.float64)
-        F0 = rest_state(self.W_matrix, self.f0, float(v[0]), float(i[0]))
+        F0 = rest_state(self.coefficients(float(i[0])), self.f0, float(v[0]))
         one = np.zeros(1, dtype=np.int64)
-        F, _, bad = p15i_run(v, i, experiment.dt, self.W_matrix, self.f0, 0, 0.0, 1.0, int(n_sub),
+        bern = self.basis == "bernstein"
+        lo, hi = self.input_range if bern else (0.0, 1.0)
+        F, _, bad = p15i_run(v, i, experiment.dt, self.W_matrix, self.f0, int(bern), lo, hi, int(n_sub),
                              self.force_bound, one, np.array([experiment.n], dtype=np.int64),
                              np.array([F0]), np.zeros(1), np.zeros((1, 16)), False, True)
         if bad[0] >= 0:
@@ -339,9 +376,8 @@ class P15Estimator(Estimator):
                 segment_stride=self.segment_stride, shoot_nfev=self.shoot_nfev, max_nfev=self.max_nfev,
                 max_samples=self.max_samples, jacobian=self.jacobian, bound=bound,
             )
-        W = to_monomial(B, lo, hi)
-        model = P15Model(W=tuple(W.ravel()), f0=f0, input=self.input, input_range=(lo, hi),
-                         force_bound=bound, max_step=self.max_step, eta=self.eta)
+        model = P15Model(W=tuple(B.ravel()), f0=f0, input=self.input, input_range=(lo, hi),
+                         force_bound=bound, max_step=self.max_step, eta=self.eta, basis="bernstein")
         divergence, esr = _simulate_training(model, raw)
         model, step = self._checked_step(model, [e for e in raw if e.name not in divergence])
         w3_grid = model.coefficients(np.linspace(lo, hi, 201))[2]
