@@ -13,7 +13,8 @@ Protocols (no tuning on test data):
 Every model is fitted with its estimator's defaults plus the data set's electrical input; the LPV
 and LTI models use a model rate of 200 Hz for Quiroz (chosen a priori: the lowest record rate);
 for Dyke the model rate (3004.8 Hz divided by 1, 2 or 5) is chosen with ``eta`` on the training
-part. A model that fails to fit or to
+part, and P-15's coefficients follow the voltage through the same drive lag ``eta``. ``--set
+KIND.KEY=VALUE`` overrides a setting (ablations). A model that fails to fit or to
 simulate is reported as a row with its error, never dropped.
 
 Run::
