@@ -13,18 +13,21 @@ Protocols (no tuning on test data):
 Every model is fitted with its estimator's defaults plus the data set's electrical input; the LPV
 and LTI models use a model rate of 200 Hz for Quiroz (chosen a priori: the lowest record rate);
 for Dyke the model rate (3004.8 Hz divided by 1, 2 or 5) is chosen with ``eta`` on the training
-part. A model that fails to fit or to
+part, and P-15's coefficients follow the voltage through the same drive lag ``eta``. ``--set
+KIND.KEY=VALUE`` overrides a setting (ablations). A model that fails to fit or to
 simulate is reported as a row with its error, never dropped.
 
 Run::
 
     python benchmarks/accuracy_real_data.py                 # both protocols, every model
     python benchmarks/accuracy_real_data.py --models lpv lti sp1 --protocol quiroz
+    python benchmarks/accuracy_real_data.py --models p15 --set p15.method=equation-error
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import os
 import sys
 import time
@@ -47,6 +50,10 @@ DECIMATION_GRID = (1, 2, 5)
 ETA_GRID = (50.0, 100.0, 150.0, 250.0, 400.0)
 
 
+#: Extra estimator settings per kind from ``--set KIND.KEY=VALUE`` (override the ones below).
+EXTRA: dict[str, dict[str, Any]] = {}
+
+
 def settings_for(kind: str, protocol: str, eta: float | None = None, decimation: int = 1) -> dict[str, Any]:
     """Estimator settings per kind and protocol (defaults plus the data set's input)."""
     s: dict[str, Any] = {}
@@ -56,7 +63,9 @@ def settings_for(kind: str, protocol: str, eta: float | None = None, decimation:
         s["fs"] = QUIROZ_FS if protocol == "quiroz" else DYKE_FS / decimation
         if protocol == "dyke":
             s["eta"] = eta
-    return s
+    if kind == "p15" and protocol == "dyke":
+        s["eta"] = eta  # the coefficients follow the drive-lagged command voltage, as LPV's rho
+    return {**s, **EXTRA.get(kind, {})}
 
 
 def fit_and_score(
@@ -164,7 +173,19 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--models", nargs="*", default=None, help="model kinds (default: every available)")
     ap.add_argument("--protocol", choices=("quiroz", "dyke", "both"), default="both")
     ap.add_argument("--csv", type=Path, default=None, help="also write the per-record rows to this CSV")
+    ap.add_argument("--set", dest="extra", action="append", default=[], metavar="KIND.KEY=VALUE",
+                    help="extra estimator setting, e.g. p15.method=equation-error (repeatable)")
     args = ap.parse_args(argv)
+    for item in args.extra:
+        key, sep, raw = item.partition("=")
+        kind, dot, name = key.partition(".")
+        if not (sep and dot and kind and name):
+            ap.error(f"--set: expected KIND.KEY=VALUE, got {item!r}")
+        try:
+            value = ast.literal_eval(raw)
+        except (ValueError, SyntaxError):
+            value = raw
+        EXTRA.setdefault(kind, {})[name] = value
     models = args.models or available_models()
     pd.set_option("display.width", 200)
     print(f"models: {models}\n")

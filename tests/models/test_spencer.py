@@ -242,7 +242,8 @@ def test_bad_parameters_name_the_field(changes: dict, field: str) -> None:
     ("settings", "field"),
     [({"fixed": {"kappa": 1.0}}, "fixed"), ({"n_starts": 0}, "n_starts"),
      ({"weighting": "equal"}, "weighting"), ({"jacobian": "magic"}, "jacobian"),
-     ({"bounds": {"c0a": (5.0, 1.0)}}, "bounds"), ({"start": {"eta": float("inf")}}, "eta")],
+     ({"bounds": {"c0a": (5.0, 1.0)}}, "bounds"), ({"start": {"eta": float("inf")}}, "eta"),
+     ({"step_tolerance": 0.0}, "step_tolerance")],
 )
 def test_bad_estimator_settings(settings: dict, field: str) -> None:
     with pytest.raises(DataValidationError, match=field):
@@ -289,6 +290,23 @@ def test_identification_is_deterministic_for_a_seed() -> None:
     assert a.to_dict()["parameters"] == b.to_dict()["parameters"]
     assert not a.provenance["converged"]
     assert c.provenance["starts"] != a.provenance["starts"]
+
+
+def test_fit_checks_its_integration_step() -> None:
+    """The fitted model's free run with half the RK4 step: within the tolerance with the automatic
+    sub-steps; with one sub-step per sample and a tolerance of 1e-14 the fit warns and says so."""
+    truth = SpencerModel(**TRUE, input="i", input_range=(0, 1))
+    train = [_with_force(truth, _record(seed=41, duration=1.0))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # stopped early on purpose
+        fit = SpencerEstimator(n_starts=1, max_nfev=3).fit(train)
+    check = fit.provenance["step_check"]
+    assert check["passed"] and 0.0 <= check["max_discrepancy"] < 1e-4
+    assert set(check["discrepancy"]) == {"synthetic"}
+    with pytest.warns(RuntimeWarning, match="^spencer: halving the integration step changes the free run"):
+        coarse = SpencerEstimator(n_starts=1, max_nfev=3, substeps=1, step_tolerance=1e-14).fit(train)
+    assert not coarse.provenance["step_check"]["passed"]
+    assert coarse.provenance["step_check"]["max_discrepancy"] > 1e-14
 
 
 def test_eta_is_fixed_for_constant_input_and_redundancy_is_reported() -> None:

@@ -72,6 +72,9 @@ def _check_settings(est: SpencerEstimator) -> None:
             raise DataValidationError(name, f"expected a positive integer, got {v!r}")
     if isinstance(est.substeps, bool) or not isinstance(est.substeps, (int, np.integer)) or est.substeps < 0:
         raise DataValidationError("substeps", f"expected an integer >= 0 (0 = automatic), got {est.substeps!r}")
+    tol = est.step_tolerance
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < math.inf:
+        raise DataValidationError("step_tolerance", f"expected a positive finite number (ESR units), got {tol!r}")
     choices = {
         "weighting": ("record", "none"),
         "jacobian": ("sensitivity", "2-point", "3-point"),

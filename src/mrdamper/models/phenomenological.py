@@ -6,69 +6,54 @@ velocity ``v`` [m/s] and the electrical input ``i`` ([A], or [V] with ``input="v
     F = f0 + w1(i) v + w2(i) dF/dt + w3(i) d2F/dt2 + w4(i) F^3 + w5(i) F^5
     w_j(i) = W[j-1, 0] + W[j-1, 1] i + W[j-1, 2] i^2          (5 x 3 = 15 coefficients)
 
-``f0`` [N] is a constant force offset (accumulator preload, load-cell zero), identified when
-``offset=True`` (default) and exactly 0 with ``offset=False`` (the paper's literal form).
+``f0`` [N] is a constant force offset, identified when ``offset=True`` (default) and exactly 0
+with ``offset=False`` (the paper's literal form). With ``m = -w3``, ``c = -w2``,
+``a = -w4``, ``b = -w5`` it reads ``m F'' + c F' + g(F) = w1 v + f0``, ``g(F) = F + a F^3 + b F^5``:
+a forced nonlinear oscillator for the force.
 
-The relation is implicit in ``F``: the force is the solution of a second-order ODE. Simulation
-solves it for the highest derivative,
+Stability by construction
+-------------------------
+The default identification (``method="output-error"``) writes each of ``w1, c, m, a, b`` in the
+Bernstein basis of the identified input range with positive coefficients, so on the whole range
+``m > 0``, ``c > 0``, ``a > 0``, ``b > 0`` and ``w1 > 0``; then ``g`` is odd and strictly
+increasing (``g' >= 1``) and at every frozen input and velocity the ODE has exactly one
+equilibrium, which is globally asymptotically stable (proof in ``docs/models.md``).
+:meth:`P15Model.stability_certificate` checks these conditions on any coefficient set.
 
-    d2F/dt2 = (F - f0 - w1 v - w2 dF/dt - w4 F^3 - w5 F^5) / w3,
+Simulation
+----------
+``(F, dF/dt)`` is integrated with the two-stage L-stable SDIRK2 scheme of
+:mod:`mrdamper.models._p15_implicit`, ``ceil(dt / max_step)`` steps per sample, ``v`` and ``i``
+linear between samples. L-stability keeps the stiff part of the force ODE (fast force relaxation
+at large ``|F|``) stable at any step; the step is chosen for accuracy and checked by the
+estimator: the free run of every training record is repeated with half the step and the change
+(in ESR units) must stay below ``step_tolerance``, else a warning names the model and the
+discrepancy (also in ``provenance["step_check"]``).
 
-and integrates ``(F, dF/dt)`` with compiled fixed-step RK4 (:mod:`mrdamper.models._p15_kernels`).
-Writing ``m = -w3`` and ``c = -w2`` gives ``m F'' + c F' + g(F) = w1 v`` with
-``g(F) = F - w4 F^3 - w5 F^5 - f0``: a forced nonlinear oscillator whose S-shaped ``g`` produces
-the hysteresis. It is well posed only for ``w3 != 0`` and is dissipative and bounded for
-``w3 < 0``, ``w2 < 0``, ``w5 < 0`` (``form="stable"`` imposes these signs; see below).
+Free run starts from the model's rest state, like the other models' (LPV from zero initial
+conditions, Spencer from its rest state): ``dF/dt = 0`` and ``F`` the equilibrium for the
+record's first velocity and input (:func:`mrdamper.models._p15_fit.rest_state`). The measured
+force is never used. A non-finite state, ``|F|`` above ``force_bound`` (10 x the training force
+span), an implicit stage without a root, or ``w3(i)`` reaching zero along the record raises
+:class:`~mrdamper.errors.SimulationDivergedError` with the first offending sample.
 
 Identification
 --------------
-Equation-error linear least squares on filtered derivatives, per record (records are never
-joined: filtering and differentiation stop at record edges):
-
-1. ``F`` and ``v`` pass a zero-phase Butterworth low-pass (``filter_order``, default 4, run
-   forward and backward, so no phase lag between F, its derivatives and v) with cut-off
-   ``cutoff`` [Hz]. Default ``"auto"``: a tenth of each record's sampling rate, capped at
-   100 Hz (1 kHz records: 100 Hz; 200 Hz records: 20 Hz; 3 kHz records: 100 Hz). The measured
-   force of an MR damper holds sharp reversals, so the cut-off must stay well above the
-   excitation frequency; the second derivative amplifies noise with the cut-off squared, so it
-   must stay well below Nyquist. ``docs/models.md`` reports how the real-data results move with
-   the cut-off.
-2. ``dF/dt`` and ``d2F/dt2`` are second-order central differences of the filtered force
-   (:func:`numpy.gradient`); ``3 fs / cutoff`` samples are trimmed at both record edges.
-3. The quadratics ``w_j(i)`` are expanded in the Bernstein basis of ``s = (i - lo) / (hi - lo)``
-   over the training input range (well conditioned on [0, 1]); columns are scaled to unit norm;
-   the condition number of the scaled regression is checked (``IdentificationError`` above
-   ``1e10``, a warning above ``1e6``) and stored in provenance. The coefficients are converted
-   exactly to the monomial ``W`` above.
-4. ``form="free"`` (default, the paper's plain least squares) or ``form="stable"``: bounded least
-   squares (:func:`scipy.optimize.lsq_linear`) with every Bernstein coefficient of ``w3`` and
-   ``w2`` below zero and of ``w5`` at most zero, which is sufficient for ``w3 < 0``, ``w2 < 0``,
-   ``w5 <= 0`` on the whole training input range; ``form="monotone"`` adds ``w4 <= 0`` so that
-   ``g`` is increasing (no bistable branch, a saturating static force-velocity curve).
-
-After the fit every training record is simulated. A divergence is recorded in
-``provenance["training_divergence"]`` (record name -> sample), and with ``stable_only=True`` it
-raises :class:`~mrdamper.errors.IdentificationError` instead. An unstable least-squares fit is a
-legitimate result of the method: it is reported, never hidden.
-
-Simulation details
-------------------
-* Initial conditions: ``F(t0)`` and ``dF/dt(t0)`` are the value and slope at ``t0`` of a straight
-  line fitted to the measured force over the record's first 5 ms (at least 3 samples). This is
-  the only use of the measured force; the rest of the free run sees x, v and the input only.
-* Sub-steps: ``n_sub = ceil(dt / max_step)`` RK4 steps per sample, where ``max_step`` [s] is
-  stored in the model: half the inverse of the largest eigenvalue modulus of the linearised ODE
-  over the training input range and force span (so ``h |lambda| <= 0.5``), and at most 2000.
-* Divergence: a non-finite state or ``|F|`` above ``force_bound`` (10 x the training force span)
-  raises :class:`~mrdamper.errors.SimulationDivergedError` with the first offending sample, as
-  does ``w3(i)`` reaching zero or changing sign along the record's input.
+``method="output-error"`` (default): :mod:`mrdamper.models._p15_fit` (multiple shooting from the
+measured state over short segments, then free-run least squares; forward sensitivities of the
+compiled integrator), started from the ``form="monotone"`` equation-error fit.
+``method="equation-error"``: the paper's reading, linear least squares of the relation on
+filtered derivatives (:mod:`mrdamper.models._p15_eqerr`), ``form="free"`` (literal),
+``"stable"`` or ``"monotone"`` (sign constraints on the Bernstein coefficients).
 
 Examples
 --------
 >>> import numpy as np
 >>> from mrdamper import Experiment
->>> W = np.array([[1500, 2000, 0], [-2e-3, -1e-3, 0], [-1e-6, 0, 0], [2e-6, 0, 0], [-1e-12, 0, 0]])
+>>> W = np.array([[1500, 2000, 0], [-2e-3, -1e-3, 0], [-1e-6, 0, 0], [-2e-6, 0, 0], [-1e-12, 0, 0]])
 >>> m = P15Model(W=tuple(W.ravel()), input_range=(0.0, 1.0), force_bound=1e5, max_step=1e-4)
+>>> m.stability_certificate()["stable_by_construction"]
+True
 >>> t = np.arange(1000) / 1000.0
 >>> v = 0.1 * np.sin(2 * np.pi * 2 * t)
 >>> e = Experiment(t=t, x=0 * t, v=v, F=0 * t, i=0.5 + 0 * t)
@@ -79,6 +64,8 @@ True
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 import time
 import warnings
@@ -87,26 +74,28 @@ from dataclasses import asdict, dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from scipy.optimize import least_squares, lsq_linear
-from scipy.signal import butter, sosfiltfilt
 
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models._p15_kernels import p15_sensitivities, p15_simulate
+from mrdamper.models._lpv_kernels import first_order_lag
+from mrdamper.models._p15_eqerr import check_levels, equation_error, filtered_state
+from mrdamper.models._p15_fit import (
+    BERNSTEIN_TO_POWER,
+    bernstein_basis,
+    identify_output_error,
+    rest_state,
+    to_monomial,
+)
+from mrdamper.models._p15_implicit import p15i_run
+from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
 __all__ = ["P15Estimator", "P15Model"]
 
-#: Upper limit of RK4 sub-steps per sampling interval.
+#: Upper limit of integration steps per sampling interval.
 MAX_SUBSTEPS = 2000
-#: Condition number of the scaled regression above which identification fails / warns.
-_COND_FAIL, _COND_WARN = 1e10, 1e6
-#: Samples required per coefficient.
-_SAMPLES_PER_PARAMETER = 10
-#: Length of the initial-condition window [s].
-_IC_WINDOW = 5e-3
 
 
 @dataclass(frozen=True)
@@ -116,21 +105,35 @@ class P15Model(FittedModel):
     Attributes
     ----------
     W : tuple of 15 float
-        Row-major 5 x 3 coefficients, ``w_j(i) = W[3(j-1)] + W[3(j-1)+1] i + W[3(j-1)+2] i^2``.
-        Units: w1 [N s/m], w2 [s], w3 [s^2], w4 [1/N^2], w5 [1/N^4], each per input unit to the
-        power of the term.
+        Row-major 5 x 3 coefficients of ``w_1 .. w_5`` in the basis ``basis``. Units: w1 [N s/m],
+        w2 [s], w3 [s^2], w4 [1/N^2], w5 [1/N^4] (in the power basis, each per input unit to the
+        power of the term).
     f0 : float
         Force offset [N].
     force_bound : float
         Largest accepted ``|F|`` during simulation [N] (10 x the training force span).
     max_step : float
-        Largest RK4 step [s].
+        Largest integration step [s] (``inf``: one step per sample).
+    eta : float or None
+        Rate [1/s] of an optional first-order drive lag ``d rho/dt = -eta (rho - input)`` (exact
+        zero-order-hold discretisation, ``rho(t0) = input(t0)``); the coefficients are then
+        quadratics in ``rho`` (for records whose electrical input is a command voltage, as in the
+        LPV model). ``None``: the input itself.
+    basis : {"power", "bernstein"}
+        ``"power"``: ``w_j(i) = W[3(j-1)] + W[3(j-1)+1] i + W[3(j-1)+2] i^2``. ``"bernstein"``
+        (what the estimator returns): ``W[3(j-1) + k]`` multiplies the Bernstein polynomial
+        ``B_k(s)`` (``(1-s)^2, 2s(1-s), s^2``) of ``s = (i - lo) / (hi - lo)`` on ``input_range``,
+        with ``s`` clipped to [0, 1]: the coefficients are held at their edge values outside the
+        identified range (where a quadratic could otherwise lose its sign), and positivity is exact
+        in floating point.
     """
 
     W: tuple[float, ...] = (0.0,) * 15
     f0: float = 0.0
     force_bound: float = 1e6
     max_step: float = math.inf
+    eta: float | None = None
+    basis: Literal["power", "bernstein"] = "power"
 
     kind: ClassVar[str] = "p15"
 
@@ -145,6 +148,13 @@ class P15Model(FittedModel):
             raise DataValidationError("force_bound", f"expected a positive force [N], got {self.force_bound}")
         if not self.max_step > 0:
             raise DataValidationError("max_step", f"expected a positive step [s], got {self.max_step}")
+        if self.eta is not None and not (math.isfinite(self.eta) and self.eta > 0):
+            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+        if self.basis not in ("power", "bernstein"):
+            raise DataValidationError("basis", f"expected 'power' or 'bernstein', got {self.basis!r}")
+        if self.basis == "bernstein" and not self.input_range[1] > self.input_range[0]:
+            raise DataValidationError(
+                "input_range", f"the Bernstein basis needs lo < hi, got {self.input_range}")
         object.__setattr__(self, "W", W)
         object.__setattr__(self, "f0", float(self.f0))
         object.__setattr__(self, "force_bound", float(self.force_bound))
@@ -152,111 +162,181 @@ class P15Model(FittedModel):
 
     @property
     def W_matrix(self) -> np.ndarray:
-        """Coefficients as a (5, 3) array: row j-1 holds ``w_j``'s constant, linear, quadratic term."""
+        """Stored coefficients as a (5, 3) array (row j-1: ``w_j`` in the model's ``basis``)."""
         return np.asarray(self.W, dtype=np.float64).reshape(5, 3)
 
     def coefficients(self, i: np.ndarray | float) -> np.ndarray:
         """``w_1 .. w_5`` at input ``i`` [A or V]; shape ``(5,) + shape(i)``."""
         ii = np.asarray(i, dtype=float)
         Wm = self.W_matrix
+        if self.basis == "bernstein":
+            phi = bernstein_basis(ii, *self.input_range)
+            return np.stack([Wm[j, 0] * phi[0] + Wm[j, 1] * phi[1] + Wm[j, 2] * phi[2] for j in range(5)])
         return np.stack([Wm[j, 0] + Wm[j, 1] * ii + Wm[j, 2] * ii**2 for j in range(5)])
 
+    def monomial(self) -> np.ndarray:
+        """Power-basis coefficients (5 x 3, ``w_j = c0 + c1 i + c2 i^2``), valid on ``input_range``."""
+        if self.basis == "power":
+            return self.W_matrix
+        return to_monomial(self.W_matrix, *self.input_range)
+
+    def bernstein(self) -> np.ndarray:
+        """Bernstein coefficients (5 x 3) of ``w1, c = -w2, m = -w3, a = -w4, b = -w5`` on
+        ``input_range``: a row of non-negative coefficients proves that quadratic non-negative on
+        the whole range."""
+        lo, hi = self.input_range
+        if not hi > lo:
+            raise DataValidationError("input_range", f"expected lo < hi, got {self.input_range}")
+        if self.basis == "bernstein":
+            B = self.W_matrix
+        else:
+            R = hi - lo
+            to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
+            M = to_i @ BERNSTEIN_TO_POWER  # Bernstein -> monomial
+            B = np.linalg.solve(M, self.W_matrix.T).T
+        return B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None]
+
+    def stability_certificate(self) -> dict[str, Any]:
+        """Check the sufficient conditions for stability on ``input_range`` (``docs/models.md``).
+
+        Returns
+        -------
+        dict
+            ``min_bernstein``: smallest Bernstein coefficient of each of ``w1, c, m, a, b``,
+            relative to the largest magnitude of the same quadratic; ``stable_by_construction``:
+            ``m, c`` positive and ``a, b`` non-negative on the range (``g`` strictly increasing;
+            exact for ``basis="bernstein"``, up to ~1e-12 rounding of the power basis otherwise);
+            ``passive``: also ``w1 > 0``; ``outside_range``: how the coefficients continue beyond
+            the range (held at the edge values for the Bernstein basis, so the conditions hold for
+            every input).
+        """
+        B = self.bernstein()
+        rel = {}
+        for name, row in zip(("w1", "c", "m", "a", "b"), B):
+            top = float(np.max(np.abs(row))) or 1.0
+            rel[name] = float(np.min(row) / top)
+        tol = 0.0 if self.basis == "bernstein" else -1e-9
+        stable = rel["m"] > 0 and rel["c"] > 0 and rel["a"] >= tol and rel["b"] >= tol
+        return {"min_bernstein": rel, "stable_by_construction": bool(stable),
+                "passive": bool(stable and rel["w1"] > 0),
+                "outside_range": "held at edge values" if self.basis == "bernstein" else "quadratic extrapolation"}
+
     def substeps(self, dt: float) -> int:
-        """RK4 sub-steps per sampling interval ``dt`` [s] (at most :data:`MAX_SUBSTEPS`)."""
+        """Integration steps per sampling interval ``dt`` [s] (at most :data:`MAX_SUBSTEPS`)."""
         if not math.isfinite(self.max_step):
             return 1
         return int(min(MAX_SUBSTEPS, max(1, math.ceil(dt / self.max_step - 1e-12))))
 
     def predict(self, experiment: Experiment) -> np.ndarray:
-        """Free-run force [N] (initial state from the first 5 ms of the measured force).
+        """Free-run force [N], from the model's rest state at the first sample.
 
         Raises
         ------
         SimulationDivergedError
-            If ``w3(i)`` reaches zero or changes sign along the record, or the force becomes
-            non-finite or exceeds ``force_bound``; the error names the first such sample.
+            If ``w3(i)`` reaches zero or changes sign along the record, an implicit stage has no
+            root, or the force becomes non-finite or exceeds ``force_bound``; the error names
+            the first such sample.
         """
-        i = np.ascontiguousarray(self.electrical_input(experiment), dtype=np.float64)
+        return self.simulate_steps(experiment, self.substeps(experiment.dt))
+
+    def simulate_steps(self, experiment: Experiment, n_sub: int) -> np.ndarray:
+        """Free-run force [N] with ``n_sub`` integration steps per sample (see :meth:`predict`)."""
+        i = _lagged(np.asarray(self.electrical_input(experiment), dtype=np.float64), experiment.dt, self.eta)
         w3 = self.coefficients(i)[2]
-        bad = np.flatnonzero((w3 == 0) | (np.sign(w3) != np.sign(w3[0])))
-        if bad.size:
-            k = int(bad[0])
+        bad_w3 = np.flatnonzero((w3 == 0) | (np.sign(w3) != np.sign(w3[0])))
+        if bad_w3.size:
+            k = int(bad_w3[0])
             raise SimulationDivergedError(
                 self.kind, k,
                 f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} "
                 f"(w3 from {w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
             )
-        dt = experiment.dt
-        n_sub = self.substeps(dt)
-        if n_sub == MAX_SUBSTEPS and dt / self.max_step > MAX_SUBSTEPS:
-            warnings.warn(
-                f"p15: the ODE needs {math.ceil(dt / self.max_step)} RK4 sub-steps per sample; "
-                f"capped at {MAX_SUBSTEPS} (accuracy not guaranteed)",
-                RuntimeWarning,
-                stacklevel=2,
-            )
-        F0, G0 = initial_state(experiment)
-        F, k = p15_simulate(
-            np.ascontiguousarray(experiment.v), i, dt, self.W_matrix, self.f0, F0, G0, n_sub, self.force_bound
-        )
-        if k >= 0:
+        v = np.ascontiguousarray(experiment.v, dtype=np.float64)
+        F0 = rest_state(self.coefficients(float(i[0])), self.f0, float(v[0]))
+        one = np.zeros(1, dtype=np.int64)
+        bern = self.basis == "bernstein"
+        lo, hi = self.input_range if bern else (0.0, 1.0)
+        F, _, bad = p15i_run(v, i, experiment.dt, self.W_matrix, self.f0, int(bern), lo, hi, int(n_sub),
+                             self.force_bound, one, np.array([experiment.n], dtype=np.int64),
+                             np.array([F0]), np.zeros(1), np.zeros((1, 16)), False, True)
+        if bad[0] >= 0:
+            k = int(bad[0])
             raise SimulationDivergedError(
                 self.kind, k,
-                f"force left the bound |F| <= {self.force_bound:.4g} N or became non-finite "
-                f"(t = {experiment.t[k]:.6g} s, {n_sub} RK4 sub-steps per sample)",
+                f"force left the bound |F| <= {self.force_bound:.4g} N, became non-finite or an implicit "
+                f"stage had no root (t = {experiment.t[k]:.6g} s, {n_sub} steps per sample)",
             )
         return F
 
 
-def initial_state(experiment: Experiment) -> tuple[float, float]:
-    """Force [N] and force rate [N/s] at ``t0`` from a line fitted to the first 5 ms of F."""
-    m = int(min(experiment.n, max(3, round(_IC_WINDOW * experiment.fs))))
-    tt = experiment.t[:m] - experiment.t[0]
-    slope, intercept = np.polyfit(tt, experiment.F[:m], 1)
-    return float(intercept), float(slope)
-
-
 @dataclass
 class P15Estimator(Estimator):
-    """Identifies :class:`P15Model` by least squares on filtered force derivatives.
+    """Identifies :class:`P15Model`.
 
     Parameters
     ----------
     input : {"i", "voltage"}
         Electrical input channel.
-    cutoff : float, "auto" or None
-        Low-pass cut-off [Hz] of the zero-phase derivative filter; ``"auto"``: ``min(fs / 10,
-        100)`` per record; ``None``: no filter (noise-free synthetic data only).
-    filter_order : int
-        Butterworth order (the filter runs forward and backward: twice the order, zero phase).
+    method : {"output-error", "equation-error"}
+        ``"output-error"`` (default): least squares on the simulated force with the
+        stable-by-construction parametrisation (multiple shooting, then free run).
+        ``"equation-error"``: least squares of the relation on filtered derivatives, the paper's
+        reading (with ``form="free"`` its literal form).
     form : {"free", "stable", "monotone"}
-        Plain least squares (the paper, default); ``"stable"``: sign-constrained least squares
-        (``w3 < 0``, ``w2 < 0``, ``w5 <= 0`` over the training input range); ``"monotone"``:
-        additionally ``w4 <= 0``, so ``g(F)`` is increasing and the model has no bistable branch.
+        Sign constraints of the equation-error fit (``method="equation-error"`` only; the
+        output-error fit starts from the ``"monotone"`` equation-error fit).
+    cutoff : float, "auto" or None
+        Low-pass cut-off [Hz] of the zero-phase derivative filter (``"auto"``: ``min(fs / 10,
+        100)`` per record; ``None``: no filter). Also filters the measured state from which the
+        shooting segments start.
+    filter_order : int
+        Butterworth order (run forward and backward).
     offset : bool
         Identify the force offset ``f0`` [N] (default) or fix it to 0.
     stable_only : bool
-        Raise :class:`IdentificationError` if a free-run simulation of a training record
-        diverges (default: record it in provenance and return the model).
-    refine : bool
-        After the equation-error fit, minimise the free-run (output) error by nonlinear least
-        squares with forward-sensitivity Jacobians and the same sign bounds as ``form``.
-    max_nfev : int
-        Evaluation budget of the refinement.
-    refine_samples : int
-        Largest number of residual samples of the refinement (every k-th sample of each
-        simulated record; the simulation itself always runs on every sample).
+        Raise :class:`IdentificationError` if a training record's free run diverges.
+    max_step : float
+        Largest integration step [s] used by the fit and given to the model (default 2.5 ms: two
+        steps per sample at 200 Hz, one at 1 kHz and above), refined after the fit if the step
+        check asks for it (``step_tolerance``).
+    segment : float
+        Duration [s] of the multiple-shooting segments.
+    segment_stride : int
+        Use every ``segment_stride``-th segment in the shooting stage (1: all).
+    shoot_nfev, max_nfev : int
+        Evaluation budgets of the shooting stage and of the free-run stage (0 skips a stage).
+    max_samples : int
+        Largest number of residual samples per evaluation (every k-th sample).
+    jacobian : {"sensitivity", "2-point", "3-point"}
+        Forward sensitivities (default) or SciPy finite differences (for comparison only).
+    step_tolerance : float
+        Largest accepted change of a training record's free run when the integration step is
+        halved, in ESR units (mean squared change over the variance of the measured force).
+        Above it the fit halves the model's step (at most ``step_refinements`` times) and checks
+        again; a warning names the model and the discrepancy if it still fails.
+    step_refinements : int
+        How many times the fit may halve the model's step to meet ``step_tolerance``.
+    eta : float or None
+        Drive-lag rate [1/s] of the electrical input (see :class:`P15Model`); ``None``: none.
     """
 
     input: ElectricalSource = "i"
+    method: Literal["output-error", "equation-error"] = "output-error"
+    form: Literal["free", "stable", "monotone"] = "free"
     cutoff: float | Literal["auto"] | None = "auto"
     filter_order: int = 4
-    form: Literal["free", "stable", "monotone"] = "free"
     offset: bool = True
     stable_only: bool = False
-    refine: bool = False
+    max_step: float = 2.5e-3
+    segment: float = 0.2
+    segment_stride: int = 1
+    shoot_nfev: int = 30
     max_nfev: int = 20
-    refine_samples: int = 20000
+    max_samples: int = 20000
+    jacobian: Literal["sensitivity", "2-point", "3-point"] = "sensitivity"
+    step_tolerance: float = 1e-4
+    step_refinements: int = 3
+    eta: float | None = None
 
     kind: ClassVar[str] = "p15"
 
@@ -274,84 +354,45 @@ class P15Estimator(Estimator):
         """
         t_start = time.perf_counter()
         self._check_settings()
-        exps = self._as_set(data)
-        parts = [self._regressors(e) for e in exps]
-        n_total = sum(p[0].size for p in parts)
-        n_par = 15 + int(self.offset)
-        if n_total < _SAMPLES_PER_PARAMETER * n_par:
-            raise IdentificationError(
-                f"data: p15 has {n_par} parameters and needs at least {_SAMPLES_PER_PARAMETER * n_par} "
-                f"samples after trimming the filter edges, got {n_total}"
-            )
-        i_all = np.concatenate([e.electrical(self.input) for e in exps])
+        raw = self._as_set(data)
+        i_all = np.concatenate([e.electrical(self.input) for e in raw])
+        # the range of the raw input also holds every lagged input (a convex combination of it)
         lo, hi = float(np.min(i_all)), float(np.max(i_all))
-        i_reg = np.concatenate([p[1] for p in parts])
-        _check_levels(i_reg, lo, hi, self.input)
-
-        y = np.concatenate([p[0] for p in parts])
-        cols = np.concatenate([p[2] for p in parts], axis=0)  # (n, 5): v, dF, ddF, F^3, F^5
-        s = (i_reg - lo) / (hi - lo)
-        basis = np.stack([(1 - s) ** 2, 2 * s * (1 - s), s**2], axis=1)
-        X = (cols[:, :, None] * basis[:, None, :]).reshape(y.size, 15)
-        if self.offset:
-            X = np.concatenate([X, np.ones((y.size, 1))], axis=1)
-        norms = np.sqrt(np.einsum("ij,ij->j", X, X))
-        if np.any(norms == 0):
-            j = int(np.flatnonzero(norms == 0)[0])
-            raise IdentificationError(f"data: regressor {j} of p15 is identically zero; nothing to identify")
-        ynorm = float(np.linalg.norm(y)) or 1.0
-        Xs, ys = X / norms, y / ynorm
-        # einsum without BLAS: the same bytes whatever the BLAS thread count (a fitted P-15 can be
-        # chaotic, so rounding differences would otherwise show in its free run)
-        gram = np.einsum("ij,ik->jk", Xs, Xs)
-        ev = np.linalg.eigvalsh(gram)
-        cond = float(np.sqrt(ev[-1] / ev[0])) if ev[0] > 0 else math.inf
-        if not cond < _COND_FAIL:
-            raise IdentificationError(
-                f"data: p15 regression is ill-conditioned (condition number {cond:.3g} > {_COND_FAIL:g}); "
-                f"the records do not excite all 15 terms (vary velocity amplitude and {self.input})"
-            )
-        if cond > _COND_WARN:
-            warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=2)
-        lb, ub = _form_bounds(self.form, X.shape[1])
-        if self.form == "free":
-            theta = np.linalg.solve(gram, np.einsum("ij,i->j", Xs, ys))
-        else:
-            theta = lsq_linear(Xs, ys, bounds=(lb, ub), method="bvls").x
-        scale = ynorm / norms
-        M = _coef_map(lo, hi)
-        W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
-        f0 = float(theta[15] * scale[15]) if self.offset else 0.0
-        resid = float(np.sqrt(np.mean((X @ (theta * scale) - y) ** 2)))
-        span = float(max(np.ptp(e.F) for e in exps))
-        refined: dict[str, Any] = {}
-        if self.refine:
-            theta, refined = _refine(theta, scale, M, (lb, ub), exps, self, 10.0 * span, lo, hi)
-            W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
-            f0 = float(theta[15] * scale[15]) if self.offset else 0.0
-        model = P15Model(
-            W=tuple(W.ravel()),
-            f0=f0,
-            input=self.input,
-            input_range=(lo, hi),
-            force_bound=10.0 * span,
-            max_step=_max_step(W, lo, hi, exps),
+        exps = raw if self.eta is None else ExperimentSet(
+            [e.replace(**{self.input: _lagged(e.electrical(self.input), e.dt, self.eta)}) for e in raw]
         )
-        divergence, esr = _simulate_training(model, exps)
+        check_levels(np.concatenate([e.electrical(self.input) for e in exps]), lo, hi, self.input)
+        form = self.form if self.method == "equation-error" else "monotone"
+        B, f0, ee_info = equation_error(list(exps), self.input, lo, hi, form=form, offset=self.offset,
+                                        cutoff=self.cutoff, order=self.filter_order)
+        span = float(max(np.ptp(e.F) for e in exps))
+        bound = 10.0 * span
+        oe_info: dict[str, Any] = {}
+        if self.method == "output-error":
+            states = [filtered_state(e, self.cutoff, self.filter_order) for e in exps]
+            B, f0, oe_info = identify_output_error(
+                list(exps), self.input, lo, hi, B, f0, Ff=[s[0] for s in states], Gf=[s[1] for s in states],
+                offset=self.offset, max_step=self.max_step, segment=self.segment,
+                segment_stride=self.segment_stride, shoot_nfev=self.shoot_nfev, max_nfev=self.max_nfev,
+                max_samples=self.max_samples, jacobian=self.jacobian, bound=bound,
+            )
+        model = P15Model(W=tuple(B.ravel()), f0=f0, input=self.input, input_range=(lo, hi),
+                         force_bound=bound, max_step=self.max_step, eta=self.eta, basis="bernstein")
+        divergence, esr = _simulate_training(model, raw)
+        model, step = self._checked_step(model, [e for e in raw if e.name not in divergence])
         w3_grid = model.coefficients(np.linspace(lo, hi, 201))[2]
         provenance: dict[str, Any] = {
             "estimator": type(self).__name__,
             "settings": asdict(self),
-            "training_records": list(exps.names),
-            "n_samples": int(y.size),
-            "cutoff_hz": {e.name: _cutoff(self.cutoff, e.fs) for e in exps},
-            "condition_number": cond,
-            "equation_error_rms": resid,
-            "refinement": refined,
+            "training_records": list(raw.names),
+            **ee_info,
+            "output_error": oe_info,
+            "stability": model.stability_certificate(),
             "w3_range": [float(w3_grid.min()), float(w3_grid.max())],
             "w3_crosses_zero": bool(w3_grid.min() <= 0 <= w3_grid.max()),
             "training_divergence": divergence,
             "training_esr": esr,
+            "step_check": step,
             "elapsed_s": time.perf_counter() - t_start,
         }
         if self.stable_only and divergence:
@@ -359,15 +400,39 @@ class P15Estimator(Estimator):
             raise IdentificationError(
                 f"p15: free-run simulation of {len(divergence)} training record(s) diverged "
                 f"(first: {first[0]!r} at sample {first[1]['sample']}); stable_only=True. "
-                f"Try form='stable' or another cutoff"
+                f"Use method='output-error' (stable by construction)"
             )
         return P15Model(**{**model.parameters, "input": self.input, "input_range": (lo, hi)},
                         provenance=provenance)
 
-    # ------------------------------------------------------------------ helpers
+    def _checked_step(self, model: P15Model, records: list[Experiment]) -> tuple[P15Model, dict[str, Any]]:
+        """Halve the model's step until halving it again changes no training free run by more than
+        ``step_tolerance`` (at most ``step_refinements`` times); warn if that is not reached."""
+        history = []
+        for k in range(self.step_refinements + 1):
+            last = k == self.step_refinements
+            with warnings.catch_warnings():
+                if not last:
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                check = step_halving_check(
+                    "p15", records, functools.partial(_run_refined, model), self.step_tolerance)
+            history.append({"max_step": model.max_step, "max_discrepancy": check["max_discrepancy"]})
+            if check["passed"] or last:
+                break
+            model = dataclasses.replace(model, max_step=0.5 * min(model.max_step, min(e.dt for e in records)))
+        return model, {**check, "history": history, "max_step": model.max_step}
+
     def _check_settings(self) -> None:
+        if self.eta is not None and (isinstance(self.eta, bool) or not isinstance(self.eta, (int, float))
+                                     or not (math.isfinite(self.eta) and self.eta > 0)):
+            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+        if isinstance(self.step_refinements, bool) or not isinstance(self.step_refinements, int) or not (
+                0 <= self.step_refinements <= 10):
+            raise DataValidationError("step_refinements", f"expected an integer in 0..10, got {self.step_refinements!r}")
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+        if self.method not in ("output-error", "equation-error"):
+            raise DataValidationError("method", f"expected 'output-error' or 'equation-error', got {self.method!r}")
         if self.cutoff is not None and self.cutoff != "auto" and (
             isinstance(self.cutoff, bool) or not isinstance(self.cutoff, (int, float)) or not self.cutoff > 0
         ):
@@ -376,179 +441,30 @@ class P15Estimator(Estimator):
             raise DataValidationError("filter_order", f"expected an integer in 1..8, got {self.filter_order!r}")
         if self.form not in ("free", "stable", "monotone"):
             raise DataValidationError("form", f"expected 'free', 'stable' or 'monotone', got {self.form!r}")
-        for name in ("max_nfev", "refine_samples"):
+        if self.jacobian not in ("sensitivity", "2-point", "3-point"):
+            raise DataValidationError("jacobian", f"expected 'sensitivity', '2-point' or '3-point', got {self.jacobian!r}")
+        for name, low in (("shoot_nfev", 0), ("max_nfev", 0), ("max_samples", 100), ("segment_stride", 1)):
             val = getattr(self, name)
-            if isinstance(val, bool) or not isinstance(val, int) or val < 1:
-                raise DataValidationError(name, f"expected a positive integer, got {val!r}")
-        for name in ("offset", "stable_only", "refine"):
+            if isinstance(val, bool) or not isinstance(val, int) or val < low:
+                raise DataValidationError(name, f"expected an integer >= {low}, got {val!r}")
+        for name in ("max_step", "segment", "step_tolerance"):
+            val = getattr(self, name)
+            if isinstance(val, bool) or not isinstance(val, (int, float)) or not 0 < val < math.inf:
+                raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
+        for name in ("offset", "stable_only"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise DataValidationError(name, f"expected True or False, got {getattr(self, name)!r}")
 
-    def _regressors(self, e: Experiment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Filtered force (target), input and the five regressor signals of one record, trimmed."""
-        i = e.electrical(self.input)
-        if self.cutoff is None:
-            dF = np.gradient(e.F, e.dt)
-            ddF = np.gradient(dF, e.dt)
-            sl = slice(2, e.n - 2)
-            F = e.F[sl]
-            cols = np.stack([e.v[sl], dF[sl], ddF[sl], F**3, F**5], axis=1)
-            return F, np.asarray(i[sl]), cols
-        fc = float(_cutoff(self.cutoff, e.fs) or 0.0)
-        if not fc < 0.5 * e.fs:
-            raise DataValidationError(
-                "cutoff", f"{fc:g} Hz is not below the Nyquist frequency {0.5 * e.fs:g} Hz of record {e.name!r}"
-            )
-        trim = math.ceil(3.0 * e.fs / fc)
-        if e.n <= 2 * trim + 3 * self.filter_order:
-            return np.empty(0), np.empty(0), np.empty((0, 5))
-        sos = butter(self.filter_order, fc, btype="low", fs=e.fs, output="sos")
-        Ff = sosfiltfilt(sos, e.F)
-        vf = sosfiltfilt(sos, e.v)
-        dF = np.gradient(Ff, e.dt)
-        ddF = np.gradient(dF, e.dt)
-        sl = slice(trim, e.n - trim)
-        F = Ff[sl]
-        cols = np.stack([vf[sl], dF[sl], ddF[sl], F**3, F**5], axis=1)
-        return F, np.asarray(i[sl]), cols
+
+def _run_refined(model: P15Model, e: Experiment, k: int) -> np.ndarray:
+    """Free run of ``e`` with ``k`` times the model's integration steps per sample."""
+    return model.simulate_steps(e, k * model.substeps(e.dt))
 
 
-def _cutoff(setting: float | str | None, fs: float) -> float | None:
-    if setting is None:
-        return None
-    return float(min(fs / 10.0, 100.0)) if setting == "auto" else float(setting)
-
-
-def _check_levels(i: np.ndarray, lo: float, hi: float, source: str) -> None:
-    """Quadratics in the input need at least three distinct input levels."""
-    if hi - lo <= 1e-9 * max(1.0, abs(hi)):
-        raise IdentificationError(
-            f"{source}: p15 coefficients are quadratics in {source} and need at least 3 distinct "
-            f"{source} levels, but the training input is constant ({lo:g}); rank 1 of 3"
-        )
-    s = (i - lo) / (hi - lo)
-    V = np.stack([np.ones_like(s), s, s * s], axis=1)
-    sv = np.linalg.svd(V / np.linalg.norm(V, axis=0), compute_uv=False)
-    rank = int(np.sum(sv > sv[0] * 1e-6))
-    if rank < 3:
-        raise IdentificationError(
-            f"{source}: p15 coefficients are quadratics in {source} and need at least 3 distinct "
-            f"{source} levels; the training input has numerical rank {rank} of 3"
-        )
-
-
-def _coef_map(lo: float, hi: float) -> np.ndarray:
-    """Linear map (15 x 15) from Bernstein coefficients on ``s = (i - lo) / (hi - lo)`` (row-major
-    5 x 3) to the monomial coefficients ``W`` in ``i``."""
-    R = hi - lo
-    # Bernstein (b0, b1, b2) -> power basis in s (a0, a1, a2) -> power basis in i
-    to_s = np.array([[1.0, 0.0, 0.0], [-2.0, 2.0, 0.0], [1.0, -2.0, 1.0]])
-    to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
-    return np.kron(np.eye(5), to_i @ to_s)
-
-
-def _form_bounds(form: str, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on the scaled Bernstein coefficients that impose the sign constraints of ``form``."""
-    lb, ub = np.full(n, -np.inf), np.full(n, np.inf)
-    if form != "free":
-        ub[3:6] = -1e-9  # w2 Bernstein coefficients < 0
-        ub[6:9] = -1e-9  # w3 < 0
-        ub[12:15] = 0.0  # w5 <= 0
-    if form == "monotone":
-        ub[9:12] = 0.0  # w4 <= 0: g(F) increasing, no bistable branch
-    return lb, ub
-
-
-def _max_step(W: np.ndarray, lo: float, hi: float, exps: Iterable[Experiment]) -> float:
-    """Step [s] keeping ``h |lambda| <= 0.5`` for the linearised ODE over input range and force span."""
-    Fmin = min(float(np.min(e.F)) for e in exps)
-    Fmax = max(float(np.max(e.F)) for e in exps)
-    ii = np.linspace(lo, hi, 11)[:, None]
-    FF = np.linspace(Fmin, Fmax, 41)[None, :]
-    w = [W[j, 0] + W[j, 1] * ii + W[j, 2] * ii**2 for j in range(5)]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        b = w[1] / w[2]  # lambda^2 + b lambda - gp / w3 = 0
-        gp = 1.0 - 3.0 * w[3] * FF**2 - 5.0 * w[4] * FF**4
-        c = -gp / w[2]
-        disc = np.sqrt((b * b - 4 * c).astype(complex))
-        lam = np.maximum(np.abs((-b + disc) / 2), np.abs((-b - disc) / 2))
-    lmax = float(np.nanmax(lam)) if np.any(np.isfinite(lam)) else math.inf
-    return 0.5 / lmax if lmax > 0 else math.inf
-
-
-def _refine(
-    theta0: np.ndarray, scale: np.ndarray, M: np.ndarray, bounds: tuple[np.ndarray, np.ndarray],
-    exps: Iterable[Experiment], est: P15Estimator, bound: float, lo: float, hi: float,
-) -> tuple[np.ndarray, dict[str, Any]]:
-    """Output-error refinement: least squares on the free-run simulation error of every training
-    record, Jacobian from forward sensitivities, same sign bounds as the equation-error fit."""
-    recs = list(exps)
-    n_total = sum(e.n for e in recs)
-    stride = max(1, math.ceil(n_total / est.refine_samples))
-    idx = [np.arange(0, e.n, stride) for e in recs]
-    states = [initial_state(e) for e in recs]
-    Fs = float(np.std(np.concatenate([e.F for e in recs]))) or 1.0
-    n_par = theta0.size
-    lb, ub = bounds
-    x0 = np.clip(theta0, lb, ub)
-
-    def substeps(theta: np.ndarray) -> list[int]:
-        W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
-        ms = _max_step(W, lo, hi, recs)
-        return [int(min(MAX_SUBSTEPS, max(1, math.ceil(e.dt / ms)))) if math.isfinite(ms) else 1 for e in recs]
-
-    # Sub-steps are fixed at max(8, twice the starting model's need): a step into a stiffer region
-    # (h |lambda| > 0.5 at that step) counts as divergence, which bounds the cost of each
-    # evaluation and keeps the integration accurate.
-    budget = [min(MAX_SUBSTEPS, max(8, 2 * n)) for n in substeps(x0)]
-
-    def run(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        W = np.einsum("jk,k->j", M, theta[:15] * scale[:15]).reshape(5, 3)
-        f0 = float(theta[15] * scale[15]) if est.offset else 0.0
-        need = substeps(theta)
-        res, jac = [], []
-        for e, k, (F0, G0), n_sub, nb in zip(recs, idx, states, need, budget):
-            if n_sub > nb:
-                res.append(np.full(k.size, bound / Fs))
-                jac.append(np.zeros((k.size, n_par)))
-                continue
-            n_sub = nb
-            i = np.ascontiguousarray(e.electrical(est.input))
-            F, J, bad = p15_sensitivities(np.ascontiguousarray(e.v), i, e.dt, W, f0, F0, G0, n_sub, bound,
-                                          bool(est.offset))
-            if bad >= 0:  # diverged: a large, finite residual so the solver rejects the step
-                F[bad:] = bound
-                J[bad:] = 0.0
-            res.append((F[k] - e.F[k]) / Fs)
-            Jt = np.empty((k.size, n_par))
-            Jt[:, :15] = (J[k, :15] @ M) * scale[:15]
-            if est.offset:
-                Jt[:, 15] = J[k, 15] * scale[15]
-            jac.append(Jt / Fs)
-        return np.concatenate(res), np.concatenate(jac)
-
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-    def cached(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        key = theta.tobytes()
-        if key not in cache:
-            cache.clear()
-            cache[key] = run(theta)
-        return cache[key]
-
-    r0 = cached(x0)[0]
-    sol = least_squares(lambda th: cached(th)[0], x0, jac=lambda th: cached(th)[1], bounds=(lb, ub),
-                        method="trf", x_scale="jac", max_nfev=est.max_nfev)
-    info = {
-        "rms_before": float(np.sqrt(np.mean(r0**2)) * Fs),
-        "rms_after": float(np.sqrt(2 * sol.cost / sol.fun.size) * Fs),
-        "nfev": int(sol.nfev),
-        "status": int(sol.status),
-        "sample_stride": int(stride),
-    }
-    if not info["rms_after"] <= info["rms_before"]:
-        return x0, {**info, "kept": "equation-error fit"}
-    return sol.x, info
+def _lagged(e: np.ndarray, dt: float, eta: float | None) -> np.ndarray:
+    """The input through the drive lag ``eta`` [1/s] (unchanged for ``None``), contiguous float64."""
+    e = np.ascontiguousarray(e, dtype=np.float64)
+    return e if eta is None else first_order_lag(e, dt, eta)
 
 
 def _simulate_training(model: P15Model, exps: Iterable[Experiment]) -> tuple[dict[str, Any], dict[str, float]]:

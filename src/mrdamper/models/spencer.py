@@ -26,6 +26,7 @@ with parameter scaling, seeded multi-start and a Jacobian from forward sensitivi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Iterable, Mapping
@@ -37,6 +38,7 @@ import numpy as np
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models import _spencer_kernels as _k
+from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
@@ -348,6 +350,10 @@ class SpencerEstimator(Estimator):
         When to fix ``eta`` (see ``fixed``).
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
+    step_tolerance : float
+        After the fit every training record is simulated again with half the RK4 step; a change
+        of the free run above this value (ESR units: mean squared change over the variance of
+        the measured force) gives a warning naming the discrepancy (``provenance["step_check"]``).
     """
 
     kind: ClassVar[str] = "spencer"
@@ -368,6 +374,7 @@ class SpencerEstimator(Estimator):
     substeps: int = 0
     fix_eta: Literal["auto", "never", "always"] = "auto"
     range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    step_tolerance: float = 1e-4
 
     def fit(self, data: Experiment | Iterable[Experiment]) -> SpencerModel:
         """Identify the model from one record or a collection of records.
@@ -384,6 +391,13 @@ class SpencerEstimator(Estimator):
         exps = self._as_set(data)
         t0, c0 = time.perf_counter(), time.process_time()
         p, common = identify(self, exps)
+        model = SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))
+        # stiff model: halving the RK4 step must not change the free run (else warn, see provenance)
+        common["provenance"]["step_check"] = step_halving_check(
+            "spencer", exps,
+            lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
+            self.step_tolerance,
+        )
         common["provenance"]["elapsed_s"] = time.perf_counter() - t0
         common["provenance"]["cpu_s"] = time.process_time() - c0
         return SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))

@@ -67,8 +67,9 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
     The electrical input is the command voltage; the force-velocity analysis is skipped (the
     voltage switches on a 10 ms grid, there are no constant-current records). LPV and LTI use the
     drive-lag rate ``eta = 250 1/s`` and the full 3004.8 Hz rate, chosen on the training part only
-    (``docs/results.md``). The test part's voltage exceeds the training range by < 0.1 %, so
-    models are scored with ``range_policy="clip"``.
+    (``docs/results.md``); P-15's coefficients follow the same drive-lagged voltage. The test
+    part's voltage exceeds the training range by < 0.1 %, so models are scored with
+    ``range_policy="clip"``.
     """
     return Protocol(
         name="dyke-70-30",
@@ -80,7 +81,8 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
         input="voltage",
         models=tuple(models),
         range_policy="clip",
-        settings={"lpv": {"eta": 250.0, "fs": 3004.8}, "lti": {"eta": 250.0, "fs": 3004.8}},
+        settings={"lpv": {"eta": 250.0, "fs": 3004.8}, "lti": {"eta": 250.0, "fs": 3004.8},
+                  "p15": {"eta": 250.0}},
     )
 
 

@@ -41,7 +41,7 @@ _LAW_SETTINGS = ("laws", "zone_laws")
 #: Typical identification cost rank per kind (most expensive first). Fits are submitted in this
 #: order so the longest task starts first and the others fill the remaining workers; results do
 #: not depend on it.
-_COST_RANK: dict[str, int] = {"spencer": 0, "lpv": 1, "sp1": 2, "sp4": 3, "lti": 4, "p15": 5}
+_COST_RANK: dict[str, int] = {"spencer": 0, "lpv": 1, "p15": 2, "sp1": 3, "sp4": 4, "lti": 5}
 
 
 def _estimator_fields(est: Any) -> set[str]:
