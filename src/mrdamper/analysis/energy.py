@@ -2,8 +2,8 @@
 
 A cycle runs from one upward crossing of the displacement through its mid-range to the next.
 Crossings are detected with a hysteresis band (a Schmitt trigger) so sensor noise near the
-mid-range does not split a cycle: the displacement must first fall below ``mid - band * half_range``
-and then rise above ``mid``. The work done on the damper over a cycle is
+mid-range does not split a cycle: a cycle starts where the displacement last rose through ``mid``
+before it reached ``mid + band * half_range``, after having been below ``mid - band * half_range``. The work done on the damper over a cycle is
 ``W = integral F v dt`` [J] (trapezoidal rule over the samples), which equals the loop area
 ``closed integral F dx`` when ``v = dx/dt``. Cycle boundaries come from the displacement only, so
 the measured force and every model's force are integrated over the same cycles.
@@ -11,6 +11,7 @@ the measured force and every model's force are integrated over the same cycles.
 
 from __future__ import annotations
 
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -39,8 +40,8 @@ def cycle_starts(x: Any, band: float = 0.1) -> np.ndarray:
     x : array_like
         Displacement [m].
     band : float
-        Hysteresis band as a fraction of the half-range of ``x`` [-]: after a start, ``x`` must
-        fall below ``mid - band * half_range`` before the next start counts.
+        Hysteresis band as a fraction of the half-range of ``x`` [-]: a start counts once ``x``
+        has been below ``mid - band * half_range`` and then reaches ``mid + band * half_range``.
 
     Returns
     -------
@@ -63,14 +64,17 @@ def cycle_starts(x: Any, band: float = 0.1) -> np.ndarray:
     mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
     if half <= 0.0:
         return np.zeros(0, dtype=int)
-    arm = mid - band * half
+    arm, fire = mid - band * half, mid + band * half
     starts: list[int] = []
     armed = bool(xa[0] < arm)
+    last_up = -1  # last sample where x rose through mid
     for k in range(1, xa.size):
+        if xa[k - 1] < mid <= xa[k]:
+            last_up = k
         if not armed:
             armed = bool(xa[k] < arm)
-        elif xa[k - 1] < mid <= xa[k]:
-            starts.append(k)
+        elif xa[k] >= fire and last_up > 0:
+            starts.append(last_up)
             armed = False
     return np.asarray(starts, dtype=int)
 
@@ -113,7 +117,7 @@ def energy_per_cycle(t: Any, x: Any, v: Any, F: Any, band: float = 0.1) -> np.nd
     starts = cycle_starts(a["x"], band)
     power = a["F"] * a["v"]
     out = []
-    for s, e in zip(starts[:-1], starts[1:]):
+    for s, e in pairwise(starts):
         seg = slice(int(s), int(e) + 1)
         out.append(float(trapezoid(power[seg], a["t"][seg])))
     return np.asarray(out, dtype=float)

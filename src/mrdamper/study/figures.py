@@ -33,19 +33,19 @@ __all__ = ["FAILED_ESR", "FIGURES", "failed_models", "make_figures", "overlay_mo
 #: consecutively and names the paper's number beside each.
 FIGURES: dict[str, tuple[int | None, str]] = {
     "fig01_fv_map": (1, "Force-velocity map at each current level (analysis records)."),
-    "fig02_zone_fit": (2, "Measured F-v samples and the three-zone straight-line regression (eq. 17) at the "
-                          "highest current level."),
-    "fig03_zone_laws": (3, "Slopes m_j and intercepts c_j of the three zones against current (points) with the "
-                           "fitted quadratic laws (lines, eq. 18); one panel and scale per quantity."),
-    "fig04_lti_hysteresis": (4, "The LTI model (no scheduling) against the measured force: it cannot follow "
-                                "the hysteresis."),
+    "fig02_zone_fit": (2, ("Measured F-v samples and the three-zone straight-line regression (eq. 17) at the "
+                          "highest current level.")),
+    "fig03_zone_laws": (3, ("Slopes m_j and intercepts c_j of the three zones against current (points) with the "
+                           "fitted quadratic laws (lines, eq. 18); one panel and scale per quantity.")),
+    "fig04_lti_hysteresis": (4, ("The LTI model (no scheduling) against the measured force: it cannot follow "
+                                "the hysteresis.")),
     "fig06_lpv_tracking": (6, "Measured and LPV force (top), velocity (middle) and current (bottom)."),
     "fig07_esr_boxes": (7, "ESR per model over the scored records; the mean is written under each box."),
     "fig08_ssse_boxes": (8, "SSSE [N] per model over the scored records; the mean is written under each box."),
     "fig09_force_time": (9, "Measured and computed damper force against time."),
     "fig10_fv_models": (10, "Force-velocity plane, measured and computed."),
-    "fig11_fx_loops": (None, "Force-displacement loops, measured and computed; the loop area is the energy "
-                             "dissipated per cycle (table below)."),
+    "fig11_fx_loops": (None, ("Force-displacement loops, measured and computed; the loop area is the energy "
+                             "dissipated per cycle (table below).")),
 }
 
 #: A model whose mean ESR over the study, or whose ESR on the drawn record, exceeds this [-] is
@@ -280,7 +280,7 @@ def make_figures(res: StudyResult) -> dict[str, Any]:
     from mrdamper.plotting._common import PRINT_STYLE
 
     out: dict[str, Any] = {}
-    with matplotlib.rc_context(PRINT_STYLE):
+    with matplotlib.rc_context(PRINT_STYLE):  # type: ignore[arg-type]
         for name, draw in _DRAW.items():
             try:
                 out[name] = draw(res)

@@ -214,8 +214,8 @@ def _analysis_section(res: StudyResult) -> str:
         if an.laws is None or not hasattr(an.laws, "levels"):
             out.append(f"<p>Fold <code>{_e(fold)}</code>: {_e(an.error or 'no analysis')}</p>")
             continue
-        body = [f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
-                f"with the largest distance of a per-level fit from its law:</p>"]
+        body = [(f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
+                 "with the largest distance of a per-level fit from its law:</p>")]
         for title, df in laws_table(an.laws, unit).items():
             body.append(f"<p><b>{_e(title)}</b></p>" + _table(df))
         body.append("<p>Three-zone fit (eq. 17) at each level:</p>" + _table(analysis_table(an.laws, unit)))

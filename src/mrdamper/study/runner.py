@@ -326,7 +326,7 @@ def _informative(folds: list[Fold], source: str) -> tuple[Fold, Experiment] | No
     cands = [(f, e) for f in folds for e in f.score]
     if not cands:
         return None
-    levels = [np.asarray(e.electrical(source), dtype=float) for _, e in cands]  # type: ignore[arg-type]
+    levels = [np.asarray(e.electrical(source), dtype=np.float64) for _, e in cands]  # type: ignore[arg-type]
     span = max(float(np.ptp(np.concatenate(levels))), 1e-12)
 
     def key(k: int) -> tuple[bool, int, float]:
