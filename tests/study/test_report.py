@@ -77,8 +77,8 @@ def test_tables_keep_failed_rows_with_status_units_and_comparisons(result) -> No
     for col in tab.columns:
         assert re.search(r"\[[^\]]+\]|model|status|scored|rank", col), f"column without a unit: {col}"
     # the comparison column is about the reference against the row, worded like the headline
-    assert tab.loc["toy", "toy mean ESR vs this model"] == "reference"
-    assert tab.loc["wild", "toy mean ESR vs this model"].endswith("% lower")
+    assert tab.loc["toy", "toy ESR vs this model"] == "reference"
+    assert tab.loc["wild", "toy ESR vs this model"].endswith("% lower")
 
 
 def test_report_html_rows_rounding_and_failed_note(result, tmp_path) -> None:

@@ -60,7 +60,7 @@ def plot_fv_map(
         v, F = (np.asarray(a, dtype=float) for a in curves[lev])
         if v.shape != F.shape:
             raise DataValidationError("curves", f"level {lev}: v has shape {v.shape}, F has {F.shape}")
-        ax.plot(v, F, ".", ms=1.2, alpha=0.6, color=col, label=f"i = {lev:.3g} {unit}")
+        ax.plot(v, F, ".", ms=1.2, alpha=0.6, color=col, label=f"i = {round(lev, 3):.3g} {unit}")
     ax.set_xlabel("v [m/s]")
     ax.set_ylabel("F [N]")
     ax.set_title("Force-velocity map")

@@ -162,10 +162,10 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, 
     out.append(
         '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured force) [-] and SSSE '
         "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is the "
-        f"interquartile range. <i>{_e(ref)} mean ESR vs this model</i>: how much lower (or higher) {_e(ref)}'s "
-        "mean is than the row's model, 100 (other - " + _e(ref) + ") / other, the way the headline and the paper "
-        "state 51 % and 36.8 %. A model whose mean ESR exceeds 1 (an error larger than the signal) or that never "
-        "simulated is marked failed; its row stays. Times are summed over folds and records. "
+        f"interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) {_e(ref)}'s "
+        "mean ESR is than the row model's mean, 100 (other - " + _e(ref) + ") / other, the way the headline and the "
+        "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an error larger than the signal) or that never "
+        "simulated is marked failed; its row stays. Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
         + _data_note(res) + "</p>")
     return "\n".join(out)
 
