@@ -18,7 +18,7 @@ from mrdamper.data import ExperimentSet
 from mrdamper.study import ModelSpec, Protocol, Selection, Split, doe_protocol, run_study
 from mrdamper.study.figures import FAILED_ESR, failed_models, make_figures, overlay_models
 from mrdamper.study.report import render_report
-from mrdamper.study.report_tables import esr_by_table, laws_table, summary_table
+from mrdamper.study.report_tables import energy_table, esr_by_table, laws_table, summary_table
 from mrdamper.study.tables import PAPER_HEADLINE
 
 from .browser import find_browser, layout_problems
@@ -152,3 +152,20 @@ def test_report_tables_fit_the_browser_window(result, tmp_path, width) -> None:
     got = layout_problems(out / "report.html", width, browser, tmp_path)
     assert got["tables"] >= 8
     assert got["problems"] == []
+
+
+def test_energy_table_measured_first_then_each_model_on_the_same_cycles(result) -> None:
+    from mrdamper.analysis import energy_per_cycle
+    from mrdamper.study import Showcase
+
+    sc = result.showcase
+    tab = energy_table(sc).set_index("model")
+    e = sc.record
+    W = energy_per_cycle(e.t, e.x, e.v, e.F)
+    assert W.size >= 1 and tab.loc["measured", "cycles"] == W.size
+    assert tab.loc["measured", "energy_J"] == pytest.approx(W.mean()) and W.mean() > 0  # a damper dissipates
+    assert abs(tab.loc["toy", "diff_pct"]) < 5  # the true structure dissipates what was measured
+    assert tab.loc["wild", "diff_pct"] > 100 and np.isnan(tab.loc["toydiverge", "energy_J"])
+    short = e.slice(0, int(0.3 * e.fs))  # less than one displacement cycle
+    whole = energy_table(Showcase(fold="all", record=short, predictions={"toy": sc.predictions["toy"][: short.n]}))
+    assert whole["cycles"].iloc[0] == 0 and whole["basis"].iloc[0].startswith("whole record")

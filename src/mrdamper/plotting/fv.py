@@ -71,6 +71,11 @@ def plot_fv_map(
     return ax
 
 
+def _slope_text(m: float) -> str:
+    """Slope [N s/m] to 4 significant digits without an exponent (116400, 6202, 12.35)."""
+    return f"{float(f'{m:.4g}'):.0f}" if abs(m) >= 1e4 else f"{m:.4g}"
+
+
 def plot_zone_fit(v: Any, F: Any, fit: Any, *, ax: Any = None, unit: str = "A") -> Any:
     """Paper Fig. 2: measured F-v samples at one level with the three-zone regression (eq. 17).
 
@@ -102,7 +107,7 @@ def plot_zone_fit(v: Any, F: Any, fit: Any, *, ax: Any = None, unit: str = "A") 
     spans = ((lo, min(fit.v_low, hi)), (fit.v_low, fit.v_high), (max(fit.v_high, lo), hi))
     for j, ((a, b), name, col) in enumerate(zip(spans, ("zone I", "zone II", "zone III"), ("tab:blue", "tab:red", "tab:green"))):
         vv = np.linspace(a, b, 50)
-        ax.plot(vv, fit.m[j] * vv + fit.c[j], lw=2.0, color=col, label=f"{name}: m{j + 1}={fit.m[j]:.4g} N s/m")
+        ax.plot(vv, fit.m[j] * vv + fit.c[j], lw=2.0, color=col, label=f"{name}: m{j + 1} = {_slope_text(fit.m[j])} N s/m")
     for b, name, ha, dx in ((fit.v_low, "v_low", "right", -2), (fit.v_high, "v_high", "left", 2)):
         ax.axvline(b, ls=":", lw=0.9, color="k")
         ax.annotate(f"{name} = {b:.3g} m/s", (b, 0.97), xycoords=("data", "axes fraction"), xytext=(dx, 0),

@@ -253,9 +253,10 @@ def _energy_titles(sc: Showcase, titles: Mapping[str, str]) -> dict[str, str]:
     out = dict(titles)
     if tab.empty:
         return out
+    unit = "J/cycle" if int(tab["cycles"].iloc[0]) > 0 else "J"
     for row in tab.itertuples(index=False):
         if row.model in out and np.isfinite(row.energy_J):
-            out[row.model] = f"{row.energy_J:.3g} J/cycle"
+            out[row.model] = f"{row.energy_J:.3g} {unit}"
     return out
 
 

@@ -288,9 +288,10 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
         if name == "fig11_fx_loops":
             tab = energy_table(res.showcase)
             if not tab.empty:
-                out.append("<p>Energy dissipated per displacement cycle on this record, the mean over its complete "
-                           "cycles (cycles of the measured displacement; every force integrated with the measured "
-                           "velocity, W = &int; F v dt):</p>" + _table(energy_display(tab, failed), digits=3))
+                out.append("<p>Energy dissipated on this record, W = &int; F v dt: the mean over the complete "
+                           "cycles of the measured displacement, or the whole record when it holds less than one "
+                           "(every force integrated over the same cycles with the measured velocity):</p>"
+                           + _table(energy_display(tab, failed), digits=3))
     if not out:
         return "<p>Figures were not requested.</p>"
     note = study_failed_note(res, failed)

@@ -249,42 +249,53 @@ def energy_table(sc: Showcase | None) -> pd.DataFrame:
     """Energy dissipated per displacement cycle on the showcase record, measured and each model.
 
     Cycles are those of the measured displacement (:func:`mrdamper.analysis.energy_per_cycle`);
-    every force is integrated over the same cycles with the measured velocity.
+    every force is integrated over the same cycles with the measured velocity. A record with
+    less than one complete cycle (a random excitation that crosses its mid-range once) is
+    integrated whole instead, and says so in ``basis``.
 
     Returns
     -------
     DataFrame
-        Columns ``model``, ``energy_J`` (mean over complete cycles [J]), ``diff_pct`` (relative
-        to the measured force's [%]) and ``cycles``; the first row is ``measured``. Empty when
-        the record has fewer than one complete cycle.
+        Columns ``model``, ``energy_J`` (mean over complete cycles, or over the whole record [J]),
+        ``diff_pct`` (relative to the measured force's [%]), ``cycles`` and ``basis``; the first
+        row is ``measured``. Empty without a showcase.
     """
+    from scipy.integrate import trapezoid
+
     from mrdamper.analysis import energy_per_cycle
 
-    cols = ["model", "energy_J", "diff_pct", "cycles"]
+    cols = ["model", "energy_J", "diff_pct", "cycles", "basis"]
     if sc is None:
         return pd.DataFrame(columns=cols)
     e = sc.record
-    ref = energy_per_cycle(e.t, e.x, e.v, e.F)
-    if ref.size == 0:
-        return pd.DataFrame(columns=cols)
-    W0 = float(np.mean(ref))
-    rows: list[dict[str, Any]] = [{"model": "measured", "energy_J": W0, "diff_pct": 0.0, "cycles": int(ref.size)}]
+
+    def energy(F: Any) -> tuple[float, int]:
+        W = energy_per_cycle(e.t, e.x, e.v, F)
+        if W.size:
+            return float(np.mean(W)), int(W.size)
+        return float(trapezoid(np.asarray(F, dtype=float) * e.v, e.t)), 0
+
+    W0, n0 = energy(e.F)
+    basis = f"mean of {n0} cycles" if n0 else "whole record (less than one complete cycle)"
+    rows: list[dict[str, Any]] = [{"model": "measured", "energy_J": W0, "diff_pct": 0.0, "cycles": n0, "basis": basis}]
     for label, F in sc.predictions.items():
         if isinstance(F, str):
-            rows.append({"model": label, "energy_J": float("nan"), "diff_pct": float("nan"), "cycles": 0})
+            rows.append({"model": label, "energy_J": float("nan"), "diff_pct": float("nan"), "cycles": n0,
+                         "basis": "no prediction"})
             continue
-        W = energy_per_cycle(e.t, e.x, e.v, F)
-        Wm = float(np.mean(W))
+        Wm, _ = energy(F)
         rows.append({"model": label, "energy_J": Wm, "diff_pct": 100.0 * (Wm - W0) / abs(W0) if W0 else float("nan"),
-                     "cycles": int(W.size)})
+                     "cycles": n0, "basis": basis})
     return pd.DataFrame(rows, columns=cols)
 
 
 def energy_display(tab: pd.DataFrame, failed: dict[str, str] | None = None) -> pd.DataFrame:
     """:func:`energy_table` with headers carrying units and the failed models marked."""
     failed = failed or {}
-    out = tab.rename(columns={"energy_J": "energy per cycle [J]", "diff_pct": "model - measured [%]",
-                              "cycles": "complete cycles"})
+    per_cycle = bool(len(tab)) and int(tab["cycles"].iloc[0]) > 0
+    out = tab.drop(columns=["cycles"]).rename(columns={
+        "energy_J": "energy per cycle [J]" if per_cycle else "energy over the record [J]",
+        "diff_pct": "model - measured [%]"})
     out.insert(1, "status", ["" if m == "measured" else ("failed" if m in failed else "ok") for m in tab["model"]])
     return out
 
