@@ -267,19 +267,20 @@ def figure_captions(res: StudyResult, failed: dict[str, str] | None = None) -> d
 
 def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[str, str]) -> str:
     out = []
+    skipped = []
     caps = figure_captions(res, failed)
     number = 0
     for name, (paper, _) in FIGURES.items():
         item = saved.get(name)
         if item is None:
             continue
-        number += 1
         ref = f"paper Fig. {paper}" if paper is not None else "not in the paper"
-        label = f"<b>Figure {number}</b> ({ref})."
         if isinstance(item, str):
-            out.append(f'<figure id="{_e(name)}"><figcaption>{label} {caps[name]} '
-                       f'<span class="warn">Not drawn: {_e(item)}</span></figcaption></figure>')
+            skipped.append(f'<li id="{_e(name)}">{_e(ref[0].upper() + ref[1:])}: {_e(FIGURES[name][1])} '
+                           f'<span class="warn">Not drawn: {_e(item)}</span></li>')
             continue
+        number += 1
+        label = f"<b>Figure {number}</b> ({ref})."
         data = base64.b64encode(Path(item["png"]).read_bytes()).decode("ascii")
         out.append(
             f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" alt="Figure {number}: {_e(FIGURES[name][1])}">'
@@ -292,6 +293,8 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
                            "cycles of the measured displacement, or the whole record when it holds less than one "
                            "(every force integrated over the same cycles with the measured velocity):</p>"
                            + _table(energy_display(tab, failed), digits=3))
+    if skipped:
+        out.insert(0, "<p>Figures that this study cannot draw:</p><ul>" + "".join(skipped) + "</ul>")
     if not out:
         return "<p>Figures were not requested.</p>"
     note = study_failed_note(res, failed)
