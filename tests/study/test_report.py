@@ -169,3 +169,21 @@ def test_energy_table_measured_first_then_each_model_on_the_same_cycles(result) 
     short = e.slice(0, int(0.3 * e.fs))  # less than one displacement cycle
     whole = energy_table(Showcase(fold="all", record=short, predictions={"toy": sc.predictions["toy"][: short.n]}))
     assert whole["cycles"].iloc[0] == 0 and whole["basis"].iloc[0].startswith("whole record")
+
+
+def test_every_figure_is_drawn_for_print(result) -> None:
+    from matplotlib.text import Text
+
+    figs = {k: f for k, f in make_figures(result).items() if not isinstance(f, str)}
+    assert len(figs) >= 8
+    for name, fig in figs.items():
+        assert fig.get_size_inches()[0] <= 7.0 + 1e-9, name  # the text width of an A4 / letter page
+        fig.canvas.draw()
+        small = [(t.get_text(), t.get_fontsize()) for t in fig.findobj(Text)
+                 if t.get_visible() and t.get_text().strip() and t.get_fontsize() < 7.0]
+        assert not small, (name, small[:5])
+        for ax in fig.axes:
+            if ax.get_visible() and ax.has_data():
+                assert ax.get_xlabel() and ax.get_ylabel() or ax.get_title(), name
+                for label in (ax.get_xlabel(), ax.get_ylabel()):
+                    assert not label or "[" in label, (name, label)  # units on every axis

@@ -12,7 +12,7 @@ from mrdamper.errors import DataValidationError
 __all__ = ["PRINT_STYLE", "check_same_length", "legend_outside", "model_color", "new_axes", "window_mask"]
 
 #: Matplotlib settings of the report's figures: drawn at the size they are printed (at most
-#: 7 in wide, the text width of an A4 or letter page), so no text is smaller than 7.5 pt on paper.
+#: 7 in wide, the text width of an A4 or letter page), so no text is smaller than 7 pt on paper.
 PRINT_STYLE: dict[str, Any] = {
     "font.size": 9.0,
     "axes.titlesize": 9.5,

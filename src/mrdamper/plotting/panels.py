@@ -152,7 +152,7 @@ def plot_model_panels(
         extra = titles.get(k, "")
         if is_failed:
             ax.set_title(f"{k}: FAILED, own scale", color="tab:red", fontsize=8.5)
-            ax.text(0.03, 0.03, _wrap(failed[k], 30, 3), transform=ax.transAxes, fontsize=6.5, va="bottom",
+            ax.text(0.03, 0.03, _wrap(failed[k], 30, 3), transform=ax.transAxes, fontsize=7, va="bottom",
                     color="tab:red", bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.0})
             for side in ax.spines.values():
                 side.set_edgecolor("tab:red")

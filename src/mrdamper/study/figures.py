@@ -13,7 +13,7 @@ rules, stated in their captions:
   best of the paper's classical models (P-15, SP-1..SP-4) and the best of the others by mean ESR
   over the study, none of them failed. Every model, overlaid or not, also has its own panel.
 
-All figures are drawn at print size (7 in wide at most, text of 7.5 pt or more; see
+All figures are drawn at print size (7 in wide at most, text of 7 pt or more; see
 :data:`mrdamper.plotting._common.PRINT_STYLE`).
 """
 

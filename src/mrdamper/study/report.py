@@ -3,7 +3,7 @@ the tables and every figure embedded as a base64 PNG, readable offline in any br
 
 Layout rules: the page is at most 1100 px wide; every table sits in a box that scrolls
 sideways when the table is wider than the page (the page itself never does); figures are shown
-at the size they are drawn for print (7 in) and shrink with the window. Numbers are rounded to
+at the size they are drawn for print (at most 7 in wide) and shrink with a narrower window. Numbers are rounded to
 four significant digits (:func:`~mrdamper.study.report_tables.format_number`). The wording
 depends on the data: records from the virtual rig (whose damper is a known model) or measured
 ones (:func:`~mrdamper.study.runner.data_origin`).
@@ -33,6 +33,7 @@ from mrdamper.study.report_tables import (
     summary_table,
 )
 from mrdamper.study.tables import PAPER_HEADLINE
+from mrdamper.study.writer import FIGURE_DPI
 
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.study.result import StudyResult
@@ -51,7 +52,7 @@ th{background:#f2f2f2;font-weight:600}td{white-space:nowrap}td:first-child,th:fi
 .left td,.left th{text-align:left}td.text{text-align:left;white-space:normal;min-width:14em;max-width:40em;overflow-wrap:anywhere}
 .headline{background:#f5f9ff;border-left:4px solid #3b73b9;padding:.6em 1em;font-size:1.05em}
 .warn{background:#fff6e5;border-left:4px solid #e0a020;padding:.4em 1em}
-figure{margin:1.4em 0}figure img{width:7in;max-width:100%;height:auto;border:1px solid #ddd}
+figure{margin:1.4em 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
 figcaption{font-size:.9em;color:#333;max-width:7in}
 code{background:#f4f4f4;padding:0 .25em;overflow-wrap:anywhere}details{margin:.6em 0}.small{font-size:.85em;color:#555}
 pre{white-space:pre-wrap;overflow-wrap:anywhere}
@@ -281,9 +282,12 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
             continue
         number += 1
         label = f"<b>Figure {number}</b> ({ref})."
-        data = base64.b64encode(Path(item["png"]).read_bytes()).decode("ascii")
+        png = Path(item["png"]).read_bytes()
+        data = base64.b64encode(png).decode("ascii")
+        width_in = int.from_bytes(png[16:20], "big") / FIGURE_DPI  # IHDR width [px] at the saved resolution
         out.append(
-            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" alt="Figure {number}: {_e(FIGURES[name][1])}">'
+            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" style="width:{width_in:.2f}in" '
+            f'alt="Figure {number}: {_e(FIGURES[name][1])}">'
             f"<figcaption>{label} {caps[name]} (<code>figures/{_e(name)}.png</code>, <code>.svg</code>)</figcaption></figure>"
         )
         if name == "fig11_fx_loops":
