@@ -63,13 +63,19 @@ def test_zone_fit_draws_data_three_zones_and_limits() -> None:
     assert "1 A" in ax.get_title()
 
 
-def test_zone_laws_two_panels_points_and_curves() -> None:
+def test_zone_laws_one_panel_and_scale_per_quantity() -> None:
     fits = [fit_zones(*_fv(lev), level=lev) for lev in (0.0, 0.25, 0.5, 0.75, 1.0)]
-    axes = plot_zone_laws(fit_zone_laws(fits))
-    assert len(axes) == 2
-    for ax, name in zip(axes, "mc"):
-        labels = [ln.get_label() for ln in ax.get_lines()]
-        assert labels == [f"{name}{j}{kind}" for j in (1, 2, 3) for kind in (" fit", " law")]
+    laws = fit_zone_laws(fits)
+    axes = plot_zone_laws(laws)
+    assert axes.shape == (2, 3)
+    for row, name in enumerate("mc"):
+        for j in range(3):
+            ax = axes[row, j]
+            assert [ln.get_label() for ln in ax.get_lines()] == [f"{name}{j + 1} fit", f"{name}{j + 1} law"]
+            assert ax.get_ylabel().startswith(f"{name}{j + 1} [")
+    # m2 is far steeper than m1: each slope's panel spans its own values, not the largest one's
+    _, hi = axes[0, 0].get_ylim()
+    assert hi < 0.5 * laws.level_m[:, 1].max()
 
 
 def test_lti_hysteresis_and_tracking_panels() -> None:
@@ -97,7 +103,7 @@ def test_index_boxes_mean_under_each_box() -> None:
     ax = plot_index_boxes(df, "esr", order=["lpv", "sp1", "p15"])
     assert [t.get_text() for t in ax.get_xticklabels()] == ["lpv", "sp1", "p15"]
     texts = [t.get_text() for t in ax.texts]
-    assert texts == ["mean 0.02", "mean 0.2", "failed"]
+    assert texts == ["mean\n0.02", "mean\n0.2", "failed"]
     assert len(ax.patches) == 2  # two filled boxes, none for the failed model
     with pytest.raises(DataValidationError, match="ssse"):
         plot_index_boxes(df, "ssse")
@@ -123,3 +129,22 @@ def test_a_wild_model_does_not_hide_the_others() -> None:
     assert any("beyond the axes: wild" in t.get_text() for t in ax.texts)
     ax = plot_fv_models(e, {"wild": e.F * 50}, clip_margin=None)
     assert ax.get_ylim()[1] >= 50 * e.F.max()
+
+
+def test_model_panels_overlay_few_and_draw_every_model_apart() -> None:
+    from mrdamper.plotting import plot_model_panels
+
+    e = _record()
+    preds = {"a": e.F * 0.98, "b": e.F * 0.9, "c": e.F * 0.7, "wild": e.F * 80, "gone": "diverged at sample 3"}
+    fig = plot_model_panels(e, preds, plane="fx", overlay=["a", "b", "wild"], failed={"wild": "ESR 6e3 > 1"})
+    top, *panels = fig.axes
+    assert [ln.get_label() for ln in top.get_lines()] == ["measured", "a", "b"]  # failed never overlaid
+    assert top.get_xlabel() == "x [mm]" and top.get_ylabel() == "F [N]"
+    assert [ax.get_title().split(" ")[0].rstrip(":") for ax in panels] == ["a", "b", "c", "wild", "gone"]
+    assert panels[3].get_ylim()[1] >= 80 * e.F.max()  # its own scale
+    assert panels[0].get_ylim()[1] < 2 * e.F.max()  # shared scale of the others
+    assert "FAILED" in panels[4].get_title()
+    with pytest.raises(DataValidationError, match="plane"):
+        plot_model_panels(e, preds, plane="xy")
+    with pytest.raises(DataValidationError, match="overlay"):
+        plot_model_panels(e, preds, overlay=["nope"])

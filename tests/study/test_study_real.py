@@ -57,3 +57,10 @@ def test_quiroz_leave_one_condition_out(quiroz_unfiltered_dir) -> None:
     # trained on another amplitude/frequency, SP-2 must still beat predicting the mean force
     assert (r["esr"] < 1.0).all()
     assert res.analyses["condition=5mm_3Hz"].by == "current"
+    # the report speaks of measured data, and its showcase is a 1 A record, not the first (0 A) one
+    assert res.info["data_origin"] == "measured"
+    assert res.showcase.record.metadata["current"] == 1.0
+    from mrdamper.study.report import render_report
+
+    html = render_report(res, res.summary, {})
+    assert "measured data" in html and "Spencer model" not in html and "virtual rig, whose" not in html

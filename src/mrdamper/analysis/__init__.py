@@ -1,6 +1,7 @@
 """Force-velocity analysis: three-zone regression (eq. 17), laws across current (eq. 18) and the
-LPV scheduling input ``u(v, i)`` (eqs. 19-22)."""
+LPV scheduling input ``u(v, i)`` (eqs. 19-22), and the energy dissipated per displacement cycle."""
 
+from mrdamper.analysis.energy import cycle_starts, energy_per_cycle
 from mrdamper.analysis.laws import (
     ZoneLaws,
     ZoneLawWarning,
@@ -16,6 +17,8 @@ __all__ = [
     "ZoneFit",
     "ZoneLawWarning",
     "ZoneLaws",
+    "cycle_starts",
+    "energy_per_cycle",
     "fit_zone_laws",
     "fit_zones",
     "scheduling_input_arrays",

@@ -143,7 +143,8 @@ class ZoneLaws:
         vh, vl = self.v_high(r), self.v_low(r)
         if np.any(vh <= 0) or np.any(vl >= 0):
             out.append(
-                f"zone limits must satisfy v_low < 0 < v_high over {self.rho_range}; got v_high in "
+                f"zone limits must satisfy v_low < 0 < v_high over [{self.rho_range[0]:.4g}, "
+                f"{self.rho_range[1]:.4g}]; got v_high in "
                 f"[{vh.min():.4g}, {vh.max():.4g}] m/s, v_low in [{vl.min():.4g}, {vl.max():.4g}] m/s"
             )
         return out

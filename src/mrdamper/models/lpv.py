@@ -404,7 +404,8 @@ class LPVEstimator(Estimator):
         prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0, fit_seconds=time.perf_counter() - t_start)
         if pmax >= 1.0:
             warnings.warn(
-                f"{self.kind}: identified model is not frozen-stable over rho in {rho_range} "
+                f"{self.kind}: identified model is not frozen-stable over rho in "
+                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}] "
                 f"(max frozen pole modulus {pmax:.4f})", RuntimeWarning, stacklevel=2,
             )
         return model

@@ -12,12 +12,14 @@ Fig. 6 LPV tracking       :func:`plot_model_tracking`
 Figs. 7, 8 box plots      :func:`plot_index_boxes`
 Fig. 9 force-time         :func:`plot_force_time`
 Fig. 10 F-v all models    :func:`plot_fv_models`
+Figs. 9-11 small multiples :func:`plot_model_panels` (overlay + one panel per model; F-t, F-v, F-x)
 ========================  ============================================================
 """
 
 from mrdamper.plotting.comparison import plot_force_time, plot_fv_models, plot_index_boxes
 from mrdamper.plotting.fv import plot_fv_map, plot_zone_fit
 from mrdamper.plotting.laws import plot_zone_laws
+from mrdamper.plotting.panels import plot_model_panels
 from mrdamper.plotting.timeseries import plot_lti_hysteresis, plot_model_tracking
 
 __all__ = [
@@ -26,6 +28,7 @@ __all__ = [
     "plot_fv_models",
     "plot_index_boxes",
     "plot_lti_hysteresis",
+    "plot_model_panels",
     "plot_model_tracking",
     "plot_zone_fit",
     "plot_zone_laws",

@@ -9,7 +9,22 @@ import numpy as np
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["check_same_length", "model_color", "new_axes", "window_mask"]
+__all__ = ["PRINT_STYLE", "check_same_length", "legend_outside", "model_color", "new_axes", "window_mask"]
+
+#: Matplotlib settings of the report's figures: drawn at the size they are printed (at most
+#: 7 in wide, the text width of an A4 or letter page), so no text is smaller than 7 pt on paper.
+PRINT_STYLE: dict[str, Any] = {
+    "font.size": 9.0,
+    "axes.titlesize": 9.5,
+    "axes.labelsize": 9.0,
+    "xtick.labelsize": 8.0,
+    "ytick.labelsize": 8.0,
+    "legend.fontsize": 8.0,
+    "figure.titlesize": 10.0,
+    "axes.grid": True,
+    "grid.linewidth": 0.3,
+    "lines.linewidth": 1.0,
+}
 
 #: Fixed colour per registry kind so a model looks the same in every figure.
 _KIND_COLORS = {
@@ -30,6 +45,13 @@ _FALLBACK = ("tab:pink", "gold", "navy", "teal", "maroon", "lime")
 def model_color(label: str, k: int = 0) -> str:
     """Colour of a model label (its kind's colour, else a fallback by position ``k``)."""
     return _KIND_COLORS.get(label.lower(), _FALLBACK[k % len(_FALLBACK)])
+
+
+def legend_outside(ax: Any, **kwargs: Any) -> Any:
+    """Legend to the right of ``ax``, outside the data area; returns the Legend."""
+    opts: dict[str, Any] = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0, "frameon": False}
+    opts.update(kwargs)
+    return ax.legend(**opts)
 
 
 def new_axes(ax: Any, figsize: tuple[float, float]) -> Any:

@@ -64,7 +64,7 @@ def plot_index_boxes(
     labels = list(order) if order is not None else list(dict.fromkeys(results["model"]))
     if not labels:
         raise DataValidationError("results", "no model rows to plot")
-    ax = new_axes(ax, (max(4.5, 0.9 * len(labels) + 2), 4.2))
+    ax = new_axes(ax, (min(7.0, max(4.5, 0.62 * len(labels) + 1.2)), 3.8))
     ok = results[results["status"] == "ok"]
     data = [ok.loc[ok["model"] == m, index].to_numpy(dtype=float) for m in labels]
     means = [float(np.mean(d)) if d.size else float("nan") for d in data]
@@ -85,11 +85,13 @@ def plot_index_boxes(
     if log:
         ax.set_yscale("log")
     for p, m in zip(pos, means):
-        text = "failed" if not np.isfinite(m) else f"mean {m:.3g}"
-        ax.annotate(text, (p, 0), xycoords=("data", "axes fraction"), xytext=(0, -26),
-                    textcoords="offset points", ha="center", va="top", fontsize=8)
+        text = "failed" if not np.isfinite(m) else f"mean\n{m:.3g}"
+        ax.annotate(text, (p, 0), xycoords=("data", "axes fraction"), xytext=(0, -16),
+                    textcoords="offset points", ha="center", va="top", fontsize=7.5)
     ax.set_ylabel(_INDEX_LABELS.get(index, index))
     ax.set_title(f"{index.upper() if index in ('esr', 'ssse') else index} per model (mean under each box)")
+    if len(labels) > 7:
+        ax.tick_params(axis="x", labelsize=7.5)
     ax.grid(True, axis="y", lw=0.3)
     return ax
 
@@ -181,11 +183,13 @@ def plot_force_time(
     """
     ax = _measured_and_models(
         experiment, predictions, experiment.t, ax=ax, window=window, clip_margin=clip_margin,
-        figsize=(9, 4), widths=(1.6, 0.8),
+        figsize=(6.2, 3.4), widths=(1.6, 0.8),
     )
     ax.set_xlabel("t [s]")
     ax.set_title(f"Measured and computed damper force ({experiment.name})")
-    ax.legend(loc="upper right", fontsize=7, ncol=2)
+    from mrdamper.plotting._common import legend_outside
+
+    legend_outside(ax, fontsize=7.5)
     return ax
 
 
@@ -219,9 +223,11 @@ def plot_fv_models(
     """
     ax = _measured_and_models(
         experiment, predictions, experiment.v, ax=ax, window=window, clip_margin=clip_margin,
-        figsize=(6, 4.8), widths=(1.4, 0.7), alpha=0.85,
+        figsize=(5.6, 4.2), widths=(1.4, 0.7), alpha=0.85,
     )
     ax.set_xlabel("v [m/s]")
     ax.set_title(f"F-v plane, measured and computed ({experiment.name})")
-    ax.legend(loc="upper left", fontsize=7, ncol=2)
+    from mrdamper.plotting._common import legend_outside
+
+    legend_outside(ax, fontsize=7.5)
     return ax

@@ -48,8 +48,8 @@ def plot_lti_hysteresis(
     if axes is None:
         import matplotlib.pyplot as plt
 
-        _, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    axes = new_axes_column(axes, 2, (10, 3.6))
+        _, axes = plt.subplots(1, 2, figsize=(7.0, 3.2), sharey=True, layout="constrained")
+    axes = new_axes_column(axes, 2, (7.0, 3.2))
     e = experiment
     axes[0].plot(e.v[mask], e.F[mask], lw=0.6, color="0.2", label="measured")
     axes[0].plot(e.v[mask], Fm[mask], lw=0.8, color="tab:gray", ls="--", label=label)
@@ -63,7 +63,12 @@ def plot_lti_hysteresis(
     axes[1].set_title(f"Force against time ({e.name})")
     for ax in axes:
         ax.grid(True, lw=0.3)
-        ax.legend(loc="best", fontsize=8)
+    fig = axes[0].figure
+    handles, names = axes[0].get_legend_handles_labels()
+    if fig.get_layout_engine() is not None:
+        fig.legend(handles, names, loc="outside upper center", ncol=2, frameon=False)
+    else:
+        fig.legend(handles, names, loc="upper center", ncol=2, frameon=False)
     return axes
 
 
@@ -102,14 +107,21 @@ def plot_model_tracking(
 
     Fm = check_same_length("F_model", F_model, experiment.n)
     mask = window_mask(experiment.t, window)
-    axes = new_axes_column(axes, 3, (8, 6))
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, axes = plt.subplots(3, 1, sharex=True, figsize=(7.0, 5.2), layout="constrained",
+                               gridspec_kw={"height_ratios": [1.6, 1.0, 1.0]})
+    axes = new_axes_column(axes, 3, (7.0, 5.2))
     e = experiment
     t = e.t[mask]
     axes[0].plot(t, e.F[mask], lw=0.8, color="0.2", label="measured")
     axes[0].plot(t, Fm[mask], lw=0.8, color="tab:red", label=label)
     axes[0].set_ylabel("F [N]")
     axes[0].set_title(f"Measured and {label} force ({e.name})")
-    axes[0].legend(loc="upper right", fontsize=8)
+    from mrdamper.plotting._common import legend_outside
+
+    legend_outside(axes[0])
     axes[1].plot(t, e.v[mask], lw=0.7, color="tab:blue", label="v")
     axes[1].set_ylabel("v [m/s]")
     el = e.electrical(source)  # type: ignore[arg-type]

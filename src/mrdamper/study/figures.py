@@ -2,11 +2,24 @@
 
 A figure that cannot be drawn (no analysis records, no LTI or LPV model, every model failed) is
 returned as the text of the reason instead of a Figure, and the report shows that text.
+
+Figures with every model on one record (Figs. 9, 10 and the force-displacement loops) follow two
+rules, stated in their captions:
+
+* **Failed models** (:func:`failed_models`: no successful simulation, a mean ESR above
+  :data:`FAILED_ESR` over the study, or a failed / ESR > 1 prediction of the drawn record) get a
+  panel of their own with their own force scale; they are never overlaid on the others.
+* **Overlay** (:func:`overlay_models`): the measured force with at most three models, LPV, the
+  best of the paper's classical models (P-15, SP-1..SP-4) and the best of the others by mean ESR
+  over the study, none of them failed. Every model, overlaid or not, also has its own panel.
+
+All figures are drawn at print size (7 in wide at most, text of 7 pt or more; see
+:data:`mrdamper.plotting._common.PRINT_STYLE`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -14,20 +27,30 @@ import numpy as np
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.study.result import Showcase, StudyResult
 
-__all__ = ["FIGURES", "make_figures"]
+__all__ = ["FAILED_ESR", "FIGURES", "failed_models", "make_figures", "overlay_models", "record_esr"]
 
-#: Figure file name -> caption (paper figure number first).
-FIGURES: dict[str, str] = {
-    "fig01_fv_map": "Fig. 1. Force-velocity map at several currents (analysis records).",
-    "fig02_zone_fit": "Fig. 2. Measured F-v samples and the three-zone straight-line regression (eq. 17) at one current.",
-    "fig03_zone_laws": "Fig. 3. Slopes m_j and intercepts c_j of the three zones against current, with the fitted quadratic laws.",
-    "fig04_lti_hysteresis": "Fig. 4. The LTI model (no scheduling) against the measured force: it cannot follow the hysteresis.",
-    "fig06_lpv_tracking": "Fig. 6. Measured and LPV force (top), velocity (middle) and current (bottom).",
-    "fig07_esr_boxes": "Fig. 7. ESR per model over the scored records; the mean is written under each box.",
-    "fig08_ssse_boxes": "Fig. 8. SSSE [N] per model over the scored records; the mean is written under each box.",
-    "fig09_force_time": "Fig. 9. Measured and computed damper force, all models.",
-    "fig10_fv_models": "Fig. 10. Force-velocity plane, measured and computed, all models.",
+#: Figure file name -> (paper figure number or None, caption). The report numbers its figures
+#: consecutively and names the paper's number beside each.
+FIGURES: dict[str, tuple[int | None, str]] = {
+    "fig01_fv_map": (1, "Force-velocity map at each current level (analysis records)."),
+    "fig02_zone_fit": (2, ("Measured F-v samples and the three-zone straight-line regression (eq. 17) at the "
+                          "highest current level.")),
+    "fig03_zone_laws": (3, ("Slopes m_j and intercepts c_j of the three zones against current (points) with the "
+                           "fitted quadratic laws (lines, eq. 18); one panel and scale per quantity.")),
+    "fig04_lti_hysteresis": (4, ("The LTI model (no scheduling) against the measured force: it cannot follow "
+                                "the hysteresis.")),
+    "fig06_lpv_tracking": (6, "Measured and LPV force (top), velocity (middle) and current (bottom)."),
+    "fig07_esr_boxes": (7, "ESR per model over the scored records; the mean is written under each box."),
+    "fig08_ssse_boxes": (8, "SSSE [N] per model over the scored records; the mean is written under each box."),
+    "fig09_force_time": (9, "Measured and computed damper force against time."),
+    "fig10_fv_models": (10, "Force-velocity plane, measured and computed."),
+    "fig11_fx_loops": (None, ("Force-displacement loops, measured and computed; the loop area is the energy "
+                             "dissipated per cycle (table below).")),
 }
+
+#: A model whose mean ESR over the study, or whose ESR on the drawn record, exceeds this [-] is
+#: treated as failed in the shared figures (its error is larger than the measured force's spread).
+FAILED_ESR = 1.0
 
 #: Longest stretch drawn in time-domain figures [s].
 _WINDOW = 6.0
@@ -79,7 +102,7 @@ def _fig3(res: StudyResult) -> Any:
     if an is None or an.laws is None:
         err = "" if an is None else an.error
         return "no laws across current" + (f" ({err})" if err else "")
-    return plot_zone_laws(an.laws, unit="A" if res.protocol.input == "i" else "V")[0].figure
+    return plot_zone_laws(an.laws, unit="A" if res.protocol.input == "i" else "V").flat[0].figure
 
 
 def _by_kind(sc: Showcase | None, kind: str) -> tuple[str, Any] | None:
@@ -126,21 +149,115 @@ def _boxes(index: str) -> Callable[[StudyResult], Any]:
     return draw
 
 
-def _all_models(kind: str) -> Callable[[StudyResult], Any]:
+def record_esr(sc: Showcase) -> dict[str, float]:
+    """ESR [-] of each successful prediction on the showcase record (eq. 24)."""
+    from mrdamper.metrics import esr
+
+    out: dict[str, float] = {}
+    for k, F in sc.ok().items():
+        try:
+            out[k] = float(esr(sc.record.F, F))
+        except Exception:  # noqa: BLE001 - a degenerate record has no ESR; the panel says nothing
+            out[k] = float("nan")
+    return out
+
+
+def failed_models(res: StudyResult, sc: Showcase | None = None) -> dict[str, str]:
+    """Models treated as failed in the shared figures, with the reason.
+
+    A model fails when it has no successful scored record, when its mean ESR over the study is
+    above :data:`FAILED_ESR`, or (for the drawn record ``sc``) when its prediction of that record
+    failed or has an ESR above :data:`FAILED_ESR`. Its rows stay in every table.
+
+    Parameters
+    ----------
+    res : StudyResult
+        The study.
+    sc : Showcase, optional
+        Record drawn (default: the study's showcase).
+
+    Returns
+    -------
+    dict
+        Label -> one-line reason, in display order.
+    """
+    sc = res.showcase if sc is None else sc
+    summary = res.summary.set_index("model")
+    per_record = record_esr(sc) if sc is not None else {}
+    out: dict[str, str] = {}
+    for label in res.labels:
+        row = summary.loc[label] if label in summary.index else None
+        n_ok = int(row["n_ok"]) if row is not None else 0
+        mean = float(row["esr_mean"]) if row is not None else float("nan")
+        if n_ok == 0:
+            statuses = res.results.loc[res.results["model"] == label, "status"].value_counts()
+            out[label] = "no successful simulation (" + ", ".join(f"{n} {s}" for s, n in statuses.items()) + ")"
+        elif np.isfinite(mean) and mean > FAILED_ESR:
+            out[label] = f"mean ESR {mean:.3g} > {FAILED_ESR:g} over the study"
+        elif sc is not None and isinstance(sc.predictions.get(label), str):
+            out[label] = f"failed on this record: {sc.predictions[label]}"
+        elif per_record.get(label, 0.0) > FAILED_ESR:
+            out[label] = f"ESR {per_record[label]:.3g} > {FAILED_ESR:g} on this record"
+    return out
+
+
+def overlay_models(res: StudyResult, failed: Mapping[str, str] | None = None) -> list[str]:
+    """Models overlaid on the measured force in Figs. 9-11 (at most three, none failed).
+
+    LPV (the paper's model), the best of the paper's classical models (P-15, SP-1..SP-4) and the
+    best of the remaining models, each by mean ESR over the study, in display order.
+    """
+    from mrdamper.study.tables import PAPER_CLASSICAL
+
+    failed = failed_models(res) if failed is None else failed
+    summary = res.summary
+    ok = summary[~summary["model"].isin(list(failed)) & np.isfinite(summary["esr_mean"].to_numpy(dtype=float))]
+    if res.showcase is not None:
+        ok = ok[ok["model"].isin(list(res.showcase.ok()))]
+    chosen: list[str] = []
+    lpv = ok[ok["kind"] == "lpv"]
+    if not lpv.empty:
+        chosen.append(str(lpv.sort_values("esr_mean")["model"].iloc[0]))
+    for group in (ok[ok["kind"].isin(PAPER_CLASSICAL)], ok):
+        rest = group[~group["model"].isin(chosen)]
+        if not rest.empty and len(chosen) < 3:
+            chosen.append(str(rest.sort_values("esr_mean")["model"].iloc[0]))
+    return [k for k in res.labels if k in chosen]
+
+
+def _all_models(plane: str) -> Callable[[StudyResult], Any]:
     def draw(res: StudyResult) -> Any:
-        from mrdamper.plotting import plot_force_time, plot_fv_models
+        from mrdamper.plotting import plot_model_panels
 
         sc = res.showcase
-        if sc is None or not sc.ok():
-            return "no successful model prediction to draw"
-        fn = plot_force_time if kind == "ft" else plot_fv_models
-        ax = fn(sc.record, sc.ok(), window=_window(sc))
-        failed = [k for k, v in sc.predictions.items() if isinstance(v, str)]
-        if failed:
-            ax.text(0.01, 0.01, "failed: " + ", ".join(failed), transform=ax.transAxes, fontsize=7, color="tab:red")
-        return ax.figure
+        if sc is None or not sc.predictions:
+            return "no model prediction to draw"
+        failed = failed_models(res, sc)
+        scores = record_esr(sc)
+        titles = {k: f"ESR {v:.3g}" for k, v in scores.items() if np.isfinite(v)}
+        if plane == "fx":
+            titles = _energy_titles(sc, titles)
+        preds = {k: sc.predictions[k] for k in res.labels if k in sc.predictions}
+        fig = plot_model_panels(sc.record, preds, plane=plane, overlay=overlay_models(res, failed), failed=failed,
+                                titles=titles, window=_window(sc))
+        fig.suptitle(f"Record {sc.record.name} (scored in fold {sc.fold})", fontsize=9.5)
+        return fig
 
     return draw
+
+
+def _energy_titles(sc: Showcase, titles: Mapping[str, str]) -> dict[str, str]:
+    from mrdamper.study.report_tables import energy_table
+
+    tab = energy_table(sc)
+    out = dict(titles)
+    if tab.empty:
+        return out
+    unit = "J/cycle" if int(tab["cycles"].iloc[0]) > 0 else "J"
+    for row in tab.itertuples(index=False):
+        if row.model in out and np.isfinite(row.energy_J):
+            out[row.model] = f"{row.energy_J:.3g} {unit}"
+    return out
 
 
 _DRAW: dict[str, Callable[[StudyResult], Any]] = {
@@ -153,15 +270,21 @@ _DRAW: dict[str, Callable[[StudyResult], Any]] = {
     "fig08_ssse_boxes": _boxes("ssse"),
     "fig09_force_time": _all_models("ft"),
     "fig10_fv_models": _all_models("fv"),
+    "fig11_fx_loops": _all_models("fx"),
 }
 
 
 def make_figures(res: StudyResult) -> dict[str, Any]:
     """Draw every figure; name -> Figure, or the reason (str) it was not drawn."""
+    import matplotlib
+
+    from mrdamper.plotting._common import PRINT_STYLE
+
     out: dict[str, Any] = {}
-    for name, draw in _DRAW.items():
-        try:
-            out[name] = draw(res)
-        except Exception as exc:  # noqa: BLE001 - a figure problem must not lose the study's numbers
-            out[name] = f"figure could not be drawn: {type(exc).__name__}: {exc}"
+    with matplotlib.rc_context(PRINT_STYLE):  # type: ignore[arg-type]
+        for name, draw in _DRAW.items():
+            try:
+                out[name] = draw(res)
+            except Exception as exc:  # noqa: BLE001 - a figure problem must not lose the study's numbers
+                out[name] = f"figure could not be drawn: {type(exc).__name__}: {exc}"
     return out

@@ -311,8 +311,9 @@ class Protocol:
         Default estimator settings per kind (``{"lpv": {"fs": 200.0}}``), applied to every model
         of that kind unless the model entry sets the same key.
     showcase : str, optional
-        Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10); default: the
-        first scored record.
+        Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10, 11); default: the
+        most informative scored record (varying current if any, else the highest current level,
+        then the widest velocity spread).
     hysteresis_record : str, optional
         Glob of the record of the LTI hysteresis figure (Fig. 4); default: the first scored
         record of the analysis selection, else the showcase.

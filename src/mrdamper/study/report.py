@@ -1,5 +1,13 @@
 """``report.html``: one self-contained page (no external files, scripts or fonts) with the protocol,
-the tables and every figure embedded as a base64 PNG, readable offline in any browser."""
+the tables and every figure embedded as a base64 PNG, readable offline in any browser.
+
+Layout rules: the page is at most 1100 px wide; every table sits in a box that scrolls
+sideways when the table is wider than the page (the page itself never does); figures are shown
+at the size they are drawn for print (at most 7 in wide) and shrink with a narrower window. Numbers are rounded to
+four significant digits (:func:`~mrdamper.study.report_tables.format_number`). The wording
+depends on the data: records from the virtual rig (whose damper is a known model) or measured
+ones (:func:`~mrdamper.study.runner.data_origin`).
+"""
 
 from __future__ import annotations
 
@@ -12,39 +20,75 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from mrdamper.study.figures import FIGURES
+from mrdamper.study.figures import FIGURES, failed_models, overlay_models
+from mrdamper.study.report_tables import (
+    analysis_table,
+    energy_display,
+    energy_table,
+    esr_by_table,
+    format_number,
+    grouping_keys,
+    laws_table,
+    study_failed_note,
+    summary_table,
+)
+from mrdamper.study.tables import PAPER_HEADLINE
+from mrdamper.study.writer import FIGURE_DPI
 
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.study.result import StudyResult
 
-__all__ = ["render_report"]
+__all__ = ["figure_captions", "render_report"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;margin:2em auto;
 padding:0 1em;color:#222;line-height:1.45}
 h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.8em}
-table{border-collapse:collapse;font-size:.85em;margin:.6em 0}th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right}
-th{background:#f2f2f2}td:first-child,th:first-child{text-align:left}.left td{text-align:left}
+h3{font-size:1.05em;margin:1.2em 0 .3em}
+.tablewrap{max-width:100%;overflow-x:auto;margin:.6em 0}
+table{border-collapse:collapse;font-size:.85em}th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right;
+vertical-align:top}
+th{background:#f2f2f2;font-weight:600}td{white-space:nowrap}td:first-child,th:first-child{text-align:left}
+.left td,.left th{text-align:left}td.text{text-align:left;white-space:normal;min-width:14em;max-width:40em;overflow-wrap:anywhere}
 .headline{background:#f5f9ff;border-left:4px solid #3b73b9;padding:.6em 1em;font-size:1.05em}
 .warn{background:#fff6e5;border-left:4px solid #e0a020;padding:.4em 1em}
-figure{margin:1.2em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{font-size:.9em;color:#444}
-code{background:#f4f4f4;padding:0 .25em}details{margin:.6em 0}.small{font-size:.85em;color:#555}
+figure{margin:1.4em 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
+figcaption{font-size:.9em;color:#333;max-width:7in}
+code{background:#f4f4f4;padding:0 .25em;overflow-wrap:anywhere}details{margin:.6em 0}.small{font-size:.85em;color:#555}
+pre{white-space:pre-wrap;overflow-wrap:anywhere}
+@media print{body{max-width:none;margin:0}.tablewrap{overflow:visible}table{font-size:7.5pt}
+figure{break-inside:avoid}details{display:block}}
 """
+
+#: Columns whose cells are free text (wrapped, left-aligned).
+_TEXT_COLUMNS = frozenset({"error", "note", "first_error", "example", "status", "reason"})
 
 
 def _e(x: Any) -> str:
     return html.escape(str(x), quote=True)
 
 
-def _table(df: pd.DataFrame, floatfmt: str = "{:.4g}", cls: str = "") -> str:
-    def fmt(v: Any) -> str:
-        if isinstance(v, (float, np.floating)):
-            return "" if not np.isfinite(v) else floatfmt.format(v)
-        return "" if v is None else str(v)
-
+def _table(df: pd.DataFrame, cls: str = "", digits: int = 4) -> str:
+    """HTML table in a sideways-scrolling box; numbers to ``digits`` significant digits."""
     head = "".join(f"<th>{_e(c)}</th>" for c in df.columns)
-    body = "".join("<tr>" + "".join(f"<td>{_e(fmt(v))}</td>" for v in row) + "</tr>" for row in df.itertuples(index=False))
-    return f'<table class="{cls}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+    text_cols = [str(c) in _TEXT_COLUMNS for c in df.columns]
+    body = []
+    for row in df.itertuples(index=False):
+        cells = []
+        for v, is_text in zip(row, text_cols):
+            attr = ' class="text"' if is_text and isinstance(v, str) and len(v) > 30 else ""
+            cells.append(f"<td{attr}>{_e(format_number(v, digits))}</td>")
+        body.append("<tr>" + "".join(cells) + "</tr>")
+    return (f'<div class="tablewrap"><table class="{cls}"><thead><tr>{head}</tr></thead>'
+            f"<tbody>{''.join(body)}</tbody></table></div>")
+
+
+def _unit(res: StudyResult) -> str:
+    return "A" if res.protocol.input == "i" else "V"
+
+
+def _virtual(res: StudyResult) -> bool:
+    return str(res.info.get("data_origin", "")).startswith("virtual rig")
 
 
 def _model_text(p: Any, spec: Any) -> str:
@@ -59,6 +103,7 @@ def _protocol_section(res: StudyResult) -> str:
     rows = [
         ("name", p.name),
         ("description", p.description or "-"),
+        ("data", res.info.get("data_origin", "not recorded")),
         ("electrical input", p.input),
         ("force-velocity analysis records", "none" if p.analysis is None else p.analysis.describe()),
         ("identification records", p.train.describe()),
@@ -68,9 +113,12 @@ def _protocol_section(res: StudyResult) -> str:
         ("out-of-range policy when scoring", p.range_policy),
         ("models", ", ".join(_model_text(p, s) for s in res.specs)),
     ]
-    out = ['<table class="left">'] + [f"<tr><th>{_e(k)}</th><td>{_e(v)}</td></tr>" for k, v in rows] + ["</table>"]
+    out = ['<div class="tablewrap"><table class="left">']
+    out += [f'<tr><th>{_e(k)}</th><td class="text">{_e(v)}</td></tr>' for k, v in rows]
+    out.append("</table></div>")
     roles = res.roles.groupby(["fold", "role"], sort=False).agg(records=("record", "count"), samples=("samples", "sum"))
-    out.append("<p>Records per role and fold:</p>" + _table(roles.reset_index(), "{:.0f}"))
+    roles = roles.reset_index().rename(columns={"samples": "samples [-]"})
+    out.append("<p>Records per role and fold:</p>" + _table(roles))
     ov = res.overlap()
     if ov.empty:
         out.append("<p><b>Train/score overlap:</b> none. No scored record trained a model or the analysis "
@@ -82,26 +130,68 @@ def _protocol_section(res: StudyResult) -> str:
     return "\n".join(out)
 
 
-def _summary_section(res: StudyResult, summary: pd.DataFrame) -> str:
+def _headline_text(res: StudyResult) -> tuple[str, str]:
     hl = res.headline()
     cls = "headline" if hl.get("available") else "warn"
-    text = ('<b>Headline</b> (LPV against the best of the paper\'s classical models, P-15 and SP-1..SP-4). '
-            + _e(hl["text"]))
+    text = ("<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and SP-1..SP-4): "
+            + _e(hl["text"]) + ". " + _e(PAPER_HEADLINE["text"]))
+    return cls, text
+
+
+def _data_note(res: StudyResult) -> str:
+    origin = str(res.info.get("data_origin", ""))
+    if _virtual(res):
+        damper = origin[origin.find("(") + 1: origin.rfind(" damper)")] if "(" in origin else "a known"
+        note = (f"The records come from the virtual rig, whose damper is a {damper} model with noise and "
+                "sensor dynamics added.")
+        if damper == "spencer":
+            note += (" The <code>spencer</code> estimator therefore has the true structure here: it is a "
+                     "reference, not a competitor.")
+        return note
+    return ("The records are measured data: no model has the damper's true structure. Spencer, Bingham and "
+            "NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, LTI).")
+
+
+def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, str]) -> str:
+    cls, text = _headline_text(res)
     out = [f'<p class="{cls}">{text}</p>']
-    cols = ["model", "n_ok", "n_failed", "esr_mean", "esr_median", "esr_q1", "esr_q3",
-            "ssse_mean", "ssse_median", "ssse_q1", "ssse_q3", "esr_gain_of_best_pct", "ssse_gain_of_best_pct",
-            "fit_time_s", "sim_time_s"]
-    out.append(_table(summary[cols]))
-    out.append('<p class="small">ESR (eq. 24) [-] and SSSE (eq. 23, an RMS error) [N] over the rows with status '
-               "<code>ok</code>. <code>*_gain_of_best_pct</code>: improvement of the model with the lowest mean over "
-               "this model, 100 (mean - best) / mean, as the paper states its 51 % and 36.8 %. Times in seconds, "
-               "summed over folds and records. On the virtual rig the damper itself is a Spencer model: the "
-               "<code>spencer</code> estimator has the true structure there and is a reference, not a competitor.</p>")
+    ref = res.headline().get("model", "lpv")
+    out.append(_table(summary_table(summary, ref, failed)))
+    if failed:
+        out.append('<p class="small">Failed: ' + "; ".join(f"<b>{_e(k)}</b>: {_e(v)}" for k, v in failed.items())
+                   + ".</p>")
+    out.append(
+        '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured force) [-] and SSSE '
+        "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is the "
+        f"interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) {_e(ref)}'s "
+        "mean ESR is than the row model's mean, 100 (other - " + _e(ref) + ") / other, the way the headline and the "
+        "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an error larger than the signal) or that never "
+        "simulated is marked failed; its row stays. Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
+        + _data_note(res) + "</p>")
+    return "\n".join(out)
+
+
+def _by_group_section(res: StudyResult) -> str:
+    keys = grouping_keys(res.results)
+    if not keys:
+        return ("<p>The scored records carry no condition, experiment or current metadata with two or more "
+                "values, so there is no breakdown; every row is in the table at the end.</p>")
+    titles = {"condition": "Mean ESR [-] per test condition (amplitude and frequency)",
+              "experiment": "Mean ESR [-] per experiment (Table II)",
+              "current": f"Mean ESR [-] per current level [{_unit(res)}]"}
+    out = []
+    for key in keys:
+        out.append(f"<h3>{_e(titles[key])}</h3>" + _table(esr_by_table(res.results, key, res.labels, _unit(res)), digits=3))
+    if "current" not in keys:
+        out.append('<p class="small">No per-current table: the scored records have no constant current level '
+                   "(the current varies within each record).</p>")
     return "\n".join(out)
 
 
 def _failures_section(res: StudyResult) -> str:
     fits = res.fits[["fold", "model", "status", "fit_time_s", "n_train", "train_samples", "error", "note"]]
+    fits = fits.rename(columns={"fit_time_s": "fit time [s]", "n_train": "training records",
+                                "train_samples": "training samples"})
     out = ["<p>Identification, one row per fold and model:</p>", _table(fits, cls="left")]
     bad = res.results[res.results["status"] != "ok"]
     if bad.empty:
@@ -118,37 +208,103 @@ def _failures_section(res: StudyResult) -> str:
 
 
 def _analysis_section(res: StudyResult) -> str:
+    unit = _unit(res)
     out = []
+    shown = 0
     for fold, an in res.analyses.items():
-        if an.laws is not None and hasattr(an.laws, "to_frame"):
-            cols = [c for c in an.laws.to_frame().columns if not c.endswith("_law")]
-            out.append(f"<p>Fold <code>{_e(fold)}</code>: {len(an.fits)} level(s), grouped by {_e(an.by)}.</p>"
-                       + _table(an.laws.to_frame()[cols]))
-        else:
+        if an.laws is None or not hasattr(an.laws, "levels"):
             out.append(f"<p>Fold <code>{_e(fold)}</code>: {_e(an.error or 'no analysis')}</p>")
+            continue
+        body = [(f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
+                 "with the largest distance of a per-level fit from its law:</p>")]
+        for title, df in laws_table(an.laws, unit).items():
+            body.append(f"<p><b>{_e(title)}</b></p>" + _table(df))
+        body.append("<p>Three-zone fit (eq. 17) at each level:</p>" + _table(analysis_table(an.laws, unit)))
         if an.notes:
-            out.append(f'<p class="small">Notes: {_e(an.notes)}</p>')
-        if len(res.analyses) > 3:
-            out.append(f'<p class="small">({len(res.analyses) - 1} more folds in <code>analysis/</code>.)</p>')
-            break
+            body.append(f'<p class="small">Warnings of the analysis: {_e(an.notes)}</p>')
+        if shown == 0:
+            out.append(f"<h3>Fold <code>{_e(fold)}</code></h3>" + "\n".join(body))
+        else:
+            out.append(f"<details><summary>Fold <code>{_e(fold)}</code></summary>" + "\n".join(body) + "</details>")
+        shown += 1
+    out.append('<p class="small">Every fold\'s laws are also in <code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>')
     return "\n".join(out)
 
 
-def _figures_section(saved: Mapping[str, Any]) -> str:
+def _record_text(res: StudyResult, which: str) -> str:
+    sc = res.showcase if which == "showcase" else res.hysteresis
+    if sc is None:
+        return ""
+    el = np.asarray(sc.record.electrical(res.protocol.input), dtype=float)  # type: ignore[arg-type]
+    lo, hi = float(np.min(el)), float(np.max(el))
+    unit = _unit(res)
+    level = (f"{res.protocol.input} from {lo:.3g} to {hi:.3g} {unit}" if hi - lo > 0.05 * max(abs(hi), 1e-9)
+             else f"{res.protocol.input} = {float(np.mean(el)):.3g} {unit}")
+    why = ("the protocol's choice" if (res.protocol.showcase if which == "showcase" else res.protocol.hysteresis_record)
+           else "the scored record with varying current if any, else the highest current level and widest velocity range")
+    return f"Record <code>{_e(sc.record.name)}</code> ({_e(level)}; fold {_e(sc.fold)}; {_e(why)})."
+
+
+def figure_captions(res: StudyResult, failed: dict[str, str] | None = None) -> dict[str, str]:
+    """Caption (HTML) of each figure for this study: the base text plus what depends on the data."""
+    failed = failed_models(res) if failed is None else failed
+    caps = {name: _e(text) for name, (_, text) in FIGURES.items()}
+    caps["fig06_lpv_tracking"] += " " + _record_text(res, "showcase")
+    caps["fig04_lti_hysteresis"] += " " + _record_text(res, "hysteresis")
+    over = overlay_models(res, failed) if res.showcase is not None else []
+    rule = (f" {_record_text(res, 'showcase')} Top: the measured force with {_e(', '.join(over) or 'no model')} "
+            "(rule: LPV, the best of the paper's classical models and the best other model by mean ESR over the "
+            "study, none of them failed). Below: every model in its own panel on a shared force scale, with its "
+            "ESR on this record.")
+    if failed:
+        rule += (" Failed models (" + _e(", ".join(failed)) + ") have a panel of their own with their own force "
+                 "scale, outlined in red.")
+    for name in ("fig09_force_time", "fig10_fv_models", "fig11_fx_loops"):
+        caps[name] += rule
+    if _virtual(res):
+        caps["fig01_fv_map"] += " Virtual rig records."
+    return caps
+
+
+def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[str, str]) -> str:
     out = []
-    for name, caption in FIGURES.items():
+    skipped = []
+    caps = figure_captions(res, failed)
+    number = 0
+    for name, (paper, _) in FIGURES.items():
         item = saved.get(name)
         if item is None:
             continue
+        ref = f"paper Fig. {paper}" if paper is not None else "not in the paper"
         if isinstance(item, str):
-            out.append(f'<figure><figcaption>{_e(caption)} <span class="warn">Not drawn: {_e(item)}</span></figcaption></figure>')
+            skipped.append(f'<li id="{_e(name)}">{_e(ref[0].upper() + ref[1:])}: {_e(FIGURES[name][1])} '
+                           f'<span class="warn">Not drawn: {_e(item)}</span></li>')
             continue
-        data = base64.b64encode(Path(item["png"]).read_bytes()).decode("ascii")
+        number += 1
+        label = f"<b>Figure {number}</b> ({ref})."
+        png = Path(item["png"]).read_bytes()
+        data = base64.b64encode(png).decode("ascii")
+        width_in = int.from_bytes(png[16:20], "big") / FIGURE_DPI  # IHDR width [px] at the saved resolution
         out.append(
-            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" alt="{_e(caption)}">'
-            f"<figcaption>{_e(caption)} (<code>figures/{_e(name)}.png</code>, <code>.svg</code>)</figcaption></figure>"
+            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" style="width:{width_in:.2f}in" '
+            f'alt="Figure {number}: {_e(FIGURES[name][1])}">'
+            f"<figcaption>{label} {caps[name]} (<code>figures/{_e(name)}.png</code>, <code>.svg</code>)</figcaption></figure>"
         )
-    return "\n".join(out) if out else "<p>Figures were not requested.</p>"
+        if name == "fig11_fx_loops":
+            tab = energy_table(res.showcase)
+            if not tab.empty:
+                out.append("<p>Energy dissipated on this record, W = &int; F v dt: the mean over the complete "
+                           "cycles of the measured displacement, or the whole record when it holds less than one "
+                           "(every force integrated over the same cycles with the measured velocity):</p>"
+                           + _table(energy_display(tab, failed), digits=3))
+    if skipped:
+        out.insert(0, "<p>Figures that this study cannot draw:</p><ul>" + "".join(skipped) + "</ul>")
+    if not out:
+        return "<p>Figures were not requested.</p>"
+    note = study_failed_note(res, failed)
+    if note:
+        out.insert(0, f'<p class="warn">{_e(note)}</p>')
+    return "\n".join(out)
 
 
 def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, Any]) -> str:
@@ -164,26 +320,33 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         Figure name -> ``{"png": path, "svg": path}`` or the reason it was not drawn.
     """
     info = res.info
+    failed = failed_models(res)
     results_cols = [c for c in res.results.columns if c not in ("note",)]
+    all_rows = res.results[results_cols].rename(columns={
+        "esr": "ESR [-]", "ssse": "SSSE [N]", "nrmse": "NRMSE [-]", "fit_pct": "fit [%]",
+        "fit_time_s": "fit time [s]", "sim_time_s": "simulation time [s]", "current": f"current [{_unit(res)}]",
+        "amplitude": "amplitude [m]", "frequency": "frequency [Hz]"})
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f"<title>mrdamper study: {_e(res.protocol.name)}</title><style>{_CSS}</style></head><body>",
         f"<h1>MR damper model comparison: {_e(res.protocol.name)}</h1>",
-        (f'<p class="small">{_e(info.get("n_records", "?"))} records, {_e(info.get("n_folds", "?"))} fold(s), '
-         f'{len(res.specs)} models; seed {_e(info.get("seed"))}; run on {_e(info.get("executor", "?"))} in '
-         f'{float(info.get("wall_time_s", float("nan"))):.1f} s.</p>'),
-        "<h2>Summary</h2>", _summary_section(res, summary),
+        (f'<p class="small">{_e(info.get("n_records", "?"))} records ({_e(info.get("data_origin", "origin not recorded"))}), '
+         f'{_e(info.get("n_folds", "?"))} fold(s), {len(res.specs)} models; seed {_e(info.get("seed"))}; run on '
+         f'{_e(info.get("executor", "?"))} in {float(info.get("wall_time_s", float("nan"))):.1f} s.</p>'),
+        "<h2>Summary</h2>", _summary_section(res, summary, failed),
+        "<h2>ESR per condition and per current level</h2>", _by_group_section(res),
         "<h2>Protocol</h2>", _protocol_section(res),
-        "<h2>Figures</h2>", _figures_section(saved),
+        "<h2>Figures</h2>", _figures_section(res, saved, failed),
         "<h2>Identification and failures</h2>", _failures_section(res),
-        "<h2>Force-velocity analysis</h2>", _analysis_section(res),
+        "<h2>Force-velocity analysis and fitted laws</h2>", _analysis_section(res),
         "<h2>All results</h2>",
         (f"<details><summary>{len(res.results)} rows (also in <code>results.csv</code>)</summary>"
-         + _table(res.results[results_cols], cls="left") + "</details>"),
+         + _table(all_rows, cls="left") + "</details>"),
         (f'<p class="small">Python {_e(info.get("python", ""))} on {_e(info.get("platform", ""))}. Files next to '
-         "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, figures/.</p>"),
+         "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, analysis/, "
+         "figures/.</p>"),
         "</body></html>",
     ]
     return "\n".join(parts) + "\n"

@@ -1,17 +1,12 @@
-"""The outcome of a study and how it is written to disk.
+"""The outcome of a study: a value holding tables, fitted models and the figure records.
 
-:meth:`StudyResult.write` builds everything in a hidden temporary folder beside the target and
-renames it into place at the very end, so an interrupted or failed write never leaves a folder
-that looks complete. ``report.html`` is written last inside it.
+Writing it (CSV, JSON, figures, ``report.html``) is :mod:`mrdamper.study.writer`'s job;
+:meth:`StudyResult.write` only hands the result to it.
 """
 
 from __future__ import annotations
 
-import json
 import os
-import re
-import shutil
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,16 +14,12 @@ from typing import Any
 
 import pandas as pd
 
-from mrdamper._io import atomic_write_text
 from mrdamper.data import Experiment
-from mrdamper.errors import OutputExistsError
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
 from mrdamper.study.tables import headline, summarize
 
-__all__ = ["FIGURE_FORMATS", "Showcase", "StudyResult"]
-
-FIGURE_FORMATS: tuple[str, ...] = ("png", "svg")
+__all__ = ["Showcase", "StudyResult"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,10 +46,6 @@ class Showcase:
     def ok(self) -> dict[str, Any]:
         """Only the successful predictions."""
         return {k: v for k, v in self.predictions.items() if not isinstance(v, str)}
-
-
-def _slug(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "fold"
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,6 +126,8 @@ class StudyResult:
     def write(self, out_dir: str | os.PathLike[str], *, force: bool = False, figures: bool = True) -> Path:
         """Write results, summary, models, figures (PNG + SVG) and ``report.html`` to ``out_dir``.
 
+        The writing itself is :func:`mrdamper.study.writer.write_study`; see there.
+
         Parameters
         ----------
         out_dir : path
@@ -158,106 +147,8 @@ class StudyResult:
         OutputExistsError
             ``out_dir`` exists, is not an empty folder and ``force`` is false.
         """
-        out = Path(out_dir)
-        if out.exists() and not out.is_dir():
-            raise OutputExistsError(f"{out}: exists and is not a folder; choose another --out")
-        if out.is_dir() and any(out.iterdir()) and not force:
-            raise OutputExistsError(f"{out}: folder exists and is not empty; pass force=True (CLI: --force) to replace it")
-        out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
-        try:
-            self._write_into(tmp, figures)
-            _swap_into_place(tmp, out, force)
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
-            raise
-        return out
+        from mrdamper.study.writer import write_study
 
-    def _write_into(self, d: Path, figures: bool) -> None:
-        from mrdamper.study.report import render_report
-
-        atomic_write_text(d / "results.csv", self.results.to_csv(index=False))
-        summary = self.summary
-        atomic_write_text(d / "summary.csv", summary.to_csv(index=False))
-        atomic_write_text(d / "fits.csv", self.fits.to_csv(index=False))
-        atomic_write_text(d / "roles.csv", self.roles.to_csv(index=False))
-        atomic_write_text(d / "protocol.json", self.protocol.to_json() + "\n")
-        info = dict(self.info)
-        info["headline"] = {k: v for k, v in self.headline().items()}
-        atomic_write_text(d / "study.json", json.dumps(info, indent=2, default=str) + "\n")
-        for (fold, label), model in self.models.items():
-            model.save(d / "models" / _slug(fold) / f"{_slug(label)}.json")
-        for fold, an in self.analyses.items():
-            if an.laws is not None and hasattr(an.laws, "to_dict"):
-                text = json.dumps(an.laws.to_dict(), indent=1)
-                atomic_write_text(d / "analysis" / f"{_slug(fold)}_zone_laws.json", text + "\n")
-        saved = _save_figures(self.figures(), d / "figures") if figures else {}
-        html = render_report(self, summary, saved)
-        atomic_write_text(d / "report.html", html)
+        return write_study(self, out_dir, force=force, figures=figures)
 
 
-def _save_figures(figs: Mapping[str, Any], folder: Path) -> dict[str, Any]:
-    """Save each Figure as PNG and SVG in ``folder``; name -> {format: path} or the skip reason."""
-    import matplotlib
-    import matplotlib.pyplot as plt
-
-    folder.mkdir(exist_ok=True)
-    saved: dict[str, Any] = {}
-    with matplotlib.rc_context({"svg.hashsalt": "mrdamper"}):
-        for name, fig in figs.items():
-            if isinstance(fig, str):
-                saved[name] = fig
-                continue
-            files = {}
-            for fmt in FIGURE_FORMATS:
-                p = folder / f"{name}.{fmt}"
-                fig.savefig(p, format=fmt, dpi=110, bbox_inches="tight", metadata=_fig_metadata(fmt))
-                files[fmt] = p
-            saved[name] = files
-            plt.close(fig)
-    return saved
-
-
-def _fig_metadata(fmt: str) -> dict[str, Any]:
-    """Fixed metadata so the same figure gives the same bytes (no dates, no software versions)."""
-    if fmt == "svg":
-        return {"Date": None, "Creator": None}
-    if fmt == "png":
-        return {"Software": None}
-    return {}
-
-
-def _umask() -> int:
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("Umask:"):
-                return int(line.split()[1], 8)
-    except OSError:
-        pass
-    return 0o022
-
-
-def _usual_permissions(folder: Path) -> None:
-    """Give the finished folder the permissions of an ordinary folder (temporary files are private)."""
-    mask = _umask()
-    folder.chmod(0o777 & ~mask)
-    for p in folder.rglob("*"):
-        p.chmod((0o777 if p.is_dir() else 0o666) & ~mask)
-
-
-def _swap_into_place(tmp: Path, out: Path, force: bool) -> None:
-    """Move the finished folder ``tmp`` to ``out`` (replacing an empty one, or any one if ``force``)."""
-    _usual_permissions(tmp)
-    if not out.exists():
-        os.replace(tmp, out)
-        return
-    if not any(out.iterdir()):
-        out.rmdir()
-        os.replace(tmp, out)
-        return
-    if not force:  # re-check: the folder may have been filled meanwhile
-        raise OutputExistsError(f"{out}: folder filled while writing; pass force=True to replace it")
-    trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-    os.replace(out, trash / out.name)
-    os.replace(tmp, out)
-    shutil.rmtree(trash, ignore_errors=True)

@@ -31,7 +31,7 @@ from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
-__all__ = ["META_COLUMNS", "run_study"]
+__all__ = ["META_COLUMNS", "data_origin", "run_study"]
 
 #: Record metadata copied into the results table when present.
 META_COLUMNS: tuple[str, ...] = ("experiment", "replicate", "pattern", "condition", "current", "amplitude", "frequency")
@@ -69,6 +69,23 @@ def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict
             if key in fields and key not in out:
                 out[key] = laws
     return out
+
+
+def data_origin(data: Iterable[Experiment]) -> str:
+    """Where the records come from, for the report's wording.
+
+    Returns
+    -------
+    str
+        ``"virtual rig (<damper> damper)"`` when every record carries the virtual rig's metadata
+        (``source = "virtual rig"``), else ``"measured"`` (files, real test rigs, or records
+        whose origin is not recorded).
+    """
+    recs = list(data)
+    if recs and all(e.metadata.get("source") == "virtual rig" for e in recs):
+        dampers = sorted({str(e.metadata.get("damper", "unknown")) for e in recs})
+        return f"virtual rig ({', '.join(dampers)} damper)"
+    return "measured"
 
 
 def _pick(records: Iterable[Experiment], pattern: str | None) -> Experiment | None:
@@ -184,6 +201,7 @@ def run_study(
         "executor": executor.description,
         "wall_time_s": time.perf_counter() - t_start,
         "n_records": len(data),
+        "data_origin": data_origin(data),
         "n_folds": len(folds),
         "python": platform.python_version(),
         "platform": platform.platform(),
@@ -298,23 +316,58 @@ def _fitted_models(
     return out
 
 
+def _informative(folds: list[Fold], source: str) -> tuple[Fold, Experiment] | None:
+    """The scored record that shows the most of a current-scheduled model (default showcase).
+
+    Preference: a record whose electrical input varies (more than 10 % of the span over all
+    scored records), then the highest mean electrical level, then the widest velocity spread;
+    ties keep the first in fold and record order.
+    """
+    cands = [(f, e) for f in folds for e in f.score]
+    if not cands:
+        return None
+    levels = [np.asarray(e.electrical(source), dtype=np.float64) for _, e in cands]  # type: ignore[arg-type]
+    span = max(float(np.ptp(np.concatenate(levels))), 1e-12)
+
+    def key(k: int) -> tuple[bool, int, float]:
+        el, e = levels[k], cands[k][1]
+        return (float(np.ptp(el)) > 0.1 * span, round(20 * float(np.mean(np.abs(el))) / span), float(np.std(e.v)))
+
+    best = max(range(len(cands)), key=lambda k: (key(k), -k))
+    return cands[best]
+
+
 def _showcases(
     folds: list[Fold], specs: Sequence[ModelSpec], fitted: Mapping[tuple[str, str], Any], protocol: Protocol
 ) -> tuple[Showcase | None, Showcase | None]:
-    """Predictions of every model on the figure records (Figs. 4, 6, 9, 10)."""
+    """Predictions of every model on the figure records (Figs. 4, 6, 9, 10, 11).
+
+    The showcase is the protocol's ``showcase`` glob (first match in fold order) or, when unset,
+    the most informative scored record (:func:`_informative`); the hysteresis record is the
+    protocol's ``hysteresis_record`` glob, else the showcase.
+    """
+    kinds = {s.label: s.kind for s in specs}
+
+    def make(fold: Fold, e: Experiment) -> Showcase:
+        ms = {s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted}
+        return Showcase(fold=fold.name, record=e, predictions=_predict_all(ms, e, protocol.range_policy), kinds=kinds)
+
     show = hyst = None
+    if protocol.showcase is None:
+        hit = _informative(folds, protocol.input)
+        if hit is not None:
+            show = make(*hit)
     for pattern, is_hyst in ((protocol.showcase, False), (protocol.hysteresis_record, True)):
+        if pattern is None:
+            continue
         for fold in folds:
             e = _pick(fold.score, pattern)
             if e is None:
                 continue
-            ms = {s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted}
-            kinds = {s.label: s.kind for s in specs}
-            sc = Showcase(fold=fold.name, record=e, predictions=_predict_all(ms, e, protocol.range_policy), kinds=kinds)
             if is_hyst:
-                hyst = sc
+                hyst = make(fold, e)
             else:
-                show = sc
+                show = make(fold, e)
             break
     if hyst is None:
         hyst = show
