@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["lpv_inverse"]
+__all__ = ["lpv_inverse", "lpv_inverse_reg", "reg_solve_poly", "reg_solve_static", "sp_force1", "static_inverse_reg"]
 
 #: LPV input modes: u = v, continuous reading of eq. 22, literal reading.
 MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
@@ -231,3 +231,206 @@ def lpv_inverse(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu
         u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
         prev = r
     return rho, F, sat
+
+
+# ----------------------------------------------------------------------------- regularised inverse
+_INV_GOLDEN = 0.6180339887498949
+_N_GOLDEN = 80
+
+
+@njit(cache=True)
+def sp_force1(x, v, i, comp, power, theta, f0):  # pragma: no cover - numba
+    """One sample of the static map ``A(i) tanh(a(i) v + b(i) x) + c(i) v + d(i) x + f0`` [N].
+
+    ``comp``/``power``/``theta`` as in :mod:`mrdamper.models._sp_kernels`: component ``comp[k]``
+    (0 = A, 1 = a, 2 = b, 3 = c, 4 = d) gains ``theta[k] * i**power[k]``.
+    """
+    A = 0.0
+    a = 0.0
+    b = 0.0
+    c = 0.0
+    d = 0.0
+    for k in range(theta.size):
+        term = theta[k] * i ** power[k]
+        m = comp[k]
+        if m == 0:
+            A += term
+        elif m == 1:
+            a += term
+        elif m == 2:
+            b += term
+        elif m == 3:
+            c += term
+        else:
+            d += term
+    return A * np.tanh(a * v + b * x) + c * v + d * x + f0
+
+
+@njit(cache=True)
+def _obj_poly(cf, target, r, prev, lam2):  # pragma: no cover - numba
+    e = _poly(cf, r) - target
+    return e * e + lam2 * (r - prev) * (r - prev)
+
+
+@njit(cache=True)
+def _obj_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragma: no cover - numba
+    e = sp_force1(x, v, r, comp, power, theta, f0) - target
+    return e * e + lam2 * (r - prev) * (r - prev)
+
+
+@njit(cache=True)
+def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # pragma: no cover - numba
+    """Minimiser of ``(poly(cf)(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
+
+    Grid scan of ``n_grid`` intervals (``prev`` included), then golden-section search on the two
+    intervals around the best grid point. Returns ``(r, reachable)``: ``reachable`` is False when
+    ``target`` lies outside the range of forces on the grid (the damper cannot give it).
+    """
+    best = min(max(prev, a), b)
+    best_j = _obj_poly(cf, target, best, prev, lam2)
+    fmin = _poly(cf, best)
+    fmax = fmin
+    if b <= a:
+        return best, fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        f = _poly(cf, r)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+        e = f - target
+        j = e * e + lam2 * (r - prev) * (r - prev)
+        if j < best_j:
+            best, best_j = r, j
+    lo = max(a, best - h)
+    hi = min(b, best + h)
+    for _ in range(_N_GOLDEN):
+        m1 = hi - _INV_GOLDEN * (hi - lo)
+        m2 = lo + _INV_GOLDEN * (hi - lo)
+        if _obj_poly(cf, target, m1, prev, lam2) <= _obj_poly(cf, target, m2, prev, lam2):
+            hi = m2
+        else:
+            lo = m1
+    r = 0.5 * (lo + hi)
+    if _obj_poly(cf, target, r, prev, lam2) < best_j:
+        best = r
+    return best, fmin <= target <= fmax
+
+
+@njit(cache=True)
+def reg_solve_static(x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
+    """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""
+    best = min(max(prev, a), b)
+    best_j = _obj_static(x, v, comp, power, theta, f0, target, best, prev, lam2)
+    fmin = sp_force1(x, v, best, comp, power, theta, f0)
+    fmax = fmin
+    if b <= a:
+        return best, fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        f = sp_force1(x, v, r, comp, power, theta, f0)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+        e = f - target
+        j = e * e + lam2 * (r - prev) * (r - prev)
+        if j < best_j:
+            best, best_j = r, j
+    lo = max(a, best - h)
+    hi = min(b, best + h)
+    for _ in range(_N_GOLDEN):
+        m1 = hi - _INV_GOLDEN * (hi - lo)
+        m2 = lo + _INV_GOLDEN * (hi - lo)
+        j1 = _obj_static(x, v, comp, power, theta, f0, target, m1, prev, lam2)
+        j2 = _obj_static(x, v, comp, power, theta, f0, target, m2, prev, lam2)
+        if j1 <= j2:
+            hi = m2
+        else:
+            lo = m1
+    r = 0.5 * (lo + hi)
+    if _obj_static(x, v, comp, power, theta, f0, target, r, prev, lam2) < best_j:
+        best = r
+    return best, fmin <= target <= fmax
+
+
+@njit(cache=True)
+def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # pragma: no cover - numba
+    """Coefficients (in ``rho``) of the force at sample ``k`` given the past ``y``, ``u`` (into ``cf``)."""
+    n_m, n_p = alpha.shape
+    for p in range(n_p):
+        acc = 0.0
+        for j in range(n_m):
+            q = k - 1 - j
+            if q >= 0:
+                acc += beta[j, p] * u[q] - alpha[j, p] * y[q]
+        cf[p] = acc
+    cf[0] += offset
+
+
+@njit(cache=True)
+def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0,
+                    n_grid, lam, rate_step):  # pragma: no cover - numba
+    """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
+
+    Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - rho[k-1])^2`` over
+    the admissible interval (input limits, the reach of the drive lag when ``lag >= 0``, and
+    ``|rho - rho[k-1]| <= rate_step``). Other arguments as :func:`lpv_inverse`.
+
+    Returns
+    -------
+    rho, F : float64[:]
+    saturated : bool[:]
+        True where ``F_desired[k]`` lies outside the forces the admissible interval gives.
+    """
+    n = v.size
+    n_m, n_p = alpha.shape
+    y = np.zeros(n)
+    u = np.zeros(n)
+    rho = np.zeros(n)
+    F = np.zeros(n)
+    sat = np.zeros(n, dtype=np.bool_)
+    cf = np.zeros(n_p)
+    prev = min(max(rho0, lo), hi)
+    lam2 = lam * lam
+    for k in range(n):
+        lpv_coefficients(cf, y, u, k, alpha, beta, offset)
+        a, b = lo, hi
+        if lag >= 0.0 and k >= 1:
+            if k == 1:
+                a = b = rho[0]
+            else:
+                a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
+                b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
+        if k >= 1:
+            a = max(a, prev - rate_step)
+            b = min(b, prev + rate_step)
+            if b < a:
+                a = b = min(max(prev, a), b)
+        r, ok = reg_solve_poly(cf, F_desired[k], a, b, prev, lam2, n_grid)
+        rho[k] = r
+        F[k] = _poly(cf, r)
+        y[k] = F[k] - offset
+        sat[k] = not ok
+        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
+        prev = r
+    return rho, F, sat
+
+
+@njit(cache=True)
+def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step):  # pragma: no cover
+    """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`)."""
+    n = x.size
+    out = np.zeros(n)
+    sat = np.zeros(n, dtype=np.bool_)
+    prev = min(max(i0, lo), hi)
+    lam2 = lam * lam
+    for k in range(n):
+        a, b = lo, hi
+        if k >= 1:
+            a = max(a, prev - rate_step)
+            b = min(b, prev + rate_step)
+        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, prev, lam2, n_grid)
+        out[k] = r
+        sat[k] = not ok
+        prev = r
+    return out, sat
