@@ -234,8 +234,6 @@ def lpv_inverse(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu
 
 
 # ----------------------------------------------------------------------------- regularised inverse
-_INV_GOLDEN = 0.6180339887498949
-_N_GOLDEN = 80
 
 
 @njit(cache=True)
@@ -267,90 +265,136 @@ def sp_force1(x, v, i, comp, power, theta, f0):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _obj_poly(cf, target, r, prev, lam2):  # pragma: no cover - numba
-    e = _poly(cf, r) - target
-    return e * e + lam2 * (r - prev) * (r - prev)
+def sp_dforce1(x, v, i, comp, power, theta):  # pragma: no cover - numba
+    """``dF/di`` of :func:`sp_force1` at one sample [N per input unit]."""
+    A = 0.0
+    a = 0.0
+    b = 0.0
+    dA = 0.0
+    da = 0.0
+    db = 0.0
+    dc = 0.0
+    dd = 0.0
+    for k in range(theta.size):
+        pw = power[k]
+        term = theta[k] * i ** pw
+        dterm = pw * theta[k] * i ** (pw - 1) if pw > 0 else 0.0
+        m = comp[k]
+        if m == 0:
+            A += term
+            dA += dterm
+        elif m == 1:
+            a += term
+            da += dterm
+        elif m == 2:
+            b += term
+            db += dterm
+        elif m == 3:
+            dc += dterm
+        else:
+            dd += dterm
+    th = np.tanh(a * v + b * x)
+    return dA * th + A * (1.0 - th * th) * (da * v + db * x) + dc * v + dd * x
 
 
 @njit(cache=True)
-def _obj_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragma: no cover - numba
-    e = sp_force1(x, v, r, comp, power, theta, f0) - target
-    return e * e + lam2 * (r - prev) * (r - prev)
+def _slope_poly(cf, target, r, prev, lam2):  # pragma: no cover - numba
+    """Half the derivative of the regularised objective, ``(F - target) F' + lam2 (r - prev)``."""
+    return (_poly(cf, r) - target) * _dpoly(cf, r) + lam2 * (r - prev)
+
+
+@njit(cache=True)
+def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragma: no cover - numba
+    return ((sp_force1(x, v, r, comp, power, theta, f0) - target) * sp_dforce1(x, v, r, comp, power, theta)
+            + lam2 * (r - prev))
+
+
+@njit(cache=True)
+def _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b):  # pragma: no cover
+    """Zero of the objective's slope in ``[a, b]`` (slope < 0 at ``a``, > 0 at ``b``), to machine precision."""
+    for _ in range(_N_BISECT):
+        m = 0.5 * (a + b)
+        if m <= a or m >= b:
+            break
+        if is_poly:
+            g = _slope_poly(cf, target, m, prev, lam2)
+        else:
+            g = _slope_static(x, v, comp, power, theta, f0, target, m, prev, lam2)
+        if g == 0.0:
+            return m
+        if g < 0.0:
+            a = m
+        else:
+            b = m
+    return 0.5 * (a + b)
+
+
+@njit(cache=True)
+def _reg_solve(is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
+    """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]`` (see :func:`reg_solve_poly`)."""
+    best = min(max(prev, a), b)
+    if is_poly:
+        f = _poly(cf, best)
+    else:
+        f = sp_force1(x, v, best, comp, power, theta, f0)
+    best_j = (f - target) * (f - target) + lam2 * (best - prev) * (best - prev)
+    fmin = f
+    fmax = f
+    if b <= a:
+        return best, fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        if is_poly:
+            f = _poly(cf, r)
+        else:
+            f = sp_force1(x, v, r, comp, power, theta, f0)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+        j = (f - target) * (f - target) + lam2 * (r - prev) * (r - prev)
+        if j < best_j:
+            best, best_j = r, j
+    # local minimum next to the best grid point: the sign change of the slope, bisected
+    if is_poly:
+        g = _slope_poly(cf, target, best, prev, lam2)
+    else:
+        g = _slope_static(x, v, comp, power, theta, f0, target, best, prev, lam2)
+    if g > 0.0 and best > a:
+        lo = max(a, best - h)
+        if is_poly:
+            g_lo = _slope_poly(cf, target, lo, prev, lam2)
+        else:
+            g_lo = _slope_static(x, v, comp, power, theta, f0, target, lo, prev, lam2)
+        if g_lo < 0.0:
+            best = _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, lo, best)
+    elif g < 0.0 and best < b:
+        hi = min(b, best + h)
+        if is_poly:
+            g_hi = _slope_poly(cf, target, hi, prev, lam2)
+        else:
+            g_hi = _slope_static(x, v, comp, power, theta, f0, target, hi, prev, lam2)
+        if g_hi > 0.0:
+            best = _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, best, hi)
+    return best, fmin <= target <= fmax
 
 
 @njit(cache=True)
 def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # pragma: no cover - numba
     """Minimiser of ``(poly(cf)(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
 
-    Grid scan of ``n_grid`` intervals (``prev`` included), then golden-section search on the two
-    intervals around the best grid point. Returns ``(r, reachable)``: ``reachable`` is False when
-    ``target`` lies outside the range of forces on the grid (the damper cannot give it).
+    Grid scan of ``n_grid`` intervals (``prev`` included); then the zero of the objective's slope
+    next to the best grid point (where the slope changes sign within one grid step) is bisected to
+    machine precision. Returns ``(r, reachable)``: ``reachable`` is False when ``target`` lies
+    outside the range of forces on the grid (the damper cannot give it).
     """
-    best = min(max(prev, a), b)
-    best_j = _obj_poly(cf, target, best, prev, lam2)
-    fmin = _poly(cf, best)
-    fmax = fmin
-    if b <= a:
-        return best, fmin == target
-    h = (b - a) / n_grid
-    for q in range(n_grid + 1):
-        r = b if q == n_grid else a + q * h
-        f = _poly(cf, r)
-        fmin = min(fmin, f)
-        fmax = max(fmax, f)
-        e = f - target
-        j = e * e + lam2 * (r - prev) * (r - prev)
-        if j < best_j:
-            best, best_j = r, j
-    lo = max(a, best - h)
-    hi = min(b, best + h)
-    for _ in range(_N_GOLDEN):
-        m1 = hi - _INV_GOLDEN * (hi - lo)
-        m2 = lo + _INV_GOLDEN * (hi - lo)
-        if _obj_poly(cf, target, m1, prev, lam2) <= _obj_poly(cf, target, m2, prev, lam2):
-            hi = m2
-        else:
-            lo = m1
-    r = 0.5 * (lo + hi)
-    if _obj_poly(cf, target, r, prev, lam2) < best_j:
-        best = r
-    return best, fmin <= target <= fmax
+    e1 = np.zeros(0, dtype=np.int64)
+    return _reg_solve(True, cf, 0.0, 0.0, e1, e1, cf, 0.0, target, a, b, prev, lam2, n_grid)
 
 
 @njit(cache=True)
 def reg_solve_static(x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
     """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""
-    best = min(max(prev, a), b)
-    best_j = _obj_static(x, v, comp, power, theta, f0, target, best, prev, lam2)
-    fmin = sp_force1(x, v, best, comp, power, theta, f0)
-    fmax = fmin
-    if b <= a:
-        return best, fmin == target
-    h = (b - a) / n_grid
-    for q in range(n_grid + 1):
-        r = b if q == n_grid else a + q * h
-        f = sp_force1(x, v, r, comp, power, theta, f0)
-        fmin = min(fmin, f)
-        fmax = max(fmax, f)
-        e = f - target
-        j = e * e + lam2 * (r - prev) * (r - prev)
-        if j < best_j:
-            best, best_j = r, j
-    lo = max(a, best - h)
-    hi = min(b, best + h)
-    for _ in range(_N_GOLDEN):
-        m1 = hi - _INV_GOLDEN * (hi - lo)
-        m2 = lo + _INV_GOLDEN * (hi - lo)
-        j1 = _obj_static(x, v, comp, power, theta, f0, target, m1, prev, lam2)
-        j2 = _obj_static(x, v, comp, power, theta, f0, target, m2, prev, lam2)
-        if j1 <= j2:
-            hi = m2
-        else:
-            lo = m1
-    r = 0.5 * (lo + hi)
-    if _obj_static(x, v, comp, power, theta, f0, target, r, prev, lam2) < best_j:
-        best = r
-    return best, fmin <= target <= fmax
+    return _reg_solve(False, theta, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid)
 
 
 @njit(cache=True)

@@ -439,7 +439,7 @@ def force_authority(model: Any, v_ref: float) -> float:
 
 
 #: Default regularisation weight as a fraction of :func:`force_authority` at the peak velocity.
-DEFAULT_REG_FRACTION = 0.3
+DEFAULT_REG_FRACTION = 0.5
 
 
 def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float) -> tuple[float, float]:
