@@ -237,6 +237,15 @@ def lpv_inverse(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu
 
 
 @njit(cache=True)
+def _ipow(x, n):  # pragma: no cover - numba
+    """``x ** n`` for an integer ``n >= 0`` by repeated multiplication (the C export does the same)."""
+    r = 1.0
+    for _ in range(n):
+        r *= x
+    return r
+
+
+@njit(cache=True)
 def sp_force1(x, v, i, comp, power, theta, f0):  # pragma: no cover - numba
     """One sample of the static map ``A(i) tanh(a(i) v + b(i) x) + c(i) v + d(i) x + f0`` [N].
 
@@ -249,7 +258,7 @@ def sp_force1(x, v, i, comp, power, theta, f0):  # pragma: no cover - numba
     c = 0.0
     d = 0.0
     for k in range(theta.size):
-        term = theta[k] * i ** power[k]
+        term = theta[k] * _ipow(i, power[k])
         m = comp[k]
         if m == 0:
             A += term
@@ -277,8 +286,8 @@ def sp_dforce1(x, v, i, comp, power, theta):  # pragma: no cover - numba
     dd = 0.0
     for k in range(theta.size):
         pw = power[k]
-        term = theta[k] * i ** pw
-        dterm = pw * theta[k] * i ** (pw - 1) if pw > 0 else 0.0
+        term = theta[k] * _ipow(i, pw)
+        dterm = pw * theta[k] * _ipow(i, pw - 1) if pw > 0 else 0.0
         m = comp[k]
         if m == 0:
             A += term

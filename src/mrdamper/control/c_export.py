@@ -225,12 +225,20 @@ static const double {P}_F0 = {f0};
 static const double {P}_LO = {lo};
 static const double {P}_HI = {hi};
 
+static double {p}_ipow(double x, int n)
+{{
+    double r = 1.0;
+    int q;
+    for (q = 0; q < n; ++q) r *= x;
+    return r;
+}}
+
 /* A(i) tanh(a(i) v + b(i) x) + c(i) v + d(i) x + f0, each component a polynomial in i */
 static double {p}_force(double x, double v, double i)
 {{
     double c[5] = {{0.0, 0.0, 0.0, 0.0, 0.0}};
     int q;
-    for (q = 0; q < {P}_N_THETA; ++q) c[{P}_COMP[q]] += {P}_THETA[q] * pow(i, (double){P}_POWER[q]);
+    for (q = 0; q < {P}_N_THETA; ++q) c[{P}_COMP[q]] += {P}_THETA[q] * {p}_ipow(i, {P}_POWER[q]);
     return c[0] * tanh(c[1] * v + c[2] * x) + c[3] * v + c[4] * x + {P}_F0;
 }}
 
@@ -268,8 +276,8 @@ static double {p}_dforce(double x, double v, double i)
     int q;
     for (q = 0; q < {P}_N_THETA; ++q) {{
         int pw = {P}_POWER[q];
-        double term = {P}_THETA[q] * pow(i, (double)pw);
-        double dterm = pw > 0 ? (double)pw * {P}_THETA[q] * pow(i, (double)(pw - 1)) : 0.0;
+        double term = {P}_THETA[q] * {p}_ipow(i, pw);
+        double dterm = pw > 0 ? (double)pw * {P}_THETA[q] * {p}_ipow(i, pw - 1) : 0.0;
         switch ({P}_COMP[q]) {{
         case 0: A += term; dA += dterm; break;
         case 1: a += term; da += dterm; break;
