@@ -436,7 +436,7 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
         True where ``F_desired[k]`` lies outside the forces the admissible interval gives.
     """
     n = v.size
-    n_m, n_p = alpha.shape
+    n_p = alpha.shape[1]
     y = np.zeros(n)
     u = np.zeros(n)
     rho = np.zeros(n)

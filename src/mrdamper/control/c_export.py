@@ -472,8 +472,8 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
               f"void {p}_run(long n, const double *x, const double *v, const double *input, double *F);"]
     if has_inverse:
         protos += [f"double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out);",
-                   f"void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired, "
-                   "double *input, double *F);"]
+                   (f"void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired, "
+                    "double *input, double *F);")]
     header = (
         f"/* {name}.h: {kind} damper model exported by mrdamper (C99, no dynamic allocation).\n"
         f" * Units: x [m], v [m/s], input [{unit}] in [{lo!r}, {hi!r}], force [N]. Sample rate: {rate_note}.\n"

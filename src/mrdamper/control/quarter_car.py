@@ -215,7 +215,7 @@ def bump_road(*, height: float = 0.05, length: float = 2.0, speed: float = 20.0,
     L = _pos("length", length, "m")
     V = _pos("speed", speed, "m/s")
     fs = _pos("fs", fs, "Hz")
-    n = int(round(_pos("duration", duration, "s") * fs)) + 1
+    n = round(_pos("duration", duration, "s") * fs) + 1
     s = V * (np.arange(n) / fs - start)  # distance past the bump's start [m]
     z = np.where((s >= 0) & (s <= L), 0.5 * h * (1 - np.cos(2 * np.pi * np.clip(s, 0, L) / L)), 0.0)
     return Road(name=f"bump {100 * h:g} cm x {L:g} m @ {V:g} m/s", fs=float(fs), z=z)
@@ -385,7 +385,6 @@ def simulate_quarter_car(
     SimulationDivergedError
         A state left ``bound``.
     """
-    from mrdamper.models.lpv import LPVModel
 
     car = QuarterCar() if car is None else car
     ctrl = Controller(controller) if isinstance(controller, str) else controller
@@ -399,7 +398,7 @@ def simulate_quarter_car(
         raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
     if arrays["is_lpv"]:
         ratio = road.fs / model.fs
-        n_sub = int(round(ratio))
+        n_sub = round(ratio)
         if n_sub < 1 or abs(ratio - n_sub) > 1e-9 * ratio:
             raise DataValidationError(
                 "road", f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an integer multiple"
