@@ -5,7 +5,7 @@ over ISO 8608 roads and a bump with every controller and writes, atomically and 
 existing file without ``--force``:
 
 * ``DIR/quartercar.csv``: the metrics table (one row per road and controller);
-* ``DIR/time_<road>.png``: time histories of the first ISO road and of the bump;
+* ``DIR/time_<road>.png``: time histories of the first ISO road (2 s in its middle) and of the bump;
 * ``DIR/spectra_<road>.png``: body-acceleration PSD and transmissibility of the first ISO road.
 
 The table is also printed.
@@ -97,7 +97,11 @@ def quartercar(
     atomic_write_text(table_path, table.to_csv(index=False, float_format="%.6g"), force=force)
     written = [table_path]
     iso = [r for r in cmp.roads if r.startswith("ISO")]
-    for road in iso[:1] + [r for r in cmp.roads if r.startswith("bump")]:
+    mid = 0.5 * duration
+    for road in iso[:1]:  # a 2 s window in the middle of the road
+        fig = cmp.plot_time(road, t_range=(max(0.0, mid - 1.0), mid + 1.0))
+        written.append(_save_png(fig, out / f"time_{_slug(road)}.png", force))
+    for road in [r for r in cmp.roads if r.startswith("bump")]:
         written.append(_save_png(cmp.plot_time(road), out / f"time_{_slug(road)}.png", force))
     if iso:
         written.append(_save_png(cmp.plot_spectra(iso[0]), out / f"spectra_{_slug(iso[0])}.png", force))
