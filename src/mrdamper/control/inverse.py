@@ -7,6 +7,19 @@ model actually produces with it (free run) and where the desired force cannot be
 
 What is solved
 --------------
+Regularised inverse (``method="regularised"``, the default), every supported kind
+    Causal, one pass: ``i[k]`` minimises ``(F_k(i) - F_desired[k])^2 + reg^2 (i - i[k-1])^2`` over
+    the input range intersected with the rate bound ``|i - i[k-1]| <= rate dt`` (first sample
+    free) and, for an LPV model with a drive lag, the lag's reach. ``F_k`` is the model force at
+    sample k given its past (LPV: a polynomial in ``rho[k]``; static map: the map at ``x[k]``,
+    ``v[k]``). Where ``|dF/di|`` is small against ``reg`` the input holds; where it is large the
+    input follows the exact solution. Minimum: grid of ``n_grid`` intervals, then the zero of the
+    objective's slope next to the best grid point, bisected to machine precision. ``reg`` defaults
+    to ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)``. Records at another rate than an
+    LPV model's are resampled to it and the input interpolated back.
+
+The exact per-sample inverse (``method="exact"``):
+
 LPV model (kind ``"lpv"``), causal and in one pass
     At sample ``k`` the model force is a polynomial of degree ``n_rho`` in the present scheduling
     value ``rho[k]`` once the past outputs and LPV inputs are fixed (eq. 9: every coefficient is
