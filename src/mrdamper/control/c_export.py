@@ -41,6 +41,7 @@ from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
     force_authority,
     lpv_law_arrays,
+    model_input_limits,
     static_map_arrays,
 )
 from mrdamper.errors import DataValidationError
@@ -86,8 +87,9 @@ _LPV = r"""
 static const double {P}_ALPHA[{P}_N_M][{P}_N_P] = {alpha};
 static const double {P}_BETA[{P}_N_M][{P}_N_P] = {beta};
 static const double {P}_OFFSET = {offset};
-static const double {P}_LO = {lo};
-static const double {P}_HI = {hi};
+static const double {P}_IN_LO = {in_lo}; /* identified input range: the forward step clips to it */
+static const double {P}_IN_HI = {in_hi};
+static const double {P}_LO = {lo}; /* lower input limit of the inverse, rest state */
 static const double {P}_LAG = {lag}; /* exp(-eta / fs), or -1: no drive lag */
 static const int {P}_MODE = {mode}; /* 0: u = v; 1: continuous, 2: literal reading of eq. 22 */
 static const double {P}_GM[3][{P}_N_D] = {gm};
@@ -163,7 +165,7 @@ void {p}_init({p}_state *s)
 double {p}_step({p}_state *s, double x, double v, double input)
 {{
     double cf[{P}_N_P];
-    double w = {p}_dmin({p}_dmax(input, {P}_LO), {P}_HI);
+    double w = {p}_dmin({p}_dmax(input, {P}_IN_LO), {P}_IN_HI);
     double r = w, F;
     (void)x;
     if ({P}_LAG >= 0.0 && s->k > 0) r = {P}_LAG * s->rho + (1.0 - {P}_LAG) * s->w;
@@ -176,6 +178,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
 """
 
 _LPV_DPOLY = r"""
+static const double {P}_HI = {hi}; /* upper input limit of the inverse */
 static double {p}_dpoly(const double *c, int n, double r)
 {{
     double acc = 0.0;
@@ -222,7 +225,9 @@ static const int {P}_COMP[{P}_N_THETA] = {comp};
 static const int {P}_POWER[{P}_N_THETA] = {power};
 static const double {P}_THETA[{P}_N_THETA] = {theta};
 static const double {P}_F0 = {f0};
-static const double {P}_LO = {lo};
+static const double {P}_IN_LO = {in_lo}; /* identified input range: the forward step clips to it */
+static const double {P}_IN_HI = {in_hi};
+static const double {P}_LO = {lo}; /* input limits of the inverse */
 static const double {P}_HI = {hi};
 
 static double {p}_ipow(double x, int n)
@@ -251,7 +256,7 @@ void {p}_init({p}_state *s)
 double {p}_step({p}_state *s, double x, double v, double input)
 {{
     (void)s;
-    return {p}_force(x, v, {p}_dmin({p}_dmax(input, {P}_LO), {P}_HI));
+    return {p}_force(x, v, {p}_dmin({p}_dmax(input, {P}_IN_LO), {P}_IN_HI));
 }}
 
 double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
@@ -377,7 +382,7 @@ def _solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str
 
 
 def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, dt: float) -> tuple[float, float]:
-    lo, hi = model.input_range
+    lo, hi = model_input_limits(model)
     if reg is None:
         lam = DEFAULT_REG_FRACTION * force_authority(model, v_ref) if hi > lo else 0.0
     elif not (np.isfinite(reg) and reg >= 0):
@@ -425,7 +430,7 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     p, P = name, name.upper()
-    lo, hi = (float(b) for b in model.input_range)
+    lo, hi = model_input_limits(model)
     has_inverse = not isinstance(model, LTIModel)
     is_lpv = isinstance(model, LPVModel)
     if is_lpv:
@@ -435,7 +440,8 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         if rate is not None and dt is None:
             raise DataValidationError("dt", "a rate bound on a static map's inverse needs the sample time dt [s]")
     lam, rate_step = _settings(model, reg, v_ref, rate, step_dt) if has_inverse else (0.0, math.inf)
-    fmt: dict[str, Any] = {"p": p, "P": P, "lo": _f(lo), "hi": _f(hi), "lam2": _f(lam * lam),
+    fmt: dict[str, Any] = {"p": p, "P": P, "lo": _f(lo), "hi": _f(hi), "in_lo": _f(model.input_range[0]),
+                           "in_hi": _f(model.input_range[1]), "lam2": _f(lam * lam),
                            "rate_step": _f(rate_step), "n_grid": n_grid, "n_bisect": K._N_BISECT}
     if is_lpv:
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
@@ -476,7 +482,8 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
                     "double *input, double *F);")]
     header = (
         f"/* {name}.h: {kind} damper model exported by mrdamper (C99, no dynamic allocation).\n"
-        f" * Units: x [m], v [m/s], input [{unit}] in [{lo!r}, {hi!r}], force [N]. Sample rate: {rate_note}.\n"
+        f" * Units: x [m], v [m/s], input [{unit}] clipped to [{model.input_range[0]!r}, {model.input_range[1]!r}] "
+        f"(inverse: [{lo!r}, {hi!r}]), force [N].\n * Sample rate: {rate_note}.\n"
         f" * Inverse: regularisation weight {lam!r} N/{unit}, grid {n_grid}. */\n"
         f"#ifndef {guard}\n#define {guard}\n\n{state}\n" + "\n".join(protos) + f"\n\n#endif /* {guard} */\n"
     )

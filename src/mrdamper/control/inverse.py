@@ -80,6 +80,7 @@ __all__ = [
     "force_authority",
     "inverse_current",
     "lpv_law_arrays",
+    "model_input_limits",
     "static_map_arrays",
 ]
 
@@ -231,8 +232,19 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     )
 
 
+def model_input_limits(model: Any) -> tuple[float, float]:
+    """Default input limits: the identified ``input_range``, for an LPV model intersected with the
+    scheduling range ``rho_range`` it was identified on (beyond it the coefficients are extrapolated).
+    """
+    lo, hi = (float(b) for b in model.input_range)
+    rr = getattr(model, "rho_range", None)
+    if getattr(model, "kind", "") == "lpv" and rr is not None and rr[1] > rr[0]:
+        lo, hi = max(lo, float(rr[0])), min(hi, float(rr[1]))
+    return lo, hi
+
+
 def _range(model: FittedModel, i_range: Any) -> tuple[float, float]:
-    lo_m, hi_m = model.input_range
+    lo_m, hi_m = model_input_limits(model)
     if i_range is None:
         lo, hi = lo_m, hi_m
     else:
@@ -434,9 +446,9 @@ def force_authority(model: Any, v_ref: float) -> float:
     """
     from mrdamper.models.lpv import LPVModel
 
-    lo, hi = model.input_range
+    lo, hi = model_input_limits(model)
     if not hi > lo:
-        raise DataValidationError("input_range", f"expected low < high, got {model.input_range}")
+        raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
     if isinstance(model, LPVModel):
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))

@@ -43,6 +43,7 @@ from mrdamper.control.inverse import (
     driver_command,
     force_authority,
     lpv_law_arrays,
+    model_input_limits,
     static_map_arrays,
 )
 from mrdamper.errors import DataValidationError, SimulationDivergedError
@@ -393,7 +394,7 @@ def simulate_quarter_car(
     if not isinstance(road, Road):
         raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
     arrays = _damper_arrays(model)
-    lo, hi = model.input_range if i_range is None else (float(i_range[0]), float(i_range[1]))
+    lo, hi = model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
     if not hi >= lo:
         raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
     if arrays["is_lpv"]:
