@@ -98,3 +98,22 @@ def test_bump_and_bad_input() -> None:
         QuarterCar(m_s=-1.0)
     with pytest.raises(DataValidationError, match="road_class"):
         iso_road("Z")
+
+
+def test_compare_controllers_table_and_figures() -> None:
+    from mrdamper.control import compare_controllers
+    from mrdamper.control.quarter_car_study import default_rate
+
+    m = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), input_range=(0.0, 2.0))
+    cmp = compare_controllers(m, road_classes=("B",), controllers=("soft", "skyhook"), duration=4.0, speed=15.0)
+    table = cmp.to_frame()
+    assert list(table["controller"]) == ["soft", "skyhook", "soft", "skyhook"]
+    assert table["road"].iloc[0] == "ISO B @ 15 m/s" and table["road"].iloc[-1].startswith("bump")
+    np.testing.assert_allclose(table["acc_wk_vs_soft"].iloc[0], 1.0)
+    r = cmp.results[("ISO B @ 15 m/s", "skyhook")]
+    assert r.plot() is not None and cmp.plot_time().axes and cmp.plot_spectra().axes
+    frame = r.to_frame()
+    assert frame.shape == (r.t.size, 11)
+    assert default_rate(m) == 1000.0
+    lpv_like = type("M", (), {"kind": "lpv", "fs": 300.0})()
+    assert default_rate(lpv_like) == 1200.0  # smallest multiple of 300 Hz with a step <= 1 ms

@@ -61,6 +61,9 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
     return alpha * sky + (1.0 - alpha) * gnd
 
 
+# Cached on disk (compiling takes seconds). Caveat: numba does not invalidate this cache when a
+# function it calls in another module (the inverse kernels) changes; after editing those, delete
+# this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
 @njit(cache=True)
 def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, offset, lag, mode, gm, gc,
              mu_high, mu_low, ctrl, gains, lo, hi, lam, rate_step, n_grid, bound):  # pragma: no cover - numba
