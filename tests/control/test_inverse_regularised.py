@@ -68,14 +68,14 @@ def test_quiroz_targets_every_record(quiroz_models: dict[str, Any], quiroz_recor
         assert bad.empty, f"{kind}: {bad.to_string()}"
 
 
-_NOT_MET = "not met on Dyke (median voltage error 0.44 V SP-1, 0.81 V LPV; LPV force ratio 1.65), see docs/control.md"
+_NOT_MET = "not met on Dyke (SP-1: median voltage error 0.44 V; LPV: force ratio 1.57), see docs/control.md"
 
 
 @pytest.mark.parametrize(("kind", "figure"), [
     ("sp1", "force"),
     pytest.param("lpv", "force", marks=pytest.mark.xfail(strict=True, reason=_NOT_MET)),
     pytest.param("sp1", "voltage", marks=pytest.mark.xfail(strict=True, reason=_NOT_MET)),
-    pytest.param("lpv", "voltage", marks=pytest.mark.xfail(strict=True, reason=_NOT_MET)),
+    ("lpv", "voltage"),
 ])
 def test_dyke_targets(dyke_models: dict[str, Any], dyke_record: Any, kind: str, figure: str) -> None:
     check = check_inverse(dyke_models[kind], dyke_record)

@@ -425,9 +425,11 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
                     n_grid, lam, rate_step):  # pragma: no cover - numba
     """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
 
-    Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - rho[k-1])^2`` over
+    Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
     the admissible interval (input limits, the reach of the drive lag when ``lag >= 0``, and
-    ``|rho - rho[k-1]| <= rate_step``). Other arguments as :func:`lpv_inverse`.
+    ``|rho - rho[k-1]| <= rate_step``); ``hold = rho[k-1]``, or with a drive lag the value ``rho[k]``
+    would take with the previous command held (the regularisation then penalises command changes,
+    not the lag's own motion). Other arguments as :func:`lpv_inverse`.
 
     Returns
     -------
@@ -444,6 +446,7 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
     sat = np.zeros(n, dtype=np.bool_)
     cf = np.zeros(n_p)
     prev = min(max(rho0, lo), hi)
+    w_prev = prev
     lam2 = lam * lam
     for k in range(n):
         lpv_coefficients(cf, y, u, k, alpha, beta, offset)
@@ -459,7 +462,12 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
             b = min(b, prev + rate_step)
             if b < a:
                 a = b = min(max(prev, a), b)
-        r, ok = reg_solve_poly(cf, F_desired[k], a, b, prev, lam2, n_grid)
+        hold = prev
+        if lag >= 0.0 and k >= 2:  # rho with the previous command held: the lag's own motion is free
+            hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+        r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
+        if lag >= 0.0:
+            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         rho[k] = r
         F[k] = _poly(cf, r)
         y[k] = F[k] - offset

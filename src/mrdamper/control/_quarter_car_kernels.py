@@ -120,6 +120,7 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
     k4 = np.zeros(4)
     lam2 = lam * lam
     prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
+    w_prev = prev
     for k in range(n_ctrl):
         zs, vs, zu, vu = st[0], st[1], st[2], st[3]
         x_d = zs - zu
@@ -144,7 +145,12 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
                 r = min(max(i_const, a), b)
                 ok = True
             else:
-                r, ok = reg_solve_poly(cf, target + offset, a, b, prev, lam2, n_grid)
+                hold = prev
+                if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
+                    hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
+            if lag >= 0.0:
+                w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
             Fk = _poly(cf, r)
             y[k] = Fk - offset
             u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low)

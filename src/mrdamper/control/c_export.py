@@ -191,7 +191,7 @@ static double {p}_dpoly(const double *c, int n, double r)
 _LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
 {{
     double cf[{P}_N_P];
-    double a = {P}_LO, b = {P}_HI, prev = s->rho, r, F;
+    double a = {P}_LO, b = {P}_HI, prev = s->rho, hold, r, F;
     (void)x;
     {p}_coefficients(s, cf);
     if ({P}_LAG >= 0.0 && s->k >= 1) {{
@@ -211,7 +211,12 @@ _LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, dou
             b = a;
         }}
     }}
-    r = {p}_solve(cf, F_desired, a, b, prev);
+    hold = prev;
+    if ({P}_LAG >= 0.0 && s->k >= 2) hold = {p}_dmin({p}_dmax({P}_LAG * prev + (1.0 - {P}_LAG) * s->w, a), b);
+    r = {p}_solve(cf, F_desired, a, b, hold);
+    if ({P}_LAG >= 0.0) {{ /* command of the previous sample (the lead of the lag) */
+        s->w = s->k <= 1 ? r : {p}_dmin({p}_dmax((r - {P}_LAG * prev) / (1.0 - {P}_LAG), {P}_LO), {P}_HI);
+    }}
     F = {p}_poly(cf, {P}_N_P, r);
     {p}_commit(s, F, v, r);
     if (F_out) *F_out = F;
@@ -452,7 +457,7 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         state = (f"typedef struct {{\n    double y[{model.n_m}]; /* past outputs y[k-1-j] (force minus offset) [N] */\n"
                  f"    double u[{model.n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
                  "    double rho; /* scheduling value of the last sample */\n"
-                 "    double w; /* input of the last sample (drive-lag state) */\n"
+                 "    double w; /* forward: input of the last sample; inverse: last command (drive lag) */\n"
                  f"    long k; /* samples taken */\n}} {p}_state;\n")
         body = _LPV.format(**fmt)
         if has_inverse:
