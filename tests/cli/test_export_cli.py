@@ -72,8 +72,10 @@ def test_inverse_writes_current(tmp_path: Path, capsys: pytest.CaptureFixture[st
     model = m.save(tmp_path / "m.json")
     rec = _record(tmp_path / "rec.csv", m)
     out = tmp_path / "current.csv"
-    main(["inverse", str(model), str(rec), "--out", str(out)])
-    assert "saturated; wrote" in capsys.readouterr().out
+    main(["inverse", str(model), str(rec), "--out", str(out), "--method", "exact"])
+    printed = capsys.readouterr().out
+    assert "saturated; wrote" in printed
+    assert "median |i error| over |v| > 20 % of peak" in printed and "ratio" in printed
     frame = pd.read_csv(out)
     assert list(frame.columns) == ["t", "F_desired", "i", "F_achieved", "saturated"]
     ok = frame["saturated"] == 0
@@ -82,6 +84,28 @@ def test_inverse_writes_current(tmp_path: Path, capsys: pytest.CaptureFixture[st
     np.testing.assert_allclose(frame["F_achieved"][ok], frame["F_desired"][ok], atol=1e-5 * scale)
     assert frame["i"].between(0.0, 1.0).all()
     assert _exit_code(["inverse", str(model), str(rec), "--out", str(out)]) == 2
+
+
+def test_inverse_default_is_regularised_and_prints_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = SP3.save(tmp_path / "m.json")
+    rec = _record(tmp_path / "rec.csv", SP3)
+    main(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--rate", "20"])
+    printed = capsys.readouterr().out
+    assert "(regularised)" in printed
+    err = float(printed.split("peak: ")[1].split(" A")[0])
+    assert err < 0.05  # the record's current is piecewise constant in [0.1, 0.9] A
+    frame = pd.read_csv(tmp_path / "o.csv")
+    assert np.max(np.abs(np.diff(frame["i"]))) <= 20.0 / 1000.0 + 1e-12
+
+
+def test_export_c(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = LPV.save(tmp_path / "lpv.json")
+    main(["export", str(model), "--format", "c", "--out", str(tmp_path / "c"), "--name", "lpv_damper"])
+    assert "(C99)" in capsys.readouterr().out
+    header = (tmp_path / "c" / "lpv_damper.h").read_text()
+    assert "double lpv_damper_inverse_step(lpv_damper_state *s" in header
+    assert _exit_code(["export", str(model), "--format", "c", "--out", str(tmp_path / "c"), "--name", "lpv_damper"]) == 2
+    assert "already exists" in capsys.readouterr().err
 
 
 def test_inverse_refuses_unsupported_kind(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -1,4 +1,5 @@
-"""Inverse model: round trips (force -> current -> force), saturation, drive-lag lead, bad input."""
+"""Inverse model, exact per-sample method: round trips (force -> current -> force), saturation, drive-lag
+lead, bad input. The regularised method (the default) is tested in test_inverse_regularised.py."""
 
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ def test_lpv_round_trip_known_model() -> None:
     m = _lpv_v()
     e, i = _motion()
     F = m.predict(e.replace(i=i))
-    res = inverse_current(m, e, F)
+    res = inverse_current(m, e, F, method="exact")
     assert isinstance(res, InverseResult)
     tol = 1e-6 * np.max(np.abs(F))
     assert not res.saturated[m.n_m:].any()
@@ -68,7 +69,7 @@ def test_lpv_fitted_on_virtual_rig_round_trip() -> None:
         m = LPVEstimator(n_m=2, n_rho=2, laws_by="bins").fit(train)
     e = ds[20]
     F = m.predict(e)
-    res = inverse_current(m, e, F)
+    res = inverse_current(m, e, F, method="exact")
     tol = 1e-6 * np.max(np.abs(F))
     ok = ~res.saturated
     assert ok.mean() > 0.9
@@ -81,7 +82,7 @@ def test_lpv_unreachable_force_saturates_at_range_ends() -> None:
     m = _lpv_v()
     e, i = _motion()
     F = m.predict(e.replace(i=i))
-    res = inverse_current(m, e, 10 * (F - m.offset) + m.offset)
+    res = inverse_current(m, e, 10 * (F - m.offset) + m.offset, method="exact")
     sat = res.saturated
     assert sat.mean() > 0.5
     at_end = np.isclose(res.i[sat], 0.0) | np.isclose(res.i[sat], 2.0)
@@ -94,7 +95,7 @@ def test_lpv_with_drive_lag_uses_lead_command() -> None:
     m = _lpv_v(eta=80.0)
     e, i = _motion()
     F = m.predict(e.replace(i=i))
-    res = inverse_current(m, e, F)
+    res = inverse_current(m, e, F, method="exact")
     ok = ~res.saturated
     assert ok[5:].mean() > 0.9
     np.testing.assert_allclose(res.F_achieved[ok], F[ok], atol=2e-6 * np.max(np.abs(F)))
@@ -125,7 +126,7 @@ def test_static_round_trip(kind: str) -> None:
                                                   input_range=(0.0, 2.0))
     e, i = _motion(seed=5)
     F = m.predict(e.replace(i=i))
-    res = inverse_current(m, e, F)
+    res = inverse_current(m, e, F, method="exact")
     np.testing.assert_allclose(res.F_achieved, F, rtol=0, atol=1e-8 * np.max(np.abs(F)))
     sens = np.abs(m.predict(e.replace(i=np.clip(i + 1e-3, 0, 2))) - F) / 1e-3
     ok = sens > 10.0
@@ -139,17 +140,17 @@ def test_static_unreachable_targets() -> None:
     e, _ = _motion(seed=1)
     moving = np.abs(e.v) > 1e-3
     # force opposite to the velocity: the damper can only dissipate -> smallest force, lowest current
-    res = inverse_current(m, e, -500.0 * np.sign(e.v))
+    res = inverse_current(m, e, -500.0 * np.sign(e.v), method="exact")
     assert res.saturated[moving].all()
     np.testing.assert_allclose(res.i[moving], 0.0, atol=1e-9)
     np.testing.assert_allclose(res.F_achieved, m.predict(e.replace(i=np.zeros(e.n))), rtol=1e-12)
     # more than the largest current gives -> top of the range
     big = 1e5 * np.sign(e.v)
-    res = inverse_current(m, e, big)
+    res = inverse_current(m, e, big, method="exact")
     assert res.saturated[moving].all()
     np.testing.assert_allclose(res.i[moving], 2.0, atol=1e-9)
     # a user range inside the identified one confines the current
-    res = inverse_current(m, e, big, i_range=(0.2, 1.0))
+    res = inverse_current(m, e, big, i_range=(0.2, 1.0), method="exact")
     np.testing.assert_allclose(res.i[moving], 1.0, atol=1e-9)
     assert res.i_range == (0.2, 1.0)
 
@@ -158,25 +159,25 @@ def test_arrays_input_and_bad_inputs() -> None:
     m = _sp3()
     e, i = _motion(n=500)
     F = m.predict(e.replace(i=i))
-    res = inverse_current(m, {"t": e.t, "x": e.x, "v": e.v}, F)
+    res = inverse_current(m, {"t": e.t, "x": e.x, "v": e.v}, F, method="exact")
     np.testing.assert_allclose(res.F_achieved, F, atol=1e-6)
     with pytest.raises(DataValidationError, match="F_desired"):
-        inverse_current(m, e, F[:-1])
+        inverse_current(m, e, F[:-1], method="exact")
     with pytest.raises(DataValidationError, match="F_desired"):
-        inverse_current(m, e, np.full(e.n, np.nan))
+        inverse_current(m, e, np.full(e.n, np.nan), method="exact")
     with pytest.raises(DataValidationError, match="mapping lacks"):
-        inverse_current(m, {"t": e.t, "v": e.v}, F)
+        inverse_current(m, {"t": e.t, "v": e.v}, F, method="exact")
     with pytest.raises(OutOfRangeError, match="i_range"):
-        inverse_current(m, e, F, i_range=(0.0, 3.0))
+        inverse_current(m, e, F, i_range=(0.0, 3.0), method="exact")
     with pytest.raises(DataValidationError, match="i_range"):
-        inverse_current(m, e, F, i_range=(1.0, 0.5))
+        inverse_current(m, e, F, i_range=(1.0, 0.5), method="exact")
     lpv = _lpv_v()
     slow = Experiment(t=e.t * 2, x=e.x, v=e.v, F=e.F, i=e.i)
     with pytest.raises(DataValidationError, match="model rate"):
-        inverse_current(lpv, slow, F)
+        inverse_current(lpv, slow, F, method="exact")
     lti = LTIModel(alpha=ALPHA[:, :1], beta=BETA[:, :1], fs=FS, input_signal="v", input_range=(0.0, 2.0))
     with pytest.raises(TypeError, match="'lti'"):
-        inverse_current(lti, e, F)
+        inverse_current(lti, e, F, method="exact")
 
 
 def test_unsupported_kind_names_supported_ones() -> None:
@@ -184,4 +185,4 @@ def test_unsupported_kind_names_supported_ones() -> None:
 
     e, _ = _motion(n=200)
     with pytest.raises(TypeError, match="supported kinds are 'lpv'"):
-        inverse_current(reference_damper(), e, np.zeros(e.n))
+        inverse_current(reference_damper(), e, np.zeros(e.n), method="exact")

@@ -3,6 +3,8 @@ canonical structure, python-control export, frozen-pole stability."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -61,3 +63,20 @@ def test_bad_input() -> None:
         state_space(_model(), float("nan"))
     with pytest.raises(DataValidationError, match="model"):
         state_space(object(), 0.0)
+
+
+def test_control_grid_on_a_fitted_quiroz_model(quiroz_models: dict[str, Any]) -> None:
+    control = pytest.importorskip("control")
+    from mrdamper.control.statespace import control_grid
+
+    m = quiroz_models["lpv"]
+    g = control_grid(m, n_grid=5)
+    assert len(g) == 5 and all(isinstance(s, control.StateSpace) for s in g.systems)
+    assert g[0].dt == pytest.approx(1.0 / m.fs)
+    frame = g.to_frame()
+    np.testing.assert_allclose(frame["max_pole_modulus"], [np.max(np.abs(s.poles())) for s in g.systems], rtol=1e-12)
+    # the DC gain is the frozen model's static slope sum(b) / (1 + sum(a))
+    for r, gain in zip(g.rho, frame["dc_gain"]):
+        assert gain == pytest.approx(np.sum(m.b(r)) / (1.0 + np.sum(m.a(r))), rel=1e-9)
+    # the response at 1 A damps more than at 0 A (larger static slope), as the records show
+    assert frame["dc_gain"].iloc[-1] > frame["dc_gain"].iloc[0] > 0

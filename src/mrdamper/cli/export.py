@@ -2,6 +2,8 @@
 
 * ``export MODEL.json --out FILE [--format mat|json] [--force]`` writes the LPV / LTI model's
   matrices (see :mod:`mrdamper.control.export`); other model kinds are refused with one line.
+* ``export MODEL.json --format c --out DIR`` writes C99 code of the model and its inverse
+  (:mod:`mrdamper.control.c_export`).
 * ``inverse MODEL.json DATA --out FILE`` answers "which current would have produced this
   force": the record's measured force ``F`` is the desired force, its motion the motion. Writes
   ``t, F_desired, <input>, F_achieved, saturated`` [s, N, A|V, N, 0/1] as CSV, atomically.
@@ -21,21 +23,33 @@ __all__ = ["register"]
 
 def export(
     model_file: Annotated[Path, typer.Argument(help="LPV or LTI model file written by 'mrdamper fit'.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.mat or .json).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.mat or .json), or folder for --format c.")],
     fmt: Annotated[
-        str | None, typer.Option("--format", help="mat | json (default: from the --out suffix, else mat).")
+        str | None, typer.Option("--format", help="mat | json | c (default: from the --out suffix, else mat).")
+    ] = None,
+    name: Annotated[str, typer.Option("--name", help="C identifier prefix and file stem (--format c).")] = "mrd_damper",
+    reg: Annotated[
+        float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A] (--format c; default from the model).")
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
 ) -> None:
-    """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws for control design."""
+    """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws for control design,
+    or (--format c) C99 code of the model and its inverse."""
     from mrdamper._io import check_writable
     from mrdamper.control.export import export_lpv
     from mrdamper.models.registry import load_model
 
     if fmt is None:
         fmt = "json" if out.suffix.lower() == ".json" else "mat"
-    if fmt not in ("mat", "json"):
-        raise DataValidationError("--format", f"expected 'mat' or 'json', got {fmt!r}")
+    if fmt not in ("mat", "json", "c"):
+        raise DataValidationError("--format", f"expected 'mat', 'json' or 'c', got {fmt!r}")
+    if fmt == "c":
+        from mrdamper.control.c_export import export_c
+
+        m = load_model(model_file)
+        h, c = export_c(m, out, name=name, reg=reg, force=force)
+        typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
+        return
     check_writable(out, force)
     m = load_model(model_file)
     if m.kind not in ("lpv", "lti"):
@@ -52,8 +66,15 @@ def inverse(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV.")],
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
     fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+    method: Annotated[str, typer.Option("--method", help="regularised | exact.")] = "regularised",
+    reg: Annotated[float | None, typer.Option("--reg", help="Regularisation weight [N/A] (default from the model).")] = None,
+    rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
 ) -> None:
-    """Current that would have produced the record's measured force (causal inverse of the model)."""
+    """Current that would have produced the record's measured force (causal inverse of the model).
+
+    Prints the force error and, when the record has the model's electrical input, the median input
+    error over |v| > 20 % of its peak and the forward model's SSSE with the measured and with the
+    recovered input."""
     from mrdamper._io import atomic_write_text, check_writable
     from mrdamper.cli.models import read_records
     from mrdamper.control.inverse import inverse_current
@@ -64,8 +85,9 @@ def inverse(
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
     [exp] = read_records([data], fs=fs)
+    kw = {"method": method, "reg": reg, "rate": rate}
     try:
-        res = inverse_current(m, exp, exp.F)
+        res = inverse_current(m, exp, exp.F, **kw)  # type: ignore[arg-type]
     except TypeError as exc:
         raise DataValidationError("MODEL", str(exc)) from exc
     frame = res.to_frame()[["t", "F_desired", res.input, "F_achieved", "saturated"]].copy()
@@ -74,9 +96,19 @@ def inverse(
     err = res.error
     rms = float((err**2).mean() ** 0.5)
     typer.echo(
-        f"{exp.name}: {m.kind} inverse, RMS force error {rms:.4g} N, "
+        f"{exp.name}: {m.kind} inverse ({method}), RMS force error {rms:.4g} N, "
         f"{100 * res.saturated_fraction:.1f} % of samples saturated; wrote {path}"
     )
+    if m.input in exp.channel_names:
+        from mrdamper.control.inverse_check import check_inverse
+
+        chk = check_inverse(m, exp, **kw)  # type: ignore[arg-type]
+        unit = "A" if m.input == "i" else "V"
+        typer.echo(
+            f"  median |{m.input} error| over |v| > 20 % of peak: {chk.median_input_error:.4g} {unit}; "
+            f"SSSE with measured {m.input}: {chk.ssse_model:.4g} N, with inverse {m.input}: {chk.ssse_inverse:.4g} N "
+            f"(ratio {chk.ssse_ratio:.3g})"
+        )
 
 
 def register(app: typer.Typer) -> None:

@@ -1,11 +1,29 @@
-"""Control export of the LPV model: state-space realisation (eqs. 10-15), frozen-rho LTI systems
-(python-control), frozen-pole stability over the scheduling range, the inverse (current-for-force)
-model and the export of the matrices to .mat / JSON."""
+"""Control export of the identified models: state-space realisation (eqs. 10-15), frozen-rho LTI
+systems (python-control), frozen-pole stability over the scheduling range, the inverse
+(current-for-force) model and its check on records, a quarter-car evaluation of semi-active
+controllers, the export of the matrices to .mat / JSON and of the model and its inverse to C99."""
 
+from mrdamper.control.c_export import C_KINDS, c_source, export_c
+from mrdamper.control.comfort import weighted_rms, wk_response
 from mrdamper.control.export import EXPORT_SCHEMA, export_lpv, lpv_export_data
-from mrdamper.control.inverse import InverseResult, driver_command, inverse_current
+from mrdamper.control.inverse import InverseResult, driver_command, force_authority, inverse_current
+from mrdamper.control.inverse_check import InverseCheck, check_inverse, check_inverse_frame
+from mrdamper.control.quarter_car import (
+    CONTROLLERS,
+    Controller,
+    LinearDamper,
+    QuarterCar,
+    QuarterCarResult,
+    Road,
+    bump_road,
+    iso_road,
+    simulate_quarter_car,
+)
+from mrdamper.control.quarter_car_study import ControllerComparison, compare_controllers
 from mrdamper.control.statespace import (
+    ControlGrid,
     StateSpaceMatrices,
+    control_grid,
     frozen_stability,
     simulate_state_space,
     state_space,
@@ -13,15 +31,37 @@ from mrdamper.control.statespace import (
 )
 
 __all__ = [
+    "CONTROLLERS",
+    "C_KINDS",
     "EXPORT_SCHEMA",
+    "ControlGrid",
+    "Controller",
+    "ControllerComparison",
+    "InverseCheck",
     "InverseResult",
+    "LinearDamper",
+    "QuarterCar",
+    "QuarterCarResult",
+    "Road",
     "StateSpaceMatrices",
+    "bump_road",
+    "c_source",
+    "check_inverse",
+    "check_inverse_frame",
+    "compare_controllers",
+    "control_grid",
     "driver_command",
+    "export_c",
     "export_lpv",
+    "force_authority",
     "frozen_stability",
     "inverse_current",
+    "iso_road",
     "lpv_export_data",
+    "simulate_quarter_car",
     "simulate_state_space",
     "state_space",
     "to_control",
+    "weighted_rms",
+    "wk_response",
 ]

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["lpv_inverse"]
+__all__ = ["lpv_inverse", "lpv_inverse_reg", "reg_solve_poly", "reg_solve_static", "sp_force1", "static_inverse_reg"]
 
 #: LPV input modes: u = v, continuous reading of eq. 22, literal reading.
 MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
@@ -231,3 +231,267 @@ def lpv_inverse(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu
         u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
         prev = r
     return rho, F, sat
+
+
+# ----------------------------------------------------------------------------- regularised inverse
+
+
+@njit(cache=True)
+def _ipow(x, n):  # pragma: no cover - numba
+    """``x ** n`` for an integer ``n >= 0`` by repeated multiplication (the C export does the same)."""
+    r = 1.0
+    for _ in range(n):
+        r *= x
+    return r
+
+
+@njit(cache=True)
+def sp_force1(x, v, i, comp, power, theta, f0):  # pragma: no cover - numba
+    """One sample of the static map ``A(i) tanh(a(i) v + b(i) x) + c(i) v + d(i) x + f0`` [N].
+
+    ``comp``/``power``/``theta`` as in :mod:`mrdamper.models._sp_kernels`: component ``comp[k]``
+    (0 = A, 1 = a, 2 = b, 3 = c, 4 = d) gains ``theta[k] * i**power[k]``.
+    """
+    A = 0.0
+    a = 0.0
+    b = 0.0
+    c = 0.0
+    d = 0.0
+    for k in range(theta.size):
+        term = theta[k] * _ipow(i, power[k])
+        m = comp[k]
+        if m == 0:
+            A += term
+        elif m == 1:
+            a += term
+        elif m == 2:
+            b += term
+        elif m == 3:
+            c += term
+        else:
+            d += term
+    return A * np.tanh(a * v + b * x) + c * v + d * x + f0
+
+
+@njit(cache=True)
+def sp_dforce1(x, v, i, comp, power, theta):  # pragma: no cover - numba
+    """``dF/di`` of :func:`sp_force1` at one sample [N per input unit]."""
+    A = 0.0
+    a = 0.0
+    b = 0.0
+    dA = 0.0
+    da = 0.0
+    db = 0.0
+    dc = 0.0
+    dd = 0.0
+    for k in range(theta.size):
+        pw = power[k]
+        term = theta[k] * _ipow(i, pw)
+        dterm = pw * theta[k] * _ipow(i, pw - 1) if pw > 0 else 0.0
+        m = comp[k]
+        if m == 0:
+            A += term
+            dA += dterm
+        elif m == 1:
+            a += term
+            da += dterm
+        elif m == 2:
+            b += term
+            db += dterm
+        elif m == 3:
+            dc += dterm
+        else:
+            dd += dterm
+    th = np.tanh(a * v + b * x)
+    return dA * th + A * (1.0 - th * th) * (da * v + db * x) + dc * v + dd * x
+
+
+@njit(cache=True)
+def _slope_poly(cf, target, r, prev, lam2):  # pragma: no cover - numba
+    """Half the derivative of the regularised objective, ``(F - target) F' + lam2 (r - prev)``."""
+    return (_poly(cf, r) - target) * _dpoly(cf, r) + lam2 * (r - prev)
+
+
+@njit(cache=True)
+def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragma: no cover - numba
+    return ((sp_force1(x, v, r, comp, power, theta, f0) - target) * sp_dforce1(x, v, r, comp, power, theta)
+            + lam2 * (r - prev))
+
+
+@njit(cache=True)
+def _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b):  # pragma: no cover
+    """Zero of the objective's slope in ``[a, b]`` (slope < 0 at ``a``, > 0 at ``b``), to machine precision."""
+    for _ in range(_N_BISECT):
+        m = 0.5 * (a + b)
+        if m <= a or m >= b:
+            break
+        if is_poly:
+            g = _slope_poly(cf, target, m, prev, lam2)
+        else:
+            g = _slope_static(x, v, comp, power, theta, f0, target, m, prev, lam2)
+        if g == 0.0:
+            return m
+        if g < 0.0:
+            a = m
+        else:
+            b = m
+    return 0.5 * (a + b)
+
+
+@njit(cache=True)
+def _reg_solve(is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
+    """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]`` (see :func:`reg_solve_poly`)."""
+    best = min(max(prev, a), b)
+    if is_poly:
+        f = _poly(cf, best)
+    else:
+        f = sp_force1(x, v, best, comp, power, theta, f0)
+    best_j = (f - target) * (f - target) + lam2 * (best - prev) * (best - prev)
+    fmin = f
+    fmax = f
+    if b <= a:
+        return best, fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        if is_poly:
+            f = _poly(cf, r)
+        else:
+            f = sp_force1(x, v, r, comp, power, theta, f0)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+        j = (f - target) * (f - target) + lam2 * (r - prev) * (r - prev)
+        if j < best_j:
+            best, best_j = r, j
+    # local minimum next to the best grid point: the sign change of the slope, bisected
+    if is_poly:
+        g = _slope_poly(cf, target, best, prev, lam2)
+    else:
+        g = _slope_static(x, v, comp, power, theta, f0, target, best, prev, lam2)
+    if g > 0.0 and best > a:
+        lo = max(a, best - h)
+        if is_poly:
+            g_lo = _slope_poly(cf, target, lo, prev, lam2)
+        else:
+            g_lo = _slope_static(x, v, comp, power, theta, f0, target, lo, prev, lam2)
+        if g_lo < 0.0:
+            best = _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, lo, best)
+    elif g < 0.0 and best < b:
+        hi = min(b, best + h)
+        if is_poly:
+            g_hi = _slope_poly(cf, target, hi, prev, lam2)
+        else:
+            g_hi = _slope_static(x, v, comp, power, theta, f0, target, hi, prev, lam2)
+        if g_hi > 0.0:
+            best = _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, best, hi)
+    return best, fmin <= target <= fmax
+
+
+@njit(cache=True)
+def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # pragma: no cover - numba
+    """Minimiser of ``(poly(cf)(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
+
+    Grid scan of ``n_grid`` intervals (``prev`` included); then the zero of the objective's slope
+    next to the best grid point (where the slope changes sign within one grid step) is bisected to
+    machine precision. Returns ``(r, reachable)``: ``reachable`` is False when ``target`` lies
+    outside the range of forces on the grid (the damper cannot give it).
+    """
+    e1 = np.zeros(0, dtype=np.int64)
+    return _reg_solve(True, cf, 0.0, 0.0, e1, e1, cf, 0.0, target, a, b, prev, lam2, n_grid)
+
+
+@njit(cache=True)
+def reg_solve_static(x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
+    """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""
+    return _reg_solve(False, theta, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid)
+
+
+@njit(cache=True)
+def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # pragma: no cover - numba
+    """Coefficients (in ``rho``) of the force at sample ``k`` given the past ``y``, ``u`` (into ``cf``)."""
+    n_m, n_p = alpha.shape
+    for p in range(n_p):
+        acc = 0.0
+        for j in range(n_m):
+            q = k - 1 - j
+            if q >= 0:
+                acc += beta[j, p] * u[q] - alpha[j, p] * y[q]
+        cf[p] = acc
+    cf[0] += offset
+
+
+@njit(cache=True)
+def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0,
+                    n_grid, lam, rate_step):  # pragma: no cover - numba
+    """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
+
+    Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
+    the admissible interval (input limits, the reach of the drive lag when ``lag >= 0``, and
+    ``|rho - rho[k-1]| <= rate_step``); ``hold = rho[k-1]``, or with a drive lag the value ``rho[k]``
+    would take with the previous command held (the regularisation then penalises command changes,
+    not the lag's own motion). Other arguments as :func:`lpv_inverse`.
+
+    Returns
+    -------
+    rho, F : float64[:]
+    saturated : bool[:]
+        True where ``F_desired[k]`` lies outside the forces the admissible interval gives.
+    """
+    n = v.size
+    n_p = alpha.shape[1]
+    y = np.zeros(n)
+    u = np.zeros(n)
+    rho = np.zeros(n)
+    F = np.zeros(n)
+    sat = np.zeros(n, dtype=np.bool_)
+    cf = np.zeros(n_p)
+    prev = min(max(rho0, lo), hi)
+    w_prev = prev
+    lam2 = lam * lam
+    for k in range(n):
+        lpv_coefficients(cf, y, u, k, alpha, beta, offset)
+        a, b = lo, hi
+        if lag >= 0.0 and k >= 1:
+            if k == 1:
+                a = b = rho[0]
+            else:
+                a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
+                b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
+        if k >= 1:
+            a = max(a, prev - rate_step)
+            b = min(b, prev + rate_step)
+            if b < a:
+                a = b = min(max(prev, a), b)
+        hold = prev
+        if lag >= 0.0 and k >= 2:  # rho with the previous command held: the lag's own motion is free
+            hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+        r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
+        if lag >= 0.0:
+            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        rho[k] = r
+        F[k] = _poly(cf, r)
+        y[k] = F[k] - offset
+        sat[k] = not ok
+        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
+        prev = r
+    return rho, F, sat
+
+
+@njit(cache=True)
+def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step):  # pragma: no cover
+    """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`)."""
+    n = x.size
+    out = np.zeros(n)
+    sat = np.zeros(n, dtype=np.bool_)
+    prev = min(max(i0, lo), hi)
+    lam2 = lam * lam
+    for k in range(n):
+        a, b = lo, hi
+        if k >= 1:
+            a = max(a, prev - rate_step)
+            b = min(b, prev + rate_step)
+        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, prev, lam2, n_grid)
+        out[k] = r
+        sat[k] = not ok
+        prev = r
+    return out, sat

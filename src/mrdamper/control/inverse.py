@@ -7,6 +7,19 @@ model actually produces with it (free run) and where the desired force cannot be
 
 What is solved
 --------------
+Regularised inverse (``method="regularised"``, the default), every supported kind
+    Causal, one pass: ``i[k]`` minimises ``(F_k(i) - F_desired[k])^2 + reg^2 (i - i[k-1])^2`` over
+    the input range intersected with the rate bound ``|i - i[k-1]| <= rate dt`` (first sample
+    free) and, for an LPV model with a drive lag, the lag's reach. ``F_k`` is the model force at
+    sample k given its past (LPV: a polynomial in ``rho[k]``; static map: the map at ``x[k]``,
+    ``v[k]``). Where ``|dF/di|`` is small against ``reg`` the input holds; where it is large the
+    input follows the exact solution. Minimum: grid of ``n_grid`` intervals, then the zero of the
+    objective's slope next to the best grid point, bisected to machine precision. ``reg`` defaults
+    to ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)``. Records at another rate than an
+    LPV model's are resampled to it and the input interpolated back.
+
+The exact per-sample inverse (``method="exact"``):
+
 LPV model (kind ``"lpv"``), causal and in one pass
     At sample ``k`` the model force is a polynomial of degree ``n_rho`` in the present scheduling
     value ``rho[k]`` once the past outputs and LPV inputs are fixed (eq. 9: every coefficient is
@@ -60,7 +73,16 @@ from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, OutOfRangeError
 from mrdamper.models.base import FittedModel
 
-__all__ = ["InverseResult", "driver_command", "inverse_current"]
+__all__ = [
+    "DEFAULT_REG_FRACTION",
+    "InverseResult",
+    "driver_command",
+    "force_authority",
+    "inverse_current",
+    "lpv_law_arrays",
+    "model_input_limits",
+    "static_map_arrays",
+]
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
 
@@ -210,8 +232,19 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     )
 
 
+def model_input_limits(model: Any) -> tuple[float, float]:
+    """Default input limits: the identified ``input_range``, for an LPV model intersected with the
+    scheduling range ``rho_range`` it was identified on (beyond it the coefficients are extrapolated).
+    """
+    lo, hi = (float(b) for b in model.input_range)
+    rr = getattr(model, "rho_range", None)
+    if getattr(model, "kind", "") == "lpv" and rr is not None and rr[1] > rr[0]:
+        lo, hi = max(lo, float(rr[0])), min(hi, float(rr[1]))
+    return lo, hi
+
+
 def _range(model: FittedModel, i_range: Any) -> tuple[float, float]:
-    lo_m, hi_m = model.input_range
+    lo_m, hi_m = model_input_limits(model)
     if i_range is None:
         lo, hi = lo_m, hi_m
     else:
@@ -247,6 +280,9 @@ def inverse_current(
     i_range: tuple[float, float] | None = None,
     n_grid: int = 32,
     tol: float | None = None,
+    method: str = "regularised",
+    reg: float | None = None,
+    rate: float | None = None,
 ) -> InverseResult:
     """Electrical input that makes ``model`` produce ``F_desired`` for the given motion.
 
@@ -267,7 +303,17 @@ def inverse_current(
     tol : float, optional
         Force tolerance [N] of the LPV inverse (see the module docstring); default
         ``1e-6 * max(1, max|F_desired|)``. Static maps are solved to machine precision and
-        flagged saturated when no input gives the force exactly.
+        flagged saturated when no input gives the force exactly. Used by ``method="exact"``.
+    method : {"regularised", "exact"}
+        ``"regularised"`` (default): per sample the input minimises
+        ``(F(i) - F_desired)^2 + reg^2 (i - i_prev)^2`` within the limits and the rate bound (see
+        the module docstring). ``"exact"``: the exact per-sample solution described above.
+    reg : float, optional
+        Regularisation weight [N/A] or [N/V] of the regularised inverse; default
+        ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)`` (:func:`force_authority`).
+        0 gives the exact least-squares solution per sample.
+    rate : float, optional
+        Largest change of the input per second [A/s] or [V/s] (regularised method); default none.
 
     Returns
     -------
@@ -306,7 +352,21 @@ def inverse_current(
         tol = 1e-6 * max(1.0, float(np.max(np.abs(Fd))) if Fd.size else 1.0)
     if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating)) or not (np.isfinite(tol) and tol >= 0):
         raise DataValidationError("tol", f"expected a force tolerance >= 0 [N], got {tol!r}")
-    if isinstance(model, LPVModel):
+    if method not in ("regularised", "exact"):
+        raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
+    if method == "regularised":
+        lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi)
+        if isinstance(model, LPVModel):
+            rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate)
+        else:
+            comp, power, theta, f0 = static_map_arrays(model)
+            dt = float(t[1] - t[0]) if t.size > 1 else 1.0
+            rho, sat = K.static_inverse_reg(
+                np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64), Fd,
+                comp, power, theta, f0, lo, hi, lo, int(n_grid), lam, step_rate * dt,
+            )
+            w = rho
+    elif isinstance(model, LPVModel):
         rho, w, sat = _lpv(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
     else:
         rho, sat = _static(model, x, v, Fd, lo, hi, int(n_grid))
@@ -346,6 +406,119 @@ def _lpv(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi
     if model.eta is None:
         return rho, rho, sat
     return rho, driver_command(rho, model.eta, dt, (lo, hi)), sat
+
+
+def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """A static map as the arrays of :func:`~mrdamper.control._inverse_kernels.sp_force1`.
+
+    SP-1..SP-4 map directly; a Bingham model is ``fc(i) sign(v) + c0(i) v + f0`` with the sign
+    written as ``tanh(v / v_eps)`` (``tanh(1e300 v)``, i.e. the exact sign, when ``v_eps = 0``).
+
+    Returns
+    -------
+    comp, power : ndarray of int64
+    theta : ndarray
+    f0 : float [N]
+    """
+    from mrdamper.models.bingham import BinghamModel
+    from mrdamper.models.semiphenomenological import _SPModel
+
+    if isinstance(model, _SPModel):
+        comp, power = model.layout_arrays()
+        return comp, power, np.asarray(model.S, dtype=np.float64), float(model.f0)
+    if isinstance(model, BinghamModel):
+        comp_l = [0] * len(model.fc) + [1] + [3] * len(model.c0)
+        power_l = list(range(len(model.fc))) + [0] + list(range(len(model.c0)))
+        slope = 1e300 if model.v_eps == 0.0 else 1.0 / model.v_eps
+        theta_l = [*model.fc, slope, *model.c0]
+        return (np.asarray(comp_l, dtype=np.int64), np.asarray(power_l, dtype=np.int64),
+                np.asarray(theta_l, dtype=np.float64), float(model.f0))
+    raise TypeError(f"model: kind {getattr(model, 'kind', type(model).__name__)!r} is not a static map")
+
+
+def force_authority(model: Any, v_ref: float) -> float:
+    """Steady force range per unit input at velocity ``v_ref`` [N/A] or [N/V].
+
+    ``|F(v_ref, hi) - F(v_ref, lo)| / (hi - lo)`` over the model's ``input_range`` at ``x = 0``;
+    for an LPV model the force is the frozen-``rho`` steady state
+    ``F0 + sum_j b_j(rho) / (1 + sum_j a_j(rho)) u(v_ref, rho)``. It sets the scale of the
+    default regularisation weight.
+    """
+    from mrdamper.models.lpv import LPVModel
+
+    lo, hi = model_input_limits(model)
+    if not hi > lo:
+        raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
+    if isinstance(model, LPVModel):
+        def steady(r: float) -> float:
+            gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
+            if model.input_signal == "v" or model.zone_laws is None:
+                u = float(v_ref)
+            else:
+                u = float(model.zone_laws.scheduling_input(np.array([v_ref]), np.array([r]), reading=model.reading)[0])
+            return gain * u
+        return abs(steady(hi) - steady(lo)) / (hi - lo)
+    comp, power, theta, f0 = static_map_arrays(model)
+    return abs(K.sp_force1(0.0, float(v_ref), hi, comp, power, theta, f0)
+               - K.sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)) / (hi - lo)
+
+
+#: Default regularisation weight as a fraction of :func:`force_authority` at the peak velocity.
+DEFAULT_REG_FRACTION = 0.5
+
+
+def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float) -> tuple[float, float]:
+    if reg is None:
+        vpk = float(np.max(np.abs(v))) if v.size else 0.0
+        lam = DEFAULT_REG_FRACTION * force_authority(model, vpk) if vpk > 0 else 0.0
+    else:
+        if isinstance(reg, bool) or not isinstance(reg, (int, float, np.floating)) or not (np.isfinite(reg) and reg >= 0):
+            raise DataValidationError("reg", f"expected a regularisation weight >= 0 [N per input unit], got {reg!r}")
+        lam = float(reg)
+    if rate is None:
+        step_rate = np.inf
+    else:
+        if isinstance(rate, bool) or not isinstance(rate, (int, float, np.floating)) or not rate > 0:
+            raise DataValidationError("rate", f"expected a positive input rate bound [A/s] or [V/s], got {rate!r}")
+        step_rate = float(rate)
+    return lam, step_rate
+
+
+def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
+             lam: float, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Regularised LPV inverse at the model rate; records at another rate are resampled in and out."""
+    from mrdamper.models._rates import to_model_rate
+
+    if t.size < 2:
+        raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
+    fs_rec = 1.0 / float(t[1] - t[0])
+    vm = np.ascontiguousarray(to_model_rate(v, fs_rec, model.fs))
+    Fm = np.ascontiguousarray(to_model_rate(Fd, fs_rec, model.fs))
+    dt = 1.0 / model.fs
+    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
+    lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
+    rho, _, sat = K.lpv_inverse_reg(
+        vm, Fm, np.ascontiguousarray(model.alpha), np.ascontiguousarray(model.beta), float(model.offset),
+        lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, lam, rate * dt,
+    )
+    w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
+    if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
+        return rho, w, sat
+    tm = np.arange(rho.size) * dt
+    tr = t - t[0]
+    back = np.minimum(np.rint(tr * model.fs).astype(np.int64), rho.size - 1)
+    return np.interp(tr, tm, rho), np.interp(tr, tm, w), sat[back]
+
+
+def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Zone-law arrays of an LPV model for the kernels: ``(mode, gamma_m, gamma_c, mu_high, mu_low)``."""
+    laws = model.zone_laws
+    if model.input_signal == "v" or laws is None:
+        return K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
+    mode = K.MODE_CONTINUOUS if model.reading == "continuous" else K.MODE_LITERAL
+    return (mode, np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
+            np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
+            np.asarray(laws.mu_high, dtype=np.float64), np.asarray(laws.mu_low, dtype=np.float64))
 
 
 def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:

@@ -26,7 +26,9 @@ import pandas as pd
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 
 __all__ = [
+    "ControlGrid",
     "StateSpaceMatrices",
+    "control_grid",
     "frozen_stability",
     "simulate_state_space",
     "state_space",
@@ -203,3 +205,64 @@ def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = 
         out[k] = f + ss.offset
         z = ss.A @ z + ss.B[:, 0] * u[k]
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class ControlGrid:
+    """Frozen-``rho`` python-control systems of an LPV model on a grid of scheduling values.
+
+    Attributes
+    ----------
+    rho : ndarray
+        Scheduling values [A] or [V].
+    systems : list of control.StateSpace
+        Discrete systems (sampling time ``1 / fs``) from the LPV input ``u`` [m/s] to the force
+        ``C z`` [N] (the offset ``F0`` is not part of the linear system), one per ``rho``.
+    stability : DataFrame
+        :func:`frozen_stability` on the same grid, with the DC gain of each system [N s/m] (the
+        static slope ``F / u`` at constant ``rho``; NaN where the system has a pole at 1).
+    """
+
+    rho: np.ndarray
+    systems: list[Any]
+    stability: pd.DataFrame
+
+    def to_frame(self) -> pd.DataFrame:
+        """The stability table."""
+        return self.stability
+
+    def __getitem__(self, k: int) -> Any:
+        return self.systems[k]
+
+    def __len__(self) -> int:
+        return len(self.systems)
+
+
+def control_grid(model: Any, rho: Any = None, n_grid: int = 11) -> ControlGrid:
+    """python-control systems of the LPV model at ``rho`` (default ``n_grid`` points over its range).
+
+    Raises
+    ------
+    ImportError
+        If python-control is not installed (``pip install "mrdamper[control]"``).
+    """
+    import control
+
+    _check_model(model)
+    if rho is None:
+        lo, hi = (float(b) for b in model.rho_range)
+        grid = np.linspace(lo, hi, n_grid)
+    else:
+        grid = np.atleast_1d(np.asarray(rho, dtype=float))
+    if grid.size == 0 or not np.all(np.isfinite(grid)):
+        raise DataValidationError("rho", f"expected a non-empty finite grid, got {rho!r}")
+    systems = [to_control(model, float(r)) for r in grid]
+    table = frozen_stability(model, rho=grid)
+    gains = []
+    for s in systems:
+        try:
+            gains.append(float(np.real(control.dcgain(s))))
+        except (ValueError, np.linalg.LinAlgError, ZeroDivisionError):
+            gains.append(float("nan"))
+    table["dc_gain"] = gains
+    return ControlGrid(rho=grid, systems=systems, stability=table)

@@ -1,0 +1,116 @@
+"""``mrdamper quartercar``: semi-active controllers on a quarter car with the identified damper.
+
+``quartercar MODEL.json --out DIR`` drives the quarter car (:mod:`mrdamper.control.quarter_car`)
+over ISO 8608 roads and a bump with every controller and writes, atomically and never over an
+existing file without ``--force``:
+
+* ``DIR/quartercar.csv``: the metrics table (one row per road and controller);
+* ``DIR/time_<road>.png``: time histories of the first ISO road (2 s in its middle) and of the bump;
+* ``DIR/spectra_<road>.png``: body-acceleration PSD and transmissibility of the first ISO road.
+
+The table is also printed.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from mrdamper.errors import DataValidationError
+
+__all__ = ["register"]
+
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
+
+
+def _save_png(fig: Any, path: Path, force: bool) -> Path:
+    import matplotlib.pyplot as plt
+
+    from mrdamper._io.atomic import atomic_write_with
+
+    try:
+        return atomic_write_with(
+            path, lambda tmp: fig.savefig(tmp, format="png", dpi=100, metadata={"Software": None}), force=force
+        )
+    finally:
+        plt.close(fig)
+
+
+def quartercar(
+    model_file: Annotated[Path, typer.Argument(help="Damper model file (lpv, sp1..sp4, bingham).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder for the table and figures.")],
+    roads: Annotated[str, typer.Option("--roads", help="ISO 8608 classes, comma-separated (A..H).")] = "A,B,C,D,E",
+    bump: Annotated[bool, typer.Option("--bump/--no-bump", help="Also drive over one bump.")] = True,
+    controllers: Annotated[
+        str, typer.Option("--controllers", help="Comma-separated: soft, hard, skyhook, groundhook, hybrid.")
+    ] = "soft,hard,skyhook,groundhook,hybrid",
+    speed: Annotated[float, typer.Option("--speed", help="Vehicle speed [m/s].")] = 20.0,
+    duration: Annotated[float, typer.Option("--duration", help="Length of each ISO road [s].")] = 20.0,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the road phases.")] = 0,
+    bump_height: Annotated[float, typer.Option("--bump-height", help="Bump height [m].")] = 0.05,
+    bump_length: Annotated[float, typer.Option("--bump-length", help="Bump length [m].")] = 2.0,
+    car: Annotated[
+        list[str] | None,
+        typer.Option("--car", help="Quarter-car parameter KEY=VALUE (m_s, m_u, k_s, k_t, c_t, travel_limit, "
+                                   "motion_ratio); repeatable."),
+    ] = None,
+    c_sky: Annotated[float, typer.Option("--c-sky", help="Skyhook gain [N s/m].")] = 3000.0,
+    c_ground: Annotated[float, typer.Option("--c-ground", help="Groundhook gain [N s/m].")] = 3000.0,
+    alpha: Annotated[float, typer.Option("--alpha", help="Hybrid weight of skyhook [-].")] = 0.5,
+    reg: Annotated[float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A].")] = None,
+    rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
+) -> None:
+    """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
+    from mrdamper._io import atomic_write_text, check_writable
+    from mrdamper.cli.models import parse_settings
+    from mrdamper.control.quarter_car import Controller, QuarterCar
+    from mrdamper.control.quarter_car_study import compare_controllers
+    from mrdamper.models.registry import load_model
+
+    if out.exists() and not out.is_dir():
+        raise DataValidationError("--out", f"{out} exists and is not a folder")
+    table_path = check_writable(out / "quartercar.csv", force)
+    car_kw = parse_settings(car)
+    fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
+    unknown = sorted(set(car_kw) - set(fields))
+    if unknown:
+        raise DataValidationError("--car", f"unknown parameter(s) {unknown}; expected some of {list(fields)}")
+    qc = QuarterCar(**car_kw)
+    m = load_model(model_file)
+    ctrls = [Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha) for c in controllers.split(",") if c.strip()]
+    classes = [r.strip().upper() for r in roads.split(",") if r.strip()]
+    try:
+        cmp = compare_controllers(
+            m, road_classes=classes, bump=bump, controllers=ctrls, car=qc, speed=speed, duration=duration,
+            seed=seed, bump_height=bump_height, bump_length=bump_length, reg=reg, rate=rate,
+        )
+    except TypeError as exc:
+        raise DataValidationError("MODEL", str(exc)) from exc
+    table = cmp.table()
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(table_path, table.to_csv(index=False, float_format="%.6g"), force=force)
+    written = [table_path]
+    iso = [r for r in cmp.roads if r.startswith("ISO")]
+    mid = 0.5 * duration
+    for road in iso[:1]:  # a 2 s window in the middle of the road
+        fig = cmp.plot_time(road, t_range=(max(0.0, mid - 1.0), mid + 1.0))
+        written.append(_save_png(fig, out / f"time_{_slug(road)}.png", force))
+    for road in [r for r in cmp.roads if r.startswith("bump")]:
+        written.append(_save_png(cmp.plot_time(road), out / f"time_{_slug(road)}.png", force))
+    if iso:
+        written.append(_save_png(cmp.plot_spectra(iso[0]), out / f"spectra_{_slug(iso[0])}.png", force))
+    cols = ["road", "controller", "rms_acc", "rms_acc_wk", "rms_tyre_load", "rms_travel", "max_travel",
+            "travel_over_limit", "mean_input"]
+    typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    typer.echo(f"{m.kind}: wrote {', '.join(p.name for p in written)} in {out}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``quartercar`` command to ``app``."""
+    app.command("quartercar")(quartercar)

@@ -1,0 +1,203 @@
+"""Numba kernel of the quarter-car simulation with the identified damper in the loop.
+
+Plain arrays only (see :mod:`mrdamper.control.quarter_car` for the equations and choices).
+
+State ``[z_s, v_s, z_u, v_u]`` (deviations from static equilibrium [m, m/s]); the plant is
+integrated by the classical fixed-step Runge-Kutta method (RK4) with ``n_sub`` steps of ``h`` per
+control sample. The road displacement is linear between its samples (given at the plant rate).
+
+The damper is used through a per-sample step interface:
+
+* static map (SP family, Bingham, linear): force ``sp_force1(x, v, i) - f0`` evaluated at every
+  Runge-Kutta stage with the current held over the control sample;
+* LPV model: the force of control sample ``k`` is a polynomial in ``rho[k]`` fixed by the past
+  (``lpv_coefficients``); it is held over the sample (the model has no direct feedthrough), and
+  ``u[k]`` is built from the damper velocity at the sample instant.
+
+Controllers (desired damper force ``Fd``, damper velocity ``v_rel = v_s - v_u``, the force acting
+on the body is ``-F``): 0 passive (constant input ``i_const``), 1 skyhook
+``Fd = c_sky v_s`` when ``v_s v_rel > 0`` else 0, 2 groundhook ``Fd = -c_gnd v_u`` when
+``-v_u v_rel > 0`` else 0, 3 hybrid ``Fd = alpha sky + (1 - alpha) ground``. The input realising
+``Fd`` comes from the regularised inverse step of the same damper model.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from mrdamper.control._inverse_kernels import (
+    _poly,
+    _u_of,
+    lpv_coefficients,
+    reg_solve_poly,
+    reg_solve_static,
+    sp_force1,
+)
+
+__all__ = ["simulate"]
+
+CTRL_PASSIVE, CTRL_SKYHOOK, CTRL_GROUNDHOOK, CTRL_HYBRID = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # pragma: no cover - numba
+    fs = k_s * (zs - zu)
+    out[0] = vs
+    out[1] = (-fs - F) / m_s
+    out[2] = vu
+    out[3] = (fs + F - k_t * (zu - zr) - c_t * (vu - vr)) / m_u
+
+
+@njit(cache=True)
+def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
+    vrel = vs - vu
+    sky = c_sky * vs if vs * vrel > 0.0 else 0.0
+    gnd = -c_gnd * vu if -vu * vrel > 0.0 else 0.0
+    if ctrl == CTRL_SKYHOOK:
+        return sky
+    if ctrl == CTRL_GROUNDHOOK:
+        return gnd
+    return alpha * sky + (1.0 - alpha) * gnd
+
+
+# Cached on disk (compiling takes seconds). Caveat: numba does not invalidate this cache when a
+# function it calls in another module (the inverse kernels) changes; after editing those, delete
+# this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
+@njit(cache=True)
+def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, offset, lag, mode, gm, gc,
+             mu_high, mu_low, ctrl, gains, lo, hi, lam, rate_step, n_grid, bound):  # pragma: no cover - numba
+    """Run the quarter car over a road.
+
+    Parameters
+    ----------
+    zr : float64[:]
+        Road displacement at the plant rate [m], ``n_ctrl * n_sub + 1`` samples.
+    h : float
+        Plant step [s]; the control (and LPV model) sample is ``n_sub * h``.
+    car : float64[:]
+        ``[m_s, m_u, k_s, k_t, c_t]`` [kg, kg, N/m, N/m, N s/m].
+    is_lpv : bool
+        LPV damper (``alpha``, ``beta``, ``offset``, ``lag``, zone laws) or static map (``comp``,
+        ``power``, ``theta``, ``f0``).
+    ctrl : int
+        Controller code (module docstring); ``gains = [c_sky, c_gnd, alpha, i_const]``.
+    lo, hi : float
+        Input limits; ``lam`` [N per input unit] regularisation weight, ``rate_step`` largest input
+        change per control sample, ``n_grid`` search grid of the inverse.
+    bound : float
+        Largest admissible ``|state|`` (divergence check).
+
+    Returns
+    -------
+    X : float64[:, :]
+        ``(n_ctrl * n_sub, 5)``: ``z_s, v_s, z_u, v_u, a_s`` at the start of every plant step.
+    F, Fd, rho : float64[:]
+        Per control sample: damper force (preload removed) [N], desired force [N] (NaN for the
+        passive controller) and the scheduling value (the input, or the input through the drive lag).
+    sat : bool[:]
+        Desired force out of reach at that sample.
+    bad : int
+        First diverged plant step or -1.
+    """
+    m_s, m_u, k_s, k_t, c_t = car[0], car[1], car[2], car[3], car[4]
+    c_sky, c_gnd, alpha_h, i_const = gains[0], gains[1], gains[2], gains[3]
+    n_ctrl = (zr.size - 1) // n_sub
+    X = np.zeros((n_ctrl * n_sub, 5))
+    F = np.zeros(n_ctrl)
+    Fd = np.zeros(n_ctrl)
+    rho = np.zeros(n_ctrl)
+    sat = np.zeros(n_ctrl, dtype=np.bool_)
+    n_p = alpha.shape[1]
+    y = np.zeros(n_ctrl)
+    u = np.zeros(n_ctrl)
+    cf = np.zeros(n_p)
+    st = np.zeros(4)
+    tmp = np.zeros(4)
+    k1 = np.zeros(4)
+    k2 = np.zeros(4)
+    k3 = np.zeros(4)
+    k4 = np.zeros(4)
+    lam2 = lam * lam
+    prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
+    w_prev = prev
+    for k in range(n_ctrl):
+        zs, vs, zu, vu = st[0], st[1], st[2], st[3]
+        x_d = zs - zu
+        v_d = vs - vu
+        # --- input for this sample
+        a, b = lo, hi
+        if is_lpv and lag >= 0.0 and k >= 1:
+            a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
+            b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
+        if k >= 1:
+            a = max(a, prev - rate_step)
+            b = min(b, prev + rate_step)
+            if b < a:
+                a = b = min(max(prev, a), b)
+        if ctrl == CTRL_PASSIVE:
+            target = np.nan
+        else:
+            target = _desired(ctrl, vs, vu, c_sky, c_gnd, alpha_h)
+        if is_lpv:
+            lpv_coefficients(cf, y, u, k, alpha, beta, offset)
+            if ctrl == CTRL_PASSIVE:
+                r = min(max(i_const, a), b)
+                ok = True
+            else:
+                hold = prev
+                if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
+                    hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
+            if lag >= 0.0:
+                w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+            Fk = _poly(cf, r)
+            y[k] = Fk - offset
+            u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low)
+            F[k] = Fk - offset
+        else:
+            if ctrl == CTRL_PASSIVE:
+                r = min(max(i_const, a), b)
+                ok = True
+            else:
+                r, ok = reg_solve_static(x_d, v_d, comp, power, theta, f0, target + f0, a, b, prev, lam2, n_grid)
+            F[k] = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0
+        rho[k] = r
+        Fd[k] = target
+        sat[k] = not ok
+        prev = r
+        # --- plant over the control sample
+        for s in range(n_sub):
+            j = k * n_sub + s
+            z0, z1 = zr[j], zr[j + 1]
+            vr = (z1 - z0) / h
+            zm = 0.5 * (z0 + z1)
+            Fh = F[k]
+            if not is_lpv:
+                Fh = sp_force1(st[0] - st[2], st[1] - st[3], r, comp, power, theta, f0) - f0
+            _deriv(st[0], st[1], st[2], st[3], z0, vr, Fh, m_s, m_u, k_s, k_t, c_t, k1)
+            X[j, 0] = st[0]
+            X[j, 1] = st[1]
+            X[j, 2] = st[2]
+            X[j, 3] = st[3]
+            X[j, 4] = k1[1]
+            for q in range(4):
+                tmp[q] = st[q] + 0.5 * h * k1[q]
+            if not is_lpv:
+                Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
+            _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zm, vr, Fh, m_s, m_u, k_s, k_t, c_t, k2)
+            for q in range(4):
+                tmp[q] = st[q] + 0.5 * h * k2[q]
+            if not is_lpv:
+                Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
+            _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zm, vr, Fh, m_s, m_u, k_s, k_t, c_t, k3)
+            for q in range(4):
+                tmp[q] = st[q] + h * k3[q]
+            if not is_lpv:
+                Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
+            _deriv(tmp[0], tmp[1], tmp[2], tmp[3], z1, vr, Fh, m_s, m_u, k_s, k_t, c_t, k4)
+            for q in range(4):
+                st[q] += h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
+                if not (abs(st[q]) <= bound):
+                    return X, F, Fd, rho, sat, j
+    return X, F, Fd, rho, sat, -1

@@ -1,0 +1,462 @@
+"""Quarter-car evaluation of semi-active control with an identified damper model in the loop.
+
+The plant is the 2-DOF quarter car (sprung mass ``m_s`` on the suspension spring ``k_s`` and the
+damper, unsprung mass ``m_u`` on the tyre ``k_t``, ``c_t``)::
+
+    m_s z_s'' = -k_s (z_s - z_u) - F
+    m_u z_u'' =  k_s (z_s - z_u) + F - k_t (z_u - z_r) - c_t (z_u' - z_r')
+
+with displacements measured from static equilibrium and ``F`` the damper force for the damper
+displacement ``x = z_s - z_u`` and velocity ``v = z_s' - z_u'`` (positive in extension). The
+damper's force at rest (``f0`` of a static map, ``F0`` of an LPV model: accumulator preload and
+load-cell zero) is carried by the static equilibrium and removed. The tyre stays in contact (a
+linear tyre); the travel limit is reported, not enforced (no bump stop).
+
+Numerics: fixed-step RK4 (plant step ``h``, default 1 ms or finer) in a compiled kernel
+(:mod:`mrdamper.control._quarter_car_kernels`), the controller and the damper's inverse run once per
+control sample, the input is held in between. A static damper map is evaluated at every
+Runge-Kutta stage; an LPV damper runs at its own rate ``fs`` (control sample = model sample, several
+plant steps per sample) and its force is held over the sample (the model has no direct
+feedthrough). The run stops with :class:`~mrdamper.errors.SimulationDivergedError` when a state
+leaves ``bound``.
+
+Controllers: passive soft (lowest input), passive hard (highest input), skyhook, groundhook and
+hybrid (see :class:`Controller`); the semi-active ones ask for a force and get the input from the
+regularised inverse step of the same model (:func:`mrdamper.control.inverse_current`), within the
+input limits and an optional rate bound. A force opposite to the damper velocity cannot be produced:
+the inverse then drives the input to its lowest value as fast as the regularisation lets it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from mrdamper.control import _quarter_car_kernels as QK
+from mrdamper.control.comfort import weighted_rms
+from mrdamper.control.inverse import (
+    DEFAULT_REG_FRACTION,
+    driver_command,
+    force_authority,
+    lpv_law_arrays,
+    model_input_limits,
+    static_map_arrays,
+)
+from mrdamper.errors import DataValidationError, SimulationDivergedError
+
+__all__ = [
+    "CONTROLLERS",
+    "Controller",
+    "LinearDamper",
+    "QuarterCar",
+    "QuarterCarResult",
+    "Road",
+    "bump_road",
+    "iso_road",
+    "simulate_quarter_car",
+]
+
+#: Names of the built-in controllers.
+CONTROLLERS = ("soft", "hard", "skyhook", "groundhook", "hybrid")
+
+
+def _pos(name: str, value: Any, unit: str, allow_zero: bool = False) -> float:
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        raise DataValidationError(name, f"expected a number [{unit}], got {value!r}") from None
+    ok = math.isfinite(f) and (f >= 0 if allow_zero else f > 0)
+    if isinstance(value, bool) or not ok:
+        raise DataValidationError(name, f"expected a finite value {'>=' if allow_zero else '>'} 0 [{unit}], got {value!r}")
+    return f
+
+
+@dataclass(frozen=True)
+class QuarterCar:
+    """Quarter-car parameters (defaults: one corner of a mid-size passenger car).
+
+    Attributes
+    ----------
+    m_s : float
+        Sprung mass [kg] (default 300: a quarter of a 1200 kg body).
+    m_u : float
+        Unsprung mass [kg] (40: wheel, tyre, hub, brake, part of the links).
+    k_s : float
+        Suspension spring rate at the wheel [N/m] (20 000: body mode ``sqrt(k_s/m_s)/2pi`` = 1.3 Hz).
+    k_t : float
+        Tyre vertical stiffness [N/m] (200 000: wheel-hop mode about 12 Hz).
+    c_t : float
+        Tyre damping [N s/m] (0).
+    travel_limit : float
+        Suspension travel available either side of static equilibrium [m] (0.08).
+    motion_ratio : float
+        Damper travel per wheel travel [-] (1: damper at the wheel). The damper sees
+        ``motion_ratio`` times the wheel-to-body motion and acts with ``motion_ratio`` times its
+        force at the wheel.
+    """
+
+    m_s: float = 300.0
+    m_u: float = 40.0
+    k_s: float = 20_000.0
+    k_t: float = 200_000.0
+    c_t: float = 0.0
+    travel_limit: float = 0.08
+    motion_ratio: float = 1.0
+
+    def __post_init__(self) -> None:
+        units = {"m_s": "kg", "m_u": "kg", "k_s": "N/m", "k_t": "N/m", "travel_limit": "m", "motion_ratio": "-"}
+        for name, unit in units.items():
+            object.__setattr__(self, name, _pos(name, getattr(self, name), unit))
+        object.__setattr__(self, "c_t", _pos("c_t", self.c_t, "N s/m", allow_zero=True))
+
+    def body_frequency(self) -> float:
+        """Undamped body mode on the spring and tyre in series [Hz]."""
+        k = self.k_s * self.k_t / (self.k_s + self.k_t)
+        return math.sqrt(k / self.m_s) / (2 * math.pi)
+
+    def wheel_hop_frequency(self) -> float:
+        """Undamped wheel-hop mode with the body held [Hz]."""
+        return math.sqrt((self.k_s + self.k_t) / self.m_u) / (2 * math.pi)
+
+
+@dataclass(frozen=True)
+class LinearDamper:
+    """Ideal linear damper ``F = c v`` (reference plant, no electrical input).
+
+    Attributes
+    ----------
+    c : float
+        Damping coefficient [N s/m].
+    """
+
+    c: float
+    kind: str = field(default="linear", init=False)
+    input: str = field(default="i", init=False)
+    input_range: tuple[float, float] = field(default=(0.0, 1.0), init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "c", _pos("c", self.c, "N s/m", allow_zero=True))
+
+
+@dataclass(frozen=True)
+class Controller:
+    """A damper controller.
+
+    Attributes
+    ----------
+    kind : {"soft", "hard", "skyhook", "groundhook", "hybrid"}
+        ``soft`` / ``hard``: constant lowest / highest input. ``skyhook``: desired force
+        ``c_sky z_s'`` when ``z_s' v > 0``, else 0. ``groundhook``: ``-c_ground z_u'`` when
+        ``-z_u' v > 0``, else 0. ``hybrid``: ``alpha`` skyhook + ``(1 - alpha)`` groundhook.
+    c_sky, c_ground : float
+        Gains [N s/m] (default 3000 each, about 0.6 of the body's critical damping with the defaults).
+    alpha : float
+        Hybrid weight [-].
+    """
+
+    kind: str
+    c_sky: float = 3000.0
+    c_ground: float = 3000.0
+    alpha: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.kind not in CONTROLLERS:
+            raise DataValidationError("controller", f"expected one of {CONTROLLERS}, got {self.kind!r}")
+        _pos("c_sky", self.c_sky, "N s/m", allow_zero=True)
+        _pos("c_ground", self.c_ground, "N s/m", allow_zero=True)
+        if not (0.0 <= float(self.alpha) <= 1.0):
+            raise DataValidationError("alpha", f"expected 0 <= alpha <= 1, got {self.alpha!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Road:
+    """Road displacement under the tyre.
+
+    Attributes
+    ----------
+    name : str
+    fs : float
+        Sampling rate [Hz].
+    z : ndarray
+        Road height [m].
+    """
+
+    name: str
+    fs: float
+    z: np.ndarray
+
+    @property
+    def t(self) -> np.ndarray:
+        """Time [s]."""
+        return np.arange(self.z.size) / self.fs
+
+
+def iso_road(road_class: str, *, speed: float = 20.0, duration: float = 20.0, fs: float = 1000.0, seed: int = 0,
+             min_frequency: float = 0.3, max_frequency: float = 30.0) -> Road:
+    """ISO 8608 road of class ``road_class`` driven at ``speed`` [m/s] (physical amplitude).
+
+    Uses :func:`mrdamper.signals.road_profile` with ``fill=None`` (no scaling) and a 0.5 s fade in
+    and out; the band ``[min_frequency, max_frequency]`` [Hz] bounds the synthesis.
+    """
+    from mrdamper.signals.road import road_profile
+
+    z = road_profile(fs, duration, seed=seed, road_class=road_class, speed=speed, max_frequency=max_frequency,
+                     min_frequency=min_frequency, stroke=1e3, fill=None, taper=0.5)
+    return Road(name=f"ISO {str(road_class).upper()} @ {speed:g} m/s", fs=float(fs), z=z)
+
+
+def bump_road(*, height: float = 0.05, length: float = 2.0, speed: float = 20.0, duration: float = 3.0,
+              fs: float = 1000.0, start: float = 0.5) -> Road:
+    """One ``(1 - cos)`` bump of ``height`` [m] and ``length`` [m] reached after ``start`` [s]."""
+    h = _pos("height", height, "m")
+    L = _pos("length", length, "m")
+    V = _pos("speed", speed, "m/s")
+    fs = _pos("fs", fs, "Hz")
+    n = round(_pos("duration", duration, "s") * fs) + 1
+    s = V * (np.arange(n) / fs - start)  # distance past the bump's start [m]
+    z = np.where((s >= 0) & (s <= L), 0.5 * h * (1 - np.cos(2 * np.pi * np.clip(s, 0, L) / L)), 0.0)
+    return Road(name=f"bump {100 * h:g} cm x {L:g} m @ {V:g} m/s", fs=float(fs), z=z)
+
+
+@dataclass(frozen=True, eq=False)
+class QuarterCarResult:
+    """One quarter-car run (signals at the plant rate, inputs held per control sample).
+
+    Attributes
+    ----------
+    road, controller, model_kind : str
+    fs : float
+        Plant rate [Hz].
+    t, z_r, z_s, v_s, z_u, v_u, a_s : ndarray
+        Time [s], road [m], body displacement [m] / velocity [m/s], wheel [m] / [m/s], body
+        acceleration [m/s^2].
+    F, F_desired : ndarray
+        Damper force at the wheel (preload removed) and desired force [N] (NaN when passive).
+    i : ndarray
+        Electrical input (command) [A] or [V].
+    saturated : ndarray of bool
+        Desired force out of reach.
+    car : QuarterCar
+    """
+
+    road: str
+    controller: str
+    model_kind: str
+    fs: float
+    t: np.ndarray
+    z_r: np.ndarray
+    z_s: np.ndarray
+    v_s: np.ndarray
+    z_u: np.ndarray
+    v_u: np.ndarray
+    a_s: np.ndarray
+    F: np.ndarray
+    F_desired: np.ndarray
+    i: np.ndarray
+    saturated: np.ndarray
+    car: QuarterCar
+
+    @property
+    def travel(self) -> np.ndarray:
+        """Suspension travel ``z_s - z_u`` [m] (positive: extension)."""
+        return self.z_s - self.z_u
+
+    @property
+    def tyre_load(self) -> np.ndarray:
+        """Dynamic tyre load [N] (positive: more load than static)."""
+        vr = np.gradient(self.z_r, 1.0 / self.fs)
+        return -(self.car.k_t * (self.z_u - self.z_r) + self.car.c_t * (self.v_u - vr))
+
+    def metrics(self) -> dict[str, Any]:
+        """RMS and peak figures of the run.
+
+        Keys: ``rms_acc`` and ``rms_acc_wk`` (ISO 2631 Wk weighted) [m/s^2], ``peak_acc`` [m/s^2],
+        ``rms_tyre_load`` [N], ``rms_tyre_load_rel`` (over the static wheel load) [-],
+        ``rms_travel``, ``max_travel`` [m], ``travel_over_limit`` (fraction of time beyond the
+        limit) [-], ``mean_input`` [A|V], ``saturated`` (fraction) [-].
+        """
+        static = (self.car.m_s + self.car.m_u) * 9.81
+        tl = self.tyre_load
+        tr = self.travel
+        return {
+            "road": self.road, "controller": self.controller,
+            "rms_acc": float(np.sqrt(np.mean(self.a_s**2))),
+            "rms_acc_wk": weighted_rms(self.a_s, self.fs),
+            "peak_acc": float(np.max(np.abs(self.a_s))),
+            "rms_tyre_load": float(np.sqrt(np.mean(tl**2))),
+            "rms_tyre_load_rel": float(np.sqrt(np.mean(tl**2)) / static),
+            "rms_travel": float(np.sqrt(np.mean(tr**2))),
+            "max_travel": float(np.max(np.abs(tr))),
+            "travel_over_limit": float(np.mean(np.abs(tr) > self.car.travel_limit)),
+            "mean_input": float(np.mean(self.i)),
+            "saturated": float(np.mean(self.saturated)),
+        }
+
+    def to_frame(self) -> pd.DataFrame:
+        """Signals as columns ``t, z_r, z_s, v_s, z_u, v_u, a_s, F, F_desired, i, saturated``."""
+        return pd.DataFrame({k: getattr(self, k) for k in
+                             ("t", "z_r", "z_s", "v_s", "z_u", "v_u", "a_s", "F", "F_desired", "i", "saturated")})
+
+    def plot(self, ax: Any = None) -> Any:
+        """Body acceleration with the input on a twin axis; returns the Axes."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots(figsize=(7, 3))
+        ax.plot(self.t, self.a_s, lw=0.7, label=f"{self.controller}")
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("body acceleration [m/s²]")
+        ax.legend(loc="upper right")
+        return ax
+
+
+def _damper_arrays(model: Any) -> dict[str, Any]:
+    """The model as kernel arrays (static map or LPV); unsupported kinds raise TypeError."""
+    from mrdamper.models.lpv import LPVModel, LTIModel
+
+    empty2 = np.zeros((1, 1))
+    out: dict[str, Any] = {
+        "is_lpv": False, "comp": np.zeros(0, np.int64), "power": np.zeros(0, np.int64), "theta": np.zeros(0),
+        "f0": 0.0, "alpha": empty2, "beta": empty2, "offset": 0.0, "lag": -1.0, "mode": 0,
+        "gm": np.zeros((3, 1)), "gc": np.zeros((3, 1)), "mu_high": np.zeros(2), "mu_low": np.zeros(2),
+    }
+    if isinstance(model, LinearDamper):
+        out.update(comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c]))
+        return out
+    if isinstance(model, LPVModel) and not isinstance(model, LTIModel):
+        mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
+        out.update(is_lpv=True, alpha=np.ascontiguousarray(model.alpha), beta=np.ascontiguousarray(model.beta),
+                   offset=float(model.offset), mode=mode, gm=gm, gc=gc, mu_high=mu_h, mu_low=mu_l)
+        return out
+    comp, power, theta, f0 = static_map_arrays(model)
+    out.update(comp=comp, power=power, theta=theta, f0=f0)
+    return out
+
+
+def simulate_quarter_car(
+    model: Any,
+    road: Road,
+    controller: Controller | str = "soft",
+    car: QuarterCar | None = None,
+    *,
+    reg: float | None = None,
+    v_ref: float = 0.3,
+    rate: float | None = None,
+    i_range: tuple[float, float] | None = None,
+    n_grid: int = 16,
+    bound: float = 10.0,
+) -> QuarterCarResult:
+    """Drive the quarter car over ``road`` with ``model`` as its damper under ``controller``.
+
+    Parameters
+    ----------
+    model : FittedModel or LinearDamper
+        LPV model (kind ``lpv``), static map (``sp1``..``sp4``, ``bingham``) or :class:`LinearDamper`.
+    road : Road
+        Road at the plant rate. With an LPV damper its rate must be an integer multiple of the
+        model rate (the control sample is the model sample).
+    controller : Controller or str
+        A :class:`Controller` or one of :data:`CONTROLLERS` with default gains.
+    car : QuarterCar, optional
+        Plant parameters (default :class:`QuarterCar()`).
+    reg : float, optional
+        Regularisation weight of the inverse [N per input unit]; default
+        ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``.
+    v_ref : float
+        Damper velocity setting the default ``reg`` [m/s].
+    rate : float, optional
+        Largest input change per second [A/s] or [V/s].
+    i_range : (float, float), optional
+        Input limits (default: the model's ``input_range``).
+    n_grid : int
+        Search grid of the inverse step.
+    bound : float
+        Divergence bound on every state [m, m/s].
+
+    Returns
+    -------
+    QuarterCarResult
+
+    Raises
+    ------
+    SimulationDivergedError
+        A state left ``bound``.
+    """
+
+    car = QuarterCar() if car is None else car
+    ctrl = Controller(controller) if isinstance(controller, str) else controller
+    if not isinstance(ctrl, Controller):
+        raise DataValidationError("controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}")
+    if not isinstance(road, Road):
+        raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
+    arrays = _damper_arrays(model)
+    lo, hi = model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
+    if not hi >= lo:
+        raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
+    if arrays["is_lpv"]:
+        ratio = road.fs / model.fs
+        n_sub = round(ratio)
+        if n_sub < 1 or abs(ratio - n_sub) > 1e-9 * ratio:
+            raise DataValidationError(
+                "road", f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an integer multiple"
+            )
+        if model.eta is not None:
+            arrays["lag"] = float(np.exp(-model.eta / model.fs))
+    else:
+        n_sub = 1
+    h = 1.0 / road.fs
+    if isinstance(model, LinearDamper) or ctrl.kind in ("soft", "hard"):
+        lam = 0.0
+    elif reg is None:
+        lam = DEFAULT_REG_FRACTION * force_authority(model, _pos("v_ref", v_ref, "m/s")) if hi > lo else 0.0
+    else:
+        lam = _pos("reg", reg, "N per input unit", allow_zero=True)
+    step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * h * n_sub
+    code = {"soft": QK.CTRL_PASSIVE, "hard": QK.CTRL_PASSIVE, "skyhook": QK.CTRL_SKYHOOK,
+            "groundhook": QK.CTRL_GROUNDHOOK, "hybrid": QK.CTRL_HYBRID}[ctrl.kind]
+    i_const = hi if ctrl.kind == "hard" else lo
+    mr = car.motion_ratio
+    # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the model
+    car_arr = np.array([car.m_s, car.m_u, car.k_s, car.k_t, car.c_t], dtype=np.float64)
+    gains = np.array([ctrl.c_sky / mr**2, ctrl.c_ground / mr**2, ctrl.alpha, i_const])
+    zr = np.ascontiguousarray(road.z, dtype=np.float64)
+    n_ctrl = (zr.size - 1) // n_sub
+    if n_ctrl < 2:
+        raise DataValidationError("road", f"too short: {zr.size} samples")
+    if mr != 1.0:
+        car_arr = np.array([car.m_s / mr**2, car.m_u / mr**2, car.k_s / mr**2, car.k_t / mr**2, car.c_t / mr**2])
+        zr = zr * mr
+    X, F, Fd, rho, sat, bad = QK.simulate(
+        zr[: n_ctrl * n_sub + 1], h, n_sub, car_arr, arrays["is_lpv"], arrays["comp"], arrays["power"],
+        arrays["theta"], arrays["f0"], arrays["alpha"], arrays["beta"], arrays["offset"], arrays["lag"],
+        arrays["mode"], arrays["gm"], arrays["gc"], arrays["mu_high"], arrays["mu_low"], code, gains, lo, hi, lam,
+        step_rate, int(n_grid), float(bound) * mr,
+    )
+    if bad >= 0:
+        raise SimulationDivergedError(getattr(model, "kind", "damper"), int(bad),
+                                      f"quarter-car state left +-{bound:g} at t = {bad * h:.4g} s")
+    if arrays["is_lpv"] and model.eta is not None:
+        cmd = driver_command(rho, model.eta, 1.0 / model.fs, (lo, hi))
+    else:
+        cmd = rho
+    n = n_ctrl * n_sub
+    rep = np.repeat
+    return QuarterCarResult(
+        road=road.name, controller=ctrl.kind, model_kind=getattr(model, "kind", "damper"), fs=road.fs,
+        t=np.arange(n) * h, z_r=road.z[:n].copy(), z_s=X[:, 0] / mr, v_s=X[:, 1] / mr, z_u=X[:, 2] / mr,
+        v_u=X[:, 3] / mr, a_s=X[:, 4] / mr, F=rep(F, n_sub) * mr, F_desired=rep(Fd, n_sub) * mr,
+        i=rep(cmd, n_sub), saturated=rep(sat, n_sub), car=car,
+    )
+
+
+def car_table(car: QuarterCar) -> pd.DataFrame:
+    """Parameters of ``car`` with their units and the two mode frequencies."""
+    units = {"m_s": "kg", "m_u": "kg", "k_s": "N/m", "k_t": "N/m", "c_t": "N s/m", "travel_limit": "m",
+             "motion_ratio": "-"}
+    rows = [(k, v, units[k]) for k, v in asdict(car).items()]
+    rows += [("body_frequency", car.body_frequency(), "Hz"), ("wheel_hop_frequency", car.wheel_hop_frequency(), "Hz")]
+    return pd.DataFrame(rows, columns=["parameter", "value", "unit"])

@@ -1,0 +1,50 @@
+"""Models fitted once per session on the shared real data (skipped where the data are absent)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def quiroz_records(quiroz_unfiltered_dir: Path) -> list[Any]:
+    """The 30 unfiltered constant-current Quiroz sine records."""
+    from mrdamper.data.readers import DEFAULT_PATTERN, read_directory
+
+    return list(read_directory(quiroz_unfiltered_dir, DEFAULT_PATTERN))
+
+
+@pytest.fixture(scope="session")
+def quiroz_models(quiroz_records: list[Any]) -> dict[str, Any]:
+    """LPV (model rate 200 Hz, defaults otherwise) and SP-1 fitted on all 30 Quiroz sine records."""
+    from mrdamper.models.lpv import LPVEstimator
+    from mrdamper.models.semiphenomenological import SP1Estimator
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lpv = LPVEstimator(fs=200.0).fit(quiroz_records)
+    return {"lpv": lpv, "sp1": SP1Estimator().fit(quiroz_records)}
+
+
+@pytest.fixture(scope="session")
+def dyke_record(dyke_csv: Path) -> Any:
+    """The Dyke white-noise record (time base regenerated at 3004.8 Hz)."""
+    from mrdamper.data.readers import read_csv
+
+    return read_csv(dyke_csv, fs=3004.8)
+
+
+@pytest.fixture(scope="session")
+def dyke_models(dyke_record: Any) -> dict[str, Any]:
+    """LPV (drive lag eta = 250 1/s, full rate) and SP-1 with the voltage input, fitted on the first 70 %."""
+    from mrdamper.models.lpv import LPVEstimator
+    from mrdamper.models.semiphenomenological import SP1Estimator
+
+    train = dyke_record.slice(0, int(0.7 * dyke_record.n))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lpv = LPVEstimator(input="voltage", eta=250.0).fit(train)
+    return {"lpv": lpv, "sp1": SP1Estimator(input="voltage").fit(train)}

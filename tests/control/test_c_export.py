@@ -1,0 +1,115 @@
+"""C99 export: compiled with ``gcc -std=c99 -Wall -Werror`` and compared with the Python simulation
+and the Python inverse on real records (skipped without gcc or without the shared data)."""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mrdamper.control import inverse_current
+from mrdamper.control.c_export import c_source, export_c
+from mrdamper.control.inverse import DEFAULT_REG_FRACTION, force_authority
+from mrdamper.errors import DataValidationError, OutputExistsError
+from mrdamper.models.bingham import BinghamModel
+from mrdamper.models.lpv import LTIModel
+
+GCC = shutil.which("gcc")
+needs_gcc = pytest.mark.skipif(GCC is None, reason="gcc not found")
+_P = ctypes.POINTER(ctypes.c_double)
+
+
+def _build(model: Any, folder: Path, name: str, **kw: Any) -> ctypes.CDLL:
+    _, c = export_c(model, folder, name=name, **kw)
+    lib = folder / f"lib{name}.so"
+    subprocess.run([str(GCC), "-std=c99", "-Wall", "-Werror", "-O2", "-shared", "-fPIC", str(c), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True, text=True)
+    return ctypes.CDLL(str(lib))
+
+
+def _arr(a: Any) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _forward(lib: ctypes.CDLL, name: str, x: Any, v: Any, inp: Any) -> np.ndarray:
+    x, v, inp = _arr(x), _arr(v), _arr(inp)
+    F = np.zeros(x.size)
+    getattr(lib, f"{name}_run")(ctypes.c_long(x.size), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
+                                inp.ctypes.data_as(_P), F.ctypes.data_as(_P))
+    return F
+
+
+def _inverse(lib: ctypes.CDLL, name: str, x: Any, v: Any, Fd: Any) -> tuple[np.ndarray, np.ndarray]:
+    x, v, Fd = _arr(x), _arr(v), _arr(Fd)
+    i, F = np.zeros(x.size), np.zeros(x.size)
+    getattr(lib, f"{name}_inverse_run")(ctypes.c_long(x.size), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
+                                        Fd.ctypes.data_as(_P), i.ctypes.data_as(_P), F.ctypes.data_as(_P))
+    return i, F
+
+
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+
+
+@needs_gcc
+@pytest.mark.parametrize("kind", ["lpv", "sp1"])
+def test_c_matches_python_on_a_quiroz_record(tmp_path: Path, quiroz_models: dict[str, Any],
+                                             quiroz_records: list[Any], kind: str) -> None:
+    model = quiroz_models[kind]
+    rec = next(e for e in quiroz_records if e.name == "sine_25mm_0.5Hz_0.5A")  # 200 Hz: the LPV model rate
+    lib = _build(model, tmp_path, f"q_{kind}", reg=800.0)
+    assert _rel(_forward(lib, f"q_{kind}", rec.x, rec.v, rec.i), model.predict(rec)) < 1e-9
+    i_c, F_c = _inverse(lib, f"q_{kind}", rec.x, rec.v, rec.F)
+    res = inverse_current(model, rec, rec.F, reg=800.0)
+    assert _rel(i_c, res.rho) < 1e-9
+    assert _rel(F_c, res.F_achieved) < 1e-9
+
+
+@needs_gcc
+def test_c_with_drive_lag_on_dyke(tmp_path: Path, dyke_models: dict[str, Any], dyke_record: Any) -> None:
+    model = dyke_models["lpv"]  # voltage input through the drive lag eta = 250 1/s
+    rec = dyke_record.slice(0, 6000)
+    lib = _build(model, tmp_path, "d_lpv")
+    F_py = model.with_range_policy("clip").predict(rec)
+    assert _rel(_forward(lib, "d_lpv", rec.x, rec.v, rec.voltage), F_py) < 1e-9
+    rho_c, _ = _inverse(lib, "d_lpv", rec.x, rec.v, rec.F)
+    res = inverse_current(model, rec, rec.F, reg=DEFAULT_REG_FRACTION * force_authority(model, 0.3))  # the C default
+    assert _rel(rho_c, res.rho) < 1e-9
+
+
+@needs_gcc
+def test_c_bingham_and_lti(tmp_path: Path) -> None:
+    n = 1500
+    t = np.arange(n) / 1000.0
+    x, v = 0.01 * np.sin(2 * np.pi * 2 * t), 0.01 * 2 * np.pi * 2 * np.cos(2 * np.pi * 2 * t)
+    i = np.clip(0.5 + 0.4 * np.sin(2 * np.pi * 0.7 * t), 0.0, 1.0)
+    from mrdamper.data import Experiment
+
+    e = Experiment(t=t, x=x, v=v, F=0 * t, i=i)
+    bing = BinghamModel(fc=(100.0, 500.0, -50.0), c0=(1000.0, 2000.0), v_eps=0.02, f0=3.0, input_range=(0.0, 1.0))
+    lib = _build(bing, tmp_path, "bing")
+    assert _rel(_forward(lib, "bing", x, v, i), bing.predict(e)) < 1e-9
+    lti = LTIModel(alpha=np.array([[-0.9], [0.2]]), beta=np.array([[300.0], [-100.0]]), fs=1000.0,
+                   input_signal="v", input_range=(0.0, 1.0))
+    lib = _build(lti, tmp_path, "lti")
+    assert _rel(_forward(lib, "lti", x, v, i), lti.predict(e)) < 1e-9
+    assert not hasattr(lib, "lti_inverse_run")  # no inverse: the LTI force does not depend on the input
+
+
+def test_refusals(tmp_path: Path) -> None:
+    from mrdamper.rig import reference_damper
+
+    with pytest.raises(DataValidationError, match="C export handles kinds"):
+        c_source(reference_damper())
+    bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
+    with pytest.raises(DataValidationError, match="C identifier"):
+        c_source(bing, "1bad-name")
+    export_c(bing, tmp_path, name="b")
+    with pytest.raises(OutputExistsError):
+        export_c(bing, tmp_path, name="b")
+    export_c(bing, tmp_path, name="b", force=True)
