@@ -46,7 +46,7 @@ import numpy as np
 import pandas as pd
 import scipy.signal as sps
 
-from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.data import ExperimentSet
 from mrdamper.data.readers import read_csv, read_directory
 from mrdamper.models import available_models, get_estimator
 from mrdamper.rig import VirtualRig, reference_damper
