@@ -37,7 +37,7 @@ from mrdamper.errors import DataValidationError, IdentificationError, Simulation
 from mrdamper.models import _lpv_fit
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models._rates import to_model_rate, to_record_rate
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
 
 __all__ = ["LPVEstimator", "LPVModel", "LTIEstimator", "LTIModel", "select_order"]
@@ -321,7 +321,9 @@ class LPVEstimator(Estimator):
         if self.fs is not None and not (np.isfinite(self.fs) and self.fs > 0):
             raise DataValidationError("fs", f"expected a positive model rate [Hz], got {self.fs!r}")
 
-    def _laws(self, exps: Sequence[Experiment], rhos: list[np.ndarray], prov: dict[str, Any]) -> ZoneLaws | None:
+    def _laws(
+        self, exps: Sequence[Experiment], rhos: list[np.ndarray], prov: dict[str, Any], single: bool = False
+    ) -> ZoneLaws | None:
         if self.input_signal == "v":
             return None
         if self.zone_laws is not None:
@@ -342,7 +344,7 @@ class LPVEstimator(Estimator):
         if by == "bins":
             fits = zone_fits_binned([e.v for e in exps], [e.F for e in exps], rhos, n_bins=self.n_bins)
             return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
-        return fit_zone_laws(exps, degree=self.laws_degree, by=by, source=self.input)
+        return fit_zone_laws(exps, degree=0 if single else self.laws_degree, by=by, source=self.input)
 
     def fit(
         self, data: Experiment | Iterable[Experiment], *, record_weights: Sequence[float] | None = None
@@ -380,7 +382,8 @@ class LPVEstimator(Estimator):
         in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
         rhos = [K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r for r, e in zip(raw, exps)]
         prov: dict[str, Any] = {}
-        laws = self._laws(exps, rhos, prov)
+        level = single_level(np.concatenate(rhos))
+        laws = self._laws(exps, rhos, prov, single=level is not None)
         proto = self.model_cls(
             alpha=np.zeros((self.n_m, self.n_rho + 1)), beta=np.zeros((self.n_m, self.n_rho + 1)),
             fs=fs, input_signal=self.input_signal, reading=self.reading, zone_laws=laws, eta=self.eta,
@@ -401,13 +404,19 @@ class LPVEstimator(Estimator):
         rho_all = np.concatenate(R)
         rho_range = (float(rho_all.min()), float(rho_all.max()))
         n_lev = _distinct_levels(rho_all, 1e-9 * max(1.0, abs(rho_range[1])))
-        if n_lev < self.n_rho + 1:
+        n_p = self.n_rho + 1
+        reduced_laws = self.input_signal == "u" and self.zone_laws is None and self.laws_degree > 0
+        if level is not None and (n_p > 1 or reduced_laws):
+            n_p = 1  # one level: coefficients and laws are constants (higher powers exactly 0)
+            prov["note"] = single_level_note(self.kind, self.input, level)
+            warnings.warn(prov["note"], UserWarning, stacklevel=2)
+        elif n_lev < n_p:
             raise IdentificationError(
                 f"{self.kind}: rho takes {n_lev} distinct value(s) in the training data; degree "
                 f"n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current levels or lower n_rho)"
             )
         rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
-        ls = _lpv_fit.ls_identify(rec, self.n_m, self.n_rho + 1, self.offset)
+        ls = _lpv_fit.ls_identify(rec, self.n_m, n_p, self.offset)
         f_scale = max(float(np.max(np.abs(np.concatenate(F)))), 1.0)
         bound = 1e3 * f_scale
         theta, F0 = ls.theta, ls.offset
@@ -419,19 +428,19 @@ class LPVEstimator(Estimator):
             prov["record_weights"] = [float(x) for x in user_w]
         enforce = self.stability == "enforce"
         grid = np.linspace(*rho_range, _lpv_fit.STABILITY_GRID)
-        ls_cost = _cost(rec, theta, F0, self.n_m, self.n_rho + 1, bound)
+        ls_cost = _cost(rec, theta, F0, self.n_m, n_p, bound)
         prov["ls_free_run_cost"] = ls_cost
         if self.refine:
-            theta0, shrink = _stable_start(theta, self.n_m, self.n_rho + 1, rho_range, rec, F0, bound)
+            theta0, shrink = _stable_start(theta, self.n_m, n_p, rho_range, rec, F0, bound)
             if shrink != 1.0:
                 prov["oe_start_pole_scaling"] = shrink
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
+                rec, theta0, F0, self.n_m, n_p, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
                 solver=self.oe_solver, rho_grid=grid if enforce else None,
             )
-            oe_cost = _cost(rec, th_r, f0_r, self.n_m, self.n_rho + 1, bound)
+            oe_cost = _cost(rec, th_r, f0_r, self.n_m, n_p, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
-            ls_ok = not enforce or _pole(theta, self.n_m, self.n_rho + 1, grid)[0] < 1.0
+            ls_ok = not enforce or _pole(theta, self.n_m, n_p, grid)[0] < 1.0
             if oe_cost < ls_cost or not ls_ok:
                 theta, F0 = th_r, f0_r
                 if oe_cost >= ls_cost:
@@ -439,7 +448,7 @@ class LPVEstimator(Estimator):
                                        "refined (frozen-stable) model kept")
             else:
                 prov["oe_note"] = "refinement did not lower the free-run cost; least-squares model kept"
-        pmax, rho_at, pole = _pole(theta, self.n_m, self.n_rho + 1, grid)
+        pmax, rho_at, pole = _pole(theta, self.n_m, n_p, grid)
         if enforce and not pmax < 1.0:
             raise IdentificationError(
                 f"{self.kind}: no frozen-stable model: frozen pole z = {pole.real:.4f}{pole.imag:+.4f}j "
@@ -447,7 +456,8 @@ class LPVEstimator(Estimator):
                 + ("" if self.refine else "; the least-squares estimate is unstable, set refine=True")
                 + " (stability='warn' returns it with a warning)"
             )
-        alpha, beta = _lpv_fit.split_theta(theta, self.n_m, self.n_rho + 1)
+        alpha, beta = (np.pad(c, ((0, 0), (0, self.n_rho + 1 - n_p)))
+                       for c in _lpv_fit.split_theta(theta, self.n_m, n_p))
         model = self.model_cls(
             alpha=alpha, beta=beta, offset=F0, fs=fs, input_signal=self.input_signal, reading=self.reading,
             zone_laws=laws, eta=self.eta, rho_range=rho_range, force_bound=bound, input=self.input,
