@@ -24,6 +24,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "mrdamper.cli.rig",
     "mrdamper.cli.study",
     "mrdamper.cli.export",
+    "mrdamper.cli.select",
 )
 
 app = typer.Typer(
