@@ -59,7 +59,7 @@ def test_time_folds_of_one_record(records) -> None:
 
 def test_recommends_the_true_family(records) -> None:
     res = cross_validate(ExperimentSet(records), models=KINDS)
-    assert list(res.table.index)[0] == "bingham" == res.recommended
+    assert res.table.index[0] == "bingham" == res.recommended
     assert set(res.table.index) == set(KINDS)
     assert "lowest mean free-run ESR" in res.reason and "2 condition folds" in res.reason
     assert res.table.loc["bingham", "mean_esr"] < 1e-3 < res.table.loc["lti", "mean_esr"]

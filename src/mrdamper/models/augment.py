@@ -112,7 +112,7 @@ def reference_records(
     v_max = max(float(np.max(np.abs(e.v))) for e in exps)
     lo = min(float(np.min(e.electrical(input))) for e in exps)  # type: ignore[arg-type]
     hi = max(float(np.max(e.electrical(input))) for e in exps)  # type: ignore[arg-type]
-    n = int(round(duration * rate))
+    n = round(duration * rate)
     t = np.arange(n) / rate
     sos = sps.butter(4, [min_frequency, max_frequency], btype="bandpass", fs=rate, output="sos")
     ramp = np.clip(np.minimum(t, t[-1] - t) / 0.5, 0.0, 1.0)
@@ -130,8 +130,8 @@ def reference_records(
         level = aprbs(rate, duration, low=lo, high=hi, min_hold=min_hold, seed=int(rng.integers(2**31)))
         if hi - lo <= 0:
             level = np.full(n, lo)
-        elec = {input: level[:n]}
         e = Experiment(t=t, x=x, v=v, F=np.zeros(n), name=f"reference_{k}",
-                       metadata={"source": "reference model", "reference": reference.kind}, **elec)
+                       i=level[:n] if input == "i" else None, voltage=level[:n] if input == "voltage" else None,
+                       metadata={"source": "reference model", "reference": reference.kind})
         out.append(e.replace(F=np.asarray(reference.predict(e), dtype=np.float64)))
     return ExperimentSet(out, name="reference records"), reference

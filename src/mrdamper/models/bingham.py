@@ -203,8 +203,9 @@ class BinghamEstimator(Estimator):
             "weighted_rms_residual": float(np.sqrt(np.mean((y - pred) ** 2))),
         }
         if level is not None and deg != int(self.degree):
-            provenance["note"] = single_level_note(self.kind, self.input, level)
-            warnings.warn(provenance["note"], UserWarning, stacklevel=2)
+            note = single_level_note(self.kind, self.input, level)
+            provenance["note"] = note
+            warnings.warn(note, UserWarning, stacklevel=2)
         return BinghamModel(
             fc=tuple(coef[: deg + 1]), c0=tuple(coef[deg + 1 : 2 * deg + 2]), f0=float(coef[-1]),
             v_eps=float(self.v_eps), input=self.input,

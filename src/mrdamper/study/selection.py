@@ -118,8 +118,8 @@ def selection_folds(
         groups = [set(names[j::k]) for j in range(k)]
         out = []
         for j, g in enumerate(groups):
-            tr = exps.where(lambda e, g=g: e.name not in g)
-            te = exps.where(lambda e, g=g: e.name in g)
+            tr = ExperimentSet([e for e in exps if e.name not in g], name=exps.name)
+            te = ExperimentSet([e for e in exps if e.name in g], name=exps.name)
             out.append((f"records {j + 1}/{k}", tr, te))
         return "record", out
     if len(exps) != 1:
