@@ -99,7 +99,18 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     tab = df.groupby(["variant", "scenario", "test"], sort=False)["esr"].mean().unstack(["scenario", "test"])
     tab.columns = [f"{s.split()[0]} {t}" for s, t in tab.columns]
     print(f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; {time.perf_counter() - t0:.0f} s)\n")
-    print(G.to_markdown(tab))
+    skipped = tab.loc["eta=100"].isna() if "eta=100" in tab.index else None
+    text = G.to_markdown(tab)
+    if skipped is not None and skipped.any():  # not run (constant or already filtered input): not a failure
+        lines = text.split("\n")
+        k = next(j for j, line in enumerate(lines) if line.startswith("| eta=100 |"))
+        cells = [c.strip() for c in lines[k].strip().strip("|").split("|")]
+        for j, miss in enumerate(skipped.to_numpy(), start=1):
+            if miss:
+                cells[j] = "n/a"
+        lines[k] = "| " + " | ".join(cells) + " |"
+        text = "\n".join(lines)
+    print(text)
     for r in rows:
         if r["error"]:
             print(f"- {r['scenario']} / {r['test']} / {r['variant']}: {r['error'][:150]}")
