@@ -91,3 +91,14 @@ def test_cli_select_prints_table_and_recommendation(records, tmp_path: Path, cap
     with pytest.raises(SystemExit):
         main(["select", str(d), "--set", "n_m=2"])
     assert "KIND.KEY=VALUE" in capsys.readouterr().err
+
+
+def test_close_runner_up_is_named_as_a_tie() -> None:
+    from mrdamper.study.selection import _recommend
+
+    tab = pd.DataFrame({"mean_esr": [0.0180, 0.0182, 0.0244], "worst_esr": [0.09, 0.07, 0.1],
+                        "folds_failed": [0, 0, 0]}, index=["narx", "spencer", "lpv"])
+    best, reason = _recommend(tab, "condition", 6)
+    assert best == "narx" and "next: spencer 0.0182 (only 1% higher: a tie" in reason
+    _, reason = _recommend(tab.drop("spencer"), "condition", 6)
+    assert "tie" not in reason

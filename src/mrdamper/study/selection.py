@@ -14,7 +14,7 @@ else ``"time"``. Every model kind is fitted with its defaults (plus ``input`` an
 ``settings``) on each training part and scored in free run (ESR, eq. 24) on the part left out,
 with ``range_policy="clip"`` (a left-out level outside the training range is clipped and counted
 in the ``clipped`` column). The recommendation is the kind with the lowest mean ESR among those
-that fitted and simulated on every fold.
+that fitted and simulated on every fold; a runner-up within 5 % is named as a tie.
 """
 
 from __future__ import annotations
@@ -252,7 +252,10 @@ def _recommend(table: pd.DataFrame, split: str, n: int) -> tuple[str | None, str
     reason = (f"{best} has the lowest mean free-run ESR on the left-out data, {ok['mean_esr'].iloc[0]:.3g} "
               f"over {n} {split} folds (worst left-out record {ok['worst_esr'].iloc[0]:.3g})")
     if len(ok) > 1:
+        gap = ok["mean_esr"].iloc[1] / ok["mean_esr"].iloc[0] - 1.0
         reason += f"; next: {ok.index[1]} {ok['mean_esr'].iloc[1]:.3g}"
+        if gap < 0.05:
+            reason += f" (only {gap:.0%} higher: a tie at this data size, either will do)"
     failing = table.index[table["folds_failed"] > 0].tolist()
     if failing:
         reason += f"; failed on some fold: {', '.join(failing)}"
