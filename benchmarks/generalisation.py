@@ -14,7 +14,8 @@ Four scenarios, every registered model kind, one table of mean test ESR (eq. 24)
   chirp (constant velocity amplitude 0.1 m/s) at 0, 0.5 and 1 A and on an ISO 8608 road profile
   (class C, up to 10 Hz) with an APRBS current.
 * **(d) Dyke 70/30** (``ranran_50.csv``): first 70 % trains, last 30 % tests; drive-lag rate and
-  model rate of the LPV/LTI models chosen on the training part (as in ``accuracy_real_data.py``).
+  model rate of the LPV/LTI models chosen on the training part (as in ``accuracy_real_data.py``);
+  any other estimator with a drive-lag setting ``eta`` gets the same rate.
 
 Nothing is chosen on test records. Every model uses its estimator defaults plus the data set's
 electrical input; the LPV/LTI model rate is 200 Hz on Quiroz (the lowest record rate) and the
@@ -34,6 +35,7 @@ Run::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -273,6 +275,8 @@ def scenario_dyke(quick: bool) -> Scenario:
         s: dict[str, Any] = {"input": "voltage"}
         if kind in ("lpv", "lti"):
             s.update(fs=DYKE_FS / dec, eta=eta)
+        elif "eta" in {f.name for f in dataclasses.fields(type(get_estimator(kind)))}:
+            s["eta"] = eta  # another model with a drive-lag setting gets the same lag
         return s
 
     c2 = round(0.8 * train.n)
