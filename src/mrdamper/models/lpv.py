@@ -452,7 +452,8 @@ class LPVEstimator(Estimator):
         if enforce and not pmax < 1.0:
             raise IdentificationError(
                 f"{self.kind}: no frozen-stable model: frozen pole z = {pole.real:.4f}{pole.imag:+.4f}j "
-                f"(|z| = {pmax:.4f}) at rho = {rho_at:.4g} of the identified range {rho_range}"
+                f"(|z| = {pmax:.4f}) at rho = {rho_at:.4g} of the identified range "
+                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}]"
                 + ("" if self.refine else "; the least-squares estimate is unstable, set refine=True")
                 + " (stability='warn' returns it with a warning)"
             )
@@ -466,8 +467,9 @@ class LPVEstimator(Estimator):
         prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0, fit_seconds=time.perf_counter() - t_start)
         if pmax >= 1.0:
             warnings.warn(
-                f"{self.kind}: identified model is not frozen-stable over rho in {rho_range} "
-                f"(frozen pole |z| = {pmax:.4f} at rho = {rho_at:.4g})", RuntimeWarning, stacklevel=2,
+                f"{self.kind}: identified model is not frozen-stable over rho in "
+                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}] "
+                f"(max frozen pole modulus {pmax:.4f} at rho = {rho_at:.4g})", RuntimeWarning, stacklevel=2,
             )
         return model
 
