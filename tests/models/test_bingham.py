@@ -58,12 +58,17 @@ def test_noisy_identification_is_close() -> None:
     assert fit.score(test).esr < 1e-3
 
 
-def test_one_level_needs_degree_zero() -> None:
+def test_one_level_reduces_to_constants_two_levels_need_degree_one() -> None:
     data = [_record(0.5, seed=1, truth=TRUTH)]
-    with pytest.raises(IdentificationError, match="degree=2"):
-        BinghamEstimator(degree=2).fit(data)
+    with pytest.warns(UserWarning, match=r"one i level \(0.5 A\).*\[0.5, 0.5\] A"):
+        reduced = BinghamEstimator(degree=2).fit(data)
     fit = BinghamEstimator(degree=0).fit(data)
     assert fit.score(data[0]).esr < 1e-20
+    assert reduced.fc == pytest.approx(fit.fc) and reduced.c0 == pytest.approx(fit.c0)
+    assert reduced.input_range == (0.5, 0.5)
+    two = [*data, _record(1.0, seed=2, truth=TRUTH, name="c1")]
+    with pytest.raises(IdentificationError, match="degree=2"):
+        BinghamEstimator(degree=2).fit(two)
 
 
 def test_round_trip_and_registry(tmp_path: Path) -> None:

@@ -136,7 +136,7 @@ def test_bad_settings(settings, field) -> None:
 
 
 def test_bad_data() -> None:
-    recs = [_record(0.5, k) for k in range(3)]  # one current level only
+    recs = [_record(0.5, k) for k in range(2)] + [_record(1.0, 5)]  # two current levels
     with pytest.raises(IdentificationError, match="distinct"):
         LPVEstimator(n_rho=2, input_signal="v").fit(recs)
     other_rate = _record(0.0, 1)

@@ -25,6 +25,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "mrdamper.cli.study",
     "mrdamper.cli.export",
     "mrdamper.cli.control",
+    "mrdamper.cli.select",
 )
 
 app = typer.Typer(

@@ -14,12 +14,26 @@ from scipy import optimize
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
 
-__all__ = ["LSResult", "Records", "frozen_poles", "ls_identify", "refine_output_error", "split_theta"]
+__all__ = [
+    "STABILITY_GRID",
+    "STABILITY_LIMIT",
+    "LSResult",
+    "Records",
+    "frozen_poles",
+    "largest_frozen_pole",
+    "ls_identify",
+    "refine_output_error",
+    "split_theta",
+]
 
 #: Condition number of the column-scaled Gram matrix above which the QR fall-back is used.
 GRAM_COND_LIMIT = 1e8
 #: Condition number of the column-scaled regression matrix above which identification fails.
 REGRESSION_COND_LIMIT = 1e12
+#: Largest frozen-pole modulus the output-error refinement accepts (strictly inside the unit circle).
+STABILITY_LIMIT = 0.999
+#: Points of the scheduling grid (identified range, ends included) on which frozen stability is checked.
+STABILITY_GRID = 101
 
 
 @dataclass
@@ -135,6 +149,26 @@ def frozen_poles(alpha: np.ndarray, rho_grid: np.ndarray) -> np.ndarray:
     return out
 
 
+def largest_frozen_pole(alpha: np.ndarray, rho_grid: np.ndarray) -> tuple[float, float, complex]:
+    """Largest frozen-pole modulus over ``rho_grid``, the ``rho`` where it occurs and the pole.
+
+    The poles are the eigenvalues of the companion matrices of ``z^n + a_1(rho) z^(n-1) + ...``,
+    computed for the whole grid at once.
+    """
+    n_m, n_p = alpha.shape
+    a = (np.asarray(rho_grid, float)[:, None] ** np.arange(n_p)) @ alpha.T  # (G, n_m)
+    C = np.zeros((a.shape[0], n_m, n_m))
+    C[:, 0, :] = -a
+    if n_m > 1:
+        C[:, np.arange(1, n_m), np.arange(n_m - 1)] = 1.0
+    ev = np.linalg.eigvals(C)
+    if not np.all(np.isfinite(ev)):
+        return float("inf"), float(rho_grid[0]), complex("nan")
+    mod = np.abs(ev)
+    g, j = np.unravel_index(int(np.argmax(mod)), mod.shape)
+    return float(mod[g, j]), float(rho_grid[g]), complex(ev[g, j])
+
+
 def refine_output_error(
     rec: Records,
     theta0: np.ndarray,
@@ -146,6 +180,7 @@ def refine_output_error(
     bound: float,
     max_nfev: int,
     solver: str = "gauss-newton",
+    rho_grid: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float, optimize.OptimizeResult]:
     """Minimise the weighted free-run (simulation) error from a least-squares start.
 
@@ -155,6 +190,11 @@ def refine_output_error(
     ``scipy.optimize.least_squares`` (MINPACK Levenberg-Marquardt) with the analytic Jacobian of
     :func:`~mrdamper.models._lpv_kernels.simulate_sensitivity` (slower: it stores and factors
     ``J``). A candidate whose free run diverges is rejected (infinite cost / large residuals).
+
+    With ``rho_grid`` the refinement is constrained to frozen stability over that grid: a
+    candidate with a frozen pole of modulus ``>= STABILITY_LIMIT`` at any grid point is rejected
+    like a diverging one (Levenberg-Marquardt raises its damping and takes a shorter step), so a
+    frozen-stable start stays frozen-stable.
     """
     P = 2 * n_m * n_p
     sw = np.sqrt(rec.weights)
@@ -167,9 +207,10 @@ def refine_output_error(
         alpha, beta = split_theta(p, n_m, n_p)
         f0 = float(p[P]) if offset else F0
         res, jacs = [], []
+        unstable = rho_grid is not None and largest_frozen_pole(alpha, rho_grid)[0] >= STABILITY_LIMIT
         for r in range(len(rec.u)):
             yh, J, bad = K.simulate_sensitivity(rec.u[r], rec.rho[r], alpha, beta, bound)
-            if bad >= 0:
+            if bad >= 0 or unstable:
                 e = np.full(rec.F[r].size, 10.0 * bound)
                 J = np.zeros_like(J)
             else:
@@ -186,7 +227,8 @@ def refine_output_error(
 
     x0 = np.r_[theta0, F0] if offset else theta0.copy()
     if solver == "gauss-newton":
-        return _levenberg_marquardt(rec, x0, n_m, n_p, offset=offset, F0=F0, bound=bound, max_iter=max_nfev)
+        return _levenberg_marquardt(rec, x0, n_m, n_p, offset=offset, F0=F0, bound=bound, max_iter=max_nfev,
+                                    rho_grid=rho_grid)
     sol = optimize.least_squares(
         lambda p: evaluate(p)[0], x0, jac=lambda p: evaluate(p)[1], method="lm",
         x_scale="jac", max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10,
@@ -231,7 +273,7 @@ def _free_run_cost(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool
     return total
 
 
-def _levenberg_marquardt(rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=1e-7):
+def _levenberg_marquardt(rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=1e-7, rho_grid=None):
     P = 2 * n_m * n_p
     x = x0.copy()
     cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
@@ -252,7 +294,10 @@ def _levenberg_marquardt(rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=
                 continue
             dx = -scipy.linalg.cho_solve((c, low), gs, check_finite=False) / d
             xn = x + dx
-            cn = _free_run_cost(rec, xn, n_m, n_p, offset, F0, bound)
+            if rho_grid is not None and largest_frozen_pole(split_theta(xn, n_m, n_p)[0], rho_grid)[0] >= STABILITY_LIMIT:
+                cn = np.inf  # leaves the frozen-stable set over the identified range: rejected
+            else:
+                cn = _free_run_cost(rec, xn, n_m, n_p, offset, F0, bound)
             nfev += 1
             if cn < cost:
                 rel = (cost - cn) / cost

@@ -6,6 +6,8 @@ other rates are resampled on the way in and the predicted force is interpolated 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import scipy.signal as sps
 
@@ -19,10 +21,19 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
 
     Integer down-sampling ratios use anti-aliased polyphase filtering
     (``scipy.signal.resample_poly`` with ``padtype="line"``); other ratios linear interpolation.
-    Equal rates return ``x`` itself (as float64).
+    Equal rates return ``x`` itself (as float64). A model rate above the record rate
+    (up-sampling) interpolates linearly and says so with a ``RuntimeWarning``: the model then
+    sees no content above the record's Nyquist frequency.
     """
     if abs(fs_in - fs_out) <= 1e-9 * fs_out:
         return np.asarray(x, dtype=np.float64)
+    if fs_out > fs_in:
+        warnings.warn(
+            f"model rate {fs_out:g} Hz is above the record rate {fs_in:g} Hz: the record is "
+            f"up-sampled by linear interpolation",
+            RuntimeWarning,
+            stacklevel=3,
+        )
     q = fs_in / fs_out
     if abs(q - round(q)) < 1e-9 and round(q) >= 2:
         return np.asarray(sps.resample_poly(x, 1, round(q), padtype="line"), dtype=np.float64)

@@ -41,6 +41,8 @@ __all__ = [
     "check_input_range",
     "decode_value",
     "encode_value",
+    "single_level",
+    "single_level_note",
 ]
 
 SCHEMA_NAME = "mrdamper.model"
@@ -95,6 +97,26 @@ def check_input_range(
     if policy == "ignore":
         return values
     raise OutOfRangeError(f"range_policy: expected error/warn/clip/ignore, got {policy!r}")
+
+
+def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
+    """The one level of a constant electrical input, or None when it takes more than one value.
+
+    ``values`` is constant when its spread is at most ``rel_tol * max(1, max |values|)``.
+    """
+    lo, hi = float(np.min(values)), float(np.max(values))
+    if hi - lo <= rel_tol * max(1.0, abs(lo), abs(hi)):
+        return 0.5 * (lo + hi)
+    return None
+
+
+def single_level_note(kind: str, source: str, level: float) -> str:
+    """One-line note for a model identified at a single electrical level (also emitted as a warning)."""
+    unit = "A" if source == "i" else "V"
+    return (
+        f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws are "
+        f"constants and its identified range is [{level:g}, {level:g}] {unit}; other levels follow range_policy"
+    )
 
 
 # ----------------------------------------------------------------------------- JSON encoding

@@ -10,6 +10,7 @@ records.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
@@ -18,7 +19,7 @@ import numpy as np
 
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
 
 __all__ = ["BinghamEstimator", "BinghamModel"]
@@ -119,7 +120,8 @@ class BinghamEstimator(Estimator):
         Electrical input channel.
     degree : int
         Polynomial degree of ``fc`` and ``c0`` in the input; needs at least ``degree + 1``
-        distinct input levels in the data.
+        distinct input levels in the data, except at one constant level, where both reduce to
+        constants (degree 0; noted in ``provenance["note"]`` and a ``UserWarning``).
     v_eps : float
         Sign smoothing velocity [m/s] (0: exact sign).
     weighting : {"record", "none"}
@@ -173,6 +175,13 @@ class BinghamEstimator(Estimator):
             rows.append(X * w)
             rhs.append(exp.F * w)
             inputs.append(e)
+        e_all = np.concatenate(inputs)
+        level = single_level(e_all)
+        if level is not None and deg > 0:  # one level: fc and c0 reduce to constants
+            n_cols = 2 * (deg + 1) + 1
+            cols = [0, deg + 1, n_cols - 1]
+            rows = [r[:, cols] for r in rows]
+            deg = 0
         X = np.vstack(rows)
         y = np.concatenate(rhs)
         coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)
@@ -183,7 +192,6 @@ class BinghamEstimator(Estimator):
                 f"needs at least {deg + 1} distinct '{self.input}' levels and moving records "
                 f"(found {levels} level(s))"
             )
-        e_all = np.concatenate(inputs)
         pred = X @ coef
         provenance = {
             "method": "linear least squares",
@@ -194,6 +202,10 @@ class BinghamEstimator(Estimator):
             "cond_X": float(sv[0] / sv[-1]),
             "weighted_rms_residual": float(np.sqrt(np.mean((y - pred) ** 2))),
         }
+        if level is not None and deg != int(self.degree):
+            note = single_level_note(self.kind, self.input, level)
+            provenance["note"] = note
+            warnings.warn(note, UserWarning, stacklevel=2)
         return BinghamModel(
             fc=tuple(coef[: deg + 1]), c0=tuple(coef[deg + 1 : 2 * deg + 2]), f0=float(coef[-1]),
             v_eps=float(self.v_eps), input=self.input,

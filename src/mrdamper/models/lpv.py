@@ -37,7 +37,7 @@ from mrdamper.errors import DataValidationError, IdentificationError, Simulation
 from mrdamper.models import _lpv_fit
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models._rates import to_model_rate, to_record_rate
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
 
 __all__ = ["LPVEstimator", "LPVModel", "LTIEstimator", "LTIModel", "select_order"]
@@ -249,7 +249,8 @@ class LPVEstimator(Estimator):
     laws_by : {"auto", "current", "plateaus", "bins"}
         How the laws are fitted: records grouped by metadata ``current``, constant plateaus of
         the electrical input, or bins of ``rho``. ``"auto"``: ``"current"`` if every record has it,
-        else ``"bins"``.
+        ``"bins"`` if none has it (noted in the provenance as ``laws_note``); a mix is refused
+        (name the method).
     laws_degree : int
         Degree of the slope/intercept laws (2 in the paper).
     n_bins : int
@@ -270,6 +271,11 @@ class LPVEstimator(Estimator):
         ``scipy.optimize.least_squares`` with the stored analytic Jacobian (slower).
     range_policy : {"error", "warn", "clip", "ignore"}
         Stored in the fitted model.
+    stability : {"enforce", "warn"}
+        ``"enforce"`` (default): the output-error refinement is constrained to frozen stability
+        over the identified ``rho`` range (every frozen pole of modulus below 0.999 on a
+        101-point grid) and the fit refuses, naming the pole, when the returned model would not be
+        frozen-stable. ``"warn"``: unconstrained refinement; an unstable result only warns.
     """
 
     kind: ClassVar[str] = "lpv"
@@ -292,6 +298,7 @@ class LPVEstimator(Estimator):
     max_nfev: int = 60
     oe_solver: Literal["gauss-newton", "least_squares"] = "gauss-newton"
     range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    stability: Literal["enforce", "warn"] = "enforce"
 
     def _validate(self) -> None:
         for name in ("n_m", "n_rho", "laws_degree", "n_bins", "max_nfev"):
@@ -304,7 +311,7 @@ class LPVEstimator(Estimator):
             "input": ("i", "voltage"), "input_signal": ("u", "v"), "reading": ("continuous", "literal"),
             "laws_by": ("auto", "current", "plateaus", "bins"), "weighting": ("esr", "sse"),
             "oe_solver": ("gauss-newton", "least_squares"),
-            "range_policy": ("error", "warn", "clip", "ignore"),
+            "range_policy": ("error", "warn", "clip", "ignore"), "stability": ("enforce", "warn"),
         }
         for name, ok in choices.items():
             if getattr(self, name) not in ok:
@@ -314,24 +321,55 @@ class LPVEstimator(Estimator):
         if self.fs is not None and not (np.isfinite(self.fs) and self.fs > 0):
             raise DataValidationError("fs", f"expected a positive model rate [Hz], got {self.fs!r}")
 
-    def _laws(self, exps: Sequence[Experiment], rhos: list[np.ndarray]) -> ZoneLaws | None:
+    def _laws(
+        self, exps: Sequence[Experiment], rhos: list[np.ndarray], prov: dict[str, Any], single: bool = False
+    ) -> ZoneLaws | None:
         if self.input_signal == "v":
             return None
         if self.zone_laws is not None:
             return self.zone_laws
         by = self.laws_by
         if by == "auto":
-            by = "current" if all("current" in e.metadata for e in exps) else "bins"
+            lacking = [e.name for e in exps if "current" not in e.metadata]
+            if lacking and len(lacking) < len(exps):
+                raise DataValidationError(
+                    "laws_by",
+                    f"'auto' needs metadata 'current' on every record or on none; {len(lacking)} of "
+                    f"{len(exps)} records lack it (first: {lacking[0]!r}); set laws_by='bins' or "
+                    f"'plateaus', or give the laws (zone_laws=)",
+                )
+            by = "bins" if lacking else "current"
+            if lacking:
+                prov["laws_note"] = "laws_by='auto': no record carries metadata 'current'; laws fitted on rho bins"
         if by == "bins":
             fits = zone_fits_binned([e.v for e in exps], [e.F for e in exps], rhos, n_bins=self.n_bins)
             return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
-        return fit_zone_laws(exps, degree=self.laws_degree, by=by, source=self.input)
+        return fit_zone_laws(exps, degree=0 if single else self.laws_degree, by=by, source=self.input)
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> LPVModel:
-        """Identify the model from one record or a collection (records keep their own start)."""
+    def fit(
+        self, data: Experiment | Iterable[Experiment], *, record_weights: Sequence[float] | None = None
+    ) -> LPVModel:
+        """Identify the model from one record or a collection (records keep their own start).
+
+        Parameters
+        ----------
+        data : Experiment or iterable of Experiment
+            Training records.
+        record_weights : sequence of float, optional
+            One non-negative weight per record [-], multiplying that record's share of the
+            least-squares and output-error costs (on top of ``weighting``); e.g. to mix measured
+            records with synthetic ones without duplicating records. Default: all 1.
+
+        Raises
+        ------
+        IdentificationError
+            Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
+            ``stability="enforce"``) no frozen-stable model; the message names the pole.
+        """
         t_start = time.perf_counter()
         self._validate()
         exps = self._as_set(data)
+        user_w = _record_weights(record_weights, len(exps))
         rates = sorted({e.fs for e in exps})
         fs = float(self.fs) if self.fs is not None else rates[0]
         if self.fs is None and len(rates) > 1:
@@ -343,7 +381,9 @@ class LPVEstimator(Estimator):
         raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
         in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
         rhos = [K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r for r, e in zip(raw, exps)]
-        laws = self._laws(exps, rhos)
+        prov: dict[str, Any] = {}
+        level = single_level(np.concatenate(rhos))
+        laws = self._laws(exps, rhos, prov, single=level is not None)
         proto = self.model_cls(
             alpha=np.zeros((self.n_m, self.n_rho + 1)), beta=np.zeros((self.n_m, self.n_rho + 1)),
             fs=fs, input_signal=self.input_signal, reading=self.reading, zone_laws=laws, eta=self.eta,
@@ -359,56 +399,95 @@ class LPVEstimator(Estimator):
             R.append(rho)
             var = float(np.var(Fr))
             w.append(1.0 / (Fr.size * var) if self.weighting == "esr" and var > 0 else 1.0)
-        weights = np.asarray(w)
+        weights = np.asarray(w) * user_w
         weights = weights / weights.mean()
         rho_all = np.concatenate(R)
         rho_range = (float(rho_all.min()), float(rho_all.max()))
         n_lev = _distinct_levels(rho_all, 1e-9 * max(1.0, abs(rho_range[1])))
-        if n_lev < self.n_rho + 1:
+        n_p = self.n_rho + 1
+        reduced_laws = self.input_signal == "u" and self.zone_laws is None and self.laws_degree > 0
+        if level is not None and (n_p > 1 or reduced_laws):
+            n_p = 1  # one level: coefficients and laws are constants (higher powers exactly 0)
+            prov["note"] = single_level_note(self.kind, self.input, level)
+            warnings.warn(prov["note"], UserWarning, stacklevel=2)
+        elif n_lev < n_p:
             raise IdentificationError(
                 f"{self.kind}: rho takes {n_lev} distinct value(s) in the training data; degree "
                 f"n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current levels or lower n_rho)"
             )
         rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
-        ls = _lpv_fit.ls_identify(rec, self.n_m, self.n_rho + 1, self.offset)
+        ls = _lpv_fit.ls_identify(rec, self.n_m, n_p, self.offset)
         f_scale = max(float(np.max(np.abs(np.concatenate(F)))), 1.0)
         bound = 1e3 * f_scale
         theta, F0 = ls.theta, ls.offset
-        prov: dict[str, Any] = {
+        prov.update({
             "training_records": list(exps.names), "n_samples": int(sum(a.size for a in F)),
             "settings": _settings_dict(self), "ls_solver": ls.solver, "ls_condition_number": ls.cond,
-        }
-        ls_cost = _cost(rec, theta, F0, self.n_m, self.n_rho + 1, bound)
+        })
+        if record_weights is not None:
+            prov["record_weights"] = [float(x) for x in user_w]
+        enforce = self.stability == "enforce"
+        grid = np.linspace(*rho_range, _lpv_fit.STABILITY_GRID)
+        ls_cost = _cost(rec, theta, F0, self.n_m, n_p, bound)
         prov["ls_free_run_cost"] = ls_cost
         if self.refine:
-            theta0, shrink = _stable_start(theta, self.n_m, self.n_rho + 1, rho_range, rec, F0, bound)
+            theta0, shrink = _stable_start(theta, self.n_m, n_p, rho_range, rec, F0, bound)
             if shrink != 1.0:
                 prov["oe_start_pole_scaling"] = shrink
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
-                solver=self.oe_solver,
+                rec, theta0, F0, self.n_m, n_p, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
+                solver=self.oe_solver, rho_grid=grid if enforce else None,
             )
-            oe_cost = _cost(rec, th_r, f0_r, self.n_m, self.n_rho + 1, bound)
+            oe_cost = _cost(rec, th_r, f0_r, self.n_m, n_p, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
-            if oe_cost < ls_cost:
+            ls_ok = not enforce or _pole(theta, self.n_m, n_p, grid)[0] < 1.0
+            if oe_cost < ls_cost or not ls_ok:
                 theta, F0 = th_r, f0_r
+                if oe_cost >= ls_cost:
+                    prov["oe_note"] = ("least-squares model has a lower free-run cost but is not frozen-stable; "
+                                       "refined (frozen-stable) model kept")
             else:
                 prov["oe_note"] = "refinement did not lower the free-run cost; least-squares model kept"
-        alpha, beta = _lpv_fit.split_theta(theta, self.n_m, self.n_rho + 1)
+        pmax, rho_at, pole = _pole(theta, self.n_m, n_p, grid)
+        if enforce and not pmax < 1.0:
+            raise IdentificationError(
+                f"{self.kind}: no frozen-stable model: frozen pole z = {pole.real:.4f}{pole.imag:+.4f}j "
+                f"(|z| = {pmax:.4f}) at rho = {rho_at:.4g} of the identified range "
+                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}]"
+                + ("" if self.refine else "; the least-squares estimate is unstable, set refine=True")
+                + " (stability='warn' returns it with a warning)"
+            )
+        alpha, beta = (np.pad(c, ((0, 0), (0, self.n_rho + 1 - n_p)))
+                       for c in _lpv_fit.split_theta(theta, self.n_m, n_p))
         model = self.model_cls(
             alpha=alpha, beta=beta, offset=F0, fs=fs, input_signal=self.input_signal, reading=self.reading,
             zone_laws=laws, eta=self.eta, rho_range=rho_range, force_bound=bound, input=self.input,
             input_range=in_range, range_policy=self.range_policy, provenance=prov,
         )
-        pmax = model.max_pole_modulus()
         prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0, fit_seconds=time.perf_counter() - t_start)
         if pmax >= 1.0:
             warnings.warn(
                 f"{self.kind}: identified model is not frozen-stable over rho in "
                 f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}] "
-                f"(max frozen pole modulus {pmax:.4f})", RuntimeWarning, stacklevel=2,
+                f"(max frozen pole modulus {pmax:.4f} at rho = {rho_at:.4g})", RuntimeWarning, stacklevel=2,
             )
         return model
+
+
+def _pole(theta: np.ndarray, n_m: int, n_p: int, grid: np.ndarray) -> tuple[float, float, complex]:
+    return _lpv_fit.largest_frozen_pole(_lpv_fit.split_theta(theta, n_m, n_p)[0], grid)
+
+
+def _record_weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
+    """Validated per-record weights (all 1 when None)."""
+    if weights is None:
+        return np.ones(n)
+    w = np.asarray(weights, dtype=np.float64)
+    if w.shape != (n,):
+        raise DataValidationError("record_weights", f"expected {n} weights (one per record), got shape {w.shape}")
+    if not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
+        raise DataValidationError("record_weights", f"expected finite weights >= 0, not all zero, got {w.tolist()}")
+    return w
 
 
 def _stable_start(
@@ -422,8 +501,8 @@ def _stable_start(
     time-varying run still diverges) gives a frozen-stable start with the same pole pattern.
     """
     alpha, beta = _lpv_fit.split_theta(theta, n_m, n_p)
-    pmax = float(np.max(np.abs(_lpv_fit.frozen_poles(alpha, np.linspace(*rho_range, 51)))))
-    lam = 1.0 if pmax < 0.999 else 0.98 / pmax
+    pmax = _lpv_fit.largest_frozen_pole(alpha, np.linspace(*rho_range, _lpv_fit.STABILITY_GRID))[0]
+    lam = 1.0 if pmax < _lpv_fit.STABILITY_LIMIT else 0.98 / pmax
     for _ in range(20):
         al = alpha * (lam ** np.arange(1, n_m + 1))[:, None]
         th = np.r_[al.ravel(), beta.ravel()]

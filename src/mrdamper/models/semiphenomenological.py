@@ -40,7 +40,10 @@ force error, with the analytic Jacobian of :mod:`mrdamper.models._sp_kernels`:
 
 Identifiability is checked before fitting: each component polynomial needs as many distinct
 input levels as it has coefficients (SP-1 and SP-4 need three, SP-3 two, SP-2 a non-zero input);
-otherwise :class:`~mrdamper.errors.IdentificationError` names the rank found.
+otherwise :class:`~mrdamper.errors.IdentificationError` names the rank found. The exception is
+data at a single, constant input level: each component then keeps only its lowest-power term
+(its law in the input is a constant, the higher coefficients are exactly 0), the identified
+range is that level, and a one-line note says so (``provenance["note"]`` and a ``UserWarning``).
 
 Examples
 --------
@@ -72,7 +75,7 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models._sp_kernels import N_COMPONENTS, sp_force, sp_force_jacobian
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
 
 __all__ = [
@@ -265,9 +268,13 @@ class _SPEstimator(Estimator):
         self._check_settings()
         exps = self._as_set(data)
         cls = self.model_class
-        comp, power = cls.layout_arrays()
-        n_par = comp.size + int(self.offset)
+        comp_all, power_all = cls.layout_arrays()
         x, v, i, F = _stack(exps, self.input)
+        level = single_level(i)
+        # one level: every component's polynomial in the input reduces to its constant term
+        keep = _single_level_terms(comp_all, power_all) if level is not None else np.ones(comp_all.size, bool)
+        comp, power = comp_all[keep], power_all[keep]
+        n_par = comp.size + int(self.offset)
         if F.size < _SAMPLES_PER_PARAMETER * n_par:
             raise IdentificationError(
                 f"data: {cls.kind} has {n_par} parameters and needs at least "
@@ -321,7 +328,9 @@ class _SPEstimator(Estimator):
                 RuntimeWarning,
                 stacklevel=2,
             )
-        S, f0 = _to_physical(final.x, comp, power, self.offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
+        S_kept, f0 = _to_physical(final.x, comp, power, self.offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
+        S = np.zeros(comp_all.size)
+        S[keep] = S_kept
         rms = float(np.sqrt(2.0 * final.cost / final.fun.size) * Fs)
         provenance = {
             "estimator": type(self).__name__,
@@ -339,6 +348,10 @@ class _SPEstimator(Estimator):
             "training_esr": float(rms**2 / Fs**2),
             "elapsed_s": time.perf_counter() - t_start,
         }
+        if level is not None and not np.all(keep):
+            note = single_level_note(cls.kind, self.input, level)
+            provenance["note"] = note
+            warnings.warn(note, UserWarning, stacklevel=2)
         return cls(
             S=tuple(S),
             f0=f0,
@@ -442,6 +455,15 @@ def _check_identifiable(cls: type[_SPModel], comp: np.ndarray, power: np.ndarray
                 f"distinct value(s) (numerical rank {rank} of {pw.size}); it is not identifiable: "
                 f"train on records with at least {pw.size} distinct {source} levels"
             )
+
+
+def _single_level_terms(comp: np.ndarray, power: np.ndarray) -> np.ndarray:
+    """Mask keeping, per component, only its lowest power of the input (the constant law)."""
+    keep = np.zeros(comp.size, bool)
+    for m in np.unique(comp):
+        idx = np.flatnonzero(comp == m)
+        keep[idx[np.argmin(power[idx])]] = True
+    return keep
 
 
 def _bounds(comp: np.ndarray, power: np.ndarray, offset: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -23,6 +23,7 @@ from mrdamper.study.protocol import (
 )
 from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.runner import run_study
+from mrdamper.study.selection import SelectionResult, cross_validate
 from mrdamper.study.splits import Fold, make_folds
 from mrdamper.study.tables import headline, summarize
 
@@ -33,9 +34,11 @@ __all__ = [
     "ModelSpec",
     "Protocol",
     "Selection",
+    "SelectionResult",
     "Showcase",
     "Split",
     "StudyResult",
+    "cross_validate",
     "doe_protocol",
     "dyke_protocol",
     "headline",

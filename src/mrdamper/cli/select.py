@@ -1,0 +1,85 @@
+"""``mrdamper select DATA...``: which model for my damper?
+
+Cross-validates every model kind on the records in the given files / folders
+(:func:`mrdamper.study.cross_validate`: folds by condition or record, time blocks for one
+record), prints the table of left-out free-run ESR and recommends one kind with the reason.
+``--csv`` also writes the table (atomically; never overwriting without ``--force``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from mrdamper.errors import DataValidationError
+
+__all__ = ["register", "select"]
+
+
+def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
+    """``KIND.KEY=VALUE`` items -> ``{kind: {key: value}}`` (values read as JSON)."""
+    from mrdamper.cli.models import parse_settings
+
+    out: dict[str, dict[str, Any]] = {}
+    for item in items or []:
+        kind, dot, rest = item.partition(".")
+        if not dot or "=" not in rest or not kind:
+            raise DataValidationError("--set", f"expected KIND.KEY=VALUE (e.g. lpv.n_m=2), got {item!r}")
+        out.setdefault(kind.strip(), {}).update(parse_settings([rest]))
+    return out
+
+
+def select(
+    data: Annotated[list[Path], typer.Argument(help="Data files or folders (the user's records).")],
+    models: Annotated[
+        list[str] | None, typer.Option("--model", "-m", help="Model kind to include (repeatable; default: all).")
+    ] = None,
+    folds: Annotated[
+        str, typer.Option("--folds", help="auto | condition | record | time (time: blocks of one record).")
+    ] = "auto",
+    n_folds: Annotated[int, typer.Option("--n-folds", help="Folds for 'record' (at most) and 'time'.")] = 5,
+    input_: Annotated[
+        str | None,
+        typer.Option("--input", help="Electrical input: i | voltage (default: the channel every record has)."),
+    ] = None,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option("--set", help="Estimator setting of one kind, KIND.KEY=VALUE (JSON value), repeatable."),
+    ] = None,
+    csv: Annotated[Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite --csv if it exists.")] = False,
+    pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
+    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+) -> None:
+    """Cross-validate every model kind on DATA and recommend one."""
+    from mrdamper._io import atomic_write_text, check_writable
+    from mrdamper.cli.models import _choose_input, read_records
+    from mrdamper.study.selection import cross_validate
+
+    if csv is not None:
+        check_writable(csv, force=force)
+    records = read_records(data, pattern, fs)
+    source = input_ or _choose_input(records)
+    if folds not in ("auto", "condition", "record", "time"):
+        raise DataValidationError("--folds", f"expected auto, condition, record or time, got {folds!r}")
+    res = cross_validate(records, models=models, folds=folds, n_folds=n_folds, input=source,  # type: ignore[arg-type]
+                         settings=_kind_settings(settings))
+    tab = res.table.reset_index()
+    typer.echo(f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out data\n")
+    cols = ["model", "mean_esr", "median_esr", "worst_esr", "folds_ok", "folds_failed", "clipped", "fit_s"]
+    typer.echo(tab[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}", na_rep="-"))
+    for _, row in tab[tab["error"] != ""].iterrows():
+        typer.echo(f"  {row['model']}: {row['error']}")
+    for note in res.notes:
+        typer.echo(f"note: {note}")
+    typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")
+    if csv is not None:
+        atomic_write_text(csv, tab.to_csv(index=False), force=force)
+        typer.echo(f"wrote {csv}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``select`` command to ``app``."""
+    app.command("select")(select)

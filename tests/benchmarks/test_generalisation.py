@@ -1,0 +1,46 @@
+"""The generalisation benchmark's ``--quick`` variant runs end to end on the shared data and gives
+one table with every scenario, test set and model kind."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mrdamper.models import available_models
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _load_benchmark():
+    path = REPO / "benchmarks" / "generalisation.py"
+    sys.path.insert(0, str(path.parent))
+    spec = importlib.util.spec_from_file_location("generalisation_bench", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses look their module up
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.realdata
+@pytest.mark.slow
+def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bench = _load_benchmark()
+    tab = bench.main(["--quick"])
+    out = capsys.readouterr().out
+    assert "| scenario | test |" in out
+    scenarios = {s for s, _ in tab.index}
+    assert scenarios == {"(a) quiroz-freq", "(b) quiroz-cross", "(c) rig", "(d) dyke"}
+    assert len(tab) == 7  # 2 + 2 + 2 + 1 test sets
+    assert list(tab.columns[:-1]) == [*available_models(), "lpv-aug"]
+    # the paper's model and the black-box peer fit and score on every test set
+    for kind in ("lpv", "sp1", "narx", "lpv-aug"):
+        assert np.all(np.isfinite(tab[kind].to_numpy(float))), tab[kind]
+    # the best column names the column holding the row minimum
+    for _, row in tab.iterrows():
+        vals = row.drop("best").astype(float)
+        assert row["best"] == vals.idxmin()

@@ -1,0 +1,104 @@
+"""``cross_validate`` / ``mrdamper select``: folds never score training data, the table covers
+every kind asked for, the data's true model family is recommended, bad input is refused."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mrdamper.cli.main import main
+from mrdamper.data import Experiment, ExperimentSet, write_csv
+from mrdamper.errors import DataValidationError
+from mrdamper.models.bingham import BinghamModel
+from mrdamper.study import cross_validate
+from mrdamper.study.selection import selection_folds
+
+TRUTH = BinghamModel(fc=(100.0, 400.0, -50.0), c0=(800.0, 1500.0, 0.0), f0=5.0, v_eps=0.0, input_range=(0.0, 1.0))
+KINDS = ["bingham", "sp2", "lti"]
+
+
+def _record(level: float, freq: float, seed: int, n: int = 1500) -> Experiment:
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 500.0
+    x = 0.01 / freq * np.sin(2 * np.pi * freq * t)
+    v = 0.01 * 2 * np.pi * np.cos(2 * np.pi * freq * t)
+    e = Experiment(t=t, x=x, v=v, F=np.zeros(n), i=np.full(n, level), name=f"c{freq:g}_{level:g}",
+                   metadata={"condition": f"{freq:g}Hz", "current": level})
+    return e.replace(F=TRUTH.predict(e) + rng.normal(0.0, 2.0, n))
+
+
+@pytest.fixture(scope="module")
+def records() -> list[Experiment]:
+    return [_record(lev, f, k) for k, (lev, f) in enumerate((a, b) for a in (0.0, 0.5, 1.0) for b in (1.0, 2.0))]
+
+
+def test_condition_folds_leave_each_condition_out(records) -> None:
+    split, parts = selection_folds(records)
+    assert split == "condition" and len(parts) == 2
+    for _, train, test in parts:
+        assert not set(train.names) & set(test.names)
+        assert {e.metadata["condition"] for e in test} == {test[0].metadata["condition"]}
+    split, parts = selection_folds([r.replace(metadata={}) for r in records], n_folds=4)
+    assert split == "record" and len(parts) == 4
+    assert sorted(n for _, _, te in parts for n in te.names) == sorted(r.name for r in records)
+
+
+def test_time_folds_of_one_record(records) -> None:
+    split, parts = selection_folds(records[0], n_folds=3)
+    assert split == "time" and len(parts) == 3
+    for _, train, test in parts:
+        assert sum(e.n for e in train) + test[0].n == records[0].n
+    with pytest.raises(DataValidationError, match="n_folds"):
+        selection_folds(records, n_folds=1)
+    with pytest.raises(DataValidationError, match="'time' splits one record"):
+        selection_folds(records, folds="time")
+
+
+def test_recommends_the_true_family(records) -> None:
+    res = cross_validate(ExperimentSet(records), models=KINDS)
+    assert res.table.index[0] == "bingham" == res.recommended
+    assert set(res.table.index) == set(KINDS)
+    assert "lowest mean free-run ESR" in res.reason and "2 condition folds" in res.reason
+    assert res.table.loc["bingham", "mean_esr"] < 1e-3 < res.table.loc["lti", "mean_esr"]
+    assert len(res.scores) == len(KINDS) * len(records)
+
+
+def test_failing_kind_is_a_row_not_a_recommendation(records) -> None:
+    res = cross_validate(records, models=["bingham", "sp2"], settings={"sp2": {"n_starts": 0}})
+    assert res.recommended == "bingham"
+    assert res.table.loc["sp2", "folds_failed"] == 2 and np.isnan(res.table.loc["sp2", "mean_esr"])
+    assert "n_starts" in res.table.loc["sp2", "error"]
+
+
+def test_cli_select_prints_table_and_recommendation(records, tmp_path: Path, capsys) -> None:
+    d = tmp_path / "data"
+    d.mkdir()
+    for r in records:
+        write_csv(r, d / f"{r.name}.csv")
+    out = tmp_path / "table.csv"
+    main(["select", str(d), "-m", "bingham", "-m", "lti", "--csv", str(out)])
+    text = capsys.readouterr().out
+    assert "recommended: bingham" in text and "record folds" in text
+    tab = pd.read_csv(out)
+    assert list(tab["model"]) == ["bingham", "lti"]
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "-m", "bingham", "--csv", str(out)])
+    assert exc.value.code == 2
+    assert "already exists" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["select", str(d), "--set", "n_m=2"])
+    assert "KIND.KEY=VALUE" in capsys.readouterr().err
+
+
+def test_close_runner_up_is_named_as_a_tie() -> None:
+    from mrdamper.study.selection import _recommend
+
+    tab = pd.DataFrame({"mean_esr": [0.0180, 0.0182, 0.0244], "worst_esr": [0.09, 0.07, 0.1],
+                        "folds_failed": [0, 0, 0]}, index=["narx", "spencer", "lpv"])
+    best, reason = _recommend(tab, "condition", 6)
+    assert best == "narx" and "next: spencer 0.0182 (only 1% higher: a tie" in reason
+    _, reason = _recommend(tab.drop("spencer"), "condition", 6)
+    assert "tie" not in reason
