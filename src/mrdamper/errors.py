@@ -12,6 +12,7 @@ __all__ = [
     "MrDamperError",
     "Note",
     "OutOfRangeError",
+    "OutputError",
     "OutputExistsError",
     "SchemaError",
     "SimulationDivergedError",
@@ -73,6 +74,11 @@ class SimulationDivergedError(MrDamperError, RuntimeError):
         self.model = model
         self.sample = sample
         super().__init__(f"{model}: simulation diverged at sample {sample}: {message}")
+
+
+class OutputError(MrDamperError, ValueError):
+    """An output location is unsafe or unusable: it is an input, contains one, is the working
+    folder or an ancestor, is not a regular file, or cannot be written."""
 
 
 class OutputExistsError(MrDamperError, FileExistsError):

@@ -113,7 +113,7 @@ def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> 
     out = tmp_path / "o"
     out.mkdir()
     (out / "keep.txt").write_text("x")
-    with pytest.raises(OutputExistsError, match="not empty; pass force=True"):
+    with pytest.raises(OutputExistsError, match="not empty; pass --force"):
         result.write(out, figures=False)
     assert (out / "keep.txt").exists()
     result.write(out, force=True, figures=False)

@@ -36,7 +36,7 @@ def export(
         fmt = "json" if out.suffix.lower() == ".json" else "mat"
     if fmt not in ("mat", "json"):
         raise DataValidationError("--format", f"expected 'mat' or 'json', got {fmt!r}")
-    check_writable(out, force)
+    check_writable(out, force, inputs=[model_file])
     m = load_model(model_file)
     if m.kind not in ("lpv", "lti"):
         raise DataValidationError(
@@ -59,7 +59,7 @@ def inverse(
     from mrdamper.control.inverse import inverse_current
     from mrdamper.models.registry import load_model
 
-    check_writable(out, force)
+    check_writable(out, force, inputs=[model_file, data])
     m = load_model(model_file)
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")

@@ -139,7 +139,7 @@ def fit(
     from mrdamper._io import check_writable
 
     accepted = estimator_settings(model)  # unknown kind: SchemaError naming the known kinds
-    check_writable(out, force)  # fail before a long fit
+    check_writable(out, force, inputs=list(data))  # fail before a long fit
     records = read_records(list(data), pattern, fs)
     given: dict[str, Any] = {
         "input": input_ or _choose_input(records),
@@ -176,7 +176,7 @@ def simulate(
     """Free-run simulation of one record; writes t [s], measured F [N] and predicted F_pred [N]."""
     from mrdamper._io import atomic_write_text, check_writable
 
-    check_writable(out, force)
+    check_writable(out, force, inputs=[model_file, data])
     m = load_model(model_file)
     if range_policy is not None:
         m = m.with_range_policy(_check_policy(range_policy))

@@ -16,7 +16,7 @@ import typer
 
 from mrdamper.cli._records import ANY_RECORD_FILE
 from mrdamper.data import ExperimentSet
-from mrdamper.errors import DataValidationError, OutputExistsError, SchemaError
+from mrdamper.errors import DataValidationError, SchemaError
 
 __all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "guess_protocol", "load_data", "print_summary", "register", "study"]
 
@@ -35,11 +35,10 @@ def _headless() -> None:
     matplotlib.use("Agg")
 
 
-def _check_out(out: Path, force: bool) -> None:
-    if out.exists() and not out.is_dir():
-        raise OutputExistsError(f"{out}: exists and is not a folder; choose another --out")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise OutputExistsError(f"{out}: folder exists and is not empty; pass --force to replace it or choose another --out")
+def _check_out(out: Path, force: bool, inputs: list[Path] | None = None) -> None:
+    from mrdamper._io import check_output
+
+    check_output(out, force=force, folder=True, inputs=inputs or [])
 
 
 def _manifest_metadata(folder: Path) -> dict[str, dict[str, Any]]:
@@ -184,7 +183,7 @@ def study(
 
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
-    _check_out(out, force)
+    _check_out(out, force, [data])
     _headless()
     kinds = _models(models)
     records = load_data(data, pattern, **({} if fs is None else {"fs": fs}))

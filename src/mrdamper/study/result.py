@@ -158,11 +158,11 @@ class StudyResult:
         OutputExistsError
             ``out_dir`` exists, is not an empty folder and ``force`` is false.
         """
+        from mrdamper._io import check_output
+
         out = Path(out_dir)
-        if out.exists() and not out.is_dir():
-            raise OutputExistsError(f"{out}: exists and is not a folder; choose another --out")
-        if out.is_dir() and any(out.iterdir()) and not force:
-            raise OutputExistsError(f"{out}: folder exists and is not empty; pass force=True (CLI: --force) to replace it")
+        check_output(out, force=force, folder=True, inputs=self.sources())
+        out = Path(os.path.abspath(out))  # "." and ".." have no name to swap with
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
         try:
@@ -172,6 +172,10 @@ class StudyResult:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
         return out
+
+    def sources(self) -> list[str]:
+        """Files the scored and training records were read from (``metadata["source"]``)."""
+        return sorted({str(s) for s in self.info.get("sources", ())})
 
     def _write_into(self, d: Path, figures: bool) -> None:
         from mrdamper.study.report import render_report

@@ -185,6 +185,7 @@ def run_study(
         "wall_time_s": time.perf_counter() - t_start,
         "n_records": len(data),
         "n_folds": len(folds),
+        "sources": sorted({str(e.metadata["source"]) for e in data if e.metadata.get("source")}),
         "python": platform.python_version(),
         "platform": platform.platform(),
     }
