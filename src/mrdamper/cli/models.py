@@ -152,7 +152,8 @@ def fit(
     }
     given = {_setting_name(k, accepted): v for k, v in given.items() if v is not None}
     given.update(parse_settings(settings))
-    unknown = [k for k in given if k not in accepted]
+    renamed = getattr(type(get_estimator(model)), "renamed_settings", {})
+    unknown = [k for k in given if k not in accepted and k not in renamed]
     if unknown:
         flag = unknown[0].replace("_", "-")
         raise DataValidationError(

@@ -53,8 +53,8 @@ def doe(
     force: Annotated[bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")] = False,
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig and write CSV files + manifest.csv."""
-    from mrdamper.rig.doe import table_ii
     from mrdamper._io import check_output
+    from mrdamper.rig.doe import table_ii
     from mrdamper.rig.doe_io import write_records
 
     check_output(out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else [])

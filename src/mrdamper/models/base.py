@@ -291,6 +291,8 @@ class Estimator(abc.ABC):
     """
 
     kind: ClassVar[str] = "abstract"
+    #: Old setting name -> current name. Old names are still accepted, with a note.
+    renamed_settings: ClassVar[Mapping[str, str]] = {}
 
     @abc.abstractmethod
     def fit(self, data: Experiment | Iterable[Experiment]) -> FittedModel:

@@ -11,13 +11,12 @@ from __future__ import annotations
 import fnmatch
 import json
 import re
+import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
-
-import tomllib
 
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment_set import _equal
