@@ -10,10 +10,11 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
+from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
 __all__ = ["register"]
@@ -51,7 +52,7 @@ def inverse(
     data: Annotated[Path, typer.Argument(help="One record file; its force column F is the desired force.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV.")],
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
-    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Current that would have produced the record's measured force (causal inverse of the model)."""
     from mrdamper._io import atomic_write_text, check_writable
@@ -63,7 +64,7 @@ def inverse(
     m = load_model(model_file)
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
-    [exp] = read_records([data], fs=fs)
+    [exp] = read_records([data], read_kw=read_kw)
     try:
         res = inverse_current(m, exp, exp.F)
     except TypeError as exc:
@@ -82,4 +83,4 @@ def inverse(
 def register(app: typer.Typer) -> None:
     """Add the ``export`` and ``inverse`` commands to ``app``."""
     app.command("export")(export)
-    app.command("inverse")(inverse)
+    app.command("inverse")(reader_options()(inverse))

@@ -15,7 +15,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from mrdamper.cli._records import read_paths
+from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.data.experiment import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError
 
@@ -99,16 +99,6 @@ def summarize(exp: Experiment) -> dict[str, Any]:
     }
 
 
-def _parse_pairs(items: list[str] | None, option: str) -> dict[str, str]:
-    out: dict[str, str] = {}
-    for item in items or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip() or not value.strip():
-            raise DataValidationError(option, f"expected KEY=VALUE, got {item!r}")
-        out[key.strip()] = value.strip()
-    return out
-
-
 def _example() -> list[Experiment]:
     try:
         from mrdamper.rig.doe import table_ii
@@ -172,24 +162,11 @@ def info(
             "sine-record pattern if any file matches it, else every CSV/Parquet/MAT file.",
         ),
     ] = None,
-    units: Annotated[
-        list[str] | None, typer.Option("--units", help="Column unit, e.g. --units x=mm --units F=kN.")
-    ] = None,
-    columns: Annotated[
-        list[str] | None,
-        typer.Option("--column", help="Map a header to a channel, e.g. --column Force_kN=F."),
-    ] = None,
-    fs: Annotated[
-        float | None,
-        typer.Option("--fs", help="Declared sampling rate [Hz]; regenerates a rounded time column."),
-    ] = None,
-    nan_policy: Annotated[
-        str, typer.Option("--nan-policy", help="raise | drop-edges | interpolate (repairs are listed).")
-    ] = "interpolate",
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
     example: Annotated[
         bool, typer.Option("--example", help="Describe the built-in example (virtual rig, Table II).")
     ] = False,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Describe records: size, rate, ranges, current levels and detected problems."""
     if example:
@@ -203,14 +180,7 @@ def info(
                 re.compile(pattern)
             except re.error as exc:
                 raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
-        read_kw: dict[str, Any] = {"nan_policy": nan_policy}
-        if units:
-            read_kw["units"] = _parse_pairs(units, "units")
-        if columns:
-            read_kw["columns"] = _parse_pairs(columns, "column")
-        if fs is not None:
-            read_kw["fs"] = fs
-        records = read_paths(list(paths), pattern, read_kw)
+        records = read_paths(list(paths), pattern, read_kw or {})
         title = ", ".join(str(p) for p in paths)
     rows = [summarize(e) for e in records]
     if as_json:
@@ -221,4 +191,4 @@ def info(
 
 def register(app: typer.Typer) -> None:
     """Add the ``info`` command to ``app``."""
-    app.command("info")(info)
+    app.command("info")(reader_options(default_nan_policy="interpolate")(info))

@@ -14,7 +14,7 @@ from typing import Any
 
 import typer
 
-from mrdamper.cli._records import ANY_RECORD_FILE
+from mrdamper.cli._records import ANY_RECORD_FILE, reader_options
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError, SchemaError
 
@@ -171,12 +171,10 @@ def study(
     workers: int = typer.Option(None, "--workers", help="Local worker processes (default min(2, CPUs); 1 = in-process)."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:8786); replaces --workers."),
     pattern: str = typer.Option(None, "--pattern", help="Regex for file names in a folder; named groups become metadata."),
-    fs: float = typer.Option(
-        None, "--fs", help="Declared sampling rate [Hz]: regenerates a rounded time column (e.g. the Dyke record: 3004.8)."
-    ),
     seed: int = typer.Option(0, "--seed", help="Seed given to every estimator that takes one."),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Fit and score every model of a protocol on DATA; write tables, models, figures and report.html."""
     from mrdamper.study import load_protocol, preset_protocol, run_study
@@ -186,7 +184,7 @@ def study(
     _check_out(out, force, [data])
     _headless()
     kinds = _models(models)
-    records = load_data(data, pattern, **({} if fs is None else {"fs": fs}))
+    records = load_data(data, pattern, **(read_kw or {}))
     proto = load_protocol(protocol) if protocol is not None else preset_protocol(guess_protocol(records))
     typer.echo(f"{len(records)} records from {data}; protocol {proto.name!r}", err=True)
     res = run_study(records, proto, kinds, workers=workers, scheduler=scheduler, seed=seed, progress=not no_progress)
@@ -237,5 +235,5 @@ def demo(
 
 def register(app: typer.Typer) -> None:
     """Add the ``study`` and ``demo`` commands to ``app``."""
-    app.command("study")(study)
+    app.command("study")(reader_options()(study))
     app.command("demo")(demo)

@@ -62,7 +62,7 @@ def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
         raise DataValidationError(
             name,
             f"non-numeric value {ser.iloc[k]!r} at data row {k} of {source} "
-            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',')",
+            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',', command line --decimal ,)",
         )
     return num.to_numpy(dtype=np.float64, na_value=np.nan)
 
@@ -130,7 +130,8 @@ def _missing(channel: str, what: str, headers: list[str], source: str, hint: str
     return DataValidationError(
         channel,
         f"no {what} column in {source} (found {headers}; recognised names: "
-        f"{list(COLUMN_ALIASES[channel])}); map one with columns={{'<name>': {channel!r}}}{hint}",
+        f"{list(COLUMN_ALIASES[channel])}); map one with columns={{'<name>': {channel!r}}} "
+        f"(command line: --column <name>={channel}){hint}",
     )
 
 
@@ -182,7 +183,7 @@ def build_experiment(
             "fs", "give either fs (declared rate, time regenerated) or resample_fs (interpolation), not both"
         )
     if "t" not in specs and fs is None:
-        raise _missing("t", "time", headers, src, " or declare the rate with fs=")
+        raise _missing("t", "time", headers, src, " or declare the rate with fs= (--fs)")
     if "x" not in specs:
         raise _missing("x", "displacement", headers, src)
     if "F" not in specs:
@@ -200,7 +201,7 @@ def build_experiment(
             "velocity",
             headers,
             src,
-            ", or pass derive_velocity=True (or a cut-off [Hz]) to compute it from x; see "
+            ", or pass derive_velocity=True (or a cut-off [Hz]; command line: --derive-velocity) to compute it from x; see "
             "mrdamper.data.preprocessing.velocity_from_displacement",
         )
     if "v" in specs and derive is not None:
