@@ -10,6 +10,7 @@ Examples
 """
 
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.default import default_protocol
 from mrdamper.study.executor import make_executor
 from mrdamper.study.presets import doe_protocol, dyke_protocol, preset_protocol, quiroz_protocol
 from mrdamper.study.protocol import (
@@ -36,6 +37,7 @@ __all__ = [
     "Showcase",
     "Split",
     "StudyResult",
+    "default_protocol",
     "doe_protocol",
     "dyke_protocol",
     "headline",
