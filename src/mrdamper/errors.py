@@ -14,6 +14,7 @@ __all__ = [
     "OutOfRangeError",
     "OutputError",
     "OutputExistsError",
+    "PlausibilityWarning",
     "SchemaError",
     "SimulationDivergedError",
     "UnitError",
@@ -105,3 +106,8 @@ def interrupt_in_chain(exc: BaseException) -> bool:
         seen.add(id(cur))
         cur = cur.__cause__ or cur.__context__
     return False
+
+
+class PlausibilityWarning(UserWarning):
+    """A record holds values no MR damper test produces (a stroke of metres, a current of
+    hundreds of amperes): usually wrong declared units. See :mod:`mrdamper.data.plausibility`."""

@@ -2,7 +2,7 @@
 
 :func:`reader_options` gives a command every option of the file readers (the ones their error
 messages point to): ``--fs``, ``--resample-fs``, ``--nan-policy``, ``--max-gap``, ``--decimal``,
-``--sep``, ``--column``, ``--units``, ``--struct``, ``--derive-velocity``. The command receives
+``--sep``, ``--column``, ``--units``, ``--struct``, ``--plausible-max``, ``--derive-velocity``. The command receives
 them as one mapping ``read_kw`` to pass to the readers.
 """
 
@@ -79,6 +79,13 @@ READER_OPTIONS: dict[str, tuple[Any, Any]] = {
         Annotated[str | None, typer.Option("--struct", help="MATLAB files: the struct holding the channels.")],
         None,
     ),
+    "plausible_max": (
+        Annotated[
+            list[str] | None,
+            typer.Option("--plausible-max", help="Override a plausibility bound, e.g. --plausible-max stroke=2 (m)."),
+        ],
+        None,
+    ),
     "derive_velocity": (
         Annotated[
             bool, typer.Option("--derive-velocity", help="Compute v from x when the files have no velocity column.")
@@ -109,6 +116,8 @@ def reader_kwargs(options: Mapping[str, Any], default_nan_policy: str = "raise")
         kw["columns"] = _pairs(options["column"], "--column")
     if options.get("units"):
         kw["units"] = _pairs(options["units"], "--units")
+    if options.get("plausible_max"):
+        kw["plausible_max"] = _pairs(options["plausible_max"], "--plausible-max")
     if options.get("derive_velocity"):
         kw["derive_velocity"] = True
     return kw

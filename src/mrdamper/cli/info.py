@@ -47,12 +47,15 @@ def detect_problems(exp: Experiment) -> list[str]:
     Checks
     ------
     * repairs made while reading (``metadata["repairs"]``: NaN samples, regenerated time, ...);
+    * values beyond the plausibility bounds (``metadata["implausible"]``, see
+      :mod:`mrdamper.data.plausibility`: usually wrong declared units);
     * a force plateau at its maximum or minimum: the extreme value held for at least
       ``max(10, n / 500)`` consecutive samples (clipping or sensor saturation);
     * force standard deviation below :data:`MIN_FORCE_STD` [N];
     * coil current outside :data:`CURRENT_RANGE` [A].
     """
     problems = [f"repaired: {r}" for r in exp.metadata.get("repairs", ())]
+    problems += [f"implausible: {r}" for r in exp.metadata.get("implausible", ())]
     F = exp.F
     min_run = max(10, exp.n // 500)
     for label, extreme in (("maximum", F.max()), ("minimum", F.min())):

@@ -28,7 +28,7 @@ import pandas as pd
 from mrdamper._io import atomic_write_text
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import OutOfRangeError, SchemaError
+from mrdamper.errors import DataValidationError, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
 
 __all__ = [
@@ -265,6 +265,11 @@ class FittedModel(abc.ABC):
         if data["kind"] != cls.kind:
             raise SchemaError(f"kind: file holds {data['kind']!r}, expected {cls.kind!r}")
         params = decode_value(data["parameters"])
+        if not isinstance(params, dict):
+            raise SchemaError(f"parameters: expected an object, got {type(params).__name__}")
+        for key, value in params.items():
+            if _has_nan(value):
+                raise SchemaError(f"parameters.{key}: holds NaN; the model file is damaged or was edited")
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = set(params) - names
         if unknown:
@@ -303,7 +308,26 @@ class Estimator(abc.ABC):
         exps = as_experiment_set(data, name="training")
         if len(exps) == 0:
             raise SchemaError("data: no training records given")
+        for e in exps:
+            if not np.any(np.abs(e.v) > 0.0):
+                raise DataValidationError(
+                    "v", f"training record {e.name!r} has zero velocity everywhere; a damper model needs motion "
+                    "(check the velocity column, or derive it from x with derive_velocity / --derive-velocity)"
+                )
         return exps
+
+
+def _has_nan(value: Any) -> bool:
+    """True if a decoded parameter (number, array, nested list / dict) contains a NaN."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "fc" and bool(np.isnan(value).any())
+    if isinstance(value, float):
+        return math.isnan(value)
+    if isinstance(value, (list, tuple)):
+        return any(_has_nan(v) for v in value)
+    if isinstance(value, Mapping):
+        return any(_has_nan(v) for v in value.values())
+    return False
 
 
 def _check_schema(data: Mapping[str, Any]) -> None:

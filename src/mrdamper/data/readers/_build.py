@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
+from mrdamper.data.plausibility import check_plausibility
 from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_columns
 from mrdamper.data.units import to_si
 from mrdamper.errors import DataValidationError, Note
@@ -149,6 +150,7 @@ def build_experiment(
     name: str | None = None,
     metadata: Mapping[str, Any] | None = None,
     time_tolerance: float = DEFAULT_TIME_TOLERANCE,
+    plausible_max: Mapping[str, float] | None = None,
     stored_metadata: Mapping[str, Any] | None = None,
 ) -> Experiment:
     """Build an Experiment from ``{source column: values}``; see :func:`~mrdamper.data.readers.read_csv`.
@@ -164,7 +166,7 @@ def build_experiment(
 
     Other Parameters
     ----------------
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
         As for :func:`~mrdamper.data.readers.read_csv`.
     """
     src = str(path)
@@ -272,6 +274,9 @@ def build_experiment(
         from mrdamper.data.preprocessing import velocity_from_displacement
 
         exp = velocity_from_displacement(exp, cutoff=None if derive is True else float(derive))
+    found = check_plausibility({c: getattr(exp, c) for c in ("x", "v", "F", "i", "voltage")}, src, plausible_max)
+    if found:
+        exp = exp.replace(metadata={**dict(exp.metadata), "implausible": tuple(found)})
     return exp
 
 

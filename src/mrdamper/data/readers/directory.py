@@ -182,8 +182,9 @@ def read_directory(
     FileNotFoundError
         If the folder does not exist.
     DataValidationError
-        If ``path`` is not a folder, the pattern is invalid, or no file matches it; errors of a
-        file's reader are raised as they are (their message names the file).
+        If ``path`` is not a folder, the pattern is invalid, no file matches it, or a matching
+        name is a broken symbolic link; errors of a file's reader are raised as they are (their
+        message names the file).
 
     Examples
     --------
@@ -201,6 +202,12 @@ def read_directory(
     found: list[tuple[str, Path, dict[str, Any]]] = []
     others: list[str] = []
     for f in files:
+        if f.is_symlink() and not f.exists():
+            if parse_file_name(f.name, rx) is not None:
+                raise DataValidationError(
+                    "path", f"{f} is a broken symbolic link (its target {os.readlink(f)!r} does not exist)"
+                )
+            continue
         if not f.is_file():
             continue
         meta = parse_file_name(f.name, rx)
