@@ -21,7 +21,6 @@ coefficients; paper Fig. 4).
 from __future__ import annotations
 
 import dataclasses
-import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import InitVar, dataclass, field
@@ -337,7 +336,6 @@ class LPVEstimator(Estimator):
 
     def fit(self, data: Experiment | Iterable[Experiment]) -> LPVModel:
         """Identify the model from one record or a collection (records keep their own start)."""
-        t_start = time.perf_counter()
         self._validate()
         exps = self._as_set(data)
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
@@ -402,7 +400,7 @@ class LPVEstimator(Estimator):
             input_range=in_range, range_policy=self.range_policy, provenance=prov,
         )
         pmax = model.max_pole_modulus()
-        prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0, fit_seconds=time.perf_counter() - t_start)
+        prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0)
         if pmax >= 1.0:
             warnings.warn(
                 f"{self.kind}: identified model is not frozen-stable over rho in {rho_range} "

@@ -37,7 +37,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import time
 import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import InitVar, dataclass
@@ -379,7 +378,6 @@ class NARXEstimator(Estimator):
         IdentificationError
             Fewer equations than candidates, nothing selectable, or ill-conditioned regression.
         """
-        t_start = time.perf_counter()
         self._check()
         exps = self._as_set(data)
         base, cand = candidate_structure(self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh)
@@ -431,7 +429,6 @@ class NARXEstimator(Estimator):
             "err": [float(x) for x in err], "err_total": float(np.sum(err)),
             "cond": float(cond), "free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost),
             "refined": refined, "refine_nfev": int(nfev),
-            "fit_time_s": time.perf_counter() - t_start,
         }
         return _replace(model, provenance=prov)
 

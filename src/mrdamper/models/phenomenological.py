@@ -80,7 +80,6 @@ True
 from __future__ import annotations
 
 import math
-import time
 import warnings
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
@@ -272,7 +271,6 @@ class P15Estimator(Estimator):
             Too few samples, an input with fewer than three distinct levels, an ill-conditioned
             regression, or (with ``stable_only``) a diverging training simulation.
         """
-        t_start = time.perf_counter()
         self._check_settings()
         exps = self._as_set(data)
         parts = [self._regressors(e) for e in exps]
@@ -352,7 +350,6 @@ class P15Estimator(Estimator):
             "w3_crosses_zero": bool(w3_grid.min() <= 0 <= w3_grid.max()),
             "training_divergence": divergence,
             "training_esr": esr,
-            "elapsed_s": time.perf_counter() - t_start,
         }
         if self.stable_only and divergence:
             first = next(iter(divergence.items()))

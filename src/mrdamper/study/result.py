@@ -24,7 +24,10 @@ from mrdamper.data import Experiment
 from mrdamper.errors import OutputExistsError
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
-from mrdamper.study.tables import headline, summarize
+from mrdamper.study.tables import TIMING_COLUMNS, headline, summarize
+
+#: Entries of ``info`` that are wall-clock times (written to ``timings.json``, not ``study.json``).
+TIMING_INFO: tuple[str, ...] = ("wall_time_s",)
 
 __all__ = ["FIGURE_FORMATS", "Showcase", "StudyResult"]
 
@@ -180,15 +183,26 @@ class StudyResult:
     def _write_into(self, d: Path, figures: bool) -> None:
         from mrdamper.study.report import render_report
 
-        atomic_write_text(d / "results.csv", self.results.to_csv(index=False))
+        # Wall-clock times go to timings.csv / timings.json only, so that the same inputs and seed
+        # give byte-identical results.csv, summary.csv, fits.csv, study.json and model files.
+        timing = [c for c in TIMING_COLUMNS if c in self.results.columns]
+        atomic_write_text(d / "results.csv", self.results.drop(columns=timing).to_csv(index=False))
+        keys = [c for c in ("fold", "model", "record") if c in self.results.columns]
+        atomic_write_text(d / "timings.csv", self.results[keys + timing].to_csv(index=False))
         summary = self.summary
-        atomic_write_text(d / "summary.csv", summary.to_csv(index=False))
-        atomic_write_text(d / "fits.csv", self.fits.to_csv(index=False))
+        atomic_write_text(d / "summary.csv", summary.drop(columns=timing, errors="ignore").to_csv(index=False))
+        atomic_write_text(d / "fits.csv", self.fits.drop(columns=timing, errors="ignore").to_csv(index=False))
         atomic_write_text(d / "roles.csv", self.roles.to_csv(index=False))
         atomic_write_text(d / "protocol.json", self.protocol.to_json() + "\n")
-        info = dict(self.info)
+        info = {k: v for k, v in self.info.items() if k not in TIMING_INFO}
         info["headline"] = {k: v for k, v in self.headline().items()}
         atomic_write_text(d / "study.json", json.dumps(info, indent=2, default=str) + "\n")
+        timings = {k: self.info[k] for k in TIMING_INFO if k in self.info}
+        timings["per_model"] = {
+            str(row["model"]): {c: float(row[c]) for c in timing if c in summary.columns}
+            for row in summary.to_dict("records")
+        }
+        atomic_write_text(d / "timings.json", json.dumps(timings, indent=2, default=str) + "\n")
         for (fold, label), model in self.models.items():
             model.save(d / "models" / _slug(fold) / f"{_slug(label)}.json")
         for fold, an in self.analyses.items():
