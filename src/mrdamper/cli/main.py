@@ -124,6 +124,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         warnings.showwarning = _show_warning
     try:
         rc = app(args=args, prog_name="mrdamper", standalone_mode=False)
+        if rc == INTERRUPT_EXIT:  # Typer turns KeyboardInterrupt into this exit status
+            typer.echo("interrupted", err=True)
         if isinstance(rc, int) and rc:
             sys.exit(rc)
     except SystemExit:
