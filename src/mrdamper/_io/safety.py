@@ -119,8 +119,13 @@ def check_output(
     if not base.is_dir():
         raise OutputError(f"{option}: {base} is not a folder, so {p} cannot be created")
     try:
-        with tempfile.TemporaryFile(dir=base, prefix=".mrdamper-check-"):
-            pass
+        _probe(base)
     except OSError as exc:
         raise OutputError(f"{option}: cannot write in {base} ({exc.strerror or exc})") from None
     return p
+
+
+def _probe(folder: Path) -> None:
+    """Create and remove an empty file in ``folder``; raises OSError if it cannot be written."""
+    with tempfile.TemporaryFile(dir=folder, prefix=".mrdamper-check-"):
+        pass
