@@ -78,7 +78,7 @@ def _lpv_model() -> LPVModel:
 def test_fit_on_records_of_different_rates_takes_the_lowest_rate_with_a_note(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "mixed", currents=(0.0, 0.5, 1.0, 0.25), fs=(FS, FS, 1000.0, 1000.0))
     for kind in ("lpv", "lti", "narx"):
-        code, out, err = _run(["fit", kind, str(data), "--out", str(tmp_path / f"{kind}.json"), "--no-refine"], capsys)
+        code, _out, err = _run(["fit", kind, str(data), "--out", str(tmp_path / f"{kind}.json"), "--no-refine"], capsys)
         assert code == 0, err
         notes = [ln for ln in err.splitlines() if ln.startswith("note: ")]
         assert len(notes) == 1 and "model_fs = 200 Hz (the lowest" in notes[0], err
@@ -114,7 +114,7 @@ def test_inverse_resamples_a_record_at_another_rate_like_simulate(tmp_path, caps
     data = write_csv(rec, tmp_path / "fast.csv")
     code, out, err = _run(["simulate", str(model), str(data), "--out", str(tmp_path / "sim.csv")], capsys)
     assert code == 0, err
-    code, out, err = _run(["inverse", str(model), str(data), "--out", str(tmp_path / "cur.csv")], capsys)
+    code, _out, err = _run(["inverse", str(model), str(data), "--out", str(tmp_path / "cur.csv")], capsys)
     assert code == 0, err
     assert "note: " in err and "solved at the model rate" in err
     assert len(pd.read_csv(tmp_path / "cur.csv")) == rec.n
@@ -157,7 +157,7 @@ def test_every_record_reading_command_takes_the_reader_options(tmp_path, capsys)
 def test_study_on_own_records_runs_a_default_protocol_and_says_which(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "mine", currents=(0.0, 0.25, 0.5, 0.75, 1.0))
     out = tmp_path / "out"
-    code, stdout, err = _run(["study", str(data), "--out", str(out), "--models", "sp2", "--workers", "1",
+    code, _stdout, err = _run(["study", str(data), "--out", str(out), "--models", "sp2", "--workers", "1",
                               "--no-progress"], capsys)
     assert code == 0, err
     chosen = [ln for ln in err.splitlines() if "protocol 'default'" in ln]
@@ -224,7 +224,7 @@ def _dummy_arguments(cmd: Any) -> list[str]:
 
 @pytest.mark.parametrize("path", [p for p, _ in LEAVES], ids=[" ".join(p) for p, _ in LEAVES])
 def test_usage_errors_are_one_line_with_exit_2(path: list[str], capsys) -> None:
-    cmd = dict((tuple(p), c) for p, c in LEAVES)[tuple(path)]
+    cmd = {tuple(p): c for p, c in LEAVES}[tuple(path)]
     # unknown option
     line = _one_line_error(*_run([*path, "--no-such-option"], capsys)[::2])
     assert "--no-such-option" in line
@@ -246,7 +246,7 @@ def test_unknown_command_version_and_bare_group(capsys) -> None:
     assert "nope" in _one_line_error(*_run(["nope"], capsys)[::2])
     code, out, err = _run(["--version"], capsys)
     assert code == 0 and re.fullmatch(r"mrdamper \d+\.\d+\.\d+\S*\n", out)
-    code, out, err = _run(["rig"], capsys)
+    code, out, _err = _run(["rig"], capsys)
     assert code == 0 and "doe" in out
 
 
@@ -257,7 +257,7 @@ def test_warnings_print_as_one_line(tmp_path, capsys) -> None:
     df["v"] *= 1000.0
     p = tmp_path / "mm.csv"
     df.to_csv(p, index=False)
-    code, out, err = _run(["info", str(p), "--json"], capsys)
+    code, _out, err = _run(["info", str(p), "--json"], capsys)
     assert code == 0
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert lines and all(ln.startswith("warning: ") for ln in lines), err
@@ -319,8 +319,8 @@ def test_a_device_is_never_replaced(tmp_path, capsys) -> None:
 
 
 def test_unwritable_output_location_fails_before_any_computing(tmp_path, capsys, monkeypatch) -> None:
-    import mrdamper._io.safety as safety
-    import mrdamper.models.registry as registry
+    from mrdamper._io import safety
+    from mrdamper.models import registry
 
     data = _folder(tmp_path / "d")
 
@@ -361,9 +361,8 @@ def test_write_failure_is_one_line_and_leaves_nothing_partial(tmp_path, capsys, 
 
 
 def test_rig_doe_failure_leaves_no_folder(tmp_path, capsys, monkeypatch) -> None:
-    import mrdamper.rig.doe as doe
-    import mrdamper.rig.doe_io as doe_io
     from mrdamper.data import ExperimentSet
+    from mrdamper.rig import doe, doe_io
 
     def fail(*_: Any, **__: Any) -> None:
         raise OSError(errno.ENOSPC, "No space left on device")
@@ -455,7 +454,7 @@ def test_exporting_a_model_that_is_not_frozen_stable_warns(tmp_path, capsys) -> 
                         rho_range=(0.0, 1.0), input_range=(0.0, 1.0))
     path = tmp_path / "u.json"
     unstable.save(path)
-    code, out, err = _run(["export", str(path), "--out", str(tmp_path / "u.mat")], capsys)
+    code, _out, err = _run(["export", str(path), "--out", str(tmp_path / "u.mat")], capsys)
     assert code == 0
     warns = [ln for ln in err.splitlines() if ln.startswith("warning: ")]
     assert len(warns) == 1 and "not frozen-stable" in warns[0]
