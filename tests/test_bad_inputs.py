@@ -112,7 +112,7 @@ def test_inverse_resamples_a_record_at_another_rate_like_simulate(tmp_path, caps
     rec = _sine("fast", 0.5, fs=1000.0)
     rec = rec.replace(F=_lpv_model().predict(rec))
     data = write_csv(rec, tmp_path / "fast.csv")
-    code, out, err = _run(["simulate", str(model), str(data), "--out", str(tmp_path / "sim.csv")], capsys)
+    code, _, err = _run(["simulate", str(model), str(data), "--out", str(tmp_path / "sim.csv")], capsys)
     assert code == 0, err
     code, _out, err = _run(["inverse", str(model), str(data), "--out", str(tmp_path / "cur.csv")], capsys)
     assert code == 0, err
@@ -244,7 +244,7 @@ def test_usage_errors_are_one_line_with_exit_2(path: list[str], capsys) -> None:
 
 def test_unknown_command_version_and_bare_group(capsys) -> None:
     assert "nope" in _one_line_error(*_run(["nope"], capsys)[::2])
-    code, out, err = _run(["--version"], capsys)
+    code, out, _ = _run(["--version"], capsys)
     assert code == 0 and re.fullmatch(r"mrdamper \d+\.\d+\.\d+\S*\n", out)
     code, out, _err = _run(["rig"], capsys)
     assert code == 0 and "doe" in out
