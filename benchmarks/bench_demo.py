@@ -66,6 +66,7 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--no-full", action="store_true", help="skip the full-length demo")
+    ap.add_argument("--quick", action="store_true", help="only the --quick demo (same as --no-full)")
     ap.add_argument("--full-workers", type=int, nargs="*", default=[1, 2], help="worker counts for the full demo")
     ap.add_argument("--quick-workers", type=int, nargs="*", default=[1, 2], help="worker counts for the quick demo")
     args = ap.parse_args()
@@ -76,7 +77,7 @@ def main() -> None:
                         "--no-progress", "--workers", "1"], capture_output=True, env=dict(os.environ, MPLBACKEND="Agg"),
                        check=True)
         rows = [run("quick", w, root) for w in args.quick_workers]
-        if not args.no_full:
+        if not (args.no_full or args.quick):
             rows += [run("full", w, root) for w in args.full_workers]
     df = pd.DataFrame(rows)
     for mode in df["mode"].unique():
