@@ -43,6 +43,11 @@ def atomic_write_with(
         if p.exists() and not force:  # re-check: another process may have written meanwhile
             raise OutputExistsError(f"{p}: appeared while writing; pass force=True to overwrite")
         os.replace(tmp_path, p)
+    except OSError as exc:
+        tmp_path.unlink(missing_ok=True)
+        if isinstance(exc, OutputExistsError) or exc.errno is None:
+            raise
+        raise OSError(exc.errno, exc.strerror, str(p)) from exc  # name the output, not the temporary
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise

@@ -90,6 +90,10 @@ def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, fo
         else:  # force: move the new files in, replacing files of the same name
             for f in sorted(tmp.iterdir()):
                 os.replace(f, out / f.name)
+    except OSError as exc:
+        if exc.errno is None or isinstance(exc, FileExistsError):
+            raise
+        raise OSError(exc.errno, exc.strerror, str(out)) from exc  # name the output folder
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out / MANIFEST_NAME

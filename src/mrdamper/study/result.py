@@ -171,6 +171,11 @@ class StudyResult:
         try:
             self._write_into(tmp, figures)
             _swap_into_place(tmp, out, force)
+        except OSError as exc:
+            shutil.rmtree(tmp, ignore_errors=True)
+            if isinstance(exc, OutputExistsError) or exc.errno is None:
+                raise
+            raise OSError(exc.errno, exc.strerror, str(out)) from exc  # name the output folder
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
