@@ -88,7 +88,9 @@ def _regenerate_time(t: np.ndarray | None, n: int, fs: Any, source: str) -> tupl
         raise DataValidationError(
             "t",
             f"time column of {source} departs from t0 + k/{fs:g} by {dev:.6g} s "
-            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong",
+            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong (fs / --fs "
+            "declares the records' own sampling rate; a model's rate is the estimator setting model_fs, "
+            "command line --set model_fs=...)",
         )
     return tn, (
         f"time regenerated as t0 + k / {fs:g} Hz; largest deviation of the file's time column "
