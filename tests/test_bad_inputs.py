@@ -130,6 +130,9 @@ def test_model_rate_setting_is_model_fs_and_old_fs_still_works(tmp_path, capsys)
     assert code == 0 and "note" not in err, err
     code, _, err = _run(["fit", "sp1", str(data), "--out", str(tmp_path / "c.json"), "--set", "model_fs=100"], capsys)
     assert "'model_fs'" in _one_line_error(code, err)
+    # the record-rate option used for the model's rate: the message points to the model setting
+    code, _, err = _run(["fit", "lti", str(data), "--out", str(tmp_path / "d.json"), "--fs", "100"], capsys)
+    assert "--set model_fs=" in _one_line_error(code, err)
 
 
 def test_every_record_reading_command_takes_the_reader_options(tmp_path, capsys) -> None:
