@@ -294,6 +294,8 @@ def test_out_that_is_an_ancestor_of_the_working_folder_is_refused(tmp_path, caps
     assert "current folder or one of its ancestors" in line
     line = _one_line_error(*_run(["study", "data", "--out", ".", "--force"], capsys)[::2])
     assert "current folder" in line
+    line = _one_line_error(*_run(["study", "data", "--out", "../proj", "--force"], capsys)[::2])
+    assert "current folder" in line
     assert proj.is_dir() and data.is_dir()
     assert not [p for p in tmp_path.rglob("*old-*")] and not [p for p in tmp_path.rglob("*partial*")]
 
