@@ -318,7 +318,7 @@ class Protocol:
         Out-of-range policy applied to every fitted model before scoring; extrapolation is
         reported in the ``note`` column.
     settings : mapping
-        Default estimator settings per kind (``{"lpv": {"fs": 200.0}}``), applied to every model
+        Default estimator settings per kind (``{"lpv": {"model_fs": 200.0}}``), applied to every model
         of that kind unless the model entry sets the same key.
     showcase : str, optional
         Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10); default: the
