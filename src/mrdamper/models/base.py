@@ -34,6 +34,7 @@ from mrdamper.metrics import Scores, score_arrays
 __all__ = [
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
+    "TIMING_PROVENANCE",
     "Estimator",
     "FittedModel",
     "RangePolicy",
@@ -45,6 +46,10 @@ __all__ = [
 
 SCHEMA_NAME = "mrdamper.model"
 SCHEMA_VERSION = 1
+
+#: Provenance entries that are wall-clock or CPU times [s]. They stay on the in-memory model but
+#: are never written to a model file, so that the same fit gives the same bytes.
+TIMING_PROVENANCE: frozenset[str] = frozenset({"elapsed_s", "cpu_s", "fit_seconds", "fit_time_s"})
 
 RangePolicy = Literal["error", "warn", "clip", "ignore"]
 
@@ -246,7 +251,8 @@ class FittedModel(abc.ABC):
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in common}
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dict with schema name and version."""
+        """JSON-safe dict with schema name and version (timings of the provenance left out, see
+        :data:`TIMING_PROVENANCE`)."""
         return {
             "schema": SCHEMA_NAME,
             "schema_version": SCHEMA_VERSION,
@@ -255,7 +261,7 @@ class FittedModel(abc.ABC):
             "input_range": list(self.input_range),
             "range_policy": self.range_policy,
             "parameters": encode_value(self.parameters),
-            "provenance": encode_value(dict(self.provenance)),
+            "provenance": encode_value({k: v for k, v in self.provenance.items() if k not in TIMING_PROVENANCE}),
         }
 
     @classmethod

@@ -80,6 +80,7 @@ True
 from __future__ import annotations
 
 import math
+import time
 import warnings
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
@@ -271,6 +272,7 @@ class P15Estimator(Estimator):
             Too few samples, an input with fewer than three distinct levels, an ill-conditioned
             regression, or (with ``stable_only``) a diverging training simulation.
         """
+        t_start = time.perf_counter()
         self._check_settings()
         exps = self._as_set(data)
         parts = [self._regressors(e) for e in exps]
@@ -350,6 +352,7 @@ class P15Estimator(Estimator):
             "w3_crosses_zero": bool(w3_grid.min() <= 0 <= w3_grid.max()),
             "training_divergence": divergence,
             "training_esr": esr,
+            "elapsed_s": time.perf_counter() - t_start,
         }
         if self.stable_only and divergence:
             first = next(iter(divergence.items()))

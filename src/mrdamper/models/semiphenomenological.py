@@ -59,6 +59,7 @@ True
 
 from __future__ import annotations
 
+import time
 import warnings
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
@@ -260,6 +261,7 @@ class _SPEstimator(Estimator):
             Too few samples, an input that does not vary enough to identify the current
             dependence, a force without variance, or no start converged to a finite cost.
         """
+        t_start = time.perf_counter()
         self._check_settings()
         exps = self._as_set(data)
         cls = self.model_class
@@ -335,6 +337,7 @@ class _SPEstimator(Estimator):
             "message": str(final.message),
             "training_rms_error": rms,
             "training_esr": float(rms**2 / Fs**2),
+            "elapsed_s": time.perf_counter() - t_start,
         }
         return cls(
             S=tuple(S),

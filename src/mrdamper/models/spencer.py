@@ -27,6 +27,7 @@ with parameter scaling, seeded multi-start and a Jacobian from forward sensitivi
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
@@ -381,7 +382,10 @@ class SpencerEstimator(Estimator):
         from mrdamper.models._spencer_fit import identify
 
         exps = self._as_set(data)
+        t0, c0 = time.perf_counter(), time.process_time()
         p, common = identify(self, exps)
+        common["provenance"]["elapsed_s"] = time.perf_counter() - t0
+        common["provenance"]["cpu_s"] = time.process_time() - c0
         return SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))
 
 
