@@ -183,7 +183,7 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         (f"<details><summary>{len(res.results)} rows (also in <code>results.csv</code>)</summary>"
          + _table(res.results[results_cols], cls="left") + "</details>"),
         (f'<p class="small">Python {_e(info.get("python", ""))} on {_e(info.get("platform", ""))}. Files next to '
-         "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, timings.csv, timings.json, models/, figures/.</p>"),
+         "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, figures/.</p>"),
         "</body></html>",
     ]
     return "\n".join(parts) + "\n"

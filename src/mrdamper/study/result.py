@@ -24,10 +24,7 @@ from mrdamper.data import Experiment
 from mrdamper.errors import OutputExistsError
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
-from mrdamper.study.tables import TIMING_COLUMNS, headline, summarize
-
-#: Entries of ``info`` that are wall-clock times (written to ``timings.json``, not ``study.json``).
-TIMING_INFO: tuple[str, ...] = ("wall_time_s",)
+from mrdamper.study.tables import headline, summarize
 
 __all__ = ["FIGURE_FORMATS", "Showcase", "StudyResult"]
 
@@ -161,11 +158,9 @@ class StudyResult:
         OutputExistsError
             ``out_dir`` exists, is not an empty folder and ``force`` is false.
         """
-        from mrdamper._io import check_output
+        from mrdamper.study._outputs import naming_output, prepare_out
 
-        out = Path(out_dir)
-        check_output(out, force=force, folder=True, inputs=self.sources())
-        out = Path(os.path.abspath(out))  # "." and ".." have no name to swap with
+        out = prepare_out(self, out_dir, force)
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
         try:
@@ -173,41 +168,18 @@ class StudyResult:
             _swap_into_place(tmp, out, force)
         except OSError as exc:
             shutil.rmtree(tmp, ignore_errors=True)
-            if isinstance(exc, OutputExistsError) or exc.errno is None:
-                raise
-            raise OSError(exc.errno, exc.strerror, str(out)) from exc  # name the output folder
+            raise naming_output(exc, out) from exc
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
-        return out
-
-    def sources(self) -> list[str]:
-        """Files the scored and training records were read from (``metadata["source"]``)."""
-        return sorted({str(s) for s in self.info.get("sources", ())})
+        return Path(out_dir)
 
     def _write_into(self, d: Path, figures: bool) -> None:
+        from mrdamper.study._outputs import write_tables
         from mrdamper.study.report import render_report
 
-        # Wall-clock times go to timings.csv / timings.json only, so that the same inputs and seed
-        # give byte-identical results.csv, summary.csv, fits.csv, study.json and model files.
-        timing = [c for c in TIMING_COLUMNS if c in self.results.columns]
-        atomic_write_text(d / "results.csv", self.results.drop(columns=timing).to_csv(index=False))
-        keys = [c for c in ("fold", "model", "record") if c in self.results.columns]
-        atomic_write_text(d / "timings.csv", self.results[keys + timing].to_csv(index=False))
         summary = self.summary
-        atomic_write_text(d / "summary.csv", summary.drop(columns=timing, errors="ignore").to_csv(index=False))
-        atomic_write_text(d / "fits.csv", self.fits.drop(columns=timing, errors="ignore").to_csv(index=False))
-        atomic_write_text(d / "roles.csv", self.roles.to_csv(index=False))
-        atomic_write_text(d / "protocol.json", self.protocol.to_json() + "\n")
-        info = {k: v for k, v in self.info.items() if k not in TIMING_INFO}
-        info["headline"] = {k: v for k, v in self.headline().items()}
-        atomic_write_text(d / "study.json", json.dumps(info, indent=2, default=str) + "\n")
-        timings = {k: self.info[k] for k in TIMING_INFO if k in self.info}
-        timings["per_model"] = {
-            str(row["model"]): {c: float(row[c]) for c in timing if c in summary.columns}
-            for row in summary.to_dict("records")
-        }
-        atomic_write_text(d / "timings.json", json.dumps(timings, indent=2, default=str) + "\n")
+        write_tables(self, d, summary)
         for (fold, label), model in self.models.items():
             model.save(d / "models" / _slug(fold) / f"{_slug(label)}.json")
         for fold, an in self.analyses.items():
