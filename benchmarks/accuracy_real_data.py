@@ -60,7 +60,7 @@ def settings_for(kind: str, protocol: str, eta: float | None = None, decimation:
     if protocol == "dyke":
         s["input"] = "voltage"
     if kind in ("lpv", "lti"):
-        s["fs"] = QUIROZ_FS if protocol == "quiroz" else DYKE_FS / decimation
+        s["model_fs"] = QUIROZ_FS if protocol == "quiroz" else DYKE_FS / decimation
         if protocol == "dyke":
             s["eta"] = eta
     if kind == "p15" and protocol == "dyke":

@@ -11,8 +11,8 @@ Usage::
 
 Each case runs the real command line in a fresh process (imports and compiled-kernel cache loads
 included) into a temporary folder, after one untimed warm-up of ``--quick`` that fills the numba
-cache. The table also prints the study's own wall time, the slowest models from summary.csv and a
-digest of results.csv without its timing columns (equal digests: the same numbers whatever the
+cache. The table also prints the study's own wall time, the slowest models from timings.json and a
+digest of results.csv (timings are in timings.csv) (equal digests: the same numbers whatever the
 number of workers).
 """
 
@@ -46,15 +46,16 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
         print(proc.stdout, proc.stderr, sep="\n", file=sys.stderr)
         raise SystemExit(f"{mode} demo with {workers} worker(s) failed (exit {proc.returncode})")
     study = json.loads((out / "study.json").read_text())
-    res = pd.read_csv(out / "results.csv").drop(columns=["fit_time_s", "sim_time_s"])
+    timings = json.loads((out / "timings.json").read_text())
+    res = pd.read_csv(out / "results.csv")
     digest = hashlib.sha1(res.to_csv(index=False).encode()).hexdigest()[:12]
-    summ = pd.read_csv(out / "summary.csv")
+    summ = pd.DataFrame([{"model": m, **t} for m, t in timings["per_model"].items()])
     slow = summ.assign(t=summ["fit_time_s"] + summ["sim_time_s"]).sort_values("t", ascending=False).head(3)
     return {
         "mode": mode,
         "workers": workers,
         "wall_s": wall,
-        "study_s": float(study["wall_time_s"]),
+        "study_s": float(timings["wall_time_s"]),
         "target_s": TARGETS[mode],
         "slowest": ", ".join(f"{r.model} {r.fit_time_s:.0f}+{r.sim_time_s:.0f} s" for r in slow.itertuples()),
         "headline": study["headline"].get("text", ""),
@@ -65,6 +66,7 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--no-full", action="store_true", help="skip the full-length demo")
+    ap.add_argument("--quick", action="store_true", help="only the --quick demo (same as --no-full)")
     ap.add_argument("--full-workers", type=int, nargs="*", default=[1, 2], help="worker counts for the full demo")
     ap.add_argument("--quick-workers", type=int, nargs="*", default=[1, 2], help="worker counts for the quick demo")
     args = ap.parse_args()
@@ -75,7 +77,7 @@ def main() -> None:
                         "--no-progress", "--workers", "1"], capture_output=True, env=dict(os.environ, MPLBACKEND="Agg"),
                        check=True)
         rows = [run("quick", w, root) for w in args.quick_workers]
-        if not args.no_full:
+        if not (args.no_full or args.quick):
             rows += [run("full", w, root) for w in args.full_workers]
     df = pd.DataFrame(rows)
     for mode in df["mode"].unique():

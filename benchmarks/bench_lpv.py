@@ -97,11 +97,11 @@ def bench_quiroz() -> str:
     s = read_directory(folder)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        LPVEstimator(fs=200.0, max_nfev=2).fit(s[:3])  # compile / load caches
+        LPVEstimator(model_fs=200.0, max_nfev=2).fit(s[:3])  # compile / load caches
         times = []
         for _ in range(3):
             t0 = time.perf_counter()
-            m = LPVEstimator(fs=200.0).fit(s)
+            m = LPVEstimator(model_fs=200.0).fit(s)
             times.append(time.perf_counter() - t0)
     return (
         f"Quiroz: LPV identification incl. zone laws + LS + OE refinement on all {len(s)} sine records "

@@ -143,7 +143,7 @@ def fit_augmented(sc: Scenario, settings: dict[str, Any], reference: Any, base: 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            fs = settings.get("fs") or min(e.fs for e in sc.train)
+            fs = settings.get("model_fs") or min(e.fs for e in sc.train)
             syn, _ = reference_records(sc.train, reference=reference, input=settings.get("input", "i"),
                                        fs=fs, seed=0)
             w_syn = AUG_SHARE / (1 - AUG_SHARE) * len(sc.train) / len(syn)
@@ -187,11 +187,11 @@ def _loco(train: ExperimentSet) -> list[tuple[ExperimentSet, ExperimentSet]]:
 
 
 def _quiroz_settings(kind: str) -> dict[str, Any]:
-    return {"fs": 200.0} if kind in ("lpv", "lti") else {}
+    return {"model_fs": 200.0} if kind in ("lpv", "lti") else {}
 
 
 #: 500 Hz and 1 kHz up-sample the 200 Hz records (linear interpolation, with a warning).
-QUIROZ_GRID = [{"n_m": n, "fs": fs} for n in (2, 3, 4) for fs in (200.0, 500.0, 1000.0)]
+QUIROZ_GRID = [{"n_m": n, "model_fs": fs} for n in (2, 3, 4) for fs in (200.0, 500.0, 1000.0)]
 
 
 def scenario_quiroz_frequency(quick: bool) -> Scenario:
@@ -252,7 +252,7 @@ def scenario_rig(quick: bool) -> Scenario:
     i_road = aprbs(fs, rdur, low=0.0, high=1.0, min_hold=0.2, seed=8)
     road = rig.run(x_road, i_road, seed=950, name="road_aprbs")
     tests = {"chirp 1-15 Hz, 0/0.5/1 A": ExperimentSet(chirps), "road + APRBS current": ExperimentSet([road])}
-    grid = [] if quick else [{"n_m": n, "fs": r} for n in (2, 3, 4) for r in (200.0, 500.0, 1000.0)]
+    grid = [] if quick else [{"n_m": n, "model_fs": r} for n in (2, 3, 4) for r in (200.0, 500.0, 1000.0)]
     return Scenario("(c) rig", train_set, tests, lambda k: {}, _loco(train_set), grid)
 
 
@@ -274,7 +274,7 @@ def scenario_dyke(quick: bool) -> Scenario:
     def settings(kind: str) -> dict[str, Any]:
         s: dict[str, Any] = {"input": "voltage"}
         if kind in ("lpv", "lti"):
-            s.update(fs=DYKE_FS / dec, eta=eta)
+            s.update(model_fs=DYKE_FS / dec, eta=eta)
         elif "eta" in {f.name for f in dataclasses.fields(type(get_estimator(kind)))}:
             s["eta"] = eta  # another model with a drive-lag setting gets the same lag
         return s

@@ -51,7 +51,7 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "weighting=sse": {"weighting": "sse"},
     "reading=literal": {"reading": "literal"},
     "eta=100": {"eta": 100.0},
-    "fs=1000": {"fs": 1000.0},
+    "model_fs=1000": {"model_fs": 1000.0},
     "aug sweep": {"augment": "sweep"},
     "aug noise": {"augment": "noise"},
 }
@@ -65,7 +65,7 @@ def fit_variant(sc: G.Scenario, extra: dict[str, Any], reference: Any) -> Any:
         if motion is None:
             return get_estimator("lpv", **settings).fit(sc.train).with_range_policy("clip")
         base = get_estimator("lpv", **settings).fit(sc.train)
-        fs = settings.get("fs") or min(e.fs for e in sc.train)
+        fs = settings.get("model_fs") or min(e.fs for e in sc.train)
         syn, _ = reference_records(sc.train, reference=reference, input=settings.get("input", "i"), fs=fs,
                                    motion=motion, seed=0)
         w = G.AUG_SHARE / (1 - G.AUG_SHARE) * len(sc.train) / len(syn)
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         for label, extra in VARIANTS.items():
             if "eta" in extra and name != "rig":
                 continue  # constant current (Quiroz) or already filtered (Dyke): nothing to filter
-            if "fs" in extra and not name.startswith("quiroz"):
+            if "model_fs" in extra and not name.startswith("quiroz"):
                 continue  # the rig already runs at 1 kHz; Dyke's rate is chosen on its training part
             try:
                 m = fit_variant(sc, extra, reference)
@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     print(f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; {time.perf_counter() - t0:.0f} s)\n")
     text = G.to_markdown(tab)
     lines = text.split("\n")
-    for label in ("eta=100", "fs=1000"):  # variants not run on some scenarios: "n/a", not a failure
+    for label in ("eta=100", "model_fs=1000"):  # variants not run on some scenarios: "n/a", not a failure
         if label not in tab.index:
             continue
         k = next(j for j, line in enumerate(lines) if line.startswith(f"| {label} |"))

@@ -10,11 +10,15 @@ __all__ = [
     "DataValidationError",
     "IdentificationError",
     "MrDamperError",
+    "Note",
     "OutOfRangeError",
+    "OutputError",
     "OutputExistsError",
+    "PlausibilityWarning",
     "SchemaError",
     "SimulationDivergedError",
     "UnitError",
+    "interrupt_in_chain",
 ]
 
 
@@ -73,5 +77,37 @@ class SimulationDivergedError(MrDamperError, RuntimeError):
         super().__init__(f"{model}: simulation diverged at sample {sample}: {message}")
 
 
+class OutputError(MrDamperError, ValueError):
+    """An output location is unsafe or unusable: it is an input, contains one, is the working
+    folder or an ancestor, is not a regular file, or cannot be written."""
+
+
 class OutputExistsError(MrDamperError, FileExistsError):
     """An output file already exists and overwriting was not requested (use ``force``)."""
+
+
+class Note(UserWarning):
+    """Information about a decision taken on the user's behalf (a rate chosen, a time base
+    regenerated, a setting renamed). Issued with :func:`warnings.warn`; the command line prints it
+    as one ``note: ...`` line."""
+
+
+def interrupt_in_chain(exc: BaseException) -> bool:
+    """True if ``exc`` is, or was caused by, a :class:`KeyboardInterrupt`.
+
+    A compiled kernel interrupted by Ctrl-C can surface as ``SystemError`` whose cause or context
+    is the ``KeyboardInterrupt``; such an error is an interruption, not a failure of the model.
+    """
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, KeyboardInterrupt):
+            return True
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return False
+
+
+class PlausibilityWarning(UserWarning):
+    """A record holds values no MR damper test produces (a stroke of metres, a current of
+    hundreds of amperes): usually wrong declared units. See :mod:`mrdamper.data.plausibility`."""

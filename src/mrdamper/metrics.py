@@ -13,7 +13,13 @@ from numpy.typing import ArrayLike
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["Scores", "esr", "fit_percent", "nrmse", "score_arrays", "ssse"]
+__all__ = ["MIN_SCORED_SAMPLES", "Scores", "esr", "fit_percent", "nrmse", "score_arrays", "ssse"]
+
+#: Fewest samples a record must have for its scores to mean anything (a model's start-up
+#: transient alone spans several samples).
+MIN_SCORED_SAMPLES = 10
+#: Relative standard deviation of the measured force below which it counts as constant [-].
+_CONSTANT_FORCE = 1e-9
 
 
 def _pair(measured: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -40,8 +46,10 @@ def esr(measured: ArrayLike, predicted: ArrayLike) -> float:
     """Paper eq. (24): ``mean((F - F_hat)**2) / var(F)`` [-] (error-to-signal ratio)."""
     F, Fh = _pair(measured, predicted)
     var = float(np.var(F))
-    if var == 0.0:
-        raise DataValidationError("measured", "force has zero variance; ESR is undefined")
+    if var == 0.0 or np.sqrt(var) <= _CONSTANT_FORCE * float(np.max(np.abs(F))):
+        raise DataValidationError(
+            "measured", f"force is constant (standard deviation {np.sqrt(var):.3g} N); ESR is undefined"
+        )
     return float(np.mean((F - Fh) ** 2) / var)
 
 
@@ -82,6 +90,18 @@ class Scores:
 
 
 def score_arrays(measured: ArrayLike, predicted: ArrayLike) -> Scores:
-    """Compute every index for one measured / predicted force pair."""
+    """Compute every index for one measured / predicted force pair.
+
+    Raises
+    ------
+    DataValidationError
+        Fewer than :data:`MIN_SCORED_SAMPLES` samples, a constant measured force, mismatched
+        shapes or a non-finite prediction.
+    """
+    n = np.asarray(measured).size
+    if n < MIN_SCORED_SAMPLES:
+        raise DataValidationError(
+            "F", f"record has {n} sample(s); scores need at least {MIN_SCORED_SAMPLES}"
+        )
     e = esr(measured, predicted)
     return Scores(esr=e, ssse=ssse(measured, predicted), nrmse=float(np.sqrt(e)), fit=100 * (1 - float(np.sqrt(e))))

@@ -25,7 +25,7 @@ def quiroz_models(quiroz_records: list[Any]) -> dict[str, Any]:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        lpv = LPVEstimator(fs=200.0).fit(quiroz_records)
+        lpv = LPVEstimator(model_fs=200.0).fit(quiroz_records)
     return {"lpv": lpv, "sp1": SP1Estimator().fit(quiroz_records)}
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from mrdamper.control import InverseResult, driver_command, inverse_current
 from mrdamper.data import Experiment
-from mrdamper.errors import DataValidationError, OutOfRangeError
+from mrdamper.errors import DataValidationError, Note, OutOfRangeError
 from mrdamper.models import _lpv_kernels as LK
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel
@@ -173,8 +173,13 @@ def test_arrays_input_and_bad_inputs() -> None:
         inverse_current(m, e, F, i_range=(1.0, 0.5), method="exact")
     lpv = _lpv_v()
     slow = Experiment(t=e.t * 2, x=e.x, v=e.v, F=e.F, i=e.i)
-    with pytest.raises(DataValidationError, match="model rate"):
-        inverse_current(lpv, slow, F, method="exact")
+    # another rate is solved at the model rate and interpolated back, as simulate does
+    with pytest.warns(Note, match="solved at the model rate"):
+        res = inverse_current(lpv, slow, F, method="exact")
+    assert res.i.size == slow.n and np.all(np.isfinite(res.i)) and res.saturated.size == slow.n
+    with pytest.warns(Note, match="solved at the model rate"):
+        res = inverse_current(lpv, slow, F)
+    assert res.i.size == slow.n and np.all(np.isfinite(res.i))
     lti = LTIModel(alpha=ALPHA[:, :1], beta=BETA[:, :1], fs=FS, input_signal="v", input_range=(0.0, 2.0))
     with pytest.raises(TypeError, match="'lti'"):
         inverse_current(lti, e, F, method="exact")

@@ -11,7 +11,7 @@ import pytest
 from mrdamper.data import read, read_csv, read_directory
 from mrdamper.data.readers import DEFAULT_PATTERN, parse_file_name
 from mrdamper.data.readers.csv_reader import sniff_delimiter
-from mrdamper.errors import DataValidationError, UnitError
+from mrdamper.errors import DataValidationError, Note, UnitError
 
 N = 200
 FS = 500.0
@@ -133,9 +133,11 @@ def test_declared_rate_regenerates_rounded_time(tmp_path: Path) -> None:
     t = np.arange(N) / fs
     t_rounded = np.array([float(f"{v:.4g}") for v in t])  # few printed digits: jittered intervals
     p = _write(tmp_path / "r.csv", list(s), [t_rounded, s["x"], s["v"], s["i"], s["F"]])
-    with pytest.raises(DataValidationError, match="fs=") as info:
-        read_csv(p)
-    assert info.value.field == "t"
+    # Without fs= the rate is estimated from the rounded column, with a note saying so.
+    with pytest.warns(Note, match="rate estimated as 3004.8 Hz"):
+        est = read_csv(p)
+    np.testing.assert_allclose(est.t, t, rtol=0, atol=1e-12)
+    assert "rate estimated" in est.metadata["repairs"][0]
     e = read_csv(p, fs=fs)
     np.testing.assert_allclose(e.t, t, rtol=0, atol=1e-15)
     assert "time regenerated" in e.metadata["repairs"][0]
@@ -144,6 +146,10 @@ def test_declared_rate_regenerates_rounded_time(tmp_path: Path) -> None:
     p2 = _write(tmp_path / "gap.csv", list(s), [t[keep], s["x"][keep], s["v"][keep], s["i"][keep], s["F"][keep]])
     with pytest.raises(DataValidationError, match="missing") as info:
         read_csv(p2, fs=fs)
+    assert info.value.field == "t"
+    # ... nor by the estimate: one missing sample is a whole interval off any straight line.
+    with pytest.raises(DataValidationError, match="fs=") as info:
+        read_csv(p2)
     assert info.value.field == "t"
     with pytest.raises(DataValidationError, match="not both"):
         read_csv(p, fs=fs, resample_fs=1000.0)

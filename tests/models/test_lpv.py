@@ -19,6 +19,7 @@ from mrdamper import (
     load_model,
 )
 from mrdamper.analysis import ZoneLaws
+from mrdamper.errors import Note
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel, select_order
 
@@ -141,8 +142,14 @@ def test_bad_data() -> None:
         LPVEstimator(n_rho=2, input_signal="v").fit(recs)
     other_rate = _record(0.0, 1)
     t = np.arange(other_rate.n) / 1000.0
-    with pytest.raises(DataValidationError, match="fs"):
-        LPVEstimator(input_signal="v").fit(_train() + [other_rate.replace(t=t, name="fast")])
+    # Mixed rates: the lowest one is the model rate, with a one-line note (same rule as NARX).
+    with pytest.warns(Note, match="model rate model_fs"):
+        mixed = LPVEstimator(input_signal="v", refine=False).fit(_train() + [other_rate.replace(t=t, name="fast")])
+    assert mixed.fs == min(FS, 1000.0)
+    with pytest.raises(DataValidationError, match="model_fs"):
+        LPVEstimator(input_signal="v", model_fs=-1.0).fit(_train())
+    with pytest.warns(Note, match="now called 'model_fs'"):
+        assert LPVEstimator(fs=100.0).model_fs == 100.0
     with pytest.raises(SchemaError):
         LPVEstimator(input_signal="v").fit([])
     with pytest.raises(DataValidationError, match="n_rho"):
@@ -193,6 +200,6 @@ def test_quiroz_one_fold_accuracy(quiroz_unfiltered_dir) -> None:
     test = s.filter(condition="5mm_3Hz")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        m = LPVEstimator(fs=200.0).fit(train)
+        m = LPVEstimator(model_fs=200.0).fit(train)
     esr = np.mean([m.score(e).esr for e in test])
     assert esr < 0.04

@@ -62,7 +62,7 @@ def test_laws_by_auto_without_any_current_metadata_notes_bins() -> None:
 
 def test_model_rate_above_record_rate_warns() -> None:
     with pytest.warns(RuntimeWarning, match="above the record rate"):
-        LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False, fs=2 * FS).fit(_train())
+        LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False, model_fs=2 * FS).fit(_train())
 
 
 def test_stability_setting_is_validated() -> None:
@@ -80,11 +80,11 @@ def quiroz_fold(quiroz_unfiltered_dir: Path):
 @pytest.mark.realdata
 def test_enforced_stability_on_a_fold_where_the_unconstrained_fit_is_unstable(quiroz_fold) -> None:
     with pytest.warns(RuntimeWarning, match="not frozen-stable"):
-        free = LPVEstimator(fs=200.0, stability="warn").fit(quiroz_fold)
+        free = LPVEstimator(model_fs=200.0, stability="warn").fit(quiroz_fold)
     assert free.max_pole_modulus(n_grid=101) >= 1.0
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)  # no instability warning by default
-        m = LPVEstimator(fs=200.0).fit(quiroz_fold)
+        m = LPVEstimator(model_fs=200.0).fit(quiroz_fold)
     assert m.max_pole_modulus(n_grid=101) < _lpv_fit.STABILITY_LIMIT
     assert m.provenance["frozen_stable"] is True
 
@@ -92,4 +92,4 @@ def test_enforced_stability_on_a_fold_where_the_unconstrained_fit_is_unstable(qu
 @pytest.mark.realdata
 def test_unstable_least_squares_model_is_refused_naming_the_pole(quiroz_fold) -> None:
     with pytest.raises(IdentificationError, match=r"frozen pole z = .*\|z\| = 1\.\d+\) at rho = "):
-        LPVEstimator(fs=200.0, refine=False).fit(quiroz_fold)
+        LPVEstimator(model_fs=200.0, refine=False).fit(quiroz_fold)

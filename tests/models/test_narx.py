@@ -131,7 +131,7 @@ def test_round_trip_is_bit_identical(tmp_path: Path) -> None:
 
 
 def test_other_record_rate_is_resampled() -> None:
-    fit = NARXEstimator(refine=False, v0=0.05, fs=1000.0).fit([_from_truth(s) for s in range(2)])
+    fit = NARXEstimator(refine=False, v0=0.05, model_fs=1000.0).fit([_from_truth(s) for s in range(2)])
     e = _white(5, 600)
     t = np.arange(2 * e.n) * 5e-4
     fast = Experiment(t=t, x=np.repeat(e.x, 2), v=np.repeat(e.v, 2), F=np.zeros(t.size),

@@ -85,7 +85,9 @@ def test_write_outputs_and_report(result, tmp_path) -> None:
     assert {"results.csv", "summary.csv", "fits.csv", "roles.csv", "protocol.json", "study.json", "report.html",
             "models", "figures"} <= names
     res = pd.read_csv(out / "results.csv")
-    assert len(res) == len(result.results) and list(res.columns[:13]) == list(result.results.columns[:13])
+    kept = [c for c in result.results.columns if c not in TIMING_COLUMNS]
+    assert len(res) == len(result.results) and list(res.columns) == kept
+    assert list(pd.read_csv(out / "timings.csv").columns) == ["fold", "model", "record", *TIMING_COLUMNS]
     summ = pd.read_csv(out / "summary.csv")
     assert list(summ["model"]) == MODELS
     import json
@@ -113,7 +115,7 @@ def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> 
     out = tmp_path / "o"
     out.mkdir()
     (out / "keep.txt").write_text("x")
-    with pytest.raises(OutputExistsError, match="not empty; pass force=True"):
+    with pytest.raises(OutputExistsError, match="not empty; pass --force"):
         result.write(out, figures=False)
     assert (out / "keep.txt").exists()
     result.write(out, force=True, figures=False)

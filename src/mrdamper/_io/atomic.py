@@ -4,22 +4,25 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
+from mrdamper._io.safety import check_output
 from mrdamper.errors import OutputExistsError
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_with", "check_writable"]
 
 
-def check_writable(path: str | os.PathLike[str], force: bool) -> Path:
-    """Return ``path`` as a Path; raise :class:`OutputExistsError` if it exists and not ``force``."""
-    p = Path(path)
-    if p.exists() and not force:
-        raise OutputExistsError(f"{p}: already exists; pass force=True (CLI: --force) to overwrite")
-    if p.exists() and p.is_dir():
-        raise OutputExistsError(f"{p}: is a directory, expected a file path")
-    return p
+def check_writable(
+    path: str | os.PathLike[str], force: bool, inputs: Iterable[str | os.PathLike[str]] = ()
+) -> Path:
+    """Return ``path`` as a Path after :func:`~mrdamper._io.safety.check_output` (file output).
+
+    Raises :class:`OutputExistsError` if it exists and not ``force``, and
+    :class:`~mrdamper.errors.OutputError` if it is one of ``inputs``, not a regular file, or its
+    folder cannot be written.
+    """
+    return check_output(path, force=force, inputs=inputs)
 
 
 def atomic_write_with(
@@ -40,6 +43,11 @@ def atomic_write_with(
         if p.exists() and not force:  # re-check: another process may have written meanwhile
             raise OutputExistsError(f"{p}: appeared while writing; pass force=True to overwrite")
         os.replace(tmp_path, p)
+    except OSError as exc:
+        tmp_path.unlink(missing_ok=True)
+        if isinstance(exc, OutputExistsError) or exc.errno is None:
+            raise
+        raise OSError(exc.errno, exc.strerror, str(p)) from exc  # name the output, not the temporary
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise

@@ -12,10 +12,11 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
+from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
 __all__ = ["register"]
@@ -50,7 +51,7 @@ def export(
         h, c = export_c(m, out, name=name, reg=reg, force=force)
         typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
         return
-    check_writable(out, force)
+    check_writable(out, force, inputs=[model_file])
     m = load_model(model_file)
     if m.kind not in ("lpv", "lti"):
         raise DataValidationError(
@@ -65,10 +66,10 @@ def inverse(
     data: Annotated[Path, typer.Argument(help="One record file; its force column F is the desired force.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV.")],
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
-    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
     method: Annotated[str, typer.Option("--method", help="regularised | exact.")] = "regularised",
     reg: Annotated[float | None, typer.Option("--reg", help="Regularisation weight [N/A] (default from the model).")] = None,
     rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Current that would have produced the record's measured force (causal inverse of the model).
 
@@ -80,11 +81,11 @@ def inverse(
     from mrdamper.control.inverse import inverse_current
     from mrdamper.models.registry import load_model
 
-    check_writable(out, force)
+    check_writable(out, force, inputs=[model_file, data])
     m = load_model(model_file)
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
-    [exp] = read_records([data], fs=fs)
+    [exp] = read_records([data], read_kw=read_kw)
     kw = {"method": method, "reg": reg, "rate": rate}
     try:
         res = inverse_current(m, exp, exp.F, **kw)  # type: ignore[arg-type]
@@ -114,4 +115,4 @@ def inverse(
 def register(app: typer.Typer) -> None:
     """Add the ``export`` and ``inverse`` commands to ``app``."""
     app.command("export")(export)
-    app.command("inverse")(inverse)
+    app.command("inverse")(reader_options()(inverse))

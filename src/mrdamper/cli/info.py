@@ -15,7 +15,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from mrdamper.cli._records import read_paths
+from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.data.experiment import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError
 
@@ -47,12 +47,15 @@ def detect_problems(exp: Experiment) -> list[str]:
     Checks
     ------
     * repairs made while reading (``metadata["repairs"]``: NaN samples, regenerated time, ...);
+    * values beyond the plausibility bounds (``metadata["implausible"]``, see
+      :mod:`mrdamper.data.plausibility`: usually wrong declared units);
     * a force plateau at its maximum or minimum: the extreme value held for at least
       ``max(10, n / 500)`` consecutive samples (clipping or sensor saturation);
     * force standard deviation below :data:`MIN_FORCE_STD` [N];
     * coil current outside :data:`CURRENT_RANGE` [A].
     """
     problems = [f"repaired: {r}" for r in exp.metadata.get("repairs", ())]
+    problems += [f"implausible: {r}" for r in exp.metadata.get("implausible", ())]
     F = exp.F
     min_run = max(10, exp.n // 500)
     for label, extreme in (("maximum", F.max()), ("minimum", F.min())):
@@ -97,16 +100,6 @@ def summarize(exp: Experiment) -> dict[str, Any]:
         "problems": detect_problems(exp),
         "source": str(exp.metadata.get("source", "")),
     }
-
-
-def _parse_pairs(items: list[str] | None, option: str) -> dict[str, str]:
-    out: dict[str, str] = {}
-    for item in items or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip() or not value.strip():
-            raise DataValidationError(option, f"expected KEY=VALUE, got {item!r}")
-        out[key.strip()] = value.strip()
-    return out
 
 
 def _example() -> list[Experiment]:
@@ -172,24 +165,11 @@ def info(
             "sine-record pattern if any file matches it, else every CSV/Parquet/MAT file.",
         ),
     ] = None,
-    units: Annotated[
-        list[str] | None, typer.Option("--units", help="Column unit, e.g. --units x=mm --units F=kN.")
-    ] = None,
-    columns: Annotated[
-        list[str] | None,
-        typer.Option("--column", help="Map a header to a channel, e.g. --column Force_kN=F."),
-    ] = None,
-    fs: Annotated[
-        float | None,
-        typer.Option("--fs", help="Declared sampling rate [Hz]; regenerates a rounded time column."),
-    ] = None,
-    nan_policy: Annotated[
-        str, typer.Option("--nan-policy", help="raise | drop-edges | interpolate (repairs are listed).")
-    ] = "interpolate",
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
     example: Annotated[
         bool, typer.Option("--example", help="Describe the built-in example (virtual rig, Table II).")
     ] = False,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Describe records: size, rate, ranges, current levels and detected problems."""
     if example:
@@ -203,14 +183,7 @@ def info(
                 re.compile(pattern)
             except re.error as exc:
                 raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
-        read_kw: dict[str, Any] = {"nan_policy": nan_policy}
-        if units:
-            read_kw["units"] = _parse_pairs(units, "units")
-        if columns:
-            read_kw["columns"] = _parse_pairs(columns, "column")
-        if fs is not None:
-            read_kw["fs"] = fs
-        records = read_paths(list(paths), pattern, read_kw)
+        records = read_paths(list(paths), pattern, read_kw or {})
         title = ", ".join(str(p) for p in paths)
     rows = [summarize(e) for e in records]
     if as_json:
@@ -221,4 +194,4 @@ def info(
 
 def register(app: typer.Typer) -> None:
     """Add the ``info`` command to ``app``."""
-    app.command("info")(info)
+    app.command("info")(reader_options(default_nan_policy="interpolate")(info))

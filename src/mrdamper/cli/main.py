@@ -1,19 +1,31 @@
 """The ``mrdamper`` command: builds the Typer app from per-group modules and maps errors to exits.
 
-Each command module exposes ``register(app)``. Errors raised on purpose by the library
-(:class:`~mrdamper.errors.MrDamperError`, missing files) print one line to standard error and exit
-with status 2; ``--debug`` shows the traceback instead.
+Each command module exposes ``register(app)``. Exits, for every command:
+
+* usage errors (missing argument, unknown option or command, a value of the wrong type): one
+  line on standard error, status 2;
+* errors raised on purpose by the library (:class:`~mrdamper.errors.MrDamperError`, missing
+  files): one line, status 2; other operating-system errors while reading or writing (disk full,
+  read-only folder): one line, status 1;
+* Ctrl-C: one line ``interrupted``, status 130 (also when a compiled kernel turned the
+  interrupt into another exception);
+* warnings print as one ``warning: ...`` line, notes (:class:`~mrdamper.errors.Note`) as
+  ``note: ...``.
+
+``--debug`` shows tracebacks instead of the one-line messages.
 """
 
 from __future__ import annotations
 
 import importlib
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import Any
 
 import typer
 
-from mrdamper.errors import MrDamperError
+from mrdamper.errors import MrDamperError, Note, interrupt_in_chain
 
 __all__ = ["app", "main"]
 
@@ -28,18 +40,35 @@ COMMAND_MODULES: tuple[str, ...] = (
     "mrdamper.cli.select",
 )
 
+#: Exit status of a usage error (as click's own).
+USAGE_EXIT = 2
+#: Exit status after Ctrl-C (128 + SIGINT).
+INTERRUPT_EXIT = 130
+
 app = typer.Typer(
     name="mrdamper",
     help="Identify, compare and export control-oriented models of MR dampers.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
+
+
+def _version(value: bool) -> None:
+    if value:
+        from mrdamper import __version__
+
+        typer.echo(f"mrdamper {__version__}")
+        raise typer.Exit()
 
 
 @app.callback()
 def _root(
     debug: bool = typer.Option(False, "--debug", help="Show full tracebacks on errors."),
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
 ) -> None:
     """Identify, compare and export control-oriented models of MR dampers."""
 
@@ -58,34 +87,85 @@ def _build() -> None:
 _build()
 
 
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:
+    label = "note" if issubclass(category, Note) else "warning"
+    typer.echo(f"{label}: {_one_line(str(message))}", err=True)
+
+
+def _usage_error(exc: BaseException) -> str | None:
+    """One-line text of a command-line parser error, or None if ``exc`` is not one.
+
+    Recognised by its interface (``format_message`` and ``exit_code``), so it works whichever
+    copy of click raised it (Typer bundles its own).
+    """
+    if not (hasattr(exc, "format_message") and hasattr(exc, "exit_code")):
+        return None
+    ctx = getattr(exc, "ctx", None)
+    where = getattr(ctx, "command_path", "") or "mrdamper"
+    return f"error: {where}: {_one_line(exc.format_message())} (see '{where} --help')"
+
+
+def _help_text(exc: BaseException) -> str | None:
+    """Help of the group or command whose arguments were missing (``no_args_is_help``)."""
+    if type(exc).__name__ != "NoArgsIsHelpError":
+        return None
+    ctx = getattr(exc, "ctx", None)
+    return ctx.get_help() if ctx is not None else None
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     """Entry point of the ``mrdamper`` console script."""
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
+    saved_show = warnings.showwarning
+    if not debug:
+        warnings.showwarning = _show_warning
     try:
         rc = app(args=args, prog_name="mrdamper", standalone_mode=False)
+        if rc == INTERRUPT_EXIT:  # Typer turns KeyboardInterrupt into this exit status
+            typer.echo("interrupted", err=True)
         if isinstance(rc, int) and rc:
             sys.exit(rc)
-    except (MrDamperError, FileNotFoundError, NotADirectoryError, PermissionError) as exc:
-        if debug:
-            raise
-        typer.echo(f"error: {exc}", err=True)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        typer.echo("interrupted", err=True)
-        sys.exit(130)
     except SystemExit:
         raise
-    except Exception as exc:  # click usage errors and friends
-        import click
-
-        if isinstance(exc, click.exceptions.ClickException):
-            exc.show()
-            sys.exit(exc.exit_code)
-        if isinstance(exc, click.exceptions.Abort):
+    except KeyboardInterrupt:
+        typer.echo("interrupted", err=True)
+        sys.exit(INTERRUPT_EXIT)
+    except (MrDamperError, FileNotFoundError, NotADirectoryError, PermissionError) as exc:
+        if interrupt_in_chain(exc):
+            typer.echo("interrupted", err=True)
+            sys.exit(INTERRUPT_EXIT)
+        if debug:
+            raise
+        typer.echo(f"error: {_one_line(str(exc))}", err=True)
+        sys.exit(USAGE_EXIT)
+    except Exception as exc:
+        if interrupt_in_chain(exc):
+            typer.echo("interrupted", err=True)
+            sys.exit(INTERRUPT_EXIT)
+        help_text = _help_text(exc)
+        if help_text is not None:
+            typer.echo(help_text)
+            sys.exit(0)
+        usage = _usage_error(exc)
+        if usage is not None:
+            typer.echo(usage, err=True)
+            code = getattr(exc, "exit_code", USAGE_EXIT)
+            sys.exit(code if isinstance(code, int) and code else USAGE_EXIT)
+        if type(exc).__name__ == "Abort":
             typer.echo("aborted", err=True)
             sys.exit(1)
+        if isinstance(exc, OSError) and not debug:
+            where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+            typer.echo(f"error: {where}{exc.strerror or _one_line(str(exc))}", err=True)
+            sys.exit(1)
         raise
+    finally:
+        warnings.showwarning = saved_show
 
 
 if __name__ == "__main__":  # pragma: no cover

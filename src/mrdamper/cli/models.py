@@ -21,7 +21,7 @@ from typing import Annotated, Any, cast
 
 import typer
 
-from mrdamper.cli._records import read_paths
+from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.base import RangePolicy
@@ -33,14 +33,16 @@ _RANGE_POLICIES = ("error", "warn", "clip", "ignore")
 
 
 # ----------------------------------------------------------------------------- helpers
-def read_records(paths: list[Path], pattern: str | None = None, fs: float | None = None) -> list[Experiment]:
+def read_records(
+    paths: list[Path], pattern: str | None = None, read_kw: dict[str, Any] | None = None
+) -> list[Experiment]:
     """Read files and folders into a list of records (folders: ``pattern`` or a default).
 
     Folders use ``pattern`` when given; otherwise the sine-record pattern if any file name matches
-    it (its named groups become metadata), else every CSV / Parquet / MAT file.
-    ``fs`` [Hz] regenerates each record's time base as ``n / fs`` (for rounded time columns).
+    it (its named groups become metadata), else every CSV / Parquet / MAT file. ``read_kw`` are
+    the reader options (see :func:`mrdamper.cli._records.reader_options`).
     """
-    out = read_paths(paths, pattern, {} if fs is None else {"fs": fs})
+    out = read_paths(paths, pattern, read_kw or {})
     names = [e.name for e in out]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -133,14 +135,14 @@ def fit(
         typer.Option("--set", help="Any other estimator setting, KEY=VALUE (JSON value), repeatable."),
     ] = None,
     pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
-    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Identify MODEL on the records in DATA and save it as JSON."""
     from mrdamper._io import check_writable
 
     accepted = estimator_settings(model)  # unknown kind: SchemaError naming the known kinds
-    check_writable(out, force)  # fail before a long fit
-    records = read_records(list(data), pattern, fs)
+    check_writable(out, force, inputs=list(data))  # fail before a long fit
+    records = read_records(list(data), pattern, read_kw)
     given: dict[str, Any] = {
         "input": input_ or _choose_input(records),
         "order": order,
@@ -152,7 +154,8 @@ def fit(
     }
     given = {_setting_name(k, accepted): v for k, v in given.items() if v is not None}
     given.update(parse_settings(settings))
-    unknown = [k for k in given if k not in accepted]
+    renamed = getattr(type(get_estimator(model)), "renamed_settings", {})
+    unknown = [k for k in given if k not in accepted and k not in renamed]
     if unknown:
         flag = unknown[0].replace("_", "-")
         raise DataValidationError(
@@ -171,18 +174,18 @@ def simulate(
     range_policy: Annotated[
         str | None, typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's).")
     ] = None,
-    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Free-run simulation of one record; writes t [s], measured F [N] and predicted F_pred [N]."""
     from mrdamper._io import atomic_write_text, check_writable
 
-    check_writable(out, force)
+    check_writable(out, force, inputs=[model_file, data])
     m = load_model(model_file)
     if range_policy is not None:
         m = m.with_range_policy(_check_policy(range_policy))
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; simulate takes one record file")
-    [exp] = read_records([data], fs=fs)
+    [exp] = read_records([data], read_kw=read_kw)
     res = m.simulate(exp)
     frame = res.to_frame()[["t", "F", "F_pred"]]
     path = atomic_write_text(out, frame.to_csv(index=False, float_format="%.10g"), force=force)
@@ -198,13 +201,13 @@ def score(
         str | None, typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's).")
     ] = None,
     pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
-    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """ESR and SSSE of the model's free-run prediction for each record, and their mean."""
     m = load_model(model_file)
     if range_policy is not None:
         m = m.with_range_policy(_check_policy(range_policy))
-    records = read_records(list(data), pattern, fs)
+    records = read_records(list(data), pattern, read_kw)
     rows: list[dict[str, Any]] = []
     for e in records:
         try:
@@ -255,6 +258,6 @@ def _print_scores(result: dict[str, Any]) -> None:
 
 def register(app: typer.Typer) -> None:
     """Add the ``fit``, ``simulate`` and ``score`` commands to ``app``."""
-    app.command("fit")(fit)
-    app.command("simulate")(simulate)
-    app.command("score")(score)
+    app.command("fit")(reader_options()(fit))
+    app.command("simulate")(reader_options()(simulate))
+    app.command("score")(reader_options()(score))

@@ -53,10 +53,11 @@ def doe(
     force: Annotated[bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")] = False,
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig and write CSV files + manifest.csv."""
+    from mrdamper._io import check_output
     from mrdamper.rig.doe import table_ii
-    from mrdamper.rig.doe_io import _check_out_dir, write_records
+    from mrdamper.rig.doe_io import write_records
 
-    _check_out_dir(out, force)
+    check_output(out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else [])
     t0 = time.perf_counter()
     records = table_ii(seed=seed, scale=scale, fs=fs, damper=_damper(damper), workers=workers)
     t1 = time.perf_counter()

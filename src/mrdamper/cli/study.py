@@ -14,11 +14,11 @@ from typing import Any
 
 import typer
 
-from mrdamper.cli._records import ANY_RECORD_FILE
+from mrdamper.cli._records import ANY_RECORD_FILE, reader_options
 from mrdamper.data import ExperimentSet
-from mrdamper.errors import DataValidationError, OutputExistsError, SchemaError
+from mrdamper.errors import DataValidationError, SchemaError
 
-__all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "guess_protocol", "load_data", "print_summary", "register", "study"]
+__all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "load_data", "print_summary", "register", "study"]
 
 #: Duration scale of the Table II records in ``demo --quick`` (30 s -> 3 s, 600 s -> 60 s).
 QUICK_SCALE = 0.1
@@ -35,11 +35,10 @@ def _headless() -> None:
     matplotlib.use("Agg")
 
 
-def _check_out(out: Path, force: bool) -> None:
-    if out.exists() and not out.is_dir():
-        raise OutputExistsError(f"{out}: exists and is not a folder; choose another --out")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise OutputExistsError(f"{out}: folder exists and is not empty; pass --force to replace it or choose another --out")
+def _check_out(out: Path, force: bool, inputs: list[Path] | None = None) -> None:
+    from mrdamper._io import check_output
+
+    check_output(out, force=force, folder=True, inputs=inputs or [])
 
 
 def _manifest_metadata(folder: Path) -> dict[str, dict[str, Any]]:
@@ -91,27 +90,6 @@ def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> Experim
         if exc.field != "pattern":
             raise
     return read_directory(path, ANY_RECORD_FILE, **read_kw)
-
-
-def guess_protocol(data: ExperimentSet) -> str:
-    """Preset that fits the records: ``doe`` (metadata ``experiment``), ``quiroz`` (metadata
-    ``condition``) or ``dyke`` (command voltage, no current).
-
-    Raises
-    ------
-    SchemaError
-        When none fits; pass ``--protocol`` then.
-    """
-    if all("experiment" in e.metadata for e in data):
-        return "doe"
-    if all("condition" in e.metadata for e in data):
-        return "quiroz"
-    if all(e.i is None and e.voltage is not None for e in data):
-        return "dyke"
-    raise SchemaError(
-        "protocol: cannot tell which protocol fits these records (no 'experiment' or 'condition' "
-        "metadata, not voltage-only records); pass --protocol FILE (.json/.toml) or a preset: doe, quiroz, dyke"
-    )
 
 
 def _models(models: str | None) -> list[str] | None:
@@ -166,30 +144,33 @@ def study(
     data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),  # noqa: B008
     out: Path = typer.Option(..., "--out", help="Output folder (must not exist or be empty, unless --force)."),  # noqa: B008
     protocol: str = typer.Option(
-        None, "--protocol", help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: guessed from the records."
+        None, "--protocol", help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from the records "
+        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time split)."
     ),
     models: str = typer.Option(None, "--models", help="Comma-separated model kinds, e.g. lpv,sp1,p15 (default: the protocol's)."),
     workers: int = typer.Option(None, "--workers", help="Local worker processes (default min(2, CPUs); 1 = in-process)."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:8786); replaces --workers."),
     pattern: str = typer.Option(None, "--pattern", help="Regex for file names in a folder; named groups become metadata."),
-    fs: float = typer.Option(
-        None, "--fs", help="Declared sampling rate [Hz]: regenerates a rounded time column (e.g. the Dyke record: 3004.8)."
-    ),
     seed: int = typer.Option(0, "--seed", help="Seed given to every estimator that takes one."),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Fit and score every model of a protocol on DATA; write tables, models, figures and report.html."""
-    from mrdamper.study import load_protocol, preset_protocol, run_study
+    from mrdamper.study import default_protocol, load_protocol, run_study
 
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
-    _check_out(out, force)
+    _check_out(out, force, [data])
     _headless()
     kinds = _models(models)
-    records = load_data(data, pattern, **({} if fs is None else {"fs": fs}))
-    proto = load_protocol(protocol) if protocol is not None else preset_protocol(guess_protocol(records))
-    typer.echo(f"{len(records)} records from {data}; protocol {proto.name!r}", err=True)
+    records = load_data(data, pattern, **(read_kw or {}))
+    if protocol is not None:
+        proto = load_protocol(protocol)
+        typer.echo(f"{len(records)} records from {data}; protocol {proto.name!r}", err=True)
+    else:
+        proto, why = default_protocol(records)
+        typer.echo(f"{len(records)} records from {data}; {why}", err=True)
     res = run_study(records, proto, kinds, workers=workers, scheduler=scheduler, seed=seed, progress=not no_progress)
     res.write(out, force=force)
     print_summary(res, out)
@@ -238,5 +219,5 @@ def demo(
 
 def register(app: typer.Typer) -> None:
     """Add the ``study`` and ``demo`` commands to ``app``."""
-    app.command("study")(study)
+    app.command("study")(reader_options()(study))
     app.command("demo")(demo)

@@ -49,6 +49,7 @@ The state-space system is ``z[k+1] = A(rho[k]) z[k] + B u[k]``, ``F[k] = C(rho[k
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 from typing import Any, Literal
 
@@ -171,6 +172,13 @@ def export_lpv(
     if format not in ("mat", "json"):
         raise DataValidationError("format", f"expected 'mat' or 'json', got {format!r}")
     data = lpv_export_data(model, rho_grid=rho_grid)
+    pmax = model.max_pole_modulus() if hasattr(model, "max_pole_modulus") else 0.0
+    if pmax >= 1.0:
+        warnings.warn(
+            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen pole "
+            f"modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control design",
+            RuntimeWarning, stacklevel=2,
+        )
     if format == "json":
         text = json.dumps(encode_value(data), indent=1, allow_nan=False)
         return atomic_write_text(path, text + "\n", force=force)

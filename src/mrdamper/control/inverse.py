@@ -61,6 +61,7 @@ gives): the input returned is then the one giving the closest force.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -70,7 +71,7 @@ import pandas as pd
 
 from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
-from mrdamper.errors import DataValidationError, MrDamperError, OutOfRangeError
+from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
 
 __all__ = [
@@ -324,7 +325,8 @@ def inverse_current(
     TypeError
         For model kinds without an inverse here (Spencer, P-15, NARX, LTI).
     DataValidationError
-        Bad lengths or values; an LPV record not sampled at the model rate.
+        Bad lengths or values. (An LPV record at another rate than the model is solved at the
+        model rate and interpolated back, with a note.)
     OutOfRangeError
         ``i_range`` outside the model's identified input range.
     """
@@ -367,7 +369,7 @@ def inverse_current(
             )
             w = rho
     elif isinstance(model, LPVModel):
-        rho, w, sat = _lpv(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
+        rho, w, sat = _lpv_any_rate(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
     else:
         rho, sat = _static(model, x, v, Fd, lo, hi, int(n_grid))
         w = rho
@@ -377,6 +379,35 @@ def inverse_current(
         t=t, F_desired=Fd, i=w, rho=rho, F_achieved=np.asarray(F_ach, dtype=float), saturated=sat,
         input=model.input, model_kind=model.kind, i_range=(lo, hi),
     )
+
+
+def _lpv_any_rate(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
+                  tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The LPV inverse of a record at any rate: solved at the model rate, as ``simulate`` runs it.
+
+    A record at another rate is resampled to the model rate on the way in (the same resampling
+    as the model's prediction, :func:`mrdamper.models._rates.to_model_rate`); the input is
+    interpolated back onto the record's samples, with a note.
+    """
+    from mrdamper.models._rates import to_model_rate
+
+    if t.size < 2:
+        raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
+    fs = (t.size - 1) / float(t[-1] - t[0])
+    if abs(fs - model.fs) <= 1e-6 * model.fs:
+        return _lpv(model, t, v, Fd, lo, hi, n_grid, tol)
+    v_m = to_model_rate(v, fs, model.fs)
+    Fd_m = to_model_rate(Fd, fs, model.fs)
+    if v_m.size < 2:
+        raise DataValidationError("t", f"record too short: {t.size} samples at {fs:g} Hz give {v_m.size} at the model rate")
+    t_m = t[0] + np.arange(v_m.size) / model.fs
+    rho_m, w_m, sat_m = _lpv(model, t_m, v_m, Fd_m, lo, hi, n_grid, tol)
+    warnings.warn(
+        f"{model.kind}: record sampled at {fs:g} Hz, model at {model.fs:g} Hz; the inverse is solved at the "
+        "model rate and its input interpolated back onto the record's samples", Note, stacklevel=3,
+    )
+    nearest = np.clip(np.rint((t - t[0]) * model.fs).astype(np.int64), 0, v_m.size - 1)
+    return np.interp(t, t_m, rho_m), np.interp(t, t_m, w_m), sat_m[nearest]
 
 
 def _lpv(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
@@ -504,6 +535,10 @@ def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
         return rho, w, sat
+    warnings.warn(
+        f"{model.kind}: record sampled at {fs_rec:g} Hz, model at {model.fs:g} Hz; the inverse is solved at the "
+        "model rate and its input interpolated back onto the record's samples", Note, stacklevel=3,
+    )
     tm = np.arange(rho.size) * dt
     tr = t - t[0]
     back = np.minimum(np.rint(tr * model.fs).astype(np.int64), rho.size - 1)

@@ -7,13 +7,53 @@ other rates are resampled on the way in and the predicted force is interpolated 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.signal as sps
 
 from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError, Note
 
-__all__ = ["to_model_rate", "to_record_rate"]
+__all__ = ["model_rate", "rename_setting", "to_model_rate", "to_record_rate"]
+
+
+def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> float:
+    """The model rate [Hz] of a discrete model, by one rule for every model kind that has one.
+
+    ``model_fs`` when set; otherwise the lowest sampling rate of the training records. When the
+    records have different rates and ``model_fs`` is not set, a one-line :class:`Note` says which
+    rate was taken (records at other rates are resampled to it, see :func:`to_model_rate`).
+    """
+    if model_fs is not None:
+        return float(model_fs)
+    distinct = sorted({float(r) for r in rates})
+    if not distinct:
+        raise DataValidationError("model_fs", "no training record to take the model rate from")
+    if len(distinct) > 1:
+        listed = ", ".join(f"{r:g}" for r in distinct)
+        warnings.warn(
+            f"{kind}: training records are sampled at {listed} Hz; model rate model_fs = "
+            f"{distinct[0]:g} Hz (the lowest; the others are resampled; set model_fs to choose)",
+            Note, stacklevel=3,
+        )
+    return distinct[0]
+
+
+def rename_setting(kind: str, old: str, new: str, old_value: object, new_value: object) -> object:
+    """Value of a setting given under its old name ``old`` (with a :class:`Note`); ``new_value``
+    when the old name was not used. Both names with different values is an error."""
+    if old_value is None:
+        return new_value
+    if new_value is not None and new_value != old_value:
+        raise DataValidationError(
+            old, f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old name of {new}"
+        )
+    warnings.warn(
+        f"{kind}: setting {old!r} is now called {new!r} (the model's own rate, not a record's "
+        f"sampling rate); using {new}={old_value!r}", Note, stacklevel=4,
+    )
+    return old_value
 
 
 def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:

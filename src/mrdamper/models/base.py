@@ -28,12 +28,13 @@ import pandas as pd
 from mrdamper._io import atomic_write_text
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import OutOfRangeError, SchemaError
+from mrdamper.errors import DataValidationError, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
 
 __all__ = [
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
+    "TIMING_PROVENANCE",
     "Estimator",
     "FittedModel",
     "RangePolicy",
@@ -47,6 +48,10 @@ __all__ = [
 
 SCHEMA_NAME = "mrdamper.model"
 SCHEMA_VERSION = 1
+
+#: Provenance entries that are wall-clock or CPU times [s]. They stay on the in-memory model but
+#: are never written to a model file, so that the same fit gives the same bytes.
+TIMING_PROVENANCE: frozenset[str] = frozenset({"elapsed_s", "cpu_s", "fit_seconds", "fit_time_s"})
 
 RangePolicy = Literal["error", "warn", "clip", "ignore"]
 
@@ -268,7 +273,8 @@ class FittedModel(abc.ABC):
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in common}
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dict with schema name and version."""
+        """JSON-safe dict with schema name and version (timings of the provenance left out, see
+        :data:`TIMING_PROVENANCE`)."""
         return {
             "schema": SCHEMA_NAME,
             "schema_version": SCHEMA_VERSION,
@@ -277,7 +283,7 @@ class FittedModel(abc.ABC):
             "input_range": list(self.input_range),
             "range_policy": self.range_policy,
             "parameters": encode_value(self.parameters),
-            "provenance": encode_value(dict(self.provenance)),
+            "provenance": encode_value({k: v for k, v in self.provenance.items() if k not in TIMING_PROVENANCE}),
         }
 
     @classmethod
@@ -287,6 +293,11 @@ class FittedModel(abc.ABC):
         if data["kind"] != cls.kind:
             raise SchemaError(f"kind: file holds {data['kind']!r}, expected {cls.kind!r}")
         params = decode_value(data["parameters"])
+        if not isinstance(params, dict):
+            raise SchemaError(f"parameters: expected an object, got {type(params).__name__}")
+        for key, value in params.items():
+            if _has_nan(value):
+                raise SchemaError(f"parameters.{key}: holds NaN; the model file is damaged or was edited")
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = set(params) - names
         if unknown:
@@ -313,6 +324,8 @@ class Estimator(abc.ABC):
     """
 
     kind: ClassVar[str] = "abstract"
+    #: Old setting name -> current name. Old names are still accepted, with a note.
+    renamed_settings: ClassVar[Mapping[str, str]] = {}
 
     @abc.abstractmethod
     def fit(self, data: Experiment | Iterable[Experiment]) -> FittedModel:
@@ -323,7 +336,26 @@ class Estimator(abc.ABC):
         exps = as_experiment_set(data, name="training")
         if len(exps) == 0:
             raise SchemaError("data: no training records given")
+        for e in exps:
+            if not np.any(np.abs(e.v) > 0.0):
+                raise DataValidationError(
+                    "v", f"training record {e.name!r} has zero velocity everywhere; a damper model needs motion "
+                    "(check the velocity column, or derive it from x with derive_velocity / --derive-velocity)"
+                )
         return exps
+
+
+def _has_nan(value: Any) -> bool:
+    """True if a decoded parameter (number, array, nested list / dict) contains a NaN."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "fc" and bool(np.isnan(value).any())
+    if isinstance(value, float):
+        return math.isnan(value)
+    if isinstance(value, (list, tuple)):
+        return any(_has_nan(v) for v in value)
+    if isinstance(value, Mapping):
+        return any(_has_nan(v) for v in value.values())
+    return False
 
 
 def _check_schema(data: Mapping[str, Any]) -> None:

@@ -21,10 +21,9 @@ coefficients; paper Fig. 4).
 from __future__ import annotations
 
 import dataclasses
-import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -36,7 +35,7 @@ from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _lpv_fit
 from mrdamper.models import _lpv_kernels as K
-from mrdamper.models._rates import to_model_rate, to_record_rate
+from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
 
@@ -255,8 +254,9 @@ class LPVEstimator(Estimator):
         Degree of the slope/intercept laws (2 in the paper).
     n_bins : int
         Number of ``rho`` bins for ``laws_by="bins"``.
-    fs : float, optional
-        Model rate [Hz]; default: the common rate of the training records.
+    model_fs : float, optional
+        Model rate [Hz]; default: the lowest sampling rate of the training records (records at
+        other rates are resampled, with a note). ``fs`` is its old name, still accepted.
     offset : bool
         Estimate an output force offset ``F0``.
     weighting : {"esr", "sse"}
@@ -291,7 +291,7 @@ class LPVEstimator(Estimator):
     laws_by: Literal["auto", "current", "plateaus", "bins"] = "auto"
     laws_degree: int = 2
     n_bins: int = 5
-    fs: float | None = None
+    model_fs: float | None = None
     offset: bool = True
     weighting: Literal["esr", "sse"] = "esr"
     refine: bool = True
@@ -299,6 +299,12 @@ class LPVEstimator(Estimator):
     oe_solver: Literal["gauss-newton", "least_squares"] = "gauss-newton"
     range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
     stability: Literal["enforce", "warn"] = "enforce"
+    fs: InitVar[float | None] = None
+
+    renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
+
+    def __post_init__(self, fs: float | None) -> None:
+        self.model_fs = rename_setting(self.kind, "fs", "model_fs", fs, self.model_fs)  # type: ignore[assignment]
 
     def _validate(self) -> None:
         for name in ("n_m", "n_rho", "laws_degree", "n_bins", "max_nfev"):
@@ -318,8 +324,9 @@ class LPVEstimator(Estimator):
                 raise DataValidationError(name, f"expected one of {ok}, got {getattr(self, name)!r}")
         if self.eta is not None and not (np.isfinite(self.eta) and self.eta > 0):
             raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s], got {self.eta!r}")
-        if self.fs is not None and not (np.isfinite(self.fs) and self.fs > 0):
-            raise DataValidationError("fs", f"expected a positive model rate [Hz], got {self.fs!r}")
+        mfs = self.model_fs
+        if mfs is not None and (isinstance(mfs, bool) or not isinstance(mfs, (int, float)) or not (np.isfinite(mfs) and mfs > 0)):
+            raise DataValidationError("model_fs", f"expected a positive model rate [Hz], got {mfs!r}")
 
     def _laws(
         self, exps: Sequence[Experiment], rhos: list[np.ndarray], prov: dict[str, Any], single: bool = False
@@ -366,18 +373,10 @@ class LPVEstimator(Estimator):
             Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
             ``stability="enforce"``) no frozen-stable model; the message names the pole.
         """
-        t_start = time.perf_counter()
         self._validate()
         exps = self._as_set(data)
         user_w = _record_weights(record_weights, len(exps))
-        rates = sorted({e.fs for e in exps})
-        fs = float(self.fs) if self.fs is not None else rates[0]
-        if self.fs is None and len(rates) > 1:
-            raise DataValidationError(
-                "fs",
-                f"training records have different sampling rates {rates} Hz; set fs= to the model "
-                f"rate (command line: --set fs={rates[0]:g})",
-            )
+        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
         raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
         in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
         rhos = [K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r for r, e in zip(raw, exps)]
@@ -464,7 +463,7 @@ class LPVEstimator(Estimator):
             zone_laws=laws, eta=self.eta, rho_range=rho_range, force_bound=bound, input=self.input,
             input_range=in_range, range_policy=self.range_policy, provenance=prov,
         )
-        prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0, fit_seconds=time.perf_counter() - t_start)
+        prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0)
         if pmax >= 1.0:
             warnings.warn(
                 f"{self.kind}: identified model is not frozen-stable over rho in "

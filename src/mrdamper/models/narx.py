@@ -37,10 +37,9 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import time
 import warnings
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping
+from dataclasses import InitVar, dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -49,7 +48,7 @@ from scipy import optimize
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _narx_kernels as K
-from mrdamper.models._rates import to_model_rate, to_record_rate
+from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
 
@@ -315,8 +314,9 @@ class NARXEstimator(Estimator):
         Refine the coefficients on the free-run (output) error of the training records.
     refine_max_nfev : int
         Budget of residual evaluations of the refinement.
-    fs : float or None
-        Model rate [Hz]; None: the lowest training record rate.
+    model_fs : float or None
+        Model rate [Hz]; None: the lowest training record rate (with a note when the records'
+        rates differ). ``fs`` is its old name, still accepted.
     cond_max : float
         Largest accepted condition number of the chosen (normalised) regression matrix [-].
     bound_factor : float
@@ -339,10 +339,16 @@ class NARXEstimator(Estimator):
     colin_tol: float = 1e-8
     refine: bool = True
     refine_max_nfev: int = 40
-    fs: float | None = None
+    model_fs: float | None = None
     cond_max: float = 1e8
     bound_factor: float = 10.0
     range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    fs: InitVar[float | None] = None
+
+    renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
+
+    def __post_init__(self, fs: float | None) -> None:
+        self.model_fs = rename_setting(self.kind, "fs", "model_fs", fs, self.model_fs)  # type: ignore[assignment]
 
     def _check(self) -> None:
         if self.input not in ("i", "voltage"):
@@ -353,9 +359,9 @@ class NARXEstimator(Estimator):
             val = getattr(self, name)
             if not isinstance(val, (int, float)) or isinstance(val, bool) or not 0 <= val < 1:
                 raise DataValidationError(name, f"expected a number in [0, 1), got {val!r}")
-        for name in ("v0", "fs", "cond_max", "bound_factor"):
+        for name in ("v0", "model_fs", "cond_max", "bound_factor"):
             val = getattr(self, name)
-            if val is None and name in ("v0", "fs"):
+            if val is None and name in ("v0", "model_fs"):
                 continue
             if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val) or val <= 0:
                 raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
@@ -372,11 +378,10 @@ class NARXEstimator(Estimator):
         IdentificationError
             Fewer equations than candidates, nothing selectable, or ill-conditioned regression.
         """
-        t_start = time.perf_counter()
         self._check()
         exps = self._as_set(data)
         base, cand = candidate_structure(self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh)
-        fs = float(self.fs) if self.fs is not None else min(e.fs for e in exps)
+        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
         e_all = np.concatenate([e.electrical(self.input) for e in exps])
         v_max = max(float(np.max(np.abs(e.v))) for e in exps)
         v0 = float(self.v0) if self.v0 is not None else 0.05 * v_max
@@ -424,7 +429,6 @@ class NARXEstimator(Estimator):
             "err": [float(x) for x in err], "err_total": float(np.sum(err)),
             "cond": float(cond), "free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost),
             "refined": refined, "refine_nfev": int(nfev),
-            "fit_time_s": time.perf_counter() - t_start,
         }
         return _replace(model, provenance=prov)
 

@@ -5,12 +5,13 @@ from __future__ import annotations
 import csv
 import io
 import os
+import shutil
+import tempfile
 from pathlib import Path
 from typing import Any
 
-from mrdamper._io import atomic_write_text
+from mrdamper._io import atomic_write_text, check_output
 from mrdamper.data import Experiment, ExperimentSet
-from mrdamper.errors import OutputExistsError
 from mrdamper.models.base import FittedModel
 
 __all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "write_doe", "write_records"]
@@ -31,13 +32,8 @@ def _write_csv(record: Experiment, path: Path, force: bool) -> None:
 
 
 def _check_out_dir(out_dir: Path, force: bool) -> None:
-    if out_dir.exists() and not out_dir.is_dir():
-        raise OutputExistsError(f"{out_dir}: exists and is not a directory")
-    if out_dir.is_dir() and any(out_dir.iterdir()) and not force:
-        raise OutputExistsError(
-            f"{out_dir}: directory exists and is not empty; pass force=True (CLI: --force) to "
-            f"write into it (files of the same name are overwritten, others are left alone)"
-        )
+    """Refuse an unsafe or occupied output folder (see :func:`mrdamper._io.check_output`)."""
+    check_output(out_dir, force=force, folder=True)
 
 
 def _cell(value: Any) -> str:
@@ -70,17 +66,44 @@ def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, fo
     """
     out = Path(out_dir)
     _check_out_dir(out, force)
-    out.mkdir(parents=True, exist_ok=True)
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(MANIFEST_COLUMNS)
-    for rec in records:
-        file = f"{rec.name}.csv"
-        _write_csv(rec, out / file, force)
-        meta = dict(rec.metadata)
-        row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
-        w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
-    return atomic_write_text(out / MANIFEST_NAME, buf.getvalue(), force=force)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    # everything is written into a private sibling folder first, then moved into place, so a
+    # failure (disk full, interruption) leaves neither partial files nor an empty folder
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(MANIFEST_COLUMNS)
+        for rec in records:
+            file = f"{rec.name}.csv"
+            _write_csv(rec, tmp / file, False)
+            meta = dict(rec.metadata)
+            row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
+            w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
+        atomic_write_text(tmp / MANIFEST_NAME, buf.getvalue())
+        _usual_folder_mode(tmp)
+        if not out.exists():
+            os.replace(tmp, out)
+        elif not any(out.iterdir()):
+            out.rmdir()
+            os.replace(tmp, out)
+        else:  # force: move the new files in, replacing files of the same name
+            for f in sorted(tmp.iterdir()):
+                os.replace(f, out / f.name)
+    except OSError as exc:
+        if exc.errno is None or isinstance(exc, FileExistsError):
+            raise
+        raise OSError(exc.errno, exc.strerror, str(out)) from exc  # name the output folder
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return out / MANIFEST_NAME
+
+
+def _usual_folder_mode(folder: Path) -> None:
+    """``mkdtemp`` folders are private (0700); give the finished folder an ordinary mode."""
+    umask = os.umask(0)
+    os.umask(umask)
+    folder.chmod(0o777 & ~umask)
 
 
 def write_doe(

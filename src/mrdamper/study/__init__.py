@@ -10,6 +10,7 @@ Examples
 """
 
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.default import default_protocol
 from mrdamper.study.executor import make_executor
 from mrdamper.study.presets import doe_protocol, dyke_protocol, preset_protocol, quiroz_protocol
 from mrdamper.study.protocol import (
@@ -39,6 +40,7 @@ __all__ = [
     "Split",
     "StudyResult",
     "cross_validate",
+    "default_protocol",
     "doe_protocol",
     "dyke_protocol",
     "headline",

@@ -18,6 +18,7 @@ from mrdamper.errors import (
     IdentificationError,
     OutOfRangeError,
     SimulationDivergedError,
+    interrupt_in_chain,
 )
 from mrdamper.study._threads import single_threaded_blas
 from mrdamper.study.executor import resolve_record
@@ -28,6 +29,13 @@ __all__ = ["fit_task", "simulate_task"]
 def _message(exc: BaseException) -> str:
     text = str(exc).strip().replace("\n", " ")
     return f"{type(exc).__name__}: {text}"[:500]
+
+
+def _reraise_interrupt(exc: BaseException) -> None:
+    """Ctrl-C inside a compiled kernel can surface as ``SystemError`` (its cause is the
+    KeyboardInterrupt): that is an interruption of the study, never a failure of the model."""
+    if interrupt_in_chain(exc):
+        raise KeyboardInterrupt from exc
 
 
 def _notes(caught: Sequence[warnings.WarningMessage]) -> str:
@@ -62,6 +70,7 @@ def fit_task(kind: str, settings: Mapping[str, Any], records: Sequence[Any]) -> 
         except (IdentificationError, SimulationDivergedError, DataValidationError, OutOfRangeError) as exc:
             out = {"status": "fit-failed", "model": None, "error": _message(exc)}
         except Exception as exc:  # noqa: BLE001 - any other failure of a model is a result row, not a crash
+            _reraise_interrupt(exc)
             tb = traceback.extract_tb(exc.__traceback__)
             where = f" (at {tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno})" if tb else ""
             out = {"status": "fit-failed", "model": None, "error": _message(exc) + where}
@@ -101,6 +110,7 @@ def simulate_task(model: Mapping[str, Any], record: Any, range_policy: str) -> d
         except OutOfRangeError as exc:
             out.update(status="out-of-range", error=_message(exc))
         except Exception as exc:  # noqa: BLE001 - any other failure of a model is a result row, not a crash
+            _reraise_interrupt(exc)
             out.update(status="sim-failed", error=_message(exc))
     out["note"] = _notes(caught)
     return out

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from mrdamper.data import ExperimentSet
+from mrdamper.errors import interrupt_in_chain
 
 __all__ = ["AnalysisOutcome", "fv_curves", "run_analysis"]
 
@@ -134,7 +135,9 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
             fits = zone_fits_by_level(records, by=by, source=source, **opts)  # type: ignore[arg-type]
             laws = fit_zone_laws(fits, degree=degree, strict=False)
             error = ""
-        except Exception as exc:  # noqa: BLE001 - the study goes on without laws; the report says why
+        except Exception as exc:
+            if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+                raise KeyboardInterrupt from exc
             laws, error = None, f"{type(exc).__name__}: {exc}"
     notes = " | ".join(dict.fromkeys(str(w.message).replace("\n", " ")[:200] for w in caught))
     return AnalysisOutcome(tuple(fits), laws, by, curves, error, notes)

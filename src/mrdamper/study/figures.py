@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mrdamper.errors import interrupt_in_chain
+
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.study.result import Showcase, StudyResult
 
@@ -285,6 +287,8 @@ def make_figures(res: StudyResult) -> dict[str, Any]:
         for name, draw in _DRAW.items():
             try:
                 out[name] = draw(res)
-            except Exception as exc:  # noqa: BLE001 - a figure problem must not lose the study's numbers
+            except Exception as exc:
+                if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+                    raise KeyboardInterrupt from exc
                 out[name] = f"figure could not be drawn: {type(exc).__name__}: {exc}"
     return out

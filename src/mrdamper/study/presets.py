@@ -57,7 +57,7 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
         score=Selection(),
         split=Split("leave-one-group-out", key="condition"),
         models=tuple(models),
-        settings={"lpv": {"fs": 200.0}, "lti": {"fs": 200.0}},
+        settings={"lpv": {"model_fs": 200.0}, "lti": {"model_fs": 200.0}},
     )
 
 
@@ -81,7 +81,7 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
         input="voltage",
         models=tuple(models),
         range_policy="clip",
-        settings={"lpv": {"eta": 250.0, "fs": 3004.8}, "lti": {"eta": 250.0, "fs": 3004.8},
+        settings={"lpv": {"eta": 250.0, "model_fs": 3004.8}, "lti": {"eta": 250.0, "model_fs": 3004.8},
                   "p15": {"eta": 250.0}},
     )
 

@@ -11,13 +11,12 @@ from __future__ import annotations
 import fnmatch
 import json
 import re
+import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
-
-import tomllib
 
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment_set import _equal
@@ -41,7 +40,7 @@ PROTOCOL_SCHEMA_VERSION = 1
 #: Models run by default, in display order; kinds that are not installed are left out.
 DEFAULT_MODELS: tuple[str, ...] = ("lpv", "p15", "sp1", "sp2", "sp3", "sp4", "lti", "spencer", "bingham", "narx")
 
-SplitKind = Literal["fixed", "leave-one-group-out", "time"]
+SplitKind = Literal["fixed", "leave-one-group-out", "k-fold", "time"]
 RangePolicyName = Literal["error", "warn", "clip", "ignore"]
 
 
@@ -164,9 +163,11 @@ class Split:
 
     Parameters
     ----------
-    kind : {"fixed", "leave-one-group-out", "time"}
+    kind : {"fixed", "leave-one-group-out", "k-fold", "time"}
         ``"fixed"``: one fold; the selections are used as they are. ``"leave-one-group-out"``:
         one fold per group; the group's records are scored, the other groups' records train.
+        ``"k-fold"``: ``k`` folds by record; the scored records are dealt to the folds in turn
+        (record ``j`` of the data order to fold ``j mod k``) and each fold trains on the others.
         ``"time"``: every selected record is cut in time; the first ``fraction`` of its samples
         trains, the rest is scored.
     key : str, optional
@@ -176,18 +177,23 @@ class Split:
         regular expression searched in the record name.
     fraction : float
         Training fraction of each record for ``"time"`` [-], in (0, 1).
+    k : int
+        Number of folds for ``"k-fold"`` (at least 2).
     """
 
     kind: SplitKind = "fixed"
     key: str | None = None
     name_regex: str | None = None
     fraction: float = 0.7
+    k: int = 5
 
     def __post_init__(self) -> None:
-        if self.kind not in ("fixed", "leave-one-group-out", "time"):
+        if self.kind not in ("fixed", "leave-one-group-out", "k-fold", "time"):
             raise SchemaError(
-                f"split.kind: expected 'fixed', 'leave-one-group-out' or 'time', got {self.kind!r}"
+                f"split.kind: expected 'fixed', 'leave-one-group-out', 'k-fold' or 'time', got {self.kind!r}"
             )
+        if isinstance(self.k, bool) or not isinstance(self.k, int) or self.k < 2:
+            raise SchemaError(f"split.k: expected an integer of at least 2, got {self.k!r}")
         if self.kind == "leave-one-group-out" and not (self.key or self.name_regex):
             raise SchemaError("split.key: leave-one-group-out needs 'key' or 'name_regex', got neither")
         if self.name_regex is not None:
@@ -215,6 +221,8 @@ class Split:
             return "one fold (fixed training and scoring sets)"
         if self.kind == "time":
             return f"each record cut in time: first {self.fraction:.0%} trains, last {1 - self.fraction:.0%} is scored"
+        if self.kind == "k-fold":
+            return f"{self.k}-fold by record: each record is scored once, by models trained on the other folds"
         by = f"metadata {self.key!r}" if self.key else f"name pattern {self.name_regex!r}"
         return f"leave one group out, groups by {by}"
 
@@ -227,6 +235,8 @@ class Split:
             out["name_regex"] = self.name_regex
         if self.kind == "time":
             out["fraction"] = float(self.fraction)
+        if self.kind == "k-fold":
+            out["k"] = int(self.k)
         return out
 
 
@@ -308,7 +318,7 @@ class Protocol:
         Out-of-range policy applied to every fitted model before scoring; extrapolation is
         reported in the ``note`` column.
     settings : mapping
-        Default estimator settings per kind (``{"lpv": {"fs": 200.0}}``), applied to every model
+        Default estimator settings per kind (``{"lpv": {"model_fs": 200.0}}``), applied to every model
         of that kind unless the model entry sets the same key.
     showcase : str, optional
         Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10, 11); default: the
@@ -411,7 +421,7 @@ _TOP_KEYS = {
     "split", "exclude_trained", "range_policy", "models", "settings", "showcase", "hysteresis_record",
 }
 _SEL_KEYS = {"match", "names", "exclude", "group_by", "take"}
-_SPLIT_KEYS = {"kind", "key", "name_regex", "fraction"}
+_SPLIT_KEYS = {"kind", "key", "name_regex", "fraction", "k"}
 
 
 def _selection(value: Any, where: str) -> Selection:

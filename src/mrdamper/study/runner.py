@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
-from mrdamper.errors import SchemaError
+from mrdamper.errors import SchemaError, interrupt_in_chain
 from mrdamper.study._tasks import fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
@@ -106,7 +106,9 @@ def _predict_all(models: Mapping[str, Any], e: Experiment, policy: str) -> dict[
             try:
                 F = np.asarray(m.with_range_policy(policy).predict(e), dtype=float)
                 out[label] = F if np.all(np.isfinite(F)) else "non-finite prediction"
-            except Exception as exc:  # noqa: BLE001 - shown in the figure legend, never fatal
+            except Exception as exc:
+                if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+                    raise KeyboardInterrupt from exc
                 out[label] = f"{type(exc).__name__}: {exc}"
     return out
 
@@ -203,6 +205,7 @@ def run_study(
         "n_records": len(data),
         "data_origin": data_origin(data),
         "n_folds": len(folds),
+        "sources": sorted({str(e.metadata["source"]) for e in data if e.metadata.get("source")}),
         "python": platform.python_version(),
         "platform": platform.platform(),
     }
@@ -247,7 +250,9 @@ def _execute(
                 tag = pending.pop(fut)
                 try:
                     res = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a worker died or a task could not be delivered
+                except Exception as exc:
+                    if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+                        raise KeyboardInterrupt from exc
                     res = {"status": "fit-failed" if len(tag) == 2 else "sim-failed", "model": None,
                            "error": f"worker error: {type(exc).__name__}: {exc}", "note": "",
                            "fit_time_s": float("nan"), "sim_time_s": float("nan")}

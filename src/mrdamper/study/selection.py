@@ -176,9 +176,6 @@ def cross_validate(
     notes: list[str] = []
     rates = sorted({e.fs for e in exps})
     if len(rates) > 1:
-        for k in kinds:
-            if k in _DISCRETE and "fs" not in extra.get(k, {}):
-                extra.setdefault(k, {})["fs"] = rates[0]
         notes.append(f"records have rates {rates} Hz: discrete models ({', '.join(_DISCRETE)}) run at "
                      f"the lowest, {rates[0]:g} Hz")
     rows: list[dict[str, Any]] = []

@@ -80,6 +80,16 @@ def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
                 ExperimentSet([_time_part(e, f, False) for e in score], name=data.name),
             )
         )
+    elif split.kind == "k-fold":
+        k = min(int(split.k), len(score))
+        for j in range(k):
+            scored = {e.name for pos, e in enumerate(score) if pos % k == j}
+            tr = ExperimentSet([e for e in train if e.name not in scored], name=data.name)
+            an = ExperimentSet([e for e in analysis if e.name not in scored], name=data.name)
+            sc = ExperimentSet([e for e in score if e.name in scored], name=data.name)
+            if protocol.exclude_trained:
+                sc = _without(sc, set(tr.names) | set(an.names))
+            folds.append(Fold(f"fold {j + 1} of {k}", an, tr, sc))
     else:
         label = split.key or "group"
         order: list[object] = []

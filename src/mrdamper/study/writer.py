@@ -57,36 +57,34 @@ def write_study(res: StudyResult, out_dir: str | os.PathLike[str], *, force: boo
     ------
     OutputExistsError
         ``out_dir`` exists, is not an empty folder and ``force`` is false.
+    OutputError
+        ``out_dir`` is an input, holds one, is the working folder or one of its ancestors, or
+        cannot be written (checked before anything is written).
     """
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise OutputExistsError(f"{out}: exists and is not a folder; choose another --out")
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise OutputExistsError(f"{out}: folder exists and is not empty; pass force=True (CLI: --force) to replace it")
+    from mrdamper.study._outputs import naming_output, prepare_out
+
+    out = prepare_out(res, out_dir, force)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
         _write_into(res, tmp, figures)
         _swap_into_place(tmp, out, force)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise naming_output(exc, out) from exc
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return out
+    return Path(out_dir)
 
 
 def _write_into(res: StudyResult, d: Path, figures: bool) -> None:
     from mrdamper.study import report
+    from mrdamper.study._outputs import write_tables
     from mrdamper.study.figures import make_figures
 
-    atomic_write_text(d / "results.csv", res.results.to_csv(index=False))
     summary = res.summary
-    atomic_write_text(d / "summary.csv", summary.to_csv(index=False))
-    atomic_write_text(d / "fits.csv", res.fits.to_csv(index=False))
-    atomic_write_text(d / "roles.csv", res.roles.to_csv(index=False))
-    atomic_write_text(d / "protocol.json", res.protocol.to_json() + "\n")
-    info = dict(res.info)
-    info["headline"] = dict(res.headline())
-    atomic_write_text(d / "study.json", json.dumps(info, indent=2, default=str) + "\n")
+    write_tables(res, d, summary)
     for (fold, label), model in res.models.items():
         model.save(d / "models" / _slug(fold) / f"{_slug(label)}.json")
     for fold, an in res.analyses.items():

@@ -7,6 +7,7 @@ Shared by every file reader: numeric checks, unit conversion (once, through
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -14,11 +15,17 @@ from typing import Any
 import numpy as np
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
+from mrdamper.data.plausibility import check_plausibility
 from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_columns
 from mrdamper.data.units import to_si
-from mrdamper.errors import DataValidationError
+from mrdamper.errors import DataValidationError, Note
 
-__all__ = ["ReadOptions", "build_experiment", "existing_file", "numeric_column"]
+__all__ = ["JITTER_LIMIT", "ReadOptions", "build_experiment", "estimate_rate", "existing_file", "numeric_column"]
+
+#: Largest deviation of a time column from a straight line, in sample intervals, that is taken
+#: as rounding of the printed time (rate estimated, time regenerated, with a note) rather than
+#: irregular sampling (an error asking for ``fs=`` or ``resample_fs=``).
+JITTER_LIMIT = 0.1
 
 #: Keyword arguments every file reader accepts (documented in each reader).
 ReadOptions = dict[str, Any]
@@ -56,7 +63,7 @@ def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
         raise DataValidationError(
             name,
             f"non-numeric value {ser.iloc[k]!r} at data row {k} of {source} "
-            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',')",
+            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',', command line --decimal ,)",
         )
     return num.to_numpy(dtype=np.float64, na_value=np.nan)
 
@@ -81,7 +88,9 @@ def _regenerate_time(t: np.ndarray | None, n: int, fs: Any, source: str) -> tupl
         raise DataValidationError(
             "t",
             f"time column of {source} departs from t0 + k/{fs:g} by {dev:.6g} s "
-            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong",
+            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong (fs / --fs "
+            "declares the records' own sampling rate; a model's rate is the estimator setting model_fs, "
+            "command line --set model_fs=...)",
         )
     return tn, (
         f"time regenerated as t0 + k / {fs:g} Hz; largest deviation of the file's time column "
@@ -89,11 +98,43 @@ def _regenerate_time(t: np.ndarray | None, n: int, fs: Any, source: str) -> tupl
     )
 
 
+def estimate_rate(t: np.ndarray) -> tuple[float, float] | None:
+    """Sampling rate [Hz] of a time column with rounding jitter, and its largest jitter [intervals].
+
+    The rate is the inverse slope of a least-squares line through ``(k, t[k])`` (finite samples),
+    rounded to the fewest significant digits that move the last sample by less than 1 % of an
+    interval. Returns None when the column is not increasing or deviates from the line by more
+    than :data:`JITTER_LIMIT` intervals (missing samples, irregular sampling).
+    """
+    k = np.flatnonzero(np.isfinite(t))
+    if k.size < 3:
+        return None
+    tk = t[k]
+    if np.any(np.diff(tk) <= 0):
+        return None
+    slope = float(np.polyfit(k.astype(np.float64), tk, 1)[0])
+    if not slope > 0:
+        return None
+    fs = 1.0 / float(slope)
+    n = float(k[-1] - k[0] + 1)
+    for digits in range(3, 16):
+        rounded = float(f"{fs:.{digits}g}")
+        if n * abs(fs / rounded - 1.0) < 0.01:
+            fs = rounded
+            break
+    t0 = float(np.median(tk - k / fs))
+    dev = float(np.max(np.abs(tk - (t0 + k / fs)))) * fs
+    if dev > JITTER_LIMIT:
+        return None
+    return fs, dev
+
+
 def _missing(channel: str, what: str, headers: list[str], source: str, hint: str = "") -> DataValidationError:
     return DataValidationError(
         channel,
         f"no {what} column in {source} (found {headers}; recognised names: "
-        f"{list(COLUMN_ALIASES[channel])}); map one with columns={{'<name>': {channel!r}}}{hint}",
+        f"{list(COLUMN_ALIASES[channel])}); map one with columns={{'<name>': {channel!r}}} "
+        f"(command line: --column <name>={channel}){hint}",
     )
 
 
@@ -111,6 +152,7 @@ def build_experiment(
     name: str | None = None,
     metadata: Mapping[str, Any] | None = None,
     time_tolerance: float = DEFAULT_TIME_TOLERANCE,
+    plausible_max: Mapping[str, float] | None = None,
     stored_metadata: Mapping[str, Any] | None = None,
 ) -> Experiment:
     """Build an Experiment from ``{source column: values}``; see :func:`~mrdamper.data.readers.read_csv`.
@@ -126,7 +168,7 @@ def build_experiment(
 
     Other Parameters
     ----------------
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
         As for :func:`~mrdamper.data.readers.read_csv`.
     """
     src = str(path)
@@ -145,7 +187,7 @@ def build_experiment(
             "fs", "give either fs (declared rate, time regenerated) or resample_fs (interpolation), not both"
         )
     if "t" not in specs and fs is None:
-        raise _missing("t", "time", headers, src, " or declare the rate with fs=")
+        raise _missing("t", "time", headers, src, " or declare the rate with fs= (--fs)")
     if "x" not in specs:
         raise _missing("x", "displacement", headers, src)
     if "F" not in specs:
@@ -163,7 +205,7 @@ def build_experiment(
             "velocity",
             headers,
             src,
-            ", or pass derive_velocity=True (or a cut-off [Hz]) to compute it from x; see "
+            ", or pass derive_velocity=True (or a cut-off [Hz]; command line: --derive-velocity) to compute it from x; see "
             "mrdamper.data.preprocessing.velocity_from_displacement",
         )
     if "v" in specs and derive is not None:
@@ -207,17 +249,36 @@ def build_experiment(
             time_tolerance=time_tolerance,
         )
     except DataValidationError as exc:
-        if exc.field == "t" and "not uniform" in str(exc) and fs is None:
+        if not (exc.field == "t" and "not uniform" in str(exc) and fs is None and resample_fs is None):
+            raise
+        est = estimate_rate(arrays["t"])
+        if est is None:
             raise DataValidationError(
                 "t",
-                f"{src}: {str(exc)[3:]}; if the file's time column is only rounded (printed with "
-                "few digits), declare the rate with fs= to regenerate it",
+                f"{src}: {str(exc)[3:]}; if the file's time column is only rounded, declare the rate "
+                "with fs= (command line: --fs); if the sampling really was irregular, interpolate with "
+                "resample_fs= (command line: --resample-fs)",
             ) from None
-        raise
+        fs_est, jitter = est
+        arrays["t"], _ = _regenerate_time(arrays["t"], n, fs_est, src)
+        note = (
+            f"time column of {src} is not uniform but stays within {jitter:.3g} sample intervals of a "
+            f"straight line (rounded values); rate estimated as {fs_est:.10g} Hz and time regenerated "
+            "as t0 + k/fs (declare the rate with fs= / --fs to silence this)"
+        )
+        warnings.warn(note, Note, stacklevel=2)
+        meta["repairs"] = tuple(meta.get("repairs", ())) + (note,)
+        exp = Experiment.from_arrays(
+            **arrays, name=rec_name, metadata=meta, nan_policy=nan_policy, max_gap=max_gap,
+            resample_fs=resample_fs, time_tolerance=time_tolerance,
+        )
     if derive is not None:
         from mrdamper.data.preprocessing import velocity_from_displacement
 
         exp = velocity_from_displacement(exp, cutoff=None if derive is True else float(derive))
+    found = check_plausibility({c: getattr(exp, c) for c in ("x", "v", "F", "i", "voltage")}, src, plausible_max)
+    if found:
+        exp = exp.replace(metadata={**dict(exp.metadata), "implausible": tuple(found)})
     return exp
 
 

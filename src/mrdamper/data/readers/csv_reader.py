@@ -66,6 +66,7 @@ def read_csv(
     name: str | None = None,
     metadata: Mapping[str, Any] | None = None,
     time_tolerance: float = DEFAULT_TIME_TOLERANCE,
+    plausible_max: Mapping[str, float] | None = None,
     sep: str | None = None,
     decimal: str = ".",
     comment: str | None = "#",
@@ -105,6 +106,10 @@ def read_csv(
         Extra metadata, added to the provenance (``source``, ``columns``, ``units``).
     time_tolerance : float
         Relative tolerance on the sampling interval [-]; see :class:`Experiment`.
+    plausible_max : mapping, optional
+        Overrides of the plausibility bounds (``stroke`` [m], ``v`` [m/s], ``F`` [N], ``i`` [A],
+        ``voltage`` [V]); values beyond them give a :class:`~mrdamper.errors.PlausibilityWarning`
+        (see :mod:`mrdamper.data.plausibility`).
     sep : str, optional
         Column delimiter; detected from the first lines when omitted.
     decimal : str
@@ -174,6 +179,7 @@ def read_csv(
         name=name,
         metadata=metadata,
         time_tolerance=time_tolerance,
+        plausible_max=plausible_max,
     )
 
 

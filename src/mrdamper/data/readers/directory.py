@@ -35,6 +35,15 @@ SUFFIX_READERS: dict[str, Any] = {
     ".mat": read_mat,
 }
 
+#: Options that only some file formats have: option -> suffixes whose reader takes it. A folder
+#: may mix formats, so these are passed only to the readers that take them.
+FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
+    "sep": (".csv", ".txt", ".tsv", ".dat"),
+    "decimal": (".csv", ".txt", ".tsv", ".dat"),
+    "comment": (".csv", ".txt", ".tsv", ".dat"),
+    "struct": (".mat",),
+}
+
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 #: Group-name suffix -> factor to SI (``amplitude_mm`` -> ``amplitude`` [m]); "/" becomes "_per_".
@@ -109,7 +118,9 @@ def read_file(path: str | os.PathLike[str], **kwargs: Any) -> Experiment:
     path : path-like
         The file (``.csv/.txt/.tsv/.dat``, ``.parquet/.pq`` or ``.mat``).
     **kwargs
-        Options of that reader (see :func:`~mrdamper.data.readers.read_csv`).
+        Options of that reader (see :func:`~mrdamper.data.readers.read_csv`). Format-specific
+        options (:data:`FORMAT_OPTIONS`: ``sep``, ``decimal``, ``comment`` for text, ``struct``
+        for MATLAB) are passed only to the readers of those formats.
 
     Returns
     -------
@@ -127,7 +138,8 @@ def read_file(path: str | os.PathLike[str], **kwargs: Any) -> Experiment:
         raise DataValidationError(
             "path", f"{p}: unknown file type {p.suffix!r}; expected one of {sorted(SUFFIX_READERS)}"
         )
-    return reader(p, **kwargs)
+    kw = {k: v for k, v in kwargs.items() if k not in FORMAT_OPTIONS or p.suffix.lower() in FORMAT_OPTIONS[k]}
+    return reader(p, **kw)
 
 
 def read_directory(
@@ -170,8 +182,9 @@ def read_directory(
     FileNotFoundError
         If the folder does not exist.
     DataValidationError
-        If ``path`` is not a folder, the pattern is invalid, or no file matches it; errors of a
-        file's reader are raised as they are (their message names the file).
+        If ``path`` is not a folder, the pattern is invalid, no file matches it, or a matching
+        name is a broken symbolic link; errors of a file's reader are raised as they are (their
+        message names the file).
 
     Examples
     --------
@@ -189,6 +202,12 @@ def read_directory(
     found: list[tuple[str, Path, dict[str, Any]]] = []
     others: list[str] = []
     for f in files:
+        if f.is_symlink() and not f.exists():
+            if parse_file_name(f.name, rx) is not None:
+                raise DataValidationError(
+                    "path", f"{f} is a broken symbolic link (its target {os.readlink(f)!r} does not exist)"
+                )
+            continue
         if not f.is_file():
             continue
         meta = parse_file_name(f.name, rx)

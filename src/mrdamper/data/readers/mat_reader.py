@@ -125,6 +125,7 @@ def read_mat(
     name: str | None = None,
     metadata: Mapping[str, Any] | None = None,
     time_tolerance: float = DEFAULT_TIME_TOLERANCE,
+    plausible_max: Mapping[str, float] | None = None,
 ) -> Experiment:
     """Read one record from a MATLAB ``.mat`` file (v5 via SciPy, v7.3 via h5py).
 
@@ -134,7 +135,7 @@ def read_mat(
         The file.
     struct : str, optional
         Name of a struct variable whose fields are the channels; default: top-level variables.
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
         See :func:`~mrdamper.data.readers.read_csv` (``columns`` maps variable names).
 
     Returns
@@ -179,6 +180,7 @@ def read_mat(
         name=name,
         metadata=meta,
         time_tolerance=time_tolerance,
+        plausible_max=plausible_max,
     )
     if skipped:
         ignored = list(exp.metadata.get("ignored_columns", [])) + skipped

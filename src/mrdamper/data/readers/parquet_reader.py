@@ -42,6 +42,7 @@ def read_parquet(
     name: str | None = None,
     metadata: Mapping[str, Any] | None = None,
     time_tolerance: float = DEFAULT_TIME_TOLERANCE,
+    plausible_max: Mapping[str, float] | None = None,
 ) -> Experiment:
     """Read one record from a Parquet file.
 
@@ -54,7 +55,7 @@ def read_parquet(
     ----------
     path : path-like
         The file.
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
         See :func:`~mrdamper.data.readers.read_csv`.
 
     Returns
@@ -105,5 +106,6 @@ def read_parquet(
         name=name if name is not None else stored_name,
         metadata=metadata,
         time_tolerance=time_tolerance,
+        plausible_max=plausible_max,
         stored_metadata=stored,
     )

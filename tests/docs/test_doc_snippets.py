@@ -1,0 +1,142 @@
+"""Every ```bash and ```python block of README.md and docs/**/*.md runs as written.
+
+How the blocks run:
+
+* one test per page; the page's blocks run in order, in one fresh temporary folder that has
+  ``../shared`` (a link to the shared folder holding ``data/``) beside it and a link
+  ``benchmarks/`` to the repository's benchmarks, so commands are written as a user at the
+  repository root would write them (``../shared/data/...``);
+* ``bash`` blocks run with ``bash -e`` (the first failing command fails the block); ``python``
+  blocks run as a script with this interpreter. Both see this checkout's ``src`` first on
+  ``PYTHONPATH``, matplotlib's ``Agg`` backend and single-threaded BLAS;
+* a block preceded, on the line just before its fence, by ``<!-- doc-test: skip "reason" -->`` is
+  not run (the reason is reported); such blocks are the ones that take minutes, and the page
+  then shows their quick form in a block that does run;
+* the package is already installed where this test runs, so a ``pip install ... && COMMAND``
+  line runs only ``COMMAND`` (the part after ``&&``), and a line that only installs is left out.
+
+Pages that use ``../shared`` skip, with the reason, when the shared data are absent.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO_ROOT, SHARED_DATA
+
+#: Longest time one block may run [s] (the convention asks for seconds to about a minute).
+BLOCK_TIMEOUT_S = 600
+_FENCE = re.compile(r"^\s*```\s*([A-Za-z0-9_+-]*)\s*$")
+_SKIP = re.compile(r'^\s*<!--\s*doc-test:\s*skip\s+"([^"]+)"\s*-->\s*$')
+_PIP = re.compile(r"^\s*(?:python3?\s+-m\s+)?pip3?\s+install\b[^&]*?(?:&&\s*(?P<rest>.*))?$")
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced block of a page."""
+
+    page: str
+    line: int
+    lang: str
+    code: str
+    skip: str | None
+
+
+def doc_pages() -> list[Path]:
+    """README.md and every Markdown page under docs/, in a stable order."""
+    pages = [REPO_ROOT / "README.md"] if (REPO_ROOT / "README.md").is_file() else []
+    return pages + sorted((REPO_ROOT / "docs").rglob("*.md"))
+
+
+def blocks_of(page: Path) -> list[Block]:
+    """The ``bash`` and ``python`` blocks of a page, with their skip reasons."""
+    lines = page.read_text(encoding="utf-8").splitlines()
+    out: list[Block] = []
+    k = 0
+    rel = str(page.relative_to(REPO_ROOT))
+    while k < len(lines):
+        m = _FENCE.match(lines[k])
+        if not m:
+            k += 1
+            continue
+        start, lang = k, m.group(1).lower()
+        k += 1
+        body: list[str] = []
+        while k < len(lines) and not lines[k].lstrip().startswith("```"):
+            body.append(lines[k])
+            k += 1
+        k += 1  # closing fence
+        if lang in ("bash", "python"):
+            prev = _SKIP.match(lines[start - 1]) if start > 0 else None
+            code = textwrap.dedent("\n".join(body)) + "\n"  # blocks indented inside list items
+            out.append(Block(rel, start + 1, lang, code, prev.group(1) if prev else None))
+    return out
+
+
+def as_run(block: Block) -> str:
+    """The code that runs: install lines reduced to what follows their ``&&``."""
+    if block.lang != "bash":
+        return block.code
+    kept = []
+    for ln in block.code.splitlines():
+        m = _PIP.match(ln)
+        if m:
+            if m.group("rest"):
+                kept.append(m.group("rest"))
+            continue
+        kept.append(ln)
+    return "\n".join(kept) + "\n"
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    src = str(REPO_ROOT / "src")
+    env["PYTHONPATH"] = src + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    env.update(MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    return env
+
+
+PAGES = doc_pages()
+
+
+def test_the_convention_is_parsed() -> None:
+    page = REPO_ROOT / "README.md"
+    assert any(b.lang == "python" for b in blocks_of(page))
+    demo = Block("x", 1, "bash", 'python3 -m pip install -e ".[dev]" && python3 -m pytest\npip install x\nls\n', None)
+    assert as_run(demo) == "python3 -m pytest\nls\n"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", PAGES, ids=[str(p.relative_to(REPO_ROOT)) for p in PAGES])
+def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
+    blocks = blocks_of(page)
+    runnable = [b for b in blocks if b.skip is None]
+    if not runnable:
+        reasons = "; ".join(f"line {b.line}: {b.skip}" for b in blocks) or "no bash or python block"
+        pytest.skip(reasons)
+    if "../shared" in "".join(b.code for b in runnable) and not SHARED_DATA.is_dir():
+        pytest.skip(f"shared data not found at {SHARED_DATA} (set MRDAMPER_SHARED_DATA)")
+    work = tmp_path / "repo"
+    work.mkdir()
+    (tmp_path / "shared").symlink_to(SHARED_DATA.parent, target_is_directory=True)
+    (work / "benchmarks").symlink_to(REPO_ROOT / "benchmarks", target_is_directory=True)
+    env = _env()
+    for b in runnable:
+        code = as_run(b)
+        cmd = ["bash", "-e", "-c", code] if b.lang == "bash" else [sys.executable, "-c", code]
+        try:
+            proc = subprocess.run(cmd, cwd=work, env=env, capture_output=True, text=True,
+                                  timeout=BLOCK_TIMEOUT_S, check=False)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"{b.page}:{b.line} ({b.lang}) ran longer than {BLOCK_TIMEOUT_S} s")
+        if proc.returncode != 0:
+            tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-15:])
+            pytest.fail(f"{b.page}:{b.line} ({b.lang}) exited {proc.returncode}:\n{code}\n--- output ---\n{tail}")
