@@ -75,7 +75,7 @@ def quartercar(
 
     if out.exists() and not out.is_dir():
         raise DataValidationError("--out", f"{out} exists and is not a folder")
-    table_path = check_writable(out / "quartercar.csv", force)
+    table_path = check_writable(out / "quartercar.csv", force, inputs=[model_file])
     car_kw = parse_settings(car)
     fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
     unknown = sorted(set(car_kw) - set(fields))

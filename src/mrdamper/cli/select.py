@@ -13,6 +13,7 @@ from typing import Annotated, Any
 
 import typer
 
+from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
 __all__ = ["register", "select"]
@@ -51,7 +52,7 @@ def select(
     csv: Annotated[Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --csv if it exists.")] = False,
     pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
-    fs: Annotated[float | None, typer.Option("--fs", help="Regenerate time as n / fs [Hz].")] = None,
+    read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Cross-validate every model kind on DATA and recommend one."""
     from mrdamper._io import atomic_write_text, check_writable
@@ -59,8 +60,8 @@ def select(
     from mrdamper.study.selection import cross_validate
 
     if csv is not None:
-        check_writable(csv, force=force)
-    records = read_records(data, pattern, fs)
+        check_writable(csv, force=force, inputs=list(data))
+    records = read_records(data, pattern, read_kw)
     source = input_ or _choose_input(records)
     if folds not in ("auto", "condition", "record", "time"):
         raise DataValidationError("--folds", f"expected auto, condition, record or time, got {folds!r}")
@@ -82,4 +83,4 @@ def select(
 
 def register(app: typer.Typer) -> None:
     """Add the ``select`` command to ``app``."""
-    app.command("select")(select)
+    app.command("select")(reader_options()(select))
