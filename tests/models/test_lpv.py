@@ -144,7 +144,7 @@ def test_bad_data() -> None:
     t = np.arange(other_rate.n) / 1000.0
     # Mixed rates: the lowest one is the model rate, with a one-line note (same rule as NARX).
     with pytest.warns(Note, match="model rate model_fs"):
-        mixed = LPVEstimator(input_signal="v", refine=False).fit(_train() + [other_rate.replace(t=t, name="fast")])
+        mixed = LPVEstimator(input_signal="v", refine=False, stability="warn").fit(_train() + [other_rate.replace(t=t, name="fast")])
     assert mixed.fs == min(FS, 1000.0)
     with pytest.raises(DataValidationError, match="model_fs"):
         LPVEstimator(input_signal="v", model_fs=-1.0).fit(_train())
