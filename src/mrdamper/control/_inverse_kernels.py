@@ -478,19 +478,39 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
 
 
 @njit(cache=True)
-def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step):  # pragma: no cover
-    """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`)."""
+def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step, lag):  # pragma: no cover
+    """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`).
+
+    With a drive lag (``lag = exp(-eta dt) >= 0``; -1 for none) the map sees ``rho``, the lagged
+    command, and the unknown is ``rho[k]`` within the lag's reach from ``rho[k-1]`` (the command in
+    ``[lo, hi]``), regularised towards the ``rho`` the previous command would give, exactly as
+    :func:`lpv_inverse_reg`; ``rho[1] = rho[0]`` (the lag starts at rest).
+    """
     n = x.size
     out = np.zeros(n)
     sat = np.zeros(n, dtype=np.bool_)
     prev = min(max(i0, lo), hi)
+    w_prev = prev
     lam2 = lam * lam
     for k in range(n):
         a, b = lo, hi
+        if lag >= 0.0 and k >= 1:
+            if k == 1:
+                a = b = out[0]
+            else:
+                a = max(lag * out[k - 1] + (1.0 - lag) * lo, lo)
+                b = min(lag * out[k - 1] + (1.0 - lag) * hi, hi)
         if k >= 1:
             a = max(a, prev - rate_step)
             b = min(b, prev + rate_step)
-        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, prev, lam2, n_grid)
+            if b < a:
+                a = b = min(max(prev, a), b)
+        hold = prev
+        if lag >= 0.0 and k >= 2:  # rho with the previous command held
+            hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, hold, lam2, n_grid)
+        if lag >= 0.0:
+            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         out[k] = r
         sat[k] = not ok
         prev = r

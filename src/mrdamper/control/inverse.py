@@ -233,12 +233,13 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def model_input_limits(model: Any) -> tuple[float, float]:
-    """Default input limits: the identified ``input_range``, for an LPV model intersected with the
-    scheduling range ``rho_range`` it was identified on (beyond it the coefficients are extrapolated).
+    """Default input limits: the identified ``input_range``, for an LPV model (or a static map with a
+    drive lag) intersected with the scheduling range ``rho_range`` it was identified on (beyond it the
+    coefficients are extrapolated).
     """
     lo, hi = (float(b) for b in model.input_range)
     rr = getattr(model, "rho_range", None)
-    if getattr(model, "kind", "") == "lpv" and rr is not None and rr[1] > rr[0]:
+    if rr is not None and rr[1] > rr[0]:
         lo, hi = max(lo, float(rr[0])), min(hi, float(rr[1]))
     return lo, hi
 
@@ -361,14 +362,21 @@ def inverse_current(
         else:
             comp, power, theta, f0 = static_map_arrays(model)
             dt = float(t[1] - t[0]) if t.size > 1 else 1.0
+            eta = getattr(model, "eta", None)
+            lag = -1.0 if eta is None else float(np.exp(-eta * dt))
             rho, sat = K.static_inverse_reg(
                 np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64), Fd,
-                comp, power, theta, f0, lo, hi, lo, int(n_grid), lam, step_rate * dt,
+                comp, power, theta, f0, lo, hi, lo, int(n_grid), lam, step_rate * dt, lag,
             )
-            w = rho
+            w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
     elif isinstance(model, LPVModel):
         rho, w, sat = _lpv(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
     else:
+        if getattr(model, "eta", None) is not None:
+            raise DataValidationError(
+                "method", f"the exact inverse of a static map with a drive lag (eta) is not implemented; "
+                f"use method='regularised' for this {model.kind} model"
+            )
         rho, sat = _static(model, x, v, Fd, lo, hi, int(n_grid))
         w = rho
     rec = _record(t, x, v, Fd, model, w)
