@@ -109,6 +109,11 @@ def test_refusals(tmp_path: Path) -> None:
     bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
     with pytest.raises(DataValidationError, match="C identifier"):
         c_source(bing, "1bad-name")
+    from mrdamper.models.semiphenomenological import SP3Model
+
+    lagged = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), input_range=(0.0, 2.0), eta=30.0, rho_range=(0.0, 2.0))
+    with pytest.raises(DataValidationError, match="drive lag"):
+        c_source(lagged)
     export_c(bing, tmp_path, name="b")
     with pytest.raises(OutputExistsError):
         export_c(bing, tmp_path, name="b")

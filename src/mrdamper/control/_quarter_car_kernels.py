@@ -9,7 +9,8 @@ control sample. The road displacement is linear between its samples (given at th
 The damper is used through a per-sample step interface:
 
 * static map (SP family, Bingham, linear): force ``sp_force1(x, v, i) - f0`` evaluated at every
-  Runge-Kutta stage with the current held over the control sample;
+  Runge-Kutta stage with the current held over the control sample (with a drive lag, ``rho[k]``,
+  the lagged command at the sample instant, is held);
 * LPV model: the force of control sample ``k`` is a polynomial in ``rho[k]`` fixed by the past
   (``lpv_coefficients``); it is held over the sample (the model has no direct feedthrough), and
   ``u[k]`` is built from the damper velocity at the sample instant.
@@ -127,7 +128,7 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
         v_d = vs - vu
         # --- input for this sample
         a, b = lo, hi
-        if is_lpv and lag >= 0.0 and k >= 1:
+        if lag >= 0.0 and k >= 1:
             a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
             b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
         if k >= 1:
@@ -160,7 +161,12 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
                 r = min(max(i_const, a), b)
                 ok = True
             else:
-                r, ok = reg_solve_static(x_d, v_d, comp, power, theta, f0, target + f0, a, b, prev, lam2, n_grid)
+                hold = prev
+                if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
+                    hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+                r, ok = reg_solve_static(x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid)
+            if lag >= 0.0:
+                w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
             F[k] = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0
         rho[k] = r
         Fd[k] = target

@@ -434,6 +434,11 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         raise DataValidationError("name", f"expected a C identifier, got {name!r}")
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
+    if not isinstance(model, LPVModel) and getattr(model, "eta", None) is not None:
+        raise DataValidationError(
+            "model", f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
+            "implemented; export the map without the lag or an LPV model with its drive lag"
+        )
     p, P = name, name.upper()
     lo, hi = model_input_limits(model)
     has_inverse = not isinstance(model, LTIModel)

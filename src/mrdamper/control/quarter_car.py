@@ -408,6 +408,8 @@ def simulate_quarter_car(
             arrays["lag"] = float(np.exp(-model.eta / model.fs))
     else:
         n_sub = 1
+        if getattr(model, "eta", None) is not None:  # static map with a drive lag, at the road rate
+            arrays["lag"] = float(np.exp(-model.eta / road.fs))
     h = 1.0 / road.fs
     if isinstance(model, LinearDamper) or ctrl.kind in ("soft", "hard"):
         lam = 0.0
@@ -441,6 +443,8 @@ def simulate_quarter_car(
                                       f"quarter-car state left +-{bound:g} at t = {bad * h:.4g} s")
     if arrays["is_lpv"] and model.eta is not None:
         cmd = driver_command(rho, model.eta, 1.0 / model.fs, (lo, hi))
+    elif getattr(model, "eta", None) is not None:
+        cmd = driver_command(rho, model.eta, h, (lo, hi))
     else:
         cmd = rho
     n = n_ctrl * n_sub
