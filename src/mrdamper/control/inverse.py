@@ -78,6 +78,7 @@ __all__ = [
     "InverseResult",
     "driver_command",
     "force_authority",
+    "horizon_samples",
     "inverse_current",
     "lpv_law_arrays",
     "model_input_limits",
@@ -284,6 +285,7 @@ def inverse_current(
     method: str = "regularised",
     reg: float | None = None,
     rate: float | None = None,
+    horizon: float | None = None,
 ) -> InverseResult:
     """Electrical input that makes ``model`` produce ``F_desired`` for the given motion.
 
@@ -315,6 +317,11 @@ def inverse_current(
         0 gives the exact least-squares solution per sample.
     rate : float, optional
         Largest change of the input per second [A/s] or [V/s] (regularised method); default none.
+    horizon : float, optional
+        Lead horizon [s] of the regularised inverse of an LPV model with a drive lag: the command is
+        chosen for the mean force error over this time with the command held (see the module
+        docstring); default one lag time constant ``1 / eta``; 0 decides on the present sample
+        only. Ignored for models without a drive lag and for static maps.
 
     Returns
     -------
@@ -357,8 +364,12 @@ def inverse_current(
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
     if method == "regularised":
         lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi)
+        if horizon is not None and (isinstance(horizon, bool) or not isinstance(horizon, (int, float, np.floating))
+                                    or not (np.isfinite(horizon) and horizon >= 0)):
+            raise DataValidationError("horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}")
         if isinstance(model, LPVModel):
-            rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate)
+            n_h = horizon_samples(model.eta, 1.0 / model.fs, horizon)
+            rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate, n_h)
         else:
             comp, power, theta, f0 = static_map_arrays(model)
             dt = float(t[1] - t[0]) if t.size > 1 else 1.0
@@ -492,8 +503,20 @@ def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi:
     return lam, step_rate
 
 
+def horizon_samples(eta: float | None, dt: float, horizon: float | None = None) -> int:
+    """Samples of the lead horizon of the drive-lag inverse: ``round(horizon / dt)``, at least 1.
+
+    ``horizon`` [s] defaults to the lag time constant ``1 / eta`` [s]; without a drive lag
+    (``eta`` None) the horizon is 1 (the present sample).
+    """
+    if eta is None:
+        return 1
+    T = 1.0 / float(eta) if horizon is None else float(horizon)
+    return max(1, int(round(T / dt)))
+
+
 def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
-             lam: float, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+             lam: float, rate: float, n_h: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Regularised LPV inverse at the model rate; records at another rate are resampled in and out."""
     from mrdamper.models._rates import to_model_rate
 
@@ -507,7 +530,7 @@ def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     rho, _, sat = K.lpv_inverse_reg(
         vm, Fm, np.ascontiguousarray(model.alpha), np.ascontiguousarray(model.beta), float(model.offset),
-        lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, lam, rate * dt,
+        lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, lam, rate * dt, n_h,
     )
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
