@@ -42,6 +42,7 @@ from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
     driver_command,
     force_authority,
+    horizon_samples,
     lpv_law_arrays,
     model_input_limits,
     static_map_arrays,
@@ -406,7 +407,9 @@ def simulate_quarter_car(
             )
         if model.eta is not None:
             arrays["lag"] = float(np.exp(-model.eta / model.fs))
+        n_h = horizon_samples(model.eta, 1.0 / model.fs)
     else:
+        n_h = 1
         n_sub = 1
         if getattr(model, "eta", None) is not None:  # static map with a drive lag, at the road rate
             arrays["lag"] = float(np.exp(-model.eta / road.fs))
@@ -436,7 +439,7 @@ def simulate_quarter_car(
         zr[: n_ctrl * n_sub + 1], h, n_sub, car_arr, arrays["is_lpv"], arrays["comp"], arrays["power"],
         arrays["theta"], arrays["f0"], arrays["alpha"], arrays["beta"], arrays["offset"], arrays["lag"],
         arrays["mode"], arrays["gm"], arrays["gc"], arrays["mu_high"], arrays["mu_low"], code, gains, lo, hi, lam,
-        step_rate, int(n_grid), float(bound) * mr,
+        step_rate, int(n_grid), float(bound) * mr, n_h,
     )
     if bad >= 0:
         raise SimulationDivergedError(getattr(model, "kind", "damper"), int(bad),
