@@ -14,7 +14,7 @@ import pytest
 
 from mrdamper.control import inverse_current
 from mrdamper.control.c_export import c_source, export_c
-from mrdamper.control.inverse import DEFAULT_REG_FRACTION, force_authority
+from mrdamper.control.inverse import default_reg
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.lpv import LTIModel
@@ -78,7 +78,7 @@ def test_c_with_drive_lag_on_dyke(tmp_path: Path, dyke_models: dict[str, Any], d
     F_py = model.with_range_policy("clip").predict(rec)
     assert _rel(_forward(lib, "d_lpv", rec.x, rec.v, rec.voltage), F_py) < 1e-9
     rho_c, _ = _inverse(lib, "d_lpv", rec.x, rec.v, rec.F)
-    res = inverse_current(model, rec, rec.F, reg=DEFAULT_REG_FRACTION * force_authority(model, 0.3))  # the C default
+    res = inverse_current(model, rec, rec.F, reg=default_reg(model, 0.3, 1.0 / model.fs))  # the C default
     assert _rel(rho_c, res.rho) < 1e-9
 
 

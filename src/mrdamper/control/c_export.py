@@ -39,6 +39,7 @@ from mrdamper._io import atomic_write_text, check_writable
 from mrdamper.control import _inverse_kernels as K
 from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
+    default_reg,
     force_authority,
     horizon_samples,
     lpv_law_arrays,
@@ -466,10 +467,13 @@ def _solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str
     return slope.format(**sub) + _BISECT.format(**sub) + ("/* minimiser" + solve).format(**sub)
 
 
-def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, dt: float) -> tuple[float, float]:
+def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, dt: float,
+              dt_known: bool = True) -> tuple[float, float]:
     lo, hi = model_input_limits(model)
-    if reg is None:
-        lam = DEFAULT_REG_FRACTION * force_authority(model, v_ref) if hi > lo else 0.0
+    if reg is None and not hi > lo:
+        lam = 0.0
+    elif reg is None:
+        lam = default_reg(model, v_ref, dt) if dt_known else DEFAULT_REG_FRACTION * force_authority(model, v_ref)
     elif not (np.isfinite(reg) and reg >= 0):
         raise DataValidationError("reg", f"expected a regularisation weight >= 0, got {reg!r}")
     else:
@@ -495,7 +499,9 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         C identifier prefix and file stem.
     reg : float, optional
         Regularisation weight of the inverse [N per input unit]; default
-        ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)`` (fixed into the code).
+        ``default_reg(model, v_ref, dt)`` at the LPV model's sample time or, for a static map, at
+        ``dt`` (without ``dt``: ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``, the 200 Hz
+        value); fixed into the code.
     v_ref : float
         Velocity setting the default ``reg`` [m/s].
     rate : float, optional
@@ -529,7 +535,8 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         step_dt = 1.0 if dt is None else float(dt)
         if rate is not None and dt is None:
             raise DataValidationError("dt", "a rate bound on a static map's inverse needs the sample time dt [s]")
-    lam, rate_step = _settings(model, reg, v_ref, rate, step_dt) if has_inverse else (0.0, math.inf)
+    dt_known = is_lpv or dt is not None
+    lam, rate_step = _settings(model, reg, v_ref, rate, step_dt, dt_known) if has_inverse else (0.0, math.inf)
     fmt: dict[str, Any] = {"p": p, "P": P, "lo": _f(lo), "hi": _f(hi), "in_lo": _f(model.input_range[0]),
                            "in_hi": _f(model.input_range[1]), "lam2": _f(lam * lam),
                            "rate_step": _f(rate_step), "n_grid": n_grid, "n_bisect": K._N_BISECT}

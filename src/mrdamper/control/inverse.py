@@ -15,7 +15,10 @@ Regularised inverse (``method="regularised"``, the default), every supported kin
     ``v[k]``). Where ``|dF/di|`` is small against ``reg`` the input holds; where it is large the
     input follows the exact solution. Minimum: grid of ``n_grid`` intervals, then the zero of the
     objective's slope next to the best grid point, bisected to machine precision. ``reg`` defaults
-    to ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)``. Records at another rate than an
+    to :func:`default_reg` (rate independent: a smoothing time constant ``DEFAULT_REG_TIME``).
+    For an LPV model with a drive lag the force term is, from the third sample on, the mean over a
+    lead horizon (default one lag time constant ``1/eta``) of the model force with the implied
+    command held, the velocity held and the present desired force (:func:`horizon_samples`). Records at another rate than an
     LPV model's are resampled to it and the input interpolated back.
 
 The exact per-sample inverse (``method="exact"``):
@@ -75,7 +78,9 @@ from mrdamper.models.base import FittedModel
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
+    "DEFAULT_REG_TIME",
     "InverseResult",
+    "default_reg",
     "driver_command",
     "force_authority",
     "horizon_samples",
@@ -313,7 +318,8 @@ def inverse_current(
         the module docstring). ``"exact"``: the exact per-sample solution described above.
     reg : float, optional
         Regularisation weight [N/A] or [N/V] of the regularised inverse; default
-        ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)`` (:func:`force_authority`).
+        ``default_reg(model, max|v|, dt)`` with ``dt`` the model sample time (LPV) or the record's
+        (static maps): a smoothing time constant :data:`DEFAULT_REG_TIME`, the same at every rate.
         0 gives the exact least-squares solution per sample.
     rate : float, optional
         Largest change of the input per second [A/s] or [V/s] (regularised method); default none.
@@ -363,7 +369,11 @@ def inverse_current(
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
     if method == "regularised":
-        lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi)
+        if isinstance(model, LPVModel):
+            dt_inv = 1.0 / model.fs
+        else:
+            dt_inv = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
+        lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi, dt_inv)
         if horizon is not None and (isinstance(horizon, bool) or not isinstance(horizon, (int, float, np.floating))
                                     or not (np.isfinite(horizon) and horizon >= 0)):
             raise DataValidationError("horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}")
@@ -482,14 +492,35 @@ def force_authority(model: Any, v_ref: float) -> float:
                - K.sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)) / (hi - lo)
 
 
-#: Default regularisation weight as a fraction of :func:`force_authority` at the peak velocity.
+#: Default regularisation weight at 200 Hz as a fraction of :func:`force_authority` (where it was chosen).
 DEFAULT_REG_FRACTION = 0.5
+#: Smoothing time constant of the default weight [s]: the fraction 0.5 at 200 Hz (see :func:`default_reg`).
+DEFAULT_REG_TIME = 0.005 / float(np.log(5.0))
 
 
-def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float) -> tuple[float, float]:
+def default_reg(model: Any, v_ref: float, dt: float) -> float:
+    """Default regularisation weight [N/A] or [N/V] for an inverse running every ``dt`` [s].
+
+    Per sample the regularised input is, to first order, ``q i[k-1] + (1 - q) i_exact`` with
+    ``q = reg^2 / (s^2 + reg^2)`` where ``s = |dF/di|``. The default makes this a first-order
+    smoothing of time constant :data:`DEFAULT_REG_TIME` where ``s`` equals the force authority at
+    ``v_ref`` (:func:`force_authority`), whatever the sample rate::
+
+        reg = force_authority(model, v_ref) * sqrt(q / (1 - q)),   q = exp(-dt / DEFAULT_REG_TIME)
+
+    At 200 Hz this is :data:`DEFAULT_REG_FRACTION` (0.5) times the authority; at 3 kHz about 3.0.
+    """
+    if not (np.isfinite(dt) and dt > 0):
+        raise DataValidationError("dt", f"expected a positive sampling interval [s], got {dt!r}")
+    q = float(np.exp(-dt / DEFAULT_REG_TIME))
+    return float(np.sqrt(q / (1.0 - q))) * force_authority(model, v_ref)
+
+
+def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float,
+                  dt: float) -> tuple[float, float]:
     if reg is None:
         vpk = float(np.max(np.abs(v))) if v.size else 0.0
-        lam = DEFAULT_REG_FRACTION * force_authority(model, vpk) if vpk > 0 else 0.0
+        lam = default_reg(model, vpk, dt) if vpk > 0 else 0.0
     else:
         if isinstance(reg, bool) or not isinstance(reg, (int, float, np.floating)) or not (np.isfinite(reg) and reg >= 0):
             raise DataValidationError("reg", f"expected a regularisation weight >= 0 [N per input unit], got {reg!r}")

@@ -39,9 +39,8 @@ import pandas as pd
 from mrdamper.control import _quarter_car_kernels as QK
 from mrdamper.control.comfort import weighted_rms
 from mrdamper.control.inverse import (
-    DEFAULT_REG_FRACTION,
+    default_reg,
     driver_command,
-    force_authority,
     horizon_samples,
     lpv_law_arrays,
     model_input_limits,
@@ -366,7 +365,7 @@ def simulate_quarter_car(
         Plant parameters (default :class:`QuarterCar()`).
     reg : float, optional
         Regularisation weight of the inverse [N per input unit]; default
-        ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``.
+        ``default_reg(model, v_ref, dt)`` at the control sample time ``dt`` (rate independent).
     v_ref : float
         Damper velocity setting the default ``reg`` [m/s].
     rate : float, optional
@@ -417,7 +416,7 @@ def simulate_quarter_car(
     if isinstance(model, LinearDamper) or ctrl.kind in ("soft", "hard"):
         lam = 0.0
     elif reg is None:
-        lam = DEFAULT_REG_FRACTION * force_authority(model, _pos("v_ref", v_ref, "m/s")) if hi > lo else 0.0
+        lam = default_reg(model, _pos("v_ref", v_ref, "m/s"), h * n_sub) if hi > lo else 0.0
     else:
         lam = _pos("reg", reg, "N per input unit", allow_zero=True)
     step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * h * n_sub
