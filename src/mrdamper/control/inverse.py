@@ -543,7 +543,7 @@ def horizon_samples(eta: float | None, dt: float, horizon: float | None = None) 
     if eta is None:
         return 1
     T = 1.0 / float(eta) if horizon is None else float(horizon)
-    return max(1, int(round(T / dt)))
+    return max(1, round(T / dt))
 
 
 def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
