@@ -29,7 +29,7 @@ MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
 _N_BISECT = 200
 #: Golden-section ratio and iterations of the drive-lag horizon solver (the C export uses the same).
 GOLDEN = 0.5 * (5.0 ** 0.5 - 1.0)
-N_GOLDEN = 80
+N_GOLDEN = 50
 
 
 @njit(cache=True)
