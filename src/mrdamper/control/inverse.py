@@ -10,7 +10,9 @@ What is solved
 Regularised inverse (``method="regularised"``, the default), every supported kind
     Causal, one pass: ``i[k]`` minimises ``(F_k(i) - F_desired[k])^2 + reg^2 (i - i[k-1])^2`` over
     the input range intersected with the rate bound ``|i - i[k-1]| <= rate dt`` (first sample
-    free) and, for an LPV model with a drive lag, the lag's reach. ``F_k`` is the model force at
+    free) and, for a model with a drive lag (LPV, or a static map with ``eta``), the lag's reach
+    (the static map is then evaluated at the lagged input ``rho`` and the command is
+    :func:`driver_command` of it). ``F_k`` is the model force at
     sample k given its past (LPV: a polynomial in ``rho[k]``; static map: the map at ``x[k]``,
     ``v[k]``). Where ``|dF/di|`` is small against ``reg`` the input holds; where it is large the
     input follows the exact solution. Minimum: grid of ``n_grid`` intervals, then the zero of the
@@ -18,8 +20,9 @@ Regularised inverse (``method="regularised"``, the default), every supported kin
     to :func:`default_reg` (rate independent: a smoothing time constant ``DEFAULT_REG_TIME``).
     For an LPV model with a drive lag the force term is, from the third sample on, the mean over a
     lead horizon (default one lag time constant ``1/eta``) of the model force with the implied
-    command held, the velocity held and the present desired force (:func:`horizon_samples`). Records at another rate than an
-    LPV model's are resampled to it and the input interpolated back.
+    command held, the velocity held and the present desired force (:func:`horizon_samples`),
+    minimised on the grid and then by golden-section search. Records at another rate than an LPV
+    model's are resampled to it and the input interpolated back.
 
 The exact per-sample inverse (``method="exact"``):
 
