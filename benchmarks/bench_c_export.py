@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
                                                       F_lpv.ctypes.data_as(_P), out[0].ctypes.data_as(_P),
                                                       out[1].ctypes.data_as(_P)),
                 lambda: IK.lpv_inverse_reg(v, F_lpv, lpv.alpha, lpv.beta, 0.0, 0.0, 1.0, -1.0, mode, gm, gc, mu_h,
-                                           mu_l, 0.0, N_GRID, REG, np.inf),
+                                           mu_l, 0.0, N_GRID, REG, np.inf, 1),
             ),
             ("sp1", "forward"): (
                 lambda: libs["sp1"].b_sp1_run(ctypes.c_long(n), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
                 lambda: libs["sp1"].b_sp1_inverse_run(ctypes.c_long(n), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
                                                       F_sp.ctypes.data_as(_P), out[0].ctypes.data_as(_P),
                                                       out[1].ctypes.data_as(_P)),
-                lambda: IK.static_inverse_reg(x, v, F_sp, comp, power, theta, f0, 0.0, 1.0, 0.0, N_GRID, REG, np.inf),
+                lambda: IK.static_inverse_reg(x, v, F_sp, comp, power, theta, f0, 0.0, 1.0, 0.0, N_GRID, REG, np.inf, -1.0),
             ),
         }
         for (kind, what), (fc, fp) in cases.items():

@@ -117,3 +117,14 @@ def test_inverse_refuses_unsupported_kind(tmp_path: Path, capsys: pytest.Capture
     assert _exit_code(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "'lti'" in err
+
+
+def test_inverse_horizon_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = SP3.save(tmp_path / "m.json")
+    rec = _record(tmp_path / "rec.csv", SP3)
+    assert _exit_code(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "-1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "horizon" in err
+    assert not (tmp_path / "o.csv").exists()
+    main(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "0.01"])
+    assert "(regularised)" in capsys.readouterr().out  # no drive lag: the horizon does not apply

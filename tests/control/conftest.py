@@ -39,7 +39,8 @@ def dyke_record(dyke_csv: Path) -> Any:
 
 @pytest.fixture(scope="session")
 def dyke_models(dyke_record: Any) -> dict[str, Any]:
-    """LPV (drive lag eta = 250 1/s, full rate) and SP-1 with the voltage input, fitted on the first 70 %."""
+    """LPV (full rate) and SP-1, both with the voltage input through the drive lag eta = 250 1/s, fitted
+    on the first 70 %."""
     from mrdamper.models.lpv import LPVEstimator
     from mrdamper.models.semiphenomenological import SP1Estimator
 
@@ -47,4 +48,4 @@ def dyke_models(dyke_record: Any) -> dict[str, Any]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         lpv = LPVEstimator(input="voltage", eta=250.0).fit(train)
-    return {"lpv": lpv, "sp1": SP1Estimator(input="voltage").fit(train)}
+    return {"lpv": lpv, "sp1": SP1Estimator(input="voltage", eta=250.0).fit(train)}

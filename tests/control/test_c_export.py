@@ -14,7 +14,7 @@ import pytest
 
 from mrdamper.control import inverse_current
 from mrdamper.control.c_export import c_source, export_c
-from mrdamper.control.inverse import DEFAULT_REG_FRACTION, force_authority
+from mrdamper.control.inverse import default_reg
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.lpv import LTIModel
@@ -78,7 +78,7 @@ def test_c_with_drive_lag_on_dyke(tmp_path: Path, dyke_models: dict[str, Any], d
     F_py = model.with_range_policy("clip").predict(rec)
     assert _rel(_forward(lib, "d_lpv", rec.x, rec.v, rec.voltage), F_py) < 1e-9
     rho_c, _ = _inverse(lib, "d_lpv", rec.x, rec.v, rec.F)
-    res = inverse_current(model, rec, rec.F, reg=DEFAULT_REG_FRACTION * force_authority(model, 0.3))  # the C default
+    res = inverse_current(model, rec, rec.F, reg=default_reg(model, 0.3, 1.0 / model.fs))  # the C default
     assert _rel(rho_c, res.rho) < 1e-9
 
 
@@ -109,6 +109,11 @@ def test_refusals(tmp_path: Path) -> None:
     bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
     with pytest.raises(DataValidationError, match="C identifier"):
         c_source(bing, "1bad-name")
+    from mrdamper.models.semiphenomenological import SP3Model
+
+    lagged = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), input_range=(0.0, 2.0), eta=30.0, rho_range=(0.0, 2.0))
+    with pytest.raises(DataValidationError, match="drive lag"):
+        c_source(lagged)
     export_c(bing, tmp_path, name="b")
     with pytest.raises(OutputExistsError):
         export_c(bing, tmp_path, name="b")

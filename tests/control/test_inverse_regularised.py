@@ -38,8 +38,9 @@ def test_constant_current_recovered_from_the_models_own_force(which: str) -> Non
     F = m.predict(e)
     res = inverse_current(m, e, F)
     moving = np.abs(e.v) > 0.2 * np.abs(e.v).max()
-    # starting from the lowest input, the regularised inverse reaches 1.3 A within the first stroke
-    late = moving & (e.t > 0.2)
+    # starting from the lowest input, the regularised inverse reaches 1.3 A within the first cycle
+    # and a half (the default weight at 1 kHz is about 1.6 x the force authority)
+    late = moving & (e.t > 0.5)
     assert np.max(np.abs(res.i[late] - 1.3)) < 1e-6
     assert np.all((res.i >= 0.0) & (res.i <= 2.0))
 
@@ -68,18 +69,71 @@ def test_quiroz_targets_every_record(quiroz_models: dict[str, Any], quiroz_recor
         assert bad.empty, f"{kind}: {bad.to_string()}"
 
 
-_NOT_MET = "not met on Dyke (SP-1: median voltage error 0.44 V; LPV: force ratio 1.57), see docs/control.md"
-
-
-@pytest.mark.parametrize(("kind", "figure"), [
-    ("sp1", "force"),
-    pytest.param("lpv", "force", marks=pytest.mark.xfail(strict=True, reason=_NOT_MET)),
-    pytest.param("sp1", "voltage", marks=pytest.mark.xfail(strict=True, reason=_NOT_MET)),
-    ("lpv", "voltage"),
-])
+@pytest.mark.parametrize(("kind", "figure"), [("sp1", "force"), ("lpv", "force"), ("sp1", "voltage"), ("lpv", "voltage")])
 def test_dyke_targets(dyke_models: dict[str, Any], dyke_record: Any, kind: str, figure: str) -> None:
     check = check_inverse(dyke_models[kind], dyke_record)
     if figure == "force":
         assert check.ssse_ratio <= 1.5
     else:
         assert check.median_input_error <= 0.1
+
+
+def test_lead_horizon_setting() -> None:
+    from mrdamper.control.inverse import horizon_samples
+
+    assert horizon_samples(None, 1e-3) == 1
+    assert horizon_samples(250.0, 1.0 / 3004.8) == 12  # one lag time constant
+    assert horizon_samples(250.0, 1e-3, 0.0) == 1
+    m = LPVModel(alpha=ALPHA, beta=BETA, offset=5.0, fs=FS, input_signal="v", rho_range=(0.0, 2.0),
+                 input_range=(0.0, 2.0), eta=60.0)
+    e = _motion()
+    t = np.asarray(e.t)
+    e = e.replace(i=np.where((t > 0.5) & (t < 1.8), 1.6, 0.4))
+    F = m.predict(e)
+    lead = inverse_current(m, e, F)
+    plain = inverse_current(m, e, F, horizon=0.0)
+    assert not np.array_equal(lead.rho, plain.rho)
+    for r in (lead, plain):
+        assert np.all((r.i >= 0.0) & (r.i <= 2.0))
+        step = np.abs(np.diff(r.rho))
+        assert np.all(step <= (1.0 - np.exp(-60.0 / FS)) * 2.0 + 1e-12)  # rho moves through the lag
+    with pytest.raises(DataValidationError, match="horizon"):
+        inverse_current(m, e, F, horizon=-1.0)
+
+
+def _lagged_sp3(eta: float) -> SP3Model:
+    return SP3Model(S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0), input_range=(0.0, 2.0), eta=eta,
+                    rho_range=(0.0, 2.0))
+
+
+def test_static_map_with_drive_lag_inverted_through_the_lag() -> None:
+    m = _lagged_sp3(40.0)
+    e = _motion()
+    t = np.asarray(e.t)
+    cmd = np.where((t > 0.5) & (t < 1.8), 1.6, 0.4)  # a switching command the lag smooths
+    e = e.replace(i=cmd)
+    F = m.predict(e)
+    assert not np.allclose(F, SP3Model(S=m.S, input_range=(0.0, 2.0)).predict(e))  # the lag matters
+    res = inverse_current(m, e, F, reg=0.0)
+    moving = np.abs(e.v) > 0.2 * np.abs(e.v).max()
+    late = moving & (t > 0.3)
+    # the command is recovered (the map sees its lagged value) and the force reproduced
+    assert np.median(np.abs(res.i[late] - cmd[late])) < 1e-6
+    assert np.sqrt(np.mean(res.error[t > 0.3] ** 2)) < 1e-6 * np.max(np.abs(F))
+    # rho moves only as far as the lag lets it in one sample
+    e_lag = np.exp(-40.0 / FS)
+    step = np.abs(np.diff(res.rho)[1:])
+    assert np.all(step <= (1.0 - e_lag) * 2.0 + 1e-12)
+    with pytest.raises(DataValidationError, match="method"):
+        inverse_current(m, e, F, method="exact")
+
+
+def test_static_map_drive_lag_round_trip_and_validation(tmp_path: Any) -> None:
+    from mrdamper.models.registry import load_model
+
+    m = _lagged_sp3(40.0)
+    back = load_model(m.save(tmp_path / "sp3.json"))
+    assert back.eta == 40.0 and back.rho_range == (0.0, 2.0)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(DataValidationError, match="eta"):
+            _lagged_sp3(bad)

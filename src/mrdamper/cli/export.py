@@ -69,6 +69,8 @@ def inverse(
     method: Annotated[str, typer.Option("--method", help="regularised | exact.")] = "regularised",
     reg: Annotated[float | None, typer.Option("--reg", help="Regularisation weight [N/A] (default from the model).")] = None,
     rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
+    horizon: Annotated[float | None, typer.Option(
+        "--horizon", help="Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present sample only).")] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Current that would have produced the record's measured force (causal inverse of the model).
@@ -86,7 +88,7 @@ def inverse(
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
     [exp] = read_records([data], read_kw=read_kw)
-    kw = {"method": method, "reg": reg, "rate": rate}
+    kw = {"method": method, "reg": reg, "rate": rate, "horizon": horizon}
     try:
         res = inverse_current(m, exp, exp.F, **kw)  # type: ignore[arg-type]
     except TypeError as exc:

@@ -18,12 +18,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["lpv_inverse", "lpv_inverse_reg", "reg_solve_poly", "reg_solve_static", "sp_force1", "static_inverse_reg"]
+__all__ = [
+    "horizon_step", "lpv_inverse", "lpv_inverse_reg", "reg_solve_poly", "reg_solve_static", "sp_force1",
+    "static_inverse_reg",
+]
 
 #: LPV input modes: u = v, continuous reading of eq. 22, literal reading.
 MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
 
 _N_BISECT = 200
+#: Golden-section ratio and iterations of the drive-lag horizon solver (the C export uses the same).
+GOLDEN = 0.5 * (5.0 ** 0.5 - 1.0)
+N_GOLDEN = 50
 
 
 @njit(cache=True)
@@ -421,15 +427,131 @@ def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # pragma: no cover - nu
 
 
 @njit(cache=True)
+def horizon_cost(cf, yb, ub, valid, alpha, beta, offset, r, w, lag, horizon, v, target, mode, gm, gc, mu_high,
+                 mu_low, ys, us, c2):  # pragma: no cover - numba
+    """Mean squared force error over ``horizon`` samples with the command ``w`` held.
+
+    Sample 0 has the coefficients ``cf`` (fixed by the past) and scheduling value ``r``; then the
+    model runs on: ``rho <- lag rho + (1 - lag) w``, the velocity held at ``v``, the past buffers
+    ``yb``, ``ub`` (most recent first, ``valid`` entries in use) copied into ``ys``, ``us``. Every
+    sample is compared with the same ``target`` (the desired force now: nothing later is known).
+    """
+    n_m, n_p = alpha.shape
+    for j in range(n_m):
+        ys[j] = yb[j]
+        us[j] = ub[j]
+    F = _poly(cf, r)
+    e = F - target
+    acc = e * e
+    rr = r
+    nv = valid
+    for _ in range(1, horizon):
+        for j in range(n_m - 1, 0, -1):
+            ys[j] = ys[j - 1]
+            us[j] = us[j - 1]
+        ys[0] = F - offset
+        us[0] = _u_of(v, rr, mode, gm, gc, mu_high, mu_low)
+        if nv < n_m:
+            nv += 1
+        rr = lag * rr + (1.0 - lag) * w
+        for p in range(n_p):
+            acc2 = 0.0
+            for j in range(nv):
+                acc2 += beta[j, p] * us[j] - alpha[j, p] * ys[j]
+            c2[p] = acc2
+        c2[0] += offset
+        F = _poly(c2, rr)
+        e = F - target
+        acc += e * e
+    return acc / horizon
+
+
+@njit(cache=True)
+def _horizon_j(cf, yb, ub, valid, alpha, beta, offset, r, prev, hold, lag, horizon, v, target, lam2, mode, gm, gc,
+               mu_high, mu_low, ys, us, c2):  # pragma: no cover - numba
+    w = (r - lag * prev) / (1.0 - lag)
+    d = r - hold
+    return horizon_cost(cf, yb, ub, valid, alpha, beta, offset, r, w, lag, horizon, v, target, mode, gm, gc,
+                        mu_high, mu_low, ys, us, c2) + lam2 * d * d
+
+
+@njit(cache=True)
+def horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, horizon, v, target, lam2, n_grid,
+                 mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
+    """``rho[k]`` in ``[a, b]`` minimising the horizon cost (:func:`horizon_cost`) of the command it
+    implies, ``w = (rho - lag prev) / (1 - lag)``, plus ``lam2 (rho - hold)^2``.
+
+    Grid scan of ``n_grid`` intervals (``hold`` included), then ``N_GOLDEN`` golden-section steps
+    on the grid intervals either side of the best point (the result is kept only if better).
+    Returns ``(rho, reachable)``: ``reachable`` is False when ``target`` lies outside the forces of
+    the present sample on the grid.
+    """
+    n_m, n_p = alpha.shape
+    ys = np.zeros(n_m)
+    us = np.zeros(n_m)
+    c2 = np.zeros(n_p)
+    best = min(max(hold, a), b)
+    best_j = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, best, prev, hold, lag, horizon, v, target, lam2,
+                        mode, gm, gc, mu_high, mu_low, ys, us, c2)
+    f = _poly(cf, best)
+    fmin = f
+    fmax = f
+    if b <= a:
+        return best, fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        f = _poly(cf, r)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+        j = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, r, prev, hold, lag, horizon, v, target, lam2,
+                       mode, gm, gc, mu_high, mu_low, ys, us, c2)
+        if j < best_j:
+            best, best_j = r, j
+    lo = max(a, best - h)
+    hi = min(b, best + h)
+    for _ in range(N_GOLDEN):
+        c1 = hi - GOLDEN * (hi - lo)
+        c3 = lo + GOLDEN * (hi - lo)
+        j1 = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, c1, prev, hold, lag, horizon, v, target, lam2,
+                        mode, gm, gc, mu_high, mu_low, ys, us, c2)
+        j3 = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, c3, prev, hold, lag, horizon, v, target, lam2,
+                        mode, gm, gc, mu_high, mu_low, ys, us, c2)
+        if j1 <= j3:
+            hi = c3
+        else:
+            lo = c1
+    m = 0.5 * (lo + hi)
+    jm = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, m, prev, hold, lag, horizon, v, target, lam2,
+                    mode, gm, gc, mu_high, mu_low, ys, us, c2)
+    if jm < best_j:
+        best = m
+    return best, fmin <= target <= fmax
+
+
+@njit(cache=True)
+def past_buffers(y, u, k, yb, ub):  # pragma: no cover - numba
+    """``yb[j] = y[k-1-j]``, ``ub[j] = u[k-1-j]`` (zero before the start); returns the entries in use."""
+    n_m = yb.size
+    for j in range(n_m):
+        q = k - 1 - j
+        yb[j] = y[q] if q >= 0 else 0.0
+        ub[j] = u[q] if q >= 0 else 0.0
+    return min(n_m, k)
+
+
+@njit(cache=True)
 def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0,
-                    n_grid, lam, rate_step):  # pragma: no cover - numba
+                    n_grid, lam, rate_step, horizon):  # pragma: no cover - numba
     """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
 
     Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
     the admissible interval (input limits, the reach of the drive lag when ``lag >= 0``, and
     ``|rho - rho[k-1]| <= rate_step``); ``hold = rho[k-1]``, or with a drive lag the value ``rho[k]``
     would take with the previous command held (the regularisation then penalises command changes,
-    not the lag's own motion). Other arguments as :func:`lpv_inverse`.
+    not the lag's own motion). With a drive lag and ``horizon > 1`` (from the third sample on) the
+    force term is the mean over ``horizon`` samples with the implied command held
+    (:func:`horizon_step`): a causal lead over the lag. Other arguments as :func:`lpv_inverse`.
 
     Returns
     -------
@@ -445,6 +567,8 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
     F = np.zeros(n)
     sat = np.zeros(n, dtype=np.bool_)
     cf = np.zeros(n_p)
+    yb = np.zeros(alpha.shape[0])
+    ub = np.zeros(alpha.shape[0])
     prev = min(max(rho0, lo), hi)
     w_prev = prev
     lam2 = lam * lam
@@ -465,7 +589,12 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
         hold = prev
         if lag >= 0.0 and k >= 2:  # rho with the previous command held: the lag's own motion is free
             hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-        r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
+        if lag >= 0.0 and k >= 2 and horizon > 1:
+            valid = past_buffers(y, u, k, yb, ub)
+            r, ok = horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, horizon, v[k],
+                                 F_desired[k], lam2, n_grid, mode, gm, gc, mu_high, mu_low)
+        else:
+            r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         rho[k] = r
@@ -478,19 +607,39 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
 
 
 @njit(cache=True)
-def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step):  # pragma: no cover
-    """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`)."""
+def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step, lag):  # pragma: no cover
+    """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`).
+
+    With a drive lag (``lag = exp(-eta dt) >= 0``; -1 for none) the map sees ``rho``, the lagged
+    command, and the unknown is ``rho[k]`` within the lag's reach from ``rho[k-1]`` (the command in
+    ``[lo, hi]``), regularised towards the ``rho`` the previous command would give, exactly as
+    :func:`lpv_inverse_reg`; ``rho[1] = rho[0]`` (the lag starts at rest).
+    """
     n = x.size
     out = np.zeros(n)
     sat = np.zeros(n, dtype=np.bool_)
     prev = min(max(i0, lo), hi)
+    w_prev = prev
     lam2 = lam * lam
     for k in range(n):
         a, b = lo, hi
+        if lag >= 0.0 and k >= 1:
+            if k == 1:
+                a = b = out[0]
+            else:
+                a = max(lag * out[k - 1] + (1.0 - lag) * lo, lo)
+                b = min(lag * out[k - 1] + (1.0 - lag) * hi, hi)
         if k >= 1:
             a = max(a, prev - rate_step)
             b = min(b, prev + rate_step)
-        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, prev, lam2, n_grid)
+            if b < a:
+                a = b = min(max(prev, a), b)
+        hold = prev
+        if lag >= 0.0 and k >= 2:  # rho with the previous command held
+            hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, hold, lam2, n_grid)
+        if lag >= 0.0:
+            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         out[k] = r
         sat[k] = not ok
         prev = r

@@ -9,7 +9,8 @@ control sample. The road displacement is linear between its samples (given at th
 The damper is used through a per-sample step interface:
 
 * static map (SP family, Bingham, linear): force ``sp_force1(x, v, i) - f0`` evaluated at every
-  Runge-Kutta stage with the current held over the control sample;
+  Runge-Kutta stage with the current held over the control sample (with a drive lag, ``rho[k]``,
+  the lagged command at the sample instant, is held);
 * LPV model: the force of control sample ``k`` is a polynomial in ``rho[k]`` fixed by the past
   (``lpv_coefficients``); it is held over the sample (the model has no direct feedthrough), and
   ``u[k]`` is built from the damper velocity at the sample instant.
@@ -29,7 +30,9 @@ from numba import njit
 from mrdamper.control._inverse_kernels import (
     _poly,
     _u_of,
+    horizon_step,
     lpv_coefficients,
+    past_buffers,
     reg_solve_poly,
     reg_solve_static,
     sp_force1,
@@ -66,7 +69,7 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
 # this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
 @njit(cache=True)
 def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, offset, lag, mode, gm, gc,
-             mu_high, mu_low, ctrl, gains, lo, hi, lam, rate_step, n_grid, bound):  # pragma: no cover - numba
+             mu_high, mu_low, ctrl, gains, lo, hi, lam, rate_step, n_grid, bound, horizon):  # pragma: no cover - numba
     """Run the quarter car over a road.
 
     Parameters
@@ -87,6 +90,9 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
         change per control sample, ``n_grid`` search grid of the inverse.
     bound : float
         Largest admissible ``|state|`` (divergence check).
+    horizon : int
+        Lead horizon [samples] of the inverse of an LPV damper with a drive lag (``horizon_step``);
+        1: the present sample only.
 
     Returns
     -------
@@ -112,6 +118,8 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
     y = np.zeros(n_ctrl)
     u = np.zeros(n_ctrl)
     cf = np.zeros(n_p)
+    yb = np.zeros(alpha.shape[0])
+    ub = np.zeros(alpha.shape[0])
     st = np.zeros(4)
     tmp = np.zeros(4)
     k1 = np.zeros(4)
@@ -127,7 +135,7 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
         v_d = vs - vu
         # --- input for this sample
         a, b = lo, hi
-        if is_lpv and lag >= 0.0 and k >= 1:
+        if lag >= 0.0 and k >= 1:
             a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
             b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
         if k >= 1:
@@ -148,7 +156,12 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
                 hold = prev
                 if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
                     hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
+                if lag >= 0.0 and k >= 2 and horizon > 1:
+                    valid = past_buffers(y, u, k, yb, ub)
+                    r, ok = horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, horizon,
+                                         v_d, target + offset, lam2, n_grid, mode, gm, gc, mu_high, mu_low)
+                else:
+                    r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
             if lag >= 0.0:
                 w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
             Fk = _poly(cf, r)
@@ -160,7 +173,12 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
                 r = min(max(i_const, a), b)
                 ok = True
             else:
-                r, ok = reg_solve_static(x_d, v_d, comp, power, theta, f0, target + f0, a, b, prev, lam2, n_grid)
+                hold = prev
+                if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
+                    hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+                r, ok = reg_solve_static(x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid)
+            if lag >= 0.0:
+                w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
             F[k] = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0
         rho[k] = r
         Fd[k] = target

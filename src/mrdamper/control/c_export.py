@@ -39,7 +39,9 @@ from mrdamper._io import atomic_write_text, check_writable
 from mrdamper.control import _inverse_kernels as K
 from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
+    default_reg,
     force_authority,
+    horizon_samples,
     lpv_law_arrays,
     model_input_limits,
     static_map_arrays,
@@ -188,6 +190,84 @@ static double {p}_dpoly(const double *c, int n, double r)
 }}
 """
 
+_LPV_HORIZON = r"""
+static const int {P}_HORIZON = {horizon}; /* lead horizon [samples] of the drive-lag inverse */
+static const double {P}_GOLDEN = {golden};
+
+/* mean squared force error over the horizon: this sample at r, then the model run on with the
+   command w held, the velocity v held and the same target */
+static double {p}_hcost(const {p}_state *s, const double *cf, double r, double w, double v, double target)
+{{
+    double ys[{P}_N_M], us[{P}_N_M], c2[{P}_N_P], F, e, acc, rr;
+    int j, q, h, nv = s->k < {P}_N_M ? (int)s->k : {P}_N_M;
+    for (j = 0; j < {P}_N_M; ++j) {{
+        ys[j] = s->y[j];
+        us[j] = s->u[j];
+    }}
+    F = {p}_poly(cf, {P}_N_P, r);
+    e = F - target;
+    acc = e * e;
+    rr = r;
+    for (h = 1; h < {P}_HORIZON; ++h) {{
+        for (j = {P}_N_M - 1; j > 0; --j) {{
+            ys[j] = ys[j - 1];
+            us[j] = us[j - 1];
+        }}
+        ys[0] = F - {P}_OFFSET;
+        us[0] = {p}_u_of(v, rr);
+        if (nv < {P}_N_M) nv += 1;
+        rr = {P}_LAG * rr + (1.0 - {P}_LAG) * w;
+        for (q = 0; q < {P}_N_P; ++q) {{
+            double a2 = 0.0;
+            for (j = 0; j < nv; ++j) a2 += {P}_BETA[j][q] * us[j] - {P}_ALPHA[j][q] * ys[j];
+            c2[q] = a2;
+        }}
+        c2[0] += {P}_OFFSET;
+        F = {p}_poly(c2, {P}_N_P, rr);
+        e = F - target;
+        acc += e * e;
+    }}
+    return acc / {P}_HORIZON;
+}}
+
+static double {p}_hj(const {p}_state *s, const double *cf, double r, double prev, double hold, double v,
+                     double target)
+{{
+    double w = (r - {P}_LAG * prev) / (1.0 - {P}_LAG), d = r - hold;
+    return {p}_hcost(s, cf, r, w, v, target) + {P}_LAM2 * d * d;
+}}
+
+/* rho on [a, b] minimising the horizon cost of the command it implies: grid scan, then golden
+   section on the grid intervals either side of the best point */
+static double {p}_hstep(const {p}_state *s, const double *cf, double a, double b, double prev, double hold,
+                        double v, double target)
+{{
+    double best = {p}_dmin({p}_dmax(hold, a), b), best_j, h, lo, hi, m, jm;
+    int q, it;
+    best_j = {p}_hj(s, cf, best, prev, hold, v, target);
+    if (b <= a) return best;
+    h = (b - a) / {P}_N_GRID;
+    for (q = 0; q <= {P}_N_GRID; ++q) {{
+        double r = (q == {P}_N_GRID) ? b : a + q * h, j = {p}_hj(s, cf, r, prev, hold, v, target);
+        if (j < best_j) {{
+            best = r;
+            best_j = j;
+        }}
+    }}
+    lo = {p}_dmax(a, best - h);
+    hi = {p}_dmin(b, best + h);
+    for (it = 0; it < {n_golden}; ++it) {{
+        double c1 = hi - {P}_GOLDEN * (hi - lo), c3 = lo + {P}_GOLDEN * (hi - lo);
+        if ({p}_hj(s, cf, c1, prev, hold, v, target) <= {p}_hj(s, cf, c3, prev, hold, v, target)) hi = c3;
+        else lo = c1;
+    }}
+    m = 0.5 * (lo + hi);
+    jm = {p}_hj(s, cf, m, prev, hold, v, target);
+    if (jm < best_j) best = m;
+    return best;
+}}
+"""
+
 _LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
 {{
     double cf[{P}_N_P];
@@ -213,7 +293,8 @@ _LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, dou
     }}
     hold = prev;
     if ({P}_LAG >= 0.0 && s->k >= 2) hold = {p}_dmin({p}_dmax({P}_LAG * prev + (1.0 - {P}_LAG) * s->w, a), b);
-    r = {p}_solve(cf, F_desired, a, b, hold);
+    if ({P}_LAG >= 0.0 && s->k >= 2 && {P}_HORIZON > 1) r = {p}_hstep(s, cf, a, b, prev, hold, v, F_desired);
+    else r = {p}_solve(cf, F_desired, a, b, hold);
     if ({P}_LAG >= 0.0) {{ /* command of the previous sample (the lead of the lag) */
         s->w = s->k <= 1 ? r : {p}_dmin({p}_dmax((r - {P}_LAG * prev) / (1.0 - {P}_LAG), {P}_LO), {P}_HI);
     }}
@@ -386,10 +467,13 @@ def _solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str
     return slope.format(**sub) + _BISECT.format(**sub) + ("/* minimiser" + solve).format(**sub)
 
 
-def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, dt: float) -> tuple[float, float]:
+def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, dt: float,
+              dt_known: bool = True) -> tuple[float, float]:
     lo, hi = model_input_limits(model)
-    if reg is None:
-        lam = DEFAULT_REG_FRACTION * force_authority(model, v_ref) if hi > lo else 0.0
+    if reg is None and not hi > lo:
+        lam = 0.0
+    elif reg is None:
+        lam = default_reg(model, v_ref, dt) if dt_known else DEFAULT_REG_FRACTION * force_authority(model, v_ref)
     elif not (np.isfinite(reg) and reg >= 0):
         raise DataValidationError("reg", f"expected a regularisation weight >= 0, got {reg!r}")
     else:
@@ -415,7 +499,9 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         C identifier prefix and file stem.
     reg : float, optional
         Regularisation weight of the inverse [N per input unit]; default
-        ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)`` (fixed into the code).
+        ``default_reg(model, v_ref, dt)`` at the LPV model's sample time or, for a static map, at
+        ``dt`` (without ``dt``: ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``, the 200 Hz
+        value); fixed into the code.
     v_ref : float
         Velocity setting the default ``reg`` [m/s].
     rate : float, optional
@@ -434,6 +520,11 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         raise DataValidationError("name", f"expected a C identifier, got {name!r}")
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
+    if not isinstance(model, LPVModel) and getattr(model, "eta", None) is not None:
+        raise DataValidationError(
+            "model", f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
+            "implemented; export the map without the lag or an LPV model with its drive lag"
+        )
     p, P = name, name.upper()
     lo, hi = model_input_limits(model)
     has_inverse = not isinstance(model, LTIModel)
@@ -444,7 +535,8 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         step_dt = 1.0 if dt is None else float(dt)
         if rate is not None and dt is None:
             raise DataValidationError("dt", "a rate bound on a static map's inverse needs the sample time dt [s]")
-    lam, rate_step = _settings(model, reg, v_ref, rate, step_dt) if has_inverse else (0.0, math.inf)
+    dt_known = is_lpv or dt is not None
+    lam, rate_step = _settings(model, reg, v_ref, rate, step_dt, dt_known) if has_inverse else (0.0, math.inf)
     fmt: dict[str, Any] = {"p": p, "P": P, "lo": _f(lo), "hi": _f(hi), "in_lo": _f(model.input_range[0]),
                            "in_hi": _f(model.input_range[1]), "lam2": _f(lam * lam),
                            "rate_step": _f(rate_step), "n_grid": n_grid, "n_bisect": K._N_BISECT}
@@ -453,7 +545,8 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         lag = -1.0 if model.eta is None else float(np.exp(-model.eta / model.fs))
         fmt.update(n_m=model.n_m, n_p=model.n_rho + 1, n_d=gm.shape[1], alpha=_arr2(model.alpha),
                    beta=_arr2(model.beta), offset=_f(model.offset), lag=_f(lag), mode=mode, gm=_arr2(gm),
-                   gc=_arr2(gc), mu_high=_arr1(mu_h), mu_low=_arr1(mu_l))
+                   gc=_arr2(gc), mu_high=_arr1(mu_h), mu_low=_arr1(mu_l),
+                   horizon=horizon_samples(model.eta, 1.0 / model.fs), golden=_f(K.GOLDEN), n_golden=K.N_GOLDEN)
         state = (f"typedef struct {{\n    double y[{model.n_m}]; /* past outputs y[k-1-j] (force minus offset) [N] */\n"
                  f"    double u[{model.n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
                  "    double rho; /* scheduling value of the last sample */\n"
@@ -463,7 +556,7 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         if has_inverse:
             body += _LPV_DPOLY.format(**fmt) + _solver(fmt, "const double *cf", "cf", f"{p}_poly(cf, {P}_N_P, {{r}})",
                                                        f"{p}_dpoly(cf, {P}_N_P, {{r}})")
-            body += _LPV_INVERSE.format(**fmt)
+            body += _LPV_HORIZON.format(**fmt) + _LPV_INVERSE.format(**fmt)
         rate_note = f"{model.fs!r} Hz (one call per model sample)"
     else:
         comp, power, theta, f0 = static_map_arrays(model)

@@ -10,13 +10,19 @@ What is solved
 Regularised inverse (``method="regularised"``, the default), every supported kind
     Causal, one pass: ``i[k]`` minimises ``(F_k(i) - F_desired[k])^2 + reg^2 (i - i[k-1])^2`` over
     the input range intersected with the rate bound ``|i - i[k-1]| <= rate dt`` (first sample
-    free) and, for an LPV model with a drive lag, the lag's reach. ``F_k`` is the model force at
+    free) and, for a model with a drive lag (LPV, or a static map with ``eta``), the lag's reach
+    (the static map is then evaluated at the lagged input ``rho`` and the command is
+    :func:`driver_command` of it). ``F_k`` is the model force at
     sample k given its past (LPV: a polynomial in ``rho[k]``; static map: the map at ``x[k]``,
     ``v[k]``). Where ``|dF/di|`` is small against ``reg`` the input holds; where it is large the
     input follows the exact solution. Minimum: grid of ``n_grid`` intervals, then the zero of the
     objective's slope next to the best grid point, bisected to machine precision. ``reg`` defaults
-    to ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)``. Records at another rate than an
-    LPV model's are resampled to it and the input interpolated back.
+    to :func:`default_reg` (rate independent: a smoothing time constant ``DEFAULT_REG_TIME``).
+    For an LPV model with a drive lag the force term is, from the third sample on, the mean over a
+    lead horizon (default one lag time constant ``1/eta``) of the model force with the implied
+    command held, the velocity held and the present desired force (:func:`horizon_samples`),
+    minimised on the grid and then by golden-section search. Records at another rate than an LPV
+    model's are resampled to it and the input interpolated back.
 
 The exact per-sample inverse (``method="exact"``):
 
@@ -76,9 +82,12 @@ from mrdamper.models.base import FittedModel
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
+    "DEFAULT_REG_TIME",
     "InverseResult",
+    "default_reg",
     "driver_command",
     "force_authority",
+    "horizon_samples",
     "inverse_current",
     "lpv_law_arrays",
     "model_input_limits",
@@ -234,12 +243,13 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def model_input_limits(model: Any) -> tuple[float, float]:
-    """Default input limits: the identified ``input_range``, for an LPV model intersected with the
-    scheduling range ``rho_range`` it was identified on (beyond it the coefficients are extrapolated).
+    """Default input limits: the identified ``input_range``, for an LPV model (or a static map with a
+    drive lag) intersected with the scheduling range ``rho_range`` it was identified on (beyond it the
+    coefficients are extrapolated).
     """
     lo, hi = (float(b) for b in model.input_range)
     rr = getattr(model, "rho_range", None)
-    if getattr(model, "kind", "") == "lpv" and rr is not None and rr[1] > rr[0]:
+    if rr is not None and rr[1] > rr[0]:
         lo, hi = max(lo, float(rr[0])), min(hi, float(rr[1]))
     return lo, hi
 
@@ -284,6 +294,7 @@ def inverse_current(
     method: str = "regularised",
     reg: float | None = None,
     rate: float | None = None,
+    horizon: float | None = None,
 ) -> InverseResult:
     """Electrical input that makes ``model`` produce ``F_desired`` for the given motion.
 
@@ -311,10 +322,16 @@ def inverse_current(
         the module docstring). ``"exact"``: the exact per-sample solution described above.
     reg : float, optional
         Regularisation weight [N/A] or [N/V] of the regularised inverse; default
-        ``DEFAULT_REG_FRACTION * force_authority(model, max|v|)`` (:func:`force_authority`).
+        ``default_reg(model, max|v|, dt)`` with ``dt`` the model sample time (LPV) or the record's
+        (static maps): a smoothing time constant :data:`DEFAULT_REG_TIME`, the same at every rate.
         0 gives the exact least-squares solution per sample.
     rate : float, optional
         Largest change of the input per second [A/s] or [V/s] (regularised method); default none.
+    horizon : float, optional
+        Lead horizon [s] of the regularised inverse of an LPV model with a drive lag: the command is
+        chosen for the mean force error over this time with the command held (see the module
+        docstring); default one lag time constant ``1 / eta``; 0 decides on the present sample
+        only. Ignored for models without a drive lag and for static maps.
 
     Returns
     -------
@@ -357,20 +374,35 @@ def inverse_current(
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
     if method == "regularised":
-        lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi)
         if isinstance(model, LPVModel):
-            rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate)
+            dt_inv = 1.0 / model.fs
+        else:
+            dt_inv = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
+        lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi, dt_inv)
+        if horizon is not None and (isinstance(horizon, bool) or not isinstance(horizon, (int, float, np.floating))
+                                    or not (np.isfinite(horizon) and horizon >= 0)):
+            raise DataValidationError("horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}")
+        if isinstance(model, LPVModel):
+            n_h = horizon_samples(model.eta, 1.0 / model.fs, horizon)
+            rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate, n_h)
         else:
             comp, power, theta, f0 = static_map_arrays(model)
             dt = float(t[1] - t[0]) if t.size > 1 else 1.0
+            eta = getattr(model, "eta", None)
+            lag = -1.0 if eta is None else float(np.exp(-eta * dt))
             rho, sat = K.static_inverse_reg(
                 np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64), Fd,
-                comp, power, theta, f0, lo, hi, lo, int(n_grid), lam, step_rate * dt,
+                comp, power, theta, f0, lo, hi, lo, int(n_grid), lam, step_rate * dt, lag,
             )
-            w = rho
+            w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
     elif isinstance(model, LPVModel):
         rho, w, sat = _lpv_any_rate(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
     else:
+        if getattr(model, "eta", None) is not None:
+            raise DataValidationError(
+                "method", f"the exact inverse of a static map with a drive lag (eta) is not implemented; "
+                f"use method='regularised' for this {model.kind} model"
+            )
         rho, sat = _static(model, x, v, Fd, lo, hi, int(n_grid))
         w = rho
     rec = _record(t, x, v, Fd, model, w)
@@ -494,14 +526,35 @@ def force_authority(model: Any, v_ref: float) -> float:
                - K.sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)) / (hi - lo)
 
 
-#: Default regularisation weight as a fraction of :func:`force_authority` at the peak velocity.
+#: Default regularisation weight at 200 Hz as a fraction of :func:`force_authority` (where it was chosen).
 DEFAULT_REG_FRACTION = 0.5
+#: Smoothing time constant of the default weight [s]: the fraction 0.5 at 200 Hz (see :func:`default_reg`).
+DEFAULT_REG_TIME = 0.005 / float(np.log(5.0))
 
 
-def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float) -> tuple[float, float]:
+def default_reg(model: Any, v_ref: float, dt: float) -> float:
+    """Default regularisation weight [N/A] or [N/V] for an inverse running every ``dt`` [s].
+
+    Per sample the regularised input is, to first order, ``q i[k-1] + (1 - q) i_exact`` with
+    ``q = reg^2 / (s^2 + reg^2)`` where ``s = |dF/di|``. The default makes this a first-order
+    smoothing of time constant :data:`DEFAULT_REG_TIME` where ``s`` equals the force authority at
+    ``v_ref`` (:func:`force_authority`), whatever the sample rate::
+
+        reg = force_authority(model, v_ref) * sqrt(q / (1 - q)),   q = exp(-dt / DEFAULT_REG_TIME)
+
+    At 200 Hz this is :data:`DEFAULT_REG_FRACTION` (0.5) times the authority; at 3 kHz about 3.0.
+    """
+    if not (np.isfinite(dt) and dt > 0):
+        raise DataValidationError("dt", f"expected a positive sampling interval [s], got {dt!r}")
+    q = float(np.exp(-dt / DEFAULT_REG_TIME))
+    return float(np.sqrt(q / (1.0 - q))) * force_authority(model, v_ref)
+
+
+def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float,
+                  dt: float) -> tuple[float, float]:
     if reg is None:
         vpk = float(np.max(np.abs(v))) if v.size else 0.0
-        lam = DEFAULT_REG_FRACTION * force_authority(model, vpk) if vpk > 0 else 0.0
+        lam = default_reg(model, vpk, dt) if vpk > 0 else 0.0
     else:
         if isinstance(reg, bool) or not isinstance(reg, (int, float, np.floating)) or not (np.isfinite(reg) and reg >= 0):
             raise DataValidationError("reg", f"expected a regularisation weight >= 0 [N per input unit], got {reg!r}")
@@ -515,8 +568,20 @@ def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi:
     return lam, step_rate
 
 
+def horizon_samples(eta: float | None, dt: float, horizon: float | None = None) -> int:
+    """Samples of the lead horizon of the drive-lag inverse: ``round(horizon / dt)``, at least 1.
+
+    ``horizon`` [s] defaults to the lag time constant ``1 / eta`` [s]; without a drive lag
+    (``eta`` None) the horizon is 1 (the present sample).
+    """
+    if eta is None:
+        return 1
+    T = 1.0 / float(eta) if horizon is None else float(horizon)
+    return max(1, round(T / dt))
+
+
 def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
-             lam: float, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+             lam: float, rate: float, n_h: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Regularised LPV inverse at the model rate; records at another rate are resampled in and out."""
     from mrdamper.models._rates import to_model_rate
 
@@ -530,7 +595,7 @@ def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     rho, _, sat = K.lpv_inverse_reg(
         vm, Fm, np.ascontiguousarray(model.alpha), np.ascontiguousarray(model.beta), float(model.offset),
-        lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, lam, rate * dt,
+        lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, lam, rate * dt, n_h,
     )
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:

@@ -39,9 +39,9 @@ import pandas as pd
 from mrdamper.control import _quarter_car_kernels as QK
 from mrdamper.control.comfort import weighted_rms
 from mrdamper.control.inverse import (
-    DEFAULT_REG_FRACTION,
+    default_reg,
     driver_command,
-    force_authority,
+    horizon_samples,
     lpv_law_arrays,
     model_input_limits,
     static_map_arrays,
@@ -365,7 +365,7 @@ def simulate_quarter_car(
         Plant parameters (default :class:`QuarterCar()`).
     reg : float, optional
         Regularisation weight of the inverse [N per input unit]; default
-        ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``.
+        ``default_reg(model, v_ref, dt)`` at the control sample time ``dt`` (rate independent).
     v_ref : float
         Damper velocity setting the default ``reg`` [m/s].
     rate : float, optional
@@ -406,13 +406,17 @@ def simulate_quarter_car(
             )
         if model.eta is not None:
             arrays["lag"] = float(np.exp(-model.eta / model.fs))
+        n_h = horizon_samples(model.eta, 1.0 / model.fs)
     else:
+        n_h = 1
         n_sub = 1
+        if getattr(model, "eta", None) is not None:  # static map with a drive lag, at the road rate
+            arrays["lag"] = float(np.exp(-model.eta / road.fs))
     h = 1.0 / road.fs
     if isinstance(model, LinearDamper) or ctrl.kind in ("soft", "hard"):
         lam = 0.0
     elif reg is None:
-        lam = DEFAULT_REG_FRACTION * force_authority(model, _pos("v_ref", v_ref, "m/s")) if hi > lo else 0.0
+        lam = default_reg(model, _pos("v_ref", v_ref, "m/s"), h * n_sub) if hi > lo else 0.0
     else:
         lam = _pos("reg", reg, "N per input unit", allow_zero=True)
     step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * h * n_sub
@@ -434,13 +438,15 @@ def simulate_quarter_car(
         zr[: n_ctrl * n_sub + 1], h, n_sub, car_arr, arrays["is_lpv"], arrays["comp"], arrays["power"],
         arrays["theta"], arrays["f0"], arrays["alpha"], arrays["beta"], arrays["offset"], arrays["lag"],
         arrays["mode"], arrays["gm"], arrays["gc"], arrays["mu_high"], arrays["mu_low"], code, gains, lo, hi, lam,
-        step_rate, int(n_grid), float(bound) * mr,
+        step_rate, int(n_grid), float(bound) * mr, n_h,
     )
     if bad >= 0:
         raise SimulationDivergedError(getattr(model, "kind", "damper"), int(bad),
                                       f"quarter-car state left +-{bound:g} at t = {bad * h:.4g} s")
     if arrays["is_lpv"] and model.eta is not None:
         cmd = driver_command(rho, model.eta, 1.0 / model.fs, (lo, hi))
+    elif getattr(model, "eta", None) is not None:
+        cmd = driver_command(rho, model.eta, h, (lo, hi))
     else:
         cmd = rho
     n = n_ctrl * n_sub

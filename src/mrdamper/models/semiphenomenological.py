@@ -15,7 +15,11 @@ zero); it is identified when the estimator's ``offset=True`` (default) and is ex
 ``offset=False``, which is the paper's literal form.
 
 Because the maps are static, a free-run prediction is a direct evaluation on the record's x, v
-and electrical input: the measured force is never used.
+and electrical input: the measured force is never used. Optionally (``eta``, as for the LPV and
+P-15 models) the map is evaluated at the electrical input passed through a first-order drive lag
+``d rho/dt = -eta (rho - input)`` (zero-order-hold discretisation, ``rho[0] = input[0]``): the
+map itself stays static, ``rho`` replaces ``i`` in it. Use it when the recorded input is a command
+that reaches the fluid through a driver and coil with a lag (the Dyke voltage record).
 
 Identification
 --------------
@@ -74,6 +78,7 @@ from scipy.optimize import least_squares
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._sp_kernels import N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
@@ -110,10 +115,18 @@ class _SPModel(FittedModel):
         Coefficients in the paper's order (see the subclass for units and layout).
     f0 : float
         Force offset [N] (0 when identified with ``offset=False``).
+    eta : float or None
+        Rate [1/s] of an optional first-order drive lag of the electrical input (see the module
+        docstring); ``None``: the map sees the input itself.
+    rho_range : (float, float) or None
+        With ``eta``: range of the lagged input the map was identified on [A] or [V] (the
+        ``input_range`` is that of the recorded command); ``None`` without a lag.
     """
 
     S: tuple[float, ...] = ()
     f0: float = 0.0
+    eta: float | None = None
+    rho_range: tuple[float, float] | None = None
 
     #: (component, power of i) of each coefficient, in the paper's order.
     LAYOUT: ClassVar[tuple[tuple[int, int], ...]] = ()
@@ -129,6 +142,16 @@ class _SPModel(FittedModel):
             raise DataValidationError("S", f"{self.kind} coefficients must be finite, got {S}, f0={self.f0}")
         object.__setattr__(self, "S", S)
         object.__setattr__(self, "f0", float(self.f0))
+        if self.eta is not None:
+            if isinstance(self.eta, bool) or not isinstance(self.eta, (int, float)) or not (
+                    np.isfinite(self.eta) and self.eta > 0):
+                raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+            object.__setattr__(self, "eta", float(self.eta))
+        if self.rho_range is not None:
+            rr = tuple(float(b) for b in self.rho_range)
+            if len(rr) != 2 or not (np.isfinite(rr[0]) and np.isfinite(rr[1]) and rr[0] <= rr[1]):
+                raise DataValidationError("rho_range", f"expected finite (low, high) with low <= high, got {self.rho_range!r}")
+            object.__setattr__(self, "rho_range", rr)
 
     @classmethod
     def layout_arrays(cls) -> tuple[np.ndarray, np.ndarray]:
@@ -163,8 +186,11 @@ class _SPModel(FittedModel):
         return sp_force(xa, va, ia, comp, power, np.asarray(self.S, dtype=np.float64), self.f0)
 
     def predict(self, experiment: Experiment) -> np.ndarray:
-        """Free-run force [N]: direct evaluation on the record's x, v and electrical input."""
+        """Free-run force [N]: direct evaluation on the record's x, v and electrical input
+        (through the drive lag when ``eta`` is set; the range policy applies to the input)."""
         i = self.electrical_input(experiment)
+        if self.eta is not None:
+            i = first_order_lag(np.ascontiguousarray(i, dtype=np.float64), experiment.dt, self.eta)
         return self.force(experiment.x, experiment.v, i)
 
 
@@ -240,6 +266,9 @@ class _SPEstimator(Estimator):
         Samples (evenly spaced over the training data) used for screening and multi-start.
     fit_samples : int or None
         Samples (evenly spaced) used by the final polish; ``None`` uses every sample.
+    eta : float or None
+        Drive-lag rate [1/s]: the map is fitted to the electrical input passed through the lag
+        (per record, see the module docstring); ``None`` (default): no lag.
     """
 
     input: ElectricalSource = "i"
@@ -250,6 +279,7 @@ class _SPEstimator(Estimator):
     max_nfev: int = 200
     screen_samples: int = 4000
     fit_samples: int | None = 20000
+    eta: float | None = None
 
     model_class: ClassVar[type[_SPModel]] = _SPModel
 
@@ -269,7 +299,7 @@ class _SPEstimator(Estimator):
         exps = self._as_set(data)
         cls = self.model_class
         comp_all, power_all = cls.layout_arrays()
-        x, v, i, F = _stack(exps, self.input)
+        x, v, i, F = _stack(exps, self.input, self.eta)
         level = single_level(i)
         # one level: every component's polynomial in the input reduces to its constant term
         keep = _single_level_terms(comp_all, power_all) if level is not None else np.ones(comp_all.size, bool)
@@ -356,8 +386,10 @@ class _SPEstimator(Estimator):
             S=tuple(S),
             f0=f0,
             input=self.input,
-            input_range=(float(np.min(i)), float(np.max(i))),
+            input_range=_input_range(exps, self.input),
             provenance=provenance,
+            eta=self.eta,
+            rho_range=None if self.eta is None else (float(np.min(i)), float(np.max(i))),
         )
 
     def _check_settings(self) -> None:
@@ -374,6 +406,9 @@ class _SPEstimator(Estimator):
             raise DataValidationError("seed", f"expected an integer, got {self.seed!r}")
         if not isinstance(self.offset, (bool, np.bool_)):
             raise DataValidationError("offset", f"expected True or False, got {self.offset!r}")
+        if self.eta is not None and (isinstance(self.eta, bool) or not isinstance(self.eta, (int, float))
+                                     or not (np.isfinite(self.eta) and self.eta > 0)):
+            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
 
 
 @dataclass
@@ -409,15 +444,23 @@ class SP4Estimator(_SPEstimator):
 
 
 # ============================================================================ helpers
-def _stack(exps: Iterable[Experiment], source: ElectricalSource) -> tuple[np.ndarray, ...]:
-    """Concatenate the samples of all records (valid for a static map: no state crosses records)."""
+def _stack(exps: Iterable[Experiment], source: ElectricalSource, eta: float | None = None) -> tuple[np.ndarray, ...]:
+    """Concatenate the samples of all records (valid for a static map: no state crosses records);
+    with ``eta`` the electrical input of each record goes through the drive lag first."""
     cols: dict[str, list[np.ndarray]] = {"x": [], "v": [], "i": [], "F": []}
     for e in exps:
-        cols["i"].append(e.electrical(source))
+        el = np.ascontiguousarray(e.electrical(source), dtype=np.float64)
+        cols["i"].append(el if eta is None else first_order_lag(el, e.dt, eta))
         cols["x"].append(e.x)
         cols["v"].append(e.v)
         cols["F"].append(e.F)
     return tuple(np.ascontiguousarray(np.concatenate(cols[k])) for k in ("x", "v", "i", "F"))
+
+
+def _input_range(exps: Iterable[Experiment], source: ElectricalSource) -> tuple[float, float]:
+    """Range of the recorded electrical input (the command, before any drive lag)."""
+    el = np.concatenate([np.asarray(e.electrical(source), dtype=float) for e in exps])
+    return float(np.min(el)), float(np.max(el))
 
 
 def _even_subset(n: int, size: int | None) -> np.ndarray:
