@@ -34,7 +34,7 @@ from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _lpv_fit
+from mrdamper.models import _lpv_fit, _scale
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models._rates import to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel
@@ -384,12 +384,15 @@ class LPVEstimator(Estimator):
             theta0, shrink = _stable_start(theta, self.n_m, self.n_rho + 1, rho_range, rec, F0, bound)
             if shrink != 1.0:
                 prov["oe_start_pole_scaling"] = shrink
+            rec_oe, windows = _scale.window_records(rec, fs)  # long campaigns: evenly spread windows
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
+                rec_oe, theta0, F0, self.n_m, self.n_rho + 1, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
                 solver=self.oe_solver,
             )
             oe_cost = _cost(rec, th_r, f0_r, self.n_m, self.n_rho + 1, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
+            if windows is not None:
+                prov.update(oe_windows=windows, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost})
             if oe_cost < ls_cost:
                 theta, F0 = th_r, f0_r
             else:
