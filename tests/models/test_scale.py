@@ -89,3 +89,20 @@ def test_windows_and_full_data_check(kind: str, records, small_windows) -> None:
     assert lo <= min(float(r.i.min()) for r in records) and hi >= max(float(r.i.max()) for r in records)
     for r in records:  # every record simulates in the identified range
         assert np.all(np.isfinite(m.predict(r)))
+
+
+def test_lpv_qr_factor_matches_full_regression(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mrdamper.models import _lpv_kernels as LK
+
+    rng = np.random.default_rng(1)
+    n = 3000
+    y, u, rho = rng.standard_normal(n), rng.standard_normal(n), rng.uniform(0, 1, n)
+    starts = np.array([0, 1100, n], dtype=np.int64)
+    w = np.array([0.7, 1.6])
+    monkeypatch.setattr(_scale, "QR_BLOCK", 300)
+    for with_const in (False, True):
+        X, t = LK.build_regressors(y, u, rho, starts, w, 3, 3, with_const)
+        R, z = _scale.lpv_qr_factor(y, u, rho, starts, w, 3, 3, with_const, LK.build_regressors)
+        np.testing.assert_allclose(np.linalg.solve(R, z), np.linalg.lstsq(X, t, rcond=None)[0], rtol=1e-8)
+        np.testing.assert_allclose(np.linalg.svd(R, compute_uv=False), np.linalg.svd(X, compute_uv=False),
+                                   rtol=1e-9)

@@ -13,6 +13,7 @@ from scipy import optimize
 
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
+from mrdamper.models import _scale
 
 __all__ = ["LSResult", "Records", "frozen_poles", "ls_identify", "refine_output_error", "split_theta"]
 
@@ -97,7 +98,7 @@ def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
         z = scipy.linalg.cho_solve((c, low), g / d, check_finite=False)
         solver = "cholesky"
     else:  # normal equations lose too many digits: QR of the scaled regression matrix
-        X, t = K.build_regressors(y, u, rho, starts, w, n_m, n_p, with_const)
+        X, t = _scale.lpv_qr_factor(y, u, rho, starts, w, n_m, n_p, with_const, K.build_regressors)
         z = np.linalg.lstsq(X / d, t, rcond=None)[0]
         solver = "qr"
     return z / d, cond_x, solver, int(n_eq)

@@ -33,6 +33,7 @@ __all__ = [
     "extrema",
     "full_data_esr",
     "input_range",
+    "lpv_qr_factor",
     "narx_windows",
     "plan_windows",
     "window_arrays",
@@ -237,3 +238,33 @@ def _n_columns(records: Sequence[np.ndarray], r: int) -> int:
         e = records._exps[r]
         return int(e.n)  # at the record rate; windows are clipped to the model-rate length
     return int(records[r].shape[1])
+
+
+def lpv_qr_factor(y: np.ndarray, u: np.ndarray, rho: np.ndarray, starts: np.ndarray, weights: np.ndarray,
+                  n_m: int, n_p: int, with_const: bool,
+                  build: Callable[..., tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """Triangular factor ``(R, z)`` of the weighted LPV regression ``[X t]``, block by block.
+
+    ``build`` is the kernel that materialises the rows of whole records
+    (:func:`~mrdamper.models._lpv_kernels.build_regressors`); it is called on blocks of
+    :data:`QR_BLOCK` rows (each with the ``n_m`` samples before it, so the lags are exact), and the
+    blocks are folded into the QR factor. ``min |R c - z|`` has the solution and ``R`` the
+    singular values of ``min |X c - t|``; memory is one block instead of the whole ``X``.
+    """
+    R: np.ndarray | None = None
+    for r in range(starts.size - 1):
+        a, b = int(starts[r]), int(starts[r + 1])
+        w = np.asarray(weights[r : r + 1], dtype=np.float64)
+        for k0 in range(a + n_m, b, QR_BLOCK):
+            k1 = min(k0 + QR_BLOCK, b)
+            sl = slice(k0 - n_m, k1)
+            Xb, tb = build(y[sl], u[sl], rho[sl], np.array([0, k1 - k0 + n_m], dtype=np.int64), w,
+                           n_m, n_p, with_const)
+            B = np.column_stack((Xb, tb))
+            R = B if R is None else np.vstack((R, B))
+            R = np.asarray(np.linalg.qr(R, mode="r"))
+    if R is None:
+        raise ValueError("no regression rows")
+    P = R.shape[1] - 1
+    R = np.vstack((R, np.zeros((max(0, P + 1 - R.shape[0]), P + 1))))
+    return np.ascontiguousarray(R[:P, :P]), R[:P, P].copy()
