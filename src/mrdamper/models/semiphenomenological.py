@@ -71,6 +71,7 @@ from scipy.optimize import least_squares
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.models import _scale
 from mrdamper.models._sp_kernels import N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
@@ -267,7 +268,7 @@ class _SPEstimator(Estimator):
         cls = self.model_class
         comp, power = cls.layout_arrays()
         n_par = comp.size + int(self.offset)
-        x, v, i, F = _stack(exps, self.input)
+        x, v, i, F = _stack(exps, self.input, _scale.WINDOW_THRESHOLD)  # long campaigns: an even subset
         if F.size < _SAMPLES_PER_PARAMETER * n_par:
             raise IdentificationError(
                 f"data: {cls.kind} has {n_par} parameters and needs at least "
@@ -327,7 +328,8 @@ class _SPEstimator(Estimator):
             "estimator": type(self).__name__,
             "settings": asdict(self),
             "training_records": list(exps.names),
-            "n_samples": int(F.size),
+            "n_samples": int(sum(e.n for e in exps)),
+            "n_samples_stacked": int(F.size),
             "n_screen_samples": int(sub.size),
             "n_fit_samples": int(full.size),
             "scales": {"x": xs, "v": vs, "input": i_s, "F": Fs},
@@ -343,7 +345,7 @@ class _SPEstimator(Estimator):
             S=tuple(S),
             f0=f0,
             input=self.input,
-            input_range=(float(np.min(i)), float(np.max(i))),
+            input_range=_scale.input_range(exps, self.input),
             provenance=provenance,
         )
 
@@ -396,14 +398,27 @@ class SP4Estimator(_SPEstimator):
 
 
 # ============================================================================ helpers
-def _stack(exps: Iterable[Experiment], source: ElectricalSource) -> tuple[np.ndarray, ...]:
-    """Concatenate the samples of all records (valid for a static map: no state crosses records)."""
+def _stack(exps: Iterable[Experiment], source: ElectricalSource, max_samples: int | None = None) -> tuple[np.ndarray, ...]:
+    """Concatenate the samples of all records (valid for a static map: no state crosses records).
+
+    With more than ``max_samples`` samples in all, only an evenly spaced subset of that many is
+    gathered (record by record: the whole concatenation is never built).
+    """
     cols: dict[str, list[np.ndarray]] = {"x": [], "v": [], "i": [], "F": []}
+    exps = list(exps)
+    total = sum(e.n for e in exps)
+    keep = _even_subset(total, max_samples) if max_samples is not None and total > max_samples else None
+    offset = 0
     for e in exps:
-        cols["i"].append(e.electrical(source))
-        cols["x"].append(e.x)
-        cols["v"].append(e.v)
-        cols["F"].append(e.F)
+        sel: slice | np.ndarray = slice(None)
+        if keep is not None:
+            lo, hi = np.searchsorted(keep, [offset, offset + e.n])
+            sel = keep[lo:hi] - offset
+        offset += e.n
+        cols["i"].append(e.electrical(source)[sel])
+        cols["x"].append(e.x[sel])
+        cols["v"].append(e.v[sel])
+        cols["F"].append(e.F[sel])
     return tuple(np.ascontiguousarray(np.concatenate(cols[k])) for k in ("x", "v", "i", "F"))
 
 
