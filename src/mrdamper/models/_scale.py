@@ -17,7 +17,7 @@ results do not depend on this module.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -31,6 +31,7 @@ __all__ = [
     "LazyRecords",
     "chunked_qr",
     "extrema",
+    "fold_qr",
     "full_data_esr",
     "input_range",
     "lpv_qr_factor",
@@ -268,3 +269,19 @@ def lpv_qr_factor(y: np.ndarray, u: np.ndarray, rho: np.ndarray, starts: np.ndar
     P = R.shape[1] - 1
     R = np.vstack((R, np.zeros((max(0, P + 1 - R.shape[0]), P + 1))))
     return np.ascontiguousarray(R[:P, :P]), R[:P, P].copy()
+
+
+def fold_qr(blocks: Iterable[np.ndarray]) -> np.ndarray:
+    """Triangular factor ``R`` of the row blocks ``[X_b y_b]`` stacked (``Q R = [X y]``).
+
+    Returns the square ``(P+1) x (P+1)`` factor: ``R[:P, :P]`` and ``R[:P, P]`` give the
+    least-squares solution and singular values of ``X c = y``; ``R[P, P]**2`` is the residual sum of
+    squares. Memory: one block at a time.
+    """
+    R: np.ndarray | None = None
+    for B in blocks:
+        R = np.asarray(np.linalg.qr(B if R is None else np.vstack((R, B)), mode="r"))
+    if R is None:
+        raise ValueError("no regression rows")
+    P1 = R.shape[1]
+    return np.vstack((R, np.zeros((max(0, P1 - R.shape[0]), P1))))[:P1]
