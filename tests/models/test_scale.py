@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mrdamper.models import _scale, get_estimator
 from mrdamper.models import _narx_kernels as NK
+from mrdamper.models import _scale, get_estimator
 from mrdamper.models.narx import candidate_structure
 
 
@@ -27,7 +27,8 @@ def records():  # type: ignore[no-untyped-def]
 @pytest.fixture()
 def small_windows(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(_scale, "WINDOW_THRESHOLD", 20_000)
-    monkeypatch.setattr(_scale, "WINDOW_BUDGET", 16_000)
+    for name in ("WINDOW_BUDGET", "WINDOW_BUDGET_SPENCER", "WINDOW_BUDGET_P15"):
+        monkeypatch.setattr(_scale, name, 16_000)
     monkeypatch.setattr(_scale, "WINDOW_SECONDS", 4.0)
 
 

@@ -357,7 +357,7 @@ class P15Estimator(Estimator):
         from mrdamper.models import _scale
 
         raw_all = self._as_set(data)
-        raw, windows = _scale.window_set(raw_all)  # long campaigns: evenly spread windows
+        raw, windows = _scale.window_set(raw_all, budget=_scale.WINDOW_BUDGET_P15)  # long campaigns
         i_all = np.concatenate([_scale.extrema(e.electrical(self.input)) for e in raw_all])
         # the range of the raw input also holds every lagged input (a convex combination of it)
         lo, hi = float(np.min(i_all)), float(np.max(i_all))

@@ -391,7 +391,7 @@ class SpencerEstimator(Estimator):
 
         all_exps = self._as_set(data)
         t0, c0 = time.perf_counter(), time.process_time()
-        exps, windows = _scale.window_set(all_exps)  # long campaigns: evenly spread windows
+        exps, windows = _scale.window_set(all_exps, budget=_scale.WINDOW_BUDGET_SPENCER)  # long campaigns
         p, common = identify(self, exps)
         if windows is not None:  # the input range of every sample, not only of the windows
             common["input_range"] = _scale.input_range(all_exps, self.input)
