@@ -107,3 +107,21 @@ def test_lpv_qr_factor_matches_full_regression(monkeypatch: pytest.MonkeyPatch) 
         np.testing.assert_allclose(np.linalg.solve(R, z), np.linalg.lstsq(X, t, rcond=None)[0], rtol=1e-8)
         np.testing.assert_allclose(np.linalg.svd(R, compute_uv=False), np.linalg.svd(X, compute_uv=False),
                                    rtol=1e-9)
+
+
+def test_lpv_least_squares_record_by_record_matches_concatenated(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mrdamper.models import _lpv_fit
+
+    rng = np.random.default_rng(2)
+    U = [rng.standard_normal(n) for n in (1500, 2500)]
+    R = [rng.uniform(0, 1, n) for n in (1500, 2500)]
+    F = [np.convolve(u, [0.0, 0.5, 0.2], mode="full")[: u.size] * (1 + r) + 3.0 + 0.01 * rng.standard_normal(u.size)
+         for u, r in zip(U, R)]
+    rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=np.array([0.8, 1.2]))
+    ref = _lpv_fit.ls_identify(rec, 2, 2, True)
+    monkeypatch.setattr(_scale, "WINDOW_THRESHOLD", 100)
+    got = _lpv_fit.ls_identify(rec, 2, 2, True)
+    np.testing.assert_allclose(got.theta, ref.theta, rtol=1e-9, atol=1e-12)
+    assert got.offset == pytest.approx(ref.offset, rel=1e-9)
+    assert got.n_eq == ref.n_eq and got.solver == ref.solver
+    assert _scale.distinct_levels([np.array([0.0, 0.0, 1.0]), np.array([2.0, 1.0])], 1e-9) == 3

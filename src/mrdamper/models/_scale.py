@@ -19,7 +19,7 @@ P-15 200 000), passed by their estimators.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -33,12 +33,17 @@ __all__ = [
     "WINDOW_SECONDS",
     "WINDOW_THRESHOLD",
     "LazyRecords",
+    "RecordList",
     "chunked_qr",
+    "distinct_levels",
     "extrema",
     "fold_qr",
     "full_data_esr",
     "input_range",
+    "input_range_of",
+    "lpv_gram_records",
     "lpv_qr_factor",
+    "lpv_qr_records",
     "narx_windows",
     "plan_windows",
     "window_arrays",
@@ -163,6 +168,12 @@ def extrema(a: np.ndarray) -> np.ndarray:
 def input_range(exps: Sequence[Experiment], source: Any) -> tuple[float, float]:
     """Range of the electrical input ``source`` over every record."""
     ext = np.array([extrema(e.electrical(source)) for e in exps])
+    return float(ext[:, 0].min()), float(ext[:, 1].max())
+
+
+def input_range_of(arrays: Sequence[np.ndarray]) -> tuple[float, float]:
+    """``(min, max)`` over per-record arrays (no concatenation)."""
+    ext = np.array([extrema(a) for a in arrays])
     return float(ext[:, 0].min()), float(ext[:, 1].max())
 
 
@@ -292,3 +303,53 @@ def fold_qr(blocks: Iterable[np.ndarray]) -> np.ndarray:
         raise ValueError("no regression rows")
     P1 = R.shape[1]
     return np.vstack((R, np.zeros((max(0, P1 - R.shape[0]), P1))))[:P1]
+
+
+class RecordList(list):  # type: ignore[type-arg]
+    """Per-record arrays that the LPV least squares takes record by record (no concatenation)."""
+
+
+def lpv_gram_records(ys: Sequence[np.ndarray], us: Sequence[np.ndarray], rhos: Sequence[np.ndarray],
+                     weights: np.ndarray, n_m: int, n_p: int, with_const: bool,
+                     gram_pass: Callable[..., Any]) -> tuple[np.ndarray, np.ndarray, float, int]:
+    """``gram_pass`` summed over records given as separate arrays (same sums as one call on the
+    concatenation, up to the order of the floating-point additions)."""
+    G: np.ndarray | None = None
+    g: np.ndarray | None = None
+    yy, n_eq = 0.0, 0
+    for r in range(len(us)):
+        st = np.array([0, us[r].size], dtype=np.int64)
+        Gr, gr, yyr, nr = gram_pass(ys[r], us[r], rhos[r], st, np.asarray(weights[r : r + 1], dtype=np.float64),
+                                    n_m, n_p, with_const)
+        G = Gr if G is None else G + Gr
+        g = gr if g is None else g + gr
+        yy += float(yyr)
+        n_eq += int(nr)
+    assert G is not None and g is not None
+    return G, g, yy, n_eq
+
+
+def lpv_qr_records(ys: Sequence[np.ndarray], us: Sequence[np.ndarray], rhos: Sequence[np.ndarray],
+                   weights: np.ndarray, n_m: int, n_p: int, with_const: bool,
+                   build: Callable[..., tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`lpv_qr_factor` over records given as separate arrays."""
+    def blocks() -> Iterator[np.ndarray]:
+        for r in range(len(us)):
+            st = np.array([0, us[r].size], dtype=np.int64)
+            R, z = lpv_qr_factor(ys[r], us[r], rhos[r], st, np.asarray(weights[r : r + 1]), n_m, n_p, with_const,
+                                 build)
+            yield np.column_stack((R, z))
+
+    Rf = fold_qr(blocks())
+    return np.ascontiguousarray(Rf[:-1, :-1]), Rf[:-1, -1].copy()
+
+
+def distinct_levels(rhos: Sequence[np.ndarray], tol: float) -> int:
+    """Number of levels of the scheduling variable separated by more than ``tol``, record by record
+    (one representative per cluster of each record, then the same count over the representatives)."""
+    reps = []
+    for r in rhos:
+        s = np.sort(r)
+        reps.append(s[np.r_[True, np.diff(s) > tol]])
+    s = np.sort(np.concatenate(reps))
+    return int(1 + np.count_nonzero(np.diff(s) > tol))

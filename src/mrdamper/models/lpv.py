@@ -361,9 +361,10 @@ class LPVEstimator(Estimator):
             w.append(1.0 / (Fr.size * var) if self.weighting == "esr" and var > 0 else 1.0)
         weights = np.asarray(w)
         weights = weights / weights.mean()
-        rho_all = np.concatenate(R)
-        rho_range = (float(rho_all.min()), float(rho_all.max()))
-        n_lev = _distinct_levels(rho_all, 1e-9 * max(1.0, abs(rho_range[1])))
+        rho_range = _scale.input_range_of(R)
+        tol = 1e-9 * max(1.0, abs(rho_range[1]))
+        long = sum(r.size for r in R) > _scale.WINDOW_THRESHOLD  # long campaigns: record by record
+        n_lev = _scale.distinct_levels(R, tol) if long else _distinct_levels(np.concatenate(R), tol)
         if n_lev < self.n_rho + 1:
             raise IdentificationError(
                 f"{self.kind}: rho takes {n_lev} distinct value(s) in the training data; degree "
@@ -371,7 +372,7 @@ class LPVEstimator(Estimator):
             )
         rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
         ls = _lpv_fit.ls_identify(rec, self.n_m, self.n_rho + 1, self.offset)
-        f_scale = max(float(np.max(np.abs(np.concatenate(F)))), 1.0)
+        f_scale = max(max(float(np.max(np.abs(f))) for f in F), 1.0)
         bound = 1e3 * f_scale
         theta, F0 = ls.theta, ls.offset
         prov: dict[str, Any] = {
