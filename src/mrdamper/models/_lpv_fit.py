@@ -119,6 +119,8 @@ def ls_identify(rec: Records, n_m: int, n_p: int, offset: bool) -> LSResult:
     coefficients are re-estimated on ``F - F0``.
     """
     y: Any
+    u: Any
+    rho: Any
     if sum(a.size for a in rec.u) > _scale.WINDOW_THRESHOLD:  # long campaigns: no concatenation
         y, u, rho, starts = (_scale.RecordList(rec.F), _scale.RecordList(rec.u), _scale.RecordList(rec.rho),
                              np.zeros(1, dtype=np.int64))
