@@ -46,6 +46,7 @@ __all__ = [
     "lpv_qr_records",
     "narx_windows",
     "plan_windows",
+    "strided",
     "window_arrays",
     "window_records",
     "window_set",
@@ -169,6 +170,21 @@ def input_range(exps: Sequence[Experiment], source: Any) -> tuple[float, float]:
     """Range of the electrical input ``source`` over every record."""
     ext = np.array([extrema(e.electrical(source)) for e in exps])
     return float(ext[:, 0].min()), float(ext[:, 1].max())
+
+
+def strided(channels: Sequence[Sequence[np.ndarray]], threshold: int | None = None) -> list[list[np.ndarray]]:
+    """Every k-th sample of each record (views, no copy) so at most about ``threshold`` samples
+    remain in all (default :data:`WINDOW_THRESHOLD`); the arrays themselves below it.
+
+    For static fits (the F-v zone regression of the LPV laws), where sample order does not matter
+    and an even thinning keeps every record and level represented.
+    """
+    threshold = WINDOW_THRESHOLD if threshold is None else threshold
+    total = sum(a.size for a in channels[0])
+    if total <= threshold:
+        return [list(ch) for ch in channels]
+    k = -(-total // threshold)
+    return [[a[::k] for a in ch] for ch in channels]
 
 
 def input_range_of(arrays: Sequence[np.ndarray]) -> tuple[float, float]:

@@ -323,7 +323,8 @@ class LPVEstimator(Estimator):
         if by == "auto":
             by = "current" if all("current" in e.metadata for e in exps) else "bins"
         if by == "bins":
-            fits = zone_fits_binned([e.v for e in exps], [e.F for e in exps], rhos, n_bins=self.n_bins)
+            v, F, r = _scale.strided([[e.v for e in exps], [e.F for e in exps], rhos])  # long campaigns
+            fits = zone_fits_binned(v, F, r, n_bins=self.n_bins)
             return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
         return fit_zone_laws(exps, degree=self.laws_degree, by=by, source=self.input)
 

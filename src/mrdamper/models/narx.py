@@ -411,15 +411,15 @@ class NARXEstimator(Estimator):
             raise IdentificationError(
                 f"narx: {n_eq} equations for {cand.shape[0]} candidate terms; expected more "
                 "samples (longer records) or a smaller structure (n_a, n_b, degree)")
-        order, err = self._select(records, weights, base, cand, p)
+        # long campaigns: term selection and output-error refinement on evenly spread windows
+        fit_recs, fit_w, windows = _scale.narx_windows(records, weights, fs, p)
+        order, err = self._select(list(fit_recs), fit_w, base, cand, p)
         terms = cand[order]
         theta, cond = self._least_squares(records, weights, base, terms, p)
         model = _replace(probe, terms=terms, theta=theta, range_policy=self.range_policy)
         cost_ls = _free_run_cost(model, records, weights, p)
         cost, nfev, refined = cost_ls, 0, False
-        windows = None
         if self.refine:
-            fit_recs, fit_w, windows = _scale.narx_windows(records, weights, fs, p)
             theta_r, cost_r, nfev = self._refine(model, list(fit_recs), fit_w, p)
             if windows is not None:  # full-data check of the refined coefficients
                 cost_r = _free_run_cost(_replace(model, theta=theta_r), records, weights, p)
@@ -438,7 +438,7 @@ class NARXEstimator(Estimator):
             "fit_time_s": time.perf_counter() - t_start,
         }
         if windows is not None:
-            prov["refine_windows"] = windows
+            prov["refine_windows"] = {**windows, "used_for": "term selection and output-error refinement"}
             prov["full_data_check"] = {"free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost)}
         return _replace(model, provenance=prov)
 
