@@ -27,9 +27,10 @@ def records():  # type: ignore[no-untyped-def]
 @pytest.fixture()
 def small_windows(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(_scale, "WINDOW_THRESHOLD", 20_000)
-    for name in ("WINDOW_BUDGET", "WINDOW_BUDGET_SPENCER", "WINDOW_BUDGET_P15"):
+    for name in ("WINDOW_BUDGET", "WINDOW_BUDGET_SPENCER", "WINDOW_BUDGET_P15", "WINDOW_BUDGET_LPV"):
         monkeypatch.setattr(_scale, name, 16_000)
     monkeypatch.setattr(_scale, "WINDOW_SECONDS", 4.0)
+    monkeypatch.setattr(_scale, "WINDOW_SECONDS_LPV", 4.0)
 
 
 def test_plan_windows_spread_and_bounded() -> None:

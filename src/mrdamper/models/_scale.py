@@ -28,9 +28,11 @@ from mrdamper.data import Experiment, ExperimentSet
 
 __all__ = [
     "WINDOW_BUDGET",
+    "WINDOW_BUDGET_LPV",
     "WINDOW_BUDGET_P15",
     "WINDOW_BUDGET_SPENCER",
     "WINDOW_SECONDS",
+    "WINDOW_SECONDS_LPV",
     "WINDOW_THRESHOLD",
     "LazyRecords",
     "RecordList",
@@ -59,6 +61,9 @@ WINDOW_BUDGET = 300_000
 #: Budgets of the costliest fits (Spencer, P-15) [samples].
 WINDOW_BUDGET_SPENCER = 120_000
 WINDOW_BUDGET_P15 = 200_000
+#: Budget and window length of the LPV / LTI output-error refinement [samples], [s].
+WINDOW_BUDGET_LPV = 900_000
+WINDOW_SECONDS_LPV = 60.0
 #: Length of one window [s] (at least 2000 samples whatever the rate).
 WINDOW_SECONDS = 20.0
 
@@ -141,7 +146,13 @@ def window_arrays(arrays: Sequence[Sequence[np.ndarray]], fs: float,
 
 def window_records(rec: Any, fs: float, **kwargs: Any) -> tuple[Any, dict[str, Any] | None]:
     """Windows of an LPV ``Records`` (fields ``F, u, rho`` per record, ``weights``); ``rec``
-    itself below the threshold. Each window keeps its parent record's weight."""
+    itself below the threshold. Each window keeps its parent record's weight.
+
+    Defaults: :data:`WINDOW_BUDGET_LPV` samples in windows of :data:`WINDOW_SECONDS_LPV` (on a 1 h
+    rig record, 300 000 samples in 20 s windows gave a 17 % higher test ESR than every sample;
+    900 000 in 60 s windows 0.6 %, at a quarter of the time)."""
+    kwargs.setdefault("budget", WINDOW_BUDGET_LPV)
+    kwargs.setdefault("seconds", WINDOW_SECONDS_LPV)
     chans, parent, info = window_arrays([rec.F, rec.u, rec.rho], fs, **kwargs)
     if chans is None:
         return rec, None
