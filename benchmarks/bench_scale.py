@@ -5,6 +5,7 @@ Usage::
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py              # 6 min, 1 h, 10 h
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --quick      # 12 s, 2 min (seconds)
     python benchmarks/bench_scale.py --lengths 360 3600 --kinds lpv narx --cache /tmp/scale
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --accuracy lpv p15 narx   # windows vs every sample
 
 The records come from the virtual rig (default reference damper, 1 kHz): road profile (ISO 8608
 class C at 20 m/s, 4.5 Hz band) with an APRBS current (0.2 s minimum hold) over the damper's
@@ -26,6 +27,10 @@ fit time against samples (1 = linear) from a least-squares line through all leng
 the targets: fit <= 30 s and peak <= 1.5 GB at 1 h, 1 h fit <= 12 x the 6 min fit, peak <= 3 GB at
 10 h. A fit that takes longer than ``--timeout`` is stopped and reported as such. Timings on a
 loaded machine are noisy; the ratios between kinds and lengths of one run are what to compare.
+
+``--accuracy KIND ...`` checks what the long-campaign windows cost in accuracy: each kind is fitted
+on the first 1 h record twice in one process, with the windows and on every sample (threshold
+raised), and both models are scored in free run on that record and on a second 1 h record.
 """
 
 from __future__ import annotations
@@ -114,6 +119,31 @@ def _child_fit(kind: str, cache: Path, length_s: float, record_s: float) -> None
                       "n": sum(r.n for r in records), "check": check}, default=str))
 
 
+def _child_accuracy(kind: str, cache: Path) -> None:
+    """Fit ``kind`` on record 0 (1 h) with the long-campaign windows and on every sample (threshold
+    raised); score both in free run on record 1 (test) and record 0 (train)."""
+    from mrdamper.errors import MrDamperError
+    from mrdamper.models import _scale, get_estimator
+
+    train, test = _load(cache, 7200.0, 3600.0)
+    get_estimator(kind).fit(train.slice(0, int(WARMUP_S * FS)))
+    out: dict[str, Any] = {}
+    for label in ("windows", "every sample"):
+        if label == "every sample":
+            _scale.WINDOW_THRESHOLD = 10**12
+        t0 = time.perf_counter()
+        model = get_estimator(kind).fit(train).with_range_policy("clip")
+        fit_s = time.perf_counter() - t0
+        scores = {}
+        for name, rec in (("train", train), ("test", test)):
+            try:
+                scores[name] = model.score(rec).esr
+            except MrDamperError as exc:  # a diverging free run is a result, not a crash
+                scores[name] = f"{type(exc).__name__}"
+        out[label] = {"fit_s": fit_s, **scores}
+    print(json.dumps(out))
+
+
 # ----------------------------------------------------------------------------- parent
 def _run_child(args: list[str], timeout: float) -> dict[str, Any]:
     env = dict(os.environ, OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"))
@@ -150,6 +180,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=9)
     ap.add_argument("--timeout", type=float, default=900.0, help="stop a fit after this long [s]")
     ap.add_argument("--json", type=Path, help="also write the rows as JSON here")
+    ap.add_argument("--accuracy", nargs="+", metavar="KIND",
+                    help="instead of the scaling table: windows vs every sample on 1 h (train record 1, test record 2)")
+    ap.add_argument("--child-accuracy", nargs=2, metavar=("KIND", "CACHE"), help=argparse.SUPPRESS)
     ap.add_argument("--child", nargs=4, metavar=("KIND", "CACHE", "LENGTH", "RECORD"), help=argparse.SUPPRESS)
     ap.add_argument("--generate", nargs=4, metavar=("CACHE", "RECORD", "N", "SEED"), help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -157,11 +190,17 @@ def main() -> None:
         kind, cache, length, record = args.child
         _child_fit(kind, Path(cache), float(length), float(record))
         return
+    if args.child_accuracy:
+        _child_accuracy(args.child_accuracy[0], Path(args.child_accuracy[1]))
+        return
     if args.generate:
         cache, record, n, seed = args.generate
         _generate(Path(cache), float(record), int(n), int(seed))
         return
 
+    if args.accuracy:
+        _accuracy(args)
+        return
     lengths = sorted(args.lengths or ([12.0, 120.0] if args.quick else [360.0, 3600.0, 36000.0]))
     unknown = sorted(set(args.kinds) - set(KINDS))
     if unknown:
@@ -192,6 +231,26 @@ def main() -> None:
     _report(rows, lengths)
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1, default=str) + "\n")
+
+
+def _accuracy(args: argparse.Namespace) -> None:
+    with tempfile.TemporaryDirectory(prefix="bench-scale-") as tmp:
+        cache = (args.cache or Path(tmp)) / f"seed{args.seed}-rec3600s"
+        subprocess.run([sys.executable, str(Path(__file__).resolve()), "--generate", str(cache), "3600", "2",
+                        str(args.seed)], check=True)
+        print("| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train ESR / test ESR |")
+        print("|---|---|---|")
+        for kind in args.accuracy:
+            r = _run_child(["--child-accuracy", kind, str(cache)], args.timeout)
+            if r["status"] != "ok":
+                print(f"| {kind} | {r['status']} | |", flush=True)
+                continue
+
+            def fmt(d: dict[str, Any]) -> str:
+                esr = [f"{d[k]:.6f}" if isinstance(d[k], float) else d[k] for k in ("train", "test")]
+                return f"{d['fit_s']:.1f} / {esr[0]} / {esr[1]}"
+
+            print(f"| {kind} | {fmt(r['windows'])} | {fmt(r['every sample'])} |", flush=True)
 
 
 def _report(rows: list[dict[str, Any]], lengths: list[float]) -> None:
