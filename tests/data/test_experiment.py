@@ -116,3 +116,26 @@ def test_pickle_round_trip_revalidates() -> None:
     back = pickle.loads(pickle.dumps(e))
     assert back.name == "p" and dict(back.metadata) == {"current": 0.5}
     assert np.array_equal(back.F, e.F) and not back.F.flags.writeable
+
+
+def test_read_only_channels_are_shared_writable_ones_copied() -> None:
+    import numpy as np
+
+    from mrdamper.data import Experiment
+
+    t = np.arange(100) * 1e-3
+    e = Experiment(t=t, x=t.copy(), v=t.copy(), F=t.copy(), i=t.copy())
+    assert not np.shares_memory(e.x, t) and not e.x.flags.writeable  # writable input: copied
+    s = e.slice(10, 60)
+    assert np.shares_memory(s.F, e.F)  # a slice of a record: no copy
+    frozen = t.copy()
+    frozen.setflags(write=False)
+    view = frozen[::1]
+    assert np.shares_memory(Experiment(t=t, x=view, v=t, F=t, i=t).x, frozen)
+    base = t.copy()
+    ro_view = base[:]
+    ro_view.setflags(write=False)  # read-only view of a writable array: still copied
+    e2 = Experiment(t=t, x=ro_view, v=t, F=t, i=t)
+    assert not np.shares_memory(e2.x, base)
+    base[0] = 99.0
+    assert e2.x[0] == 0.0

@@ -59,3 +59,35 @@ def test_damper_option_accepts_a_model_file(tmp_path: Path) -> None:
     loaded = cli_rig._damper(str(path))
     assert loaded.kind == "spencer" and loaded.input == "voltage"
     assert cli_rig._damper(None) is None
+
+
+def test_rig_doe_parquet_reads_back_and_says_how_much(
+    fast_damper: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("pyarrow")
+    from mrdamper.rig.doe_io import read_doe
+
+    csv_out, pq_out = tmp_path / "csv", tmp_path / "pq"
+    main(["rig", "doe", "--out", str(csv_out), "--seed", "3", "--scale", "0.07", "--fs", "200"])
+    main(["rig", "doe", "--out", str(pq_out), "--seed", "3", "--scale", "0.07", "--fs", "200",
+          "--format", "parquet", "--workers", "2"])
+    said = capsys.readouterr().out
+    files = sorted(pq_out.glob("*.parquet"))
+    assert len(files) == 61 and not list(pq_out.glob("exp*.csv"))
+    mb = sum(f.stat().st_size for f in files) / 1e6
+    assert f"wrote 61 parquet files, {mb:.1f} MB" in said
+    a, b = read_doe(csv_out), read_doe(pq_out)
+    assert a.names == b.names
+    for ra, rb in zip(a, b):
+        assert rb.metadata["experiment"] == ra.metadata["experiment"]
+        for ch in ("t", "x", "v", "i", "F"):
+            assert getattr(ra, ch).tobytes() == getattr(rb, ch).tobytes()
+
+
+def test_rig_doe_rejects_unknown_format(fast_damper: None, tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["rig", "doe", "--out", str(tmp_path / "x"), "--format", "hdf5", "--scale", "0.07"])
+    err = capsys.readouterr().err
+    assert "--format" in err and "parquet" in err
+    assert not (tmp_path / "x").exists()

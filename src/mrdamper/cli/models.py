@@ -161,7 +161,10 @@ def fit(
         raise DataValidationError(
             f"--{flag}", f"model {model!r} does not take the setting {unknown[0]!r}; its settings are {accepted}"
         )
-    fitted = get_estimator(model, **given).fit(records)
+    from mrdamper.cli._status import working
+
+    with working(f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"):
+        fitted = get_estimator(model, **given).fit(records)
     path = fitted.save(out, force=force)
     typer.echo(f"{model}: identified on {len(records)} record(s); wrote {path}")
 

@@ -1,9 +1,10 @@
 """``mrdamper rig``: the virtual test rig from the command line.
 
 ``mrdamper rig doe --out DIR [--seed N] [--scale S] [--fs HZ] [--damper NAME|FILE] [--workers W]
-[--force]``
-generates the paper's Table II design of experiments and writes one CSV per record plus
-``manifest.csv``.
+[--format csv|parquet] [--no-progress] [--force]``
+generates the paper's Table II design of experiments and writes one file per record (CSV or
+Parquet) plus ``manifest.csv``; on a terminal it shows a progress bar, and it says how much it
+wrote.
 """
 
 from __future__ import annotations
@@ -51,24 +52,69 @@ def doe(
     ] = None,
     workers: Annotated[int, typer.Option("--workers", min=1, help="Worker processes (same files for any number).")] = 1,
     force: Annotated[bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")] = False,
+    format: Annotated[str, typer.Option("--format", help="Record files: csv or parquet (needs pyarrow).")] = "csv",
+    no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress bar (shown only on a terminal).")] = False,
 ) -> None:
-    """Generate the paper's Table II DoE on the virtual rig and write CSV files + manifest.csv."""
+    """Generate the paper's Table II DoE on the virtual rig and write record files + manifest.csv."""
     from mrdamper._io import check_output
-    from mrdamper.rig.doe import table_ii
-    from mrdamper.rig.doe_io import write_records
+    from mrdamper.rig.doe import TABLE_II, table_ii
+    from mrdamper.rig.doe_io import RECORD_FORMATS, write_records
 
+    if format not in RECORD_FORMATS:
+        raise DataValidationError("--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}")
     check_output(out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else [])
-    t0 = time.perf_counter()
-    records = table_ii(seed=seed, scale=scale, fs=fs, damper=_damper(damper), workers=workers)
-    t1 = time.perf_counter()
-    manifest = write_records(records, out, force=force)
-    t2 = time.perf_counter()
+    n_rec = sum(s.replicates for s in TABLE_II)
+    written: list[int] = []
+    with _bar(not no_progress) as bar:
+        gen = bar.add_task("generating", total=n_rec)
+        t0 = time.perf_counter()
+        records = table_ii(seed=seed, scale=scale, fs=fs, damper=_damper(damper), workers=workers,
+                           progress=lambda _rec: bar.advance(gen))
+        t1 = time.perf_counter()
+        wri = bar.add_task(f"writing {format}", total=len(records))
+
+        def wrote(path: Path) -> None:
+            written.append(path.stat().st_size)
+            bar.advance(wri)
+
+        manifest = write_records(records, out, force=force, format=format, progress=wrote)  # type: ignore[arg-type]
+        t2 = time.perf_counter()
     samples = sum(r.n for r in records)
     typer.echo(
         f"{len(records)} records, {samples} samples ({samples / fs:g} s at {fs:g} Hz), "
         f"seed {seed}, scale {scale:g}: generated in {t1 - t0:.1f} s, written in {t2 - t1:.1f} s"
     )
+    typer.echo(f"wrote {len(written)} {format} files, {sum(written) / 1e6:.1f} MB, to {out}")
     typer.echo(f"manifest: {manifest}")
+
+
+class _NoBar:
+    """Stand-in for a rich Progress when no bar is shown."""
+
+    def __enter__(self) -> _NoBar:  # noqa: PYI034
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def add_task(self, description: str, total: int) -> int:
+        return 0
+
+    def advance(self, task: int) -> None:
+        return None
+
+
+def _bar(enabled: bool):  # type: ignore[no-untyped-def]
+    """A rich progress bar on standard error when it is a terminal (else a silent stand-in)."""
+    import sys
+
+    if not enabled or not sys.stderr.isatty():
+        return _NoBar()
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                    console=Console(stderr=True), transient=False)
 
 
 def register(app: typer.Typer) -> None:

@@ -30,8 +30,25 @@ NanPolicy = Literal["raise", "drop-edges", "interpolate"]
 DEFAULT_TIME_TOLERANCE = 1e-3
 
 
+def _frozen(values: Any) -> bool:
+    """True for a float64 array that nothing can write to: read-only down its chain of bases
+    (a channel of another record, a slice of one, a read-only memory map)."""
+    arr = values
+    while isinstance(arr, np.ndarray):
+        if arr.flags.writeable:
+            return False
+        arr = arr.base
+    return isinstance(values, np.ndarray) and values.dtype == np.float64 and not isinstance(arr, np.ndarray)
+
+
 def _as_channel(name: str, values: Any) -> np.ndarray:
-    """Return a read-only float64 1-D copy of ``values`` or raise naming ``name``."""
+    """Return a read-only float64 1-D copy of ``values`` or raise naming ``name``.
+
+    An array that is already float64 and read-only down its chain of bases is kept as it is
+    (no copy: it cannot change under the record).
+    """
+    if _frozen(values) and values.ndim == 1:
+        return np.asarray(values).view(np.ndarray)
     try:
         arr = np.array(values, dtype=np.float64, copy=True)
     except (TypeError, ValueError) as exc:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -13,6 +14,7 @@ from scipy import optimize
 
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
+from mrdamper.models import _scale
 
 __all__ = [
     "STABILITY_GRID",
@@ -78,7 +80,10 @@ def split_theta(theta: np.ndarray, n_m: int, n_p: int) -> tuple[np.ndarray, np.n
 
 
 def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
-    G, g, _, n_eq = K.gram_pass(y, u, rho, starts, w, n_m, n_p, with_const)
+    if isinstance(u, _scale.RecordList):  # long campaigns: record by record, never concatenated
+        G, g, _, n_eq = _scale.lpv_gram_records(y, u, rho, w, n_m, n_p, with_const, K.gram_pass)
+    else:
+        G, g, _, n_eq = K.gram_pass(y, u, rho, starts, w, n_m, n_p, with_const)
     P = G.shape[0]
     if n_eq < P:
         raise IdentificationError(f"lpv: {n_eq} equations for {P} unknowns; give longer or more records")
@@ -111,7 +116,10 @@ def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
         z = scipy.linalg.cho_solve((c, low), g / d, check_finite=False)
         solver = "cholesky"
     else:  # normal equations lose too many digits: QR of the scaled regression matrix
-        X, t = K.build_regressors(y, u, rho, starts, w, n_m, n_p, with_const)
+        if isinstance(u, _scale.RecordList):
+            X, t = _scale.lpv_qr_records(y, u, rho, w, n_m, n_p, with_const, K.build_regressors)
+        else:
+            X, t = _scale.lpv_qr_factor(y, u, rho, starts, w, n_m, n_p, with_const, K.build_regressors)
         z = np.linalg.lstsq(X / d, t, rcond=None)[0]
         solver = "qr"
     return z / d, cond_x, solver, int(n_eq)
@@ -124,7 +132,14 @@ def ls_identify(rec: Records, n_m: int, n_p: int, offset: bool) -> LSResult:
     affine terms ``delta_p rho^p`` (``delta = F0 (e_0 + sum_j alpha_j)`` in least squares), then the
     coefficients are re-estimated on ``F - F0``.
     """
-    y, u, rho, starts = rec.flat(rec.F)
+    y: Any
+    u: Any
+    rho: Any
+    if sum(a.size for a in rec.u) > _scale.WINDOW_THRESHOLD:  # long campaigns: no concatenation
+        y, u, rho, starts = (_scale.RecordList(rec.F), _scale.RecordList(rec.u), _scale.RecordList(rec.rho),
+                             np.zeros(1, dtype=np.int64))
+    else:
+        y, u, rho, starts = rec.flat(rec.F)
     F0 = 0.0
     if offset:
         th, *_ = _solve(y, u, rho, starts, rec.weights, n_m, n_p, True)
@@ -134,7 +149,7 @@ def ls_identify(rec: Records, n_m: int, n_p: int, offset: bool) -> LSResult:
         s[0] += 1.0
         den = float(s @ s)
         F0 = float(delta @ s / den) if den > 0 else 0.0
-        y = y - F0
+        y = _scale.RecordList(a - F0 for a in y) if isinstance(y, _scale.RecordList) else y - F0
     th, cond, solver, n_eq = _solve(y, u, rho, starts, rec.weights, n_m, n_p, False)
     return LSResult(theta=th, offset=F0, cond=cond, solver=solver, n_eq=n_eq)
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
@@ -19,6 +19,7 @@ import numpy as np
 
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.models import _scale
 from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
 from mrdamper.models.registry import register
 
@@ -160,47 +161,49 @@ class BinghamEstimator(Estimator):
         exps = self._as_set(data)
         probe = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps)
         deg = int(self.degree)
-        rows, rhs, inputs = [], [], []
-        for exp in exps:
-            e = exp.electrical(self.input)
-            s = probe.sign(exp.v)
-            powers = np.vander(e, deg + 1, increasing=True)
-            X = np.hstack([powers * s[:, None], powers * exp.v[:, None], np.ones((exp.n, 1))])
-            w = 1.0
-            if self.weighting == "record":
-                sd = float(np.std(exp.F))
-                if sd == 0.0:
-                    raise DataValidationError("F", f"record {exp.name!r} has constant force; use weighting='none'")
-                w = 1.0 / (sd * math.sqrt(exp.n))
-            rows.append(X * w)
-            rhs.append(exp.F * w)
-            inputs.append(e)
+        inputs, n_rows = [], 0
+
+        def blocks() -> Iterator[np.ndarray]:  # weighted rows [X y], folded into a QR factor
+            for exp in exps:
+                w = 1.0
+                if self.weighting == "record":
+                    sd = float(np.std(exp.F))
+                    if sd == 0.0:
+                        raise DataValidationError("F", f"record {exp.name!r} has constant force; use weighting='none'")
+                    w = 1.0 / (sd * math.sqrt(exp.n))
+                inputs.append(_scale.extrema(exp.electrical(self.input)))
+                for k0 in range(0, exp.n, _scale.QR_BLOCK):
+                    sl = slice(k0, k0 + _scale.QR_BLOCK)
+                    e, v = exp.electrical(self.input)[sl], exp.v[sl]
+                    powers = np.vander(e, deg + 1, increasing=True)
+                    yield np.hstack([powers * probe.sign(v)[:, None], powers * v[:, None], np.ones((e.size, 1)),
+                                     exp.F[sl, None]]) * w
+
+        Rf = _scale.fold_qr(blocks())  # Q Rf = [X y]: X c - y = Q (Rf[:, :-1] c - Rf[:, -1])
+        n_rows = sum(e.n for e in exps)
         e_all = np.concatenate(inputs)
         level = single_level(e_all)
+        cols = list(range(2 * (deg + 1) + 1))
         if level is not None and deg > 0:  # one level: fc and c0 reduce to constants
-            n_cols = 2 * (deg + 1) + 1
-            cols = [0, deg + 1, n_cols - 1]
-            rows = [r[:, cols] for r in rows]
+            cols = [0, deg + 1, cols[-1]]
             deg = 0
-        X = np.vstack(rows)
-        y = np.concatenate(rhs)
+        X, y = Rf[:, cols], Rf[:, -1]
         coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)
         if rank < X.shape[1]:
-            levels = np.unique(np.round(np.concatenate(inputs), 9)).size
+            levels = np.unique(np.round(np.concatenate([e.electrical(self.input) for e in exps]), 9)).size
             raise IdentificationError(
                 f"bingham: regression is rank deficient (rank {rank} of {X.shape[1]}); degree={deg} "
                 f"needs at least {deg + 1} distinct '{self.input}' levels and moving records "
                 f"(found {levels} level(s))"
             )
-        pred = X @ coef
         provenance = {
             "method": "linear least squares",
             "records": [e.name for e in exps],
-            "n_samples": int(X.shape[0]),
+            "n_samples": int(n_rows),
             "weighting": self.weighting,
             "degree": deg,
             "cond_X": float(sv[0] / sv[-1]),
-            "weighted_rms_residual": float(np.sqrt(np.mean((y - pred) ** 2))),
+            "weighted_rms_residual": float(np.linalg.norm(X @ coef - y) / math.sqrt(n_rows)),
         }
         if level is not None and deg != int(self.degree):
             note = single_level_note(self.kind, self.input, level)

@@ -33,7 +33,7 @@ from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _lpv_fit
+from mrdamper.models import _lpv_fit, _scale
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
@@ -349,7 +349,8 @@ class LPVEstimator(Estimator):
             if lacking:
                 prov["laws_note"] = "laws_by='auto': no record carries metadata 'current'; laws fitted on rho bins"
         if by == "bins":
-            fits = zone_fits_binned([e.v for e in exps], [e.F for e in exps], rhos, n_bins=self.n_bins)
+            v, F, r = _scale.strided([[e.v for e in exps], [e.F for e in exps], rhos])  # long campaigns
+            fits = zone_fits_binned(v, F, r, n_bins=self.n_bins)
             return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
         return fit_zone_laws(exps, degree=0 if single else self.laws_degree, by=by, source=self.input)
 
@@ -381,7 +382,7 @@ class LPVEstimator(Estimator):
         in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
         rhos = [K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r for r, e in zip(raw, exps)]
         prov: dict[str, Any] = {}
-        level = single_level(np.concatenate(rhos))
+        level = single_level(np.array([_scale.extrema(r) for r in rhos]))  # no concatenated copy
         laws = self._laws(exps, rhos, prov, single=level is not None)
         proto = self.model_cls(
             alpha=np.zeros((self.n_m, self.n_rho + 1)), beta=np.zeros((self.n_m, self.n_rho + 1)),
@@ -400,9 +401,10 @@ class LPVEstimator(Estimator):
             w.append(1.0 / (Fr.size * var) if self.weighting == "esr" and var > 0 else 1.0)
         weights = np.asarray(w) * user_w
         weights = weights / weights.mean()
-        rho_all = np.concatenate(R)
-        rho_range = (float(rho_all.min()), float(rho_all.max()))
-        n_lev = _distinct_levels(rho_all, 1e-9 * max(1.0, abs(rho_range[1])))
+        rho_range = _scale.input_range_of(R)
+        tol = 1e-9 * max(1.0, abs(rho_range[1]))
+        long = sum(r.size for r in R) > _scale.WINDOW_THRESHOLD  # long campaigns: record by record
+        n_lev = _scale.distinct_levels(R, tol) if long else _distinct_levels(np.concatenate(R), tol)
         n_p = self.n_rho + 1
         reduced_laws = self.input_signal == "u" and self.zone_laws is None and self.laws_degree > 0
         if level is not None and (n_p > 1 or reduced_laws):
@@ -416,7 +418,7 @@ class LPVEstimator(Estimator):
             )
         rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
         ls = _lpv_fit.ls_identify(rec, self.n_m, n_p, self.offset)
-        f_scale = max(float(np.max(np.abs(np.concatenate(F)))), 1.0)
+        f_scale = max(max(float(np.max(np.abs(f))) for f in F), 1.0)
         bound = 1e3 * f_scale
         theta, F0 = ls.theta, ls.offset
         prov.update({
@@ -433,12 +435,15 @@ class LPVEstimator(Estimator):
             theta0, shrink = _stable_start(theta, self.n_m, n_p, rho_range, rec, F0, bound)
             if shrink != 1.0:
                 prov["oe_start_pole_scaling"] = shrink
+            rec_oe, windows = _scale.window_records(rec, fs)  # long campaigns: evenly spread windows
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec, theta0, F0, self.n_m, n_p, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
+                rec_oe, theta0, F0, self.n_m, n_p, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
                 solver=self.oe_solver, rho_grid=grid if enforce else None,
             )
             oe_cost = _cost(rec, th_r, f0_r, self.n_m, n_p, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
+            if windows is not None:
+                prov.update(oe_windows=windows, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost})
             ls_ok = not enforce or _pole(theta, self.n_m, n_p, grid)[0] < 1.0
             if oe_cost < ls_cost or not ls_ok:
                 theta, F0 = th_r, f0_r

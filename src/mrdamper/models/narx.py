@@ -48,6 +48,7 @@ from scipy import optimize
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _narx_kernels as K
+from mrdamper.models import _scale
 from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel
 from mrdamper.models.registry import register
@@ -397,6 +398,8 @@ class NARXEstimator(Estimator):
             input_range=(float(e_all.min()), float(e_all.max())), range_policy="ignore")
         p = probe.max_lag
         records, weights = [], []
+        lazy = sum(e.n for e in exps) > _scale.WINDOW_THRESHOLD  # long campaigns: one record at a time
+        n_eq = 0
         for e in exps:
             S = probe.scaled_signals(e)
             sd = float(np.std(S[0, p:]))
@@ -404,11 +407,18 @@ class NARXEstimator(Estimator):
                 raise DataValidationError("F", f"record {e.name!r} has constant force; expected a moving damper")
             records.append(S)
             weights.append(1.0 / (sd * sd * (S.shape[1] - p)))
-        n_eq = sum(S.shape[1] - p for S in records)
+            n_eq += S.shape[1] - p
+            if lazy:
+                records[-1] = np.empty((0, 0))
+        if lazy:
+            records = _scale.LazyRecords(probe.scaled_signals, exps)  # type: ignore[assignment]
         if n_eq <= cand.shape[0]:
             raise IdentificationError(
                 f"narx: {n_eq} equations for {cand.shape[0]} candidate terms; expected more "
                 "samples (longer records) or a smaller structure (n_a, n_b, degree)")
+        # long campaigns: the output-error refinement runs on evenly spread windows (term selection
+        # on windows was tried: its least-squares model diverged in free run on a 1 h record)
+        fit_recs, fit_w, windows = _scale.narx_windows(records, weights, fs, p)
         order, err = self._select(records, weights, base, cand, p)
         terms = cand[order]
         theta, cond = self._least_squares(records, weights, base, terms, p)
@@ -416,7 +426,9 @@ class NARXEstimator(Estimator):
         cost_ls = _free_run_cost(model, records, weights, p)
         cost, nfev, refined = cost_ls, 0, False
         if self.refine:
-            theta_r, cost_r, nfev = self._refine(model, records, weights, p)
+            theta_r, cost_r, nfev = self._refine(model, list(fit_recs), fit_w, p)
+            if windows is not None:  # full-data check of the refined coefficients
+                cost_r = _free_run_cost(_replace(model, theta=theta_r), records, weights, p)
             if cost_r < cost_ls:
                 model, cost, refined = _replace(model, theta=theta_r), cost_r, True
         prov = {
@@ -430,6 +442,9 @@ class NARXEstimator(Estimator):
             "cond": float(cond), "free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost),
             "refined": refined, "refine_nfev": int(nfev),
         }
+        if windows is not None:
+            prov["refine_windows"] = windows
+            prov["full_data_check"] = {"free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost)}
         return _replace(model, provenance=prov)
 
     # --- steps ---------------------------------------------------------------------------
@@ -460,13 +475,9 @@ class NARXEstimator(Estimator):
 
     def _least_squares(self, records: list[np.ndarray], weights: list[float], base: np.ndarray,
                        terms: np.ndarray, p: int) -> tuple[np.ndarray, float]:
-        rows, rhs = [], []
-        for S, w in zip(records, weights, strict=True):
-            Phi = np.empty((S.shape[1] - p, terms.shape[0]))
-            K.fill_candidates(S, base, terms, p, S.shape[1], Phi)
-            rows.append(Phi * math.sqrt(w))
-            rhs.append(S[0, p:] * math.sqrt(w))
-        X, y = np.vstack(rows), np.concatenate(rhs)
+        # [X y] is reduced block by block to its triangular QR factor R (same least-squares
+        # solution and singular values as X itself, never held in memory)
+        X, y = _scale.chunked_qr(records, weights, base, terms, p, K.fill_candidates)
         norms = np.linalg.norm(X, axis=0)
         Xn = X / norms
         coef, _, rank, sv = np.linalg.lstsq(Xn, y, rcond=None)

@@ -354,8 +354,11 @@ class P15Estimator(Estimator):
         """
         t_start = time.perf_counter()
         self._check_settings()
-        raw = self._as_set(data)
-        i_all = np.concatenate([e.electrical(self.input) for e in raw])
+        from mrdamper.models import _scale
+
+        raw_all = self._as_set(data)
+        raw, windows = _scale.window_set(raw_all, budget=_scale.WINDOW_BUDGET_P15)  # long campaigns
+        i_all = np.concatenate([_scale.extrema(e.electrical(self.input)) for e in raw_all])
         # the range of the raw input also holds every lagged input (a convex combination of it)
         lo, hi = float(np.min(i_all)), float(np.max(i_all))
         exps = raw if self.eta is None else ExperimentSet(
@@ -393,8 +396,11 @@ class P15Estimator(Estimator):
             "training_divergence": divergence,
             "training_esr": esr,
             "step_check": step,
-            "elapsed_s": time.perf_counter() - t_start,
         }
+        if windows is not None:
+            provenance["windows"] = windows
+            provenance["full_data_check"] = _scale.full_data_esr(model, raw_all)
+        provenance["elapsed_s"] = time.perf_counter() - t_start
         if self.stable_only and divergence:
             first = next(iter(divergence.items()))
             raise IdentificationError(

@@ -78,6 +78,7 @@ from scipy.optimize import least_squares
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._sp_kernels import N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
@@ -299,7 +300,7 @@ class _SPEstimator(Estimator):
         exps = self._as_set(data)
         cls = self.model_class
         comp_all, power_all = cls.layout_arrays()
-        x, v, i, F = _stack(exps, self.input, self.eta)
+        x, v, i, F = _stack(exps, self.input, self.eta, _scale.WINDOW_THRESHOLD)  # long campaigns: an even subset
         level = single_level(i)
         # one level: every component's polynomial in the input reduces to its constant term
         keep = _single_level_terms(comp_all, power_all) if level is not None else np.ones(comp_all.size, bool)
@@ -366,7 +367,8 @@ class _SPEstimator(Estimator):
             "estimator": type(self).__name__,
             "settings": asdict(self),
             "training_records": list(exps.names),
-            "n_samples": int(F.size),
+            "n_samples": int(sum(e.n for e in exps)),
+            "n_samples_stacked": int(F.size),
             "n_screen_samples": int(sub.size),
             "n_fit_samples": int(full.size),
             "scales": {"x": xs, "v": vs, "input": i_s, "F": Fs},
@@ -386,7 +388,7 @@ class _SPEstimator(Estimator):
             S=tuple(S),
             f0=f0,
             input=self.input,
-            input_range=_input_range(exps, self.input),
+            input_range=_scale.input_range(exps, self.input),
             provenance=provenance,
             eta=self.eta,
             rho_range=None if self.eta is None else (float(np.min(i)), float(np.max(i))),
@@ -444,23 +446,32 @@ class SP4Estimator(_SPEstimator):
 
 
 # ============================================================================ helpers
-def _stack(exps: Iterable[Experiment], source: ElectricalSource, eta: float | None = None) -> tuple[np.ndarray, ...]:
+def _stack(
+    exps: Iterable[Experiment], source: ElectricalSource, eta: float | None = None, max_samples: int | None = None
+) -> tuple[np.ndarray, ...]:
     """Concatenate the samples of all records (valid for a static map: no state crosses records);
-    with ``eta`` the electrical input of each record goes through the drive lag first."""
+    with ``eta`` the electrical input of each record goes through the drive lag first.
+
+    With more than ``max_samples`` samples in all, only an evenly spaced subset of that many is
+    gathered (record by record: the whole concatenation is never built).
+    """
     cols: dict[str, list[np.ndarray]] = {"x": [], "v": [], "i": [], "F": []}
+    exps = list(exps)
+    total = sum(e.n for e in exps)
+    keep = _even_subset(total, max_samples) if max_samples is not None and total > max_samples else None
+    offset = 0
     for e in exps:
+        sel: slice | np.ndarray = slice(None)
+        if keep is not None:
+            lo, hi = np.searchsorted(keep, [offset, offset + e.n])
+            sel = keep[lo:hi] - offset
+        offset += e.n
         el = np.ascontiguousarray(e.electrical(source), dtype=np.float64)
-        cols["i"].append(el if eta is None else first_order_lag(el, e.dt, eta))
-        cols["x"].append(e.x)
-        cols["v"].append(e.v)
-        cols["F"].append(e.F)
+        cols["i"].append((el if eta is None else first_order_lag(el, e.dt, eta))[sel])
+        cols["x"].append(e.x[sel])
+        cols["v"].append(e.v[sel])
+        cols["F"].append(e.F[sel])
     return tuple(np.ascontiguousarray(np.concatenate(cols[k])) for k in ("x", "v", "i", "F"))
-
-
-def _input_range(exps: Iterable[Experiment], source: ElectricalSource) -> tuple[float, float]:
-    """Range of the recorded electrical input (the command, before any drive lag)."""
-    el = np.concatenate([np.asarray(e.electrical(source), dtype=float) for e in exps])
-    return float(np.min(el)), float(np.max(el))
 
 
 def _even_subset(n: int, size: int | None) -> np.ndarray:

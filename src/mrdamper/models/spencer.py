@@ -386,11 +386,15 @@ class SpencerEstimator(Estimator):
         IdentificationError
             Every start diverged, or the optimiser returned a non-finite result.
         """
+        from mrdamper.models import _scale
         from mrdamper.models._spencer_fit import identify
 
-        exps = self._as_set(data)
+        all_exps = self._as_set(data)
         t0, c0 = time.perf_counter(), time.process_time()
+        exps, windows = _scale.window_set(all_exps, budget=_scale.WINDOW_BUDGET_SPENCER)  # long campaigns
         p, common = identify(self, exps)
+        if windows is not None:  # the input range of every sample, not only of the windows
+            common["input_range"] = _scale.input_range(all_exps, self.input)
         model = SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))
         # stiff model: halving the RK4 step must not change the free run (else warn, see provenance)
         common["provenance"]["step_check"] = step_halving_check(
@@ -398,6 +402,9 @@ class SpencerEstimator(Estimator):
             lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
             self.step_tolerance,
         )
+        if windows is not None:
+            common["provenance"]["windows"] = windows
+            common["provenance"]["full_data_check"] = _scale.full_data_esr(model, all_exps)
         common["provenance"]["elapsed_s"] = time.perf_counter() - t0
         common["provenance"]["cpu_s"] = time.process_time() - c0
         return SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))

@@ -31,7 +31,7 @@ settings this module adds (documented in ``docs/rig.md``) are:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -239,6 +239,7 @@ def table_ii(
     rig: VirtualRig | None = None,
     experiments: Sequence[int] | None = None,
     workers: int = 1,
+    progress: Callable[[Experiment], None] | None = None,
 ) -> ExperimentSet:
     """Generate the paper's Table II design of experiments on the virtual rig.
 
@@ -260,6 +261,8 @@ def table_ii(
     workers : int
         Worker processes (default 1: in this process). Records are independent and fully
         determined by their seeds, so any number of workers gives the same bytes.
+    progress : callable, optional
+        Called with each record as it is finished (in completion order), e.g. to show progress.
 
     Returns
     -------
@@ -287,9 +290,13 @@ def table_ii(
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise DataValidationError("workers", f"expected an int >= 1, got {workers!r}")
     if workers == 1 or len(jobs) < 2:
-        records = [make_record(spec, r, s, rig, scale) for spec, r, s in jobs]
+        records = []
+        for spec, r, s in jobs:
+            records.append(make_record(spec, r, s, rig, scale))
+            if progress is not None:
+                progress(records[-1])
     else:
-        records = _make_parallel(jobs, rig, scale, int(workers))
+        records = _make_parallel(jobs, rig, scale, int(workers), progress)
     return ExperimentSet(records, name=f"table_ii_seed{seed}")
 
 
@@ -302,19 +309,23 @@ def _payload(job: tuple[DoeSequence, int, int], rig: VirtualRig, scale: float) -
 
 
 def _make_parallel(jobs: list[tuple[DoeSequence, int, int]], rig: VirtualRig, scale: float,
-                   workers: int) -> list[Experiment]:
+                   workers: int, progress: Callable[[Experiment], None] | None = None) -> list[Experiment]:
     """Records in worker processes; each is fully determined by its seed, so order and bytes are
     those of the serial run. Long records go first so the workers finish together."""
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures import ProcessPoolExecutor, as_completed
 
     order = sorted(range(len(jobs)), key=lambda k: -jobs[k][0].duration)
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("fork" if "fork" in methods else None)
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = {k: pool.submit(_payload, jobs[k], rig, scale) for k in order}
-        payloads = {k: f.result() for k, f in futures.items()}
-    return [Experiment(**payloads[k]) for k in range(len(jobs))]
+        futures = {pool.submit(_payload, jobs[k], rig, scale): k for k in order}
+        records: dict[int, Experiment] = {}
+        for f in as_completed(futures):
+            records[futures[f]] = Experiment(**f.result())
+            if progress is not None:
+                progress(records[futures[f]])
+    return [records[k] for k in range(len(jobs))]
 
 
 def constant_current_sweep(

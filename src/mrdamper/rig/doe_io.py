@@ -7,14 +7,20 @@ import io
 import os
 import shutil
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from mrdamper._io import atomic_write_text, check_output
 from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 
-__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "write_doe", "write_records"]
+__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "RECORD_FORMATS", "write_doe", "write_records"]
+
+RecordFormat = Literal["csv", "parquet"]
+#: Record file formats :func:`write_records` writes.
+RECORD_FORMATS: tuple[str, ...] = ("csv", "parquet")
 
 #: File name of the manifest written beside the records.
 MANIFEST_NAME = "manifest.csv"
@@ -42,7 +48,8 @@ def _cell(value: Any) -> str:
     return "" if value is None else str(value)
 
 
-def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, force: bool = False) -> Path:
+def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, force: bool = False,
+                  format: RecordFormat = "csv", progress: Callable[[Path], None] | None = None) -> Path:
     """Write every record as ``<name>.csv`` (SI columns) and ``manifest.csv`` into ``out_dir``.
 
     Parameters
@@ -53,6 +60,11 @@ def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, fo
         Output folder; created if missing.
     force : bool
         Write into an existing, non-empty folder (overwriting files of the same name).
+    format : {"csv", "parquet"}
+        Record file format (``<name>.csv`` or ``<name>.parquet``; Parquet needs pyarrow and
+        keeps name and metadata in the file).
+    progress : callable, optional
+        Called with the path of each record file once it is written.
 
     Returns
     -------
@@ -64,6 +76,8 @@ def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, fo
     OutputExistsError
         If ``out_dir`` is a non-empty folder (or a file) and ``force`` is false.
     """
+    if format not in RECORD_FORMATS:
+        raise DataValidationError("format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}")
     out = Path(out_dir)
     _check_out_dir(out, force)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -75,8 +89,15 @@ def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, fo
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(MANIFEST_COLUMNS)
         for rec in records:
-            file = f"{rec.name}.csv"
-            _write_csv(rec, tmp / file, False)
+            file = f"{rec.name}.{format}"
+            if format == "parquet":
+                from mrdamper.data.writers import write_parquet
+
+                write_parquet(rec, tmp / file)
+            else:
+                _write_csv(rec, tmp / file, False)
+            if progress is not None:
+                progress(tmp / file)
             meta = dict(rec.metadata)
             row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
             w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
@@ -180,7 +201,6 @@ def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:
         differs from the manifest.
     """
     from mrdamper.data.readers import read_csv
-    from mrdamper.errors import DataValidationError
 
     root = Path(folder)
     manifest = root / MANIFEST_NAME
@@ -205,7 +225,12 @@ def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:
         path = root / row["file"]
         if not path.is_file():
             raise FileNotFoundError(f"{path}: listed in {manifest} but missing")
-        rec = read_csv(path, name=row["name"], metadata=meta)
+        if path.suffix.lower() == ".parquet":
+            from mrdamper.data.readers import read_parquet
+
+            rec = read_parquet(path, name=row["name"], metadata=meta)
+        else:
+            rec = read_csv(path, name=row["name"], metadata=meta)
         if rec.n != samples:
             raise DataValidationError("samples", f"{path}: {rec.n} samples, manifest says {samples}")
         records.append(rec)
