@@ -91,3 +91,15 @@ def test_rig_doe_rejects_unknown_format(fast_damper: None, tmp_path: Path,
     err = capsys.readouterr().err
     assert "--format" in err and "parquet" in err
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("fmt", ["csv", "parquet"])
+def test_fit_reads_a_doe_folder_through_its_manifest(
+    fast_damper: None, tmp_path: Path, capsys: pytest.CaptureFixture[str], fmt: str
+) -> None:
+    out = tmp_path / "doe"
+    main(["rig", "doe", "--out", str(out), "--scale", "0.07", "--fs", "200", "--format", fmt, "--no-progress"])
+    capsys.readouterr()
+    main(["fit", "bingham", str(out), "--out", str(tmp_path / "b.json")])
+    said = capsys.readouterr().out
+    assert "identified on 61 record(s)" in said  # the manifest is not read as a record
