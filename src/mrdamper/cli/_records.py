@@ -178,13 +178,13 @@ def read_paths(paths: list[Path], pattern: str | None, read_kw: Mapping[str, Any
         If a path does not exist.
     """
     from mrdamper.data.readers import DEFAULT_PATTERN, parse_file_name, read_directory, read_file
-    from mrdamper.rig.doe_io import MANIFEST_NAME, read_doe
+    from mrdamper.rig.doe_io import is_doe_folder, read_doe
 
     records: list[Experiment] = []
     for p in paths:
         if not p.exists():
             raise FileNotFoundError(f"{p}: no such file or folder")
-        if p.is_dir() and pattern is None and (p / MANIFEST_NAME).is_file():
+        if p.is_dir() and pattern is None and is_doe_folder(p):
             records.extend(read_doe(p))  # a folder written by 'mrdamper rig doe': its manifest lists the records
             continue
         if p.is_dir():

@@ -24,8 +24,6 @@ __all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "load_data", "print_summary", "reg
 QUICK_SCALE = 0.1
 #: Default output folder of ``mrdamper demo``.
 DEMO_OUT = Path("mrdamper-demo")
-#: File names of a design-of-experiments folder (``exp1_rep01.csv``), as ``mrdamper rig doe`` writes.
-DOE_FILE_PATTERN = r"exp(?P<experiment>\d+)_rep(?P<replicate>\d+)\.(csv|parquet)"
 
 
 def _headless() -> None:
@@ -41,33 +39,17 @@ def _check_out(out: Path, force: bool, inputs: list[Path] | None = None) -> None
     check_output(out, force=force, folder=True, inputs=inputs or [])
 
 
-def _manifest_metadata(folder: Path) -> dict[str, dict[str, Any]]:
-    """Record name -> extra metadata from a ``manifest.csv`` beside DoE files (pattern, seed, ...)."""
-    import pandas as pd
-
-    man = folder / "manifest.csv"
-    if not man.is_file():
-        return {}
-    df = pd.read_csv(man)
-    if "file" not in df.columns:
-        return {}
-    out: dict[str, dict[str, Any]] = {}
-    for row in df.to_dict("records"):
-        name = Path(str(row.pop("file"))).stem
-        out[name] = {k: (v.item() if hasattr(v, "item") else v) for k, v in row.items() if k in ("pattern", "seed", "experiment", "replicate", "duration", "max_frequency")}
-    return out
-
-
 def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> ExperimentSet:
     """Read the study's records from a file or a folder.
 
     Folders: with ``pattern`` the file names must match it (named groups become metadata);
-    without it, a folder holding ``manifest.csv`` is read as a design-of-experiments folder
-    (``exp{n}_rep{k}`` files, manifest columns added as metadata), otherwise the sine-record
+    without it, a folder written by ``mrdamper rig doe`` is read through its manifest
+    (:func:`mrdamper.rig.doe_io.read_doe`: metadata and ``source="virtual rig"``), otherwise the sine-record
     pattern is tried and then every CSV / Parquet / MAT file. ``read_kw`` go to the file reader
     (e.g. ``fs`` to regenerate a rounded time column).
     """
     from mrdamper.data.readers import DEFAULT_PATTERN, read_directory, read_file
+    from mrdamper.rig.doe_io import is_doe_folder, read_doe
 
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file or folder")
@@ -80,10 +62,8 @@ def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> Experim
         except re.error as exc:
             raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
         return read_directory(path, pattern, **read_kw)
-    extra = _manifest_metadata(path)
-    if extra:
-        data = read_directory(path, DOE_FILE_PATTERN, **read_kw)
-        return ExperimentSet([e.replace(metadata={**dict(e.metadata), **extra.get(e.name, {})}) for e in data], name=data.name)
+    if is_doe_folder(path):  # written by 'mrdamper rig doe': SI files listed with their metadata
+        return read_doe(path)
     try:
         return read_directory(path, DEFAULT_PATTERN, **read_kw)
     except DataValidationError as exc:

@@ -16,7 +16,7 @@ from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 
-__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "RECORD_FORMATS", "write_doe", "write_records"]
+__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "RECORD_FORMATS", "is_doe_folder", "read_doe", "write_doe", "write_records"]
 
 RecordFormat = Literal["csv", "parquet"]
 #: Record file formats :func:`write_records` writes.
@@ -173,6 +173,20 @@ _MANIFEST_TYPES: dict[str, type] = {
     "experiment": int, "replicate": int, "pattern": str, "displacement": str, "duration": float,
     "max_frequency": float, "samples": int, "seed": int,
 }
+
+
+def is_doe_folder(folder: str | os.PathLike[str]) -> bool:
+    """True when ``folder`` holds a manifest written by :func:`write_records` (every manifest column).
+
+    The one test of "this folder came from ``mrdamper rig doe``" that every reader of folders uses
+    before :func:`read_doe`; a folder with some other ``manifest.csv`` is read as ordinary records.
+    """
+    manifest = Path(folder) / MANIFEST_NAME
+    if not manifest.is_file():
+        return False
+    with manifest.open(newline="", encoding="utf-8") as fh:
+        header = next(csv.reader(fh), [])
+    return all(c in header for c in MANIFEST_COLUMNS)
 
 
 def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:

@@ -142,7 +142,8 @@ def _data_note(res: StudyResult) -> str:
     origin = str(res.info.get("data_origin", ""))
     if _virtual(res):
         damper = origin[origin.find("(") + 1: origin.rfind(" damper)")] if "(" in origin else "a known"
-        note = (f"The records come from the virtual rig, whose damper is a {damper} model with noise and "
+        what = "reference model (its kind is not recorded in the files)" if damper == "unknown" else f"{damper} model"
+        note = (f"The records come from the virtual rig, whose damper is a {what} with noise and "
                 "sensor dynamics added.")
         if damper == "spencer":
             note += (" The <code>spencer</code> estimator therefore has the true structure here: it is a "
