@@ -161,7 +161,7 @@ class BinghamEstimator(Estimator):
         exps = self._as_set(data)
         probe = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps)
         deg = int(self.degree)
-        inputs, n_rows = [], 0
+        inputs: list[np.ndarray] = []  # [min, max] of each record's input, filled while folding
 
         def blocks() -> Iterator[np.ndarray]:  # weighted rows [X y], folded into a QR factor
             for exp in exps:
