@@ -54,7 +54,9 @@ ETA_GRID = (50.0, 100.0, 150.0, 250.0, 400.0)
 EXTRA: dict[str, dict[str, Any]] = {}
 
 
-def settings_for(kind: str, protocol: str, eta: float | None = None, decimation: int = 1) -> dict[str, Any]:
+def settings_for(
+    kind: str, protocol: str, eta: float | None = None, decimation: int = 1
+) -> dict[str, Any]:
     """Estimator settings per kind and protocol (defaults plus the data set's input)."""
     s: dict[str, Any] = {}
     if protocol == "dyke":
@@ -69,7 +71,11 @@ def settings_for(kind: str, protocol: str, eta: float | None = None, decimation:
 
 
 def fit_and_score(
-    kind: str, settings: dict[str, Any], train: Any, test: ExperimentSet, range_policy: str | None = None
+    kind: str,
+    settings: dict[str, Any],
+    train: Any,
+    test: ExperimentSet,
+    range_policy: str | None = None,
 ) -> list[dict[str, Any]]:
     """Fit ``kind`` on ``train``; one row per test record (or one error row).
 
@@ -83,8 +89,16 @@ def fit_and_score(
             if range_policy is not None:
                 model = model.with_range_policy(range_policy)
     except Exception as exc:  # noqa: BLE001 - any failure is reported as a row, never dropped
-        return [{"model": kind, "record": "(fit)", "esr": np.nan, "ssse": np.nan,
-                 "fit_s": time.perf_counter() - t0, "error": f"{type(exc).__name__}: {exc}"}]
+        return [
+            {
+                "model": kind,
+                "record": "(fit)",
+                "esr": np.nan,
+                "ssse": np.nan,
+                "fit_s": time.perf_counter() - t0,
+                "error": f"{type(exc).__name__}: {exc}",
+            }
+        ]
     fit_s = time.perf_counter() - t0
     rows = []
     for e in test:
@@ -92,10 +106,27 @@ def fit_and_score(
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 sc = model.score(e)
-            rows.append({"model": kind, "record": e.name, "esr": sc.esr, "ssse": sc.ssse, "fit_s": fit_s, "error": ""})
+            rows.append(
+                {
+                    "model": kind,
+                    "record": e.name,
+                    "esr": sc.esr,
+                    "ssse": sc.ssse,
+                    "fit_s": fit_s,
+                    "error": "",
+                }
+            )
         except Exception as exc:  # noqa: BLE001 - reported as a row
-            rows.append({"model": kind, "record": e.name, "esr": np.nan, "ssse": np.nan, "fit_s": fit_s,
-                         "error": f"{type(exc).__name__}: {exc}"})
+            rows.append(
+                {
+                    "model": kind,
+                    "record": e.name,
+                    "esr": np.nan,
+                    "ssse": np.nan,
+                    "fit_s": fit_s,
+                    "error": f"{type(exc).__name__}: {exc}",
+                }
+            )
     return rows
 
 
@@ -107,8 +138,12 @@ def quiroz(models: list[str]) -> pd.DataFrame:
             for r in fit_and_score(kind, settings_for(kind, "quiroz"), train, test):
                 rows.append({"fold": cond, **r})
             last = rows[-1]
-            print(f"  quiroz fold {cond:>12s} {kind:8s} fit {last['fit_s']:6.2f} s  "
-                  f"{'error: ' + last['error'][:70] if last['error'] else ''}", file=sys.stderr, flush=True)
+            print(
+                f"  quiroz fold {cond:>12s} {kind:8s} fit {last['fit_s']:6.2f} s  "
+                f"{'error: ' + last['error'][:70] if last['error'] else ''}",
+                file=sys.stderr,
+                flush=True,
+            )
     return pd.DataFrame(rows)
 
 
@@ -126,8 +161,13 @@ def choose_eta(train: Experiment) -> tuple[float, int, pd.DataFrame]:
     rows = []
     for dec in DECIMATION_GRID:
         for eta in ETA_GRID:
-            r = fit_and_score("lpv", settings_for("lpv", "dyke", eta, dec), fit_part, ExperimentSet([val_part]),
-                              "clip")[0]
+            r = fit_and_score(
+                "lpv",
+                settings_for("lpv", "dyke", eta, dec),
+                fit_part,
+                ExperimentSet([val_part]),
+                "clip",
+            )[0]
             rows.append({"decimation": dec, "eta": eta, "val_esr": r["esr"], "error": r["error"]})
     tab = pd.DataFrame(rows)
     if not tab["val_esr"].notna().any():
@@ -142,17 +182,25 @@ def dyke(models: list[str]) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
     rows = []
     for kind in models:
         # the command voltage of the test part exceeds the training range by < 0.1 %: clip it
-        rows += fit_and_score(kind, settings_for(kind, "dyke", eta, dec), train, ExperimentSet([test]), "clip")
+        rows += fit_and_score(
+            kind, settings_for(kind, "dyke", eta, dec), train, ExperimentSet([test]), "clip"
+        )
         last = rows[-1]
-        print(f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  {'error: ' + last['error'][:70] if last['error'] else ''}",
-              file=sys.stderr, flush=True)
+        print(
+            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  {'error: ' + last['error'][:70] if last['error'] else ''}",
+            file=sys.stderr,
+            flush=True,
+        )
     return pd.DataFrame(rows), eta, dec, eta_tab
 
 
 def to_markdown(df: pd.DataFrame, index: bool = True) -> str:
     """Markdown table of ``df`` (floats with 4 significant digits)."""
     d = df.reset_index() if index else df
-    fmt = [[f"{x:.4g}" if isinstance(x, float) else str(x) for x in row] for row in d.itertuples(index=False)]
+    fmt = [
+        [f"{x:.4g}" if isinstance(x, float) else str(x) for x in row]
+        for row in d.itertuples(index=False)
+    ]
     head = "| " + " | ".join(map(str, d.columns)) + " |"
     sep = "|" + "|".join("---" for _ in d.columns) + "|"
     return "\n".join([head, sep] + ["| " + " | ".join(r) + " |" for r in fmt])
@@ -160,21 +208,37 @@ def to_markdown(df: pd.DataFrame, index: bool = True) -> str:
 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
     g = df.groupby("model", sort=False)
-    out = pd.DataFrame({
-        "mean_esr": g["esr"].mean(), "mean_ssse_N": g["ssse"].mean(),
-        "records": g["esr"].count(), "failed": g["error"].apply(lambda s: int((s != "").sum())),
-        "fit_s_total": g.apply(lambda d: d.drop_duplicates("fold" if "fold" in d else "model")["fit_s"].sum()),
-    })
+    out = pd.DataFrame(
+        {
+            "mean_esr": g["esr"].mean(),
+            "mean_ssse_N": g["ssse"].mean(),
+            "records": g["esr"].count(),
+            "failed": g["error"].apply(lambda s: int((s != "").sum())),
+            "fit_s_total": g.apply(
+                lambda d: d.drop_duplicates("fold" if "fold" in d else "model")["fit_s"].sum()
+            ),
+        }
+    )
     return out
 
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--models", nargs="*", default=None, help="model kinds (default: every available)")
+    ap.add_argument(
+        "--models", nargs="*", default=None, help="model kinds (default: every available)"
+    )
     ap.add_argument("--protocol", choices=("quiroz", "dyke", "both"), default="both")
-    ap.add_argument("--csv", type=Path, default=None, help="also write the per-record rows to this CSV")
-    ap.add_argument("--set", dest="extra", action="append", default=[], metavar="KIND.KEY=VALUE",
-                    help="extra estimator setting, e.g. p15.method=equation-error (repeatable)")
+    ap.add_argument(
+        "--csv", type=Path, default=None, help="also write the per-record rows to this CSV"
+    )
+    ap.add_argument(
+        "--set",
+        dest="extra",
+        action="append",
+        default=[],
+        metavar="KIND.KEY=VALUE",
+        help="extra estimator setting, e.g. p15.method=equation-error (repeatable)",
+    )
     args = ap.parse_args(argv)
     for item in args.extra:
         key, sep, raw = item.partition("=")
@@ -194,15 +258,20 @@ def main(argv: list[str] | None = None) -> None:
         q = quiroz(models)
         frames.append(q.assign(protocol="quiroz"))
         print("## Quiroz leave-one-condition-out: mean test ESR per fold")
-        print(q.pivot_table(index="fold", columns="model", values="esr", aggfunc="mean", sort=False)
-              .pipe(to_markdown))
+        print(
+            q.pivot_table(
+                index="fold", columns="model", values="esr", aggfunc="mean", sort=False
+            ).pipe(to_markdown)
+        )
         print("\n## Quiroz summary (mean over all test records)")
         print(summarise(q).pipe(to_markdown))
     if args.protocol in ("dyke", "both"):
         d, eta, dec, eta_tab = dyke(models)
         frames.append(d.assign(protocol="dyke"))
-        print(f"\n## Dyke 70/30: LPV/LTI settings chosen on the training part: eta = {eta:g} 1/s, "
-              f"model rate {DYKE_FS / dec:g} Hz (decimation {dec})")
+        print(
+            f"\n## Dyke 70/30: LPV/LTI settings chosen on the training part: eta = {eta:g} 1/s, "
+            f"model rate {DYKE_FS / dec:g} Hz (decimation {dec})"
+        )
         print(to_markdown(eta_tab, index=False))
         print("\n## Dyke test (last 30 %)")
         print(d.set_index("model")[["esr", "ssse", "fit_s", "error"]].pipe(to_markdown))

@@ -50,7 +50,9 @@ N_GRID = 32
 def _compile(model: object, folder: Path, name: str) -> ctypes.CDLL:
     _, c = export_c(model, folder, name=name, reg=REG, n_grid=N_GRID)
     lib = folder / f"lib{name}.so"
-    subprocess.run(["gcc", "-std=c99", "-O2", "-shared", "-fPIC", str(c), "-o", str(lib), "-lm"], check=True)
+    subprocess.run(
+        ["gcc", "-std=c99", "-O2", "-shared", "-fPIC", str(c), "-o", str(lib), "-lm"], check=True
+    )
     return ctypes.CDLL(str(lib))
 
 
@@ -63,10 +65,19 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     n, repeat = (20_000, 3) if args.quick else (300_000, 5)
     rng = np.random.default_rng(0)
-    v = np.ascontiguousarray(np.convolve(rng.standard_normal(n), np.ones(20) / 20, mode="same") * 0.5)
+    v = np.ascontiguousarray(
+        np.convolve(rng.standard_normal(n), np.ones(20) / 20, mode="same") * 0.5
+    )
     x = np.ascontiguousarray(np.cumsum(v) * 1e-3)
     i = np.ascontiguousarray(np.repeat(rng.uniform(0.0, 1.0, n // 50 + 1), 50)[:n])
-    lpv = LPVModel(alpha=ALPHA, beta=BETA, fs=1000.0, input_signal="v", rho_range=(0.0, 1.0), input_range=(0.0, 1.0))
+    lpv = LPVModel(
+        alpha=ALPHA,
+        beta=BETA,
+        fs=1000.0,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+        input_range=(0.0, 1.0),
+    )
     sp1 = SP1Model(S=S1, input_range=(0.0, 1.0))
     F_lpv = LK.simulate_record(v, i, lpv.alpha, lpv.beta, 1e12)[0]
     comp, power, theta, f0 = static_map_arrays(sp1)
@@ -78,27 +89,67 @@ def main(argv: list[str] | None = None) -> int:
         libs = {"lpv": _compile(lpv, Path(tmp), "b_lpv"), "sp1": _compile(sp1, Path(tmp), "b_sp1")}
         cases = {
             ("lpv", "forward"): (
-                lambda: libs["lpv"].b_lpv_run(ctypes.c_long(n), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
-                                              i.ctypes.data_as(_P), out[0].ctypes.data_as(_P)),
+                lambda: libs["lpv"].b_lpv_run(
+                    ctypes.c_long(n),
+                    x.ctypes.data_as(_P),
+                    v.ctypes.data_as(_P),
+                    i.ctypes.data_as(_P),
+                    out[0].ctypes.data_as(_P),
+                ),
                 lambda: LK.simulate_record(v, i, lpv.alpha, lpv.beta, 1e12),
             ),
             ("lpv", "inverse"): (
-                lambda: libs["lpv"].b_lpv_inverse_run(ctypes.c_long(n), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
-                                                      F_lpv.ctypes.data_as(_P), out[0].ctypes.data_as(_P),
-                                                      out[1].ctypes.data_as(_P)),
-                lambda: IK.lpv_inverse_reg(v, F_lpv, lpv.alpha, lpv.beta, 0.0, 0.0, 1.0, -1.0, mode, gm, gc, mu_h,
-                                           mu_l, 0.0, N_GRID, REG, np.inf, 1),
+                lambda: libs["lpv"].b_lpv_inverse_run(
+                    ctypes.c_long(n),
+                    x.ctypes.data_as(_P),
+                    v.ctypes.data_as(_P),
+                    F_lpv.ctypes.data_as(_P),
+                    out[0].ctypes.data_as(_P),
+                    out[1].ctypes.data_as(_P),
+                ),
+                lambda: IK.lpv_inverse_reg(
+                    v,
+                    F_lpv,
+                    lpv.alpha,
+                    lpv.beta,
+                    0.0,
+                    0.0,
+                    1.0,
+                    -1.0,
+                    mode,
+                    gm,
+                    gc,
+                    mu_h,
+                    mu_l,
+                    0.0,
+                    N_GRID,
+                    REG,
+                    np.inf,
+                    1,
+                ),
             ),
             ("sp1", "forward"): (
-                lambda: libs["sp1"].b_sp1_run(ctypes.c_long(n), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
-                                              i.ctypes.data_as(_P), out[0].ctypes.data_as(_P)),
+                lambda: libs["sp1"].b_sp1_run(
+                    ctypes.c_long(n),
+                    x.ctypes.data_as(_P),
+                    v.ctypes.data_as(_P),
+                    i.ctypes.data_as(_P),
+                    out[0].ctypes.data_as(_P),
+                ),
                 lambda: sp_force(x, v, i, comp, power, theta, f0),
             ),
             ("sp1", "inverse"): (
-                lambda: libs["sp1"].b_sp1_inverse_run(ctypes.c_long(n), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
-                                                      F_sp.ctypes.data_as(_P), out[0].ctypes.data_as(_P),
-                                                      out[1].ctypes.data_as(_P)),
-                lambda: IK.static_inverse_reg(x, v, F_sp, comp, power, theta, f0, 0.0, 1.0, 0.0, N_GRID, REG, np.inf, -1.0),
+                lambda: libs["sp1"].b_sp1_inverse_run(
+                    ctypes.c_long(n),
+                    x.ctypes.data_as(_P),
+                    v.ctypes.data_as(_P),
+                    F_sp.ctypes.data_as(_P),
+                    out[0].ctypes.data_as(_P),
+                    out[1].ctypes.data_as(_P),
+                ),
+                lambda: IK.static_inverse_reg(
+                    x, v, F_sp, comp, power, theta, f0, 0.0, 1.0, 0.0, N_GRID, REG, np.inf, -1.0
+                ),
             ),
         }
         for (kind, what), (fc, fp) in cases.items():
@@ -110,7 +161,9 @@ def main(argv: list[str] | None = None) -> int:
                 tp = min(tp, best_time(fp, 1))
             rows.append((kind, what, 1e9 * tc / n, 1e9 * tp / n, tc / tp))
     print(f"{n} samples, minimum of {repeat} interleaved repeats")
-    print(f"{'model':6s} {'part':8s} {'C [ns/sample]':>14s} {'numba [ns/sample]':>18s} {'C / numba':>10s}")
+    print(
+        f"{'model':6s} {'part':8s} {'C [ns/sample]':>14s} {'numba [ns/sample]':>18s} {'C / numba':>10s}"
+    )
     for kind, what, c_ns, p_ns, ratio in rows:
         print(f"{kind:6s} {what:8s} {c_ns:14.1f} {p_ns:18.1f} {ratio:10.2f}")
     return 0

@@ -35,7 +35,17 @@ TARGETS = {"quick": 60.0, "full": 180.0}
 
 def run(mode: str, workers: int, root: Path) -> dict[str, object]:
     out = root / f"{mode}-{workers}"
-    cmd = [sys.executable, "-m", "mrdamper", "demo", "--out", str(out), "--workers", str(workers), "--no-progress"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "mrdamper",
+        "demo",
+        "--out",
+        str(out),
+        "--workers",
+        str(workers),
+        "--no-progress",
+    ]
     if mode == "quick":
         cmd.append("--quick")
     env = dict(os.environ, MPLBACKEND="Agg")
@@ -50,14 +60,20 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
     res = pd.read_csv(out / "results.csv")
     digest = hashlib.sha1(res.to_csv(index=False).encode()).hexdigest()[:12]
     summ = pd.DataFrame([{"model": m, **t} for m, t in timings["per_model"].items()])
-    slow = summ.assign(t=summ["fit_time_s"] + summ["sim_time_s"]).sort_values("t", ascending=False).head(3)
+    slow = (
+        summ.assign(t=summ["fit_time_s"] + summ["sim_time_s"])
+        .sort_values("t", ascending=False)
+        .head(3)
+    )
     return {
         "mode": mode,
         "workers": workers,
         "wall_s": wall,
         "study_s": float(timings["wall_time_s"]),
         "target_s": TARGETS[mode],
-        "slowest": ", ".join(f"{r.model} {r.fit_time_s:.0f}+{r.sim_time_s:.0f} s" for r in slow.itertuples()),
+        "slowest": ", ".join(
+            f"{r.model} {r.fit_time_s:.0f}+{r.sim_time_s:.0f} s" for r in slow.itertuples()
+        ),
         "headline": study["headline"].get("text", ""),
         "results_sha1": digest,
     }
@@ -66,16 +82,44 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--no-full", action="store_true", help="skip the full-length demo")
-    ap.add_argument("--quick", action="store_true", help="only the --quick demo (same as --no-full)")
-    ap.add_argument("--full-workers", type=int, nargs="*", default=[1, 2], help="worker counts for the full demo")
-    ap.add_argument("--quick-workers", type=int, nargs="*", default=[1, 2], help="worker counts for the quick demo")
+    ap.add_argument(
+        "--quick", action="store_true", help="only the --quick demo (same as --no-full)"
+    )
+    ap.add_argument(
+        "--full-workers",
+        type=int,
+        nargs="*",
+        default=[1, 2],
+        help="worker counts for the full demo",
+    )
+    ap.add_argument(
+        "--quick-workers",
+        type=int,
+        nargs="*",
+        default=[1, 2],
+        help="worker counts for the quick demo",
+    )
     args = ap.parse_args()
     print(f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs")
     with tempfile.TemporaryDirectory(prefix="bench-demo-") as tmp:
         root = Path(tmp)
-        subprocess.run([sys.executable, "-m", "mrdamper", "demo", "--quick", "--out", str(root / "warm"),
-                        "--no-progress", "--workers", "1"], capture_output=True, env=dict(os.environ, MPLBACKEND="Agg"),
-                       check=True)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "mrdamper",
+                "demo",
+                "--quick",
+                "--out",
+                str(root / "warm"),
+                "--no-progress",
+                "--workers",
+                "1",
+            ],
+            capture_output=True,
+            env=dict(os.environ, MPLBACKEND="Agg"),
+            check=True,
+        )
         rows = [run("quick", w, root) for w in args.quick_workers]
         if not (args.no_full or args.quick):
             rows += [run("full", w, root) for w in args.full_workers]
@@ -85,15 +129,26 @@ def main() -> None:
         base = df.loc[sel & (df["workers"] == df.loc[sel, "workers"].min()), "wall_s"].iloc[0]
         df.loc[sel, "speedup_vs_fewest_workers"] = base / df.loc[sel, "wall_s"]
     df["within_target"] = df["wall_s"] < df["target_s"]
-    cols = ["mode", "workers", "wall_s", "study_s", "target_s", "within_target", "speedup_vs_fewest_workers",
-            "results_sha1", "slowest"]
+    cols = [
+        "mode",
+        "workers",
+        "wall_s",
+        "study_s",
+        "target_s",
+        "within_target",
+        "speedup_vs_fewest_workers",
+        "results_sha1",
+        "slowest",
+    ]
     with pd.option_context("display.width", 200, "display.max_colwidth", 80):
         print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.2f}"))
     for r in rows:
         print(f"{r['mode']} / {r['workers']} worker(s): {r['headline']}")
     for mode in df["mode"].unique():
         same = df.loc[df["mode"] == mode, "results_sha1"].nunique() == 1
-        print(f"{mode}: results.csv without timing columns identical across worker counts: {'yes' if same else 'NO'}")
+        print(
+            f"{mode}: results.csv without timing columns identical across worker counts: {'yes' if same else 'NO'}"
+        )
 
 
 if __name__ == "__main__":

@@ -74,11 +74,15 @@ def part1(seed: int, fs: float, workers: int, scale: float = 1.0) -> None:
     print(f"{'faster than real time (ratio)':<44}{rig_time / total:>16.1f}")
     print(f"{f'total time, {workers} worker processes [s]':<44}{total_par:>16.2f}")
     print(f"{'same bytes as the serial run':<44}{same!s:>16}")
-    print(f"{'target < 10 s met (serial / workers)':<44}{f'{total < 10.0} / {total_par < 10.0}':>16}")
+    print(
+        f"{'target < 10 s met (serial / workers)':<44}{f'{total < 10.0} / {total_par < 10.0}':>16}"
+    )
     print(f"{'load average at the end (1 min)':<44}{os.getloadavg()[0]:>16.2f}")
 
 
-def _sum_of_cosines(n: int, fs: float, fmin: float, fmax: float, rng: np.random.Generator) -> np.ndarray:
+def _sum_of_cosines(
+    n: int, fs: float, fmin: float, fmax: float, rng: np.random.Generator
+) -> np.ndarray:
     df = fs / n
     k = np.arange(n // 2 + 1)
     f = k * df
@@ -108,8 +112,12 @@ def _prbs_python(order: int, taps: tuple[int, ...], state: int, n_bits: int) -> 
 def part2(fs: float, repeat: int) -> None:
     rows = []
     n30 = int(30 * fs)
-    ours = best_time(lambda: road_profile(fs, 30.0, seed=0, max_frequency=5.5, taper=0.0, fill=None,
-                                          road_class="A"), repeat)
+    ours = best_time(
+        lambda: road_profile(
+            fs, 30.0, seed=0, max_frequency=5.5, taper=0.0, fill=None, road_class="A"
+        ),
+        repeat,
+    )
     peer = best_time(lambda: _sum_of_cosines(n30, fs, 0.2, 5.5, np.random.default_rng(0)), repeat)
     rows.append(("road profile 30 s (FFT vs sum of cosines)", ours, peer))
 
@@ -118,7 +126,9 @@ def part2(fs: float, repeat: int) -> None:
     act.track(x[:100], fs)
     ours = best_time(lambda: act.track(x, fs), repeat)
     wn = 2 * np.pi * act.bandwidth
-    sys = sps.StateSpace([[0, 1], [-wn * wn, -2 * act.damping * wn]], [[0], [wn * wn]], [[1, 0], [0, 1]], [[0], [0]])
+    sys = sps.StateSpace(
+        [[0, 1], [-wn * wn, -2 * act.damping * wn]], [[0], [wn * wn]], [[1, 0], [0, 1]], [[0], [0]]
+    )
     t = np.arange(x.size) / fs
     peer = best_time(lambda: sps.lsim(sys, x, t, X0=[x[0], 0.0], interp=False), repeat)
     rows.append(("actuator 600 s (recursion vs scipy lsim)", ours, peer))
@@ -148,7 +158,9 @@ def main() -> None:
     ap.add_argument("--fs", type=float, default=1000.0)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--quick", action="store_true", help="durations x 0.1 and one repetition (seconds)")
+    ap.add_argument(
+        "--quick", action="store_true", help="durations x 0.1 and one repetition (seconds)"
+    )
     args = ap.parse_args()
     part1(args.seed, args.fs, args.workers, scale=0.1 if args.quick else 1.0)
     part2(args.fs, 1 if args.quick else args.repeat)

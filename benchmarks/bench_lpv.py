@@ -55,11 +55,17 @@ def bench_simulation() -> tuple[str, float, float]:
     b = np.r_[0.0, BETA[:, 0]]
     a = np.r_[1.0, ALPHA[:, 0]]
     K.simulate_record(u[:100], rho[:100], ALPHA, BETA, 1e12)  # compile / load cache
-    t_lpv, t_lf = _interleaved(lambda: K.simulate_record(u, rho, ALPHA, BETA, 1e12), lambda: signal.lfilter(b, a, u))
+    t_lpv, t_lf = _interleaved(
+        lambda: K.simulate_record(u, rho, ALPHA, BETA, 1e12), lambda: signal.lfilter(b, a, u)
+    )
     # same-structure sanity check: at constant rho the LPV kernel is that LTI filter
     y, _ = K.simulate_record(u[:5000], np.zeros(5000), ALPHA, BETA, 1e12)
     err = float(np.max(np.abs(y - signal.lfilter(b, a, u[:5000]))))
-    return f"simulation n_m=3 n_rho=2, {N:.0e} samples (max |diff| vs lfilter at rho=0: {err:.1e})", t_lpv, t_lf
+    return (
+        f"simulation n_m=3 n_rho=2, {N:.0e} samples (max |diff| vs lfilter at rho=0: {err:.1e})",
+        t_lpv,
+        t_lf,
+    )
 
 
 def bench_least_squares() -> tuple[str, float, float, float, float]:
@@ -70,7 +76,9 @@ def bench_least_squares() -> tuple[str, float, float, float, float]:
     y = y + 0.05 * np.std(y) * rng.standard_normal(N)
     starts = np.array([0, N], dtype=np.int64)
     w = np.ones(1)
-    _lpv_fit._solve(y[:1000], u[:1000], rho[:1000], np.array([0, 1000], dtype=np.int64), w, 3, 3, False)
+    _lpv_fit._solve(
+        y[:1000], u[:1000], rho[:1000], np.array([0, 1000], dtype=np.int64), w, 3, 3, False
+    )
     t_build = best_time(lambda: K.build_regressors(y, u, rho, starts, w, 3, 3, False), 3)
     X, t = K.build_regressors(y, u, rho, starts, w, 3, 3, False)
     res: dict[str, np.ndarray] = {}
@@ -87,7 +95,11 @@ def bench_least_squares() -> tuple[str, float, float, float, float]:
 
 
 def bench_quiroz() -> str:
-    data = Path(os.environ.get("MRDAMPER_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"))
+    data = Path(
+        os.environ.get(
+            "MRDAMPER_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"
+        )
+    )
     folder = data / "quiroz2022_utfsm" / "sine_unfiltered"
     if not folder.exists():
         return f"Quiroz identification: skipped (no data at {folder})"
@@ -114,11 +126,15 @@ def main() -> None:
     print("| benchmark | mrdamper [s] | peer [s] | peer | ratio | target |")
     print("|---|---|---|---|---|---|")
     name, t_lpv, t_lf = bench_simulation()
-    print(f"| {name} | {t_lpv:.4f} | {t_lf:.4f} | scipy.signal.lfilter (LTI, order 3) | "
-          f"throughput {t_lf / t_lpv:.2f}x | >= 0.8x |")
+    print(
+        f"| {name} | {t_lpv:.4f} | {t_lf:.4f} | scipy.signal.lfilter (LTI, order 3) | "
+        f"throughput {t_lf / t_lpv:.2f}x | >= 0.8x |"
+    )
     name, t_ours, t_peer, rel, t_build = bench_least_squares()
-    print(f"| {name} | {t_ours:.4f} | {t_peer:.4f} | numpy.linalg.lstsq (X prebuilt, {t_build:.3f} s not counted) | "
-          f"speed-up {t_peer / t_ours:.1f}x, max rel. diff {rel:.1e} | >= 5x, <= 1e-8 |")
+    print(
+        f"| {name} | {t_ours:.4f} | {t_peer:.4f} | numpy.linalg.lstsq (X prebuilt, {t_build:.3f} s not counted) | "
+        f"speed-up {t_peer / t_ours:.1f}x, max rel. diff {rel:.1e} | >= 5x, <= 1e-8 |"
+    )
     print()
     print(bench_quiroz())
 

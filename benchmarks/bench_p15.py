@@ -42,8 +42,12 @@ def run(data: ExperimentSet, jacobian: str, budgets: dict[str, int]) -> dict[str
     oe = model.provenance["output_error"]
     esr = list(model.provenance["training_esr"].values())
     return {
-        "jacobian": jacobian, "records": len(data), "wall_s": wall, "cpu_s": cpu,
-        "nfev": oe["nfev_total"], "njev": oe["njev_total"],
+        "jacobian": jacobian,
+        "records": len(data),
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "nfev": oe["nfev_total"],
+        "njev": oe["njev_total"],
         "training_mean_esr": sum(esr) / len(esr),
     }
 
@@ -63,8 +67,10 @@ def main(argv: list[str] | None = None) -> None:
     print(f"P-15 fit of {len(data)} Quiroz records, budgets {budgets or 'default'}")
     print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     ratio = rows[1]["wall_s"] / rows[0]["wall_s"]
-    print(f"\nfinite differences / sensitivities, wall time: {ratio:.1f}x "
-          f"(CPU {rows[1]['cpu_s'] / rows[0]['cpu_s']:.1f}x)")
+    print(
+        f"\nfinite differences / sensitivities, wall time: {ratio:.1f}x "
+        f"(CPU {rows[1]['cpu_s'] / rows[0]['cpu_s']:.1f}x)"
+    )
 
 
 if __name__ == "__main__":

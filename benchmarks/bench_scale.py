@@ -117,8 +117,19 @@ def _child_fit(kind: str, cache: Path, length_s: float, record_s: float) -> None
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     prov = dict(model.provenance)
     check = prov.get("full_data_check") or prov.get("chunked") or {}
-    print(json.dumps({"fit_s": fit_s, "cpu_s": cpu_s, "rss_gb": peak, "rss_before_gb": rss_before,
-                      "n": sum(r.n for r in records), "check": check}, default=str))
+    print(
+        json.dumps(
+            {
+                "fit_s": fit_s,
+                "cpu_s": cpu_s,
+                "rss_gb": peak,
+                "rss_before_gb": rss_before,
+                "n": sum(r.n for r in records),
+                "check": check,
+            },
+            default=str,
+        )
+    )
 
 
 def _child_accuracy(kind: str, cache: Path) -> None:
@@ -151,7 +162,9 @@ def _run_child(args: list[str], timeout: float) -> dict[str, Any]:
     env = dict(os.environ, OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"))
     cmd = [sys.executable, str(Path(__file__).resolve()), *args]
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout, check=False)
+        proc = subprocess.run(
+            cmd, capture_output=True, text=True, env=env, timeout=timeout, check=False
+        )
     except subprocess.TimeoutExpired:
         return {"status": f"stopped after {timeout:g} s"}
     if proc.returncode != 0:
@@ -174,19 +187,35 @@ def _label(s: float) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="short lengths (12 s, 120 s): seconds per kind")
-    ap.add_argument("--lengths", type=float, nargs="+", help="record lengths [s] (default 360 3600 36000)")
+    ap.add_argument(
+        "--quick", action="store_true", help="short lengths (12 s, 120 s): seconds per kind"
+    )
+    ap.add_argument(
+        "--lengths", type=float, nargs="+", help="record lengths [s] (default 360 3600 36000)"
+    )
     ap.add_argument("--kinds", nargs="+", default=KINDS, help="model kinds (default: all)")
-    ap.add_argument("--record", type=float, default=3600.0, help="longest single record [s] (default 3600)")
-    ap.add_argument("--cache", type=Path, help="folder for the generated records (default: a temporary one)")
+    ap.add_argument(
+        "--record", type=float, default=3600.0, help="longest single record [s] (default 3600)"
+    )
+    ap.add_argument(
+        "--cache", type=Path, help="folder for the generated records (default: a temporary one)"
+    )
     ap.add_argument("--seed", type=int, default=9)
     ap.add_argument("--timeout", type=float, default=900.0, help="stop a fit after this long [s]")
     ap.add_argument("--json", type=Path, help="also write the rows as JSON here")
-    ap.add_argument("--accuracy", nargs="+", metavar="KIND",
-                    help="instead of the scaling table: windows vs every sample on 1 h (train record 1, test record 2)")
+    ap.add_argument(
+        "--accuracy",
+        nargs="+",
+        metavar="KIND",
+        help="instead of the scaling table: windows vs every sample on 1 h (train record 1, test record 2)",
+    )
     ap.add_argument("--child-accuracy", nargs=2, metavar=("KIND", "CACHE"), help=argparse.SUPPRESS)
-    ap.add_argument("--child", nargs=4, metavar=("KIND", "CACHE", "LENGTH", "RECORD"), help=argparse.SUPPRESS)
-    ap.add_argument("--generate", nargs=4, metavar=("CACHE", "RECORD", "N", "SEED"), help=argparse.SUPPRESS)
+    ap.add_argument(
+        "--child", nargs=4, metavar=("KIND", "CACHE", "LENGTH", "RECORD"), help=argparse.SUPPRESS
+    )
+    ap.add_argument(
+        "--generate", nargs=4, metavar=("CACHE", "RECORD", "N", "SEED"), help=argparse.SUPPRESS
+    )
     args = ap.parse_args()
     if args.child:
         kind, cache, length, record = args.child
@@ -212,23 +241,41 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench-scale-") as tmp:
         cache = args.cache or Path(tmp)
         cache = cache / f"seed{args.seed}-rec{record_s:g}s"
-        print(f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS="
-              f"{os.environ.get('OPENBLAS_NUM_THREADS', '1')}; {n_records} record(s) of {_label(record_s)} "
-              f"in {cache}", flush=True)
+        print(
+            f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS="
+            f"{os.environ.get('OPENBLAS_NUM_THREADS', '1')}; {n_records} record(s) of {_label(record_s)} "
+            f"in {cache}",
+            flush=True,
+        )
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, str(Path(__file__).resolve()), "--generate", str(cache),
-                        str(record_s), str(n_records), str(args.seed)], check=True)
+        subprocess.run(
+            [
+                sys.executable,
+                str(Path(__file__).resolve()),
+                "--generate",
+                str(cache),
+                str(record_s),
+                str(n_records),
+                str(args.seed),
+            ],
+            check=True,
+        )
         print(f"records ready in {time.perf_counter() - t0:.1f} s", flush=True)
         rows = []
         for kind in args.kinds:
             for length in lengths:
-                r = _run_child(["--child", kind, str(cache), str(length), str(record_s)], args.timeout)
+                r = _run_child(
+                    ["--child", kind, str(cache), str(length), str(record_s)], args.timeout
+                )
                 row = {"kind": kind, "length_s": length, **r}
                 rows.append(row)
                 if r["status"] == "ok":
-                    print(f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu {r['cpu_s']:.2f} s), "
-                          f"peak {r['rss_gb']:.2f} GB "
-                          f"(before fit {r['rss_before_gb']:.2f} GB)", flush=True)
+                    print(
+                        f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu {r['cpu_s']:.2f} s), "
+                        f"peak {r['rss_gb']:.2f} GB "
+                        f"(before fit {r['rss_before_gb']:.2f} GB)",
+                        flush=True,
+                    )
                 else:
                     print(f"{kind:8s} {_label(length):>7s}: {r['status']}", flush=True)
     _report(rows, lengths)
@@ -239,9 +286,21 @@ def main() -> None:
 def _accuracy(args: argparse.Namespace) -> None:
     with tempfile.TemporaryDirectory(prefix="bench-scale-") as tmp:
         cache = (args.cache or Path(tmp)) / f"seed{args.seed}-rec3600s"
-        subprocess.run([sys.executable, str(Path(__file__).resolve()), "--generate", str(cache), "3600", "2",
-                        str(args.seed)], check=True)
-        print("| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train ESR / test ESR |")
+        subprocess.run(
+            [
+                sys.executable,
+                str(Path(__file__).resolve()),
+                "--generate",
+                str(cache),
+                "3600",
+                "2",
+                str(args.seed),
+            ],
+            check=True,
+        )
+        print(
+            "| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train ESR / test ESR |"
+        )
         print("|---|---|---|")
         for kind in args.accuracy:
             r = _run_child(["--child-accuracy", kind, str(cache)], args.timeout)
@@ -250,15 +309,20 @@ def _accuracy(args: argparse.Namespace) -> None:
                 continue
 
             def fmt(d: dict[str, Any]) -> str:
-                esr = [f"{d[k]:.6f}" if isinstance(d[k], float) else d[k] for k in ("train", "test")]
+                esr = [
+                    f"{d[k]:.6f}" if isinstance(d[k], float) else d[k] for k in ("train", "test")
+                ]
                 return f"{d['fit_s']:.1f} / {esr[0]} / {esr[1]}"
 
             print(f"| {kind} | {fmt(r['windows'])} | {fmt(r['every sample'])} |", flush=True)
 
 
 def _report(rows: list[dict[str, Any]], lengths: list[float]) -> None:
-    print("\n| model | " + " | ".join(f"{_label(s)}: fit [s] / peak RSS [GB]" for s in lengths)
-          + " | log-log slope | targets |")
+    print(
+        "\n| model | "
+        + " | ".join(f"{_label(s)}: fit [s] / peak RSS [GB]" for s in lengths)
+        + " | log-log slope | targets |"
+    )
     print("|---|" + "---|" * len(lengths) + "---|---|")
     for kind in dict.fromkeys(r["kind"] for r in rows):
         by = {r["length_s"]: r for r in rows if r["kind"] == kind}
@@ -286,7 +350,10 @@ def _targets(by: dict[float, dict[str, Any]]) -> str:
             out.append("1 h RSS " + ("ok" if one["rss_gb"] <= TARGETS["rss_1h_gb"] else "MISSED"))
             if short is not None and short["status"] == "ok":
                 ratio = one["fit_s"] / max(short["fit_s"], 1e-3)
-                out.append(f"1 h / 6 min {ratio:.1f}x " + ("ok" if ratio <= TARGETS["ratio_1h_6min"] else "MISSED"))
+                out.append(
+                    f"1 h / 6 min {ratio:.1f}x "
+                    + ("ok" if ratio <= TARGETS["ratio_1h_6min"] else "MISSED")
+                )
     if ten is not None:
         if ten["status"] != "ok":
             out.append("10 h: not measured")

@@ -34,16 +34,24 @@ def run(label: str, data: ExperimentSet, jacobian: str) -> dict:
     esr = [model.score(e).esr for e in data]
     prov = model.provenance
     return {
-        "run": label, "records": len(data), "jacobian": jacobian, "wall_s": wall, "cpu_s": cpu,
-        "nfev": prov["nfev_total"], "njev": prov["njev_total"],
-        "mean_esr": sum(esr) / len(esr), "max_esr": max(esr),
+        "run": label,
+        "records": len(data),
+        "jacobian": jacobian,
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "nfev": prov["nfev_total"],
+        "njev": prov["njev_total"],
+        "mean_esr": sum(esr) / len(esr),
+        "max_esr": max(esr),
     }
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default=str(DEFAULT_DATA))
-    ap.add_argument("--full-peer", action="store_true", help="run finite differences on all 30 records")
+    ap.add_argument(
+        "--full-peer", action="store_true", help="run finite differences on all 30 records"
+    )
     args = ap.parse_args()
     data = read_quiroz(args.data)
     # compile / load the kernels outside the timed runs
@@ -62,8 +70,10 @@ def main() -> None:
         print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     sens = table[table.jacobian == "sensitivity"].iloc[-1]
     fd = table[table.jacobian == "2-point"].iloc[-1]
-    print(f"finite differences / sensitivities on the same records: wall x{fd.wall_s / sens.wall_s:.2f}, "
-          f"cpu x{fd.cpu_s / sens.cpu_s:.2f}; mean ESR {fd.mean_esr:.4f} vs {sens.mean_esr:.4f}")
+    print(
+        f"finite differences / sensitivities on the same records: wall x{fd.wall_s / sens.wall_s:.2f}, "
+        f"cpu x{fd.cpu_s / sens.cpu_s:.2f}; mean ESR {fd.mean_esr:.4f} vs {sens.mean_esr:.4f}"
+    )
 
 
 if __name__ == "__main__":

@@ -42,12 +42,27 @@ def peer(model: SpencerModel, exp: Experiment, rtol: float, max_step: float = np
     def rhs(tt: float, s: np.ndarray) -> list[float]:
         k = min(max(int((tt - t[0]) / exp.dt), 0), exp.n - 2)
         a = (tt - t[k]) / exp.dt
-        yd, zd, ud, _ = rhs_scalar(x[k] + a * (x[k + 1] - x[k]), v[k] + a * (v[k + 1] - v[k]),
-                                   e[k] + a * (e[k + 1] - e[k]), s[0], s[1], s[2], p)
+        yd, zd, ud, _ = rhs_scalar(
+            x[k] + a * (x[k + 1] - x[k]),
+            v[k] + a * (v[k + 1] - v[k]),
+            e[k] + a * (e[k + 1] - e[k]),
+            s[0],
+            s[1],
+            s[2],
+            p,
+        )
         return [yd, zd, ud]
 
-    sol = solve_ivp(rhs, (t[0], t[-1]), [x[0], 0.0, e[0]], method="LSODA", t_eval=t,
-                    rtol=rtol, atol=1e-12, max_step=max_step)
+    sol = solve_ivp(
+        rhs,
+        (t[0], t[-1]),
+        [x[0], 0.0, e[0]],
+        method="LSODA",
+        t_eval=t,
+        rtol=rtol,
+        atol=1e-12,
+        max_step=max_step,
+    )
     if not sol.success:
         raise RuntimeError(sol.message)
     y, z, u = sol.y
@@ -62,24 +77,43 @@ def cases() -> list[tuple[str, SpencerModel, Experiment]]:
     if dyke.exists():
         df = pd.read_csv(dyke, nrows=6010)
         t = np.arange(len(df)) / 3004.8
-        exp = Experiment(t=t, x=df["x"].to_numpy(), v=df["v"].to_numpy(), F=df["F"].to_numpy(),
-                         voltage=df["voltage"].to_numpy(), name="dyke_ranran_50_2s")
+        exp = Experiment(
+            t=t,
+            x=df["x"].to_numpy(),
+            v=df["v"].to_numpy(),
+            F=df["F"].to_numpy(),
+            voltage=df["voltage"].to_numpy(),
+            name="dyke_ranran_50_2s",
+        )
         out.append(("spencer1997 / Dyke 2 s", spencer1997(range_policy="clip"), exp))
     q = SHARED / "quiroz2022_utfsm" / "sine_unfiltered" / "sine_5mm_4Hz_1A.csv"
     if q.exists():
         df = pd.read_csv(q)
-        exp = Experiment(t=df["t"].to_numpy(), x=df["x"].to_numpy(), v=df["v"].to_numpy(),
-                         F=df["F"].to_numpy(), i=df["i"].to_numpy(), name=q.stem)
+        exp = Experiment(
+            t=df["t"].to_numpy(),
+            x=df["x"].to_numpy(),
+            v=df["v"].to_numpy(),
+            F=df["F"].to_numpy(),
+            i=df["i"].to_numpy(),
+            name=q.stem,
+        )
         model = load_model(REPO / "src" / "mrdamper" / "rig" / "parameters" / "quiroz2022.json")
         out.append(("quiroz2022 / sine_5mm_4Hz_1A", model, exp))
     if not out:
         rng = np.random.default_rng(0)
         t = np.arange(6000) / 3000.0
         x = 0.004 * np.sin(2 * np.pi * 3 * t) + 0.001 * np.sin(2 * np.pi * 17 * t)
-        v = 0.004 * 2 * np.pi * 3 * np.cos(2 * np.pi * 3 * t) + 0.001 * 2 * np.pi * 17 * np.cos(2 * np.pi * 17 * t)
+        v = 0.004 * 2 * np.pi * 3 * np.cos(2 * np.pi * 3 * t) + 0.001 * 2 * np.pi * 17 * np.cos(
+            2 * np.pi * 17 * t
+        )
         volt = 2.25 * (rng.random(300) > 0.5)[(t / 0.01).astype(int)]
-        out.append(("spencer1997 / synthetic", spencer1997(),
-                    Experiment(t=t, x=x, v=v, F=0 * t, voltage=volt, name="synthetic")))
+        out.append(
+            (
+                "spencer1997 / synthetic",
+                spencer1997(),
+                Experiment(t=t, x=x, v=v, F=0 * t, voltage=volt, name="synthetic"),
+            )
+        )
     return out
 
 
@@ -102,15 +136,25 @@ def main() -> None:
         if chosen is None:
             chosen = (1e-10, err_p)
         t_p = best_time(lambda m=model, x=exp, r=chosen[0]: peer(m, x, r), repeat=2)
-        rows.append({
-            "case": label, "samples": exp.n, "substeps": model.substeps_for(exp),
-            "kernel_s": t_k, "kernel_err": err_k, "lsoda_rtol": chosen[0], "lsoda_s": t_p,
-            "lsoda_err": chosen[1], "speed-up": t_p / t_k,
-        })
+        rows.append(
+            {
+                "case": label,
+                "samples": exp.n,
+                "substeps": model.substeps_for(exp),
+                "kernel_s": t_k,
+                "kernel_err": err_k,
+                "lsoda_rtol": chosen[0],
+                "lsoda_s": t_p,
+                "lsoda_err": chosen[1],
+                "speed-up": t_p / t_k,
+            }
+        )
     table = pd.DataFrame(rows)
     with pd.option_context("display.width", 160):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-    print("errors: RMS force error / std of the LSODA rtol=1e-11 reference; times: best of runs [s]")
+    print(
+        "errors: RMS force error / std of the LSODA rtol=1e-11 reference; times: best of runs [s]"
+    )
 
 
 if __name__ == "__main__":

@@ -44,10 +44,16 @@ def esr_table(model: SpencerModel, data: ExperimentSet) -> pd.DataFrame:
     rows = []
     for e in data:
         s = model.score(e)
-        rows.append({
-            "record": e.name, "fs_Hz": e.fs, "current_A": e.metadata.get("current"),
-            "esr": s.esr, "ssse_N": s.ssse, "substeps": model.substeps_for(e),
-        })
+        rows.append(
+            {
+                "record": e.name,
+                "fs_Hz": e.fs,
+                "current_A": e.metadata.get("current"),
+                "esr": s.esr,
+                "ssse_N": s.ssse,
+                "substeps": model.substeps_for(e),
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -65,8 +71,10 @@ def main(argv: list[str] | None = None) -> int:
     model = est.fit(data)
     elapsed = time.perf_counter() - t0
     prov = model.provenance
-    print(f"identification: {elapsed:.1f} s, cost {prov['cost']:.6g}, status {prov['status']} "
-          f"({prov['message']}), cond(J^T J) {prov['cond_JTJ']:.3g}, at bounds {prov['at_bounds']}")
+    print(
+        f"identification: {elapsed:.1f} s, cost {prov['cost']:.6g}, status {prov['status']} "
+        f"({prov['message']}), cond(J^T J) {prov['cond_JTJ']:.3g}, at bounds {prov['at_bounds']}"
+    )
     print("starts:", prov["starts"])
     for name, value in model.parameters.items():
         print(f"  {name:8s} = {value!r}")

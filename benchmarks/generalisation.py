@@ -61,7 +61,14 @@ QUIROZ = DATA / "quiroz2022_utfsm"
 DYKE_FS = 3004.8
 #: Quiroz's six sine conditions (amplitude [m], frequency [Hz]); the rig's 40 mm stroke and
 #: +-25 mm LVDT take 18 mm in place of Quiroz's 25 mm.
-RIG_CONDITIONS = ((0.018, 0.25), (0.018, 0.5), (0.010, 2.0), (0.005, 3.0), (0.005, 4.0), (0.002, 5.0))
+RIG_CONDITIONS = (
+    (0.018, 0.25),
+    (0.018, 0.5),
+    (0.010, 2.0),
+    (0.005, 3.0),
+    (0.005, 4.0),
+    (0.002, 5.0),
+)
 CURRENTS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
 
@@ -120,7 +127,9 @@ def choose_lpv(sc: Scenario) -> tuple[dict[str, Any], pd.DataFrame]:
             if err:
                 break
             vals.append(val)
-        rows.append({**cand, "val_esr": float(np.mean(vals)) if not err else np.nan, "error": err[:60]})
+        rows.append(
+            {**cand, "val_esr": float(np.mean(vals)) if not err else np.nan, "error": err[:60]}
+        )
     tab = pd.DataFrame(rows)
     if not tab["val_esr"].notna().any():
         return sc.settings("lpv"), tab
@@ -132,7 +141,9 @@ def choose_lpv(sc: Scenario) -> tuple[dict[str, Any], pd.DataFrame]:
 AUG_SHARE = 0.5
 
 
-def fit_augmented(sc: Scenario, settings: dict[str, Any], reference: Any, base: Any) -> tuple[Any, float, str]:
+def fit_augmented(
+    sc: Scenario, settings: dict[str, Any], reference: Any, base: Any
+) -> tuple[Any, float, str]:
     """LPV trained on the measured records plus broadband records simulated by the Spencer model
     fitted on the same records (``mrdamper.models.augment``); zone laws from the measured records."""
     if reference is None or base is None:
@@ -144,11 +155,14 @@ def fit_augmented(sc: Scenario, settings: dict[str, Any], reference: Any, base: 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             fs = settings.get("model_fs") or min(e.fs for e in sc.train)
-            syn, _ = reference_records(sc.train, reference=reference, input=settings.get("input", "i"),
-                                       fs=fs, seed=0)
+            syn, _ = reference_records(
+                sc.train, reference=reference, input=settings.get("input", "i"), fs=fs, seed=0
+            )
             w_syn = AUG_SHARE / (1 - AUG_SHARE) * len(sc.train) / len(syn)
             est = get_estimator("lpv", **{**settings, "zone_laws": base.zone_laws})
-            model = est.fit([*sc.train, *syn], record_weights=[1.0] * len(sc.train) + [w_syn] * len(syn))
+            model = est.fit(
+                [*sc.train, *syn], record_weights=[1.0] * len(sc.train) + [w_syn] * len(syn)
+            )
     except Exception as exc:  # noqa: BLE001 - reported
         return None, time.perf_counter() - t0, f"{type(exc).__name__}: {exc}"
     return model.with_range_policy("clip"), time.perf_counter() - t0, ""
@@ -168,16 +182,29 @@ def run_scenario(sc: Scenario, models: list[str], with_val: bool) -> list[dict[s
         plan.append(("lpv-aug", "lpv", sc.settings("lpv")))
     for label, kind, settings in plan:
         if label == "lpv-aug":
-            model, fit_s, err = fit_augmented(sc, settings, fitted.get("spencer"), fitted.get("lpv"))
+            model, fit_s, err = fit_augmented(
+                sc, settings, fitted.get("spencer"), fitted.get("lpv")
+            )
         else:
             model, fit_s, err = fit_model(kind, settings, sc.train)
         fitted[label] = model
         for test_name, records in sc.tests.items():
             esr, serr = (float("nan"), err) if model is None else mean_esr(model, records)
-            rows.append({"scenario": sc.name, "test": test_name, "model": label, "esr": esr,
-                         "fit_s": fit_s, "error": serr})
-        print(f"  {sc.name:14s} {label:8s} fit {fit_s:6.2f} s {('error: ' + err[:80]) if err else ''}",
-              file=sys.stderr, flush=True)
+            rows.append(
+                {
+                    "scenario": sc.name,
+                    "test": test_name,
+                    "model": label,
+                    "esr": esr,
+                    "fit_s": fit_s,
+                    "error": serr,
+                }
+            )
+        print(
+            f"  {sc.name:14s} {label:8s} fit {fit_s:6.2f} s {('error: ' + err[:80]) if err else ''}",
+            file=sys.stderr,
+            flush=True,
+        )
     return rows
 
 
@@ -235,8 +262,15 @@ def scenario_rig(quick: bool) -> Scenario:
             x = _ramped_sine(fs, amp, f, cycles)
             seed += 1
             cond = f"{amp * 1e3:g}mm_{f:g}Hz"
-            train.append(rig.run(x, np.full(x.size, cur), seed=seed, name=f"rig_{cond}_{cur:g}A",
-                                 metadata={"condition": cond, "current": cur, "frequency": f}))
+            train.append(
+                rig.run(
+                    x,
+                    np.full(x.size, cur),
+                    seed=seed,
+                    name=f"rig_{cond}_{cur:g}A",
+                    metadata={"condition": cond, "current": cur, "frequency": f},
+                )
+            )
     train_set = ExperimentSet(train, name="rig-sines")
     dur = 8.0 if quick else 20.0
     t = np.arange(round(dur * fs)) / fs
@@ -244,15 +278,29 @@ def scenario_rig(quick: bool) -> Scenario:
     amp = 0.1 / (2 * np.pi * f_inst)  # constant velocity amplitude 0.1 m/s
     chirp = amp * sps.chirp(t, f0=1.0, t1=dur, f1=15.0, method="linear", phi=-90)
     chirp *= np.clip(np.minimum(t, dur - t) / 0.5, 0.0, 1.0)
-    chirps = [rig.run(chirp, np.full(t.size, cur), seed=900 + k, name=f"chirp_{cur:g}A",
-                      metadata={"current": cur})
-              for k, cur in enumerate((0.0, 0.5, 1.0))]
+    chirps = [
+        rig.run(
+            chirp,
+            np.full(t.size, cur),
+            seed=900 + k,
+            name=f"chirp_{cur:g}A",
+            metadata={"current": cur},
+        )
+        for k, cur in enumerate((0.0, 0.5, 1.0))
+    ]
     rdur = 10.0 if quick else 30.0
     x_road = road_profile(fs, rdur, seed=7, max_frequency=10.0, stroke=0.04)
     i_road = aprbs(fs, rdur, low=0.0, high=1.0, min_hold=0.2, seed=8)
     road = rig.run(x_road, i_road, seed=950, name="road_aprbs")
-    tests = {"chirp 1-15 Hz, 0/0.5/1 A": ExperimentSet(chirps), "road + APRBS current": ExperimentSet([road])}
-    grid = [] if quick else [{"n_m": n, "model_fs": r} for n in (2, 3, 4) for r in (200.0, 500.0, 1000.0)]
+    tests = {
+        "chirp 1-15 Hz, 0/0.5/1 A": ExperimentSet(chirps),
+        "road + APRBS current": ExperimentSet([road]),
+    }
+    grid = (
+        []
+        if quick
+        else [{"n_m": n, "model_fs": r} for n in (2, 3, 4) for r in (200.0, 500.0, 1000.0)]
+    )
     return Scenario("(c) rig", train_set, tests, lambda k: {}, _loco(train_set), grid)
 
 
@@ -268,8 +316,10 @@ def scenario_dyke(quick: bool) -> Scenario:
         eta, dec = 100.0, 5
     else:
         eta, dec, tab = ard.choose_eta(train)
-        print(f"\n[(d) dyke] eta / decimation grid (training part only):\n{tab.to_string(index=False)}",
-              file=sys.stderr)
+        print(
+            f"\n[(d) dyke] eta / decimation grid (training part only):\n{tab.to_string(index=False)}",
+            file=sys.stderr,
+        )
 
     def settings(kind: str) -> dict[str, Any]:
         s: dict[str, Any] = {"input": "voltage"}
@@ -280,9 +330,21 @@ def scenario_dyke(quick: bool) -> Scenario:
         return s
 
     c2 = round(0.8 * train.n)
-    folds = [(ExperimentSet([train.slice(0, c2, name="fit")]), ExperimentSet([train.slice(c2, None, name="val")]))]
+    folds = [
+        (
+            ExperimentSet([train.slice(0, c2, name="fit")]),
+            ExperimentSet([train.slice(c2, None, name="val")]),
+        )
+    ]
     grid = [] if quick else [{"n_m": n} for n in (2, 3, 4, 5)]
-    return Scenario("(d) dyke", ExperimentSet([train]), {"last 30 %": ExperimentSet([test])}, settings, folds, grid)
+    return Scenario(
+        "(d) dyke",
+        ExperimentSet([train]),
+        {"last 30 %": ExperimentSet([test])},
+        settings,
+        folds,
+        grid,
+    )
 
 
 SCENARIOS: dict[str, Callable[[bool], Scenario]] = {
@@ -300,7 +362,9 @@ def table(rows: list[dict[str, Any]]) -> pd.DataFrame:
     tab = df.groupby(["scenario", "test", "model"], sort=False)["esr"].mean().unstack("model")
     order = list(dict.fromkeys(df["model"]))
     keys = list(dict.fromkeys(zip(df["scenario"], df["test"])))
-    tab = tab.reindex(index=pd.MultiIndex.from_tuples(keys, names=["scenario", "test"]), columns=order)
+    tab = tab.reindex(
+        index=pd.MultiIndex.from_tuples(keys, names=["scenario", "test"]), columns=order
+    )
     tab["best"] = [row.idxmin() if row.notna().any() else "-" for _, row in tab.iterrows()]
     return tab
 
@@ -316,27 +380,40 @@ def to_markdown(tab: pd.DataFrame) -> str:
             return "failed" if np.isnan(x) else f"{x:.3g}"
         return str(x)
 
-    return "\n".join([head, sep] + ["| " + " | ".join(cell(x) for x in r) + " |" for r in d.itertuples(index=False)])
+    return "\n".join(
+        [head, sep]
+        + ["| " + " | ".join(cell(x) for x in r) + " |" for r in d.itertuples(index=False)]
+    )
 
 
 def main(argv: list[str] | None = None) -> pd.DataFrame:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="short rig records, no validation grids")
-    ap.add_argument("--models", nargs="*", default=None, help="model kinds (default: every available)")
+    ap.add_argument(
+        "--models", nargs="*", default=None, help="model kinds (default: every available)"
+    )
     ap.add_argument("--scenarios", nargs="*", choices=list(SCENARIOS), default=list(SCENARIOS))
-    ap.add_argument("--csv", type=Path, default=None, help="also write the per-test rows to this CSV")
+    ap.add_argument(
+        "--csv", type=Path, default=None, help="also write the per-test rows to this CSV"
+    )
     args = ap.parse_args(argv)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for name in args.scenarios:
         sc = SCENARIOS[name](args.quick)
-        print(f"{sc.name}: {len(sc.train)} training records; tests "
-              f"{ {k: len(v) for k, v in sc.tests.items()} }", file=sys.stderr, flush=True)
+        print(
+            f"{sc.name}: {len(sc.train)} training records; tests "
+            f"{ {k: len(v) for k, v in sc.tests.items()} }",
+            file=sys.stderr,
+            flush=True,
+        )
         rows += run_scenario(sc, models, with_val=not args.quick)
     tab = table(rows)
-    print(f"## Generalisation: mean test ESR ({'quick' if args.quick else 'full'}; "
-          f"{time.perf_counter() - t0:.0f} s)\n")
+    print(
+        f"## Generalisation: mean test ESR ({'quick' if args.quick else 'full'}; "
+        f"{time.perf_counter() - t0:.0f} s)\n"
+    )
     print(to_markdown(tab))
     errors = [r for r in rows if r["error"]]
     if errors:

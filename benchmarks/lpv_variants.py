@@ -66,11 +66,19 @@ def fit_variant(sc: G.Scenario, extra: dict[str, Any], reference: Any) -> Any:
             return get_estimator("lpv", **settings).fit(sc.train).with_range_policy("clip")
         base = get_estimator("lpv", **settings).fit(sc.train)
         fs = settings.get("model_fs") or min(e.fs for e in sc.train)
-        syn, _ = reference_records(sc.train, reference=reference, input=settings.get("input", "i"), fs=fs,
-                                   motion=motion, seed=0)
+        syn, _ = reference_records(
+            sc.train,
+            reference=reference,
+            input=settings.get("input", "i"),
+            fs=fs,
+            motion=motion,
+            seed=0,
+        )
         w = G.AUG_SHARE / (1 - G.AUG_SHARE) * len(sc.train) / len(syn)
         est = get_estimator("lpv", **{**settings, "zone_laws": base.zone_laws})
-        return est.fit([*sc.train, *syn], record_weights=[1.0] * len(sc.train) + [w] * len(syn)).with_range_policy("clip")
+        return est.fit(
+            [*sc.train, *syn], record_weights=[1.0] * len(sc.train) + [w] * len(syn)
+        ).with_range_policy("clip")
 
 
 def main(argv: list[str] | None = None) -> pd.DataFrame:
@@ -84,7 +92,9 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         sc = G.SCENARIOS[name](args.quick)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            reference = get_estimator("spencer", input=sc.settings("lpv").get("input", "i")).fit(sc.train)
+            reference = get_estimator("spencer", input=sc.settings("lpv").get("input", "i")).fit(
+                sc.train
+            )
         for label, extra in VARIANTS.items():
             if "eta" in extra and name != "rig":
                 continue  # constant current (Quiroz) or already filtered (Dyke): nothing to filter
@@ -97,15 +107,26 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                 m, err = None, f"{type(exc).__name__}: {exc}"
             for test, records in sc.tests.items():
                 esr, serr = (np.nan, err) if m is None else G.mean_esr(m, records)
-                rows.append({"scenario": sc.name, "test": test, "variant": label, "esr": esr, "error": serr})
+                rows.append(
+                    {"scenario": sc.name, "test": test, "variant": label, "esr": esr, "error": serr}
+                )
             print(f"  {sc.name:16s} {label:16s} {err[:80]}", file=sys.stderr, flush=True)
     df = pd.DataFrame(rows)
-    tab = df.groupby(["variant", "scenario", "test"], sort=False)["esr"].mean().unstack(["scenario", "test"])
+    tab = (
+        df.groupby(["variant", "scenario", "test"], sort=False)["esr"]
+        .mean()
+        .unstack(["scenario", "test"])
+    )
     tab.columns = [f"{s.split()[0]} {t}" for s, t in tab.columns]
-    print(f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; {time.perf_counter() - t0:.0f} s)\n")
+    print(
+        f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; {time.perf_counter() - t0:.0f} s)\n"
+    )
     text = G.to_markdown(tab)
     lines = text.split("\n")
-    for label in ("eta=100", "model_fs=1000"):  # variants not run on some scenarios: "n/a", not a failure
+    for label in (
+        "eta=100",
+        "model_fs=1000",
+    ):  # variants not run on some scenarios: "n/a", not a failure
         if label not in tab.index:
             continue
         k = next(j for j, line in enumerate(lines) if line.startswith(f"| {label} |"))

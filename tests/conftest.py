@@ -17,7 +17,9 @@ SHARED_DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO_ROOT.parent / "sh
 
 def _require(path: Path) -> Path:
     if not path.exists():
-        pytest.skip(f"real measured data not found at {path} (set MRDAMPER_SHARED_DATA to its folder)")
+        pytest.skip(
+            f"real measured data not found at {path} (set MRDAMPER_SHARED_DATA to its folder)"
+        )
     return path
 
 

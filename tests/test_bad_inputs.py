@@ -49,8 +49,15 @@ def _one_line_error(code: int, err: str, expected_code: int = 2) -> str:
     return lines[0]
 
 
-def _sine(name: str, cur: float, fs: float = FS, seconds: float = 4.0, amp: float = 0.01, freq: float = 1.5,
-          seed: int = 0) -> Experiment:
+def _sine(
+    name: str,
+    cur: float,
+    fs: float = FS,
+    seconds: float = 4.0,
+    amp: float = 0.01,
+    freq: float = 1.5,
+    seed: int = 0,
+) -> Experiment:
     t = np.arange(int(fs * seconds)) / fs
     x = amp * np.sin(2 * np.pi * freq * t)
     v = amp * 2 * np.pi * freq * np.cos(2 * np.pi * freq * t)
@@ -59,29 +66,51 @@ def _sine(name: str, cur: float, fs: float = FS, seconds: float = 4.0, amp: floa
     return Experiment(t=t, x=x, v=v, F=F, i=np.full(t.size, cur), name=name)
 
 
-def _folder(path: Path, currents: tuple[float, ...] = (0.0, 0.5, 1.0), fs: tuple[float, ...] | None = None) -> Path:
+def _folder(
+    path: Path, currents: tuple[float, ...] = (0.0, 0.5, 1.0), fs: tuple[float, ...] | None = None
+) -> Path:
     """Records named with no convention (rec_a.csv, ...): the user's own data."""
     path.mkdir(parents=True)
     rates = fs or (FS,) * len(currents)
     for k, (cur, rate) in enumerate(zip(currents, rates)):
-        write_csv(_sine(f"rec_{chr(97 + k)}", cur, fs=rate, seed=k), path / f"rec_{chr(97 + k)}.csv")
+        write_csv(
+            _sine(f"rec_{chr(97 + k)}", cur, fs=rate, seed=k), path / f"rec_{chr(97 + k)}.csv"
+        )
     return path
 
 
 def _lpv_model() -> LPVModel:
-    return LPVModel(alpha=np.array([[-1.2, 0.1, -0.02], [0.4, -0.05, 0.01]]),
-                    beta=np.array([[300.0, 500.0, -40.0], [-200.0, -300.0, 30.0]]), offset=5.0, fs=FS,
-                    input_signal="v", rho_range=(0.0, 1.0), input_range=(0.0, 1.0))
+    return LPVModel(
+        alpha=np.array([[-1.2, 0.1, -0.02], [0.4, -0.05, 0.01]]),
+        beta=np.array([[300.0, 500.0, -40.0], [-200.0, -300.0, 30.0]]),
+        offset=5.0,
+        fs=FS,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+        input_range=(0.0, 1.0),
+    )
 
 
 # ----------------------------------------------------------------------------- documented commands
-def test_fit_on_records_of_different_rates_takes_the_lowest_rate_with_a_note(tmp_path, capsys) -> None:
+def test_fit_on_records_of_different_rates_takes_the_lowest_rate_with_a_note(
+    tmp_path, capsys
+) -> None:
     data = _folder(tmp_path / "mixed", currents=(0.0, 0.5, 1.0, 0.25), fs=(FS, FS, 1000.0, 1000.0))
     for kind in ("lpv", "lti", "narx"):
         # the rate rule is under test, not stability: an unrefined LPV / LTI may be frozen-unstable
         extra = ["--set", "stability=warn"] if kind in ("lpv", "lti") else []
-        code, _out, err = _run(["fit", kind, str(data), "--out", str(tmp_path / f"{kind}.json"), "--no-refine", *extra],
-                               capsys)
+        code, _out, err = _run(
+            [
+                "fit",
+                kind,
+                str(data),
+                "--out",
+                str(tmp_path / f"{kind}.json"),
+                "--no-refine",
+                *extra,
+            ],
+            capsys,
+        )
         assert code == 0, err
         notes = [ln for ln in err.splitlines() if ln.startswith("note: ")]
         assert len(notes) == 1 and "model_fs = 200 Hz (the lowest" in notes[0], err
@@ -92,7 +121,9 @@ def test_fit_on_records_of_different_rates_takes_the_lowest_rate_with_a_note(tmp
 def test_rounded_time_column_is_read_with_the_estimated_rate(tmp_path, capsys) -> None:
     e = _sine("r", 0.5, fs=3004.8, seconds=2.0)
     df = e.to_frame()
-    df["t"] = [float(f"{v:.6g}") for v in df["t"]]  # printed with 6 digits, as the Dyke file: jitter
+    df["t"] = [
+        float(f"{v:.6g}") for v in df["t"]
+    ]  # printed with 6 digits, as the Dyke file: jitter
     p = tmp_path / "rounded.csv"
     df.to_csv(p, index=False)
     code, out, err = _run(["info", str(p), "--json"], capsys)
@@ -100,7 +131,11 @@ def test_rounded_time_column_is_read_with_the_estimated_rate(tmp_path, capsys) -
     [row] = json.loads(out)
     assert row["rate_hz"] == pytest.approx(3004.8)
     notes = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(notes) == 1 and notes[0].startswith("note: ") and "rate estimated as 3004.8 Hz" in notes[0]
+    assert (
+        len(notes) == 1
+        and notes[0].startswith("note: ")
+        and "rate estimated as 3004.8 Hz" in notes[0]
+    )
 
 
 def test_dyke_record_reads_without_fs(dyke_csv, capsys) -> None:
@@ -115,9 +150,13 @@ def test_inverse_resamples_a_record_at_another_rate_like_simulate(tmp_path, caps
     rec = _sine("fast", 0.5, fs=1000.0)
     rec = rec.replace(F=_lpv_model().predict(rec))
     data = write_csv(rec, tmp_path / "fast.csv")
-    code, _, err = _run(["simulate", str(model), str(data), "--out", str(tmp_path / "sim.csv")], capsys)
+    code, _, err = _run(
+        ["simulate", str(model), str(data), "--out", str(tmp_path / "sim.csv")], capsys
+    )
     assert code == 0, err
-    code, _out, err = _run(["inverse", str(model), str(data), "--out", str(tmp_path / "cur.csv")], capsys)
+    code, _out, err = _run(
+        ["inverse", str(model), str(data), "--out", str(tmp_path / "cur.csv")], capsys
+    )
     assert code == 0, err
     assert "note: " in err and "solved at the model rate" in err
     assert len(pd.read_csv(tmp_path / "cur.csv")) == rec.n
@@ -125,16 +164,26 @@ def test_inverse_resamples_a_record_at_another_rate_like_simulate(tmp_path, caps
 
 def test_model_rate_setting_is_model_fs_and_old_fs_still_works(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "d")
-    code, _, err = _run(["fit", "lti", str(data), "--out", str(tmp_path / "a.json"), "--set", "fs=100"], capsys)
+    code, _, err = _run(
+        ["fit", "lti", str(data), "--out", str(tmp_path / "a.json"), "--set", "fs=100"], capsys
+    )
     assert code == 0, err
     assert "note: " in err and "now called 'model_fs'" in err
     assert json.loads((tmp_path / "a.json").read_text())["parameters"]["fs"] == 100.0
-    code, _, err = _run(["fit", "lti", str(data), "--out", str(tmp_path / "b.json"), "--set", "model_fs=100"], capsys)
+    code, _, err = _run(
+        ["fit", "lti", str(data), "--out", str(tmp_path / "b.json"), "--set", "model_fs=100"],
+        capsys,
+    )
     assert code == 0 and "note" not in err, err
-    code, _, err = _run(["fit", "sp1", str(data), "--out", str(tmp_path / "c.json"), "--set", "model_fs=100"], capsys)
+    code, _, err = _run(
+        ["fit", "sp1", str(data), "--out", str(tmp_path / "c.json"), "--set", "model_fs=100"],
+        capsys,
+    )
     assert "'model_fs'" in _one_line_error(code, err)
     # the record-rate option used for the model's rate: the message points to the model setting
-    code, _, err = _run(["fit", "lti", str(data), "--out", str(tmp_path / "d.json"), "--fs", "100"], capsys)
+    code, _, err = _run(
+        ["fit", "lti", str(data), "--out", str(tmp_path / "d.json"), "--fs", "100"], capsys
+    )
     assert "--set model_fs=" in _one_line_error(code, err)
 
 
@@ -155,7 +204,10 @@ def test_every_record_reading_command_takes_the_reader_options(tmp_path, capsys)
     data = _folder(tmp_path / "d")
     code, _, err = _run(["fit", "sp1", str(data), "--out", str(tmp_path / "m.json")], capsys)
     assert code == 0, err
-    code, out, err = _run(["score", str(tmp_path / "m.json"), str(p), "--decimal", ",", "--sep", ";", "--json"], capsys)
+    code, out, err = _run(
+        ["score", str(tmp_path / "m.json"), str(p), "--decimal", ",", "--sep", ";", "--json"],
+        capsys,
+    )
     assert code == 0, err
     assert json.loads(out)["mean"]["n_scored"] == 1
 
@@ -163,19 +215,47 @@ def test_every_record_reading_command_takes_the_reader_options(tmp_path, capsys)
 def test_study_on_own_records_runs_a_default_protocol_and_says_which(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "mine", currents=(0.0, 0.25, 0.5, 0.75, 1.0))
     out = tmp_path / "out"
-    code, _stdout, err = _run(["study", str(data), "--out", str(out), "--models", "sp2", "--workers", "1",
-                              "--no-progress"], capsys)
+    code, _stdout, err = _run(
+        [
+            "study",
+            str(data),
+            "--out",
+            str(out),
+            "--models",
+            "sp2",
+            "--workers",
+            "1",
+            "--no-progress",
+        ],
+        capsys,
+    )
     assert code == 0, err
     chosen = [ln for ln in err.splitlines() if "protocol 'default'" in ln]
-    assert len(chosen) == 1 and "5-fold by record" in chosen[0] and "force-velocity analysis" in chosen[0]
+    assert (
+        len(chosen) == 1
+        and "5-fold by record" in chosen[0]
+        and "force-velocity analysis" in chosen[0]
+    )
     res = pd.read_csv(out / "results.csv")
     assert len(res) == 5 and set(res["status"]) == {"ok"}
     # one long record: a time split
     single = tmp_path / "one"
     single.mkdir()
     write_csv(_sine("long", 0.5, seconds=8.0), single / "long.csv")
-    code, _, err = _run(["study", str(single / "long.csv"), "--out", str(tmp_path / "o2"), "--models", "bingham",
-                         "--workers", "1", "--no-progress"], capsys)
+    code, _, err = _run(
+        [
+            "study",
+            str(single / "long.csv"),
+            "--out",
+            str(tmp_path / "o2"),
+            "--models",
+            "bingham",
+            "--workers",
+            "1",
+            "--no-progress",
+        ],
+        capsys,
+    )
     assert code == 0, err
     assert "first 70% trains" in err
 
@@ -201,7 +281,17 @@ LEAVES = _leaf_commands()
 
 def test_the_walk_finds_every_command() -> None:
     names = {" ".join(p) for p, _ in LEAVES}
-    assert {"info", "fit", "simulate", "score", "study", "demo", "rig doe", "export", "inverse"} <= names
+    assert {
+        "info",
+        "fit",
+        "simulate",
+        "score",
+        "study",
+        "demo",
+        "rig doe",
+        "export",
+        "inverse",
+    } <= names
 
 
 def _is_option(p: Any) -> bool:
@@ -277,7 +367,11 @@ def test_cli_dependency_is_pinned_to_a_tested_range() -> None:
     lo = re.search(r">=\s*([\d.]+)", spec).group(1)  # type: ignore[union-attr]
     hi = re.search(r"<\s*([\d.]+)", spec).group(1)  # type: ignore[union-attr]
     version = tuple(int(x) for x in typer.__version__.split(".")[:2])
-    assert tuple(int(x) for x in lo.split(".")[:2]) <= version < tuple(int(x) for x in hi.split(".")[:2])
+    assert (
+        tuple(int(x) for x in lo.split(".")[:2])
+        <= version
+        < tuple(int(x) for x in hi.split(".")[:2])
+    )
 
 
 # ----------------------------------------------------------------------------- data loss and unsafe writes
@@ -289,7 +383,9 @@ def test_study_out_equal_to_its_data_is_refused_even_with_force(tmp_path, capsys
     assert sorted(p.name for p in data.iterdir()) == before
 
 
-def test_out_that_is_an_ancestor_of_the_working_folder_is_refused(tmp_path, capsys, monkeypatch) -> None:
+def test_out_that_is_an_ancestor_of_the_working_folder_is_refused(
+    tmp_path, capsys, monkeypatch
+) -> None:
     proj = tmp_path / "proj"
     data = _folder(proj / "data")
     monkeypatch.chdir(proj)
@@ -300,7 +396,9 @@ def test_out_that_is_an_ancestor_of_the_working_folder_is_refused(tmp_path, caps
     line = _one_line_error(*_run(["study", "data", "--out", "../proj", "--force"], capsys)[::2])
     assert "current folder" in line
     assert proj.is_dir() and data.is_dir()
-    assert not [p for p in tmp_path.rglob("*old-*")] and not [p for p in tmp_path.rglob("*partial*")]
+    assert not [p for p in tmp_path.rglob("*old-*")] and not [
+        p for p in tmp_path.rglob("*partial*")
+    ]
 
 
 def test_simulate_cannot_overwrite_its_input_record(tmp_path, capsys) -> None:
@@ -309,24 +407,36 @@ def test_simulate_cannot_overwrite_its_input_record(tmp_path, capsys) -> None:
     assert _run(["fit", "sp1", str(data), "--out", str(model)], capsys)[0] == 0
     rec = data / "rec_a.csv"
     before = rec.read_bytes()
-    line = _one_line_error(*_run(["simulate", str(model), str(rec), "--out", str(rec), "--force"], capsys)[::2])
+    line = _one_line_error(
+        *_run(["simulate", str(model), str(rec), "--out", str(rec), "--force"], capsys)[::2]
+    )
     assert "is an input" in line and rec.read_bytes() == before
-    line = _one_line_error(*_run(["simulate", str(model), str(rec), "--out", str(model), "--force"], capsys)[::2])
+    line = _one_line_error(
+        *_run(["simulate", str(model), str(rec), "--out", str(model), "--force"], capsys)[::2]
+    )
     assert "is an input" in line
 
 
-@pytest.mark.skipif(not Path("/dev/full").exists(), reason="/dev/full is not available on this system")
+@pytest.mark.skipif(
+    not Path("/dev/full").exists(), reason="/dev/full is not available on this system"
+)
 def test_a_device_is_never_replaced(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "d")
     model = tmp_path / "m.json"
     assert _run(["fit", "sp1", str(data), "--out", str(model)], capsys)[0] == 0
-    line = _one_line_error(*_run(["simulate", str(model), str(data / "rec_a.csv"), "--out", "/dev/full", "--force"],
-                                 capsys)[::2])
+    line = _one_line_error(
+        *_run(
+            ["simulate", str(model), str(data / "rec_a.csv"), "--out", "/dev/full", "--force"],
+            capsys,
+        )[::2]
+    )
     assert "not a regular file" in line
     assert stat.S_ISCHR(os.stat("/dev/full").st_mode)
 
 
-def test_unwritable_output_location_fails_before_any_computing(tmp_path, capsys, monkeypatch) -> None:
+def test_unwritable_output_location_fails_before_any_computing(
+    tmp_path, capsys, monkeypatch
+) -> None:
     from mrdamper._io import safety
     from mrdamper.models import registry
 
@@ -347,7 +457,9 @@ def test_unwritable_output_location_fails_before_any_computing(tmp_path, capsys,
     assert not (tmp_path / "o").exists() and not (tmp_path / "doe").exists()
 
 
-def test_write_failure_is_one_line_and_leaves_nothing_partial(tmp_path, capsys, monkeypatch) -> None:
+def test_write_failure_is_one_line_and_leaves_nothing_partial(
+    tmp_path, capsys, monkeypatch
+) -> None:
     data = _folder(tmp_path / "d")
     real = Path.write_bytes
 
@@ -360,9 +472,23 @@ def test_write_failure_is_one_line_and_leaves_nothing_partial(tmp_path, capsys, 
     code, _, err = _run(["fit", "sp1", str(data), "--out", str(tmp_path / "m.json")], capsys)
     assert "No space left on device" in _one_line_error(code, err, expected_code=1)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d"]
-    code, _, err = _run(["study", str(data), "--out", str(tmp_path / "o"), "--models", "sp2", "--workers", "1",
-                         "--no-progress"], capsys)
-    chosen, failed = [ln for ln in err.splitlines() if ln.strip()]  # the protocol line, then the error
+    code, _, err = _run(
+        [
+            "study",
+            str(data),
+            "--out",
+            str(tmp_path / "o"),
+            "--models",
+            "sp2",
+            "--workers",
+            "1",
+            "--no-progress",
+        ],
+        capsys,
+    )
+    chosen, failed = [
+        ln for ln in err.splitlines() if ln.strip()
+    ]  # the protocol line, then the error
     assert "protocol 'default'" in chosen
     assert "No space left on device" in _one_line_error(code, failed, expected_code=1)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d"]
@@ -387,17 +513,33 @@ def _interrupting_fit(*_: Any, **__: Any) -> Any:
     try:
         raise KeyboardInterrupt
     except KeyboardInterrupt as exc:  # what a compiled kernel does with Ctrl-C
-        raise SystemError("<built-in function kernel> returned a result with an exception set") from exc
+        raise SystemError(
+            "<built-in function kernel> returned a result with an exception set"
+        ) from exc
 
 
 @pytest.mark.parametrize("workers", ["1", "2"])
-def test_ctrl_c_inside_a_kernel_ends_the_study_with_130(workers, tmp_path, capsys, monkeypatch) -> None:
+def test_ctrl_c_inside_a_kernel_ends_the_study_with_130(
+    workers, tmp_path, capsys, monkeypatch
+) -> None:
     from mrdamper.models.semiphenomenological import _SPEstimator as SPEstimator
 
     data = _folder(tmp_path / "d")
     monkeypatch.setattr(SPEstimator, "fit", _interrupting_fit)
-    code, out, err = _run(["study", str(data), "--out", str(tmp_path / "o"), "--models", "sp2", "--workers",
-                           workers, "--no-progress"], capsys)
+    code, out, err = _run(
+        [
+            "study",
+            str(data),
+            "--out",
+            str(tmp_path / "o"),
+            "--models",
+            "sp2",
+            "--workers",
+            workers,
+            "--no-progress",
+        ],
+        capsys,
+    )
     assert code == 130 and err.strip().splitlines()[-1] == "interrupted"
     assert not (tmp_path / "o").exists() and "Headline" not in out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d"]
@@ -434,7 +576,9 @@ def test_sp_models_refuse_records_without_motion(kind, tmp_path, capsys) -> None
     for k, cur in enumerate((0.0, 0.5, 1.0)):
         e = _sine(f"s{k}", cur)
         write_csv(e.replace(v=np.zeros(e.n)), folder / f"s{k}.csv")
-    line = _one_line_error(*_run(["fit", kind, str(folder), "--out", str(tmp_path / "m.json")], capsys)[::2])
+    line = _one_line_error(
+        *_run(["fit", kind, str(folder), "--out", str(tmp_path / "m.json")], capsys)[::2]
+    )
     assert line.startswith("error: v: ") and "zero velocity" in line
 
 
@@ -458,8 +602,14 @@ def test_model_file_with_nan_coefficients_is_refused_at_load(tmp_path, capsys) -
 
 
 def test_exporting_a_model_that_is_not_frozen_stable_warns(tmp_path, capsys) -> None:
-    unstable = LPVModel(alpha=np.array([[-1.05]]), beta=np.array([[1.0]]), fs=FS, input_signal="v",
-                        rho_range=(0.0, 1.0), input_range=(0.0, 1.0))
+    unstable = LPVModel(
+        alpha=np.array([[-1.05]]),
+        beta=np.array([[1.0]]),
+        fs=FS,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+        input_range=(0.0, 1.0),
+    )
     path = tmp_path / "u.json"
     unstable.save(path)
     code, _out, err = _run(["export", str(path), "--out", str(tmp_path / "u.mat")], capsys)
@@ -481,8 +631,19 @@ def test_implausible_units_warn_and_bounds_can_be_overridden(tmp_path, capsys) -
     assert any(ln.startswith("warning: v: ") for ln in warned)
     assert any(ln.startswith("warning: i: ") for ln in warned)
     assert any("implausible" in prob for prob in json.loads(out)[0]["problems"])
-    code, _, err = _run(["info", str(p), "--plausible-max", "stroke=10", "--plausible-max", "v=100",
-                         "--plausible-max", "i=1000"], capsys)
+    code, _, err = _run(
+        [
+            "info",
+            str(p),
+            "--plausible-max",
+            "stroke=10",
+            "--plausible-max",
+            "v=100",
+            "--plausible-max",
+            "i=1000",
+        ],
+        capsys,
+    )
     assert code == 0 and "warning" not in err
     df["F"] = 1e7  # a force of 10 MN
     df.loc[::2, "F"] = -1e7
@@ -496,15 +657,31 @@ def test_reruns_are_byte_identical(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "d", currents=(0.0, 0.5, 1.0, 0.25))
     outs = [tmp_path / "o1", tmp_path / "o2"]
     for o in outs:
-        code, _, err = _run(["study", str(data), "--out", str(o), "--models", "sp2,lti,narx", "--workers", "1",
-                             "--no-progress", "--seed", "3"], capsys)
+        code, _, err = _run(
+            [
+                "study",
+                str(data),
+                "--out",
+                str(o),
+                "--models",
+                "sp2,lti,narx",
+                "--workers",
+                "1",
+                "--no-progress",
+                "--seed",
+                "3",
+            ],
+            capsys,
+        )
         assert code == 0, err
     names = ["results.csv", "summary.csv", "fits.csv", "study.json"]
     names += [str(p.relative_to(outs[0])) for p in (outs[0] / "models").rglob("*.json")]
     assert len(names) > 4
     for name in names:
         assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
-    assert (outs[0] / "timings.csv").exists() and "wall_time_s" in (outs[0] / "timings.json").read_text()
+    assert (outs[0] / "timings.csv").exists() and "wall_time_s" in (
+        outs[0] / "timings.json"
+    ).read_text()
     for o in outs:  # model fits run twice from the command line too
         assert _run(["fit", "narx", str(data), "--out", str(o / "cli.json")], capsys)[0] == 0
     assert (outs[0] / "cli.json").read_bytes() == (outs[1] / "cli.json").read_bytes()
@@ -513,6 +690,8 @@ def test_reruns_are_byte_identical(tmp_path, capsys) -> None:
 # ----------------------------------------------------------------------------- Python version
 def test_requires_python_matches_the_standard_library_used() -> None:
     meta = tomllib.loads((REPO / "pyproject.toml").read_text())
-    assert meta["project"]["requires-python"] == ">=3.11"  # protocol files are read with tomllib (3.11+)
+    assert (
+        meta["project"]["requires-python"] == ">=3.11"
+    )  # protocol files are read with tomllib (3.11+)
     assert "import tomllib" in (REPO / "src" / "mrdamper" / "study" / "protocol.py").read_text()
     assert meta["tool"]["mypy"]["python_version"] == "3.11"

@@ -24,16 +24,36 @@ def test_bench_scale_quick(tmp_path: Path) -> None:
     out = tmp_path / "rows.json"
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
     proc = subprocess.run(
-        [sys.executable, str(BENCH), "--quick", "--kinds", "bingham", "lti", "--cache", str(tmp_path / "cache"),
-         "--json", str(out)],
-        capture_output=True, text=True, env=env, timeout=600, check=False,
+        [
+            sys.executable,
+            str(BENCH),
+            "--quick",
+            "--kinds",
+            "bingham",
+            "lti",
+            "--cache",
+            str(tmp_path / "cache"),
+            "--json",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+        check=False,
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     rows = json.loads(out.read_text())
     assert [(r["kind"], r["length_s"]) for r in rows] == [
-        ("bingham", 12.0), ("bingham", 120.0), ("lti", 12.0), ("lti", 120.0)]
+        ("bingham", 12.0),
+        ("bingham", 120.0),
+        ("lti", 12.0),
+        ("lti", 120.0),
+    ]
     for r in rows:
         assert r["status"] == "ok", r
         assert r["n"] == round(r["length_s"] * 1000)
         assert r["fit_s"] > 0 and r["rss_gb"] >= r["rss_before_gb"] > 0
-    assert "| bingham |" in proc.stdout and "| lti |" in proc.stdout and "log-log slope" in proc.stdout
+    assert (
+        "| bingham |" in proc.stdout and "| lti |" in proc.stdout and "log-log slope" in proc.stdout
+    )

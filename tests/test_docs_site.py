@@ -28,9 +28,16 @@ def test_mkdocs_build_strict(tmp_path: Path) -> None:
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "PYTHONPATH": str(REPO / "src")}
     proc = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
-        cwd=REPO, capture_output=True, text=True, timeout=600, check=False, env=env,
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+        env=env,
     )
-    assert proc.returncode == 0, f"mkdocs build --strict failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    assert proc.returncode == 0, (
+        f"mkdocs build --strict failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+    )
     site = tmp_path / "site"
     tutorial = (site / "tutorial" / "index.html").read_text(encoding="utf-8")
     assert "read_directory" in tutorial
@@ -38,5 +45,17 @@ def test_mkdocs_build_strict(tmp_path: Path) -> None:
     # generated from the docstrings: the function's anchor and its numpydoc parameter table
     assert 'id="mrdamper.study.run_study"' in api
     assert "Fit every model of" in api and "Parameters" in api
-    for page in ("data", "models", "analysis", "metrics", "plotting", "rig", "signals", "control", "errors"):
-        assert f'id="mrdamper.{page}' in (site / "api" / page / "index.html").read_text(encoding="utf-8"), page
+    for page in (
+        "data",
+        "models",
+        "analysis",
+        "metrics",
+        "plotting",
+        "rig",
+        "signals",
+        "control",
+        "errors",
+    ):
+        assert f'id="mrdamper.{page}' in (site / "api" / page / "index.html").read_text(
+            encoding="utf-8"
+        ), page

@@ -41,7 +41,9 @@ finite = st.floats(-1e4, 1e4, allow_nan=False, allow_infinity=False)
 
 
 @given(arrays(float, 50, elements=finite), arrays(float, 50, elements=finite), st.floats(0.1, 100))
-def test_scale_invariance_of_esr_and_scaling_of_ssse(F: np.ndarray, Fh: np.ndarray, k: float) -> None:
+def test_scale_invariance_of_esr_and_scaling_of_ssse(
+    F: np.ndarray, Fh: np.ndarray, k: float
+) -> None:
     if np.var(F) < 1e-6:
         return
     assert esr(k * F, k * Fh) == pytest.approx(esr(F, Fh), rel=1e-6, abs=1e-12)

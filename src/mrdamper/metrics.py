@@ -48,7 +48,8 @@ def esr(measured: ArrayLike, predicted: ArrayLike) -> float:
     var = float(np.var(F))
     if var == 0.0 or np.sqrt(var) <= _CONSTANT_FORCE * float(np.max(np.abs(F))):
         raise DataValidationError(
-            "measured", f"force is constant (standard deviation {np.sqrt(var):.3g} N); ESR is undefined"
+            "measured",
+            f"force is constant (standard deviation {np.sqrt(var):.3g} N); ESR is undefined",
         )
     return float(np.mean((F - Fh) ** 2) / var)
 
@@ -104,4 +105,9 @@ def score_arrays(measured: ArrayLike, predicted: ArrayLike) -> Scores:
             "F", f"record has {n} sample(s); scores need at least {MIN_SCORED_SAMPLES}"
         )
     e = esr(measured, predicted)
-    return Scores(esr=e, ssse=ssse(measured, predicted), nrmse=float(np.sqrt(e)), fit=100 * (1 - float(np.sqrt(e))))
+    return Scores(
+        esr=e,
+        ssse=ssse(measured, predicted),
+        nrmse=float(np.sqrt(e)),
+        fit=100 * (1 - float(np.sqrt(e))),
+    )

@@ -18,7 +18,9 @@ v = X * w * np.cos(w * t)
 def test_viscous_loop_area_is_pi_c_w_x2() -> None:
     c = 1500.0  # N s/m; an ellipse of area pi c w X^2 (textbook viscous damping)
     W = energy_per_cycle(t, x, v, c * v)
-    assert len(W) == 4  # starts (upward crossings) at 2/3, 4/3, 2, 8/3, 10/3 s: four complete cycles
+    assert (
+        len(W) == 4
+    )  # starts (upward crossings) at 2/3, 4/3, 2, 8/3, 10/3 s: four complete cycles
     # cycles start at the first sample past a crossing: up to 2 dt / T = 3e-4 of a period off
     np.testing.assert_allclose(W, np.pi * c * w * X**2, rtol=5e-4)
 
@@ -36,7 +38,9 @@ def test_an_elastic_force_dissipates_nothing() -> None:
 
 def test_noise_near_the_mid_range_does_not_split_cycles() -> None:
     noisy = x + 0.02 * X * np.random.default_rng(0).standard_normal(t.size)
-    assert len(cycle_starts(noisy)) == len(cycle_starts(x)) == 5  # upward crossings after t = 0 in 4 s
+    assert (
+        len(cycle_starts(noisy)) == len(cycle_starts(x)) == 5
+    )  # upward crossings after t = 0 in 4 s
     with pytest.raises(DataValidationError, match="band"):
         cycle_starts(x, band=1.5)
     with pytest.raises(DataValidationError, match="F"):

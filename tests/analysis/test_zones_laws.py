@@ -29,7 +29,9 @@ def _piecewise(v, lo, hi, m, c2):
     """Continuous three-zone law with central line m2 v + c2."""
     m1, m2, m3 = m
     return np.where(
-        v < lo, m2 * lo + c2 + m1 * (v - lo), np.where(v > hi, m2 * hi + c2 + m3 * (v - hi), m2 * v + c2)
+        v < lo,
+        m2 * lo + c2 + m1 * (v - lo),
+        np.where(v > hi, m2 * hi + c2 + m3 * (v - hi), m2 * v + c2),
     )
 
 
@@ -42,7 +44,17 @@ def _laws_data(levels, noise=0.0, seed=0):
         m = GM[:, 0] + GM[:, 1] * lev + GM[:, 2] * lev**2
         vh = MU[0] * lev + MU[1]
         F = _piecewise(v, -vh, vh, m, 0.0) + noise * rng.standard_normal(t.size)
-        exps.append(Experiment(t=t, x=0 * t, v=v, F=F, i=np.full(t.size, lev), name=f"l{lev}", metadata={"current": lev}))
+        exps.append(
+            Experiment(
+                t=t,
+                x=0 * t,
+                v=v,
+                F=F,
+                i=np.full(t.size, lev),
+                name=f"l{lev}",
+                metadata={"current": lev},
+            )
+        )
     return exps
 
 
@@ -106,8 +118,12 @@ def test_laws_from_stepped_plateaus_equal_laws_from_metadata() -> None:
     exps = _laws_data([0.0, 0.5, 1.0])
     t = np.arange(3 * 4000) * 1e-3
     stepped = Experiment(
-        t=t, x=0 * t, v=np.concatenate([e.v for e in exps]), F=np.concatenate([e.F for e in exps]),
-        i=np.concatenate([e.i for e in exps]), name="sc",
+        t=t,
+        x=0 * t,
+        v=np.concatenate([e.v for e in exps]),
+        F=np.concatenate([e.F for e in exps]),
+        i=np.concatenate([e.i for e in exps]),
+        name="sc",
     )
     plates = segment_plateaus(stepped.i, stepped.dt, tolerance=0.01, min_duration=1.0, settle=0.0)
     assert [round(p[2], 6) for p in plates] == [0.0, 0.5, 1.0]
@@ -120,8 +136,14 @@ def test_laws_need_enough_levels_and_flag_nonphysical_data() -> None:
     with pytest.raises(IdentificationError, match="at least 3 levels"):
         fit_zone_laws(_laws_data([0.0, 1.0]))
     # outer slope bigger than the central one: warned per level, laws rejected when strict
-    fits = [ZoneFit(-0.01, 0.01, (5e4, 1e4, 5e4), (0.0, 0.0, 0.0), 1.0, 0.0, 100, True, lev) for lev in (0, 0.5, 1)]
-    with pytest.warns(ZoneLawWarning, match="not the biggest"), pytest.raises(IdentificationError, match="m1/m2"):
+    fits = [
+        ZoneFit(-0.01, 0.01, (5e4, 1e4, 5e4), (0.0, 0.0, 0.0), 1.0, 0.0, 100, True, lev)
+        for lev in (0, 0.5, 1)
+    ]
+    with (
+        pytest.warns(ZoneLawWarning, match="not the biggest"),
+        pytest.raises(IdentificationError, match="m1/m2"),
+    ):
         fit_zone_laws(fits)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
@@ -134,8 +156,19 @@ def _laws(sym_slopes: bool, m1: float, m3: float, m2: float, vh: float) -> ZoneL
     m3 = m1 if sym_slopes else m3
     gm = np.array([[m1, 0.0, 0.0], [m2, 0.0, 0.0], [m3, 0.0, 0.0]])
     gc = np.array([[-(m2 - m1) * vh, 0, 0], [0.0, 0, 0], [(m2 - m3) * vh, 0, 0]], dtype=float)
-    return ZoneLaws(gm, gc, (0.0, vh), (0.0, -vh), True, (0.0, 1.0), [0.0], [[m1, m2, m3]],
-                    [[gc[0, 0], 0.0, gc[2, 0]]], [-vh], [vh])
+    return ZoneLaws(
+        gm,
+        gc,
+        (0.0, vh),
+        (0.0, -vh),
+        True,
+        (0.0, 1.0),
+        [0.0],
+        [[m1, m2, m3]],
+        [[gc[0, 0], 0.0, gc[2, 0]]],
+        [-vh],
+        [vh],
+    )
 
 
 slopes = st.floats(0.0, 1.0)

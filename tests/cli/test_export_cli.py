@@ -18,9 +18,15 @@ from mrdamper.models.lpv import LPVModel
 from mrdamper.models.semiphenomenological import SP3Model
 
 SP3 = SP3Model(S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0), f0=10.0, input_range=(0.0, 1.0))
-LPV = LPVModel(alpha=np.array([[-1.2, 0.1, -0.02], [0.4, -0.05, 0.01]]),
-               beta=np.array([[300.0, 500.0, -40.0], [-200.0, -300.0, 30.0]]), offset=5.0, fs=1000.0,
-               input_signal="v", rho_range=(0.0, 1.0), input_range=(0.0, 1.0))
+LPV = LPVModel(
+    alpha=np.array([[-1.2, 0.1, -0.02], [0.4, -0.05, 0.01]]),
+    beta=np.array([[300.0, 500.0, -40.0], [-200.0, -300.0, 30.0]]),
+    offset=5.0,
+    fs=1000.0,
+    input_signal="v",
+    rho_range=(0.0, 1.0),
+    input_range=(0.0, 1.0),
+)
 
 
 def _record(path: Path, model: object) -> Path:
@@ -67,7 +73,9 @@ def test_export_refuses_static_model(tmp_path: Path, capsys: pytest.CaptureFixtu
 
 
 @pytest.mark.parametrize("which", ["lpv", "sp3"])
-def test_inverse_writes_current(tmp_path: Path, capsys: pytest.CaptureFixture[str], which: str) -> None:
+def test_inverse_writes_current(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], which: str
+) -> None:
     m = LPV if which == "lpv" else SP3
     model = m.save(tmp_path / "m.json")
     rec = _record(tmp_path / "rec.csv", m)
@@ -86,7 +94,9 @@ def test_inverse_writes_current(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert _exit_code(["inverse", str(model), str(rec), "--out", str(out)]) == 2
 
 
-def test_inverse_default_is_regularised_and_prints_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_inverse_default_is_regularised_and_prints_figures(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     model = SP3.save(tmp_path / "m.json")
     rec = _record(tmp_path / "rec.csv", SP3)
     main(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--rate", "20"])
@@ -100,18 +110,51 @@ def test_inverse_default_is_regularised_and_prints_figures(tmp_path: Path, capsy
 
 def test_export_c(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     model = LPV.save(tmp_path / "lpv.json")
-    main(["export", str(model), "--format", "c", "--out", str(tmp_path / "c"), "--name", "lpv_damper"])
+    main(
+        [
+            "export",
+            str(model),
+            "--format",
+            "c",
+            "--out",
+            str(tmp_path / "c"),
+            "--name",
+            "lpv_damper",
+        ]
+    )
     assert "(C99)" in capsys.readouterr().out
     header = (tmp_path / "c" / "lpv_damper.h").read_text()
     assert "double lpv_damper_inverse_step(lpv_damper_state *s" in header
-    assert _exit_code(["export", str(model), "--format", "c", "--out", str(tmp_path / "c"), "--name", "lpv_damper"]) == 2
+    assert (
+        _exit_code(
+            [
+                "export",
+                str(model),
+                "--format",
+                "c",
+                "--out",
+                str(tmp_path / "c"),
+                "--name",
+                "lpv_damper",
+            ]
+        )
+        == 2
+    )
     assert "already exists" in capsys.readouterr().err
 
 
-def test_inverse_refuses_unsupported_kind(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_inverse_refuses_unsupported_kind(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from mrdamper.models.lpv import LTIModel
 
-    lti = LTIModel(alpha=LPV.alpha[:, :1], beta=LPV.beta[:, :1], fs=1000.0, input_signal="v", input_range=(0.0, 1.0))
+    lti = LTIModel(
+        alpha=LPV.alpha[:, :1],
+        beta=LPV.beta[:, :1],
+        fs=1000.0,
+        input_signal="v",
+        input_range=(0.0, 1.0),
+    )
     model = lti.save(tmp_path / "lti.json")
     rec = _record(tmp_path / "rec.csv", SP3)
     assert _exit_code(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv")]) == 2
@@ -122,7 +165,12 @@ def test_inverse_refuses_unsupported_kind(tmp_path: Path, capsys: pytest.Capture
 def test_inverse_horizon_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     model = SP3.save(tmp_path / "m.json")
     rec = _record(tmp_path / "rec.csv", SP3)
-    assert _exit_code(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "-1"]) == 2
+    assert (
+        _exit_code(
+            ["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "-1"]
+        )
+        == 2
+    )
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "horizon" in err
     assert not (tmp_path / "o.csv").exists()

@@ -13,8 +13,15 @@ from mrdamper.cli.main import main
 from mrdamper.data import Experiment, write_csv
 
 
-def _rec(tmp_path: Path, name: str = "rec", n: int = 2000, current: float = 0.5, clip: float | None = None,
-         nan_at: int | None = None, units: dict | None = None) -> Path:
+def _rec(
+    tmp_path: Path,
+    name: str = "rec",
+    n: int = 2000,
+    current: float = 0.5,
+    clip: float | None = None,
+    nan_at: int | None = None,
+    units: dict | None = None,
+) -> Path:
     t = np.arange(n) / 1000.0
     x = 0.004 * np.sin(2 * np.pi * 2 * t)
     v = np.gradient(x, t)
@@ -58,18 +65,24 @@ def test_units_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
     assert row["F_n"][1] == pytest.approx(900.0, rel=0.01)
     t = np.arange(100) / 1000.0
     q = tmp_path / "plain.csv"
-    q.write_text("t,x,v,i,F\n" + "\n".join(f"{a},{1000 * 0.001 * np.sin(a)},{0.1},{0.5},{np.cos(50 * a)}" for a in t))
+    q.write_text(
+        "t,x,v,i,F\n"
+        + "\n".join(f"{a},{1000 * 0.001 * np.sin(a)},{0.1},{0.5},{np.cos(50 * a)}" for a in t)
+    )
     [row] = _json(capsys, str(q), "--units", "x=mm", "--units", "F=kN")
     assert row["F_n"][1] == pytest.approx(1000.0, rel=1e-6)
 
 
 def test_problems_are_reported(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    rows = {r["name"]: r for r in _json(
-        capsys,
-        str(_rec(tmp_path, "clipped", clip=700.0)),
-        str(_rec(tmp_path, "overcurrent", current=5.0)),
-        str(_rec(tmp_path, "gappy", nan_at=500)),
-    )}
+    rows = {
+        r["name"]: r
+        for r in _json(
+            capsys,
+            str(_rec(tmp_path, "clipped", clip=700.0)),
+            str(_rec(tmp_path, "overcurrent", current=5.0)),
+            str(_rec(tmp_path, "gappy", nan_at=500)),
+        )
+    }
     assert any("held at its maximum 700" in p for p in rows["clipped"]["problems"])
     assert any("held at its minimum -700" in p for p in rows["clipped"]["problems"])
     assert any("outside 0..4 A" in p for p in rows["overcurrent"]["problems"])
@@ -115,7 +128,9 @@ def test_debug_shows_the_exception(tmp_path: Path) -> None:
         main(["--debug", "info", str(tmp_path / "missing.csv")])
 
 
-def test_example_wiring(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+def test_example_wiring(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     # Stand-in for the rig's DoE module: checks the call, independent of the rig's state.
     import sys
     import types
@@ -127,7 +142,13 @@ def test_example_wiring(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureF
 
     def table_ii(**kw: float) -> ExperimentSet:
         calls.append(kw)
-        return ExperimentSet([Experiment(t=t, x=t, v=t + 1, F=np.sin(40 * t) * 100, i=0.5 + 0 * t, name="exp1_rep01")])
+        return ExperimentSet(
+            [
+                Experiment(
+                    t=t, x=t, v=t + 1, F=np.sin(40 * t) * 100, i=0.5 + 0 * t, name="exp1_rep01"
+                )
+            ]
+        )
 
     monkeypatch.setitem(sys.modules, "mrdamper.rig.doe", types.SimpleNamespace(table_ii=table_ii))
     [row] = _json(capsys, "--example")
@@ -146,17 +167,23 @@ def test_example(capsys: pytest.CaptureFixture[str]) -> None:
     assert len(rows) == 61  # Table II: 11 + 11 + 11 + 3 + 4 + 7 + 7 + 7 replicates
     assert all(r["samples"] > 0 and r["rate_hz"] > 0 for r in rows)
     # The electrical input stays inside the rig's 0..4 A range and the force varies.
-    assert not any("outside 0..4 A" in p or "nearly constant" in p for r in rows for p in r["problems"])
+    assert not any(
+        "outside 0..4 A" in p or "nearly constant" in p for r in rows for p in r["problems"]
+    )
 
 
 @pytest.mark.realdata
-def test_shared_data(quiroz_unfiltered_dir: Path, dyke_csv: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_shared_data(
+    quiroz_unfiltered_dir: Path, dyke_csv: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     rows = _json(capsys, str(quiroz_unfiltered_dir))
     assert len(rows) == 30
     assert all(r["problems"] == [] for r in rows)
     assert {r["levels"][0] for r in rows} == {0.0, 0.25, 0.5, 0.75, 1.0}
     [guessed] = _json(capsys, str(dyke_csv))  # rounded time column: rate estimated, with a note
-    assert guessed["rate_hz"] == pytest.approx(3004.8) and "rate estimated" in guessed["problems"][0]
+    assert (
+        guessed["rate_hz"] == pytest.approx(3004.8) and "rate estimated" in guessed["problems"][0]
+    )
     [row] = _json(capsys, str(dyke_csv), "--fs", "3004.8")
     assert row["samples"] == 64604 and row["input"] == "voltage" and row["levels"] is None
     assert row["F_n"] == pytest.approx([-1909.944, 1863.196])

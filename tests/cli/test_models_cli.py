@@ -45,7 +45,9 @@ def _exit_code(args: list[str]) -> int:
     return int(info.value.code)
 
 
-def test_fit_simulate_score_round_trip(tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_fit_simulate_score_round_trip(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     model = tmp_path / "m.json"
     main(["fit", "sp3", str(data_dir), "--out", str(model), "--seed", "3", "--n-starts", "2"])
     assert "sp3: identified on 3 record(s)" in capsys.readouterr().out
@@ -69,7 +71,9 @@ def test_fit_simulate_score_round_trip(tmp_path: Path, data_dir: Path, capsys: p
     assert "rec0" in table and "mean of 1" in table
 
 
-def test_refuses_to_overwrite_without_force(tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_refuses_to_overwrite_without_force(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     model = tmp_path / "m.json"
     model.write_text("keep me")
     assert _exit_code(["fit", "sp2", str(data_dir), "--out", str(model)]) == 2
@@ -87,25 +91,49 @@ def test_refuses_to_overwrite_without_force(tmp_path: Path, data_dir: Path, caps
     assert pd.read_csv(pred).shape == (3000, 3)
 
 
-def test_unknown_model_kind_is_one_line_exit_2(tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_unknown_model_kind_is_one_line_exit_2(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert _exit_code(["fit", "sp9", str(data_dir), "--out", str(tmp_path / "m.json")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: model: unknown kind 'sp9'") and err.count("\n") == 1
     assert not (tmp_path / "m.json").exists()
 
 
-def test_setting_the_model_does_not_take(tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert _exit_code(["fit", "sp1", str(data_dir), "--out", str(tmp_path / "m.json"), "--order", "3"]) == 2
+def test_setting_the_model_does_not_take(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert (
+        _exit_code(["fit", "sp1", str(data_dir), "--out", str(tmp_path / "m.json"), "--order", "3"])
+        == 2
+    )
     err = capsys.readouterr().err
     assert "--order: model 'sp1' does not take the setting 'order'" in err and "n_starts" in err
-    assert _exit_code(["fit", "p15", str(data_dir), "--out", str(tmp_path / "m.json"), "--set", "colour=red"]) == 2
+    assert (
+        _exit_code(
+            ["fit", "p15", str(data_dir), "--out", str(tmp_path / "m.json"), "--set", "colour=red"]
+        )
+        == 2
+    )
     assert "does not take the setting 'colour'" in capsys.readouterr().err
 
 
 def test_generic_settings_reach_the_estimator(tmp_path: Path, data_dir: Path) -> None:
     model = tmp_path / "p.json"
-    main(["fit", "p15", str(data_dir), "--out", str(model), "--set", "form=monotone", "--set", "cutoff=50",
-          "--no-offset"])
+    main(
+        [
+            "fit",
+            "p15",
+            str(data_dir),
+            "--out",
+            str(model),
+            "--set",
+            "form=monotone",
+            "--set",
+            "cutoff=50",
+            "--no-offset",
+        ]
+    )
     fitted = load_model(model)
     assert isinstance(fitted, P15Model)
     assert fitted.provenance["settings"]["form"] == "monotone"
@@ -113,7 +141,9 @@ def test_generic_settings_reach_the_estimator(tmp_path: Path, data_dir: Path) ->
     assert fitted.f0 == 0.0
 
 
-def test_score_reports_divergence_and_exits_1(tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_score_reports_divergence_and_exits_1(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     W = np.zeros((5, 3))
     W[0, 0], W[1, 0], W[2, 0] = 1500.0, -1e-2, 2e-4  # w3 > 0: a growing mode
     bad = P15Model(W=tuple(W.ravel()), input_range=(0.0, 1.0), force_bound=3000.0, max_step=1e-4)
@@ -125,7 +155,9 @@ def test_score_reports_divergence_and_exits_1(tmp_path: Path, data_dir: Path, ca
 
 
 def test_missing_data_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert _exit_code(["fit", "sp2", str(tmp_path / "nope"), "--out", str(tmp_path / "m.json")]) == 2
+    assert (
+        _exit_code(["fit", "sp2", str(tmp_path / "nope"), "--out", str(tmp_path / "m.json")]) == 2
+    )
     assert "no such file or folder" in capsys.readouterr().err
 
 

@@ -20,9 +20,14 @@ def _write_sine_folder(folder, fs: float = 200.0, duration: float = 3.0) -> None
         for cur in (0.0, 0.5, 1.0):
             x = amp_mm * 1e-3 * np.sin(2 * np.pi * freq * t)
             v = amp_mm * 1e-3 * 2 * np.pi * freq * np.cos(2 * np.pi * freq * t)
-            F = (150 + 500 * cur) * np.tanh(v / 0.01 + x / 0.05) + 400 * v + 3 * rng.standard_normal(t.size)
+            F = (
+                (150 + 500 * cur) * np.tanh(v / 0.01 + x / 0.05)
+                + 400 * v
+                + 3 * rng.standard_normal(t.size)
+            )
             pd.DataFrame({"t": t, "x": x, "v": v, "i": cur, "F": F}).to_csv(
-                folder / f"sine_{amp_mm}mm_{freq}Hz_{cur:g}A.csv", index=False)
+                folder / f"sine_{amp_mm}mm_{freq}Hz_{cur:g}A.csv", index=False
+            )
 
 
 def _run(args, capsys):
@@ -39,8 +44,20 @@ def test_study_on_a_folder_writes_report_and_prints_summary(tmp_path, capsys) ->
     data = tmp_path / "sine"
     _write_sine_folder(data)
     out = tmp_path / "out"
-    code, stdout, stderr = _run(["study", str(data), "--out", str(out), "--models", "sp2,sp3", "--workers", "1",
-                                 "--no-progress"], capsys)
+    code, stdout, stderr = _run(
+        [
+            "study",
+            str(data),
+            "--out",
+            str(out),
+            "--models",
+            "sp2,sp3",
+            "--workers",
+            "1",
+            "--no-progress",
+        ],
+        capsys,
+    )
     assert code == 0, stderr
     assert "protocol 'quiroz-loco'" in stderr
     assert "sp2" in stdout and "sp3" in stdout and "Headline" in stdout
@@ -51,7 +68,9 @@ def test_study_on_a_folder_writes_report_and_prints_summary(tmp_path, capsys) ->
     # every score is on a held-out condition
     roles = pd.read_csv(out / "roles.csv")
     for fold, grp in roles.groupby("fold"):
-        assert set(grp.loc[grp.role == "train", "record"]).isdisjoint(grp.loc[grp.role == "score", "record"])
+        assert set(grp.loc[grp.role == "train", "record"]).isdisjoint(
+            grp.loc[grp.role == "score", "record"]
+        )
     assert (out / "report.html").read_text().count("data:image/png;base64,") >= 7
 
 
@@ -61,7 +80,9 @@ def test_study_refuses_non_empty_out_before_computing(tmp_path, capsys) -> None:
     out = tmp_path / "out"
     out.mkdir()
     (out / "old.txt").write_text("keep")
-    code, _, stderr = _run(["study", str(data), "--out", str(out), "--models", "sp2", "--workers", "1"], capsys)
+    code, _, stderr = _run(
+        ["study", str(data), "--out", str(out), "--models", "sp2", "--workers", "1"], capsys
+    )
     assert code == 2
     assert stderr.strip().count("\n") == 0 and "not empty; pass --force" in stderr
     assert (out / "old.txt").read_text() == "keep"
@@ -72,7 +93,10 @@ def test_study_refuses_non_empty_out_before_computing(tmp_path, capsys) -> None:
     [
         (["--models", "sp9"], "unknown kind(s) ['sp9']"),
         (["--protocol", "nope"], "protocol file not found"),
-        (["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], "give either --workers or --scheduler"),
+        (
+            ["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"],
+            "give either --workers or --scheduler",
+        ),
     ],
 )
 def test_study_bad_options_one_line_errors(tmp_path, capsys, extra, message) -> None:
@@ -86,14 +110,20 @@ def test_study_with_a_protocol_file(tmp_path, capsys) -> None:
     data = tmp_path / "sine"
     _write_sine_folder(data)
     proto = tmp_path / "p.json"
-    proto.write_text(json.dumps({
-        "name": "train-on-10mm",
-        "train": {"match": {"condition": "10mm_1Hz"}},
-        "score": {"match": {"condition": "5mm_2Hz"}},
-        "models": [{"kind": "sp2", "label": "SP-2"}],
-    }))
+    proto.write_text(
+        json.dumps(
+            {
+                "name": "train-on-10mm",
+                "train": {"match": {"condition": "10mm_1Hz"}},
+                "score": {"match": {"condition": "5mm_2Hz"}},
+                "models": [{"kind": "sp2", "label": "SP-2"}],
+            }
+        )
+    )
     out = tmp_path / "out"
-    code, _, stderr = _run(["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1"], capsys)
+    code, _, stderr = _run(
+        ["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1"], capsys
+    )
     assert code == 0, stderr
     assert "fitting" in stderr and "simulating" in stderr  # progress bars on standard error
     res = pd.read_csv(out / "results.csv")
@@ -106,9 +136,23 @@ def test_study_on_a_dask_scheduler_address(tmp_path, capsys) -> None:
     distributed = pytest.importorskip("distributed")
     data = tmp_path / "sine"
     _write_sine_folder(data)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cl:
-        code, _, stderr = _run(["study", str(data), "--out", str(tmp_path / "out"), "--models", "sp2",
-                                "--scheduler", cl.scheduler_address, "--no-progress"], capsys)
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cl:
+        code, _, stderr = _run(
+            [
+                "study",
+                str(data),
+                "--out",
+                str(tmp_path / "out"),
+                "--models",
+                "sp2",
+                "--scheduler",
+                cl.scheduler_address,
+                "--no-progress",
+            ],
+            capsys,
+        )
     assert code == 0, stderr
     study = json.loads((tmp_path / "out" / "study.json").read_text())
     assert study["executor"] == f"Dask scheduler {cl.scheduler_address}"
@@ -125,7 +169,9 @@ def test_demo_quick_on_the_virtual_rig(tmp_path, capsys, monkeypatch) -> None:
         pytest.skip(f"virtual rig reference damper not installed: {exc}")
     assert doe is not None
     monkeypatch.chdir(tmp_path)
-    code, stdout, stderr = _run(["demo", "--scale", "0.1", "--models", "lti,sp2", "--workers", "1", "--no-progress"], capsys)
+    code, stdout, stderr = _run(
+        ["demo", "--scale", "0.1", "--models", "lti,sp2", "--workers", "1", "--no-progress"], capsys
+    )
     assert code == 0, stderr
     out = tmp_path / "mrdamper-demo"
     assert (out / "report.html").exists() and "Headline" in stdout

@@ -27,8 +27,24 @@ _P = ctypes.POINTER(ctypes.c_double)
 def _build(model: Any, folder: Path, name: str, **kw: Any) -> ctypes.CDLL:
     _, c = export_c(model, folder, name=name, **kw)
     lib = folder / f"lib{name}.so"
-    subprocess.run([str(GCC), "-std=c99", "-Wall", "-Werror", "-O2", "-shared", "-fPIC", str(c), "-o", str(lib), "-lm"],
-                   check=True, capture_output=True, text=True)
+    subprocess.run(
+        [
+            str(GCC),
+            "-std=c99",
+            "-Wall",
+            "-Werror",
+            "-O2",
+            "-shared",
+            "-fPIC",
+            str(c),
+            "-o",
+            str(lib),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return ctypes.CDLL(str(lib))
 
 
@@ -39,16 +55,27 @@ def _arr(a: Any) -> np.ndarray:
 def _forward(lib: ctypes.CDLL, name: str, x: Any, v: Any, inp: Any) -> np.ndarray:
     x, v, inp = _arr(x), _arr(v), _arr(inp)
     F = np.zeros(x.size)
-    getattr(lib, f"{name}_run")(ctypes.c_long(x.size), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
-                                inp.ctypes.data_as(_P), F.ctypes.data_as(_P))
+    getattr(lib, f"{name}_run")(
+        ctypes.c_long(x.size),
+        x.ctypes.data_as(_P),
+        v.ctypes.data_as(_P),
+        inp.ctypes.data_as(_P),
+        F.ctypes.data_as(_P),
+    )
     return F
 
 
 def _inverse(lib: ctypes.CDLL, name: str, x: Any, v: Any, Fd: Any) -> tuple[np.ndarray, np.ndarray]:
     x, v, Fd = _arr(x), _arr(v), _arr(Fd)
     i, F = np.zeros(x.size), np.zeros(x.size)
-    getattr(lib, f"{name}_inverse_run")(ctypes.c_long(x.size), x.ctypes.data_as(_P), v.ctypes.data_as(_P),
-                                        Fd.ctypes.data_as(_P), i.ctypes.data_as(_P), F.ctypes.data_as(_P))
+    getattr(lib, f"{name}_inverse_run")(
+        ctypes.c_long(x.size),
+        x.ctypes.data_as(_P),
+        v.ctypes.data_as(_P),
+        Fd.ctypes.data_as(_P),
+        i.ctypes.data_as(_P),
+        F.ctypes.data_as(_P),
+    )
     return i, F
 
 
@@ -58,10 +85,13 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 
 @needs_gcc
 @pytest.mark.parametrize("kind", ["lpv", "sp1"])
-def test_c_matches_python_on_a_quiroz_record(tmp_path: Path, quiroz_models: dict[str, Any],
-                                             quiroz_records: list[Any], kind: str) -> None:
+def test_c_matches_python_on_a_quiroz_record(
+    tmp_path: Path, quiroz_models: dict[str, Any], quiroz_records: list[Any], kind: str
+) -> None:
     model = quiroz_models[kind]
-    rec = next(e for e in quiroz_records if e.name == "sine_25mm_0.5Hz_0.5A")  # 200 Hz: the LPV model rate
+    rec = next(
+        e for e in quiroz_records if e.name == "sine_25mm_0.5Hz_0.5A"
+    )  # 200 Hz: the LPV model rate
     lib = _build(model, tmp_path, f"q_{kind}", reg=800.0)
     assert _rel(_forward(lib, f"q_{kind}", rec.x, rec.v, rec.i), model.predict(rec)) < 1e-9
     i_c, F_c = _inverse(lib, f"q_{kind}", rec.x, rec.v, rec.F)
@@ -71,14 +101,18 @@ def test_c_matches_python_on_a_quiroz_record(tmp_path: Path, quiroz_models: dict
 
 
 @needs_gcc
-def test_c_with_drive_lag_on_dyke(tmp_path: Path, dyke_models: dict[str, Any], dyke_record: Any) -> None:
+def test_c_with_drive_lag_on_dyke(
+    tmp_path: Path, dyke_models: dict[str, Any], dyke_record: Any
+) -> None:
     model = dyke_models["lpv"]  # voltage input through the drive lag eta = 250 1/s
     rec = dyke_record.slice(0, 6000)
     lib = _build(model, tmp_path, "d_lpv")
     F_py = model.with_range_policy("clip").predict(rec)
     assert _rel(_forward(lib, "d_lpv", rec.x, rec.v, rec.voltage), F_py) < 1e-9
     rho_c, _ = _inverse(lib, "d_lpv", rec.x, rec.v, rec.F)
-    res = inverse_current(model, rec, rec.F, reg=default_reg(model, 0.3, 1.0 / model.fs))  # the C default
+    res = inverse_current(
+        model, rec, rec.F, reg=default_reg(model, 0.3, 1.0 / model.fs)
+    )  # the C default
     assert _rel(rho_c, res.rho) < 1e-9
 
 
@@ -91,14 +125,23 @@ def test_c_bingham_and_lti(tmp_path: Path) -> None:
     from mrdamper.data import Experiment
 
     e = Experiment(t=t, x=x, v=v, F=0 * t, i=i)
-    bing = BinghamModel(fc=(100.0, 500.0, -50.0), c0=(1000.0, 2000.0), v_eps=0.02, f0=3.0, input_range=(0.0, 1.0))
+    bing = BinghamModel(
+        fc=(100.0, 500.0, -50.0), c0=(1000.0, 2000.0), v_eps=0.02, f0=3.0, input_range=(0.0, 1.0)
+    )
     lib = _build(bing, tmp_path, "bing")
     assert _rel(_forward(lib, "bing", x, v, i), bing.predict(e)) < 1e-9
-    lti = LTIModel(alpha=np.array([[-0.9], [0.2]]), beta=np.array([[300.0], [-100.0]]), fs=1000.0,
-                   input_signal="v", input_range=(0.0, 1.0))
+    lti = LTIModel(
+        alpha=np.array([[-0.9], [0.2]]),
+        beta=np.array([[300.0], [-100.0]]),
+        fs=1000.0,
+        input_signal="v",
+        input_range=(0.0, 1.0),
+    )
     lib = _build(lti, tmp_path, "lti")
     assert _rel(_forward(lib, "lti", x, v, i), lti.predict(e)) < 1e-9
-    assert not hasattr(lib, "lti_inverse_run")  # no inverse: the LTI force does not depend on the input
+    assert not hasattr(
+        lib, "lti_inverse_run"
+    )  # no inverse: the LTI force does not depend on the input
 
 
 def test_refusals(tmp_path: Path) -> None:
@@ -111,7 +154,12 @@ def test_refusals(tmp_path: Path) -> None:
         c_source(bing, "1bad-name")
     from mrdamper.models.semiphenomenological import SP3Model
 
-    lagged = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), input_range=(0.0, 2.0), eta=30.0, rho_range=(0.0, 2.0))
+    lagged = SP3Model(
+        S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0),
+        input_range=(0.0, 2.0),
+        eta=30.0,
+        rho_range=(0.0, 2.0),
+    )
     with pytest.raises(DataValidationError, match="drive lag"):
         c_source(lagged)
     export_c(bing, tmp_path, name="b")

@@ -20,15 +20,31 @@ BETA = np.array([[900.0, 1500.0, -400.0], [-500.0, -700.0, 300.0], [10.0, 5.0, 1
 LAWS = ZoneLaws(
     gamma_m=np.array([[300.0, 200.0, 1.0], [3000.0, 4000.0, -500.0], [300.0, 150.0, 2.0]]),
     gamma_c=np.array([[-50.0, -200.0, 3.0], [0.5, 0.0, 0.0], [50.0, 200.0, 4.0]]),
-    mu_high=(0.01, 0.02), mu_low=(-0.01, -0.02), symmetric=True, rho_range=(0.0, 2.0),
-    levels=np.zeros(0), level_m=np.zeros((0, 3)), level_c=np.zeros((0, 3)),
-    level_v_low=np.zeros(0), level_v_high=np.zeros(0),
+    mu_high=(0.01, 0.02),
+    mu_low=(-0.01, -0.02),
+    symmetric=True,
+    rho_range=(0.0, 2.0),
+    levels=np.zeros(0),
+    level_m=np.zeros((0, 3)),
+    level_c=np.zeros((0, 3)),
+    level_v_low=np.zeros(0),
+    level_v_high=np.zeros(0),
 )
 
 
 def _model(eta: float | None = None) -> LPVModel:
-    return LPVModel(alpha=ALPHA, beta=BETA, offset=3.5, fs=200.0, input_signal="u", zone_laws=LAWS,
-                    rho_range=(0.0, 2.0), input_range=(0.0, 2.0), eta=eta, provenance={"note": "test", "x": 1.5})
+    return LPVModel(
+        alpha=ALPHA,
+        beta=BETA,
+        offset=3.5,
+        fs=200.0,
+        input_signal="u",
+        zone_laws=LAWS,
+        rho_range=(0.0, 2.0),
+        input_range=(0.0, 2.0),
+        eta=eta,
+        provenance={"note": "test", "x": 1.5},
+    )
 
 
 def _rebuild(A_poly: np.ndarray, C_poly: np.ndarray, rho: float) -> tuple[np.ndarray, np.ndarray]:
@@ -53,7 +69,9 @@ def test_mat_round_trip_rebuilds_state_space(tmp_path) -> None:
     k = 7
     np.testing.assert_array_equal(d["A_grid"][:, :, k], state_space(m, grid[k]).A)
     poles = d["poles_re"][k] + 1j * d["poles_im"][k]
-    np.testing.assert_allclose(np.sort(np.abs(poles)), np.sort(np.abs(m.frozen_poles([grid[k]])[0])))
+    np.testing.assert_allclose(
+        np.sort(np.abs(poles)), np.sort(np.abs(m.frozen_poles([grid[k]])[0]))
+    )
     np.testing.assert_allclose(d["max_pole_modulus"].ravel(), np.abs(m.frozen_poles(grid)).max(1))
     # the zone laws rebuild the LPV input u exactly as the model does
     np.testing.assert_array_equal(d["gamma_m"], LAWS.gamma_m)
@@ -62,14 +80,25 @@ def test_mat_round_trip_rebuilds_state_space(tmp_path) -> None:
     gm, mu_h, mu_l = d["gamma_m"], d["mu_high"].ravel(), d["mu_low"].ravel()
     m_r = gm @ rho ** np.arange(gm.shape[1])
     hi, lo = mu_h[0] * rho + mu_h[1], mu_l[0] * rho + mu_l[1]
-    u = np.where(v < lo, lo + m_r[0] / m_r[1] * (v - lo), np.where(v > hi, hi + m_r[2] / m_r[1] * (v - hi), v))
+    u = np.where(
+        v < lo,
+        lo + m_r[0] / m_r[1] * (v - lo),
+        np.where(v > hi, hi + m_r[2] / m_r[1] * (v - hi), v),
+    )
     np.testing.assert_allclose(u, LAWS.scheduling_input(v, rho), rtol=1e-14, atol=1e-16)
     assert json.loads(str(d["provenance"][0]))["note"] == "test"
 
 
 def test_json_round_trip_and_lti(tmp_path) -> None:
-    m = LTIModel(alpha=ALPHA[:, :1], beta=BETA[:, :1], offset=1.0, fs=500.0, input_signal="v",
-                 rho_range=(0.0, 1.0), input_range=(0.0, 1.0))
+    m = LTIModel(
+        alpha=ALPHA[:, :1],
+        beta=BETA[:, :1],
+        offset=1.0,
+        fs=500.0,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+        input_range=(0.0, 1.0),
+    )
     path = export_lpv(m, tmp_path / "lti.json", format="json", rho_grid=[0.0, 0.5])
     d = decode_value(json.loads(path.read_text()))
     assert d["model_kind"] == "lti" and d["gamma_m"].shape == (0, 0) and np.isnan(d["eta"])

@@ -35,8 +35,16 @@ def _motion(n: int = 3000, seed: int = 0) -> tuple[Experiment, np.ndarray]:
 
 
 def _lpv_v(eta: float | None = None) -> LPVModel:
-    return LPVModel(alpha=ALPHA, beta=BETA, offset=5.0, fs=FS, input_signal="v", rho_range=(0.0, 2.0),
-                    input_range=(0.0, 2.0), eta=eta)
+    return LPVModel(
+        alpha=ALPHA,
+        beta=BETA,
+        offset=5.0,
+        fs=FS,
+        input_signal="v",
+        rho_range=(0.0, 2.0),
+        input_range=(0.0, 2.0),
+        eta=eta,
+    )
 
 
 def test_lpv_round_trip_known_model() -> None:
@@ -46,11 +54,13 @@ def test_lpv_round_trip_known_model() -> None:
     res = inverse_current(m, e, F, method="exact")
     assert isinstance(res, InverseResult)
     tol = 1e-6 * np.max(np.abs(F))
-    assert not res.saturated[m.n_m:].any()
-    np.testing.assert_allclose(res.F_achieved[m.n_m:], F[m.n_m:], rtol=0, atol=2 * tol)
+    assert not res.saturated[m.n_m :].any()
+    np.testing.assert_allclose(res.F_achieved[m.n_m :], F[m.n_m :], rtol=0, atol=2 * tol)
     # the current is recovered wherever the force depends on it noticeably
     sens = np.abs(m.predict(e.replace(i=np.clip(i + 1e-3, 0, 2))) - F) / 1e-3
-    ok = sens > 20.0  # [N/A]; the command is held while the force is within tol, so |di| <= ~tol / sens
+    ok = (
+        sens > 20.0
+    )  # [N/A]; the command is held while the force is within tol, so |di| <= ~tol / sens
     ok[: m.n_m] = False
     assert ok.mean() > 0.3
     np.testing.assert_allclose(res.i[ok], i[ok], atol=4 * tol / 20.0)
@@ -122,8 +132,13 @@ def _sp3() -> SP3Model:
 
 @pytest.mark.parametrize("kind", ["sp3", "bingham"])
 def test_static_round_trip(kind: str) -> None:
-    m = _sp3() if kind == "sp3" else BinghamModel(fc=(50.0, 400.0, -40.0), c0=(800.0, 900.0), v_eps=0.01,
-                                                  input_range=(0.0, 2.0))
+    m = (
+        _sp3()
+        if kind == "sp3"
+        else BinghamModel(
+            fc=(50.0, 400.0, -40.0), c0=(800.0, 900.0), v_eps=0.01, input_range=(0.0, 2.0)
+        )
+    )
     e, i = _motion(seed=5)
     F = m.predict(e.replace(i=i))
     res = inverse_current(m, e, F, method="exact")
@@ -180,7 +195,9 @@ def test_arrays_input_and_bad_inputs() -> None:
     with pytest.warns(Note, match="solved at the model rate"):
         res = inverse_current(lpv, slow, F)
     assert res.i.size == slow.n and np.all(np.isfinite(res.i))
-    lti = LTIModel(alpha=ALPHA[:, :1], beta=BETA[:, :1], fs=FS, input_signal="v", input_range=(0.0, 2.0))
+    lti = LTIModel(
+        alpha=ALPHA[:, :1], beta=BETA[:, :1], fs=FS, input_signal="v", input_range=(0.0, 2.0)
+    )
     with pytest.raises(TypeError, match="'lti'"):
         inverse_current(lti, e, F, method="exact")
 

@@ -30,8 +30,15 @@ def _motion(level: float = 1.3, n: int = 3000) -> Experiment:
 @pytest.mark.parametrize("which", ["lpv", "sp3"])
 def test_constant_current_recovered_from_the_models_own_force(which: str) -> None:
     if which == "lpv":
-        m: Any = LPVModel(alpha=ALPHA, beta=BETA, offset=5.0, fs=FS, input_signal="v", rho_range=(0.0, 2.0),
-                          input_range=(0.0, 2.0))
+        m: Any = LPVModel(
+            alpha=ALPHA,
+            beta=BETA,
+            offset=5.0,
+            fs=FS,
+            input_signal="v",
+            rho_range=(0.0, 2.0),
+            input_range=(0.0, 2.0),
+        )
     else:
         m = SP3Model(S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0), input_range=(0.0, 2.0))
     e = _motion()
@@ -51,7 +58,9 @@ def test_rate_bound_and_weight() -> None:
     F = m.predict(e)
     res = inverse_current(m, e, F, rate=5.0)  # [A/s]
     assert np.max(np.abs(np.diff(res.i))) <= 5.0 / FS + 1e-12
-    assert res.i[40] == pytest.approx(res.i[0] + 40 * 5.0 / FS, rel=1e-9)  # still ramping (first sample free)
+    assert res.i[40] == pytest.approx(
+        res.i[0] + 40 * 5.0 / FS, rel=1e-9
+    )  # still ramping (first sample free)
     heavy = inverse_current(m, e, F, reg=1e6)
     light = inverse_current(m, e, F, reg=0.0)
     assert np.sqrt(np.mean(light.error**2)) < 1e-6 * np.max(np.abs(F))
@@ -61,7 +70,9 @@ def test_rate_bound_and_weight() -> None:
             inverse_current(m, e, F, **bad)  # type: ignore[arg-type]
 
 
-def test_quiroz_targets_every_record(quiroz_models: dict[str, Any], quiroz_records: list[Any]) -> None:
+def test_quiroz_targets_every_record(
+    quiroz_models: dict[str, Any], quiroz_records: list[Any]
+) -> None:
     for kind, model in quiroz_models.items():
         frame = check_inverse_frame([check_inverse(model, e) for e in quiroz_records])
         assert len(frame) == 30
@@ -69,8 +80,12 @@ def test_quiroz_targets_every_record(quiroz_models: dict[str, Any], quiroz_recor
         assert bad.empty, f"{kind}: {bad.to_string()}"
 
 
-@pytest.mark.parametrize(("kind", "figure"), [("sp1", "force"), ("lpv", "force"), ("sp1", "voltage"), ("lpv", "voltage")])
-def test_dyke_targets(dyke_models: dict[str, Any], dyke_record: Any, kind: str, figure: str) -> None:
+@pytest.mark.parametrize(
+    ("kind", "figure"), [("sp1", "force"), ("lpv", "force"), ("sp1", "voltage"), ("lpv", "voltage")]
+)
+def test_dyke_targets(
+    dyke_models: dict[str, Any], dyke_record: Any, kind: str, figure: str
+) -> None:
     check = check_inverse(dyke_models[kind], dyke_record)
     if figure == "force":
         assert check.ssse_ratio <= 1.5
@@ -84,8 +99,16 @@ def test_lead_horizon_setting() -> None:
     assert horizon_samples(None, 1e-3) == 1
     assert horizon_samples(250.0, 1.0 / 3004.8) == 12  # one lag time constant
     assert horizon_samples(250.0, 1e-3, 0.0) == 1
-    m = LPVModel(alpha=ALPHA, beta=BETA, offset=5.0, fs=FS, input_signal="v", rho_range=(0.0, 2.0),
-                 input_range=(0.0, 2.0), eta=60.0)
+    m = LPVModel(
+        alpha=ALPHA,
+        beta=BETA,
+        offset=5.0,
+        fs=FS,
+        input_signal="v",
+        rho_range=(0.0, 2.0),
+        input_range=(0.0, 2.0),
+        eta=60.0,
+    )
     e = _motion()
     t = np.asarray(e.t)
     e = e.replace(i=np.where((t > 0.5) & (t < 1.8), 1.6, 0.4))
@@ -102,8 +125,12 @@ def test_lead_horizon_setting() -> None:
 
 
 def _lagged_sp3(eta: float) -> SP3Model:
-    return SP3Model(S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0), input_range=(0.0, 2.0), eta=eta,
-                    rho_range=(0.0, 2.0))
+    return SP3Model(
+        S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0),
+        input_range=(0.0, 2.0),
+        eta=eta,
+        rho_range=(0.0, 2.0),
+    )
 
 
 def test_static_map_with_drive_lag_inverted_through_the_lag() -> None:

@@ -25,10 +25,14 @@ def _linear_ss(car: QuarterCar, c: float):  # type: ignore[no-untyped-def]
     control = pytest.importorskip("control")
     m_s, m_u, k_s, k_t = car.m_s, car.m_u, car.k_s, car.k_t
     # state [z_s, v_s, z_u, v_u], input z_r, outputs z_s and a_s
-    A = np.array([[0, 1, 0, 0],
-                  [-k_s / m_s, -c / m_s, k_s / m_s, c / m_s],
-                  [0, 0, 0, 1],
-                  [k_s / m_u, c / m_u, -(k_s + k_t) / m_u, -c / m_u]])
+    A = np.array(
+        [
+            [0, 1, 0, 0],
+            [-k_s / m_s, -c / m_s, k_s / m_s, c / m_s],
+            [0, 0, 0, 1],
+            [k_s / m_u, c / m_u, -(k_s + k_t) / m_u, -c / m_u],
+        ]
+    )
     B = np.array([[0], [0], [0], [k_t / m_u]])
     C = np.vstack([[1, 0, 0, 0], A[1]])
     D = np.zeros((2, 1))
@@ -48,11 +52,15 @@ def test_linear_quarter_car_matches_analytic_transmissibility(f: float) -> None:
     zr = 0.01 * np.sin(2 * np.pi * f * t)
     res = simulate_quarter_car(LinearDamper(c), Road("sine", fs, zr), "soft", car)
     keep = res.t >= res.t[-1] - max(2.0, 4.0 / f)
-    basis = np.column_stack([np.sin(2 * np.pi * f * res.t[keep]), np.cos(2 * np.pi * f * res.t[keep])])
+    basis = np.column_stack(
+        [np.sin(2 * np.pi * f * res.t[keep]), np.cos(2 * np.pi * f * res.t[keep])]
+    )
     for sig, h in ((res.z_s, H[0, 0]), (res.a_s, H[1, 0])):
         s, co = np.linalg.lstsq(basis, sig[keep], rcond=None)[0]
         measured = (s + 1j * co) / 0.01  # phasor of sin basis: s sin + c cos = Im((s + jc) e^{jwt})
-        np.testing.assert_allclose(abs(measured), abs(h), rtol=1e-3)  # road linear between samples: O((2 pi f h)^2)
+        np.testing.assert_allclose(
+            abs(measured), abs(h), rtol=1e-3
+        )  # road linear between samples: O((2 pi f h)^2)
         assert abs(np.angle(measured / h)) < 1e-5
 
 
@@ -64,7 +72,9 @@ def test_wk_matches_iso_2631_table() -> None:
     # a 6.3 Hz sine of amplitude 1 m/s^2 is weighted by |Wk(6.3)|: a_w = 1.054 / sqrt(2)
     fs = 1000.0
     t = np.arange(int(10 * fs)) / fs
-    assert weighted_rms(np.sin(2 * np.pi * 6.3 * t), fs) == pytest.approx(abs(wk_response(6.3)) / np.sqrt(2), rel=1e-3)
+    assert weighted_rms(np.sin(2 * np.pi * 6.3 * t), fs) == pytest.approx(
+        abs(wk_response(6.3)) / np.sqrt(2), rel=1e-3
+    )
 
 
 def test_controllers_realised_through_the_inverse() -> None:
@@ -97,7 +107,9 @@ def test_static_map_with_drive_lag_in_the_loop() -> None:
     from mrdamper.data import Experiment
 
     e = Experiment(t=r.t, x=r.z_s - r.z_u, v=r.v_s - r.v_u, F=r.F, i=r.i, name="replay")
-    np.testing.assert_allclose(lagged.predict(e)[1:] - lagged.f0, r.F[1:], rtol=0, atol=1e-6 * np.abs(r.F).max())
+    np.testing.assert_allclose(
+        lagged.predict(e)[1:] - lagged.f0, r.F[1:], rtol=0, atol=1e-6 * np.abs(r.F).max()
+    )
     plain = simulate_quarter_car(SP3Model(S=S, input_range=(0.0, 2.0)), road, "skyhook")
     assert not np.allclose(plain.F, r.F)
 
@@ -120,7 +132,9 @@ def test_compare_controllers_table_and_figures() -> None:
     from mrdamper.control.quarter_car_study import default_rate
 
     m = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), input_range=(0.0, 2.0))
-    cmp = compare_controllers(m, road_classes=("B",), controllers=("soft", "skyhook"), duration=4.0, speed=15.0)
+    cmp = compare_controllers(
+        m, road_classes=("B",), controllers=("soft", "skyhook"), duration=4.0, speed=15.0
+    )
     table = cmp.to_frame()
     assert list(table["controller"]) == ["soft", "skyhook", "soft", "skyhook"]
     assert table["road"].iloc[0] == "ISO B @ 15 m/s" and table["road"].iloc[-1].startswith("bump")

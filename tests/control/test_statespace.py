@@ -18,8 +18,15 @@ BETA = np.array([[900.0, 1500.0, -400.0], [-500.0, -700.0, 300.0], [10.0, 5.0, 1
 
 
 def _model() -> LPVModel:
-    return LPVModel(alpha=ALPHA, beta=BETA, offset=3.5, fs=200.0, input_signal="v", rho_range=(0.0, 1.0),
-                    input_range=(0.0, 1.0))
+    return LPVModel(
+        alpha=ALPHA,
+        beta=BETA,
+        offset=3.5,
+        fs=200.0,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+        input_range=(0.0, 1.0),
+    )
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.37, 1.0])
@@ -52,8 +59,13 @@ def test_canonical_structure_and_control_export() -> None:
 def test_frozen_stability_table() -> None:
     tab = frozen_stability(_model(), n_grid=11)
     assert len(tab) == 11 and tab["stable"].all()
-    bad = LPVModel(alpha=np.array([[-1.0, -0.2]]), beta=np.array([[1.0, 0.0]]), fs=100.0, input_signal="v",
-                   rho_range=(0.0, 1.0))
+    bad = LPVModel(
+        alpha=np.array([[-1.0, -0.2]]),
+        beta=np.array([[1.0, 0.0]]),
+        fs=100.0,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+    )
     tab = frozen_stability(bad, n_grid=3)
     assert list(tab["stable"]) == [False, False, False]
 
@@ -74,7 +86,9 @@ def test_control_grid_on_a_fitted_quiroz_model(quiroz_models: dict[str, Any]) ->
     assert len(g) == 5 and all(isinstance(s, control.StateSpace) for s in g.systems)
     assert g[0].dt == pytest.approx(1.0 / m.fs)
     frame = g.to_frame()
-    np.testing.assert_allclose(frame["max_pole_modulus"], [np.max(np.abs(s.poles())) for s in g.systems], rtol=1e-12)
+    np.testing.assert_allclose(
+        frame["max_pole_modulus"], [np.max(np.abs(s.poles())) for s in g.systems], rtol=1e-12
+    )
     # the DC gain is the frozen model's static slope sum(b) / (1 + sum(a))
     for r, gain in zip(g.rho, frame["dc_gain"]):
         assert gain == pytest.approx(np.sum(m.b(r)) / (1.0 + np.sum(m.a(r))), rel=1e-9)

@@ -9,14 +9,35 @@ from mrdamper.data import preprocessing, readers, units, writers
 
 
 def test_data_exports() -> None:
-    assert sorted(data.__all__) == sorted([
-        "CHANNELS", "COLUMN_ALIASES", "Experiment", "ExperimentSet", "as_experiment_set",
-        "read", "read_csv", "read_directory", "read_mat", "read_parquet", "write_csv", "write_parquet",
-    ])
-    assert sorted(readers.__all__) == sorted([
-        "COLUMN_ALIASES", "DEFAULT_PATTERN", "parse_file_name", "read", "read_csv", "read_directory",
-        "read_file", "read_mat", "read_parquet",
-    ])
+    assert sorted(data.__all__) == sorted(
+        [
+            "CHANNELS",
+            "COLUMN_ALIASES",
+            "Experiment",
+            "ExperimentSet",
+            "as_experiment_set",
+            "read",
+            "read_csv",
+            "read_directory",
+            "read_mat",
+            "read_parquet",
+            "write_csv",
+            "write_parquet",
+        ]
+    )
+    assert sorted(readers.__all__) == sorted(
+        [
+            "COLUMN_ALIASES",
+            "DEFAULT_PATTERN",
+            "parse_file_name",
+            "read",
+            "read_csv",
+            "read_directory",
+            "read_file",
+            "read_mat",
+            "read_parquet",
+        ]
+    )
 
 
 def test_every_public_function_is_documented_with_its_parameters() -> None:

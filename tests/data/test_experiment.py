@@ -10,7 +10,9 @@ from mrdamper import DataValidationError, Experiment, ExperimentSet
 
 def _rec(n: int = 100, name: str = "r", **meta: float) -> Experiment:
     t = np.arange(n) * 1e-3
-    return Experiment(t=t, x=np.sin(t), v=np.cos(t), F=10 * np.cos(t), i=np.full(n, 0.5), name=name, metadata=meta)
+    return Experiment(
+        t=t, x=np.sin(t), v=np.cos(t), F=10 * np.cos(t), i=np.full(n, 0.5), name=name, metadata=meta
+    )
 
 
 def test_valid_record_properties() -> None:
@@ -88,7 +90,10 @@ def test_electrical_source_errors() -> None:
 
 
 def test_set_filter_groups_split_logo() -> None:
-    recs = [_rec(name=f"r{k}", current=c, condition=k % 3) for k, c in enumerate([0.0, 0.5, 0.5, 1.0, 1.0, 1.0])]
+    recs = [
+        _rec(name=f"r{k}", current=c, condition=k % 3)
+        for k, c in enumerate([0.0, 0.5, 0.5, 1.0, 1.0, 1.0])
+    ]
     s = ExperimentSet(recs, name="s")
     assert s.filter(current=0.5).names == ["r1", "r2"]
     assert s.filter(current=[0.0, 1.0]).names == ["r0", "r3", "r4", "r5"]

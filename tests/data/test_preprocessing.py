@@ -22,7 +22,9 @@ from mrdamper.errors import DataValidationError
 FS = 1000.0
 
 
-def _sine(f: float = 3.0, amp: float = 0.005, n: int = 5000, seed: int = 1, **meta: float) -> Experiment:
+def _sine(
+    f: float = 3.0, amp: float = 0.005, n: int = 5000, seed: int = 1, **meta: float
+) -> Experiment:
     rng = np.random.default_rng(seed)
     t = np.arange(n) / FS
     x = amp * np.sin(2 * np.pi * f * t) + 2e-6 * rng.standard_normal(n)  # 2 um sensor noise

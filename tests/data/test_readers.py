@@ -37,20 +37,31 @@ def _write(path: Path, header: list[str], cols: list[np.ndarray], sep: str = ","
 
 def test_aliases_and_provenance(tmp_path: Path) -> None:
     s = _signals()
-    p = _write(tmp_path / "r.csv", ["Time", "Displacement", "velocity", "Current", "FORCE"],
-               [s["t"], s["x"], s["v"], s["i"], s["F"]])
+    p = _write(
+        tmp_path / "r.csv",
+        ["Time", "Displacement", "velocity", "Current", "FORCE"],
+        [s["t"], s["x"], s["v"], s["i"], s["F"]],
+    )
     e = read_csv(p)
     np.testing.assert_array_equal(e.F, s["F"])
     np.testing.assert_array_equal(e.x, s["x"])
     assert e.name == "r"
     assert e.metadata["source"] == str(p)
-    assert e.metadata["columns"] == {"t": "Time", "x": "Displacement", "v": "velocity", "F": "FORCE", "i": "Current"}
+    assert e.metadata["columns"] == {
+        "t": "Time",
+        "x": "Displacement",
+        "v": "velocity",
+        "F": "FORCE",
+        "i": "Current",
+    }
     assert e.metadata["units"] == {"t": "s", "x": "m", "v": "m/s", "F": "N", "i": "A"}
 
 
 def test_one_letter_aliases_are_case_sensitive(tmp_path: Path) -> None:
     s = _signals()
-    p = _write(tmp_path / "r.csv", ["t", "x", "v", "V", "F"], [s["t"], s["x"], s["v"], 2 * s["i"], s["F"]])
+    p = _write(
+        tmp_path / "r.csv", ["t", "x", "v", "V", "F"], [s["t"], s["x"], s["v"], 2 * s["i"], s["F"]]
+    )
     e = read_csv(p)
     np.testing.assert_array_equal(e.v, s["v"])
     np.testing.assert_array_equal(e.voltage, 2 * s["i"])
@@ -59,10 +70,16 @@ def test_one_letter_aliases_are_case_sensitive(tmp_path: Path) -> None:
 
 def test_user_mapping_and_declared_units(tmp_path: Path) -> None:
     s = _signals()
-    p = _write(tmp_path / "r.csv", ["time_ms", "pos_mm", "vel", "I_mA", "Force_kN"],
-               [s["t"] * 1e3, s["x"] * 1e3, s["v"], s["i"] * 1e3, s["F"] / 1e3])
-    e = read_csv(p, columns={"time_ms": "t", "pos_mm": "x", "I_mA": "i", "Force_kN": "F"},
-                 units={"t": "ms", "x": "mm", "Force_kN": "kN", "i": "mA"})
+    p = _write(
+        tmp_path / "r.csv",
+        ["time_ms", "pos_mm", "vel", "I_mA", "Force_kN"],
+        [s["t"] * 1e3, s["x"] * 1e3, s["v"], s["i"] * 1e3, s["F"] / 1e3],
+    )
+    e = read_csv(
+        p,
+        columns={"time_ms": "t", "pos_mm": "x", "I_mA": "i", "Force_kN": "F"},
+        units={"t": "ms", "x": "mm", "Force_kN": "kN", "i": "mA"},
+    )
     np.testing.assert_allclose(e.t, s["t"], rtol=1e-14, atol=1e-15)
     np.testing.assert_allclose(e.x, s["x"], rtol=1e-14)
     np.testing.assert_allclose(e.F, s["F"], rtol=1e-14)
@@ -73,8 +90,11 @@ def test_user_mapping_and_declared_units(tmp_path: Path) -> None:
 
 def test_units_in_headers_and_paper_units(tmp_path: Path) -> None:
     s = _signals()
-    p = _write(tmp_path / "r.csv", ["t [s]", "x (in)", "v [in/sec]", "i [A]", "F [lbf]"],
-               [s["t"], s["x"] / 0.0254, s["v"] / 0.0254, s["i"], s["F"] / 4.4482216152605])
+    p = _write(
+        tmp_path / "r.csv",
+        ["t [s]", "x (in)", "v [in/sec]", "i [A]", "F [lbf]"],
+        [s["t"], s["x"] / 0.0254, s["v"] / 0.0254, s["i"], s["F"] / 4.4482216152605],
+    )
     e = read_csv(p)
     np.testing.assert_allclose(e.x, s["x"], rtol=1e-14)
     np.testing.assert_allclose(e.v, s["v"], rtol=1e-14)
@@ -143,7 +163,11 @@ def test_declared_rate_regenerates_rounded_time(tmp_path: Path) -> None:
     assert "time regenerated" in e.metadata["repairs"][0]
     # A missing sample is not hidden by fs=: the time column departs by a whole interval.
     keep = np.r_[0:100, 101:N]
-    p2 = _write(tmp_path / "gap.csv", list(s), [t[keep], s["x"][keep], s["v"][keep], s["i"][keep], s["F"][keep]])
+    p2 = _write(
+        tmp_path / "gap.csv",
+        list(s),
+        [t[keep], s["x"][keep], s["v"][keep], s["i"][keep], s["F"][keep]],
+    )
     with pytest.raises(DataValidationError, match="missing") as info:
         read_csv(p2, fs=fs)
     assert info.value.field == "t"
@@ -238,12 +262,16 @@ def test_non_numeric_value(tmp_path: Path) -> None:
     parts[4] = "overload"
     lines[7] = ",".join(parts)
     p.write_text("\n".join(lines))
-    with pytest.raises(DataValidationError, match="non-numeric value 'overload' at data row 6") as info:
+    with pytest.raises(
+        DataValidationError, match="non-numeric value 'overload' at data row 6"
+    ) as info:
         read_csv(p)
     assert info.value.field == "F"
 
 
-@pytest.mark.parametrize(("content", "text"), [("", "is empty"), ("\n\n", "is empty"), ("t,x,v,i,F\n", "no data rows")])
+@pytest.mark.parametrize(
+    ("content", "text"), [("", "is empty"), ("\n\n", "is empty"), ("t,x,v,i,F\n", "no data rows")]
+)
 def test_empty_files(tmp_path: Path, content: str, text: str) -> None:
     p = tmp_path / "r.csv"
     p.write_text(content)
@@ -275,10 +303,15 @@ def test_missing_file_and_unknown_type(tmp_path: Path) -> None:
 # ----------------------------------------------------------------------------- folders
 def test_parse_file_name_units_and_numbers() -> None:
     assert parse_file_name("sine_25mm_0.25Hz_0.75A.csv", DEFAULT_PATTERN) == {
-        "condition": "25mm_0.25Hz", "amplitude": 0.025, "frequency": 0.25, "current": 0.75,
+        "condition": "25mm_0.25Hz",
+        "amplitude": 0.025,
+        "frequency": 0.25,
+        "current": 0.75,
     }
     assert parse_file_name("README.md", DEFAULT_PATTERN) is None
-    meta = parse_file_name("run_3_12.5mm_per_s.csv", r"run_(?P<replicate>\d+)_(?P<speed_mm_per_s>[\d.]+)mm_per_s\.csv")
+    meta = parse_file_name(
+        "run_3_12.5mm_per_s.csv", r"run_(?P<replicate>\d+)_(?P<speed_mm_per_s>[\d.]+)mm_per_s\.csv"
+    )
     assert meta == {"replicate": 3.0, "speed": pytest.approx(0.0125)}
     with pytest.raises(DataValidationError) as info:
         parse_file_name("a_x.csv", r"a_(?P<gap_mm>\w+)\.csv")
@@ -288,10 +321,19 @@ def test_parse_file_name_units_and_numbers() -> None:
 def test_read_directory(tmp_path: Path) -> None:
     s = _signals()
     for amp, f, i in [(10, 1, 0.5), (2, 5, 0.0), (2, 5, 1), (2, 5, 0.25)]:
-        _write(tmp_path / f"sine_{amp}mm_{f}Hz_{i:g}A.csv", list(s), [s["t"], s["x"], s["v"], s["i"] * 0 + i, s["F"]])
+        _write(
+            tmp_path / f"sine_{amp}mm_{f}Hz_{i:g}A.csv",
+            list(s),
+            [s["t"], s["x"], s["v"], s["i"] * 0 + i, s["F"]],
+        )
     (tmp_path / "README.md").write_text("not a record")
     rs = read_directory(tmp_path)
-    assert rs.names == ["sine_2mm_5Hz_0A", "sine_2mm_5Hz_0.25A", "sine_2mm_5Hz_1A", "sine_10mm_1Hz_0.5A"]
+    assert rs.names == [
+        "sine_2mm_5Hz_0A",
+        "sine_2mm_5Hz_0.25A",
+        "sine_2mm_5Hz_1A",
+        "sine_10mm_1Hz_0.5A",
+    ]
     assert rs.name == tmp_path.name
     e = rs["sine_10mm_1Hz_0.5A"]
     assert e.metadata["amplitude"] == pytest.approx(0.010)

@@ -29,7 +29,9 @@ def _record(n: int = 500, electrical: str = "i", seed: int = 0) -> Experiment:
     v = np.gradient(x, t)
     F = 900 * np.tanh(v / 0.01) + 50 * rng.standard_normal(n)
     el = {electrical: np.round(rng.uniform(0, 2, n), 3)}
-    return Experiment(t=t, x=x, v=v, F=F, **el, name="rec", metadata={"current": 1.0, "pattern": "sine"})
+    return Experiment(
+        t=t, x=x, v=v, F=F, **el, name="rec", metadata={"current": 1.0, "pattern": "sine"}
+    )
 
 
 def _assert_same(a: Experiment, b: Experiment, rtol: float = 0.0) -> None:
@@ -38,7 +40,9 @@ def _assert_same(a: Experiment, b: Experiment, rtol: float = 0.0) -> None:
         if rtol == 0.0:
             np.testing.assert_array_equal(getattr(a, ch), getattr(b, ch), err_msg=ch)
         else:
-            np.testing.assert_allclose(getattr(a, ch), getattr(b, ch), rtol=rtol, atol=0, err_msg=ch)
+            np.testing.assert_allclose(
+                getattr(a, ch), getattr(b, ch), rtol=rtol, atol=0, err_msg=ch
+            )
 
 
 @pytest.mark.parametrize("electrical", ["i", "voltage"])
@@ -124,7 +128,9 @@ def test_parquet_rejects_non_parquet(tmp_path: Path) -> None:
 def test_mat_v5_round_trip(tmp_path: Path) -> None:
     e = _record()
     p = tmp_path / "rec.mat"
-    scipy.io.savemat(p, {c: getattr(e, c) for c in e.channel_names} | {"fs": 1000.0, "note": "rig A"})
+    scipy.io.savemat(
+        p, {c: getattr(e, c) for c in e.channel_names} | {"fs": 1000.0, "note": "rig A"}
+    )
     back = read_mat(p)
     _assert_same(e, back)
     assert back.metadata["mat_version"] == "v5"
@@ -133,7 +139,9 @@ def test_mat_v5_round_trip(tmp_path: Path) -> None:
     p2 = tmp_path / "struct.mat"
     rec = {"time": e.t, "disp_mm": e.x * 1e3, "vel": e.v, "curr": e.i, "Force_kN": e.F / 1e3}
     scipy.io.savemat(p2, {"rec": rec}, oned_as="column")
-    back2 = read(p2, struct="rec", columns={"disp_mm": "x", "Force_kN": "F"}, units={"x": "mm", "F": "kN"})
+    back2 = read(
+        p2, struct="rec", columns={"disp_mm": "x", "Force_kN": "F"}, units={"x": "mm", "F": "kN"}
+    )
     _assert_same(e, back2, rtol=1e-14)
     with pytest.raises(DataValidationError, match="no struct variable 'data'") as info:
         read_mat(p2, struct="data")
@@ -150,7 +158,9 @@ def _write_mat73(path: Path, variables: dict[str, np.ndarray], group: str | None
         for name, arr in variables.items():
             ds = target.create_dataset(name, data=np.asarray(arr, dtype=np.float64)[None, :])
             ds.attrs["MATLAB_class"] = np.bytes_("double")
-        txt = f.create_dataset("label", data=np.frombuffer(b"rig A", dtype=np.uint8).astype(np.uint16)[:, None])
+        txt = f.create_dataset(
+            "label", data=np.frombuffer(b"rig A", dtype=np.uint8).astype(np.uint16)[:, None]
+        )
         txt.attrs["MATLAB_class"] = np.bytes_("char")
     header = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 ."
     header = header.ljust(116, b" ") + b"\x00" * 8 + b"\x00\x02" + b"IM"
@@ -208,7 +218,9 @@ def test_directory_of_mixed_formats(tmp_path: Path) -> None:
         assert np.all(e.i == e.metadata["current"])
 
 
-def test_missing_optional_libraries_name_the_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_missing_optional_libraries_name_the_extra(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     import sys
 
     from mrdamper.errors import MrDamperError

@@ -22,10 +22,22 @@ pytestmark = pytest.mark.realdata
 CURRENTS = {0.0, 0.25, 0.5, 0.75, 1.0}
 # Sampling rate per condition, from quiroz2022_utfsm/README.md.
 RATES = {
-    "sine_unfiltered": {"2mm_5Hz": 200, "25mm_0.25Hz": 200, "25mm_0.5Hz": 200,
-                        "5mm_3Hz": 1000, "5mm_4Hz": 1000, "10mm_2Hz": 1000},
-    "sine_filtered": {"2mm_5Hz": 200, "25mm_0.1Hz": 200, "25mm_0.25Hz": 200, "25mm_0.5Hz": 200,
-                      "5mm_3Hz": 1000, "10mm_1Hz": 1000},
+    "sine_unfiltered": {
+        "2mm_5Hz": 200,
+        "25mm_0.25Hz": 200,
+        "25mm_0.5Hz": 200,
+        "5mm_3Hz": 1000,
+        "5mm_4Hz": 1000,
+        "10mm_2Hz": 1000,
+    },
+    "sine_filtered": {
+        "2mm_5Hz": 200,
+        "25mm_0.1Hz": 200,
+        "25mm_0.25Hz": 200,
+        "25mm_0.5Hz": 200,
+        "5mm_3Hz": 1000,
+        "10mm_1Hz": 1000,
+    },
 }
 
 
@@ -81,7 +93,9 @@ def test_quiroz_excitation_frequency(quiroz) -> None:
     assert np.all((ratios > 1.01) & (ratios < 1.025)), ratios
 
 
-def test_our_velocity_reproduces_the_supplied_unfiltered_velocity(quiroz_unfiltered_dir: Path) -> None:
+def test_our_velocity_reproduces_the_supplied_unfiltered_velocity(
+    quiroz_unfiltered_dir: Path,
+) -> None:
     # The README documents v as the central difference after a zero-phase 4th-order Butterworth
     # low-pass at max(10 f, 20 Hz): exactly velocity_from_displacement's default for sine records.
     for e in read_directory(quiroz_unfiltered_dir):

@@ -111,7 +111,13 @@ PAGES = [p for p in doc_pages() if blocks_of(p)]
 def test_the_convention_is_parsed() -> None:
     page = REPO_ROOT / "README.md"
     assert any(b.lang == "python" for b in blocks_of(page))
-    demo = Block("x", 1, "bash", 'python3 -m pip install -e ".[dev]" && python3 -m pytest\npip install x\nls\n', None)
+    demo = Block(
+        "x",
+        1,
+        "bash",
+        'python3 -m pip install -e ".[dev]" && python3 -m pytest\npip install x\nls\n',
+        None,
+    )
     assert as_run(demo) == "python3 -m pytest\nls\n"
 
 
@@ -133,10 +139,19 @@ def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
         code = as_run(b)
         cmd = ["bash", "-e", "-c", code] if b.lang == "bash" else [sys.executable, "-c", code]
         try:
-            proc = subprocess.run(cmd, cwd=work, env=env, capture_output=True, text=True,
-                                  timeout=BLOCK_TIMEOUT_S, check=False)
+            proc = subprocess.run(
+                cmd,
+                cwd=work,
+                env=env,
+                capture_output=True,
+                text=True,
+                timeout=BLOCK_TIMEOUT_S,
+                check=False,
+            )
         except subprocess.TimeoutExpired:
             pytest.fail(f"{b.page}:{b.line} ({b.lang}) ran longer than {BLOCK_TIMEOUT_S} s")
         if proc.returncode != 0:
             tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-15:])
-            pytest.fail(f"{b.page}:{b.line} ({b.lang}) exited {proc.returncode}:\n{code}\n--- output ---\n{tail}")
+            pytest.fail(
+                f"{b.page}:{b.line} ({b.lang}) exited {proc.returncode}:\n{code}\n--- output ---\n{tail}"
+            )

@@ -15,8 +15,16 @@ def _train() -> list[Experiment]:
     out = []
     for k, (amp, f, lev) in enumerate(((0.01, 1.0, 0.0), (0.005, 3.0, 0.5), (0.002, 5.0, 1.0))):
         t = np.arange(2000) / 500.0
-        out.append(Experiment(t=t, x=amp * np.sin(2 * np.pi * f * t), v=amp * 2 * np.pi * f * np.cos(2 * np.pi * f * t),
-                              F=np.zeros(t.size), i=np.full(t.size, lev), name=f"r{k}"))
+        out.append(
+            Experiment(
+                t=t,
+                x=amp * np.sin(2 * np.pi * f * t),
+                v=amp * 2 * np.pi * f * np.cos(2 * np.pi * f * t),
+                F=np.zeros(t.size),
+                i=np.full(t.size, lev),
+                name=f"r{k}",
+            )
+        )
     return out
 
 
@@ -24,7 +32,9 @@ def _train() -> list[Experiment]:
 def test_reference_records(motion: str) -> None:
     ref = reference_damper()
     train = _train()
-    a, used = reference_records(train, reference=ref, n_records=2, duration=4.0, motion=motion, seed=3)
+    a, used = reference_records(
+        train, reference=ref, n_records=2, duration=4.0, motion=motion, seed=3
+    )
     b, _ = reference_records(train, reference=ref, n_records=2, duration=4.0, motion=motion, seed=3)
     c, _ = reference_records(train, reference=ref, n_records=2, duration=4.0, motion=motion, seed=4)
     assert used.kind == "spencer" and a.names == ["reference_0", "reference_1"]

@@ -29,7 +29,13 @@ class _Viscous(FittedModel):
 def _record(i_level: float = 0.5) -> Experiment:
     t = np.arange(1000) / 1000.0
     v = np.sin(2 * np.pi * 2 * t)
-    return Experiment(t=t, x=-np.cos(2 * np.pi * 2 * t), v=v, F=(100 + 50 * i_level) * v, i=np.full(t.size, i_level))
+    return Experiment(
+        t=t,
+        x=-np.cos(2 * np.pi * 2 * t),
+        v=v,
+        F=(100 + 50 * i_level) * v,
+        i=np.full(t.size, i_level),
+    )
 
 
 def test_predict_simulate_score() -> None:
@@ -55,7 +61,9 @@ def test_range_policy() -> None:
 
 def test_json_round_trip_bit_identical(tmp_path) -> None:
     coeffs = np.array([0.1 + 0.2, 1 / 3, np.pi * 1e-17])
-    m = _Viscous(input_range=(0.0, 1.0), coefficients=coeffs, provenance={"records": ["a", "b"], "cost": 1.5})
+    m = _Viscous(
+        input_range=(0.0, 1.0), coefficients=coeffs, provenance={"records": ["a", "b"], "cost": 1.5}
+    )
     d = m.to_dict()
     back = _Viscous.from_dict(json.loads(json.dumps(d)))
     assert np.array_equal(back.coefficients, coeffs)
@@ -90,4 +98,15 @@ def test_encode_decode_values() -> None:
 def test_known_kinds_lists_every_family() -> None:
     from mrdamper.models import known_kinds
 
-    assert known_kinds() == ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
+    assert known_kinds() == [
+        "lpv",
+        "lti",
+        "p15",
+        "sp1",
+        "sp2",
+        "sp3",
+        "sp4",
+        "spencer",
+        "bingham",
+        "narx",
+    ]

@@ -13,8 +13,14 @@ from mrdamper.models import get_estimator, load_model, model_class
 from mrdamper.models.bingham import BinghamEstimator, BinghamModel
 
 
-def _record(current: float | np.ndarray, seed: int = 0, n: int = 2000, name: str = "r",
-            noise: float = 0.0, truth: BinghamModel | None = None) -> Experiment:
+def _record(
+    current: float | np.ndarray,
+    seed: int = 0,
+    n: int = 2000,
+    name: str = "r",
+    noise: float = 0.0,
+    truth: BinghamModel | None = None,
+) -> Experiment:
     rng = np.random.default_rng(seed)
     t = np.arange(n) * 1e-3
     x = 0.01 * np.sin(2 * np.pi * 1.7 * t + rng.uniform(0, 6))
@@ -27,7 +33,9 @@ def _record(current: float | np.ndarray, seed: int = 0, n: int = 2000, name: str
     return exp
 
 
-TRUTH = BinghamModel(fc=(60.0, 900.0, -250.0), c0=(1500.0, 4000.0, 1000.0), f0=-12.0, input_range=(0, 1))
+TRUTH = BinghamModel(
+    fc=(60.0, 900.0, -250.0), c0=(1500.0, 4000.0, 1000.0), f0=-12.0, input_range=(0, 1)
+)
 
 
 def test_predict_follows_the_equation() -> None:
@@ -43,7 +51,10 @@ def test_predict_follows_the_equation() -> None:
 @pytest.mark.parametrize("v_eps", [0.0, 0.005])
 def test_known_answer_identification(v_eps: float) -> None:
     truth = BinghamModel(fc=TRUTH.fc, c0=TRUTH.c0, f0=TRUTH.f0, v_eps=v_eps, input_range=(0, 1))
-    data = [_record(c, seed=k, truth=truth, name=f"c{c}") for k, c in enumerate((0.0, 0.25, 0.5, 0.75, 1.0))]
+    data = [
+        _record(c, seed=k, truth=truth, name=f"c{c}")
+        for k, c in enumerate((0.0, 0.25, 0.5, 0.75, 1.0))
+    ]
     fit = BinghamEstimator(degree=2, v_eps=v_eps).fit(data)
     np.testing.assert_allclose(fit.fc, truth.fc, rtol=1e-8, atol=1e-6)
     np.testing.assert_allclose(fit.c0, truth.c0, rtol=1e-8, atol=1e-6)
@@ -52,7 +63,10 @@ def test_known_answer_identification(v_eps: float) -> None:
 
 
 def test_noisy_identification_is_close() -> None:
-    data = [_record(c, seed=k, truth=TRUTH, noise=20.0, name=f"c{c}") for k, c in enumerate((0.0, 0.25, 0.5, 0.75, 1.0))]
+    data = [
+        _record(c, seed=k, truth=TRUTH, noise=20.0, name=f"c{c}")
+        for k, c in enumerate((0.0, 0.25, 0.5, 0.75, 1.0))
+    ]
     fit = BinghamEstimator(degree=2).fit(data)
     test = _record(0.6, seed=42, truth=TRUTH)
     assert fit.score(test).esr < 1e-3
@@ -74,7 +88,10 @@ def test_one_level_reduces_to_constants_two_levels_need_degree_one() -> None:
 def test_round_trip_and_registry(tmp_path: Path) -> None:
     assert model_class("bingham") is BinghamModel
     assert isinstance(get_estimator("bingham", degree=1), BinghamEstimator)
-    data = [_record(c, seed=k, truth=TRUTH, name=f"c{c}", noise=5.0) for k, c in enumerate((0.0, 0.5, 1.0))]
+    data = [
+        _record(c, seed=k, truth=TRUTH, name=f"c{c}", noise=5.0)
+        for k, c in enumerate((0.0, 0.5, 1.0))
+    ]
     fit = BinghamEstimator(degree=2, v_eps=0.002).fit(data)
     loaded = load_model(fit.save(tmp_path / "b.json"))
     assert loaded == fit

@@ -38,8 +38,15 @@ def _record(rho_level, seed, n=1500, name=None, varying=False, laws=None, offset
     u = v if laws is None else laws.scheduling_input(v, i)
     y, bad = K.simulate_record(u, i, ALPHA, BETA, 1e12)
     assert bad == -1
-    return Experiment(t=t, x=np.cumsum(v) / FS, v=v, F=y + offset, i=i, name=name or f"r{seed}",
-                      metadata={"current": float(rho_level)})
+    return Experiment(
+        t=t,
+        x=np.cumsum(v) / FS,
+        v=v,
+        F=y + offset,
+        i=i,
+        name=name or f"r{seed}",
+        metadata={"current": float(rho_level)},
+    )
 
 
 def _train(laws=None, offset=0.0):
@@ -50,13 +57,28 @@ def _train(laws=None, offset=0.0):
 
 def _known_laws() -> ZoneLaws:
     gm = np.array([[800.0, 2000.0, 0.0], [15000.0, 40000.0, 0.0], [900.0, 1800.0, 0.0]])
-    return ZoneLaws(gm, np.zeros((3, 3)), (0.01, 0.01), (-0.01, -0.01), True, (0.0, 1.0),
-                    [0.0, 1.0], gm[:, :2].T, np.zeros((2, 3)), [-0.01, -0.02], [0.01, 0.02])
+    return ZoneLaws(
+        gm,
+        np.zeros((3, 3)),
+        (0.01, 0.01),
+        (-0.01, -0.01),
+        True,
+        (0.0, 1.0),
+        [0.0, 1.0],
+        gm[:, :2].T,
+        np.zeros((2, 3)),
+        [-0.01, -0.02],
+        [0.01, 0.02],
+    )
 
 
-@pytest.mark.parametrize(("refine", "solver"), [(False, "gauss-newton"), (True, "gauss-newton"), (True, "least_squares")])
+@pytest.mark.parametrize(
+    ("refine", "solver"), [(False, "gauss-newton"), (True, "gauss-newton"), (True, "least_squares")]
+)
 def test_identifies_known_lpv_coefficients(refine, solver) -> None:
-    est = LPVEstimator(n_m=2, n_rho=2, input_signal="v", offset=False, refine=refine, oe_solver=solver)
+    est = LPVEstimator(
+        n_m=2, n_rho=2, input_signal="v", offset=False, refine=refine, oe_solver=solver
+    )
     m = est.fit(_train())
     np.testing.assert_allclose(m.alpha, ALPHA, rtol=1e-8, atol=1e-9)
     np.testing.assert_allclose(m.beta, BETA, rtol=1e-8, atol=1e-6)
@@ -113,8 +135,15 @@ def test_range_policy_on_scheduling_variable() -> None:
 
 
 def test_divergence_is_detected() -> None:
-    m = LPVModel(alpha=np.array([[-1.05]]), beta=np.array([[1.0]]), fs=FS, input_signal="v",
-                 rho_range=(0.0, 1.0), input_range=(0.0, 1.0), force_bound=1e6)
+    m = LPVModel(
+        alpha=np.array([[-1.05]]),
+        beta=np.array([[1.0]]),
+        fs=FS,
+        input_signal="v",
+        rho_range=(0.0, 1.0),
+        input_range=(0.0, 1.0),
+        force_bound=1e6,
+    )
     assert not m.is_frozen_stable()
     with pytest.raises(SimulationDivergedError, match="diverged at sample"):
         m.predict(_record(0.5, 1))
@@ -144,7 +173,9 @@ def test_bad_data() -> None:
     t = np.arange(other_rate.n) / 1000.0
     # Mixed rates: the lowest one is the model rate, with a one-line note (same rule as NARX).
     with pytest.warns(Note, match="model rate model_fs"):
-        mixed = LPVEstimator(input_signal="v", refine=False, stability="warn").fit(_train() + [other_rate.replace(t=t, name="fast")])
+        mixed = LPVEstimator(input_signal="v", refine=False, stability="warn").fit(
+            _train() + [other_rate.replace(t=t, name="fast")]
+        )
     assert mixed.fs == min(FS, 1000.0)
     with pytest.raises(DataValidationError, match="model_fs"):
         LPVEstimator(input_signal="v", model_fs=-1.0).fit(_train())
@@ -160,8 +191,14 @@ def test_resampling_to_model_rate() -> None:
     m = LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(_train())
     slow = _record(0.4, 8, n=3000)
     fast_t = np.arange(5 * slow.n - 4) / (5 * FS)
-    fast = Experiment(t=fast_t, x=np.interp(fast_t, slow.t, slow.x), v=np.interp(fast_t, slow.t, slow.v),
-                      F=np.interp(fast_t, slow.t, slow.F), i=np.full(fast_t.size, 0.4), name="fast")
+    fast = Experiment(
+        t=fast_t,
+        x=np.interp(fast_t, slow.t, slow.x),
+        v=np.interp(fast_t, slow.t, slow.v),
+        F=np.interp(fast_t, slow.t, slow.F),
+        i=np.full(fast_t.size, 0.4),
+        name="fast",
+    )
     assert m.predict(fast).size == fast.n
     assert m.score(fast).esr < 0.05  # interpolated white-ish input: only an approximation
 
@@ -170,8 +207,15 @@ def test_drive_lag_scheduling_variable() -> None:
     t = np.arange(1000) / FS
     volt = np.where((t % 1.0) < 0.5, 0.0, 2.0)
     e = Experiment(t=t, x=0 * t, v=np.sin(t), F=np.sin(t), voltage=volt, name="v")
-    m = LPVModel(alpha=np.zeros((1, 2)), beta=np.zeros((1, 2)), fs=FS, input_signal="v", input="voltage",
-                 eta=50.0, input_range=(0.0, 2.0))
+    m = LPVModel(
+        alpha=np.zeros((1, 2)),
+        beta=np.zeros((1, 2)),
+        fs=FS,
+        input_signal="v",
+        input="voltage",
+        eta=50.0,
+        input_range=(0.0, 2.0),
+    )
     rho = m.scheduling_variable(e)
     k = int(np.argmax(volt > 0)) + 1
     assert rho[k] == pytest.approx(2.0 * (1 - np.exp(-50.0 / FS)))
@@ -182,7 +226,9 @@ def test_select_order_table() -> None:
     recs = _train()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        tab = select_order(recs[:3], recs[3:], orders=(1, 2), rho_degrees=(0, 2), input_signal="v", refine=False)
+        tab = select_order(
+            recs[:3], recs[3:], orders=(1, 2), rho_degrees=(0, 2), input_signal="v", refine=False
+        )
     assert set(tab.columns) >= {"n_m", "n_rho", "val_esr", "max_frozen_pole", "error"}
     best = tab.iloc[0]
     assert (best.n_m, best.n_rho) == (2, 2)

@@ -39,10 +39,14 @@ def test_record_weights_zero_drops_a_record() -> None:
     assert not np.allclose(unweighted.alpha, without.alpha, rtol=1e-6)
 
 
-@pytest.mark.parametrize("bad", [[1.0, 1.0], [1.0, -1.0, 1.0, 1.0], [np.nan, 1, 1, 1], [0, 0, 0, 0]])
+@pytest.mark.parametrize(
+    "bad", [[1.0, 1.0], [1.0, -1.0, 1.0, 1.0], [np.nan, 1, 1, 1], [0, 0, 0, 0]]
+)
 def test_record_weights_are_validated(bad) -> None:
     with pytest.raises(DataValidationError, match="record_weights"):
-        LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(_train(), record_weights=bad)
+        LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(
+            _train(), record_weights=bad
+        )
 
 
 def test_laws_by_auto_refuses_mixed_current_metadata() -> None:

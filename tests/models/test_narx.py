@@ -16,9 +16,12 @@ from mrdamper.models.narx import NARXEstimator, NARXModel, candidate_structure
 BASE, CANDIDATES = candidate_structure(2, 1, 3)
 # base rows: 0 F[k-1], 1 F[k-2], 2 x[k], 3 x[k-1], 4 v[k], 5 v[k-1], 6 i[k], 7 i[k-1], 8 tanh_v[k], 9 tanh_v[k-1]
 TRUTH = NARXModel(
-    fs=1000.0, base=BASE,
+    fs=1000.0,
+    base=BASE,
     terms=[[-1, -1, -1], [0, -1, -1], [1, -1, -1], [4, -1, -1], [4, 6, -1], [6, 8, -1], [0, 6, -1]],
-    theta=[0.01, 0.6, -0.1, 0.5, 0.3, 0.2, -0.1], scales=[1000.0, 0.01, 0.3, 1.0, 1.0], v0=0.05,
+    theta=[0.01, 0.6, -0.1, 0.5, 0.3, 0.2, -0.1],
+    scales=[1000.0, 0.01, 0.3, 1.0, 1.0],
+    v0=0.05,
     input_range=(0.0, 1.0),
 )
 
@@ -29,8 +32,14 @@ def _white(seed: int, n: int = 3000, name: str | None = None) -> Experiment:
     t = np.arange(n) * 1e-3
     i = rng.uniform(0.0, 1.0, n)
     i[:2] = (0.0, 1.0)  # every record spans the full current range [0, 1] A
-    return Experiment(t=t, x=rng.uniform(-0.01, 0.01, n), v=rng.uniform(-0.3, 0.3, n), F=0 * t,
-                      i=i, name=name or f"w{seed}")
+    return Experiment(
+        t=t,
+        x=rng.uniform(-0.01, 0.01, n),
+        v=rng.uniform(-0.3, 0.3, n),
+        F=0 * t,
+        i=i,
+        name=name or f"w{seed}",
+    )
 
 
 def _from_truth(seed: int, noise: float = 0.0, n: int = 3000) -> Experiment:
@@ -55,9 +64,15 @@ def test_predict_follows_the_equation() -> None:
     F = TRUTH.predict(e)
     c = TRUTH.coefficients()
     k = np.arange(2, e.n)
-    expect = (c["1"] + c["F[k-1]"] * F[k - 1] + c["F[k-2]"] * F[k - 2] + c["v[k]"] * e.v[k]
-              + c["v[k]*i[k]"] * e.v[k] * e.i[k] + c["i[k]*tanh_v[k]"] * e.i[k] * np.tanh(e.v[k] / 0.05)
-              + c["F[k-1]*i[k]"] * F[k - 1] * e.i[k])
+    expect = (
+        c["1"]
+        + c["F[k-1]"] * F[k - 1]
+        + c["F[k-2]"] * F[k - 2]
+        + c["v[k]"] * e.v[k]
+        + c["v[k]*i[k]"] * e.v[k] * e.i[k]
+        + c["i[k]*tanh_v[k]"] * e.i[k] * np.tanh(e.v[k] / 0.05)
+        + c["F[k-1]*i[k]"] * F[k - 1] * e.i[k]
+    )
     np.testing.assert_allclose(F[2:], expect, rtol=1e-12, atol=1e-9)
     assert c["v[k]"] == pytest.approx(0.5 * 1000 / 0.3)
 
@@ -97,14 +112,22 @@ def test_free_run_never_feeds_back_the_measured_force() -> None:
     # the F[k-1], F[k-2] terms, which adds error on top of sigma^2.
     err_free = np.mean((fit.predict(e) - e.F) ** 2)
     err_one = np.mean((one_step - e.F) ** 2)
-    assert err_free == pytest.approx(30.0 ** 2, rel=0.1)
+    assert err_free == pytest.approx(30.0**2, rel=0.1)
     assert err_one > 1.05 * err_free
 
 
 def test_divergence_is_reported_with_the_sample() -> None:
     base = np.array([[0, 1], [2, 0]])
-    m = NARXModel(fs=1000.0, base=base, terms=[[0], [1]], theta=[1.5, 1.0],
-                  scales=[1.0, 1.0, 1.0, 1.0, 1.0], v0=1.0, force_bound=1e6, input_range=(0, 1))
+    m = NARXModel(
+        fs=1000.0,
+        base=base,
+        terms=[[0], [1]],
+        theta=[1.5, 1.0],
+        scales=[1.0, 1.0, 1.0, 1.0, 1.0],
+        v0=1.0,
+        force_bound=1e6,
+        input_range=(0, 1),
+    )
     n = 200
     t = np.arange(n) * 1e-3
     e = Experiment(t=t, x=0 * t, v=np.ones(n), F=np.zeros(n), i=np.zeros(n), name="blow-up")
@@ -131,11 +154,19 @@ def test_round_trip_is_bit_identical(tmp_path: Path) -> None:
 
 
 def test_other_record_rate_is_resampled() -> None:
-    fit = NARXEstimator(refine=False, v0=0.05, model_fs=1000.0).fit([_from_truth(s) for s in range(2)])
+    fit = NARXEstimator(refine=False, v0=0.05, model_fs=1000.0).fit(
+        [_from_truth(s) for s in range(2)]
+    )
     e = _white(5, 600)
     t = np.arange(2 * e.n) * 5e-4
-    fast = Experiment(t=t, x=np.repeat(e.x, 2), v=np.repeat(e.v, 2), F=np.zeros(t.size),
-                      i=np.repeat(e.i, 2), name="fast")
+    fast = Experiment(
+        t=t,
+        x=np.repeat(e.x, 2),
+        v=np.repeat(e.v, 2),
+        F=np.zeros(t.size),
+        i=np.repeat(e.i, 2),
+        name="fast",
+    )
     F = fit.predict(fast)
     assert F.shape == (fast.n,) and np.all(np.isfinite(F))
 
@@ -154,7 +185,9 @@ def test_bad_input_names_the_field() -> None:
     with pytest.raises(DataValidationError, match="voltage"):
         NARXEstimator(input="voltage").fit(data)
     fit = NARXEstimator(refine=False, v0=0.05).fit(data)
-    no_i = Experiment(t=data[0].t, x=data[0].x, v=data[0].v, F=data[0].F, voltage=data[0].i, name="v-only")
+    no_i = Experiment(
+        t=data[0].t, x=data[0].x, v=data[0].v, F=data[0].F, voltage=data[0].i, name="v-only"
+    )
     with pytest.raises(DataValidationError, match="'i'"):
         fit.predict(no_i)
     short = data[0].slice(0, 2)
@@ -162,9 +195,15 @@ def test_bad_input_names_the_field() -> None:
         fit.predict(short)
     with pytest.raises(IdentificationError, match="equations"):
         NARXEstimator().fit([data[0].slice(0, 100)])
-    for settings, field in (({"n_a": 0}, "n_a"), ({"degree": 0}, "degree"), ({"n_terms": 0}, "n_terms"),
-                            ({"input": "q"}, "input"), ({"v0": -1.0}, "v0"), ({"err_tol": 2.0}, "err_tol"),
-                            ({"bound_factor": 0.5}, "bound_factor")):
+    for settings, field in (
+        ({"n_a": 0}, "n_a"),
+        ({"degree": 0}, "degree"),
+        ({"n_terms": 0}, "n_terms"),
+        ({"input": "q"}, "input"),
+        ({"v0": -1.0}, "v0"),
+        ({"err_tol": 2.0}, "err_tol"),
+        ({"bound_factor": 0.5}, "bound_factor"),
+    ):
         with pytest.raises(DataValidationError, match=field):
             NARXEstimator(**settings).fit(data)
     flat = data[0].replace(F=np.full(data[0].n, 5.0))

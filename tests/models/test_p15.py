@@ -30,11 +30,18 @@ W_TRUE = np.array(
         [-1.0e-13, -5.0e-14, 2.0e-14],  # w5 [1/N^4]
     ]
 )
-TRUE = P15Model(W=tuple(W_TRUE.ravel()), f0=12.0, input_range=(0.0, 1.0), force_bound=1e5, max_step=1e-4)
+TRUE = P15Model(
+    W=tuple(W_TRUE.ravel()), f0=12.0, input_range=(0.0, 1.0), force_bound=1e5, max_step=1e-4
+)
 
 
-def _record(n: int = 8000, fs: float = 4000.0, current: float | None = None, seed: int = 0,
-            model: P15Model = TRUE) -> Experiment:
+def _record(
+    n: int = 8000,
+    fs: float = 4000.0,
+    current: float | None = None,
+    seed: int = 0,
+    model: P15Model = TRUE,
+) -> Experiment:
     rng = np.random.default_rng(seed)
     t = np.arange(n) / fs
     p = rng.uniform(0, 2 * np.pi, 2)
@@ -52,8 +59,9 @@ def _w_error(fitted: P15Model) -> list[float]:
     return [float(np.max(np.abs(got[j] - want[j])) / np.max(np.abs(want[j]))) for j in range(5)]
 
 
-def _currents_records(currents: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0), n: int = 4000,
-                      fs: float = 2000.0) -> list[Experiment]:
+def _currents_records(
+    currents: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0), n: int = 4000, fs: float = 2000.0
+) -> list[Experiment]:
     return [_record(n=n, fs=fs, current=c, seed=k) for k, c in enumerate(currents)]
 
 
@@ -168,7 +176,9 @@ def test_refining_the_integration_step_does_not_change_the_free_run() -> None:
 def test_step_check_warns_and_records_a_coarse_step() -> None:
     data = _currents_records(n=1500, fs=500.0)
     settings = {"max_step": 2e-3, "shoot_nfev": 2, "max_nfev": 0}
-    with pytest.warns(RuntimeWarning, match="^p15: halving the integration step changes the free run"):
+    with pytest.warns(
+        RuntimeWarning, match="^p15: halving the integration step changes the free run"
+    ):
         coarse = P15Estimator(**settings, step_tolerance=1e-12, step_refinements=0).fit(data)
     check = coarse.provenance["step_check"]
     assert not check["passed"] and check["max_discrepancy"] > 1e-12
@@ -188,7 +198,9 @@ def test_free_run_starts_from_rest_and_ignores_the_measured_force() -> None:
     assert np.array_equal(F, TRUE.predict(scrambled))
     # rest state: F - f0 - w1 v0 - w4 F^3 - w5 F^5 = 0
     w = TRUE.coefficients(e.i[0])
-    assert F[0] - TRUE.f0 - w[0] * e.v[0] - w[3] * F[0] ** 3 - w[4] * F[0] ** 5 == pytest.approx(0.0, abs=1e-9)
+    assert F[0] - TRUE.f0 - w[0] * e.v[0] - w[3] * F[0] ** 3 - w[4] * F[0] ** 5 == pytest.approx(
+        0.0, abs=1e-9
+    )
 
 
 def test_sensitivities_match_finite_differences() -> None:
@@ -199,8 +211,25 @@ def test_sensitivities_match_finite_differences() -> None:
     one = np.zeros(1, dtype=np.int64)
 
     def run(C: np.ndarray, f0: float, sens: bool) -> tuple[np.ndarray, np.ndarray]:
-        F, J, bad = p15i_run(e.v, e.i, e.dt, C, f0, 0, 0.0, 1.0, 2, 1e6, one, np.array([e.n]),
-                             np.array([12.0]), np.zeros(1), np.zeros((1, 16)), sens, True)
+        F, J, bad = p15i_run(
+            e.v,
+            e.i,
+            e.dt,
+            C,
+            f0,
+            0,
+            0.0,
+            1.0,
+            2,
+            1e6,
+            one,
+            np.array([e.n]),
+            np.array([12.0]),
+            np.zeros(1),
+            np.zeros((1, 16)),
+            sens,
+            True,
+        )
         assert bad[0] == -1
         return F, J
 
@@ -224,7 +253,9 @@ def test_divergence_is_detected_with_the_sample() -> None:
     bad = P15Model(W=tuple(W.ravel()), input_range=(0.0, 1.0), force_bound=5000.0, max_step=2e-5)
     assert not bad.stability_certificate()["stable_by_construction"]
     e = _record(n=2000, seed=0)
-    with pytest.raises(SimulationDivergedError, match=r"^p15: simulation diverged at sample \d+") as info:
+    with pytest.raises(
+        SimulationDivergedError, match=r"^p15: simulation diverged at sample \d+"
+    ) as info:
         bad.predict(e)
     assert 0 < info.value.sample < e.n
     assert info.value.model == "p15"
@@ -277,10 +308,18 @@ def test_missing_input_channel() -> None:
 
 @pytest.mark.parametrize(
     ("setting", "value", "field"),
-    [("cutoff", -3.0, "cutoff"), ("cutoff", 5000.0, "cutoff"), ("form", "linear", "form"),
-     ("filter_order", 0, "filter_order"), ("offset", 1, "offset"), ("method", "lsq", "method"),
-     ("max_step", 0.0, "max_step"), ("step_tolerance", -1.0, "step_tolerance"),
-     ("jacobian", "cs", "jacobian"), ("shoot_nfev", -1, "shoot_nfev")],
+    [
+        ("cutoff", -3.0, "cutoff"),
+        ("cutoff", 5000.0, "cutoff"),
+        ("form", "linear", "form"),
+        ("filter_order", 0, "filter_order"),
+        ("offset", 1, "offset"),
+        ("method", "lsq", "method"),
+        ("max_step", 0.0, "max_step"),
+        ("step_tolerance", -1.0, "step_tolerance"),
+        ("jacobian", "cs", "jacobian"),
+        ("shoot_nfev", -1, "shoot_nfev"),
+    ],
 )
 def test_bad_settings_name_the_field(setting: str, value: object, field: str) -> None:
     with pytest.raises(DataValidationError, match=f"^{field}:"):
@@ -301,12 +340,23 @@ def test_real_data_held_out_condition(quiroz_unfiltered_dir: Path) -> None:
         d = pd.read_csv(f)
         cond = re.match(r"sine_(.+mm_.+Hz)_", f.stem)
         assert cond is not None
-        recs.append(Experiment(t=d["t"], x=d["x"], v=d["v"], i=d["i"], F=d["F"], name=f.stem,
-                               metadata={"condition": cond[1]}))
+        recs.append(
+            Experiment(
+                t=d["t"],
+                x=d["x"],
+                v=d["v"],
+                i=d["i"],
+                F=d["F"],
+                name=f.stem,
+                metadata={"condition": cond[1]},
+            )
+        )
     test = [e for e in recs if e.metadata["condition"] == "5mm_3Hz"]
     train = [e for e in recs if e.metadata["condition"] != "5mm_3Hz"]
     model = P15Estimator().fit(train)
     assert model.provenance["stability"]["stable_by_construction"]
     assert model.provenance["step_check"]["passed"]
     sp1 = SP1Estimator().fit(train)
-    assert np.mean([model.score(e).esr for e in test]) < 0.5 * np.mean([sp1.score(e).esr for e in test])
+    assert np.mean([model.score(e).esr for e in test]) < 0.5 * np.mean(
+        [sp1.score(e).esr for e in test]
+    )

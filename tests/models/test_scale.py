@@ -27,7 +27,12 @@ def records():  # type: ignore[no-untyped-def]
 @pytest.fixture()
 def small_windows(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(_scale, "WINDOW_THRESHOLD", 20_000)
-    for name in ("WINDOW_BUDGET", "WINDOW_BUDGET_SPENCER", "WINDOW_BUDGET_P15", "WINDOW_BUDGET_LPV"):
+    for name in (
+        "WINDOW_BUDGET",
+        "WINDOW_BUDGET_SPENCER",
+        "WINDOW_BUDGET_P15",
+        "WINDOW_BUDGET_LPV",
+    ):
         monkeypatch.setattr(_scale, name, 16_000)
     monkeypatch.setattr(_scale, "WINDOW_SECONDS", 4.0)
     monkeypatch.setattr(_scale, "WINDOW_SECONDS_LPV", 4.0)
@@ -35,7 +40,9 @@ def small_windows(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_plan_windows_spread_and_bounded() -> None:
     assert _scale.plan_windows([1000, 2000], 1000.0, threshold=5000) is None
-    plan = _scale.plan_windows([3_600_000, 1_800_000], 1000.0, threshold=1000, budget=600_000, seconds=20.0)
+    plan = _scale.plan_windows(
+        [3_600_000, 1_800_000], 1000.0, threshold=1000, budget=600_000, seconds=20.0
+    )
     assert plan is not None
     used = sum(b - a for _, a, b in plan)
     assert used <= 600_000 + 20_000
@@ -66,7 +73,9 @@ def test_chunked_qr_matches_lstsq(monkeypatch: pytest.MonkeyPatch) -> None:
     ref = np.linalg.lstsq(X, y, rcond=None)[0]
     got = np.linalg.solve(R, z)
     np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(np.linalg.svd(R, compute_uv=False), np.linalg.svd(X, compute_uv=False), rtol=1e-9)
+    np.testing.assert_allclose(
+        np.linalg.svd(R, compute_uv=False), np.linalg.svd(X, compute_uv=False), rtol=1e-9
+    )
 
 
 def test_below_threshold_uses_every_sample(records) -> None:  # type: ignore[no-untyped-def]
@@ -88,7 +97,9 @@ def test_windows_and_full_data_check(kind: str, records, small_windows) -> None:
     check = prov["full_data_check"]
     assert check and all(np.isfinite(float(v)) for v in check.values())
     lo, hi = m.input_range
-    assert lo <= min(float(r.i.min()) for r in records) and hi >= max(float(r.i.max()) for r in records)
+    assert lo <= min(float(r.i.min()) for r in records) and hi >= max(
+        float(r.i.max()) for r in records
+    )
     for r in records:  # every record simulates in the identified range
         assert np.all(np.isfinite(m.predict(r)))
 
@@ -105,19 +116,28 @@ def test_lpv_qr_factor_matches_full_regression(monkeypatch: pytest.MonkeyPatch) 
     for with_const in (False, True):
         X, t = LK.build_regressors(y, u, rho, starts, w, 3, 3, with_const)
         R, z = _scale.lpv_qr_factor(y, u, rho, starts, w, 3, 3, with_const, LK.build_regressors)
-        np.testing.assert_allclose(np.linalg.solve(R, z), np.linalg.lstsq(X, t, rcond=None)[0], rtol=1e-8)
-        np.testing.assert_allclose(np.linalg.svd(R, compute_uv=False), np.linalg.svd(X, compute_uv=False),
-                                   rtol=1e-9)
+        np.testing.assert_allclose(
+            np.linalg.solve(R, z), np.linalg.lstsq(X, t, rcond=None)[0], rtol=1e-8
+        )
+        np.testing.assert_allclose(
+            np.linalg.svd(R, compute_uv=False), np.linalg.svd(X, compute_uv=False), rtol=1e-9
+        )
 
 
-def test_lpv_least_squares_record_by_record_matches_concatenated(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_lpv_least_squares_record_by_record_matches_concatenated(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     from mrdamper.models import _lpv_fit
 
     rng = np.random.default_rng(2)
     U = [rng.standard_normal(n) for n in (1500, 2500)]
     R = [rng.uniform(0, 1, n) for n in (1500, 2500)]
-    F = [np.convolve(u, [0.0, 0.5, 0.2], mode="full")[: u.size] * (1 + r) + 3.0 + 0.01 * rng.standard_normal(u.size)
-         for u, r in zip(U, R)]
+    F = [
+        np.convolve(u, [0.0, 0.5, 0.2], mode="full")[: u.size] * (1 + r)
+        + 3.0
+        + 0.01 * rng.standard_normal(u.size)
+        for u, r in zip(U, R)
+    ]
     rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=np.array([0.8, 1.2]))
     ref = _lpv_fit.ls_identify(rec, 2, 2, True)
     monkeypatch.setattr(_scale, "WINDOW_THRESHOLD", 100)

@@ -17,15 +17,29 @@ from mrdamper.rig import reference_damper
 LEVEL = 0.5
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 30}}
 KINDS = ["lpv", "lti", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
-REDUCED = {"lpv", "lti", "sp1", "sp3", "sp4", "bingham"}  # kinds whose current laws had to be reduced
+REDUCED = {
+    "lpv",
+    "lti",
+    "sp1",
+    "sp3",
+    "sp4",
+    "bingham",
+}  # kinds whose current laws had to be reduced
 
 
 def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:
     t = np.arange(round(4.0 / freq * fs)) / fs
     x = amp * np.sin(2 * np.pi * freq * t)
     v = amp * 2 * np.pi * freq * np.cos(2 * np.pi * freq * t)
-    e = Experiment(t=t, x=x, v=v, F=np.zeros_like(t), i=np.full(t.size, level), name=name,
-                   metadata={"current": level})
+    e = Experiment(
+        t=t,
+        x=x,
+        v=v,
+        F=np.zeros_like(t),
+        i=np.full(t.size, level),
+        name=name,
+        metadata={"current": level},
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         F = reference_damper().predict(e)
@@ -34,7 +48,11 @@ def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -
 
 @pytest.fixture(scope="module")
 def one_level() -> list[Experiment]:
-    return [_sine(0.01, 1.0, LEVEL, "a"), _sine(0.005, 3.0, LEVEL, "bb"), _sine(0.002, 5.0, LEVEL, "ccc")]
+    return [
+        _sine(0.01, 1.0, LEVEL, "a"),
+        _sine(0.005, 3.0, LEVEL, "bb"),
+        _sine(0.002, 5.0, LEVEL, "ccc"),
+    ]
 
 
 @pytest.mark.parametrize("kind", KINDS)

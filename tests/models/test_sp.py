@@ -33,19 +33,40 @@ from mrdamper.models.semiphenomenological import (
 #: Plausible coefficients (SI, current in A) for a ~1.5 kN damper.
 TRUE = {
     "sp1": SP1Model(
-        S=(300.0, 700.0, -150.0, 40.0, 30.0, -10.0, -600.0, 200.0, 100.0,
-           900.0, 600.0, -200.0, 3000.0, 1000.0, -500.0),
+        S=(
+            300.0,
+            700.0,
+            -150.0,
+            40.0,
+            30.0,
+            -10.0,
+            -600.0,
+            200.0,
+            100.0,
+            900.0,
+            600.0,
+            -200.0,
+            3000.0,
+            1000.0,
+            -500.0,
+        ),
         f0=25.0,
         input_range=(0.0, 1.0),
     ),
     "sp2": SP2Model(S=(1000.0, 60.0, -500.0, 1500.0, 4000.0), f0=-40.0, input_range=(0.0, 1.0)),
-    "sp3": SP3Model(S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0), f0=15.0, input_range=(0.0, 1.0)),
-    "sp4": SP4Model(S=(-300.0, 1000.0, 150.0, 50.0, -800.0, 1000.0, 3500.0), f0=0.0, input_range=(0.0, 1.0)),
+    "sp3": SP3Model(
+        S=(800.0, 200.0, 60.0, -1000.0, 900.0, 4000.0), f0=15.0, input_range=(0.0, 1.0)
+    ),
+    "sp4": SP4Model(
+        S=(-300.0, 1000.0, 150.0, 50.0, -800.0, 1000.0, 3500.0), f0=0.0, input_range=(0.0, 1.0)
+    ),
 }
 ESTIMATORS = {"sp1": SP1Estimator, "sp2": SP2Estimator, "sp3": SP3Estimator, "sp4": SP4Estimator}
 
 
-def _excitation(n: int = 4000, fs: float = 1000.0, current: float | None = None, seed: int = 1) -> Experiment:
+def _excitation(
+    n: int = 4000, fs: float = 1000.0, current: float | None = None, seed: int = 1
+) -> Experiment:
     """Two-tone displacement with a slowly varying current in [0, 1] A (or a constant one)."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) / fs
@@ -108,8 +129,10 @@ def test_analytic_jacobian_matches_finite_differences(kind: str) -> None:
         up, dn = theta.copy(), theta.copy()
         up[k] += h
         dn[k] -= h
-        fd = (sp_force_jacobian(e.x, e.v, e.i, comp, power, up, 3.0, True)[0]
-              - sp_force_jacobian(e.x, e.v, e.i, comp, power, dn, 3.0, True)[0]) / (2 * h)
+        fd = (
+            sp_force_jacobian(e.x, e.v, e.i, comp, power, up, 3.0, True)[0]
+            - sp_force_jacobian(e.x, e.v, e.i, comp, power, dn, 3.0, True)[0]
+        ) / (2 * h)
         np.testing.assert_allclose(J[:, k], fd, rtol=1e-5, atol=1e-6 * np.max(np.abs(fd)) + 1e-9)
     np.testing.assert_array_equal(J[:, -1], 1.0)
 
@@ -224,8 +247,15 @@ def _read_quiroz(folder: Path) -> list[Experiment]:
         m = re.match(r"sine_(.+)mm_(.+)Hz_(.+)A", f.stem)
         assert m is not None
         out.append(
-            Experiment(t=d["t"], x=d["x"], v=d["v"], i=d["i"], F=d["F"], name=f.stem,
-                       metadata={"condition": f"{m[1]}mm_{m[2]}Hz"})
+            Experiment(
+                t=d["t"],
+                x=d["x"],
+                v=d["v"],
+                i=d["i"],
+                F=d["F"],
+                name=f.stem,
+                metadata={"condition": f"{m[1]}mm_{m[2]}Hz"},
+            )
         )
     return out
 

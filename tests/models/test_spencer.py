@@ -42,15 +42,34 @@ CAL_MAX_ESR = 0.08
 
 #: A Quiroz-sized damper in the A = 1 convention (z in metres), used for synthetic records.
 TRUE = {
-    "c0a": 800.0, "c0b": 5000.0, "k0": 500.0, "c1a": 20000.0, "c1b": 150000.0, "k1": 700.0,
-    "x0": 0.0, "alpha_a": 8.0e5, "alpha_b": 5.0e6, "gamma": 2.0e6, "beta": 2.5e6, "A": 1.0,
-    "n": 2.0, "eta": 60.0, "f0": 5.0,
+    "c0a": 800.0,
+    "c0b": 5000.0,
+    "k0": 500.0,
+    "c1a": 20000.0,
+    "c1b": 150000.0,
+    "k1": 700.0,
+    "x0": 0.0,
+    "alpha_a": 8.0e5,
+    "alpha_b": 5.0e6,
+    "gamma": 2.0e6,
+    "beta": 2.5e6,
+    "A": 1.0,
+    "n": 2.0,
+    "eta": 60.0,
+    "f0": 5.0,
 }
 
 
-def _record(seed: int = 1, fs: float = 1000.0, duration: float = 3.0, input_: str = "i",
-            amp: float = 0.006, levels: tuple[float, float] = (0.0, 1.0), dwell: float = 0.25,
-            name: str = "synthetic") -> Experiment:
+def _record(
+    seed: int = 1,
+    fs: float = 1000.0,
+    duration: float = 3.0,
+    input_: str = "i",
+    amp: float = 0.006,
+    levels: tuple[float, float] = (0.0, 1.0),
+    dwell: float = 0.25,
+    name: str = "synthetic",
+) -> Experiment:
     """Multi-sine displacement with a seeded stepped electrical input (F left at zero)."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(duration * fs)) / fs
@@ -58,7 +77,13 @@ def _record(seed: int = 1, fs: float = 1000.0, duration: float = 3.0, input_: st
     phases = rng.uniform(0, 2 * np.pi, freqs.size)
     a = amp / np.array([1.0, 2.0, 3.0])
     x = (a[:, None] * np.sin(2 * np.pi * freqs[:, None] * t + phases[:, None])).sum(0)
-    v = (a[:, None] * 2 * np.pi * freqs[:, None] * np.cos(2 * np.pi * freqs[:, None] * t + phases[:, None])).sum(0)
+    v = (
+        a[:, None]
+        * 2
+        * np.pi
+        * freqs[:, None]
+        * np.cos(2 * np.pi * freqs[:, None] * t + phases[:, None])
+    ).sum(0)
     steps = rng.uniform(levels[0], levels[1], int(np.ceil(duration / dwell)) + 1)
     e = steps[(t / dwell).astype(int)]
     chans = {input_: e}
@@ -80,8 +105,16 @@ def _reference(model: SpencerModel, exp: Experiment) -> np.ndarray:
         yd, zd, ud, _ = K._rhs.py_func(xx, vv, ee, s[0], s[1], s[2], p)
         return [yd, zd, ud]
 
-    sol = solve_ivp(rhs, (t[0], t[-1]), [x[0], 0.0, e[0]], method="LSODA", t_eval=t,
-                    rtol=1e-10, atol=1e-13, max_step=exp.dt)
+    sol = solve_ivp(
+        rhs,
+        (t[0], t[-1]),
+        [x[0], 0.0, e[0]],
+        method="LSODA",
+        t_eval=t,
+        rtol=1e-10,
+        atol=1e-13,
+        max_step=exp.dt,
+    )
     assert sol.success, sol.message
     y, z, u = sol.y
     c0 = p[0] + p[1] * u
@@ -101,7 +134,9 @@ def test_kernel_matches_tight_reference_on_switching_voltage_record() -> None:
     ph = rng.uniform(0, 2 * np.pi, 8)
     amp = 0.004 / np.sqrt(8)
     x = (amp * np.sin(2 * np.pi * freqs[:, None] * t + ph[:, None])).sum(0)
-    v = (amp * 2 * np.pi * freqs[:, None] * np.cos(2 * np.pi * freqs[:, None] * t + ph[:, None])).sum(0)
+    v = (
+        amp * 2 * np.pi * freqs[:, None] * np.cos(2 * np.pi * freqs[:, None] * t + ph[:, None])
+    ).sum(0)
     volt = 2.25 * (rng.random(int(t[-1] / 0.01) + 2) > 0.5)[(t / 0.01).astype(int)]
     exp = Experiment(t=t, x=x, v=v, F=0 * t, voltage=volt, name="switching")
     model = spencer1997()
@@ -140,8 +175,10 @@ def test_sensitivities_match_central_differences() -> None:
         pp, pm = p.copy(), p.copy()
         pp[j] += h
         pm[j] -= h
-        fd = (K.simulate(exp.x, exp.v, e, exp.dt, pp, 4, exp.x[0], 0.0, e[0])[0]
-              - K.simulate(exp.x, exp.v, e, exp.dt, pm, 4, exp.x[0], 0.0, e[0])[0]) / (2 * h)
+        fd = (
+            K.simulate(exp.x, exp.v, e, exp.dt, pp, 4, exp.x[0], 0.0, e[0])[0]
+            - K.simulate(exp.x, exp.v, e, exp.dt, pm, 4, exp.x[0], 0.0, e[0])[0]
+        ) / (2 * h)
         scale = np.max(np.abs(G[:, j])) + 1e-12
         assert np.max(np.abs(fd - G[:, j])) / scale < 1e-5, name
 
@@ -153,8 +190,13 @@ def test_rest_state_and_energy_dissipation() -> None:
     fs = 1000.0
     t = np.arange(int(4 * fs)) / fs
     for cur in (0.0, 0.5, 1.0):
-        exp = Experiment(t=t, x=0.005 * np.sin(2 * np.pi * 2 * t),
-                         v=0.005 * 2 * np.pi * 2 * np.cos(2 * np.pi * 2 * t), F=0 * t, i=0 * t + cur)
+        exp = Experiment(
+            t=t,
+            x=0.005 * np.sin(2 * np.pi * 2 * t),
+            v=0.005 * 2 * np.pi * 2 * np.cos(2 * np.pi * 2 * t),
+            F=0 * t,
+            i=0 * t + cur,
+        )
         F = model.predict(exp)
         last = slice(int(2 * fs), int(4 * fs))  # two whole steady cycles
         assert np.trapezoid(F[last] * exp.v[last], t[last]) > 0
@@ -196,8 +238,14 @@ def test_divergence_is_detected_and_names_the_sample() -> None:
     )
     fs = 500.0
     t = np.arange(1000) / fs
-    exp = Experiment(t=t, x=0.02 * np.sin(2 * np.pi * 5 * t), v=0.02 * 2 * np.pi * 5 * np.cos(2 * np.pi * 5 * t),
-                     F=0 * t, voltage=0 * t + 2.25, name="coarse")
+    exp = Experiment(
+        t=t,
+        x=0.02 * np.sin(2 * np.pi * 5 * t),
+        v=0.02 * 2 * np.pi * 5 * np.cos(2 * np.pi * 5 * t),
+        F=0 * t,
+        voltage=0 * t + 2.25,
+        name="coarse",
+    )
     with pytest.raises(SimulationDivergedError) as info:
         model.predict(exp)
     assert info.value.model == "spencer"
@@ -230,8 +278,13 @@ def test_out_of_range_input_policy() -> None:
 
 @pytest.mark.parametrize(
     ("changes", "field"),
-    [({"n": 0.5}, "n"), ({"eta": -1.0}, "eta"), ({"c0a": float("nan")}, "c0a"),
-     ({"substeps": -2}, "substeps"), ({"alpha_a": "big"}, "alpha_a")],
+    [
+        ({"n": 0.5}, "n"),
+        ({"eta": -1.0}, "eta"),
+        ({"c0a": float("nan")}, "c0a"),
+        ({"substeps": -2}, "substeps"),
+        ({"alpha_a": "big"}, "alpha_a"),
+    ],
 )
 def test_bad_parameters_name_the_field(changes: dict, field: str) -> None:
     with pytest.raises(DataValidationError, match=field):
@@ -240,14 +293,21 @@ def test_bad_parameters_name_the_field(changes: dict, field: str) -> None:
 
 @pytest.mark.parametrize(
     ("settings", "field"),
-    [({"fixed": {"kappa": 1.0}}, "fixed"), ({"n_starts": 0}, "n_starts"),
-     ({"weighting": "equal"}, "weighting"), ({"jacobian": "magic"}, "jacobian"),
-     ({"bounds": {"c0a": (5.0, 1.0)}}, "bounds"), ({"start": {"eta": float("inf")}}, "eta"),
-     ({"step_tolerance": 0.0}, "step_tolerance")],
+    [
+        ({"fixed": {"kappa": 1.0}}, "fixed"),
+        ({"n_starts": 0}, "n_starts"),
+        ({"weighting": "equal"}, "weighting"),
+        ({"jacobian": "magic"}, "jacobian"),
+        ({"bounds": {"c0a": (5.0, 1.0)}}, "bounds"),
+        ({"start": {"eta": float("inf")}}, "eta"),
+        ({"step_tolerance": 0.0}, "step_tolerance"),
+    ],
 )
 def test_bad_estimator_settings(settings: dict, field: str) -> None:
     with pytest.raises(DataValidationError, match=field):
-        SpencerEstimator(**settings).fit(_with_force(SpencerModel(**TRUE, input_range=(0, 1)), _record(duration=0.5)))
+        SpencerEstimator(**settings).fit(
+            _with_force(SpencerModel(**TRUE, input_range=(0, 1)), _record(duration=0.5))
+        )
 
 
 def test_from_dict_rejects_other_kind() -> None:
@@ -260,19 +320,39 @@ def test_from_dict_rejects_other_kind() -> None:
 # ----------------------------------------------------------------------------- identification
 def test_known_answer_identification_recovers_parameters() -> None:
     truth = SpencerModel(**TRUE, input="i", input_range=(0, 1))
-    train = ExperimentSet([
-        _with_force(truth, _record(seed=s, duration=1.5, name=f"r{s}")) for s in (21, 22)
-    ])
+    train = ExperimentSet(
+        [_with_force(truth, _record(seed=s, duration=1.5, name=f"r{s}")) for s in (21, 22)]
+    )
     before = [e.F.copy() for e in train]
-    est = SpencerEstimator(n_starts=2, seed=0, screen_nfev=3, max_nfev=80, ftol=1e-12, xtol=1e-12,
-                           gtol=1e-12, fixed={"x0": 0.0, "A": 1.0, "n": 2.0})
+    est = SpencerEstimator(
+        n_starts=2,
+        seed=0,
+        screen_nfev=3,
+        max_nfev=80,
+        ftol=1e-12,
+        xtol=1e-12,
+        gtol=1e-12,
+        fixed={"x0": 0.0, "A": 1.0, "n": 2.0},
+    )
     fit = est.fit(train)
     for e, b in zip(train, before):  # input untouched
         np.testing.assert_array_equal(e.F, b)
     prov = fit.provenance
     assert prov["mean_record_esr"] < 1e-8, prov["mean_record_esr"]
     assert prov["free"] == [n for n in PARAMETER_NAMES if n not in ("x0", "A", "n")]
-    for name in ("c0a", "c0b", "c1a", "c1b", "alpha_a", "alpha_b", "beta", "gamma", "eta", "k1", "f0"):
+    for name in (
+        "c0a",
+        "c0b",
+        "c1a",
+        "c1b",
+        "alpha_a",
+        "alpha_b",
+        "beta",
+        "gamma",
+        "eta",
+        "k1",
+        "f0",
+    ):
         assert getattr(fit, name) == pytest.approx(TRUE[name], rel=1e-2, abs=1e-2), name
     # a fresh record of the same damper is reproduced
     test = _with_force(truth, _record(seed=99, duration=1.0))
@@ -303,8 +383,12 @@ def test_fit_checks_its_integration_step() -> None:
     check = fit.provenance["step_check"]
     assert check["passed"] and 0.0 <= check["max_discrepancy"] < 1e-4
     assert set(check["discrepancy"]) == {"synthetic"}
-    with pytest.warns(RuntimeWarning, match="^spencer: halving the integration step changes the free run"):
-        coarse = SpencerEstimator(n_starts=1, max_nfev=3, substeps=1, step_tolerance=1e-14).fit(train)
+    with pytest.warns(
+        RuntimeWarning, match="^spencer: halving the integration step changes the free run"
+    ):
+        coarse = SpencerEstimator(n_starts=1, max_nfev=3, substeps=1, step_tolerance=1e-14).fit(
+            train
+        )
     assert not coarse.provenance["step_check"]["passed"]
     assert coarse.provenance["step_check"]["max_discrepancy"] > 1e-14
 
@@ -337,12 +421,21 @@ def _read_quiroz(folder: Path) -> ExperimentSet:
     for path in sorted(folder.glob("sine_*.csv")):
         m = _QUIROZ.search(path.name)
         df = pd.read_csv(path)
-        exps.append(Experiment(
-            t=df["t"].to_numpy(), x=df["x"].to_numpy(), v=df["v"].to_numpy(), F=df["F"].to_numpy(),
-            i=df["i"].to_numpy(), name=path.stem,
-            metadata={"current": float(m["cur"]), "amplitude": float(m["amp"]) * 1e-3,
-                      "frequency": float(m["freq"])},
-        ))
+        exps.append(
+            Experiment(
+                t=df["t"].to_numpy(),
+                x=df["x"].to_numpy(),
+                v=df["v"].to_numpy(),
+                F=df["F"].to_numpy(),
+                i=df["i"].to_numpy(),
+                name=path.stem,
+                metadata={
+                    "current": float(m["cur"]),
+                    "amplitude": float(m["amp"]) * 1e-3,
+                    "frequency": float(m["freq"]),
+                },
+            )
+        )
     return ExperimentSet(exps, name=folder.name)
 
 
@@ -366,8 +459,14 @@ def test_spencer1997_on_dyke_record_is_finite(dyke_csv: Path) -> None:
     df = pd.read_csv(dyke_csv, nrows=6000)
     n = len(df)
     t = np.arange(n) / 3004.8
-    exp = Experiment(t=t, x=df["x"].to_numpy(), v=df["v"].to_numpy(), F=df["F"].to_numpy(),
-                     voltage=df["voltage"].to_numpy(), name="dyke")
+    exp = Experiment(
+        t=t,
+        x=df["x"].to_numpy(),
+        v=df["v"].to_numpy(),
+        F=df["F"].to_numpy(),
+        voltage=df["voltage"].to_numpy(),
+        name="dyke",
+    )
     model = spencer1997(range_policy="clip")
     F = model.predict(exp)
     assert np.all(np.isfinite(F))

@@ -34,14 +34,22 @@ def _close():
 
 def _fv(level: float, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
     v = 0.2 * np.sin(np.linspace(0, 4 * np.pi, n))
-    return v, np.where(np.abs(v) < 0.02, (2000 + 8000 * level) * v, np.sign(v) * (40 + 160 * level) + 500 * v)
+    return v, np.where(
+        np.abs(v) < 0.02, (2000 + 8000 * level) * v, np.sign(v) * (40 + 160 * level) + 500 * v
+    )
 
 
 def _record(n: int = 500) -> Experiment:
     t = np.arange(n) / 100.0
     v = 0.1 * np.cos(2 * np.pi * t)
-    return Experiment(t=t, x=0.1 / (2 * np.pi) * np.sin(2 * np.pi * t), v=v, F=800 * np.tanh(v / 0.02),
-                      i=np.full(n, 0.5), name="rec")
+    return Experiment(
+        t=t,
+        x=0.1 / (2 * np.pi) * np.sin(2 * np.pi * t),
+        v=v,
+        F=800 * np.tanh(v / 0.02),
+        i=np.full(n, 0.5),
+        name="rec",
+    )
 
 
 def test_fv_map_one_trace_per_level() -> None:
@@ -58,7 +66,11 @@ def test_zone_fit_draws_data_three_zones_and_limits() -> None:
     _, ax = plt.subplots()
     assert plot_zone_fit(v, F, fit, ax=ax) is ax
     labels = [ln.get_label() for ln in ax.get_lines()]
-    assert labels[0] == "measured" and [lab.split(":")[0] for lab in labels[1:4]] == ["zone I", "zone II", "zone III"]
+    assert labels[0] == "measured" and [lab.split(":")[0] for lab in labels[1:4]] == [
+        "zone I",
+        "zone II",
+        "zone III",
+    ]
     assert len(ax.get_lines()) == 6  # + two zone limits
     assert "1 A" in ax.get_title()
 
@@ -71,7 +83,10 @@ def test_zone_laws_one_panel_and_scale_per_quantity() -> None:
     for row, name in enumerate("mc"):
         for j in range(3):
             ax = axes[row, j]
-            assert [ln.get_label() for ln in ax.get_lines()] == [f"{name}{j + 1} fit", f"{name}{j + 1} law"]
+            assert [ln.get_label() for ln in ax.get_lines()] == [
+                f"{name}{j + 1} fit",
+                f"{name}{j + 1} law",
+            ]
             assert ax.get_ylabel().startswith(f"{name}{j + 1} [")
     # m2 is far steeper than m1: each slope's panel spans its own values, not the largest one's
     _, hi = axes[0, 0].get_ylim()
@@ -95,11 +110,13 @@ def test_lti_hysteresis_and_tracking_panels() -> None:
 
 
 def test_index_boxes_mean_under_each_box() -> None:
-    df = pd.DataFrame({
-        "model": ["lpv"] * 3 + ["sp1"] * 3 + ["p15"],
-        "status": ["ok"] * 6 + ["diverged"],
-        "esr": [0.01, 0.02, 0.03, 0.1, 0.2, 0.3, np.nan],
-    })
+    df = pd.DataFrame(
+        {
+            "model": ["lpv"] * 3 + ["sp1"] * 3 + ["p15"],
+            "status": ["ok"] * 6 + ["diverged"],
+            "esr": [0.01, 0.02, 0.03, 0.1, 0.2, 0.3, np.nan],
+        }
+    )
     ax = plot_index_boxes(df, "esr", order=["lpv", "sp1", "p15"])
     assert [t.get_text() for t in ax.get_xticklabels()] == ["lpv", "sp1", "p15"]
     texts = [t.get_text() for t in ax.texts]
@@ -135,12 +152,30 @@ def test_model_panels_overlay_few_and_draw_every_model_apart() -> None:
     from mrdamper.plotting import plot_model_panels
 
     e = _record()
-    preds = {"a": e.F * 0.98, "b": e.F * 0.9, "c": e.F * 0.7, "wild": e.F * 80, "gone": "diverged at sample 3"}
-    fig = plot_model_panels(e, preds, plane="fx", overlay=["a", "b", "wild"], failed={"wild": "ESR 6e3 > 1"})
+    preds = {
+        "a": e.F * 0.98,
+        "b": e.F * 0.9,
+        "c": e.F * 0.7,
+        "wild": e.F * 80,
+        "gone": "diverged at sample 3",
+    }
+    fig = plot_model_panels(
+        e, preds, plane="fx", overlay=["a", "b", "wild"], failed={"wild": "ESR 6e3 > 1"}
+    )
     top, *panels = fig.axes
-    assert [ln.get_label() for ln in top.get_lines()] == ["measured", "a", "b"]  # failed never overlaid
+    assert [ln.get_label() for ln in top.get_lines()] == [
+        "measured",
+        "a",
+        "b",
+    ]  # failed never overlaid
     assert top.get_xlabel() == "x [mm]" and top.get_ylabel() == "F [N]"
-    assert [ax.get_title().split(" ")[0].rstrip(":") for ax in panels] == ["a", "b", "c", "wild", "gone"]
+    assert [ax.get_title().split(" ")[0].rstrip(":") for ax in panels] == [
+        "a",
+        "b",
+        "c",
+        "wild",
+        "gone",
+    ]
     assert panels[3].get_ylim()[1] >= 80 * e.F.max()  # its own scale
     assert panels[0].get_ylim()[1] < 2 * e.F.max()  # shared scale of the others
     assert "FAILED" in panels[4].get_title()

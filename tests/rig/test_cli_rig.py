@@ -35,14 +35,33 @@ def test_rig_doe_writes_files_and_refuses_to_overwrite(
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("error:") and "--force" in err and len(err.strip().splitlines()) == 1
-    main(["rig", "doe", "--out", str(out), "--seed", "3", "--scale", "0.07", "--fs", "200", "--force",
-          "--workers", "2"])
+    main(
+        [
+            "rig",
+            "doe",
+            "--out",
+            str(out),
+            "--seed",
+            "3",
+            "--scale",
+            "0.07",
+            "--fs",
+            "200",
+            "--force",
+            "--workers",
+            "2",
+        ]
+    )
     assert (out / "exp1_rep01.csv").read_bytes() == first
 
 
 @pytest.mark.parametrize(
     "args, word",
-    [(["--scale", "0.001"], "scale"), (["--fs", "-5"], "fs"), (["--damper", "nonsense"], "--damper")],
+    [
+        (["--scale", "0.001"], "scale"),
+        (["--fs", "-5"], "fs"),
+        (["--damper", "nonsense"], "--damper"),
+    ],
 )
 def test_rig_doe_bad_options_one_line_error(
     args: list[str], word: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
@@ -69,8 +88,24 @@ def test_rig_doe_parquet_reads_back_and_says_how_much(
 
     csv_out, pq_out = tmp_path / "csv", tmp_path / "pq"
     main(["rig", "doe", "--out", str(csv_out), "--seed", "3", "--scale", "0.07", "--fs", "200"])
-    main(["rig", "doe", "--out", str(pq_out), "--seed", "3", "--scale", "0.07", "--fs", "200",
-          "--format", "parquet", "--workers", "2"])
+    main(
+        [
+            "rig",
+            "doe",
+            "--out",
+            str(pq_out),
+            "--seed",
+            "3",
+            "--scale",
+            "0.07",
+            "--fs",
+            "200",
+            "--format",
+            "parquet",
+            "--workers",
+            "2",
+        ]
+    )
     said = capsys.readouterr().out
     files = sorted(pq_out.glob("*.parquet"))
     assert len(files) == 61 and not list(pq_out.glob("exp*.csv"))
@@ -84,8 +119,9 @@ def test_rig_doe_parquet_reads_back_and_says_how_much(
             assert getattr(ra, ch).tobytes() == getattr(rb, ch).tobytes()
 
 
-def test_rig_doe_rejects_unknown_format(fast_damper: None, tmp_path: Path,
-                                        capsys: pytest.CaptureFixture[str]) -> None:
+def test_rig_doe_rejects_unknown_format(
+    fast_damper: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     with pytest.raises(SystemExit):
         main(["rig", "doe", "--out", str(tmp_path / "x"), "--format", "hdf5", "--scale", "0.07"])
     err = capsys.readouterr().err
@@ -98,7 +134,21 @@ def test_fit_reads_a_doe_folder_through_its_manifest(
     fast_damper: None, tmp_path: Path, capsys: pytest.CaptureFixture[str], fmt: str
 ) -> None:
     out = tmp_path / "doe"
-    main(["rig", "doe", "--out", str(out), "--scale", "0.07", "--fs", "200", "--format", fmt, "--no-progress"])
+    main(
+        [
+            "rig",
+            "doe",
+            "--out",
+            str(out),
+            "--scale",
+            "0.07",
+            "--fs",
+            "200",
+            "--format",
+            fmt,
+            "--no-progress",
+        ]
+    )
     capsys.readouterr()
     main(["fit", "bingham", str(out), "--out", str(tmp_path / "b.json")])
     said = capsys.readouterr().out

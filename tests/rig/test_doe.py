@@ -23,7 +23,10 @@ def doe(damper_cls):  # type: ignore[no-untyped-def]
 
 
 def test_table_ii_rows_match_the_paper() -> None:
-    rows = [(s.experiment, s.displacement, s.pattern, s.duration, s.replicates, s.max_frequency) for s in TABLE_II]
+    rows = [
+        (s.experiment, s.displacement, s.pattern, s.duration, s.replicates, s.max_frequency)
+        for s in TABLE_II
+    ]
     assert rows == [
         (1, "Road Profile", "ICPS", 30.0, 11, 5.5),
         (2, "Road Profile", "APRBS", 30.0, 11, 4.5),
@@ -41,7 +44,9 @@ def test_table_ii_rows_match_the_paper() -> None:
 def test_records_names_and_metadata(doe) -> None:
     assert len(doe) == 61
     assert doe[0].name == "exp1_rep01" and doe[-1].name == "exp8_rep07"
-    assert Counter(e.metadata["experiment"] for e in doe) == {s.experiment: s.replicates for s in TABLE_II}
+    assert Counter(e.metadata["experiment"] for e in doe) == {
+        s.experiment: s.replicates for s in TABLE_II
+    }
     for e in doe:
         spec = TABLE_II[e.metadata["experiment"] - 1]
         m = e.metadata
@@ -145,7 +150,9 @@ def test_write_records_byte_identical_and_no_overwrite(doe, tmp_path: Path) -> N
     assert back.names == sub.names
     for e, ref in zip(back, sub):
         for ch in ("t", "x", "v", "i", "F"):
-            np.testing.assert_array_equal(getattr(e, ch), getattr(ref, ch))  # exact float round trip
+            np.testing.assert_array_equal(
+                getattr(e, ch), getattr(ref, ch)
+            )  # exact float round trip
         for key in ("experiment", "replicate", "pattern", "displacement", "seed", "source"):
             assert e.metadata[key] == ref.metadata[key]
     with pytest.raises(OutputExistsError, match="not empty"):
@@ -163,12 +170,16 @@ def test_write_doe_writes_every_record_and_refuses_to_overwrite(damper, tmp_path
     out = tmp_path / "doe"
     manifest = write_doe(out, seed=4, scale=0.07, damper=damper)
     table = pd.read_csv(manifest)
-    assert len(table) == 61 and sorted(p.name for p in out.iterdir()) == sorted([*table["file"], "manifest.csv"])
+    assert len(table) == 61 and sorted(p.name for p in out.iterdir()) == sorted(
+        [*table["file"], "manifest.csv"]
+    )
     assert table["seed"].tolist() == record_seeds(4, 61)
     # a written record equals the record rebuilt from its manifest seed (full float precision)
     row = table.iloc[40]
     spec = TABLE_II[int(row["experiment"]) - 1]
-    rebuilt = make_record(spec, int(row["replicate"]), int(row["seed"]), VirtualRig(damper=damper), 0.07)
+    rebuilt = make_record(
+        spec, int(row["replicate"]), int(row["seed"]), VirtualRig(damper=damper), 0.07
+    )
     frame = pd.read_csv(out / row["file"])
     assert list(frame.columns) == ["t", "x", "v", "i", "F"]
     np.testing.assert_array_equal(frame["F"].to_numpy(), rebuilt.F)

@@ -29,7 +29,9 @@ def test_actuator_tracks_slow_motion_and_matches_second_order_response() -> None
         keep = t >= 2.0  # past the start transient; whole periods
         g, p = _gain_phase(x[keep], u[keep], f, t[keep])
         w = 2 * np.pi * f
-        H = wn**2 / (wn**2 - w**2 + 2j * 0.7 * wn * w)  # continuous loop; at wn: 1/(2 zeta), -90 deg
+        H = wn**2 / (
+            wn**2 - w**2 + 2j * 0.7 * wn * w
+        )  # continuous loop; at wn: 1/(2 zeta), -90 deg
         # the zero-order hold of the command adds about half a sample of delay
         assert g == pytest.approx(abs(H), rel=0.005)
         assert p == pytest.approx(np.angle(H) - w / (2 * FS), abs=0.005)

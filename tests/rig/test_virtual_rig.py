@@ -37,7 +37,9 @@ def test_same_seed_same_bytes_other_seed_other_noise(damper, commands) -> None:
 
 
 def test_ideal_rig_force_is_the_damper_on_the_true_motion(damper, commands) -> None:
-    rig = VirtualRig(damper=damper, sensors=SensorSuite.ideal(), variation=ReplicateVariation.none())
+    rig = VirtualRig(
+        damper=damper, sensors=SensorSuite.ideal(), variation=ReplicateVariation.none()
+    )
     rec = rig.run(*commands, seed=0)
     x_true, v_true = rig.actuator.track(commands[0], FS)
     i_true = rig.driver.drive(commands[1], FS)
@@ -59,9 +61,14 @@ def test_default_rig_record_is_close_to_but_not_the_model(damper, commands) -> N
 
 
 def test_replicates_differ_by_drawn_variation(damper, commands) -> None:
-    rig = VirtualRig(damper=damper, sensors=SensorSuite.ideal(),
-                     variation=ReplicateVariation(gain_std=0.05, drift_std=0.0, offset_std=0.0))
-    base = VirtualRig(damper=damper, sensors=SensorSuite.ideal(), variation=ReplicateVariation.none())
+    rig = VirtualRig(
+        damper=damper,
+        sensors=SensorSuite.ideal(),
+        variation=ReplicateVariation(gain_std=0.05, drift_std=0.0, offset_std=0.0),
+    )
+    base = VirtualRig(
+        damper=damper, sensors=SensorSuite.ideal(), variation=ReplicateVariation.none()
+    )
     F0 = base.run(*commands, seed=0).F
     gains = []
     for seed in range(8):
@@ -141,9 +148,13 @@ def test_non_finite_damper_force_is_reported(damper, commands) -> None:
 
 
 # the damper fixture is an immutable value, so sharing it across examples is safe
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(seed=st.integers(0, 2**40), fmax=st.floats(1.0, 8.0), high=st.floats(0.1, 1.0))
-def test_any_seed_gives_a_valid_in_stroke_record(damper, seed: int, fmax: float, high: float) -> None:
+def test_any_seed_gives_a_valid_in_stroke_record(
+    damper, seed: int, fmax: float, high: float
+) -> None:
     x = road_profile(FS, 3.0, seed=seed, max_frequency=fmax)
     i = aprbs(FS, 3.0, low=0.0, high=high, min_hold=0.1, seed=seed + 1)
     rec = VirtualRig(damper=damper).run(x, i, seed=seed)

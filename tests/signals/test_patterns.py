@@ -23,7 +23,9 @@ def _run_lengths(x: np.ndarray) -> np.ndarray:
     width=st.floats(0.1, 3.0),
     min_hold=st.sampled_from([0.01, 0.05, 0.2]),
 )
-def test_aprbs_levels_in_range_and_min_hold(seed: int, low: float, width: float, min_hold: float) -> None:
+def test_aprbs_levels_in_range_and_min_hold(
+    seed: int, low: float, width: float, min_hold: float
+) -> None:
     x = aprbs(1000.0, 4.0, low=low, high=low + width, min_hold=min_hold, seed=seed)
     assert x.size == 4000
     assert x.min() >= low and x.max() <= low + width

@@ -27,7 +27,16 @@ def _slope(x: np.ndarray, fmin: float, fmax: float, nperseg: int) -> float:
 
 def test_class_table_matches_iso_8608() -> None:
     # ISO 8608 geometric means of Gd(n0) [1e-6 m^3]: A 16, B 64, C 256, D 1024, E 4096 ... H 262144
-    expected = {"A": 16, "B": 64, "C": 256, "D": 1024, "E": 4096, "F": 16384, "G": 65536, "H": 262144}
+    expected = {
+        "A": 16,
+        "B": 64,
+        "C": 256,
+        "D": 1024,
+        "E": 4096,
+        "F": 16384,
+        "G": 65536,
+        "H": 262144,
+    }
     assert {k: round(v * 1e6) for k, v in ISO_8608_CLASSES.items()} == expected
     assert float(spatial_psd(0.2, "A")) == pytest.approx(16e-6 / 4)
     # temporal PSD: G(f) = Gd(f/V)/V
@@ -72,8 +81,17 @@ def test_long_road_profile_spectrum_and_amplitude_changes() -> None:
 
 
 def test_physical_amplitude_matches_iso_band_integral() -> None:
-    x = road_profile(FS, 60.0, seed=5, road_class="A", speed=10.0, max_frequency=5.0,
-                     min_frequency=0.5, fill=None, taper=0.0)
+    x = road_profile(
+        FS,
+        60.0,
+        seed=5,
+        road_class="A",
+        speed=10.0,
+        max_frequency=5.0,
+        min_frequency=0.5,
+        fill=None,
+        taper=0.0,
+    )
     # random-phase method with deterministic amplitudes: variance is the Riemann sum of G(f) df
     expected = band_variance("A", 10.0, 0.5, 5.0)
     assert np.var(x) == pytest.approx(expected, rel=0.05)

@@ -60,11 +60,30 @@ def layout_problems(html_file: Path, width: int, browser: str, workdir: Path) ->
     probe = workdir / f"probe-{width}-{html_file.name}"
     probe.write_text(text.replace("</body>", _PROBE + "</body>"), encoding="utf-8")
     proc = subprocess.run(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", f"--window-size={width},1200",
-         "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()],
-        capture_output=True, text=True, timeout=180, check=False,
+        [
+            browser,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            f"--window-size={width},1200",
+            "--virtual-time-budget=5000",
+            "--dump-dom",
+            probe.as_uri(),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=180,
+        check=False,
     )
     m = re.search(r'<pre id="layout-probe">(.*?)</pre>', proc.stdout, re.DOTALL)
     if m is None:
-        raise RuntimeError(f"the layout probe did not run (exit {proc.returncode}): {proc.stderr[-500:]}")
-    return json.loads(m.group(1).replace("&quot;", '"').replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
+        raise RuntimeError(
+            f"the layout probe did not run (exit {proc.returncode}): {proc.stderr[-500:]}"
+        )
+    return json.loads(
+        m.group(1)
+        .replace("&quot;", '"')
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&")
+    )

@@ -38,13 +38,24 @@ class ToyEstimator(Estimator):
 
     def fit(self, data):  # type: ignore[no-untyped-def]
         exps = self._as_set(data)
-        X = np.concatenate([np.column_stack([np.tanh(e.v / 0.02), e.electrical(self.input) * np.tanh(e.v / 0.02), e.v]) for e in exps])
+        X = np.concatenate(
+            [
+                np.column_stack(
+                    [np.tanh(e.v / 0.02), e.electrical(self.input) * np.tanh(e.v / 0.02), e.v]
+                )
+                for e in exps
+            ]
+        )
         y = np.concatenate([e.F for e in exps])
         theta = np.linalg.lstsq(X, y, rcond=None)[0]
         theta = theta + self.noise * np.random.default_rng(self.seed).standard_normal(3)
         i_all = np.concatenate([e.electrical(self.input) for e in exps])
-        return ToyModel(theta=theta, input=self.input, input_range=(float(i_all.min()), float(i_all.max())),
-                        provenance={"records": [e.name for e in exps]})
+        return ToyModel(
+            theta=theta,
+            input=self.input,
+            input_range=(float(i_all.min()), float(i_all.max())),
+            provenance={"records": [e.name for e in exps]},
+        )
 
 
 @dataclass(frozen=True)
@@ -86,7 +97,9 @@ register(FailEstimator, FailModel)
 register(DivergeEstimator, DivergeModel)
 
 
-def _record(name: str, fs: float, duration: float, i: np.ndarray | float, seed: int, **meta: object) -> Experiment:
+def _record(
+    name: str, fs: float, duration: float, i: np.ndarray | float, seed: int, **meta: object
+) -> Experiment:
     rng = np.random.default_rng(seed)
     t = np.arange(round(duration * fs)) / fs
     f = 1.5 + 0.5 * rng.random()
@@ -107,11 +120,33 @@ def small_doe(fs: float = 200.0, reps: int = 3, seed: int = 0) -> ExperimentSet:
             if pattern == "SC":
                 n = int(1.5 * fs)
                 cur = np.concatenate([np.full(n, lev) for lev in (0.0, 0.5, 1.0)])
-                recs.append(_record(f"exp{exp}_rep{rep:02d}", fs, 4.5, cur, s, experiment=exp, replicate=rep, pattern=pattern))
+                recs.append(
+                    _record(
+                        f"exp{exp}_rep{rep:02d}",
+                        fs,
+                        4.5,
+                        cur,
+                        s,
+                        experiment=exp,
+                        replicate=rep,
+                        pattern=pattern,
+                    )
+                )
             else:
                 n = int(2.0 * fs)
                 cur = np.repeat(np.random.default_rng(s).uniform(0, 1, 8), n // 8)
-                recs.append(_record(f"exp{exp}_rep{rep:02d}", fs, 2.0, cur, s, experiment=exp, replicate=rep, pattern=pattern))
+                recs.append(
+                    _record(
+                        f"exp{exp}_rep{rep:02d}",
+                        fs,
+                        2.0,
+                        cur,
+                        s,
+                        experiment=exp,
+                        replicate=rep,
+                        pattern=pattern,
+                    )
+                )
     return ExperimentSet(recs, name="small-doe")
 
 

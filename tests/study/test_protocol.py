@@ -23,7 +23,10 @@ from mrdamper.study.splits import roles_frame
 def test_selection_match_take_and_globs(doe) -> None:
     sel = Selection(match={"experiment": [1, 2]}, group_by="experiment", take=2)
     assert sel.select(doe).names == ["exp1_rep01", "exp1_rep02", "exp2_rep01", "exp2_rep02"]
-    assert Selection(names=("exp6_*",), exclude={"replicate": 1}).select(doe).names == ["exp6_rep02", "exp6_rep03"]
+    assert Selection(names=("exp6_*",), exclude={"replicate": 1}).select(doe).names == [
+        "exp6_rep02",
+        "exp6_rep03",
+    ]
     assert len(Selection().select(doe)) == len(doe)
 
 
@@ -39,13 +42,19 @@ def test_doe_default_protocol_never_scores_training_records(doe) -> None:
 
 
 def test_leave_one_group_out_and_time_split(doe) -> None:
-    p = Protocol(train=Selection(), score=Selection(), split=Split("leave-one-group-out", key="experiment"))
+    p = Protocol(
+        train=Selection(), score=Selection(), split=Split("leave-one-group-out", key="experiment")
+    )
     folds = make_folds(doe, p)
     assert [f.name for f in folds] == [f"experiment={k}" for k in (1, 2, 3, 6, 7, 8)]
     for f in folds:
         assert {e.metadata["experiment"] for e in f.score} == {int(f.name.split("=")[1])}
         assert set(f.train.names).isdisjoint(f.score.names)
-    p = Protocol(train=Selection(names=("exp1_rep01",)), score=Selection(names=("exp1_rep01",)), split=Split("time", fraction=0.7))
+    p = Protocol(
+        train=Selection(names=("exp1_rep01",)),
+        score=Selection(names=("exp1_rep01",)),
+        split=Split("time", fraction=0.7),
+    )
     (fold,) = make_folds(doe, p)
     tr, sc = fold.train[0], fold.score[0]
     assert tr.n + sc.n == doe["exp1_rep01"].n
@@ -88,7 +97,10 @@ def test_protocol_toml_file(tmp_path) -> None:
     [
         ({"trian": {}}, r"unknown key\(s\) \['trian'\]"),
         ({"split": {"kind": "random"}}, "split.kind: expected"),
-        ({"split": {"kind": "time", "fraction": 1.5}}, r"split.fraction: expected a number in \(0, 1\), got 1.5"),
+        (
+            {"split": {"kind": "time", "fraction": 1.5}},
+            r"split.fraction: expected a number in \(0, 1\), got 1.5",
+        ),
         ({"split": {"kind": "leave-one-group-out"}}, "split.key: leave-one-group-out needs"),
         ({"models": ["sp1", "sp1"]}, r"duplicate label\(s\) \['sp1'\]"),
         ({"models": [{"settings": {}}]}, "has no 'kind'"),
@@ -121,14 +133,19 @@ def test_load_protocol_errors(tmp_path) -> None:
 
 
 def test_per_kind_settings_are_defaults_that_model_entries_override(tmp_path) -> None:
-    p = Protocol(models=["lpv", ModelSpec("lpv", {"fs": 500.0}, label="lpv-500"), "sp1"],
-                 settings={"lpv": {"fs": 200.0, "n_m": 2}})
+    p = Protocol(
+        models=["lpv", ModelSpec("lpv", {"fs": 500.0}, label="lpv-500"), "sp1"],
+        settings={"lpv": {"fs": 200.0, "n_m": 2}},
+    )
     assert p.settings_for(p.models[0]) == {"fs": 200.0, "n_m": 2}
     assert p.settings_for(p.models[1]) == {"fs": 500.0, "n_m": 2}
     assert p.settings_for(p.models[2]) == {}
     path = tmp_path / "p.json"
     path.write_text(p.to_json())
-    assert load_protocol(path).settings_for(load_protocol(path).models[1]) == {"fs": 500.0, "n_m": 2}
+    assert load_protocol(path).settings_for(load_protocol(path).models[1]) == {
+        "fs": 500.0,
+        "n_m": 2,
+    }
     with pytest.raises(SchemaError, match="settings: expected a table"):
         protocol_from_dict({"settings": {"lpv": 3}})
     assert load_protocol("dyke").range_policy == "clip"

@@ -44,7 +44,9 @@ def test_failed_models_are_named_with_their_reason(result) -> None:
     failed = failed_models(result)
     assert set(failed) == {"wild", "toydiverge"}
     s = result.summary.set_index("model")
-    assert s.loc["wild", "esr_mean"] > FAILED_ESR and s.loc["wild", "n_failed"] == 0  # ok rows, still failed
+    assert (
+        s.loc["wild", "esr_mean"] > FAILED_ESR and s.loc["wild", "n_failed"] == 0
+    )  # ok rows, still failed
     assert "mean ESR" in failed["wild"] and "diverged" in failed["toydiverge"]
     assert overlay_models(result, failed) == ["toy"]
 
@@ -54,13 +56,18 @@ def test_a_failed_model_gets_its_own_panel_and_scale(result, name) -> None:
     fig = make_figures(result)[name]
     assert not isinstance(fig, str), fig
     top = fig.axes[0]
-    assert [ln.get_label() for ln in top.get_lines()] == ["measured", "toy"]  # nothing failed overlaid
+    assert [ln.get_label() for ln in top.get_lines()] == [
+        "measured",
+        "toy",
+    ]  # nothing failed overlaid
     panels = {ax.get_title().split(" ")[0].rstrip(":"): ax for ax in fig.axes[1:]}
     assert set(panels) == {"toy", "wild", "toydiverge"}  # every model keeps a panel
     F = result.showcase.record.F
     span = F.max() - F.min()
     lo, hi = panels["toy"].get_ylim()
-    assert lo >= F.min() - 0.3 * span and hi <= F.max() + 0.3 * span  # shared scale follows the measurement
+    assert (
+        lo >= F.min() - 0.3 * span and hi <= F.max() + 0.3 * span
+    )  # shared scale follows the measurement
     assert "FAILED" in panels["wild"].get_title() and "FAILED" in panels["toydiverge"].get_title()
     wild = panels["wild"].get_lines()[1].get_ydata()
     wlo, whi = panels["wild"].get_ylim()
@@ -73,9 +80,13 @@ def test_tables_keep_failed_rows_with_status_units_and_comparisons(result) -> No
     tab = summary_table(result.summary, "toy", failed_models(result)).set_index("model")
     assert list(tab.index) == ["toy", "wild", "toydiverge"]
     assert tab.loc["wild", "status"] == "failed" and tab.loc["toy", "status"] == "ok"
-    assert tab.loc["toydiverge", "scored (ok / failed)"].endswith(f"/ {int(result.summary['n_failed'].iloc[2])}")
+    assert tab.loc["toydiverge", "scored (ok / failed)"].endswith(
+        f"/ {int(result.summary['n_failed'].iloc[2])}"
+    )
     for col in tab.columns:
-        assert re.search(r"\[[^\]]+\]|model|status|scored|rank", col), f"column without a unit: {col}"
+        assert re.search(r"\[[^\]]+\]|model|status|scored|rank", col), (
+            f"column without a unit: {col}"
+        )
     # the comparison column is about the reference against the row, worded like the headline
     assert tab.loc["toy", "toy ESR vs this model"] == "reference"
     assert tab.loc["wild", "toy ESR vs this model"].endswith("% lower")
@@ -88,7 +99,9 @@ def test_report_html_rows_rounding_and_failed_note(result, tmp_path) -> None:
     cells = re.findall(r"<td[^>]*>([^<]*)</td>", html)
     floats = [c for c in cells if re.fullmatch(r"-?\d*\.\d+(e[-+]\d+)?", c)]
     sig = [re.sub(r"^0+", "", c.lstrip("-").split("e")[0].replace(".", "")) for c in floats]
-    assert floats and max(len(d) for d in sig) <= 4, max(zip(map(len, sig), floats))  # 4 significant digits
+    assert floats and max(len(d) for d in sig) <= 4, max(
+        zip(map(len, sig), floats)
+    )  # 4 significant digits
     assert PAPER_HEADLINE["text"] in html and "51 %" in html and "36.8 %" in html
     numbers = [int(n) for n in re.findall(r"<b>Figure (\d+)</b>", html)]
     assert numbers == list(range(1, len(numbers) + 1))  # consecutive, whatever the paper skips
@@ -97,15 +110,23 @@ def test_report_html_rows_rounding_and_failed_note(result, tmp_path) -> None:
 
 def test_captions_follow_the_data_origin(result) -> None:
     measured = render_report(result, result.summary, {})
-    assert "measured data" in measured and "Spencer model" not in measured and "virtual rig, whose" not in measured
-    rig = dataclasses.replace(result, info={**result.info, "data_origin": "virtual rig (spencer damper)"})
+    assert (
+        "measured data" in measured
+        and "Spencer model" not in measured
+        and "virtual rig, whose" not in measured
+    )
+    rig = dataclasses.replace(
+        result, info={**result.info, "data_origin": "virtual rig (spencer damper)"}
+    )
     text = render_report(rig, rig.summary, {})
     assert "whose damper is a spencer model" in text and "true structure here" in text
 
 
 def test_the_showcase_is_the_most_informative_record() -> None:
-    recs = [_record(f"c{c}_{lev}A", 200.0, 2.0, lev, seed=k, condition=f"c{c}", current=lev)
-            for k, (c, lev) in enumerate((c, lev) for c in (1, 2) for lev in (0.0, 1.0, 0.5))]
+    recs = [
+        _record(f"c{c}_{lev}A", 200.0, 2.0, lev, seed=k, condition=f"c{c}", current=lev)
+        for k, (c, lev) in enumerate((c, lev) for c in (1, 2) for lev in (0.0, 1.0, 0.5))
+    ]
     proto = Protocol(split=Split("leave-one-group-out", key="condition"), analysis=Selection())
     res = run_study(ExperimentSet(recs), proto, ["toy"], workers=1, progress=False)
     assert res.showcase.record.metadata["current"] == 1.0  # not the first (0 A) record
@@ -125,7 +146,11 @@ def test_esr_per_group_and_law_tables(result) -> None:
     laws = result.analyses["all"].laws
     tabs = laws_table(laws)
     slopes = tabs["slopes m_j(i) [N s/m]"]
-    assert list(slopes.columns[1:4]) == ["gamma_0 [N s/m]", "gamma_1 [N s/(m A)]", "gamma_2 [N s/(m A^2)]"]
+    assert list(slopes.columns[1:4]) == [
+        "gamma_0 [N s/m]",
+        "gamma_1 [N s/(m A)]",
+        "gamma_2 [N s/(m A^2)]",
+    ]
     np.testing.assert_array_equal(slopes.iloc[:, 1:4].to_numpy(), laws.gamma_m)
 
 
@@ -135,8 +160,10 @@ def test_layout_probe_catches_an_overflowing_table(tmp_path) -> None:
         pytest.skip("no headless browser (chromium) installed: apt-get install chromium")
     page = tmp_path / "wide.html"
     row = "".join(f"<td>{k:08d}</td>" for k in range(60))
-    page.write_text(f"<html><body><table><tr>{row}</tr></table>"
-                    f'<div style="overflow-x:auto"><table><tr>{row}</tr></table></div></body></html>')
+    page.write_text(
+        f"<html><body><table><tr>{row}</tr></table>"
+        f'<div style="overflow-x:auto"><table><tr>{row}</tr></table></div></body></html>'
+    )
     got = layout_problems(page, 800, browser, tmp_path)
     assert got["tables"] == 2
     assert any(p.startswith("table 0") for p in got["problems"])  # the bare one overflows
@@ -163,11 +190,15 @@ def test_energy_table_measured_first_then_each_model_on_the_same_cycles(result) 
     e = sc.record
     W = energy_per_cycle(e.t, e.x, e.v, e.F)
     assert W.size >= 1 and tab.loc["measured", "cycles"] == W.size
-    assert tab.loc["measured", "energy_J"] == pytest.approx(W.mean()) and W.mean() > 0  # a damper dissipates
+    assert (
+        tab.loc["measured", "energy_J"] == pytest.approx(W.mean()) and W.mean() > 0
+    )  # a damper dissipates
     assert abs(tab.loc["toy", "diff_pct"]) < 5  # the true structure dissipates what was measured
     assert tab.loc["wild", "diff_pct"] > 100 and np.isnan(tab.loc["toydiverge", "energy_J"])
     short = e.slice(0, int(0.3 * e.fs))  # less than one displacement cycle
-    whole = energy_table(Showcase(fold="all", record=short, predictions={"toy": sc.predictions["toy"][: short.n]}))
+    whole = energy_table(
+        Showcase(fold="all", record=short, predictions={"toy": sc.predictions["toy"][: short.n]})
+    )
     assert whole["cycles"].iloc[0] == 0 and whole["basis"].iloc[0].startswith("whole record")
 
 
@@ -179,8 +210,11 @@ def test_every_figure_is_drawn_for_print(result) -> None:
     for name, fig in figs.items():
         assert fig.get_size_inches()[0] <= 7.0 + 1e-9, name  # the text width of an A4 / letter page
         fig.canvas.draw()
-        small = [(t.get_text(), t.get_fontsize()) for t in fig.findobj(Text)
-                 if t.get_visible() and t.get_text().strip() and t.get_fontsize() < 7.0]
+        small = [
+            (t.get_text(), t.get_fontsize())
+            for t in fig.findobj(Text)
+            if t.get_visible() and t.get_text().strip() and t.get_fontsize() < 7.0
+        ]
         assert not small, (name, small[:5])
         for ax in fig.axes:
             if ax.get_visible() and ax.has_data():

@@ -31,7 +31,11 @@ def test_failed_models_stay_as_rows_with_their_error(result, doe) -> None:
     assert (r.loc[r["model"] == "toy", "status"] == "ok").all()
     fail = r[r["model"] == "toyfail"]
     assert (fail["status"] == "fit-failed").all() and fail["esr"].isna().all()
-    assert fail["error"].str.contains("IdentificationError: toyfail: regression matrix is singular").all()
+    assert (
+        fail["error"]
+        .str.contains("IdentificationError: toyfail: regression matrix is singular")
+        .all()
+    )
     div = r[r["model"] == "toydiverge"]
     assert (div["status"] == "diverged").all()
     assert div["error"].str.contains("diverged at sample 7").all()
@@ -63,8 +67,12 @@ def test_same_seed_gives_same_results_across_executors(doe) -> None:
 
 def test_dask_local_cluster_gives_the_same_results(doe) -> None:
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cl, \
-            distributed.Client(cl) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cl,
+        distributed.Client(cl) as client,
+    ):
         d = run_study(doe, doe_protocol(), MODELS, scheduler=client, progress=False)
     s = run_study(doe, doe_protocol(), MODELS, workers=1, progress=False)
     strip = [col for col in s.results.columns if col not in TIMING_COLUMNS]
@@ -75,19 +83,35 @@ def test_dask_local_cluster_gives_the_same_results(doe) -> None:
 def test_unknown_model_or_setting_is_refused_before_running(doe) -> None:
     with pytest.raises(SchemaError, match="unknown kind 'nope'"):
         run_study(doe, doe_protocol(), ["nope"], workers=1, progress=False)
-    with pytest.raises(SchemaError, match=r"models.toy.settings: .*unexpected keyword argument 'order'"):
+    with pytest.raises(
+        SchemaError, match=r"models.toy.settings: .*unexpected keyword argument 'order'"
+    ):
         run_study(doe, doe_protocol(), [ModelSpec("toy", {"order": 3})], workers=1, progress=False)
 
 
 def test_write_outputs_and_report(result, tmp_path) -> None:
     out = result.write(tmp_path / "out")
     names = {p.name for p in out.iterdir()}
-    assert {"results.csv", "summary.csv", "fits.csv", "roles.csv", "protocol.json", "study.json", "report.html",
-            "models", "figures"} <= names
+    assert {
+        "results.csv",
+        "summary.csv",
+        "fits.csv",
+        "roles.csv",
+        "protocol.json",
+        "study.json",
+        "report.html",
+        "models",
+        "figures",
+    } <= names
     res = pd.read_csv(out / "results.csv")
     kept = [c for c in result.results.columns if c not in TIMING_COLUMNS]
     assert len(res) == len(result.results) and list(res.columns) == kept
-    assert list(pd.read_csv(out / "timings.csv").columns) == ["fold", "model", "record", *TIMING_COLUMNS]
+    assert list(pd.read_csv(out / "timings.csv").columns) == [
+        "fold",
+        "model",
+        "record",
+        *TIMING_COLUMNS,
+    ]
     summ = pd.read_csv(out / "summary.csv")
     assert list(summ["model"]) == MODELS
     import json
@@ -126,7 +150,9 @@ def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> 
     assert (empty / "results.csv").exists()
 
 
-def test_interrupted_write_leaves_nothing_that_looks_complete(result, tmp_path, monkeypatch) -> None:
+def test_interrupted_write_leaves_nothing_that_looks_complete(
+    result, tmp_path, monkeypatch
+) -> None:
     from mrdamper.study import report
 
     def boom(*args, **kwargs):
@@ -139,14 +165,32 @@ def test_interrupted_write_leaves_nothing_that_looks_complete(result, tmp_path, 
 
 
 def test_report_renders_in_a_headless_browser(result, tmp_path) -> None:
-    browser = next((shutil.which(b) for b in ("chromium", "chromium-browser", "google-chrome") if shutil.which(b)), None)
+    browser = next(
+        (
+            shutil.which(b)
+            for b in ("chromium", "chromium-browser", "google-chrome")
+            if shutil.which(b)
+        ),
+        None,
+    )
     if browser is None:
         pytest.skip("no headless browser (chromium) installed to render report.html")
     out = result.write(tmp_path / "out")
     shot = tmp_path / "shot.png"
-    subprocess.run([browser, "--headless", "--disable-gpu", "--no-sandbox", f"--screenshot={shot}",
-                    "--window-size=1200,2000", (out / "report.html").as_uri()], check=True, timeout=120,
-                   capture_output=True)
+    subprocess.run(
+        [
+            browser,
+            "--headless",
+            "--disable-gpu",
+            "--no-sandbox",
+            f"--screenshot={shot}",
+            "--window-size=1200,2000",
+            (out / "report.html").as_uri(),
+        ],
+        check=True,
+        timeout=120,
+        capture_output=True,
+    )
     import matplotlib.image as mpimg
 
     img = mpimg.imread(io.BytesIO(shot.read_bytes()), format="png")

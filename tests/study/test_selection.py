@@ -16,7 +16,9 @@ from mrdamper.models.bingham import BinghamModel
 from mrdamper.study import cross_validate
 from mrdamper.study.selection import selection_folds
 
-TRUTH = BinghamModel(fc=(100.0, 400.0, -50.0), c0=(800.0, 1500.0, 0.0), f0=5.0, v_eps=0.0, input_range=(0.0, 1.0))
+TRUTH = BinghamModel(
+    fc=(100.0, 400.0, -50.0), c0=(800.0, 1500.0, 0.0), f0=5.0, v_eps=0.0, input_range=(0.0, 1.0)
+)
 KINDS = ["bingham", "sp2", "lti"]
 
 
@@ -25,14 +27,24 @@ def _record(level: float, freq: float, seed: int, n: int = 1500) -> Experiment:
     t = np.arange(n) / 500.0
     x = 0.01 / freq * np.sin(2 * np.pi * freq * t)
     v = 0.01 * 2 * np.pi * np.cos(2 * np.pi * freq * t)
-    e = Experiment(t=t, x=x, v=v, F=np.zeros(n), i=np.full(n, level), name=f"c{freq:g}_{level:g}",
-                   metadata={"condition": f"{freq:g}Hz", "current": level})
+    e = Experiment(
+        t=t,
+        x=x,
+        v=v,
+        F=np.zeros(n),
+        i=np.full(n, level),
+        name=f"c{freq:g}_{level:g}",
+        metadata={"condition": f"{freq:g}Hz", "current": level},
+    )
     return e.replace(F=TRUTH.predict(e) + rng.normal(0.0, 2.0, n))
 
 
 @pytest.fixture(scope="module")
 def records() -> list[Experiment]:
-    return [_record(lev, f, k) for k, (lev, f) in enumerate((a, b) for a in (0.0, 0.5, 1.0) for b in (1.0, 2.0))]
+    return [
+        _record(lev, f, k)
+        for k, (lev, f) in enumerate((a, b) for a in (0.0, 0.5, 1.0) for b in (1.0, 2.0))
+    ]
 
 
 def test_condition_folds_leave_each_condition_out(records) -> None:
@@ -96,8 +108,14 @@ def test_cli_select_prints_table_and_recommendation(records, tmp_path: Path, cap
 def test_close_runner_up_is_named_as_a_tie() -> None:
     from mrdamper.study.selection import _recommend
 
-    tab = pd.DataFrame({"mean_esr": [0.0180, 0.0182, 0.0244], "worst_esr": [0.09, 0.07, 0.1],
-                        "folds_failed": [0, 0, 0]}, index=["narx", "spencer", "lpv"])
+    tab = pd.DataFrame(
+        {
+            "mean_esr": [0.0180, 0.0182, 0.0244],
+            "worst_esr": [0.09, 0.07, 0.1],
+            "folds_failed": [0, 0, 0],
+        },
+        index=["narx", "spencer", "lpv"],
+    )
     best, reason = _recommend(tab, "condition", 6)
     assert best == "narx" and "next: spencer 0.0182 (only 1% higher: a tie" in reason
     _, reason = _recommend(tab.drop("spencer"), "condition", 6)

@@ -24,15 +24,25 @@ def test_quick_doe_study_with_real_models(short_doe, tmp_path) -> None:
     scored = len(short_doe) - 2 - 3  # first replicates of 1, 2 train; of 6, 7, 8 analyse
     assert len(res.results) == 2 * scored
     ok = res.results[res.results["status"] == "ok"]
-    assert len(ok) == len(res.results), res.results[res.results["status"] != "ok"][["model", "error"]]
+    assert len(ok) == len(res.results), res.results[res.results["status"] != "ok"][
+        ["model", "error"]
+    ]
     assert np.isfinite(ok["esr"]).all() and (ok["esr"] > 0).all()
     # the static SP-2 map describes a damper's F-v hysteresis better than a linear model does
     s = res.summary.set_index("model")
     assert s.loc["sp2", "esr_mean"] < s.loc["lti", "esr_mean"]
     out = res.write(tmp_path / "out")
     figs = {p.stem for p in (out / "figures").glob("*.png")}
-    assert {"fig01_fv_map", "fig02_zone_fit", "fig03_zone_laws", "fig04_lti_hysteresis", "fig07_esr_boxes",
-            "fig08_ssse_boxes", "fig09_force_time", "fig10_fv_models"} <= figs
+    assert {
+        "fig01_fv_map",
+        "fig02_zone_fit",
+        "fig03_zone_laws",
+        "fig04_lti_hysteresis",
+        "fig07_esr_boxes",
+        "fig08_ssse_boxes",
+        "fig09_force_time",
+        "fig10_fv_models",
+    } <= figs
     html = (out / "report.html").read_text()
     assert html.count('<img src="data:image/png;base64,') == len(figs)
     assert pd.read_csv(out / "summary.csv")["model"].tolist() == ["lti", "sp2"]
@@ -45,7 +55,9 @@ def test_quiroz_leave_one_condition_out(quiroz_unfiltered_dir) -> None:
 
     data = read_directory(quiroz_unfiltered_dir)
     two = data.where(lambda e: e.metadata["condition"] in ("5mm_3Hz", "10mm_2Hz"))
-    proto = Protocol(name="q2", analysis=Selection(), split=Split("leave-one-group-out", key="condition"))
+    proto = Protocol(
+        name="q2", analysis=Selection(), split=Split("leave-one-group-out", key="condition")
+    )
     res = run_study(two, proto, ["sp2"], workers=2, progress=False)
     r = res.results
     assert set(r["fold"]) == {"condition=5mm_3Hz", "condition=10mm_2Hz"} and len(r) == 10
@@ -63,4 +75,6 @@ def test_quiroz_leave_one_condition_out(quiroz_unfiltered_dir) -> None:
     from mrdamper.study.report import render_report
 
     html = render_report(res, res.summary, {})
-    assert "measured data" in html and "Spencer model" not in html and "virtual rig, whose" not in html
+    assert (
+        "measured data" in html and "Spencer model" not in html and "virtual rig, whose" not in html
+    )

@@ -18,13 +18,39 @@ def test_improvement_reproduces_the_papers_percentages() -> None:
 
 def _frame() -> pd.DataFrame:
     rows = []
-    esr = {"lpv": [0.01, 0.02, 0.03, 0.1], "sp1": [0.05, 0.07, 0.09, 0.2], "lti": [0.5, 0.6, 0.7, 0.8]}
+    esr = {
+        "lpv": [0.01, 0.02, 0.03, 0.1],
+        "sp1": [0.05, 0.07, 0.09, 0.2],
+        "lti": [0.5, 0.6, 0.7, 0.8],
+    }
     for m, vals in esr.items():
         for k, e in enumerate(vals):
-            rows.append({"fold": "all", "model": m, "kind": m, "record": f"r{k}", "status": "ok", "esr": e,
-                         "ssse": 100 * e, "fit_time_s": 1.0, "sim_time_s": 0.1})
-    rows.append({"fold": "all", "model": "p15", "kind": "p15", "record": "r0", "status": "diverged",
-                 "esr": np.nan, "ssse": np.nan, "fit_time_s": 2.0, "sim_time_s": np.nan})
+            rows.append(
+                {
+                    "fold": "all",
+                    "model": m,
+                    "kind": m,
+                    "record": f"r{k}",
+                    "status": "ok",
+                    "esr": e,
+                    "ssse": 100 * e,
+                    "fit_time_s": 1.0,
+                    "sim_time_s": 0.1,
+                }
+            )
+    rows.append(
+        {
+            "fold": "all",
+            "model": "p15",
+            "kind": "p15",
+            "record": "r0",
+            "status": "diverged",
+            "esr": np.nan,
+            "ssse": np.nan,
+            "fit_time_s": 2.0,
+            "sim_time_s": np.nan,
+        }
+    )
     return pd.DataFrame(rows)
 
 
@@ -37,7 +63,11 @@ def test_summary_statistics_and_failures() -> None:
     assert s.loc["sp1", "esr_q3"] == pytest.approx(np.quantile(vals, 0.75))
     assert s.loc["lpv", "esr_gain_of_best_pct"] == 0.0
     assert s.loc["sp1", "esr_gain_of_best_pct"] == pytest.approx(100 * (0.1025 - 0.04) / 0.1025)
-    assert s.loc["p15", "n_ok"] == 0 and s.loc["p15", "n_failed"] == 1 and np.isnan(s.loc["p15", "esr_mean"])
+    assert (
+        s.loc["p15", "n_ok"] == 0
+        and s.loc["p15", "n_failed"] == 1
+        and np.isnan(s.loc["p15", "esr_mean"])
+    )
 
 
 def test_headline_compares_with_best_classical_not_lti() -> None:

@@ -8,4 +8,11 @@ from mrdamper._io.atomic import (
 )
 from mrdamper._io.safety import check_output, protected_paths
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_with", "check_output", "check_writable", "protected_paths"]
+__all__ = [
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "atomic_write_with",
+    "check_output",
+    "check_writable",
+    "protected_paths",
+]

@@ -47,7 +47,9 @@ def atomic_write_with(
         tmp_path.unlink(missing_ok=True)
         if isinstance(exc, OutputExistsError) or exc.errno is None:
             raise
-        raise OSError(exc.errno, exc.strerror, str(p)) from exc  # name the output, not the temporary
+        raise OSError(
+            exc.errno, exc.strerror, str(p)
+        ) from exc  # name the output, not the temporary
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise

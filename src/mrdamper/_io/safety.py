@@ -97,10 +97,14 @@ def check_output(
         try:
             mode = os.stat(p).st_mode
         except OSError:  # broken symbolic link: writing would go through it
-            raise OutputError(f"{option}: {p} is a broken symbolic link; choose another output location") from None
+            raise OutputError(
+                f"{option}: {p} is a broken symbolic link; choose another output location"
+            ) from None
         if folder:
             if not stat.S_ISDIR(mode):
-                raise OutputError(f"{option}: {p} exists and is not a folder; choose another output location")
+                raise OutputError(
+                    f"{option}: {p} exists and is not a folder; choose another output location"
+                )
             if any(p.iterdir()) and not force:
                 raise OutputExistsError(
                     f"{p}: folder exists and is not empty; pass --force (Python: force=True) to replace it "
@@ -114,7 +118,9 @@ def check_output(
                     f"{option}: {p} is not a regular file (device, pipe or socket); it is never replaced"
                 )
             if not force:
-                raise OutputExistsError(f"{p}: already exists; pass --force (Python: force=True) to overwrite")
+                raise OutputExistsError(
+                    f"{p}: already exists; pass --force (Python: force=True) to overwrite"
+                )
     base = _nearest_existing(target.parent)
     if not base.is_dir():
         raise OutputError(f"{option}: {base} is not a folder, so {p} cannot be created")

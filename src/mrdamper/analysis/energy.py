@@ -25,7 +25,9 @@ def _arrays(**named: Any) -> dict[str, np.ndarray]:
     out = {k: np.asarray(v, dtype=float) for k, v in named.items()}
     n = {a.shape for a in out.values()}
     if len(n) != 1 or next(iter(out.values())).ndim != 1:
-        raise DataValidationError(next(iter(out)), f"expected 1-D arrays of one length, got shapes {sorted(n)}")
+        raise DataValidationError(
+            next(iter(out)), f"expected 1-D arrays of one length, got shapes {sorted(n)}"
+        )
     for k, a in out.items():
         if not np.all(np.isfinite(a)):
             raise DataValidationError(k, "contains NaN or infinite values")

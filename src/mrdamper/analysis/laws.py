@@ -79,13 +79,26 @@ class ZoneLaws:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        for name in ("gamma_m", "gamma_c", "levels", "level_m", "level_c", "level_v_low", "level_v_high"):
+        for name in (
+            "gamma_m",
+            "gamma_c",
+            "levels",
+            "level_m",
+            "level_c",
+            "level_v_low",
+            "level_v_high",
+        ):
             arr = np.array(getattr(self, name), dtype=float)
             arr.setflags(write=False)
             set_(self, name, arr)
-        if self.gamma_m.ndim != 2 or self.gamma_m.shape[0] != 3 or self.gamma_c.shape != self.gamma_m.shape:
+        if (
+            self.gamma_m.ndim != 2
+            or self.gamma_m.shape[0] != 3
+            or self.gamma_c.shape != self.gamma_m.shape
+        ):
             raise DataValidationError(
-                "gamma_m", f"expected two (3, d+1) arrays, got {self.gamma_m.shape} and {self.gamma_c.shape}"
+                "gamma_m",
+                f"expected two (3, d+1) arrays, got {self.gamma_m.shape} and {self.gamma_c.shape}",
             )
         set_(self, "mu_high", tuple(float(x) for x in self.mu_high))
         set_(self, "mu_low", tuple(float(x) for x in self.mu_low))
@@ -116,7 +129,9 @@ class ZoneLaws:
         """
         v = np.asarray(v, dtype=float)
         rho = np.broadcast_to(np.asarray(rho, dtype=float), v.shape)
-        return scheduling_input_arrays(v, self.m(rho), self.c(rho), self.v_low(rho), self.v_high(rho), reading)
+        return scheduling_input_arrays(
+            v, self.m(rho), self.c(rho), self.v_low(rho), self.v_high(rho), reading
+        )
 
     def problems(self, n_grid: int = 101) -> list[str]:
         """Violations of the paper's assumptions over ``rho_range`` (empty when none).
@@ -212,8 +227,19 @@ class ZoneLaws:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> ZoneLaws:
         """Inverse of :meth:`to_dict`."""
-        keys = ("gamma_m", "gamma_c", "mu_high", "mu_low", "symmetric", "rho_range", "levels",
-                "level_m", "level_c", "level_v_low", "level_v_high")
+        keys = (
+            "gamma_m",
+            "gamma_c",
+            "mu_high",
+            "mu_low",
+            "symmetric",
+            "rho_range",
+            "levels",
+            "level_m",
+            "level_c",
+            "level_v_low",
+            "level_v_high",
+        )
         missing = [k for k in keys if k not in data]
         if missing:
             raise DataValidationError("zone_laws", f"missing key(s) {missing}")
@@ -261,7 +287,9 @@ def zone_fits_by_level(
         span = max(float(np.ptp(s)) for s in sig)
         tol = plateau_tolerance if plateau_tolerance is not None else max(0.02 * span, 1e-9)
         for e, s in zip(exps, sig):
-            for a, b, lev in segment_plateaus(s, e.dt, tolerance=tol, min_duration=min_duration, settle=settle):
+            for a, b, lev in segment_plateaus(
+                s, e.dt, tolerance=tol, min_duration=min_duration, settle=settle
+            ):
                 key = next((k for k in pools if abs(k - lev) <= tol), lev)
                 pools.setdefault(key, []).append((e.v[a:b], e.F[a:b]))
     else:
@@ -342,7 +370,9 @@ def fit_zone_laws(
     if items and all(isinstance(f, ZoneFit) for f in items):
         fits = sorted(items, key=lambda f: (f.level is None, f.level))
         if any(f.level is None for f in fits):
-            raise DataValidationError("level", "every ZoneFit needs a level to fit laws across levels")
+            raise DataValidationError(
+                "level", "every ZoneFit needs a level to fit laws across levels"
+            )
     else:
         fits = zone_fits_by_level(items, **level_options)
     if not isinstance(degree, (int, np.integer)) or degree < 0:
@@ -378,9 +408,17 @@ def fit_zone_laws(
         mu_h = np.array([0.0, vh[0]])
         mu_l = -mu_h if symmetric else np.array([0.0, vl[0]])
     laws = ZoneLaws(
-        gamma_m=gamma_m, gamma_c=gamma_c, mu_high=tuple(mu_h), mu_low=tuple(mu_l), symmetric=symmetric,
-        rho_range=(float(lv.min()), float(lv.max())), levels=lv, level_m=M, level_c=C,
-        level_v_low=vl, level_v_high=vh,
+        gamma_m=gamma_m,
+        gamma_c=gamma_c,
+        mu_high=tuple(mu_h),
+        mu_low=tuple(mu_l),
+        symmetric=symmetric,
+        rho_range=(float(lv.min()), float(lv.max())),
+        levels=lv,
+        level_m=M,
+        level_c=C,
+        level_v_low=vl,
+        level_v_high=vh,
     )
     bad = laws.problems()
     if bad:

@@ -63,10 +63,14 @@ def scheduling_input_arrays(
     lo = np.broadcast_to(np.asarray(v_low, dtype=float), v.shape)
     hi = np.broadcast_to(np.asarray(v_high, dtype=float), v.shape)
     if m.shape != v.shape + (3,) or c.shape != v.shape + (3,):
-        raise DataValidationError("m", f"expected shape {v.shape + (3,)} for m and c, got {m.shape}, {c.shape}")
+        raise DataValidationError(
+            "m", f"expected shape {v.shape + (3,)} for m and c, got {m.shape}, {c.shape}"
+        )
     m2 = m[..., 1]
     if np.any(m2 == 0.0):
-        raise DataValidationError("m2", "central slope is zero; the input u = sigma v + psi is undefined")
+        raise DataValidationError(
+            "m2", "central slope is zero; the input u = sigma v + psi is undefined"
+        )
     below, above = v < lo, v > hi
     u = v.copy()
     if reading == "continuous":

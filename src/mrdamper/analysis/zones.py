@@ -65,7 +65,9 @@ class ZoneFit:
         v = np.asarray(v, dtype=float)
         m1, m2, m3 = self.m
         c1, c2, c3 = self.c
-        return np.where(v < self.v_low, m1 * v + c1, np.where(v > self.v_high, m3 * v + c3, m2 * v + c2))
+        return np.where(
+            v < self.v_low, m1 * v + c1, np.where(v > self.v_high, m3 * v + c3, m2 * v + c2)
+        )
 
     @property
     def central_is_steepest(self) -> bool:
@@ -213,9 +215,13 @@ def fit_zones(
         raise DataValidationError("F", f"has {F.size} samples but 'v' has {v.size}")
     for name, a in (("v", v), ("F", F)):
         if not np.all(np.isfinite(a)):
-            raise DataValidationError(name, "contains non-finite values; zone regression needs finite data")
+            raise DataValidationError(
+                name, "contains non-finite values; zone regression needs finite data"
+            )
     if not 0 < min_fraction < 0.34:
-        raise DataValidationError("min_fraction", f"expected a value in (0, 0.34), got {min_fraction}")
+        raise DataValidationError(
+            "min_fraction", f"expected a value in (0, 0.34), got {min_fraction}"
+        )
     if grid < 3:
         raise DataValidationError("grid", f"expected at least 3 grid points, got {grid}")
     n_min = max(5, int(np.ceil(min_fraction * v.size)))
@@ -234,13 +240,17 @@ def fit_zones(
         b_max = min(neg[-n_min], pos[-n_min])
         b_min = a[min(n_min, a.size - 1)]
         if not b_max > b_min:
-            raise IdentificationError("fit_zones: no symmetric breakpoint leaves enough samples in every zone")
+            raise IdentificationError(
+                "fit_zones: no symmetric breakpoint leaves enough samples in every zone"
+            )
         cand = np.linspace(b_min, b_max, grid)
         sse = np.array([prof.solve(-b, b)[0] for b in cand])
         k = int(np.argmin(sse))
         lo_b, hi_b = cand[max(k - 1, 0)], cand[min(k + 1, grid - 1)]
         res = optimize.minimize_scalar(
-            lambda b: prof.solve(-b, b)[0], bounds=(lo_b, hi_b), method="bounded",
+            lambda b: prof.solve(-b, b)[0],
+            bounds=(lo_b, hi_b),
+            method="bounded",
             options={"xatol": 1e-9 * max(abs(b_max), 1e-12)},
         )
         b = float(res.x) if res.fun <= sse[k] else float(cand[k])
@@ -257,7 +267,9 @@ def fit_zones(
                 if s < best[0]:
                     best = (s, lo_c, hi_c)
         if not np.isfinite(best[0]):
-            raise IdentificationError("fit_zones: no breakpoint pair leaves enough samples in every zone")
+            raise IdentificationError(
+                "fit_zones: no breakpoint pair leaves enough samples in every zone"
+            )
 
         def objective(p: np.ndarray) -> float:
             lo_p, hi_p = float(p[0]), float(p[1])
@@ -266,7 +278,9 @@ def fit_zones(
             return prof.solve(lo_p, hi_p)[0]
 
         res = optimize.minimize(
-            objective, np.array(best[1:]), method="Nelder-Mead",
+            objective,
+            np.array(best[1:]),
+            method="Nelder-Mead",
             options={"xatol": 1e-9 * (vs[-1] - vs[0]), "fatol": 1e-12 * best[0]},
         )
         lo, hi = (float(res.x[0]), float(res.x[1])) if res.fun <= best[0] else (best[1], best[2])
@@ -279,8 +293,14 @@ def fit_zones(
     var = float(np.sum((F - F.mean()) ** 2))
     r2 = 1.0 - sse_final / var if var > 0 else float("nan")
     return ZoneFit(
-        v_low=float(lo), v_high=float(hi), m=m, c=c, r2=float(r2),
-        resid_std=float(np.sqrt(sse_final / v.size)), n=int(v.size), symmetric=symmetric,
+        v_low=float(lo),
+        v_high=float(hi),
+        m=m,
+        c=c,
+        r2=float(r2),
+        resid_std=float(np.sqrt(sse_final / v.size)),
+        n=int(v.size),
+        symmetric=symmetric,
         level=None if level is None else float(level),
     )
 

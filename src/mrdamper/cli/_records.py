@@ -31,64 +31,95 @@ READER_OPTIONS: dict[str, tuple[Any, Any]] = {
     "fs": (
         Annotated[
             float | None,
-            typer.Option("--fs", help="Declared record sampling rate [Hz]: regenerates a rounded time column."),
+            typer.Option(
+                "--fs",
+                help="Declared record sampling rate [Hz]: regenerates a rounded time column.",
+            ),
         ],
         None,
     ),
     "resample_fs": (
         Annotated[
             float | None,
-            typer.Option("--resample-fs", help="Interpolate irregular time onto a uniform grid at this rate [Hz]."),
+            typer.Option(
+                "--resample-fs",
+                help="Interpolate irregular time onto a uniform grid at this rate [Hz].",
+            ),
         ],
         None,
     ),
     "nan_policy": (
         Annotated[
             str | None,
-            typer.Option("--nan-policy", help="raise | drop-edges | interpolate (default: raise; info: interpolate)."),
+            typer.Option(
+                "--nan-policy",
+                help="raise | drop-edges | interpolate (default: raise; info: interpolate).",
+            ),
         ],
         None,
     ),
     "max_gap": (
-        Annotated[int | None, typer.Option("--max-gap", help="Longest NaN gap 'interpolate' fills [samples].")],
+        Annotated[
+            int | None,
+            typer.Option("--max-gap", help="Longest NaN gap 'interpolate' fills [samples]."),
+        ],
         None,
     ),
     "decimal": (
-        Annotated[str | None, typer.Option("--decimal", help="Decimal mark of text files, e.g. --decimal ,")],
+        Annotated[
+            str | None,
+            typer.Option("--decimal", help="Decimal mark of text files, e.g. --decimal ,"),
+        ],
         None,
     ),
     "sep": (
-        Annotated[str | None, typer.Option("--sep", help="Column delimiter of text files (default: detected).")],
+        Annotated[
+            str | None,
+            typer.Option("--sep", help="Column delimiter of text files (default: detected)."),
+        ],
         None,
     ),
     "column": (
         Annotated[
             list[str] | None,
-            typer.Option("--column", help="Map a header to a channel, e.g. --column Force_kN=F (repeatable)."),
+            typer.Option(
+                "--column", help="Map a header to a channel, e.g. --column Force_kN=F (repeatable)."
+            ),
         ],
         None,
     ),
     "units": (
         Annotated[
             list[str] | None,
-            typer.Option("--units", help="Unit of a channel or header, e.g. --units x=mm --units F=kN."),
+            typer.Option(
+                "--units", help="Unit of a channel or header, e.g. --units x=mm --units F=kN."
+            ),
         ],
         None,
     ),
     "struct": (
-        Annotated[str | None, typer.Option("--struct", help="MATLAB files: the struct holding the channels.")],
+        Annotated[
+            str | None,
+            typer.Option("--struct", help="MATLAB files: the struct holding the channels."),
+        ],
         None,
     ),
     "plausible_max": (
         Annotated[
             list[str] | None,
-            typer.Option("--plausible-max", help="Override a plausibility bound, e.g. --plausible-max stroke=2 (m)."),
+            typer.Option(
+                "--plausible-max",
+                help="Override a plausibility bound, e.g. --plausible-max stroke=2 (m).",
+            ),
         ],
         None,
     ),
     "derive_velocity": (
         Annotated[
-            bool, typer.Option("--derive-velocity", help="Compute v from x when the files have no velocity column.")
+            bool,
+            typer.Option(
+                "--derive-velocity", help="Compute v from x when the files have no velocity column."
+            ),
         ],
         False,
     ),
@@ -146,7 +177,10 @@ def reader_options(default_nan_policy: str = "raise") -> Callable[[_F], _F]:
             kwargs["read_kw"] = reader_kwargs(opts, default_nan_policy)
             return fn(*args, **kwargs)
 
-        new_params = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) if p.kind == p.VAR_KEYWORD else p for p in params]
+        new_params = [
+            p.replace(kind=inspect.Parameter.KEYWORD_ONLY) if p.kind == p.VAR_KEYWORD else p
+            for p in params
+        ]
         wrapper.__signature__ = sig.replace(parameters=[*new_params, *extra])  # type: ignore[attr-defined]
         wrapper.__annotations__ = {p.name: p.annotation for p in [*new_params, *extra]}
         del wrapper.__wrapped__  # type: ignore[attr-defined]  # typer must see the new signature
@@ -155,7 +189,9 @@ def reader_options(default_nan_policy: str = "raise") -> Callable[[_F], _F]:
     return deco
 
 
-def read_paths(paths: list[Path], pattern: str | None, read_kw: Mapping[str, Any]) -> list[Experiment]:
+def read_paths(
+    paths: list[Path], pattern: str | None, read_kw: Mapping[str, Any]
+) -> list[Experiment]:
     """Read every file and folder of ``paths`` into one list of records, in the order given.
 
     Parameters
@@ -185,7 +221,9 @@ def read_paths(paths: list[Path], pattern: str | None, read_kw: Mapping[str, Any
         if not p.exists():
             raise FileNotFoundError(f"{p}: no such file or folder")
         if p.is_dir() and pattern is None and is_doe_folder(p):
-            records.extend(read_doe(p))  # a folder written by 'mrdamper rig doe': its manifest lists the records
+            records.extend(
+                read_doe(p)
+            )  # a folder written by 'mrdamper rig doe': its manifest lists the records
             continue
         if p.is_dir():
             pat = pattern

@@ -35,7 +35,9 @@ def _save_png(fig: Any, path: Path, force: bool) -> Path:
 
     try:
         return atomic_write_with(
-            path, lambda tmp: fig.savefig(tmp, format="png", dpi=100, metadata={"Software": None}), force=force
+            path,
+            lambda tmp: fig.savefig(tmp, format="png", dpi=100, metadata={"Software": None}),
+            force=force,
         )
     finally:
         plt.close(fig)
@@ -43,28 +45,48 @@ def _save_png(fig: Any, path: Path, force: bool) -> Path:
 
 def quartercar(
     model_file: Annotated[Path, typer.Argument(help="Damper model file (lpv, sp1..sp4, bingham).")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder for the table and figures.")],
-    roads: Annotated[str, typer.Option("--roads", help="ISO 8608 classes, comma-separated (A..H).")] = "A,B,C,D,E",
-    bump: Annotated[bool, typer.Option("--bump/--no-bump", help="Also drive over one bump.")] = True,
+    out: Annotated[
+        Path, typer.Option("--out", "-o", help="Output folder for the table and figures.")
+    ],
+    roads: Annotated[
+        str, typer.Option("--roads", help="ISO 8608 classes, comma-separated (A..H).")
+    ] = "A,B,C,D,E",
+    bump: Annotated[
+        bool, typer.Option("--bump/--no-bump", help="Also drive over one bump.")
+    ] = True,
     controllers: Annotated[
-        str, typer.Option("--controllers", help="Comma-separated: soft, hard, skyhook, groundhook, hybrid.")
+        str,
+        typer.Option(
+            "--controllers", help="Comma-separated: soft, hard, skyhook, groundhook, hybrid."
+        ),
     ] = "soft,hard,skyhook,groundhook,hybrid",
     speed: Annotated[float, typer.Option("--speed", help="Vehicle speed [m/s].")] = 20.0,
-    duration: Annotated[float, typer.Option("--duration", help="Length of each ISO road [s].")] = 20.0,
+    duration: Annotated[
+        float, typer.Option("--duration", help="Length of each ISO road [s].")
+    ] = 20.0,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the road phases.")] = 0,
     bump_height: Annotated[float, typer.Option("--bump-height", help="Bump height [m].")] = 0.05,
     bump_length: Annotated[float, typer.Option("--bump-length", help="Bump length [m].")] = 2.0,
     car: Annotated[
         list[str] | None,
-        typer.Option("--car", help="Quarter-car parameter KEY=VALUE (m_s, m_u, k_s, k_t, c_t, travel_limit, "
-                                   "motion_ratio); repeatable."),
+        typer.Option(
+            "--car",
+            help="Quarter-car parameter KEY=VALUE (m_s, m_u, k_s, k_t, c_t, travel_limit, "
+            "motion_ratio); repeatable.",
+        ),
     ] = None,
     c_sky: Annotated[float, typer.Option("--c-sky", help="Skyhook gain [N s/m].")] = 3000.0,
-    c_ground: Annotated[float, typer.Option("--c-ground", help="Groundhook gain [N s/m].")] = 3000.0,
+    c_ground: Annotated[
+        float, typer.Option("--c-ground", help="Groundhook gain [N s/m].")
+    ] = 3000.0,
     alpha: Annotated[float, typer.Option("--alpha", help="Hybrid weight of skyhook [-].")] = 0.5,
-    reg: Annotated[float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A].")] = None,
+    reg: Annotated[
+        float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A].")
+    ] = None,
     rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
+    force: Annotated[
+        bool, typer.Option("--force", help="Overwrite existing output files.")
+    ] = False,
 ) -> None:
     """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
     from mrdamper._io import atomic_write_text, check_writable
@@ -80,15 +102,31 @@ def quartercar(
     fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
     unknown = sorted(set(car_kw) - set(fields))
     if unknown:
-        raise DataValidationError("--car", f"unknown parameter(s) {unknown}; expected some of {list(fields)}")
+        raise DataValidationError(
+            "--car", f"unknown parameter(s) {unknown}; expected some of {list(fields)}"
+        )
     qc = QuarterCar(**car_kw)
     m = load_model(model_file)
-    ctrls = [Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha) for c in controllers.split(",") if c.strip()]
+    ctrls = [
+        Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha)
+        for c in controllers.split(",")
+        if c.strip()
+    ]
     classes = [r.strip().upper() for r in roads.split(",") if r.strip()]
     try:
         cmp = compare_controllers(
-            m, road_classes=classes, bump=bump, controllers=ctrls, car=qc, speed=speed, duration=duration,
-            seed=seed, bump_height=bump_height, bump_length=bump_length, reg=reg, rate=rate,
+            m,
+            road_classes=classes,
+            bump=bump,
+            controllers=ctrls,
+            car=qc,
+            speed=speed,
+            duration=duration,
+            seed=seed,
+            bump_height=bump_height,
+            bump_length=bump_length,
+            reg=reg,
+            rate=rate,
         )
     except TypeError as exc:
         raise DataValidationError("MODEL", str(exc)) from exc
@@ -104,9 +142,20 @@ def quartercar(
     for road in [r for r in cmp.roads if r.startswith("bump")]:
         written.append(_save_png(cmp.plot_time(road), out / f"time_{_slug(road)}.png", force))
     if iso:
-        written.append(_save_png(cmp.plot_spectra(iso[0]), out / f"spectra_{_slug(iso[0])}.png", force))
-    cols = ["road", "controller", "rms_acc", "rms_acc_wk", "rms_tyre_load", "rms_travel", "max_travel",
-            "travel_over_limit", "mean_input"]
+        written.append(
+            _save_png(cmp.plot_spectra(iso[0]), out / f"spectra_{_slug(iso[0])}.png", force)
+        )
+    cols = [
+        "road",
+        "controller",
+        "rms_acc",
+        "rms_acc_wk",
+        "rms_tyre_load",
+        "rms_travel",
+        "max_travel",
+        "travel_over_limit",
+        "mean_input",
+    ]
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     typer.echo(f"{m.kind}: wrote {', '.join(p.name for p in written)} in {out}")
 

@@ -23,14 +23,26 @@ __all__ = ["register"]
 
 
 def export(
-    model_file: Annotated[Path, typer.Argument(help="LPV or LTI model file written by 'mrdamper fit'.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.mat or .json), or folder for --format c.")],
+    model_file: Annotated[
+        Path, typer.Argument(help="LPV or LTI model file written by 'mrdamper fit'.")
+    ],
+    out: Annotated[
+        Path,
+        typer.Option("--out", "-o", help="Output file (.mat or .json), or folder for --format c."),
+    ],
     fmt: Annotated[
-        str | None, typer.Option("--format", help="mat | json | c (default: from the --out suffix, else mat).")
+        str | None,
+        typer.Option("--format", help="mat | json | c (default: from the --out suffix, else mat)."),
     ] = None,
-    name: Annotated[str, typer.Option("--name", help="C identifier prefix and file stem (--format c).")] = "mrd_damper",
+    name: Annotated[
+        str, typer.Option("--name", help="C identifier prefix and file stem (--format c).")
+    ] = "mrd_damper",
     reg: Annotated[
-        float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A] (--format c; default from the model).")
+        float | None,
+        typer.Option(
+            "--reg",
+            help="Inverse regularisation weight [N/A] (--format c; default from the model).",
+        ),
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
 ) -> None:
@@ -55,7 +67,8 @@ def export(
     m = load_model(model_file)
     if m.kind not in ("lpv", "lti"):
         raise DataValidationError(
-            "MODEL", f"{model_file} holds a {m.kind!r} model; export handles the state-space models 'lpv' and 'lti'"
+            "MODEL",
+            f"{model_file} holds a {m.kind!r} model; export handles the state-space models 'lpv' and 'lti'",
         )
     path = export_lpv(m, out, format="json" if fmt == "json" else "mat", force=force)
     typer.echo(f"{m.kind}: wrote {path} ({fmt})")
@@ -63,14 +76,24 @@ def export(
 
 def inverse(
     model_file: Annotated[Path, typer.Argument(help="Model file (lpv, sp1..sp4, bingham).")],
-    data: Annotated[Path, typer.Argument(help="One record file; its force column F is the desired force.")],
+    data: Annotated[
+        Path, typer.Argument(help="One record file; its force column F is the desired force.")
+    ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV.")],
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
     method: Annotated[str, typer.Option("--method", help="regularised | exact.")] = "regularised",
-    reg: Annotated[float | None, typer.Option("--reg", help="Regularisation weight [N/A] (default from the model).")] = None,
+    reg: Annotated[
+        float | None,
+        typer.Option("--reg", help="Regularisation weight [N/A] (default from the model)."),
+    ] = None,
     rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
-    horizon: Annotated[float | None, typer.Option(
-        "--horizon", help="Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present sample only).")] = None,
+    horizon: Annotated[
+        float | None,
+        typer.Option(
+            "--horizon",
+            help="Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present sample only).",
+        ),
+    ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Current that would have produced the record's measured force (causal inverse of the model).

@@ -106,7 +106,9 @@ def _example() -> list[Experiment]:
     try:
         from mrdamper.rig.doe import table_ii
     except ImportError as exc:
-        raise MrDamperError(f"example: the built-in example needs mrdamper.rig.doe ({exc})") from None
+        raise MrDamperError(
+            f"example: the built-in example needs mrdamper.rig.doe ({exc})"
+        ) from None
     return list(table_ii(seed=0, scale=0.1))
 
 
@@ -167,7 +169,8 @@ def info(
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
     example: Annotated[
-        bool, typer.Option("--example", help="Describe the built-in example (virtual rig, Table II).")
+        bool,
+        typer.Option("--example", help="Describe the built-in example (virtual rig, Table II)."),
     ] = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
@@ -182,7 +185,9 @@ def info(
             try:
                 re.compile(pattern)
             except re.error as exc:
-                raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
+                raise DataValidationError(
+                    "pattern", f"{pattern!r} is not a valid regular expression ({exc})"
+                ) from None
         records = read_paths(list(paths), pattern, read_kw or {})
         title = ", ".join(str(p) for p in paths)
     rows = [summarize(e) for e in records]

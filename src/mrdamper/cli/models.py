@@ -76,7 +76,10 @@ def parse_settings(items: list[str] | None) -> dict[str, Any]:
 
 
 #: Command-line option -> estimator setting names it may stand for, in order of preference.
-_ALIASES: dict[str, tuple[str, ...]] = {"order": ("order", "n_m"), "rho_degree": ("rho_degree", "n_rho")}
+_ALIASES: dict[str, tuple[str, ...]] = {
+    "order": ("order", "n_m"),
+    "rho_degree": ("rho_degree", "n_rho"),
+}
 
 
 def _setting_name(option: str, accepted: list[str]) -> str:
@@ -93,13 +96,16 @@ def _choose_input(records: list[Experiment]) -> str:
     if all(e.voltage is not None for e in records):
         return "voltage"
     raise DataValidationError(
-        "--input", "the records do not all share one electrical channel ('i' or 'voltage'); choose --input"
+        "--input",
+        "the records do not all share one electrical channel ('i' or 'voltage'); choose --input",
     )
 
 
 def _check_policy(policy: str) -> RangePolicy:
     if policy not in _RANGE_POLICIES:
-        raise DataValidationError("--range-policy", f"expected one of {list(_RANGE_POLICIES)}, got {policy!r}")
+        raise DataValidationError(
+            "--range-policy", f"expected one of {list(_RANGE_POLICIES)}, got {policy!r}"
+        )
     return cast(RangePolicy, policy)
 
 
@@ -113,28 +119,40 @@ def fit(
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
     input_: Annotated[
         str | None,
-        typer.Option("--input", help="Electrical input: i | voltage (default: the channel every record has)."),
+        typer.Option(
+            "--input", help="Electrical input: i | voltage (default: the channel every record has)."
+        ),
     ] = None,
     order: Annotated[
         int | None, typer.Option("--order", help="Model order (setting 'order' or 'n_m').")
     ] = None,
     rho_degree: Annotated[
         int | None,
-        typer.Option("--rho-degree", help="Degree in the scheduling variable (setting 'rho_degree' or 'n_rho')."),
+        typer.Option(
+            "--rho-degree",
+            help="Degree in the scheduling variable (setting 'rho_degree' or 'n_rho').",
+        ),
     ] = None,
     refine: Annotated[
-        bool | None, typer.Option("--refine/--no-refine", help="Nonlinear refinement after the linear fit.")
+        bool | None,
+        typer.Option("--refine/--no-refine", help="Nonlinear refinement after the linear fit."),
     ] = None,
     seed: Annotated[int | None, typer.Option("--seed", help="Seed of any random start.")] = None,
-    n_starts: Annotated[int | None, typer.Option("--n-starts", help="Number of multi-start runs.")] = None,
+    n_starts: Annotated[
+        int | None, typer.Option("--n-starts", help="Number of multi-start runs.")
+    ] = None,
     offset: Annotated[
         bool | None, typer.Option("--offset/--no-offset", help="Identify a constant force offset.")
     ] = None,
     settings: Annotated[
         list[str] | None,
-        typer.Option("--set", help="Any other estimator setting, KEY=VALUE (JSON value), repeatable."),
+        typer.Option(
+            "--set", help="Any other estimator setting, KEY=VALUE (JSON value), repeatable."
+        ),
     ] = None,
-    pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
+    pattern: Annotated[
+        str | None, typer.Option("--pattern", help="File-name regex for folders.")
+    ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Identify MODEL on the records in DATA and save it as JSON."""
@@ -159,11 +177,14 @@ def fit(
     if unknown:
         flag = unknown[0].replace("_", "-")
         raise DataValidationError(
-            f"--{flag}", f"model {model!r} does not take the setting {unknown[0]!r}; its settings are {accepted}"
+            f"--{flag}",
+            f"model {model!r} does not take the setting {unknown[0]!r}; its settings are {accepted}",
         )
     from mrdamper.cli._status import working
 
-    with working(f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"):
+    with working(
+        f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"
+    ):
         fitted = get_estimator(model, **given).fit(records)
     path = fitted.save(out, force=force)
     typer.echo(f"{model}: identified on {len(records)} record(s); wrote {path}")
@@ -175,7 +196,8 @@ def simulate(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV: t, F, F_pred.")],
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
     range_policy: Annotated[
-        str | None, typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's).")
+        str | None,
+        typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's)."),
     ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
@@ -201,9 +223,12 @@ def score(
     data: Annotated[list[Path], typer.Argument(help="Data files or folders.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
     range_policy: Annotated[
-        str | None, typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's).")
+        str | None,
+        typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's)."),
     ] = None,
-    pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
+    pattern: Annotated[
+        str | None, typer.Option("--pattern", help="File-name regex for folders.")
+    ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """ESR and SSSE of the model's free-run prediction for each record, and their mean."""
@@ -217,7 +242,9 @@ def score(
             s = m.score(e)
             rows.append({"record": e.name, "esr": s.esr, "ssse": s.ssse})
         except SimulationDivergedError as exc:
-            rows.append({"record": e.name, "esr": None, "ssse": None, "diverged_at_sample": exc.sample})
+            rows.append(
+                {"record": e.name, "esr": None, "ssse": None, "diverged_at_sample": exc.sample}
+            )
     ok = [r for r in rows if r["esr"] is not None]
     mean = {
         "esr": sum(r["esr"] for r in ok) / len(ok) if ok else None,
@@ -249,7 +276,9 @@ def _print_scores(result: dict[str, Any]) -> None:
         else:
             table.add_row(escape(r["record"]), f"{r['esr']:.4g}", f"{r['ssse']:.4g}")
     mean = result["mean"]
-    label = f"mean of {mean['n_scored']}" + (f" ({mean['n_diverged']} diverged)" if mean["n_diverged"] else "")
+    label = f"mean of {mean['n_scored']}" + (
+        f" ({mean['n_diverged']} diverged)" if mean["n_diverged"] else ""
+    )
     table.add_row(
         escape(label),
         "-" if mean["esr"] is None else f"{mean['esr']:.4g}",

@@ -36,24 +36,42 @@ def _damper(spec: str | None):  # type: ignore[no-untyped-def]
     if path.suffix.lower() == ".json" or path.exists():
         return load_model(path)
     raise DataValidationError(
-        "--damper", f"expected a reference damper name {list(REFERENCE_DAMPERS)} or a model JSON file, got {spec!r}"
+        "--damper",
+        f"expected a reference damper name {list(REFERENCE_DAMPERS)} or a model JSON file, got {spec!r}",
     )
 
 
 @rig_app.command("doe")
 def doe(
-    out: Annotated[Path, typer.Option("--out", help="Output folder (must be absent or empty unless --force).")],
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Root seed; the same seed gives byte-identical files.")] = 0,
-    scale: Annotated[float, typer.Option("--scale", help="Duration factor (0.1: 3 s and 60 s records).")] = 1.0,
+    out: Annotated[
+        Path, typer.Option("--out", help="Output folder (must be absent or empty unless --force).")
+    ],
+    seed: Annotated[
+        int,
+        typer.Option("--seed", min=0, help="Root seed; the same seed gives byte-identical files."),
+    ] = 0,
+    scale: Annotated[
+        float, typer.Option("--scale", help="Duration factor (0.1: 3 s and 60 s records).")
+    ] = 1.0,
     fs: Annotated[float, typer.Option("--fs", help="Sampling rate [Hz].")] = 1000.0,
     damper: Annotated[
         str | None,
-        typer.Option("--damper", help="Reference damper name (quiroz2022, spencer1997) or a model JSON file."),
+        typer.Option(
+            "--damper", help="Reference damper name (quiroz2022, spencer1997) or a model JSON file."
+        ),
     ] = None,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Worker processes (same files for any number).")] = 1,
-    force: Annotated[bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")] = False,
-    format: Annotated[str, typer.Option("--format", help="Record files: csv or parquet (needs pyarrow).")] = "csv",
-    no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress bar (shown only on a terminal).")] = False,
+    workers: Annotated[
+        int, typer.Option("--workers", min=1, help="Worker processes (same files for any number).")
+    ] = 1,
+    force: Annotated[
+        bool, typer.Option("--force", help="Write into a non-empty folder, overwriting.")
+    ] = False,
+    format: Annotated[
+        str, typer.Option("--format", help="Record files: csv or parquet (needs pyarrow).")
+    ] = "csv",
+    no_progress: Annotated[
+        bool, typer.Option("--no-progress", help="No progress bar (shown only on a terminal).")
+    ] = False,
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig and write record files + manifest.csv."""
     from mrdamper._io import check_output
@@ -61,15 +79,25 @@ def doe(
     from mrdamper.rig.doe_io import RECORD_FORMATS, write_records
 
     if format not in RECORD_FORMATS:
-        raise DataValidationError("--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}")
-    check_output(out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else [])
+        raise DataValidationError(
+            "--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}"
+        )
+    check_output(
+        out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else []
+    )
     n_rec = sum(s.replicates for s in TABLE_II)
     written: list[int] = []
     with _bar(not no_progress) as bar:
         gen = bar.add_task("generating", total=n_rec)
         t0 = time.perf_counter()
-        records = table_ii(seed=seed, scale=scale, fs=fs, damper=_damper(damper), workers=workers,
-                           progress=lambda _rec: bar.advance(gen))
+        records = table_ii(
+            seed=seed,
+            scale=scale,
+            fs=fs,
+            damper=_damper(damper),
+            workers=workers,
+            progress=lambda _rec: bar.advance(gen),
+        )
         t1 = time.perf_counter()
         wri = bar.add_task(f"writing {format}", total=len(records))
 
@@ -113,8 +141,14 @@ def _bar(enabled: bool):  # type: ignore[no-untyped-def]
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    console=Console(stderr=True), transient=False)
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+        transient=False,
+    )
 
 
 def register(app: typer.Typer) -> None:

@@ -27,7 +27,9 @@ def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
     for item in items or []:
         kind, dot, rest = item.partition(".")
         if not dot or "=" not in rest or not kind:
-            raise DataValidationError("--set", f"expected KIND.KEY=VALUE (e.g. lpv.n_m=2), got {item!r}")
+            raise DataValidationError(
+                "--set", f"expected KIND.KEY=VALUE (e.g. lpv.n_m=2), got {item!r}"
+            )
         out.setdefault(kind.strip(), {}).update(parse_settings([rest]))
     return out
 
@@ -35,23 +37,37 @@ def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
 def select(
     data: Annotated[list[Path], typer.Argument(help="Data files or folders (the user's records).")],
     models: Annotated[
-        list[str] | None, typer.Option("--model", "-m", help="Model kind to include (repeatable; default: all).")
+        list[str] | None,
+        typer.Option("--model", "-m", help="Model kind to include (repeatable; default: all)."),
     ] = None,
     folds: Annotated[
-        str, typer.Option("--folds", help="auto | condition | record | time (time: blocks of one record).")
+        str,
+        typer.Option(
+            "--folds", help="auto | condition | record | time (time: blocks of one record)."
+        ),
     ] = "auto",
-    n_folds: Annotated[int, typer.Option("--n-folds", help="Folds for 'record' (at most) and 'time'.")] = 5,
+    n_folds: Annotated[
+        int, typer.Option("--n-folds", help="Folds for 'record' (at most) and 'time'.")
+    ] = 5,
     input_: Annotated[
         str | None,
-        typer.Option("--input", help="Electrical input: i | voltage (default: the channel every record has)."),
+        typer.Option(
+            "--input", help="Electrical input: i | voltage (default: the channel every record has)."
+        ),
     ] = None,
     settings: Annotated[
         list[str] | None,
-        typer.Option("--set", help="Estimator setting of one kind, KIND.KEY=VALUE (JSON value), repeatable."),
+        typer.Option(
+            "--set", help="Estimator setting of one kind, KIND.KEY=VALUE (JSON value), repeatable."
+        ),
     ] = None,
-    csv: Annotated[Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")] = None,
+    csv: Annotated[
+        Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")
+    ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --csv if it exists.")] = False,
-    pattern: Annotated[str | None, typer.Option("--pattern", help="File-name regex for folders.")] = None,
+    pattern: Annotated[
+        str | None, typer.Option("--pattern", help="File-name regex for folders.")
+    ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Cross-validate every model kind on DATA and recommend one."""
@@ -64,12 +80,31 @@ def select(
     records = read_records(data, pattern, read_kw)
     source = input_ or _choose_input(records)
     if folds not in ("auto", "condition", "record", "time"):
-        raise DataValidationError("--folds", f"expected auto, condition, record or time, got {folds!r}")
-    res = cross_validate(records, models=models, folds=folds, n_folds=n_folds, input=source,  # type: ignore[arg-type]
-                         settings=_kind_settings(settings))
+        raise DataValidationError(
+            "--folds", f"expected auto, condition, record or time, got {folds!r}"
+        )
+    res = cross_validate(
+        records,
+        models=models,
+        folds=folds,
+        n_folds=n_folds,
+        input=source,  # type: ignore[arg-type]
+        settings=_kind_settings(settings),
+    )
     tab = res.table.reset_index()
-    typer.echo(f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out data\n")
-    cols = ["model", "mean_esr", "median_esr", "worst_esr", "folds_ok", "folds_failed", "clipped", "fit_s"]
+    typer.echo(
+        f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out data\n"
+    )
+    cols = [
+        "model",
+        "mean_esr",
+        "median_esr",
+        "worst_esr",
+        "folds_ok",
+        "folds_failed",
+        "clipped",
+        "fit_s",
+    ]
     typer.echo(tab[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}", na_rep="-"))
     for _, row in tab[tab["error"] != ""].iterrows():
         typer.echo(f"  {row['model']}: {row['error']}")

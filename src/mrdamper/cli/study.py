@@ -60,7 +60,9 @@ def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> Experim
         try:
             re.compile(pattern)
         except re.error as exc:
-            raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
+            raise DataValidationError(
+                "pattern", f"{pattern!r} is not a valid regular expression ({exc})"
+            ) from None
         return read_directory(path, pattern, **read_kw)
     if is_doe_folder(path):  # written by 'mrdamper rig doe': SI files listed with their metadata
         return read_doe(path)
@@ -77,7 +79,9 @@ def _models(models: str | None) -> list[str] | None:
         return None
     kinds = [m.strip() for m in models.split(",") if m.strip()]
     if not kinds:
-        raise SchemaError(f"models: expected a comma-separated list of kinds such as lpv,sp1, got {models!r}")
+        raise SchemaError(
+            f"models: expected a comma-separated list of kinds such as lpv,sp1, got {models!r}"
+        )
     from mrdamper.models import known_kinds
 
     unknown = [k for k in kinds if k not in known_kinds()]
@@ -96,41 +100,80 @@ def print_summary(res: Any, out: Path | None = None) -> None:
     console = Console()
     s = res.summary
     table = Table(title=f"Model comparison ({res.protocol.name}): scored records per model")
-    for col, just in (("model", "left"), ("ok", "right"), ("failed", "right"), ("ESR mean", "right"),
-                      ("ESR median", "right"), ("SSSE mean [N]", "right"), ("fit time [s]", "right")):
+    for col, just in (
+        ("model", "left"),
+        ("ok", "right"),
+        ("failed", "right"),
+        ("ESR mean", "right"),
+        ("ESR median", "right"),
+        ("SSSE mean [N]", "right"),
+        ("fit time [s]", "right"),
+    ):
         table.add_column(col, justify=just)  # type: ignore[arg-type]
 
     def f(x: float, fmt: str = "{:.4g}") -> str:
         return "-" if not math.isfinite(x) else fmt.format(x)
 
     for row in s.itertuples(index=False):
-        table.add_row(row.model, str(row.n_ok), str(row.n_failed), f(row.esr_mean), f(row.esr_median),
-                      f(row.ssse_mean), f(row.fit_time_s, "{:.2f}"))
+        table.add_row(
+            row.model,
+            str(row.n_ok),
+            str(row.n_failed),
+            f(row.esr_mean),
+            f(row.esr_median),
+            f(row.ssse_mean),
+            f(row.fit_time_s, "{:.2f}"),
+        )
     console.print(table)
     failed = res.fits[res.fits["status"] != "ok"]
     for row in failed.itertuples(index=False):
-        console.print(f"[yellow]{row.model}[/] did not fit ({row.fold}): {row.error}", markup=True, highlight=False)
+        console.print(
+            f"[yellow]{row.model}[/] did not fit ({row.fold}): {row.error}",
+            markup=True,
+            highlight=False,
+        )
     hl = res.headline()
-    console.print(f"[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): {hl['text']}",
-                  highlight=False)
-    console.print("The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
-                  "model (SP-1).", highlight=False)
+    console.print(
+        f"[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): {hl['text']}",
+        highlight=False,
+    )
+    console.print(
+        "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
+        "model (SP-1).",
+        highlight=False,
+    )
     if out is not None:
-        console.print(f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, {out}/results.csv)",
-                      highlight=False)
+        console.print(
+            f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, {out}/results.csv)",
+            highlight=False,
+        )
 
 
 def study(
-    data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),  # noqa: B008
-    out: Path = typer.Option(..., "--out", help="Output folder (must not exist or be empty, unless --force)."),  # noqa: B008
-    protocol: str = typer.Option(
-        None, "--protocol", help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from the records "
-        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time split)."
+    data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),
+    out: Path = typer.Option(
+        ..., "--out", help="Output folder (must not exist or be empty, unless --force)."
     ),
-    models: str = typer.Option(None, "--models", help="Comma-separated model kinds, e.g. lpv,sp1,p15 (default: the protocol's)."),
-    workers: int = typer.Option(None, "--workers", help="Local worker processes (default min(2, CPUs); 1 = in-process)."),
-    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (tcp://host:8786); replaces --workers."),
-    pattern: str = typer.Option(None, "--pattern", help="Regex for file names in a folder; named groups become metadata."),
+    protocol: str = typer.Option(
+        None,
+        "--protocol",
+        help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from the records "
+        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time split).",
+    ),
+    models: str = typer.Option(
+        None,
+        "--models",
+        help="Comma-separated model kinds, e.g. lpv,sp1,p15 (default: the protocol's).",
+    ),
+    workers: int = typer.Option(
+        None, "--workers", help="Local worker processes (default min(2, CPUs); 1 = in-process)."
+    ),
+    scheduler: str = typer.Option(
+        None, "--scheduler", help="Dask scheduler address (tcp://host:8786); replaces --workers."
+    ),
+    pattern: str = typer.Option(
+        None, "--pattern", help="Regex for file names in a folder; named groups become metadata."
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed given to every estimator that takes one."),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
@@ -151,19 +194,41 @@ def study(
     else:
         proto, why = default_protocol(records)
         typer.echo(f"{len(records)} records from {data}; {why}", err=True)
-    res = run_study(records, proto, kinds, workers=workers, scheduler=scheduler, seed=seed, progress=not no_progress)
+    res = run_study(
+        records,
+        proto,
+        kinds,
+        workers=workers,
+        scheduler=scheduler,
+        seed=seed,
+        progress=not no_progress,
+    )
     res.write(out, force=force)
     print_summary(res, out)
 
 
 def demo(
-    out: Path = typer.Option(DEMO_OUT, "--out", help="Output folder (default ./mrdamper-demo; never replaced without --force)."),  # noqa: B008
-    quick: bool = typer.Option(False, "--quick", help=f"Shortened records (durations x {QUICK_SCALE}) for a run under a minute."),
+    out: Path = typer.Option(
+        DEMO_OUT,
+        "--out",
+        help="Output folder (default ./mrdamper-demo; never replaced without --force).",
+    ),
+    quick: bool = typer.Option(
+        False,
+        "--quick",
+        help=f"Shortened records (durations x {QUICK_SCALE}) for a run under a minute.",
+    ),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
-    models: str = typer.Option(None, "--models", help="Comma-separated model kinds (default: all installed)."),
-    workers: int = typer.Option(None, "--workers", help="Local worker processes (default min(2, CPUs))."),
+    models: str = typer.Option(
+        None, "--models", help="Comma-separated model kinds (default: all installed)."
+    ),
+    workers: int = typer.Option(
+        None, "--workers", help="Local worker processes (default min(2, CPUs))."
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of the virtual rig and the estimators."),
-    scale: float = typer.Option(None, "--scale", help="Duration scale of the records (overrides --quick)."),
+    scale: float = typer.Option(
+        None, "--scale", help="Duration scale of the records (overrides --quick)."
+    ),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
 ) -> None:
     """Generate the paper's Table II experiments on the virtual rig, compare every model, write a report."""
@@ -182,19 +247,31 @@ def demo(
     try:
         from mrdamper.rig.doe import table_ii
     except ImportError as exc:
-        raise SchemaError(f"demo: the virtual rig is not available on this installation ({exc})") from None
+        raise SchemaError(
+            f"demo: the virtual rig is not available on this installation ({exc})"
+        ) from None
     console = Console(stderr=True)
     t0 = time.perf_counter()
-    console.print(f"[bold]mrdamper demo[/]: the paper's Table II experiments on the virtual rig "
-                  f"(durations x {sc:g}, 1 kHz, seed {seed}), then every model identified and scored.", highlight=False)
+    console.print(
+        f"[bold]mrdamper demo[/]: the paper's Table II experiments on the virtual rig "
+        f"(durations x {sc:g}, 1 kHz, seed {seed}), then every model identified and scored.",
+        highlight=False,
+    )
     data = table_ii(seed=seed, scale=sc)
     n = sum(e.n for e in data)
-    console.print(f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in {time.perf_counter() - t0:.1f} s.",
-                  highlight=False)
-    res = run_study(data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress)
+    console.print(
+        f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in {time.perf_counter() - t0:.1f} s.",
+        highlight=False,
+    )
+    res = run_study(
+        data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
+    )
     res.write(out, force=force)
     print_summary(res, out)
-    console.print(f"Done in {time.perf_counter() - t0:.0f} s. Open {out / 'report.html'} in a browser.", highlight=False)
+    console.print(
+        f"Done in {time.perf_counter() - t0:.0f} s. Open {out / 'report.html'} in a browser.",
+        highlight=False,
+    )
 
 
 def register(app: typer.Typer) -> None:

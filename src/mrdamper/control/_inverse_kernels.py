@@ -19,7 +19,12 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "horizon_step", "lpv_inverse", "lpv_inverse_reg", "reg_solve_poly", "reg_solve_static", "sp_force1",
+    "horizon_step",
+    "lpv_inverse",
+    "lpv_inverse_reg",
+    "reg_solve_poly",
+    "reg_solve_static",
+    "sp_force1",
     "static_inverse_reg",
 ]
 
@@ -28,7 +33,7 @@ MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
 
 _N_BISECT = 200
 #: Golden-section ratio and iterations of the drive-lag horizon solver (the C export uses the same).
-GOLDEN = 0.5 * (5.0 ** 0.5 - 1.0)
+GOLDEN = 0.5 * (5.0**0.5 - 1.0)
 N_GOLDEN = 50
 
 
@@ -167,7 +172,9 @@ def _u_of(v, r, mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def lpv_inverse(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0, n_grid, tol):  # pragma: no cover - numba
+def lpv_inverse(
+    v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0, n_grid, tol
+):  # pragma: no cover - numba
     """Causal, one-pass inverse of the LPV input-output model.
 
     Parameters
@@ -320,12 +327,15 @@ def _slope_poly(cf, target, r, prev, lam2):  # pragma: no cover - numba
 
 @njit(cache=True)
 def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragma: no cover - numba
-    return ((sp_force1(x, v, r, comp, power, theta, f0) - target) * sp_dforce1(x, v, r, comp, power, theta)
-            + lam2 * (r - prev))
+    return (sp_force1(x, v, r, comp, power, theta, f0) - target) * sp_dforce1(
+        x, v, r, comp, power, theta
+    ) + lam2 * (r - prev)
 
 
 @njit(cache=True)
-def _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b):  # pragma: no cover
+def _bisect_slope(
+    is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b
+):  # pragma: no cover
     """Zero of the objective's slope in ``[a, b]`` (slope < 0 at ``a``, > 0 at ``b``), to machine precision."""
     for _ in range(_N_BISECT):
         m = 0.5 * (a + b)
@@ -345,7 +355,9 @@ def _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2,
 
 
 @njit(cache=True)
-def _reg_solve(is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
+def _reg_solve(
+    is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
+):  # pragma: no cover
     """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]`` (see :func:`reg_solve_poly`)."""
     best = min(max(prev, a), b)
     if is_poly:
@@ -381,7 +393,9 @@ def _reg_solve(is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, la
         else:
             g_lo = _slope_static(x, v, comp, power, theta, f0, target, lo, prev, lam2)
         if g_lo < 0.0:
-            best = _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, lo, best)
+            best = _bisect_slope(
+                is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, lo, best
+            )
     elif g < 0.0 and best < b:
         hi = min(b, best + h)
         if is_poly:
@@ -389,7 +403,9 @@ def _reg_solve(is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, la
         else:
             g_hi = _slope_static(x, v, comp, power, theta, f0, target, hi, prev, lam2)
         if g_hi > 0.0:
-            best = _bisect_slope(is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, best, hi)
+            best = _bisect_slope(
+                is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, best, hi
+            )
     return best, fmin <= target <= fmax
 
 
@@ -407,7 +423,9 @@ def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # pragma: no cover - 
 
 
 @njit(cache=True)
-def reg_solve_static(x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid):  # pragma: no cover
+def reg_solve_static(
+    x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
+):  # pragma: no cover
     """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""
     return _reg_solve(False, theta, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid)
 
@@ -427,8 +445,29 @@ def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # pragma: no cover - nu
 
 
 @njit(cache=True)
-def horizon_cost(cf, yb, ub, valid, alpha, beta, offset, r, w, lag, horizon, v, target, mode, gm, gc, mu_high,
-                 mu_low, ys, us, c2):  # pragma: no cover - numba
+def horizon_cost(
+    cf,
+    yb,
+    ub,
+    valid,
+    alpha,
+    beta,
+    offset,
+    r,
+    w,
+    lag,
+    horizon,
+    v,
+    target,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    ys,
+    us,
+    c2,
+):  # pragma: no cover - numba
     """Mean squared force error over ``horizon`` samples with the command ``w`` held.
 
     Sample 0 has the coefficients ``cf`` (fixed by the past) and scheduling value ``r``; then the
@@ -467,17 +506,86 @@ def horizon_cost(cf, yb, ub, valid, alpha, beta, offset, r, w, lag, horizon, v, 
 
 
 @njit(cache=True)
-def _horizon_j(cf, yb, ub, valid, alpha, beta, offset, r, prev, hold, lag, horizon, v, target, lam2, mode, gm, gc,
-               mu_high, mu_low, ys, us, c2):  # pragma: no cover - numba
+def _horizon_j(
+    cf,
+    yb,
+    ub,
+    valid,
+    alpha,
+    beta,
+    offset,
+    r,
+    prev,
+    hold,
+    lag,
+    horizon,
+    v,
+    target,
+    lam2,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    ys,
+    us,
+    c2,
+):  # pragma: no cover - numba
     w = (r - lag * prev) / (1.0 - lag)
     d = r - hold
-    return horizon_cost(cf, yb, ub, valid, alpha, beta, offset, r, w, lag, horizon, v, target, mode, gm, gc,
-                        mu_high, mu_low, ys, us, c2) + lam2 * d * d
+    return (
+        horizon_cost(
+            cf,
+            yb,
+            ub,
+            valid,
+            alpha,
+            beta,
+            offset,
+            r,
+            w,
+            lag,
+            horizon,
+            v,
+            target,
+            mode,
+            gm,
+            gc,
+            mu_high,
+            mu_low,
+            ys,
+            us,
+            c2,
+        )
+        + lam2 * d * d
+    )
 
 
 @njit(cache=True)
-def horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, horizon, v, target, lam2, n_grid,
-                 mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
+def horizon_step(
+    cf,
+    yb,
+    ub,
+    valid,
+    alpha,
+    beta,
+    offset,
+    a,
+    b,
+    prev,
+    hold,
+    lag,
+    horizon,
+    v,
+    target,
+    lam2,
+    n_grid,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+):  # pragma: no cover - numba
     """``rho[k]`` in ``[a, b]`` minimising the horizon cost (:func:`horizon_cost`) of the command it
     implies, ``w = (rho - lag prev) / (1 - lag)``, plus ``lam2 (rho - hold)^2``.
 
@@ -491,8 +599,31 @@ def horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, 
     us = np.zeros(n_m)
     c2 = np.zeros(n_p)
     best = min(max(hold, a), b)
-    best_j = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, best, prev, hold, lag, horizon, v, target, lam2,
-                        mode, gm, gc, mu_high, mu_low, ys, us, c2)
+    best_j = _horizon_j(
+        cf,
+        yb,
+        ub,
+        valid,
+        alpha,
+        beta,
+        offset,
+        best,
+        prev,
+        hold,
+        lag,
+        horizon,
+        v,
+        target,
+        lam2,
+        mode,
+        gm,
+        gc,
+        mu_high,
+        mu_low,
+        ys,
+        us,
+        c2,
+    )
     f = _poly(cf, best)
     fmin = f
     fmax = f
@@ -504,8 +635,31 @@ def horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, 
         f = _poly(cf, r)
         fmin = min(fmin, f)
         fmax = max(fmax, f)
-        j = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, r, prev, hold, lag, horizon, v, target, lam2,
-                       mode, gm, gc, mu_high, mu_low, ys, us, c2)
+        j = _horizon_j(
+            cf,
+            yb,
+            ub,
+            valid,
+            alpha,
+            beta,
+            offset,
+            r,
+            prev,
+            hold,
+            lag,
+            horizon,
+            v,
+            target,
+            lam2,
+            mode,
+            gm,
+            gc,
+            mu_high,
+            mu_low,
+            ys,
+            us,
+            c2,
+        )
         if j < best_j:
             best, best_j = r, j
     lo = max(a, best - h)
@@ -513,17 +667,86 @@ def horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, 
     for _ in range(N_GOLDEN):
         c1 = hi - GOLDEN * (hi - lo)
         c3 = lo + GOLDEN * (hi - lo)
-        j1 = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, c1, prev, hold, lag, horizon, v, target, lam2,
-                        mode, gm, gc, mu_high, mu_low, ys, us, c2)
-        j3 = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, c3, prev, hold, lag, horizon, v, target, lam2,
-                        mode, gm, gc, mu_high, mu_low, ys, us, c2)
+        j1 = _horizon_j(
+            cf,
+            yb,
+            ub,
+            valid,
+            alpha,
+            beta,
+            offset,
+            c1,
+            prev,
+            hold,
+            lag,
+            horizon,
+            v,
+            target,
+            lam2,
+            mode,
+            gm,
+            gc,
+            mu_high,
+            mu_low,
+            ys,
+            us,
+            c2,
+        )
+        j3 = _horizon_j(
+            cf,
+            yb,
+            ub,
+            valid,
+            alpha,
+            beta,
+            offset,
+            c3,
+            prev,
+            hold,
+            lag,
+            horizon,
+            v,
+            target,
+            lam2,
+            mode,
+            gm,
+            gc,
+            mu_high,
+            mu_low,
+            ys,
+            us,
+            c2,
+        )
         if j1 <= j3:
             hi = c3
         else:
             lo = c1
     m = 0.5 * (lo + hi)
-    jm = _horizon_j(cf, yb, ub, valid, alpha, beta, offset, m, prev, hold, lag, horizon, v, target, lam2,
-                    mode, gm, gc, mu_high, mu_low, ys, us, c2)
+    jm = _horizon_j(
+        cf,
+        yb,
+        ub,
+        valid,
+        alpha,
+        beta,
+        offset,
+        m,
+        prev,
+        hold,
+        lag,
+        horizon,
+        v,
+        target,
+        lam2,
+        mode,
+        gm,
+        gc,
+        mu_high,
+        mu_low,
+        ys,
+        us,
+        c2,
+    )
     if jm < best_j:
         best = m
     return best, fmin <= target <= fmax
@@ -541,8 +764,26 @@ def past_buffers(y, u, k, yb, ub):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0,
-                    n_grid, lam, rate_step, horizon):  # pragma: no cover - numba
+def lpv_inverse_reg(
+    v,
+    F_desired,
+    alpha,
+    beta,
+    offset,
+    lo,
+    hi,
+    lag,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    rho0,
+    n_grid,
+    lam,
+    rate_step,
+    horizon,
+):  # pragma: no cover - numba
     """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
 
     Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
@@ -587,12 +828,36 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
             if b < a:
                 a = b = min(max(prev, a), b)
         hold = prev
-        if lag >= 0.0 and k >= 2:  # rho with the previous command held: the lag's own motion is free
+        if (
+            lag >= 0.0 and k >= 2
+        ):  # rho with the previous command held: the lag's own motion is free
             hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
         if lag >= 0.0 and k >= 2 and horizon > 1:
             valid = past_buffers(y, u, k, yb, ub)
-            r, ok = horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, horizon, v[k],
-                                 F_desired[k], lam2, n_grid, mode, gm, gc, mu_high, mu_low)
+            r, ok = horizon_step(
+                cf,
+                yb,
+                ub,
+                valid,
+                alpha,
+                beta,
+                offset,
+                a,
+                b,
+                prev,
+                hold,
+                lag,
+                horizon,
+                v[k],
+                F_desired[k],
+                lam2,
+                n_grid,
+                mode,
+                gm,
+                gc,
+                mu_high,
+                mu_low,
+            )
         else:
             r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
         if lag >= 0.0:
@@ -607,7 +872,9 @@ def lpv_inverse_reg(v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc
 
 
 @njit(cache=True)
-def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step, lag):  # pragma: no cover
+def static_inverse_reg(
+    x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step, lag
+):  # pragma: no cover
     """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`).
 
     With a drive lag (``lag = exp(-eta dt) >= 0``; -1 for none) the map sees ``rho``, the lagged
@@ -637,7 +904,9 @@ def static_inverse_reg(x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_gr
         hold = prev
         if lag >= 0.0 and k >= 2:  # rho with the previous command held
             hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-        r, ok = reg_solve_static(x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, hold, lam2, n_grid)
+        r, ok = reg_solve_static(
+            x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, hold, lam2, n_grid
+        )
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         out[k] = r

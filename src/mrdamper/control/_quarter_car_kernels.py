@@ -68,8 +68,35 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
 # function it calls in another module (the inverse kernels) changes; after editing those, delete
 # this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
 @njit(cache=True)
-def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, offset, lag, mode, gm, gc,
-             mu_high, mu_low, ctrl, gains, lo, hi, lam, rate_step, n_grid, bound, horizon):  # pragma: no cover - numba
+def simulate(
+    zr,
+    h,
+    n_sub,
+    car,
+    is_lpv,
+    comp,
+    power,
+    theta,
+    f0,
+    alpha,
+    beta,
+    offset,
+    lag,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    ctrl,
+    gains,
+    lo,
+    hi,
+    lam,
+    rate_step,
+    n_grid,
+    bound,
+    horizon,
+):  # pragma: no cover - numba
     """Run the quarter car over a road.
 
     Parameters
@@ -158,8 +185,30 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
                     hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
                 if lag >= 0.0 and k >= 2 and horizon > 1:
                     valid = past_buffers(y, u, k, yb, ub)
-                    r, ok = horizon_step(cf, yb, ub, valid, alpha, beta, offset, a, b, prev, hold, lag, horizon,
-                                         v_d, target + offset, lam2, n_grid, mode, gm, gc, mu_high, mu_low)
+                    r, ok = horizon_step(
+                        cf,
+                        yb,
+                        ub,
+                        valid,
+                        alpha,
+                        beta,
+                        offset,
+                        a,
+                        b,
+                        prev,
+                        hold,
+                        lag,
+                        horizon,
+                        v_d,
+                        target + offset,
+                        lam2,
+                        n_grid,
+                        mode,
+                        gm,
+                        gc,
+                        mu_high,
+                        mu_low,
+                    )
                 else:
                     r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
             if lag >= 0.0:
@@ -176,7 +225,9 @@ def simulate(zr, h, n_sub, car, is_lpv, comp, power, theta, f0, alpha, beta, off
                 hold = prev
                 if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
                     hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-                r, ok = reg_solve_static(x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid)
+                r, ok = reg_solve_static(
+                    x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid
+                )
             if lag >= 0.0:
                 w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
             F[k] = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0

@@ -461,19 +461,35 @@ void {p}_inverse_run(long n, const double *x, const double *v, const double *F_d
 
 def _solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str) -> str:
     """Slope, bisection and solver functions of the regularised inverse for one force expression."""
-    sub = dict(fmt, args=args, call=call, F_r=f_expr.format(r="r"), dF_r=df_expr.format(r="r"),
-               F_best=f_expr.format(r="best"))
+    sub = dict(
+        fmt,
+        args=args,
+        call=call,
+        F_r=f_expr.format(r="r"),
+        dF_r=df_expr.format(r="r"),
+        F_best=f_expr.format(r="best"),
+    )
     slope, solve = _SOLVE.split("/* minimiser", 1)
     return slope.format(**sub) + _BISECT.format(**sub) + ("/* minimiser" + solve).format(**sub)
 
 
-def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, dt: float,
-              dt_known: bool = True) -> tuple[float, float]:
+def _settings(
+    model: Any,
+    reg: float | None,
+    v_ref: float,
+    rate: float | None,
+    dt: float,
+    dt_known: bool = True,
+) -> tuple[float, float]:
     lo, hi = model_input_limits(model)
     if reg is None and not hi > lo:
         lam = 0.0
     elif reg is None:
-        lam = default_reg(model, v_ref, dt) if dt_known else DEFAULT_REG_FRACTION * force_authority(model, v_ref)
+        lam = (
+            default_reg(model, v_ref, dt)
+            if dt_known
+            else DEFAULT_REG_FRACTION * force_authority(model, v_ref)
+        )
     elif not (np.isfinite(reg) and reg >= 0):
         raise DataValidationError("reg", f"expected a regularisation weight >= 0, got {reg!r}")
     else:
@@ -487,8 +503,16 @@ def _settings(model: Any, reg: float | None, v_ref: float, rate: float | None, d
     return lam, step
 
 
-def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, v_ref: float = 0.3,
-             rate: float | None = None, n_grid: int = 32, dt: float | None = None) -> tuple[str, str]:
+def c_source(
+    model: Any,
+    name: str = "mrd_damper",
+    *,
+    reg: float | None = None,
+    v_ref: float = 0.3,
+    rate: float | None = None,
+    n_grid: int = 32,
+    dt: float | None = None,
+) -> tuple[str, str]:
     """Header and source text of the C export (see the module docstring).
 
     Parameters
@@ -522,8 +546,9 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     if not isinstance(model, LPVModel) and getattr(model, "eta", None) is not None:
         raise DataValidationError(
-            "model", f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
-            "implemented; export the map without the lag or an LPV model with its drive lag"
+            "model",
+            f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
+            "implemented; export the map without the lag or an LPV model with its drive lag",
         )
     p, P = name, name.upper()
     lo, hi = model_input_limits(model)
@@ -534,56 +559,106 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
     else:
         step_dt = 1.0 if dt is None else float(dt)
         if rate is not None and dt is None:
-            raise DataValidationError("dt", "a rate bound on a static map's inverse needs the sample time dt [s]")
+            raise DataValidationError(
+                "dt", "a rate bound on a static map's inverse needs the sample time dt [s]"
+            )
     dt_known = is_lpv or dt is not None
-    lam, rate_step = _settings(model, reg, v_ref, rate, step_dt, dt_known) if has_inverse else (0.0, math.inf)
-    fmt: dict[str, Any] = {"p": p, "P": P, "lo": _f(lo), "hi": _f(hi), "in_lo": _f(model.input_range[0]),
-                           "in_hi": _f(model.input_range[1]), "lam2": _f(lam * lam),
-                           "rate_step": _f(rate_step), "n_grid": n_grid, "n_bisect": K._N_BISECT}
+    lam, rate_step = (
+        _settings(model, reg, v_ref, rate, step_dt, dt_known) if has_inverse else (0.0, math.inf)
+    )
+    fmt: dict[str, Any] = {
+        "p": p,
+        "P": P,
+        "lo": _f(lo),
+        "hi": _f(hi),
+        "in_lo": _f(model.input_range[0]),
+        "in_hi": _f(model.input_range[1]),
+        "lam2": _f(lam * lam),
+        "rate_step": _f(rate_step),
+        "n_grid": n_grid,
+        "n_bisect": K._N_BISECT,
+    }
     if is_lpv:
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
         lag = -1.0 if model.eta is None else float(np.exp(-model.eta / model.fs))
-        fmt.update(n_m=model.n_m, n_p=model.n_rho + 1, n_d=gm.shape[1], alpha=_arr2(model.alpha),
-                   beta=_arr2(model.beta), offset=_f(model.offset), lag=_f(lag), mode=mode, gm=_arr2(gm),
-                   gc=_arr2(gc), mu_high=_arr1(mu_h), mu_low=_arr1(mu_l),
-                   horizon=horizon_samples(model.eta, 1.0 / model.fs), golden=_f(K.GOLDEN), n_golden=K.N_GOLDEN)
-        state = (f"typedef struct {{\n    double y[{model.n_m}]; /* past outputs y[k-1-j] (force minus offset) [N] */\n"
-                 f"    double u[{model.n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
-                 "    double rho; /* scheduling value of the last sample */\n"
-                 "    double w; /* forward: input of the last sample; inverse: last command (drive lag) */\n"
-                 f"    long k; /* samples taken */\n}} {p}_state;\n")
+        fmt.update(
+            n_m=model.n_m,
+            n_p=model.n_rho + 1,
+            n_d=gm.shape[1],
+            alpha=_arr2(model.alpha),
+            beta=_arr2(model.beta),
+            offset=_f(model.offset),
+            lag=_f(lag),
+            mode=mode,
+            gm=_arr2(gm),
+            gc=_arr2(gc),
+            mu_high=_arr1(mu_h),
+            mu_low=_arr1(mu_l),
+            horizon=horizon_samples(model.eta, 1.0 / model.fs),
+            golden=_f(K.GOLDEN),
+            n_golden=K.N_GOLDEN,
+        )
+        state = (
+            f"typedef struct {{\n    double y[{model.n_m}]; /* past outputs y[k-1-j] (force minus offset) [N] */\n"
+            f"    double u[{model.n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
+            "    double rho; /* scheduling value of the last sample */\n"
+            "    double w; /* forward: input of the last sample; inverse: last command (drive lag) */\n"
+            f"    long k; /* samples taken */\n}} {p}_state;\n"
+        )
         body = _LPV.format(**fmt)
         if has_inverse:
-            body += _LPV_DPOLY.format(**fmt) + _solver(fmt, "const double *cf", "cf", f"{p}_poly(cf, {P}_N_P, {{r}})",
-                                                       f"{p}_dpoly(cf, {P}_N_P, {{r}})")
+            body += _LPV_DPOLY.format(**fmt) + _solver(
+                fmt,
+                "const double *cf",
+                "cf",
+                f"{p}_poly(cf, {P}_N_P, {{r}})",
+                f"{p}_dpoly(cf, {P}_N_P, {{r}})",
+            )
             body += _LPV_HORIZON.format(**fmt) + _LPV_INVERSE.format(**fmt)
         rate_note = f"{model.fs!r} Hz (one call per model sample)"
     else:
         comp, power, theta, f0 = static_map_arrays(model)
-        fmt.update(n_theta=theta.size, comp="{" + ", ".join(str(int(c)) for c in comp) + "}",
-                   power="{" + ", ".join(str(int(q)) for q in power) + "}", theta=_arr1(theta), f0=_f(f0))
-        state = (f"typedef struct {{\n    double prev; /* input of the last inverse sample */\n"
-                 f"    long k; /* inverse samples taken */\n}} {p}_state;\n")
+        fmt.update(
+            n_theta=theta.size,
+            comp="{" + ", ".join(str(int(c)) for c in comp) + "}",
+            power="{" + ", ".join(str(int(q)) for q in power) + "}",
+            theta=_arr1(theta),
+            f0=_f(f0),
+        )
+        state = (
+            f"typedef struct {{\n    double prev; /* input of the last inverse sample */\n"
+            f"    long k; /* inverse samples taken */\n}} {p}_state;\n"
+        )
         head, inv = _STATIC.split("double {p}_inverse_step", 1)
         body = head.format(**fmt) + _STATIC_DFORCE.format(**fmt)
-        body += _solver(fmt, "double x, double v", "x, v", f"{p}_force(x, v, {{r}})", f"{p}_dforce(x, v, {{r}})")
+        body += _solver(
+            fmt, "double x, double v", "x, v", f"{p}_force(x, v, {{r}})", f"{p}_dforce(x, v, {{r}})"
+        )
         body += ("double {p}_inverse_step" + inv).format(**fmt)
         rate_note = "any (static map)"
     unit = "A" if model.input == "i" else "V"
     guard = f"{P}_H"
-    protos = [f"void {p}_init({p}_state *s);",
-              f"double {p}_step({p}_state *s, double x, double v, double input);",
-              f"void {p}_run(long n, const double *x, const double *v, const double *input, double *F);"]
+    protos = [
+        f"void {p}_init({p}_state *s);",
+        f"double {p}_step({p}_state *s, double x, double v, double input);",
+        f"void {p}_run(long n, const double *x, const double *v, const double *input, double *F);",
+    ]
     if has_inverse:
-        protos += [f"double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out);",
-                   (f"void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired, "
-                    "double *input, double *F);")]
+        protos += [
+            f"double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out);",
+            (
+                f"void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired, "
+                "double *input, double *F);"
+            ),
+        ]
     header = (
         f"/* {name}.h: {kind} damper model exported by mrdamper (C99, no dynamic allocation).\n"
         f" * Units: x [m], v [m/s], input [{unit}] clipped to [{model.input_range[0]!r}, {model.input_range[1]!r}] "
         f"(inverse: [{lo!r}, {hi!r}]), force [N].\n * Sample rate: {rate_note}.\n"
         f" * Inverse: regularisation weight {lam!r} N/{unit}, grid {n_grid}. */\n"
-        f"#ifndef {guard}\n#define {guard}\n\n{state}\n" + "\n".join(protos) + f"\n\n#endif /* {guard} */\n"
+        f"#ifndef {guard}\n#define {guard}\n\n{state}\n"
+        + "\n".join(protos)
+        + f"\n\n#endif /* {guard} */\n"
     )
     src = f'/* {name}.c: see {name}.h. */\n#include <math.h>\n#include "{name}.h"\n'
     src += _COMMON.format(**fmt) + (_INV_CONST.format(**fmt) if has_inverse else "") + body
@@ -593,8 +668,9 @@ def c_source(model: Any, name: str = "mrd_damper", *, reg: float | None = None, 
     return header, src
 
 
-def export_c(model: Any, out_dir: str | Path, *, name: str = "mrd_damper", force: bool = False,
-             **kwargs: Any) -> tuple[Path, Path]:
+def export_c(
+    model: Any, out_dir: str | Path, *, name: str = "mrd_damper", force: bool = False, **kwargs: Any
+) -> tuple[Path, Path]:
     """Write ``<out_dir>/<name>.h`` and ``<name>.c`` atomically (see :func:`c_source` for the options).
 
     Returns
@@ -615,4 +691,6 @@ def export_c(model: Any, out_dir: str | Path, *, name: str = "mrd_damper", force
         raise DataValidationError("out_dir", f"{d} exists and is not a folder")
     h_path, c_path = check_writable(d / f"{name}.h", force), check_writable(d / f"{name}.c", force)
     d.mkdir(parents=True, exist_ok=True)
-    return atomic_write_text(h_path, header, force=force), atomic_write_text(c_path, src, force=force)
+    return atomic_write_text(h_path, header, force=force), atomic_write_text(
+        c_path, src, force=force
+    )

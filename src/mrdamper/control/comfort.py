@@ -28,8 +28,17 @@ __all__ = ["WK_PARAMETERS", "weight_signal", "weighted_rms", "wk_response"]
 
 #: Parameters of Wk [Hz] and [-] (ISO 2631-1 Table A.2 / ISO 8041).
 WK_PARAMETERS: dict[str, float] = {
-    "f1": 0.4, "Q1": 1.0 / np.sqrt(2.0), "f2": 100.0, "Q2": 1.0 / np.sqrt(2.0),
-    "f3": 12.5, "f4": 12.5, "Q4": 0.63, "f5": 2.37, "Q5": 0.91, "f6": 3.35, "Q6": 0.91,
+    "f1": 0.4,
+    "Q1": 1.0 / np.sqrt(2.0),
+    "f2": 100.0,
+    "Q2": 1.0 / np.sqrt(2.0),
+    "f3": 12.5,
+    "f4": 12.5,
+    "Q4": 0.63,
+    "f5": 2.37,
+    "Q5": 0.91,
+    "f6": 3.35,
+    "Q6": 0.91,
 }
 
 
@@ -51,7 +60,9 @@ def wk_response(f: Any) -> np.ndarray:
 def _check(a: Any, fs: float) -> np.ndarray:
     x = np.asarray(a, dtype=float)
     if x.ndim != 1 or x.size < 2 or not np.all(np.isfinite(x)):
-        raise DataValidationError("acceleration", f"expected a finite 1-D array of >= 2 samples, got shape {x.shape}")
+        raise DataValidationError(
+            "acceleration", f"expected a finite 1-D array of >= 2 samples, got shape {x.shape}"
+        )
     if not (np.isfinite(fs) and fs > 0):
         raise DataValidationError("fs", f"expected a positive sampling rate [Hz], got {fs!r}")
     return x

@@ -82,12 +82,17 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     if not isinstance(model, LPVModel):
         kind = getattr(model, "kind", type(model).__name__)
         raise DataValidationError(
-            "model", f"state-space export needs an LPV or LTI model (kinds 'lpv', 'lti'), got kind {kind!r}"
+            "model",
+            f"state-space export needs an LPV or LTI model (kinds 'lpv', 'lti'), got kind {kind!r}",
         )
     lo, hi = model.rho_range
-    grid = np.linspace(lo, hi, 21) if rho_grid is None else np.asarray(rho_grid, dtype=float).ravel()
+    grid = (
+        np.linspace(lo, hi, 21) if rho_grid is None else np.asarray(rho_grid, dtype=float).ravel()
+    )
     if grid.size == 0 or not np.all(np.isfinite(grid)):
-        raise DataValidationError("rho_grid", f"expected a non-empty finite array, got {rho_grid!r}")
+        raise DataValidationError(
+            "rho_grid", f"expected a non-empty finite array, got {rho_grid!r}"
+        )
     n, n_p = model.alpha.shape
     A_poly = np.zeros((n, n, n_p))
     A_poly[:-1, 1:, 0] = np.eye(n - 1)
@@ -127,8 +132,19 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
         "mu_high": np.zeros(0) if laws is None else np.array(laws.mu_high),
         "mu_low": np.zeros(0) if laws is None else np.array(laws.mu_low),
         "units": {
-            "Ts": "s", "F0": "N", "F": "N", "u": "m/s", "v": "m/s", "x": "m", "rho": elec, "eta": "1/s",
-            "beta": "N s/m", "gamma_m": "N s/m", "gamma_c": "N", "mu_high": "m/s", "mu_low": "m/s",
+            "Ts": "s",
+            "F0": "N",
+            "F": "N",
+            "u": "m/s",
+            "v": "m/s",
+            "x": "m",
+            "rho": elec,
+            "eta": "1/s",
+            "beta": "N s/m",
+            "gamma_m": "N s/m",
+            "gamma_c": "N",
+            "mu_high": "m/s",
+            "mu_low": "m/s",
         },
         "provenance": json.dumps(encode_value(dict(model.provenance)), allow_nan=True, default=str),
     }
@@ -177,7 +193,8 @@ def export_lpv(
         warnings.warn(
             f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen pole "
             f"modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control design",
-            RuntimeWarning, stacklevel=2,
+            RuntimeWarning,
+            stacklevel=2,
         )
     if format == "json":
         text = json.dumps(encode_value(data), indent=1, allow_nan=False)

@@ -146,10 +146,16 @@ class InverseResult:
 
     def to_frame(self) -> pd.DataFrame:
         """Columns ``t, F_desired, <input>, rho, F_achieved, saturated`` [s, N, A|V, A|V, N, -]."""
-        return pd.DataFrame({
-            "t": self.t, "F_desired": self.F_desired, self.input: self.i, "rho": self.rho,
-            "F_achieved": self.F_achieved, "saturated": self.saturated,
-        })
+        return pd.DataFrame(
+            {
+                "t": self.t,
+                "F_desired": self.F_desired,
+                self.input: self.i,
+                "rho": self.rho,
+                "F_achieved": self.F_achieved,
+                "saturated": self.saturated,
+            }
+        )
 
     def plot(self, ax: Any = None) -> Any:
         """Desired and achieved force (saturated samples marked) and the input on a twin axis.
@@ -166,7 +172,13 @@ class InverseResult:
         ax.plot(self.t, self.F_desired, lw=0.8, label="desired")
         ax.plot(self.t, self.F_achieved, lw=0.8, label=f"achieved ({self.model_kind})")
         if np.any(self.saturated):
-            ax.plot(self.t[self.saturated], self.F_achieved[self.saturated], ".", ms=2, label="saturated")
+            ax.plot(
+                self.t[self.saturated],
+                self.F_achieved[self.saturated],
+                ".",
+                ms=2,
+                label="saturated",
+            )
         ax.set_xlabel("t [s]")
         ax.set_ylabel("F [N]")
         ax.legend(loc="upper left")
@@ -177,7 +189,9 @@ class InverseResult:
 
 
 # ----------------------------------------------------------------------------- helpers
-def driver_command(rho: Any, eta: float, dt: float, limits: tuple[float, float] | None = None) -> np.ndarray:
+def driver_command(
+    rho: Any, eta: float, dt: float, limits: tuple[float, float] | None = None
+) -> np.ndarray:
     """Command ``w`` whose first-order drive lag ``d rho/dt = -eta (rho - w)`` gives ``rho``.
 
     Exact inverse of the zero-order-hold discretisation used by the models
@@ -206,7 +220,9 @@ def driver_command(rho: Any, eta: float, dt: float, limits: tuple[float, float] 
     """
     r = np.asarray(rho, dtype=float)
     if r.ndim != 1 or r.size == 0 or not np.all(np.isfinite(r)):
-        raise DataValidationError("rho", f"expected a non-empty 1-D finite array, got shape {r.shape}")
+        raise DataValidationError(
+            "rho", f"expected a non-empty 1-D finite array, got shape {r.shape}"
+        )
     if not (np.isfinite(eta) and eta > 0):
         raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s], got {eta!r}")
     if not (np.isfinite(dt) and dt > 0):
@@ -226,7 +242,9 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if isinstance(data, Mapping):
         missing = [k for k in ("t", "x", "v") if k not in data]
         if missing:
-            raise DataValidationError("experiment_or_arrays", f"mapping lacks key(s) {missing}; expected t, x, v")
+            raise DataValidationError(
+                "experiment_or_arrays", f"mapping lacks key(s) {missing}; expected t, x, v"
+            )
         out = []
         for k in ("t", "x", "v"):
             a = np.asarray(data[k], dtype=float)
@@ -238,7 +256,8 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             raise DataValidationError("x", f"lengths differ: t {t.size}, x {x.size}, v {v.size}")
         return t, x, v
     raise DataValidationError(
-        "experiment_or_arrays", f"expected an Experiment or a mapping with t, x, v, got {type(data).__name__}"
+        "experiment_or_arrays",
+        f"expected an Experiment or a mapping with t, x, v, got {type(data).__name__}",
     )
 
 
@@ -276,7 +295,9 @@ def _range(model: FittedModel, i_range: Any) -> tuple[float, float]:
     return lo, hi
 
 
-def _record(t: np.ndarray, x: np.ndarray, v: np.ndarray, F: np.ndarray, model: FittedModel, w: np.ndarray) -> Experiment:
+def _record(
+    t: np.ndarray, x: np.ndarray, v: np.ndarray, F: np.ndarray, model: FittedModel, w: np.ndarray
+) -> Experiment:
     if model.input == "voltage":
         return Experiment(t=t, x=x, v=v, F=F, voltage=w, name="inverse")
     return Experiment(t=t, x=x, v=v, F=F, i=w, name="inverse")
@@ -356,20 +377,30 @@ def inverse_current(
         raise TypeError(
             f"model: no inverse for kind {kind!r}; supported kinds are 'lpv' (dynamic, causal per-sample "
             f"solution) and the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham'"
-            + (" (an LTI model's force does not depend on the present current)" if kind == "lti" else "")
+            + (
+                " (an LTI model's force does not depend on the present current)"
+                if kind == "lti"
+                else ""
+            )
         )
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     t, x, v = _motion(experiment_or_arrays)
     Fd = np.asarray(F_desired, dtype=float)
     if Fd.ndim != 1 or Fd.size != t.size:
-        raise DataValidationError("F_desired", f"expected {t.size} values (one per sample), got shape {Fd.shape}")
+        raise DataValidationError(
+            "F_desired", f"expected {t.size} values (one per sample), got shape {Fd.shape}"
+        )
     if not np.all(np.isfinite(Fd)):
         raise DataValidationError("F_desired", "contains non-finite values")
     lo, hi = _range(model, i_range)
     if tol is None:
         tol = 1e-6 * max(1.0, float(np.max(np.abs(Fd))) if Fd.size else 1.0)
-    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.floating)) or not (np.isfinite(tol) and tol >= 0):
+    if (
+        isinstance(tol, bool)
+        or not isinstance(tol, (int, float, np.floating))
+        or not (np.isfinite(tol) and tol >= 0)
+    ):
         raise DataValidationError("tol", f"expected a force tolerance >= 0 [N], got {tol!r}")
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
@@ -379,9 +410,14 @@ def inverse_current(
         else:
             dt_inv = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
         lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi, dt_inv)
-        if horizon is not None and (isinstance(horizon, bool) or not isinstance(horizon, (int, float, np.floating))
-                                    or not (np.isfinite(horizon) and horizon >= 0)):
-            raise DataValidationError("horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}")
+        if horizon is not None and (
+            isinstance(horizon, bool)
+            or not isinstance(horizon, (int, float, np.floating))
+            or not (np.isfinite(horizon) and horizon >= 0)
+        ):
+            raise DataValidationError(
+                "horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}"
+            )
         if isinstance(model, LPVModel):
             n_h = horizon_samples(model.eta, 1.0 / model.fs, horizon)
             rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate, n_h)
@@ -391,8 +427,20 @@ def inverse_current(
             eta = getattr(model, "eta", None)
             lag = -1.0 if eta is None else float(np.exp(-eta * dt))
             rho, sat = K.static_inverse_reg(
-                np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(v, dtype=np.float64), Fd,
-                comp, power, theta, f0, lo, hi, lo, int(n_grid), lam, step_rate * dt, lag,
+                np.ascontiguousarray(x, dtype=np.float64),
+                np.ascontiguousarray(v, dtype=np.float64),
+                Fd,
+                comp,
+                power,
+                theta,
+                f0,
+                lo,
+                hi,
+                lo,
+                int(n_grid),
+                lam,
+                step_rate * dt,
+                lag,
             )
             w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
     elif isinstance(model, LPVModel):
@@ -400,21 +448,37 @@ def inverse_current(
     else:
         if getattr(model, "eta", None) is not None:
             raise DataValidationError(
-                "method", f"the exact inverse of a static map with a drive lag (eta) is not implemented; "
-                f"use method='regularised' for this {model.kind} model"
+                "method",
+                f"the exact inverse of a static map with a drive lag (eta) is not implemented; "
+                f"use method='regularised' for this {model.kind} model",
             )
         rho, sat = _static(model, x, v, Fd, lo, hi, int(n_grid))
         w = rho
     rec = _record(t, x, v, Fd, model, w)
     F_ach = model.with_range_policy("clip").predict(rec)
     return InverseResult(
-        t=t, F_desired=Fd, i=w, rho=rho, F_achieved=np.asarray(F_ach, dtype=float), saturated=sat,
-        input=model.input, model_kind=model.kind, i_range=(lo, hi),
+        t=t,
+        F_desired=Fd,
+        i=w,
+        rho=rho,
+        F_achieved=np.asarray(F_ach, dtype=float),
+        saturated=sat,
+        input=model.input,
+        model_kind=model.kind,
+        i_range=(lo, hi),
     )
 
 
-def _lpv_any_rate(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
-                  tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _lpv_any_rate(
+    model: Any,
+    t: np.ndarray,
+    v: np.ndarray,
+    Fd: np.ndarray,
+    lo: float,
+    hi: float,
+    n_grid: int,
+    tol: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The LPV inverse of a record at any rate: solved at the model rate, as ``simulate`` runs it.
 
     A record at another rate is resampled to the model rate on the way in (the same resampling
@@ -431,27 +495,41 @@ def _lpv_any_rate(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: 
     v_m = to_model_rate(v, fs, model.fs)
     Fd_m = to_model_rate(Fd, fs, model.fs)
     if v_m.size < 2:
-        raise DataValidationError("t", f"record too short: {t.size} samples at {fs:g} Hz give {v_m.size} at the model rate")
+        raise DataValidationError(
+            "t",
+            f"record too short: {t.size} samples at {fs:g} Hz give {v_m.size} at the model rate",
+        )
     t_m = t[0] + np.arange(v_m.size) / model.fs
     rho_m, w_m, sat_m = _lpv(model, t_m, v_m, Fd_m, lo, hi, n_grid, tol)
     warnings.warn(
         f"{model.kind}: record sampled at {fs:g} Hz, model at {model.fs:g} Hz; the inverse is solved at the "
-        "model rate and its input interpolated back onto the record's samples", Note, stacklevel=3,
+        "model rate and its input interpolated back onto the record's samples",
+        Note,
+        stacklevel=3,
     )
     nearest = np.clip(np.rint((t - t[0]) * model.fs).astype(np.int64), 0, v_m.size - 1)
     return np.interp(t, t_m, rho_m), np.interp(t, t_m, w_m), sat_m[nearest]
 
 
-def _lpv(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
-         tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _lpv(
+    model: Any,
+    t: np.ndarray,
+    v: np.ndarray,
+    Fd: np.ndarray,
+    lo: float,
+    hi: float,
+    n_grid: int,
+    tol: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if t.size < 2:
         raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
     dt = float(t[1] - t[0])
     fs = 1.0 / dt
     if abs(fs - model.fs) > 1e-6 * model.fs:
         raise DataValidationError(
-            "t", f"record sampled at {fs:g} Hz but the LPV model runs at {model.fs:g} Hz; resample the "
-            "record to the model rate first (the causal inverse works sample by sample at that rate)"
+            "t",
+            f"record sampled at {fs:g} Hz but the LPV model runs at {model.fs:g} Hz; resample the "
+            "record to the model rate first (the causal inverse works sample by sample at that rate)",
         )
     laws = model.zone_laws
     if model.input_signal == "v" or laws is None:
@@ -463,8 +541,22 @@ def _lpv(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi
         mu_h, mu_l = np.asarray(laws.mu_high, dtype=float), np.asarray(laws.mu_low, dtype=float)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     rho, _, sat = K.lpv_inverse(
-        np.ascontiguousarray(v, dtype=np.float64), np.ascontiguousarray(Fd), np.ascontiguousarray(model.alpha),
-        np.ascontiguousarray(model.beta), float(model.offset), lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, tol,
+        np.ascontiguousarray(v, dtype=np.float64),
+        np.ascontiguousarray(Fd),
+        np.ascontiguousarray(model.alpha),
+        np.ascontiguousarray(model.beta),
+        float(model.offset),
+        lo,
+        hi,
+        lag,
+        mode,
+        gm,
+        gc,
+        mu_h,
+        mu_l,
+        lo,
+        n_grid,
+        tol,
     )
     if model.eta is None:
         return rho, rho, sat
@@ -494,9 +586,15 @@ def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, f
         power_l = list(range(len(model.fc))) + [0] + list(range(len(model.c0)))
         slope = 1e300 if model.v_eps == 0.0 else 1.0 / model.v_eps
         theta_l = [*model.fc, slope, *model.c0]
-        return (np.asarray(comp_l, dtype=np.int64), np.asarray(power_l, dtype=np.int64),
-                np.asarray(theta_l, dtype=np.float64), float(model.f0))
-    raise TypeError(f"model: kind {getattr(model, 'kind', type(model).__name__)!r} is not a static map")
+        return (
+            np.asarray(comp_l, dtype=np.int64),
+            np.asarray(power_l, dtype=np.int64),
+            np.asarray(theta_l, dtype=np.float64),
+            float(model.f0),
+        )
+    raise TypeError(
+        f"model: kind {getattr(model, 'kind', type(model).__name__)!r} is not a static map"
+    )
 
 
 def force_authority(model: Any, v_ref: float) -> float:
@@ -513,17 +611,25 @@ def force_authority(model: Any, v_ref: float) -> float:
     if not hi > lo:
         raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
     if isinstance(model, LPVModel):
+
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
             if model.input_signal == "v" or model.zone_laws is None:
                 u = float(v_ref)
             else:
-                u = float(model.zone_laws.scheduling_input(np.array([v_ref]), np.array([r]), reading=model.reading)[0])
+                u = float(
+                    model.zone_laws.scheduling_input(
+                        np.array([v_ref]), np.array([r]), reading=model.reading
+                    )[0]
+                )
             return gain * u
+
         return abs(steady(hi) - steady(lo)) / (hi - lo)
     comp, power, theta, f0 = static_map_arrays(model)
-    return abs(K.sp_force1(0.0, float(v_ref), hi, comp, power, theta, f0)
-               - K.sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)) / (hi - lo)
+    return abs(
+        K.sp_force1(0.0, float(v_ref), hi, comp, power, theta, f0)
+        - K.sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)
+    ) / (hi - lo)
 
 
 #: Default regularisation weight at 200 Hz as a fraction of :func:`force_authority` (where it was chosen).
@@ -550,20 +656,33 @@ def default_reg(model: Any, v_ref: float, dt: float) -> float:
     return float(np.sqrt(q / (1.0 - q))) * force_authority(model, v_ref)
 
 
-def _reg_settings(model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float,
-                  dt: float) -> tuple[float, float]:
+def _reg_settings(
+    model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float, dt: float
+) -> tuple[float, float]:
     if reg is None:
         vpk = float(np.max(np.abs(v))) if v.size else 0.0
         lam = default_reg(model, vpk, dt) if vpk > 0 else 0.0
     else:
-        if isinstance(reg, bool) or not isinstance(reg, (int, float, np.floating)) or not (np.isfinite(reg) and reg >= 0):
-            raise DataValidationError("reg", f"expected a regularisation weight >= 0 [N per input unit], got {reg!r}")
+        if (
+            isinstance(reg, bool)
+            or not isinstance(reg, (int, float, np.floating))
+            or not (np.isfinite(reg) and reg >= 0)
+        ):
+            raise DataValidationError(
+                "reg", f"expected a regularisation weight >= 0 [N per input unit], got {reg!r}"
+            )
         lam = float(reg)
     if rate is None:
         step_rate = np.inf
     else:
-        if isinstance(rate, bool) or not isinstance(rate, (int, float, np.floating)) or not rate > 0:
-            raise DataValidationError("rate", f"expected a positive input rate bound [A/s] or [V/s], got {rate!r}")
+        if (
+            isinstance(rate, bool)
+            or not isinstance(rate, (int, float, np.floating))
+            or not rate > 0
+        ):
+            raise DataValidationError(
+                "rate", f"expected a positive input rate bound [A/s] or [V/s], got {rate!r}"
+            )
         step_rate = float(rate)
     return lam, step_rate
 
@@ -580,8 +699,18 @@ def horizon_samples(eta: float | None, dt: float, horizon: float | None = None) 
     return max(1, round(T / dt))
 
 
-def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int,
-             lam: float, rate: float, n_h: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _lpv_reg(
+    model: Any,
+    t: np.ndarray,
+    v: np.ndarray,
+    Fd: np.ndarray,
+    lo: float,
+    hi: float,
+    n_grid: int,
+    lam: float,
+    rate: float,
+    n_h: int = 1,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Regularised LPV inverse at the model rate; records at another rate are resampled in and out."""
     from mrdamper.models._rates import to_model_rate
 
@@ -594,15 +723,33 @@ def _lpv_reg(model: Any, t: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float
     mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     rho, _, sat = K.lpv_inverse_reg(
-        vm, Fm, np.ascontiguousarray(model.alpha), np.ascontiguousarray(model.beta), float(model.offset),
-        lo, hi, lag, mode, gm, gc, mu_h, mu_l, lo, n_grid, lam, rate * dt, n_h,
+        vm,
+        Fm,
+        np.ascontiguousarray(model.alpha),
+        np.ascontiguousarray(model.beta),
+        float(model.offset),
+        lo,
+        hi,
+        lag,
+        mode,
+        gm,
+        gc,
+        mu_h,
+        mu_l,
+        lo,
+        n_grid,
+        lam,
+        rate * dt,
+        n_h,
     )
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
         return rho, w, sat
     warnings.warn(
         f"{model.kind}: record sampled at {fs_rec:g} Hz, model at {model.fs:g} Hz; the inverse is solved at the "
-        "model rate and its input interpolated back onto the record's samples", Note, stacklevel=3,
+        "model rate and its input interpolated back onto the record's samples",
+        Note,
+        stacklevel=3,
     )
     tm = np.arange(rho.size) * dt
     tr = t - t[0]
@@ -616,9 +763,13 @@ def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray,
     if model.input_signal == "v" or laws is None:
         return K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
     mode = K.MODE_CONTINUOUS if model.reading == "continuous" else K.MODE_LITERAL
-    return (mode, np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
-            np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
-            np.asarray(laws.mu_high, dtype=np.float64), np.asarray(laws.mu_low, dtype=np.float64))
+    return (
+        mode,
+        np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
+        np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
+        np.asarray(laws.mu_high, dtype=np.float64),
+        np.asarray(laws.mu_low, dtype=np.float64),
+    )
 
 
 def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
@@ -633,13 +784,16 @@ def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np
     return np.asarray(model.force(xb.ravel(), vb.ravel(), ib.ravel())).reshape(shape)
 
 
-def _static(model: Any, x: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int
-            ) -> tuple[np.ndarray, np.ndarray]:
+def _static(
+    model: Any, x: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int
+) -> tuple[np.ndarray, np.ndarray]:
     n = x.size
     grid = np.linspace(lo, hi, n_grid + 1)
     g = _static_force(model, x[:, None], v[:, None], grid[None, :]) - Fd[:, None]
     if not np.all(np.isfinite(g)):
-        raise MrDamperError(f"{model.kind}: the force map is not finite on the input grid {lo:g}..{hi:g}")
+        raise MrDamperError(
+            f"{model.kind}: the force map is not finite on the input grid {lo:g}..{hi:g}"
+        )
     zero = g == 0.0
     change = np.signbit(g[:, :-1]) != np.signbit(g[:, 1:])
     bracket = change | zero[:, :-1] | zero[:, 1:]

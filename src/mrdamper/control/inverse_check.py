@@ -60,10 +60,14 @@ class InverseCheck:
 
     def passes(self, max_input_error: float = 0.1, max_ssse_ratio: float = 1.5) -> bool:
         """True when both figures meet the given limits."""
-        return bool(self.median_input_error <= max_input_error and self.ssse_ratio <= max_ssse_ratio)
+        return bool(
+            self.median_input_error <= max_input_error and self.ssse_ratio <= max_ssse_ratio
+        )
 
 
-def check_inverse(model: Any, experiment: Experiment, *, v_fraction: float = 0.2, **inverse_kw: Any) -> InverseCheck:
+def check_inverse(
+    model: Any, experiment: Experiment, *, v_fraction: float = 0.2, **inverse_kw: Any
+) -> InverseCheck:
     """Invert ``model`` on the record's measured force and score the result (see module docstring).
 
     Parameters
@@ -78,7 +82,9 @@ def check_inverse(model: Any, experiment: Experiment, *, v_fraction: float = 0.2
         Passed to :func:`~mrdamper.control.inverse_current`.
     """
     if not isinstance(experiment, Experiment):
-        raise DataValidationError("experiment", f"expected an Experiment, got {type(experiment).__name__}")
+        raise DataValidationError(
+            "experiment", f"expected an Experiment, got {type(experiment).__name__}"
+        )
     if not (0.0 <= v_fraction < 1.0):
         raise DataValidationError("v_fraction", f"expected 0 <= v_fraction < 1, got {v_fraction!r}")
     measured = np.asarray(experiment.electrical(model.input), dtype=float)
@@ -86,14 +92,21 @@ def check_inverse(model: Any, experiment: Experiment, *, v_fraction: float = 0.2
     speed = np.abs(np.asarray(experiment.v))
     sel = speed > v_fraction * float(speed.max())
     if not sel.any():
-        raise DataValidationError("experiment", f"{experiment.name!r}: no sample moves; nothing to check")
+        raise DataValidationError(
+            "experiment", f"{experiment.name!r}: no sample moves; nothing to check"
+        )
     err = float(np.median(np.abs(res.i[sel] - measured[sel])))
     clip = model.with_range_policy("clip")
     own = ssse(experiment.F, clip.predict(experiment))
     inv = ssse(experiment.F, res.F_achieved)
     return InverseCheck(
-        record=experiment.name, model_kind=model.kind, input=model.input, median_input_error=err,
-        ssse_model=own, ssse_inverse=inv, ssse_ratio=inv / own if own > 0 else np.inf,
+        record=experiment.name,
+        model_kind=model.kind,
+        input=model.input,
+        median_input_error=err,
+        ssse_model=own,
+        ssse_inverse=inv,
+        ssse_ratio=inv / own if own > 0 else np.inf,
         saturated_fraction=res.saturated_fraction,
     )
 

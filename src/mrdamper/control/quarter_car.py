@@ -71,7 +71,9 @@ def _pos(name: str, value: Any, unit: str, allow_zero: bool = False) -> float:
         raise DataValidationError(name, f"expected a number [{unit}], got {value!r}") from None
     ok = math.isfinite(f) and (f >= 0 if allow_zero else f > 0)
     if isinstance(value, bool) or not ok:
-        raise DataValidationError(name, f"expected a finite value {'>=' if allow_zero else '>'} 0 [{unit}], got {value!r}")
+        raise DataValidationError(
+            name, f"expected a finite value {'>=' if allow_zero else '>'} 0 [{unit}], got {value!r}"
+        )
     return f
 
 
@@ -108,7 +110,14 @@ class QuarterCar:
     motion_ratio: float = 1.0
 
     def __post_init__(self) -> None:
-        units = {"m_s": "kg", "m_u": "kg", "k_s": "N/m", "k_t": "N/m", "travel_limit": "m", "motion_ratio": "-"}
+        units = {
+            "m_s": "kg",
+            "m_u": "kg",
+            "k_s": "N/m",
+            "k_t": "N/m",
+            "travel_limit": "m",
+            "motion_ratio": "-",
+        }
         for name, unit in units.items():
             object.__setattr__(self, name, _pos(name, getattr(self, name), unit))
         object.__setattr__(self, "c_t", _pos("c_t", self.c_t, "N s/m", allow_zero=True))
@@ -165,7 +174,9 @@ class Controller:
 
     def __post_init__(self) -> None:
         if self.kind not in CONTROLLERS:
-            raise DataValidationError("controller", f"expected one of {CONTROLLERS}, got {self.kind!r}")
+            raise DataValidationError(
+                "controller", f"expected one of {CONTROLLERS}, got {self.kind!r}"
+            )
         _pos("c_sky", self.c_sky, "N s/m", allow_zero=True)
         _pos("c_ground", self.c_ground, "N s/m", allow_zero=True)
         if not (0.0 <= float(self.alpha) <= 1.0):
@@ -195,8 +206,16 @@ class Road:
         return np.arange(self.z.size) / self.fs
 
 
-def iso_road(road_class: str, *, speed: float = 20.0, duration: float = 20.0, fs: float = 1000.0, seed: int = 0,
-             min_frequency: float = 0.3, max_frequency: float = 30.0) -> Road:
+def iso_road(
+    road_class: str,
+    *,
+    speed: float = 20.0,
+    duration: float = 20.0,
+    fs: float = 1000.0,
+    seed: int = 0,
+    min_frequency: float = 0.3,
+    max_frequency: float = 30.0,
+) -> Road:
     """ISO 8608 road of class ``road_class`` driven at ``speed`` [m/s] (physical amplitude).
 
     Uses :func:`mrdamper.signals.road_profile` with ``fill=None`` (no scaling) and a 0.5 s fade in
@@ -204,13 +223,30 @@ def iso_road(road_class: str, *, speed: float = 20.0, duration: float = 20.0, fs
     """
     from mrdamper.signals.road import road_profile
 
-    z = road_profile(fs, duration, seed=seed, road_class=road_class, speed=speed, max_frequency=max_frequency,
-                     min_frequency=min_frequency, stroke=1e3, fill=None, taper=0.5)
+    z = road_profile(
+        fs,
+        duration,
+        seed=seed,
+        road_class=road_class,
+        speed=speed,
+        max_frequency=max_frequency,
+        min_frequency=min_frequency,
+        stroke=1e3,
+        fill=None,
+        taper=0.5,
+    )
     return Road(name=f"ISO {str(road_class).upper()} @ {speed:g} m/s", fs=float(fs), z=z)
 
 
-def bump_road(*, height: float = 0.05, length: float = 2.0, speed: float = 20.0, duration: float = 3.0,
-              fs: float = 1000.0, start: float = 0.5) -> Road:
+def bump_road(
+    *,
+    height: float = 0.05,
+    length: float = 2.0,
+    speed: float = 20.0,
+    duration: float = 3.0,
+    fs: float = 1000.0,
+    start: float = 0.5,
+) -> Road:
     """One ``(1 - cos)`` bump of ``height`` [m] and ``length`` [m] reached after ``start`` [s]."""
     h = _pos("height", height, "m")
     L = _pos("length", length, "m")
@@ -283,7 +319,8 @@ class QuarterCarResult:
         tl = self.tyre_load
         tr = self.travel
         return {
-            "road": self.road, "controller": self.controller,
+            "road": self.road,
+            "controller": self.controller,
             "rms_acc": float(np.sqrt(np.mean(self.a_s**2))),
             "rms_acc_wk": weighted_rms(self.a_s, self.fs),
             "peak_acc": float(np.max(np.abs(self.a_s))),
@@ -298,8 +335,24 @@ class QuarterCarResult:
 
     def to_frame(self) -> pd.DataFrame:
         """Signals as columns ``t, z_r, z_s, v_s, z_u, v_u, a_s, F, F_desired, i, saturated``."""
-        return pd.DataFrame({k: getattr(self, k) for k in
-                             ("t", "z_r", "z_s", "v_s", "z_u", "v_u", "a_s", "F", "F_desired", "i", "saturated")})
+        return pd.DataFrame(
+            {
+                k: getattr(self, k)
+                for k in (
+                    "t",
+                    "z_r",
+                    "z_s",
+                    "v_s",
+                    "z_u",
+                    "v_u",
+                    "a_s",
+                    "F",
+                    "F_desired",
+                    "i",
+                    "saturated",
+                )
+            }
+        )
 
     def plot(self, ax: Any = None) -> Any:
         """Body acceleration with the input on a twin axis; returns the Axes."""
@@ -320,17 +373,39 @@ def _damper_arrays(model: Any) -> dict[str, Any]:
 
     empty2 = np.zeros((1, 1))
     out: dict[str, Any] = {
-        "is_lpv": False, "comp": np.zeros(0, np.int64), "power": np.zeros(0, np.int64), "theta": np.zeros(0),
-        "f0": 0.0, "alpha": empty2, "beta": empty2, "offset": 0.0, "lag": -1.0, "mode": 0,
-        "gm": np.zeros((3, 1)), "gc": np.zeros((3, 1)), "mu_high": np.zeros(2), "mu_low": np.zeros(2),
+        "is_lpv": False,
+        "comp": np.zeros(0, np.int64),
+        "power": np.zeros(0, np.int64),
+        "theta": np.zeros(0),
+        "f0": 0.0,
+        "alpha": empty2,
+        "beta": empty2,
+        "offset": 0.0,
+        "lag": -1.0,
+        "mode": 0,
+        "gm": np.zeros((3, 1)),
+        "gc": np.zeros((3, 1)),
+        "mu_high": np.zeros(2),
+        "mu_low": np.zeros(2),
     }
     if isinstance(model, LinearDamper):
-        out.update(comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c]))
+        out.update(
+            comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c])
+        )
         return out
     if isinstance(model, LPVModel) and not isinstance(model, LTIModel):
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
-        out.update(is_lpv=True, alpha=np.ascontiguousarray(model.alpha), beta=np.ascontiguousarray(model.beta),
-                   offset=float(model.offset), mode=mode, gm=gm, gc=gc, mu_high=mu_h, mu_low=mu_l)
+        out.update(
+            is_lpv=True,
+            alpha=np.ascontiguousarray(model.alpha),
+            beta=np.ascontiguousarray(model.beta),
+            offset=float(model.offset),
+            mode=mode,
+            gm=gm,
+            gc=gc,
+            mu_high=mu_h,
+            mu_low=mu_l,
+        )
         return out
     comp, power, theta, f0 = static_map_arrays(model)
     out.update(comp=comp, power=power, theta=theta, f0=f0)
@@ -390,11 +465,15 @@ def simulate_quarter_car(
     car = QuarterCar() if car is None else car
     ctrl = Controller(controller) if isinstance(controller, str) else controller
     if not isinstance(ctrl, Controller):
-        raise DataValidationError("controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}")
+        raise DataValidationError(
+            "controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}"
+        )
     if not isinstance(road, Road):
         raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
     arrays = _damper_arrays(model)
-    lo, hi = model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
+    lo, hi = (
+        model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
+    )
     if not hi >= lo:
         raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
     if arrays["is_lpv"]:
@@ -402,7 +481,8 @@ def simulate_quarter_car(
         n_sub = round(ratio)
         if n_sub < 1 or abs(ratio - n_sub) > 1e-9 * ratio:
             raise DataValidationError(
-                "road", f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an integer multiple"
+                "road",
+                f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an integer multiple",
             )
         if model.eta is not None:
             arrays["lag"] = float(np.exp(-model.eta / model.fs))
@@ -420,8 +500,13 @@ def simulate_quarter_car(
     else:
         lam = _pos("reg", reg, "N per input unit", allow_zero=True)
     step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * h * n_sub
-    code = {"soft": QK.CTRL_PASSIVE, "hard": QK.CTRL_PASSIVE, "skyhook": QK.CTRL_SKYHOOK,
-            "groundhook": QK.CTRL_GROUNDHOOK, "hybrid": QK.CTRL_HYBRID}[ctrl.kind]
+    code = {
+        "soft": QK.CTRL_PASSIVE,
+        "hard": QK.CTRL_PASSIVE,
+        "skyhook": QK.CTRL_SKYHOOK,
+        "groundhook": QK.CTRL_GROUNDHOOK,
+        "hybrid": QK.CTRL_HYBRID,
+    }[ctrl.kind]
     i_const = hi if ctrl.kind == "hard" else lo
     mr = car.motion_ratio
     # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the model
@@ -432,17 +517,45 @@ def simulate_quarter_car(
     if n_ctrl < 2:
         raise DataValidationError("road", f"too short: {zr.size} samples")
     if mr != 1.0:
-        car_arr = np.array([car.m_s / mr**2, car.m_u / mr**2, car.k_s / mr**2, car.k_t / mr**2, car.c_t / mr**2])
+        car_arr = np.array(
+            [car.m_s / mr**2, car.m_u / mr**2, car.k_s / mr**2, car.k_t / mr**2, car.c_t / mr**2]
+        )
         zr = zr * mr
     X, F, Fd, rho, sat, bad = QK.simulate(
-        zr[: n_ctrl * n_sub + 1], h, n_sub, car_arr, arrays["is_lpv"], arrays["comp"], arrays["power"],
-        arrays["theta"], arrays["f0"], arrays["alpha"], arrays["beta"], arrays["offset"], arrays["lag"],
-        arrays["mode"], arrays["gm"], arrays["gc"], arrays["mu_high"], arrays["mu_low"], code, gains, lo, hi, lam,
-        step_rate, int(n_grid), float(bound) * mr, n_h,
+        zr[: n_ctrl * n_sub + 1],
+        h,
+        n_sub,
+        car_arr,
+        arrays["is_lpv"],
+        arrays["comp"],
+        arrays["power"],
+        arrays["theta"],
+        arrays["f0"],
+        arrays["alpha"],
+        arrays["beta"],
+        arrays["offset"],
+        arrays["lag"],
+        arrays["mode"],
+        arrays["gm"],
+        arrays["gc"],
+        arrays["mu_high"],
+        arrays["mu_low"],
+        code,
+        gains,
+        lo,
+        hi,
+        lam,
+        step_rate,
+        int(n_grid),
+        float(bound) * mr,
+        n_h,
     )
     if bad >= 0:
-        raise SimulationDivergedError(getattr(model, "kind", "damper"), int(bad),
-                                      f"quarter-car state left +-{bound:g} at t = {bad * h:.4g} s")
+        raise SimulationDivergedError(
+            getattr(model, "kind", "damper"),
+            int(bad),
+            f"quarter-car state left +-{bound:g} at t = {bad * h:.4g} s",
+        )
     if arrays["is_lpv"] and model.eta is not None:
         cmd = driver_command(rho, model.eta, 1.0 / model.fs, (lo, hi))
     elif getattr(model, "eta", None) is not None:
@@ -452,17 +565,39 @@ def simulate_quarter_car(
     n = n_ctrl * n_sub
     rep = np.repeat
     return QuarterCarResult(
-        road=road.name, controller=ctrl.kind, model_kind=getattr(model, "kind", "damper"), fs=road.fs,
-        t=np.arange(n) * h, z_r=road.z[:n].copy(), z_s=X[:, 0] / mr, v_s=X[:, 1] / mr, z_u=X[:, 2] / mr,
-        v_u=X[:, 3] / mr, a_s=X[:, 4] / mr, F=rep(F, n_sub) * mr, F_desired=rep(Fd, n_sub) * mr,
-        i=rep(cmd, n_sub), saturated=rep(sat, n_sub), car=car,
+        road=road.name,
+        controller=ctrl.kind,
+        model_kind=getattr(model, "kind", "damper"),
+        fs=road.fs,
+        t=np.arange(n) * h,
+        z_r=road.z[:n].copy(),
+        z_s=X[:, 0] / mr,
+        v_s=X[:, 1] / mr,
+        z_u=X[:, 2] / mr,
+        v_u=X[:, 3] / mr,
+        a_s=X[:, 4] / mr,
+        F=rep(F, n_sub) * mr,
+        F_desired=rep(Fd, n_sub) * mr,
+        i=rep(cmd, n_sub),
+        saturated=rep(sat, n_sub),
+        car=car,
     )
 
 
 def car_table(car: QuarterCar) -> pd.DataFrame:
     """Parameters of ``car`` with their units and the two mode frequencies."""
-    units = {"m_s": "kg", "m_u": "kg", "k_s": "N/m", "k_t": "N/m", "c_t": "N s/m", "travel_limit": "m",
-             "motion_ratio": "-"}
+    units = {
+        "m_s": "kg",
+        "m_u": "kg",
+        "k_s": "N/m",
+        "k_t": "N/m",
+        "c_t": "N s/m",
+        "travel_limit": "m",
+        "motion_ratio": "-",
+    }
     rows = [(k, v, units[k]) for k, v in asdict(car).items()]
-    rows += [("body_frequency", car.body_frequency(), "Hz"), ("wheel_hop_frequency", car.wheel_hop_frequency(), "Hz")]
+    rows += [
+        ("body_frequency", car.body_frequency(), "Hz"),
+        ("wheel_hop_frequency", car.wheel_hop_frequency(), "Hz"),
+    ]
     return pd.DataFrame(rows, columns=["parameter", "value", "unit"])

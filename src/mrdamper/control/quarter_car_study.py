@@ -66,10 +66,17 @@ class ControllerComparison:
         damper on the same road (NaN when ``soft`` was not run)."""
         rows = [self.results[(r, c)].metrics() for r in self.roads for c in self.controllers]
         df = pd.DataFrame(rows)
-        for col, base in (("acc_wk_vs_soft", "rms_acc_wk"), ("tyre_load_vs_soft", "rms_tyre_load"),
-                          ("travel_vs_soft", "rms_travel")):
-            ref = {r: self.results[(r, "soft")].metrics()[base] if (r, "soft") in self.results else np.nan
-                   for r in self.roads}
+        for col, base in (
+            ("acc_wk_vs_soft", "rms_acc_wk"),
+            ("tyre_load_vs_soft", "rms_tyre_load"),
+            ("travel_vs_soft", "rms_travel"),
+        ):
+            ref = {
+                r: self.results[(r, "soft")].metrics()[base]
+                if (r, "soft") in self.results
+                else np.nan
+                for r in self.roads
+            }
             df[col] = df[base] / df["road"].map(ref)
         return df
 
@@ -185,15 +192,30 @@ def compare_controllers(
     roads: list[Road] = []
     for k, rc in enumerate(road_classes):
         if str(rc).upper() not in _ISO:
-            raise DataValidationError("road_classes", f"expected ISO 8608 classes from {_ISO}, got {rc!r}")
-        roads.append(iso_road(str(rc).upper(), speed=speed, duration=duration, fs=fs, seed=seed + k))
+            raise DataValidationError(
+                "road_classes", f"expected ISO 8608 classes from {_ISO}, got {rc!r}"
+            )
+        roads.append(
+            iso_road(str(rc).upper(), speed=speed, duration=duration, fs=fs, seed=seed + k)
+        )
     if bump:
-        roads.append(bump_road(height=bump_height, length=bump_length, speed=speed, fs=fs,
-                               duration=max(2.0, 1.5 + bump_length / speed)))
+        roads.append(
+            bump_road(
+                height=bump_height,
+                length=bump_length,
+                speed=speed,
+                fs=fs,
+                duration=max(2.0, 1.5 + bump_length / speed),
+            )
+        )
     if not roads:
-        raise DataValidationError("road_classes", "no road to drive: give road classes or bump=True")
+        raise DataValidationError(
+            "road_classes", "no road to drive: give road classes or bump=True"
+        )
     results = {}
     for road in roads:
         for c in ctrls:
             results[(road.name, c.kind)] = simulate_quarter_car(model, road, c, car, **sim_kw)
-    return ControllerComparison(results=results, roads=[r.name for r in roads], controllers=[c.kind for c in ctrls])
+    return ControllerComparison(
+        results=results, roads=[r.name for r in roads], controllers=[c.kind for c in ctrls]
+    )

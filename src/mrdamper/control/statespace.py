@@ -39,7 +39,8 @@ __all__ = [
 def _check_model(model: Any) -> None:
     if not (hasattr(model, "alpha") and hasattr(model, "beta") and hasattr(model, "fs")):
         raise DataValidationError(
-            "model", f"expected an LPV or LTI model (kinds 'lpv', 'lti'), got {type(model).__name__}"
+            "model",
+            f"expected an LPV or LTI model (kinds 'lpv', 'lti'), got {type(model).__name__}",
         )
 
 
@@ -120,7 +121,9 @@ def state_space(model: Any, rho: float) -> StateSpaceMatrices:
     B[-1, 0] = 1.0
     C = b[::-1].reshape(1, n).copy()
     D = np.zeros((1, 1))
-    return StateSpaceMatrices(A=A, B=B, C=C, D=D, dt=1.0 / model.fs, rho=r, offset=float(model.offset))
+    return StateSpaceMatrices(
+        A=A, B=B, C=C, D=D, dt=1.0 / model.fs, rho=r, offset=float(model.offset)
+    )
 
 
 def to_control(model: Any, rho: float) -> Any:
@@ -135,7 +138,7 @@ def to_control(model: Any, rho: float) -> Any:
         import control
     except ImportError as exc:  # pragma: no cover - depends on the installation
         raise ImportError(
-            "to_control needs python-control; install the extra with: pip install \"mrdamper[control]\""
+            'to_control needs python-control; install the extra with: pip install "mrdamper[control]"'
         ) from exc
     ss = state_space(model, rho)
     return control.ss(ss.A, ss.B, ss.C, ss.D, ss.dt)

@@ -38,7 +38,11 @@ def _frozen(values: Any) -> bool:
         if arr.flags.writeable:
             return False
         arr = arr.base
-    return isinstance(values, np.ndarray) and values.dtype == np.float64 and not isinstance(arr, np.ndarray)
+    return (
+        isinstance(values, np.ndarray)
+        and values.dtype == np.float64
+        and not isinstance(arr, np.ndarray)
+    )
 
 
 def _as_channel(name: str, values: Any) -> np.ndarray:
@@ -120,7 +124,8 @@ class Experiment:
                 set_(self, ch, _as_channel(ch, getattr(self, ch)))
         if self.i is None and self.voltage is None:
             raise DataValidationError(
-                "i", "no electrical input: give the coil current 'i' [A] or the command 'voltage' [V]"
+                "i",
+                "no electrical input: give the coil current 'i' [A] or the command 'voltage' [V]",
             )
         if not isinstance(self.name, str) or not self.name:
             raise DataValidationError("name", f"expected a non-empty string, got {self.name!r}")
@@ -144,7 +149,9 @@ class Experiment:
     def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]:
         """Pickle support (for worker processes): rebuild through the validating constructor."""
         state = {c: getattr(self, c) for c in self.channel_names}
-        state.update(name=self.name, metadata=dict(self.metadata), time_tolerance=self.time_tolerance)
+        state.update(
+            name=self.name, metadata=dict(self.metadata), time_tolerance=self.time_tolerance
+        )
         return (_rebuild_experiment, (state,))
 
     # ------------------------------------------------------------------ construction
@@ -273,7 +280,8 @@ class Experiment:
         """Raise :class:`DataValidationError` if the record has fewer than ``minimum`` samples."""
         if self.n < minimum:
             raise DataValidationError(
-                "t", f"record {self.name!r} has {self.n} samples; {purpose} needs at least {minimum}"
+                "t",
+                f"record {self.name!r} has {self.n} samples; {purpose} needs at least {minimum}",
             )
 
     # ------------------------------------------------------------------ slicing & export
@@ -351,7 +359,9 @@ def _repair_nan(
     first, last = int(good[0]), int(good[-1])
     repairs: list[str] = []
     if first > 0 or last < ok.size - 1:
-        repairs.append(f"dropped {first} leading and {ok.size - 1 - last} trailing non-finite samples")
+        repairs.append(
+            f"dropped {first} leading and {ok.size - 1 - last} trailing non-finite samples"
+        )
     arrays = {k: a[first : last + 1] for k, a in arrays.items()}
     if policy == "drop-edges":
         return arrays, repairs

@@ -48,7 +48,9 @@ class ExperimentSet(Sequence[Experiment]):
                     "experiments", f"item {k} is {type(e).__name__}, expected Experiment"
                 )
             if e.name in seen:
-                raise DataValidationError("name", f"duplicate record name {e.name!r} in set {name!r}")
+                raise DataValidationError(
+                    "name", f"duplicate record name {e.name!r} in set {name!r}"
+                )
             seen.add(e.name)
         self._experiments = exps
         self.name = name
@@ -130,7 +132,9 @@ class ExperimentSet(Sequence[Experiment]):
         """
         fr = np.asarray(fractions, dtype=float)
         if fr.ndim != 1 or np.any(fr < 0) or abs(fr.sum() - 1) > 1e-9:
-            raise DataValidationError("fractions", f"expected non-negative fractions summing to 1, got {fractions}")
+            raise DataValidationError(
+                "fractions", f"expected non-negative fractions summing to 1, got {fractions}"
+            )
         order = np.arange(len(self))
         if seed is not None:
             order = np.random.default_rng(seed).permutation(len(self))
@@ -154,7 +158,9 @@ class ExperimentSet(Sequence[Experiment]):
         """One row per record: name, samples, rate, duration and metadata."""
         rows = []
         for e in self:
-            rows.append({"name": e.name, "n": e.n, "fs": e.fs, "duration": e.duration, **e.metadata})
+            rows.append(
+                {"name": e.name, "n": e.n, "fs": e.fs, "duration": e.duration, **e.metadata}
+            )
         return pd.DataFrame(rows)
 
 

@@ -42,19 +42,27 @@ def plausibility_bounds(overrides: Mapping[str, Any] | None = None) -> dict[str,
     out = dict(PLAUSIBLE_MAX)
     for key, value in (overrides or {}).items():
         if key not in out:
-            raise DataValidationError("plausible_max", f"unknown key {key!r}; expected some of {sorted(out)}")
+            raise DataValidationError(
+                "plausible_max", f"unknown key {key!r}; expected some of {sorted(out)}"
+            )
         try:
             val = float(value)
         except (TypeError, ValueError):
-            raise DataValidationError("plausible_max", f"{key}: expected a positive number, got {value!r}") from None
+            raise DataValidationError(
+                "plausible_max", f"{key}: expected a positive number, got {value!r}"
+            ) from None
         if not (np.isfinite(val) and val > 0):
-            raise DataValidationError("plausible_max", f"{key}: expected a positive number, got {value!r}")
+            raise DataValidationError(
+                "plausible_max", f"{key}: expected a positive number, got {value!r}"
+            )
         out[key] = val
     return out
 
 
 def check_plausibility(
-    channels: Mapping[str, np.ndarray | None], source: str, overrides: Mapping[str, Any] | None = None
+    channels: Mapping[str, np.ndarray | None],
+    source: str,
+    overrides: Mapping[str, Any] | None = None,
 ) -> list[str]:
     """Warn (:class:`~mrdamper.errors.PlausibilityWarning`) for every bound a record exceeds.
 

@@ -45,7 +45,9 @@ def _positive(name: str, value: Any) -> float:
     return value
 
 
-def _zero_phase_lowpass(values: np.ndarray, cutoff: float, fs: float, order: int, field: str) -> np.ndarray:
+def _zero_phase_lowpass(
+    values: np.ndarray, cutoff: float, fs: float, order: int, field: str
+) -> np.ndarray:
     from scipy.signal import butter, sosfiltfilt
 
     if not cutoff < 0.5 * fs:
@@ -56,8 +58,9 @@ def _zero_phase_lowpass(values: np.ndarray, cutoff: float, fs: float, order: int
     padlen = 3 * (2 * len(sos) + 1)
     if values.size <= padlen:
         raise DataValidationError(
-            field, f"{values.size} samples are too few for a zero-phase filter of order {order} "
-            f"(need more than {padlen})"
+            field,
+            f"{values.size} samples are too few for a zero-phase filter of order {order} "
+            f"(need more than {padlen})",
         )
     return np.asarray(sosfiltfilt(sos, values), dtype=np.float64)
 
@@ -229,7 +232,9 @@ def decimate(exp: Experiment, factor: int, order: int = 8) -> Experiment:
     for ch in exp.channel_names:
         if ch != "t":
             chans[ch] = _zero_phase_lowpass(getattr(exp, ch), cut, exp.fs, order, ch)[::factor]
-    note = f"decimated by {factor} after zero-phase Butterworth low-pass (order {order}, {cut:g} Hz)"
+    note = (
+        f"decimated by {factor} after zero-phase Butterworth low-pass (order {order}, {cut:g} Hz)"
+    )
     return exp.replace(**chans, metadata=_log(exp, note))
 
 
@@ -262,14 +267,18 @@ def remove_offsets(
         channels = (channels,)
     for ch in channels:
         if ch not in _SIGNAL_CHANNELS:
-            raise DataValidationError("channels", f"{ch!r} is not a signal channel; expected any of {_SIGNAL_CHANNELS}")
+            raise DataValidationError(
+                "channels", f"{ch!r} is not a signal channel; expected any of {_SIGNAL_CHANNELS}"
+            )
         if getattr(exp, ch) is None:
             raise DataValidationError(ch, f"record {exp.name!r} has no {ch!r} channel")
     if period is None:
         f = exp.metadata.get("frequency")
         f_meta = (
             float(f)
-            if isinstance(f, (int, float, np.integer, np.floating)) and not isinstance(f, bool) and f > 0
+            if isinstance(f, (int, float, np.integer, np.floating))
+            and not isinstance(f, bool)
+            and f > 0
             else None
         )
         try:
@@ -325,7 +334,11 @@ def trim(exp: Experiment, t_start: float | None = None, t_stop: float | None = N
     lo = exp.t[0] if t_start is None else t_start
     hi = exp.t[-1] if t_stop is None else t_stop
     for fld, val in (("t_start", lo), ("t_stop", hi)):
-        if isinstance(val, bool) or not isinstance(val, (int, float, np.integer, np.floating)) or not math.isfinite(val):
+        if (
+            isinstance(val, bool)
+            or not isinstance(val, (int, float, np.integer, np.floating))
+            or not math.isfinite(val)
+        ):
             raise DataValidationError(fld, f"expected a finite time [s], got {val!r}")
     if not lo < hi:
         raise DataValidationError("t_stop", f"{hi:g} s must exceed t_start {lo:g} s")
@@ -392,6 +405,8 @@ def apply_drive_lag(exp: Experiment, eta: float, source: str = "voltage") -> Exp
 
     a = math.exp(-eta * exp.dt)
     u = lfilter([0.0, 1.0 - a], [1.0, -a], w, zi=[float(w[0])])[0]
-    note = f"first-order drive lag on {source!r}: du/dt = -{eta:g} (u - {source}) (exact, held input)"
+    note = (
+        f"first-order drive lag on {source!r}: du/dt = -{eta:g} (u - {source}) (exact, held input)"
+    )
     meta = _log(exp, note, drive_lag_eta=eta, drive_lag_source=source)
     return exp.replace(**{source: np.asarray(u, dtype=np.float64)}, metadata=meta)

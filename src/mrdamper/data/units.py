@@ -132,7 +132,9 @@ def si_factor(channel: str, unit: Any, *, column: str | None = None) -> float:
     """
     col = column or channel
     if channel not in CHANNEL_QUANTITY:
-        raise UnitError(col, f"unknown channel {channel!r}; expected one of {list(CHANNEL_QUANTITY)}")
+        raise UnitError(
+            col, f"unknown channel {channel!r}; expected one of {list(CHANNEL_QUANTITY)}"
+        )
     quantity = CHANNEL_QUANTITY[channel]
     u = canonical_unit(unit, column=col)
     table = UNITS[quantity]

@@ -48,8 +48,11 @@ def to_unit_frame(experiment: Experiment, units: Mapping[str, str] | None = None
     units = dict(units or {})
     for ch in units:
         if ch not in CHANNEL_QUANTITY or getattr(experiment, ch) is None:
-            raise UnitError(ch, f"units given for {ch!r}, which is not a channel of record {experiment.name!r} "
-                                f"(channels: {list(experiment.channel_names)})")
+            raise UnitError(
+                ch,
+                f"units given for {ch!r}, which is not a channel of record {experiment.name!r} "
+                f"(channels: {list(experiment.channel_names)})",
+            )
     cols: dict[str, np.ndarray] = {}
     for ch in experiment.channel_names:
         values = getattr(experiment, ch)

@@ -86,7 +86,9 @@ def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
         G, g, _, n_eq = K.gram_pass(y, u, rho, starts, w, n_m, n_p, with_const)
     P = G.shape[0]
     if n_eq < P:
-        raise IdentificationError(f"lpv: {n_eq} equations for {P} unknowns; give longer or more records")
+        raise IdentificationError(
+            f"lpv: {n_eq} equations for {P} unknowns; give longer or more records"
+        )
     d = np.sqrt(np.diag(G))
     if np.any(d == 0):
         col = int(np.flatnonzero(d == 0)[0])
@@ -119,7 +121,9 @@ def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
         if isinstance(u, _scale.RecordList):
             X, t = _scale.lpv_qr_records(y, u, rho, w, n_m, n_p, with_const, K.build_regressors)
         else:
-            X, t = _scale.lpv_qr_factor(y, u, rho, starts, w, n_m, n_p, with_const, K.build_regressors)
+            X, t = _scale.lpv_qr_factor(
+                y, u, rho, starts, w, n_m, n_p, with_const, K.build_regressors
+            )
         z = np.linalg.lstsq(X / d, t, rcond=None)[0]
         solver = "qr"
     return z / d, cond_x, solver, int(n_eq)
@@ -136,8 +140,12 @@ def ls_identify(rec: Records, n_m: int, n_p: int, offset: bool) -> LSResult:
     u: Any
     rho: Any
     if sum(a.size for a in rec.u) > _scale.WINDOW_THRESHOLD:  # long campaigns: no concatenation
-        y, u, rho, starts = (_scale.RecordList(rec.F), _scale.RecordList(rec.u), _scale.RecordList(rec.rho),
-                             np.zeros(1, dtype=np.int64))
+        y, u, rho, starts = (
+            _scale.RecordList(rec.F),
+            _scale.RecordList(rec.u),
+            _scale.RecordList(rec.rho),
+            np.zeros(1, dtype=np.int64),
+        )
     else:
         y, u, rho, starts = rec.flat(rec.F)
     F0 = 0.0
@@ -222,7 +230,9 @@ def refine_output_error(
         alpha, beta = split_theta(p, n_m, n_p)
         f0 = float(p[P]) if offset else F0
         res, jacs = [], []
-        unstable = rho_grid is not None and largest_frozen_pole(alpha, rho_grid)[0] >= STABILITY_LIMIT
+        unstable = (
+            rho_grid is not None and largest_frozen_pole(alpha, rho_grid)[0] >= STABILITY_LIMIT
+        )
         for r in range(len(rec.u)):
             yh, J, bad = K.simulate_sensitivity(rec.u[r], rec.rho[r], alpha, beta, bound)
             if bad >= 0 or unstable:
@@ -242,19 +252,36 @@ def refine_output_error(
 
     x0 = np.r_[theta0, F0] if offset else theta0.copy()
     if solver == "gauss-newton":
-        return _levenberg_marquardt(rec, x0, n_m, n_p, offset=offset, F0=F0, bound=bound, max_iter=max_nfev,
-                                    rho_grid=rho_grid)
+        return _levenberg_marquardt(
+            rec,
+            x0,
+            n_m,
+            n_p,
+            offset=offset,
+            F0=F0,
+            bound=bound,
+            max_iter=max_nfev,
+            rho_grid=rho_grid,
+        )
     sol = optimize.least_squares(
-        lambda p: evaluate(p)[0], x0, jac=lambda p: evaluate(p)[1], method="lm",
-        x_scale="jac", max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10,
+        lambda p: evaluate(p)[0],
+        x0,
+        jac=lambda p: evaluate(p)[1],
+        method="lm",
+        x_scale="jac",
+        max_nfev=max_nfev,
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
     )
     theta = sol.x[:P].copy()
     f0 = float(sol.x[P]) if offset else F0
     return theta, f0, sol
 
 
-
-def _normal_eq(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float):
+def _normal_eq(
+    rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
+):
     P = 2 * n_m * n_p
     alpha, beta = split_theta(x, n_m, n_p)
     f0 = float(x[P]) if offset else F0
@@ -274,7 +301,9 @@ def _normal_eq(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0
     return cost, g, H
 
 
-def _free_run_cost(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float) -> float:
+def _free_run_cost(
+    rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
+) -> float:
     P = 2 * n_m * n_p
     alpha, beta = split_theta(x, n_m, n_p)
     f0 = float(x[P]) if offset else F0
@@ -288,12 +317,16 @@ def _free_run_cost(rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool
     return total
 
 
-def _levenberg_marquardt(rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=1e-7, rho_grid=None):
+def _levenberg_marquardt(
+    rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=1e-7, rho_grid=None
+):
     P = 2 * n_m * n_p
     x = x0.copy()
     cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
     if not np.isfinite(cost):
-        raise IdentificationError("lpv: the free run of the least-squares start diverges; cannot refine")
+        raise IdentificationError(
+            "lpv: the free run of the least-squares start diverges; cannot refine"
+        )
     lam = 1e-4
     nfev, status = 1, 0
     for _ in range(max_iter):
@@ -309,7 +342,11 @@ def _levenberg_marquardt(rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=
                 continue
             dx = -scipy.linalg.cho_solve((c, low), gs, check_finite=False) / d
             xn = x + dx
-            if rho_grid is not None and largest_frozen_pole(split_theta(xn, n_m, n_p)[0], rho_grid)[0] >= STABILITY_LIMIT:
+            if (
+                rho_grid is not None
+                and largest_frozen_pole(split_theta(xn, n_m, n_p)[0], rho_grid)[0]
+                >= STABILITY_LIMIT
+            ):
                 cn = np.inf  # leaves the frozen-stable set over the identified range: rejected
             else:
                 cn = _free_run_cost(rec, xn, n_m, n_p, offset, F0, bound)

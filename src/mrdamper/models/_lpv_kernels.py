@@ -383,7 +383,9 @@ def first_order_lag(w, dt, eta):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def oe_normal_equations(u, rho, alpha, beta, F, offset, weight, bound, with_offset):  # pragma: no cover
+def oe_normal_equations(
+    u, rho, alpha, beta, F, offset, weight, bound, with_offset
+):  # pragma: no cover
     """Weighted free-run cost, gradient and Gauss-Newton matrix of one record.
 
     Residual ``e[k] = y_hat[k] + offset - F[k]``; the sensitivity rows are propagated with only

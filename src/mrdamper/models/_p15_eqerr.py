@@ -44,13 +44,16 @@ def cutoff_hz(setting: float | str | None, fs: float) -> float | None:
     return float(min(fs / 10.0, 100.0)) if setting == "auto" else float(setting)
 
 
-def _filtered(e: Experiment, cutoff: float | str | None, order: int) -> tuple[np.ndarray, np.ndarray, float | None]:
+def _filtered(
+    e: Experiment, cutoff: float | str | None, order: int
+) -> tuple[np.ndarray, np.ndarray, float | None]:
     fc = cutoff_hz(cutoff, e.fs)
     if fc is None:
         return e.F, e.v, None
     if not fc < 0.5 * e.fs:
         raise DataValidationError(
-            "cutoff", f"{fc:g} Hz is not below the Nyquist frequency {0.5 * e.fs:g} Hz of record {e.name!r}"
+            "cutoff",
+            f"{fc:g} Hz is not below the Nyquist frequency {0.5 * e.fs:g} Hz of record {e.name!r}",
         )
     sos = butter(order, fc, btype="low", fs=e.fs, output="sos")
     if e.n <= 3 * (2 * len(sos) + 1):
@@ -58,14 +61,17 @@ def _filtered(e: Experiment, cutoff: float | str | None, order: int) -> tuple[np
     return sosfiltfilt(sos, e.F), sosfiltfilt(sos, e.v), fc
 
 
-def filtered_state(e: Experiment, cutoff: float | str | None, order: int) -> tuple[np.ndarray, np.ndarray]:
+def filtered_state(
+    e: Experiment, cutoff: float | str | None, order: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Filtered force [N] and its central-difference rate [N/s] over the whole record."""
     Ff, _, _ = _filtered(e, cutoff, order)
     return Ff, np.gradient(Ff, e.dt)
 
 
-def regressors(e: Experiment, source: ElectricalSource, cutoff: float | str | None, order: int
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def regressors(
+    e: Experiment, source: ElectricalSource, cutoff: float | str | None, order: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Filtered force (target), input and the five regressor signals of one record, trimmed."""
     i = e.electrical(source)
     Ff, vf, fc = _filtered(e, cutoff, order)
@@ -110,8 +116,15 @@ def _form_bounds(form: str, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def equation_error(
-    exps: Sequence[Experiment], source: ElectricalSource, lo: float, hi: float, *, form: str, offset: bool,
-    cutoff: float | str | None, order: int,
+    exps: Sequence[Experiment],
+    source: ElectricalSource,
+    lo: float,
+    hi: float,
+    *,
+    form: str,
+    offset: bool,
+    cutoff: float | str | None,
+    order: int,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Least squares of the P-15 relation on filtered derivatives.
 
@@ -143,7 +156,9 @@ def equation_error(
     norms = np.sqrt(np.einsum("ij,ij->j", X, X))
     if np.any(norms == 0):
         j = int(np.flatnonzero(norms == 0)[0])
-        raise IdentificationError(f"data: regressor {j} of p15 is identically zero; nothing to identify")
+        raise IdentificationError(
+            f"data: regressor {j} of p15 is identically zero; nothing to identify"
+        )
     ynorm = float(np.linalg.norm(y)) or 1.0
     Xs, ys = X / norms, y / ynorm
     # einsum without BLAS: the same bytes whatever the BLAS thread count

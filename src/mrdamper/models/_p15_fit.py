@@ -39,7 +39,14 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.models._p15_implicit import p15i_run
 
-__all__ = ["BERNSTEIN_TO_POWER", "SIGNS", "bernstein_basis", "identify_output_error", "rest_state", "to_monomial"]
+__all__ = [
+    "BERNSTEIN_TO_POWER",
+    "SIGNS",
+    "bernstein_basis",
+    "identify_output_error",
+    "rest_state",
+    "to_monomial",
+]
 
 #: Sign of each paper coefficient w_j relative to the positive quadratic (w1, c, m, a, b).
 SIGNS = np.array([1.0, -1.0, -1.0, -1.0, -1.0])
@@ -52,7 +59,9 @@ _PENALTY = 10.0
 def to_monomial(B: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Monomial coefficients ``W`` (5 x 3, in ``i``) of Bernstein coefficients ``B`` on ``[lo, hi]``."""
     R = hi - lo
-    to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
+    to_i = np.array(
+        [[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]]
+    )
     M = to_i @ BERNSTEIN_TO_POWER
     return np.einsum("jk,rk->rj", M, B)
 
@@ -93,8 +102,9 @@ def rest_state(w: np.ndarray, f0: float, v0: float) -> float:
     return float(pool[np.argmin(np.abs(pool))])
 
 
-def _rest_sensitivity(B: np.ndarray, f0: float, lo: float, hi: float, v0: float, i0: float, F0: float,
-                      m: int) -> np.ndarray:
+def _rest_sensitivity(
+    B: np.ndarray, f0: float, lo: float, hi: float, v0: float, i0: float, F0: float, m: int
+) -> np.ndarray:
     """d F_rest / d (Bernstein coefficients of w, row-major; then f0)."""
     phi = bernstein_basis(i0, lo, hi)
     w = B @ phi
@@ -150,15 +160,18 @@ class _Problem:
             d[15] = self.f_scale
         return d
 
-    def segments(self, r: _Rec, mode: str, seg_len: int, seg_stride: int) -> tuple[np.ndarray, np.ndarray]:
+    def segments(
+        self, r: _Rec, mode: str, seg_len: int, seg_stride: int
+    ) -> tuple[np.ndarray, np.ndarray]:
         n = r.F.size
         if mode == "free":
             return np.array([0], dtype=np.int64), np.array([n], dtype=np.int64)
         starts = np.arange(0, max(1, n - 2), seg_stride, dtype=np.int64)
         return starts, np.minimum(starts + seg_len, n).astype(np.int64)
 
-    def evaluate(self, theta: np.ndarray, mode: str, seg: tuple[float, int], with_jac: bool
-                 ) -> tuple[np.ndarray, np.ndarray | None]:
+    def evaluate(
+        self, theta: np.ndarray, mode: str, seg: tuple[float, int], with_jac: bool
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """Weighted residuals (and Jacobian w.r.t. theta) of every record."""
         B, f0 = self.unpack(theta)
         chain = self.chain(theta)
@@ -170,14 +183,33 @@ class _Problem:
             seg_len = max(4, round(seg[0] / r.e.dt))
             st, en = self.segments(r, mode, seg_len, max(seg_len, seg_len * seg[1]))
             if mode == "free":
-                F0 = np.array([rest_state(B @ bernstein_basis(r.i[0], self.lo, self.hi), f0, r.v[0])])
+                F0 = np.array(
+                    [rest_state(B @ bernstein_basis(r.i[0], self.lo, self.hi), f0, r.v[0])]
+                )
                 G0 = np.zeros(1)
                 S0 = _rest_sensitivity(B, f0, self.lo, self.hi, r.v[0], r.i[0], F0[0], m)[None, :]
             else:
                 F0, G0 = r.Ff[st], r.Gf[st]
                 S0 = np.zeros((st.size, m))
-            F, J, bad = p15i_run(r.v, r.i, r.e.dt, B, f0, 1, self.lo, self.hi, r.n_sub, self.bound,
-                                 st, en, F0, G0, S0, with_jac, self.offset)
+            F, J, bad = p15i_run(
+                r.v,
+                r.i,
+                r.e.dt,
+                B,
+                f0,
+                1,
+                self.lo,
+                self.hi,
+                r.n_sub,
+                self.bound,
+                st,
+                en,
+                F0,
+                G0,
+                S0,
+                with_jac,
+                self.offset,
+            )
             idx = np.concatenate([np.arange(a, b) for a, b in zip(st, en)])
             idx = idx[::stride] if stride > 1 else idx
             # each record's squared residuals sum to its ESR over the samples used, / n_records
@@ -199,9 +231,24 @@ class _Problem:
 
 
 def identify_output_error(
-    exps: Sequence[Experiment], source: ElectricalSource, lo: float, hi: float, B0: np.ndarray, f00: float, *,
-    Ff: Sequence[np.ndarray], Gf: Sequence[np.ndarray], offset: bool, max_step: float, segment: float,
-    segment_stride: int, shoot_nfev: int, max_nfev: int, max_samples: int, jacobian: str, bound: float,
+    exps: Sequence[Experiment],
+    source: ElectricalSource,
+    lo: float,
+    hi: float,
+    B0: np.ndarray,
+    f00: float,
+    *,
+    Ff: Sequence[np.ndarray],
+    Gf: Sequence[np.ndarray],
+    offset: bool,
+    max_step: float,
+    segment: float,
+    segment_stride: int,
+    shoot_nfev: int,
+    max_nfev: int,
+    max_samples: int,
+    jacobian: str,
+    bound: float,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Run the two stages from Bernstein coefficients ``B0`` (signed, 5 x 3) and offset ``f00``.
 
@@ -213,9 +260,18 @@ def identify_output_error(
     for e, ff, gf in zip(exps, Ff, Gf):
         Fstd = float(np.std(e.F)) or 1.0
         n_sub = max(1, math.ceil(e.dt / max_step - 1e-12))
-        recs.append(_Rec(e, np.ascontiguousarray(e.v), np.ascontiguousarray(e.electrical(source)),
-                         np.ascontiguousarray(e.F), np.ascontiguousarray(ff), np.ascontiguousarray(gf),
-                         Fstd, n_sub))
+        recs.append(
+            _Rec(
+                e,
+                np.ascontiguousarray(e.v),
+                np.ascontiguousarray(e.electrical(source)),
+                np.ascontiguousarray(e.F),
+                np.ascontiguousarray(ff),
+                np.ascontiguousarray(gf),
+                Fstd,
+                n_sub,
+            )
+        )
     f_scale = float(max(np.std(e.F) for e in exps)) or 1.0
     prob = _Problem(recs, lo, hi, bound, f_scale, offset, max_samples)
     # start: magnitudes of the equation-error Bernstein coefficients with the positive signs,
@@ -258,13 +314,30 @@ def identify_output_error(
         lb = np.full(theta0.size, -np.inf)
         ub = np.full(theta0.size, np.inf)
         lb[:15], ub[:15] = theta0[:15] - 40.0, theta0[:15] + 40.0
-        sol = least_squares(fun, theta0, jac=jac if jacobian == "sensitivity" else jacobian,
-                            bounds=(lb, ub), method="trf", x_scale=1.0, max_nfev=nfev,
-                            ftol=1e-6, xtol=1e-10, gtol=1e-10)
+        sol = least_squares(
+            fun,
+            theta0,
+            jac=jac if jacobian == "sensitivity" else jacobian,
+            bounds=(lb, ub),
+            method="trf",
+            x_scale=1.0,
+            max_nfev=nfev,
+            ftol=1e-6,
+            xtol=1e-10,
+            gtol=1e-10,
+        )
         cost0 = 0.5 * float(r0 @ r0)
         keep = sol.x if sol.cost <= cost0 else theta0
-        stages.append({"stage": mode, "cost_before": cost0, "cost_after": float(min(sol.cost, cost0)),
-                       "nfev": int(sol.nfev), "status": int(sol.status), "message": str(sol.message)})
+        stages.append(
+            {
+                "stage": mode,
+                "cost_before": cost0,
+                "cost_after": float(min(sol.cost, cost0)),
+                "nfev": int(sol.nfev),
+                "status": int(sol.status),
+                "message": str(sol.message),
+            }
+        )
         return keep
 
     if shoot_nfev > 0:
@@ -274,7 +347,8 @@ def identify_output_error(
     B, f0 = prob.unpack(theta)
     info = {
         "method": "output error: multiple shooting then free run (scipy.optimize.least_squares, trf)",
-        "jacobian": "discrete forward sensitivities (SDIRK2)" if jacobian == "sensitivity"
+        "jacobian": "discrete forward sensitivities (SDIRK2)"
+        if jacobian == "sensitivity"
         else f"finite differences ({jacobian})",
         "stages": stages,
         "segment_s": segment,

@@ -65,7 +65,9 @@ def _accel(F: float, G: float, vv: float, w: np.ndarray, f0: float) -> float:
 
 
 @njit(cache=True)
-def _stage(A: float, B: float, hg: float, vv: float, w: np.ndarray, f0: float, G0: float) -> tuple[float, bool]:
+def _stage(
+    A: float, B: float, hg: float, vv: float, w: np.ndarray, f0: float, G0: float
+) -> tuple[float, bool]:
     """Root ``G`` of ``G - B - hg * a(A + hg G, G) = 0`` (safeguarded Newton)."""
     G = G0
     lo_b, hi_b = -np.inf, np.inf
@@ -80,8 +82,17 @@ def _stage(A: float, B: float, hg: float, vv: float, w: np.ndarray, f0: float, G
         if not np.isfinite(psi):
             return G, False
         # rounding level of psi: the terms of a's numerator cancel, so |psi| cannot go below it
-        noise = 1e-14 * (abs(G) + abs(B) + hg * (abs(F) + abs(f0) + abs(w[0] * vv) + abs(w[1] * G)
-                                                   + abs(t3) + abs(t5)) / abs(w[2])) + 1e-300
+        noise = (
+            1e-14
+            * (
+                abs(G)
+                + abs(B)
+                + hg
+                * (abs(F) + abs(f0) + abs(w[0] * vv) + abs(w[1] * G) + abs(t3) + abs(t5))
+                / abs(w[2])
+            )
+            + 1e-300
+        )
         if abs(psi) <= noise:
             return G, True
         aF = (1.0 - 3.0 * w[3] * F2 - 5.0 * w[4] * F2 * F2) / w[2]
@@ -107,8 +118,9 @@ def _stage(A: float, B: float, hg: float, vv: float, w: np.ndarray, f0: float, G
 
 
 @njit(cache=True)
-def _dacc(F: float, G: float, a: float, vv: float, w: np.ndarray, phi: np.ndarray, m: int,
-          out: np.ndarray) -> None:
+def _dacc(
+    F: float, G: float, a: float, vv: float, w: np.ndarray, phi: np.ndarray, m: int, out: np.ndarray
+) -> None:
     """Partial derivatives of the acceleration with respect to the 15 (+ offset) coefficients."""
     regs0 = -vv / w[2]
     regs1 = -G / w[2]
@@ -127,9 +139,23 @@ def _dacc(F: float, G: float, a: float, vv: float, w: np.ndarray, phi: np.ndarra
 
 @njit(cache=True)
 def p15i_run(
-    v: np.ndarray, i: np.ndarray, dt: float, C: np.ndarray, f0: float, basis: int, lo: float, hi: float,
-    n_sub: int, bound: float, seg_start: np.ndarray, seg_end: np.ndarray, F0: np.ndarray, G0: np.ndarray,
-    S0: np.ndarray, with_sens: bool, with_offset: bool,
+    v: np.ndarray,
+    i: np.ndarray,
+    dt: float,
+    C: np.ndarray,
+    f0: float,
+    basis: int,
+    lo: float,
+    hi: float,
+    n_sub: int,
+    bound: float,
+    seg_start: np.ndarray,
+    seg_end: np.ndarray,
+    F0: np.ndarray,
+    G0: np.ndarray,
+    S0: np.ndarray,
+    with_sens: bool,
+    with_offset: bool,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Simulate segments ``[seg_start[q], seg_end[q])`` of one record, each from its own state.
 
@@ -226,9 +252,9 @@ def p15i_run(
                 if with_sens:
                     a2 = _accel(F2, G2, v2, w2, f0)
                     # Jacobians of the acceleration at both stages
-                    aF1 = (1.0 - 3.0 * w1[3] * F1 * F1 - 5.0 * w1[4] * F1 ** 4) / w1[2]
+                    aF1 = (1.0 - 3.0 * w1[3] * F1 * F1 - 5.0 * w1[4] * F1**4) / w1[2]
                     aG1 = -w1[1] / w1[2]
-                    aF2 = (1.0 - 3.0 * w2[3] * F2 * F2 - 5.0 * w2[4] * F2 ** 4) / w2[2]
+                    aF2 = (1.0 - 3.0 * w2[3] * F2 * F2 - 5.0 * w2[4] * F2**4) / w2[2]
                     aG2 = -w2[1] / w2[2]
                     det1 = 1.0 - hg * aG1 - hg * hg * aF1
                     det2 = 1.0 - hg * aG2 - hg * hg * aF2

@@ -35,7 +35,8 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
         warnings.warn(
             f"{kind}: training records are sampled at {listed} Hz; model rate model_fs = "
             f"{distinct[0]:g} Hz (the lowest; the others are resampled; set model_fs to choose)",
-            Note, stacklevel=3,
+            Note,
+            stacklevel=3,
         )
     return distinct[0]
 
@@ -47,11 +48,14 @@ def rename_setting(kind: str, old: str, new: str, old_value: object, new_value: 
         return new_value
     if new_value is not None and new_value != old_value:
         raise DataValidationError(
-            old, f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old name of {new}"
+            old,
+            f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old name of {new}",
         )
     warnings.warn(
         f"{kind}: setting {old!r} is now called {new!r} (the model's own rate, not a record's "
-        f"sampling rate); using {new}={old_value!r}", Note, stacklevel=4,
+        f"sampling rate); using {new}={old_value!r}",
+        Note,
+        stacklevel=4,
     )
     return old_value
 

@@ -111,7 +111,9 @@ def plan_windows(
         k = max(1, round(n_win * n / total))
         w = min(win, n)
         k = min(k, max(1, n // w))
-        starts = np.linspace(0, n - w, k).round().astype(np.int64) if k > 1 else np.array([(n - w) // 2])
+        starts = (
+            np.linspace(0, n - w, k).round().astype(np.int64) if k > 1 else np.array([(n - w) // 2])
+        )
         out.extend((r, int(s), int(s) + w) for s in starts)
     return out
 
@@ -129,8 +131,9 @@ def window_set(exps: ExperimentSet, **kwargs: Any) -> tuple[ExperimentSet, dict[
     return ExperimentSet(wins, name="windows"), _info(plan, sum(e.n for e in exps))
 
 
-def window_arrays(arrays: Sequence[Sequence[np.ndarray]], fs: float,
-                  **kwargs: Any) -> tuple[list[list[np.ndarray]] | None, list[int], dict[str, Any] | None]:
+def window_arrays(
+    arrays: Sequence[Sequence[np.ndarray]], fs: float, **kwargs: Any
+) -> tuple[list[list[np.ndarray]] | None, list[int], dict[str, Any] | None]:
     """Window per-record arrays: ``arrays[c][r]`` is channel ``c`` of record ``r``.
 
     Returns the windowed channels (None below the threshold), the parent record of each window
@@ -157,7 +160,9 @@ def window_records(rec: Any, fs: float, **kwargs: Any) -> tuple[Any, dict[str, A
     if chans is None:
         return rec, None
     F, u, rho = chans
-    return dataclasses.replace(rec, F=F, u=u, rho=rho, weights=np.asarray(rec.weights)[parent]), info
+    return dataclasses.replace(
+        rec, F=F, u=u, rho=rho, weights=np.asarray(rec.weights)[parent]
+    ), info
 
 
 def _info(plan: list[tuple[int, int, int]], total: int) -> dict[str, Any]:
@@ -183,7 +188,9 @@ def input_range(exps: Sequence[Experiment], source: Any) -> tuple[float, float]:
     return float(ext[:, 0].min()), float(ext[:, 1].max())
 
 
-def strided(channels: Sequence[Sequence[np.ndarray]], threshold: int | None = None) -> list[list[np.ndarray]]:
+def strided(
+    channels: Sequence[Sequence[np.ndarray]], threshold: int | None = None
+) -> list[list[np.ndarray]]:
     """Every k-th sample of each record (views, no copy) so at most about ``threshold`` samples
     remain in all (default :data:`WINDOW_THRESHOLD`); the arrays themselves below it.
 
@@ -209,8 +216,11 @@ def full_data_esr(model: Any, exps: Sequence[Experiment]) -> dict[str, float]:
     from mrdamper.metrics import score_arrays
 
     esr = [float(score_arrays(e.F, model.predict(e)).esr) for e in exps]
-    return {"mean_esr": float(np.mean(esr)), "max_esr": float(np.max(esr)),
-            "samples": int(sum(e.n for e in exps))}
+    return {
+        "mean_esr": float(np.mean(esr)),
+        "max_esr": float(np.max(esr)),
+        "samples": int(sum(e.n for e in exps)),
+    }
 
 
 #: Rows of one block of the chunked least squares [rows].
@@ -233,8 +243,14 @@ class LazyRecords(Sequence[np.ndarray]):
         return self._build(self._exps[r])
 
 
-def chunked_qr(records: Sequence[np.ndarray], weights: Sequence[float], base: np.ndarray, terms: np.ndarray,
-               p: int, fill: Callable[..., None]) -> tuple[np.ndarray, np.ndarray]:
+def chunked_qr(
+    records: Sequence[np.ndarray],
+    weights: Sequence[float],
+    base: np.ndarray,
+    terms: np.ndarray,
+    p: int,
+    fill: Callable[..., None],
+) -> tuple[np.ndarray, np.ndarray]:
     """Triangular factor of the weighted NARX regression ``[X y]``, accumulated by blocks.
 
     ``fill(S, base, terms, k0, k1, out)`` writes the regressors of samples ``k0:k1`` of record
@@ -258,8 +274,9 @@ def chunked_qr(records: Sequence[np.ndarray], weights: Sequence[float], base: np
     return np.ascontiguousarray(R[:M, :M]), R[:M, M].copy()
 
 
-def narx_windows(records: Sequence[np.ndarray], weights: Sequence[float], fs: float,
-                 p: int) -> tuple[Sequence[np.ndarray], list[float], dict[str, Any] | None]:
+def narx_windows(
+    records: Sequence[np.ndarray], weights: Sequence[float], fs: float, p: int
+) -> tuple[Sequence[np.ndarray], list[float], dict[str, Any] | None]:
     """Windows (copies) of NARX signal arrays ``S`` (5 x N) for the output-error refinement;
     the records themselves below the threshold. Each window keeps its parent's weight."""
     lengths = [_n_columns(records, r) for r in range(len(records))]
@@ -286,9 +303,17 @@ def _n_columns(records: Sequence[np.ndarray], r: int) -> int:
     return int(records[r].shape[1])
 
 
-def lpv_qr_factor(y: np.ndarray, u: np.ndarray, rho: np.ndarray, starts: np.ndarray, weights: np.ndarray,
-                  n_m: int, n_p: int, with_const: bool,
-                  build: Callable[..., tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+def lpv_qr_factor(
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    starts: np.ndarray,
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+    build: Callable[..., tuple[np.ndarray, np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray]:
     """Triangular factor ``(R, z)`` of the weighted LPV regression ``[X t]``, block by block.
 
     ``build`` is the kernel that materialises the rows of whole records
@@ -304,8 +329,16 @@ def lpv_qr_factor(y: np.ndarray, u: np.ndarray, rho: np.ndarray, starts: np.ndar
         for k0 in range(a + n_m, b, QR_BLOCK):
             k1 = min(k0 + QR_BLOCK, b)
             sl = slice(k0 - n_m, k1)
-            Xb, tb = build(y[sl], u[sl], rho[sl], np.array([0, k1 - k0 + n_m], dtype=np.int64), w,
-                           n_m, n_p, with_const)
+            Xb, tb = build(
+                y[sl],
+                u[sl],
+                rho[sl],
+                np.array([0, k1 - k0 + n_m], dtype=np.int64),
+                w,
+                n_m,
+                n_p,
+                with_const,
+            )
             B = np.column_stack((Xb, tb))
             R = B if R is None else np.vstack((R, B))
             R = np.asarray(np.linalg.qr(R, mode="r"))
@@ -336,9 +369,16 @@ class RecordList(list):  # type: ignore[type-arg]
     """Per-record arrays that the LPV least squares takes record by record (no concatenation)."""
 
 
-def lpv_gram_records(ys: Sequence[np.ndarray], us: Sequence[np.ndarray], rhos: Sequence[np.ndarray],
-                     weights: np.ndarray, n_m: int, n_p: int, with_const: bool,
-                     gram_pass: Callable[..., Any]) -> tuple[np.ndarray, np.ndarray, float, int]:
+def lpv_gram_records(
+    ys: Sequence[np.ndarray],
+    us: Sequence[np.ndarray],
+    rhos: Sequence[np.ndarray],
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+    gram_pass: Callable[..., Any],
+) -> tuple[np.ndarray, np.ndarray, float, int]:
     """``gram_pass`` summed over records given as separate arrays (same sums as one call on the
     concatenation, up to the order of the floating-point additions)."""
     G: np.ndarray | None = None
@@ -346,8 +386,16 @@ def lpv_gram_records(ys: Sequence[np.ndarray], us: Sequence[np.ndarray], rhos: S
     yy, n_eq = 0.0, 0
     for r in range(len(us)):
         st = np.array([0, us[r].size], dtype=np.int64)
-        Gr, gr, yyr, nr = gram_pass(ys[r], us[r], rhos[r], st, np.asarray(weights[r : r + 1], dtype=np.float64),
-                                    n_m, n_p, with_const)
+        Gr, gr, yyr, nr = gram_pass(
+            ys[r],
+            us[r],
+            rhos[r],
+            st,
+            np.asarray(weights[r : r + 1], dtype=np.float64),
+            n_m,
+            n_p,
+            with_const,
+        )
         G = Gr if G is None else G + Gr
         g = gr if g is None else g + gr
         yy += float(yyr)
@@ -356,15 +404,32 @@ def lpv_gram_records(ys: Sequence[np.ndarray], us: Sequence[np.ndarray], rhos: S
     return G, g, yy, n_eq
 
 
-def lpv_qr_records(ys: Sequence[np.ndarray], us: Sequence[np.ndarray], rhos: Sequence[np.ndarray],
-                   weights: np.ndarray, n_m: int, n_p: int, with_const: bool,
-                   build: Callable[..., tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+def lpv_qr_records(
+    ys: Sequence[np.ndarray],
+    us: Sequence[np.ndarray],
+    rhos: Sequence[np.ndarray],
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+    build: Callable[..., tuple[np.ndarray, np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`lpv_qr_factor` over records given as separate arrays."""
+
     def blocks() -> Iterator[np.ndarray]:
         for r in range(len(us)):
             st = np.array([0, us[r].size], dtype=np.int64)
-            R, z = lpv_qr_factor(ys[r], us[r], rhos[r], st, np.asarray(weights[r : r + 1]), n_m, n_p, with_const,
-                                 build)
+            R, z = lpv_qr_factor(
+                ys[r],
+                us[r],
+                rhos[r],
+                st,
+                np.asarray(weights[r : r + 1]),
+                n_m,
+                n_p,
+                with_const,
+                build,
+            )
             yield np.column_stack((R, z))
 
     Rf = fold_qr(blocks())

@@ -23,7 +23,9 @@ N_COMPONENTS = 5
 
 
 @njit(cache=True)
-def _components(ii: float, comp: np.ndarray, power: np.ndarray, theta: np.ndarray, out: np.ndarray) -> None:
+def _components(
+    ii: float, comp: np.ndarray, power: np.ndarray, theta: np.ndarray, out: np.ndarray
+) -> None:
     for m in range(N_COMPONENTS):
         out[m] = 0.0
     for k in range(theta.size):

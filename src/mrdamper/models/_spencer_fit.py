@@ -70,11 +70,19 @@ def _check_settings(est: SpencerEstimator) -> None:
         v = getattr(est, name)
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise DataValidationError(name, f"expected a positive integer, got {v!r}")
-    if isinstance(est.substeps, bool) or not isinstance(est.substeps, (int, np.integer)) or est.substeps < 0:
-        raise DataValidationError("substeps", f"expected an integer >= 0 (0 = automatic), got {est.substeps!r}")
+    if (
+        isinstance(est.substeps, bool)
+        or not isinstance(est.substeps, (int, np.integer))
+        or est.substeps < 0
+    ):
+        raise DataValidationError(
+            "substeps", f"expected an integer >= 0 (0 = automatic), got {est.substeps!r}"
+        )
     tol = est.step_tolerance
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < math.inf:
-        raise DataValidationError("step_tolerance", f"expected a positive finite number (ESR units), got {tol!r}")
+        raise DataValidationError(
+            "step_tolerance", f"expected a positive finite number (ESR units), got {tol!r}"
+        )
     choices = {
         "weighting": ("record", "none"),
         "jacobian": ("sensitivity", "2-point", "3-point"),
@@ -83,24 +91,36 @@ def _check_settings(est: SpencerEstimator) -> None:
     }
     for name, allowed in choices.items():
         if getattr(est, name) not in allowed:
-            raise DataValidationError(name, f"expected one of {allowed}, got {getattr(est, name)!r}")
+            raise DataValidationError(
+                name, f"expected one of {allowed}, got {getattr(est, name)!r}"
+            )
     for name in ("start", "fixed", "bounds"):
         mapping = getattr(est, name)
         if mapping is None:
             continue
         if not isinstance(mapping, Mapping):
-            raise DataValidationError(name, f"expected a mapping of parameter names, got {type(mapping).__name__}")
+            raise DataValidationError(
+                name, f"expected a mapping of parameter names, got {type(mapping).__name__}"
+            )
         unknown = sorted(set(mapping) - set(PARAMETER_NAMES))
         if unknown:
-            raise DataValidationError(name, f"unknown parameter(s) {unknown}; expected names from {list(PARAMETER_NAMES)}")
+            raise DataValidationError(
+                name, f"unknown parameter(s) {unknown}; expected names from {list(PARAMETER_NAMES)}"
+            )
     for name, value in {**(est.start or {}), **(est.fixed or {})}.items():
-        if not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(float(value)):
-            raise DataValidationError(name, f"start/fixed value must be a finite number, got {value!r}")
+        if not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(
+            float(value)
+        ):
+            raise DataValidationError(
+                name, f"start/fixed value must be a finite number, got {value!r}"
+            )
     for name, b in (est.bounds or {}).items():
         try:
             lo, hi = float(b[0]), float(b[1])
         except (TypeError, ValueError, IndexError):
-            raise DataValidationError(f"bounds[{name!r}]", f"expected (low, high), got {b!r}") from None
+            raise DataValidationError(
+                f"bounds[{name!r}]", f"expected (low, high), got {b!r}"
+            ) from None
         if not lo < hi:
             raise DataValidationError(f"bounds[{name!r}]", f"expected low < high, got ({lo}, {hi})")
 
@@ -117,17 +137,30 @@ def _records(est: SpencerEstimator, exps: ExperimentSet) -> list[_Record]:
         sd = float(np.std(exp.F))
         if est.weighting == "record":
             if sd == 0.0:
-                raise DataValidationError("F", f"record {exp.name!r} has constant force; per-record weighting needs variance")
+                raise DataValidationError(
+                    "F",
+                    f"record {exp.name!r} has constant force; per-record weighting needs variance",
+                )
             w = 1.0 / (sd * math.sqrt(exp.n * n_rec))
         else:
             if F_all_std == 0.0:
                 raise DataValidationError("F", "the training force has zero variance")
             w = 1.0 / (F_all_std * math.sqrt(total))
-        recs.append(_Record(
-            exp.name, np.ascontiguousarray(exp.x), np.ascontiguousarray(exp.v), e,
-            np.ascontiguousarray(exp.F), exp.dt, w, float(np.max(np.abs(exp.v))),
-            float(np.min(e)), float(np.max(e)), slice(offset, offset + exp.n),
-        ))
+        recs.append(
+            _Record(
+                exp.name,
+                np.ascontiguousarray(exp.x),
+                np.ascontiguousarray(exp.v),
+                e,
+                np.ascontiguousarray(exp.F),
+                exp.dt,
+                w,
+                float(np.max(np.abs(exp.v))),
+                float(np.min(e)),
+                float(np.max(e)),
+                slice(offset, offset + exp.n),
+            )
+        )
         offset += exp.n
     return recs
 
@@ -148,8 +181,9 @@ def _regression(recs: list[_Record]) -> np.ndarray:
     return coef
 
 
-def _map_start(reg: np.ndarray, yield_disp: float, ratio: float, A: float, n: float,
-               force_scale: float) -> dict[str, float]:
+def _map_start(
+    reg: np.ndarray, yield_disp: float, ratio: float, A: float, n: float, force_scale: float
+) -> dict[str, float]:
     """Map Bingham-like regression coefficients onto Spencer parameters."""
     fa, fb, ca, cb, k, f0 = (float(c) for c in reg)
     zss = max(abs(A), 1e-12) * yield_disp
@@ -178,8 +212,14 @@ def _map_start(reg: np.ndarray, yield_disp: float, ratio: float, A: float, n: fl
 class _Objective:
     """Weighted free-run residuals and their sensitivity Jacobian in scaled unknowns."""
 
-    def __init__(self, recs: list[_Record], p_fixed: np.ndarray, free: np.ndarray,
-                 scale: np.ndarray, substeps: int) -> None:
+    def __init__(
+        self,
+        recs: list[_Record],
+        p_fixed: np.ndarray,
+        free: np.ndarray,
+        scale: np.ndarray,
+        substeps: int,
+    ) -> None:
         self.recs = recs
         self.p_fixed = p_fixed
         self.free = free
@@ -206,7 +246,9 @@ class _Objective:
         p = self.params(q)
         out = np.empty(self.n)
         for r in self.recs:
-            F, status, sample = _k.simulate(r.x, r.v, r.e, r.dt, p, self.nsub(p, r), r.x[0], 0.0, r.e[0])
+            F, status, sample = _k.simulate(
+                r.x, r.v, r.e, r.dt, p, self.nsub(p, r), r.x[0], 0.0, r.e[0]
+            )
             if status != _k.STATUS_OK:
                 self.failures += 1
                 self.last_failure = f"record {r.name!r}: status {status} at sample {sample}"
@@ -297,8 +339,12 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
     method = est.jacobian
     jac = obj.jacobian if method == "sensitivity" else method
     kw = {
-        "bounds": (q_lo, q_hi), "method": "trf", "x_scale": X_SCALE,
-        "ftol": est.ftol, "xtol": est.xtol, "gtol": est.gtol,
+        "bounds": (q_lo, q_hi),
+        "method": "trf",
+        "x_scale": X_SCALE,
+        "ftol": est.ftol,
+        "xtol": est.xtol,
+        "gtol": est.gtol,
     }
 
     runs: list[dict[str, Any]] = []
@@ -307,12 +353,21 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
         q0 = _strictly_inside(p0[free] / scale, q_lo, q_hi)
         r0 = obj.residuals(q0)
         if obj.last_failure and np.all(r0 == _PENALTY):
-            runs.append({"start": k, "cost": math.inf, "status": "start diverged", "detail": obj.last_failure})
+            runs.append(
+                {
+                    "start": k,
+                    "cost": math.inf,
+                    "status": "start diverged",
+                    "detail": obj.last_failure,
+                }
+            )
             obj.last_failure = ""
             continue
         nfev = est.screen_nfev if est.n_starts > 1 else est.max_nfev
         res = least_squares(obj.residuals, q0, jac=jac, max_nfev=nfev, **kw)
-        runs.append({"start": k, "cost": float(res.cost), "nfev": int(res.nfev), "status": int(res.status)})
+        runs.append(
+            {"start": k, "cost": float(res.cost), "nfev": int(res.nfev), "status": int(res.status)}
+        )
         results.append(res)
     finite = [r for r in results if np.isfinite(r.cost) and r.cost < 0.25 * _PENALTY**2 * obj.n]
     if not finite:
@@ -327,7 +382,9 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
         if not final.cost <= best.cost:
             final = best
     if not np.all(np.isfinite(final.x)) or not math.isfinite(final.cost):
-        raise IdentificationError(f"spencer: optimiser returned a non-finite result ({final.message})")
+        raise IdentificationError(
+            f"spencer: optimiser returned a non-finite result ({final.message})"
+        )
     p_hat = obj.params(final.x)
 
     sv = np.linalg.svd(final.jac, compute_uv=False)
@@ -339,12 +396,14 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
         warnings.warn(
             f"spencer: identification is ill-conditioned (cond(J^T J) = {cond:.3g} in scaled "
             "unknowns); some parameters are not determined by these records",
-            RuntimeWarning, stacklevel=3,
+            RuntimeWarning,
+            stacklevel=3,
         )
     if not converged:
         warnings.warn(
             f"spencer: optimiser stopped before convergence ({final.message}); raise max_nfev",
-            RuntimeWarning, stacklevel=3,
+            RuntimeWarning,
+            stacklevel=3,
         )
     resid = obj.residuals(final.x)
     rec_esr = {}
@@ -356,7 +415,9 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
     provenance = {
         "method": "bounded nonlinear least squares on the free-run simulation error "
         "(scipy.optimize.least_squares, trf); records simulated separately from rest",
-        "jacobian": "forward sensitivities (RK4)" if method == "sensitivity" else f"finite differences ({method})",
+        "jacobian": "forward sensitivities (RK4)"
+        if method == "sensitivity"
+        else f"finite differences ({method})",
         "records": [r.name for r in recs],
         "n_samples": int(obj.n),
         "weighting": est.weighting,
@@ -398,9 +459,21 @@ def _scale_floors(recs: list[_Record], force_scale: float) -> dict[str, float]:
     damp = 1e-2 * force_scale / vs
     stiff = 1e-2 * force_scale / xs
     return {
-        "c0a": damp, "c0b": damp / es, "c1a": damp, "c1b": damp / es, "k0": stiff, "k1": stiff,
-        "x0": xs, "alpha_a": stiff, "alpha_b": stiff / es, "gamma": 1.0, "beta": 1.0, "A": 1.0,
-        "n": 1.0, "eta": 10.0, "f0": 1e-2 * force_scale,
+        "c0a": damp,
+        "c0b": damp / es,
+        "c1a": damp,
+        "c1b": damp / es,
+        "k0": stiff,
+        "k1": stiff,
+        "x0": xs,
+        "alpha_a": stiff,
+        "alpha_b": stiff / es,
+        "gamma": 1.0,
+        "beta": 1.0,
+        "A": 1.0,
+        "n": 1.0,
+        "eta": 10.0,
+        "f0": 1e-2 * force_scale,
     }
 
 

@@ -33,8 +33,21 @@ __all__ = [
 
 #: Parameter order of the vector ``p`` used by every kernel.
 PARAM_NAMES: tuple[str, ...] = (
-    "c0a", "c0b", "k0", "c1a", "c1b", "k1", "x0",
-    "alpha_a", "alpha_b", "gamma", "beta", "A", "n", "eta", "f0",
+    "c0a",
+    "c0b",
+    "k0",
+    "c1a",
+    "c1b",
+    "k1",
+    "x0",
+    "alpha_a",
+    "alpha_b",
+    "gamma",
+    "beta",
+    "A",
+    "n",
+    "eta",
+    "f0",
 )
 N_PARAMS = len(PARAM_NAMES)
 STATUS_OK = 0
@@ -150,8 +163,12 @@ def simulate(x, v, e, dt, p, nsub, y0, z0, u0):
             a1, b1, g1, C = _rhs(xa, va, ea, y, z, u, p)
             if not C > 0.0:
                 return F, STATUS_BAD_DAMPING, k
-            a2, b2, g2, _ = _rhs(xm, vm, em, y + 0.5 * h * a1, z + 0.5 * h * b1, u + 0.5 * h * g1, p)
-            a3, b3, g3, _ = _rhs(xm, vm, em, y + 0.5 * h * a2, z + 0.5 * h * b2, u + 0.5 * h * g2, p)
+            a2, b2, g2, _ = _rhs(
+                xm, vm, em, y + 0.5 * h * a1, z + 0.5 * h * b1, u + 0.5 * h * g1, p
+            )
+            a3, b3, g3, _ = _rhs(
+                xm, vm, em, y + 0.5 * h * a2, z + 0.5 * h * b2, u + 0.5 * h * g2, p
+            )
             a4, b4, g4, _ = _rhs(xb, vb, eb, y + h * a3, z + h * b3, u + h * g3, p)
             y += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
             z += h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)

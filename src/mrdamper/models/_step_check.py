@@ -22,7 +22,9 @@ __all__ = ["step_halving_check"]
 
 
 def step_halving_check(
-    kind: str, records: Iterable[Experiment], simulate: Callable[[Experiment, int], np.ndarray],
+    kind: str,
+    records: Iterable[Experiment],
+    simulate: Callable[[Experiment, int], np.ndarray],
     tolerance: float,
 ) -> dict[str, Any]:
     """Compare each record's free run at the nominal step and at half of it.
@@ -66,5 +68,10 @@ def step_halving_check(
             RuntimeWarning,
             stacklevel=3,
         )
-    return {"tolerance": float(tolerance), "discrepancy": disc, "max_discrepancy": float(dmax),
-            "worst_record": worst, "passed": passed}
+    return {
+        "tolerance": float(tolerance),
+        "discrepancy": disc,
+        "max_discrepancy": float(dmax),
+        "worst_record": worst,
+        "passed": passed,
+    }

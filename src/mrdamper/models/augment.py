@@ -99,15 +99,18 @@ def reference_records(
     rate = float(fs) if fs is not None else min(e.fs for e in exps)
     if not 0 < min_frequency < max_frequency < rate / 2:
         raise DataValidationError(
-            "max_frequency", f"expected 0 < min_frequency < max_frequency < fs/2 = {rate / 2:g} Hz, "
-            f"got {min_frequency:g} and {max_frequency:g}"
+            "max_frequency",
+            f"expected 0 < min_frequency < max_frequency < fs/2 = {rate / 2:g} Hz, "
+            f"got {min_frequency:g} and {max_frequency:g}",
         )
     if reference is None:
         from mrdamper.models.registry import get_estimator
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            reference = get_estimator(reference_kind, **{**dict(reference_settings or {}), "input": input}).fit(exps)
+            reference = get_estimator(
+                reference_kind, **{**dict(reference_settings or {}), "input": input}
+            ).fit(exps)
     reference = reference.with_range_policy("clip")
     v_max = max(float(np.max(np.abs(e.v))) for e in exps)
     lo = min(float(np.min(e.electrical(input))) for e in exps)  # type: ignore[arg-type]
@@ -121,17 +124,30 @@ def reference_records(
         rng = np.random.default_rng(ss)
         if motion == "sweep":
             amp = v_max * float(rng.uniform(0.4, 1.0))
-            v = amp * sps.chirp(t, f0=min_frequency, t1=t[-1], f1=max_frequency, method="logarithmic") * ramp
+            v = (
+                amp
+                * sps.chirp(t, f0=min_frequency, t1=t[-1], f1=max_frequency, method="logarithmic")
+                * ramp
+            )
         else:
             v = sps.sosfiltfilt(sos, rng.standard_normal(n)) * ramp
             v *= v_max / float(np.max(np.abs(v)))
         x = np.cumsum(v) / rate
         x -= np.linspace(x[0], x[-1], n)  # keep the stroke centred (drift-free displacement)
-        level = aprbs(rate, duration, low=lo, high=hi, min_hold=min_hold, seed=int(rng.integers(2**31)))
+        level = aprbs(
+            rate, duration, low=lo, high=hi, min_hold=min_hold, seed=int(rng.integers(2**31))
+        )
         if hi - lo <= 0:
             level = np.full(n, lo)
-        e = Experiment(t=t, x=x, v=v, F=np.zeros(n), name=f"reference_{k}",
-                       i=level[:n] if input == "i" else None, voltage=level[:n] if input == "voltage" else None,
-                       metadata={"source": "reference model", "reference": reference.kind})
+        e = Experiment(
+            t=t,
+            x=x,
+            v=v,
+            F=np.zeros(n),
+            name=f"reference_{k}",
+            i=level[:n] if input == "i" else None,
+            voltage=level[:n] if input == "voltage" else None,
+            metadata={"source": "reference model", "reference": reference.kind},
+        )
         out.append(e.replace(F=np.asarray(reference.predict(e), dtype=np.float64)))
     return ExperimentSet(out, name="reference records"), reference

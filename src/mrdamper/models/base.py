@@ -128,7 +128,11 @@ def single_level_note(kind: str, source: str, level: float) -> str:
 def encode_value(value: Any) -> Any:
     """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly)."""
     if isinstance(value, np.ndarray):
-        return {"__ndarray__": value.ravel().tolist(), "dtype": str(value.dtype), "shape": list(value.shape)}
+        return {
+            "__ndarray__": value.ravel().tolist(),
+            "dtype": str(value.dtype),
+            "shape": list(value.shape),
+        }
     if isinstance(value, (np.floating, float)):
         f = float(value)
         if not math.isfinite(f):
@@ -270,7 +274,9 @@ class FittedModel(abc.ABC):
     def parameters(self) -> dict[str, Any]:
         """Model-specific parameters (every dataclass field except the common ones)."""
         common = {f.name for f in dataclasses.fields(FittedModel)}
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in common}
+        return {
+            f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in common
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dict with schema name and version (timings of the provenance left out, see
@@ -283,7 +289,9 @@ class FittedModel(abc.ABC):
             "input_range": list(self.input_range),
             "range_policy": self.range_policy,
             "parameters": encode_value(self.parameters),
-            "provenance": encode_value({k: v for k, v in self.provenance.items() if k not in TIMING_PROVENANCE}),
+            "provenance": encode_value(
+                {k: v for k, v in self.provenance.items() if k not in TIMING_PROVENANCE}
+            ),
         }
 
     @classmethod
@@ -297,7 +305,9 @@ class FittedModel(abc.ABC):
             raise SchemaError(f"parameters: expected an object, got {type(params).__name__}")
         for key, value in params.items():
             if _has_nan(value):
-                raise SchemaError(f"parameters.{key}: holds NaN; the model file is damaged or was edited")
+                raise SchemaError(
+                    f"parameters.{key}: holds NaN; the model file is damaged or was edited"
+                )
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = set(params) - names
         if unknown:
@@ -339,8 +349,9 @@ class Estimator(abc.ABC):
         for e in exps:
             if not np.any(np.abs(e.v) > 0.0):
                 raise DataValidationError(
-                    "v", f"training record {e.name!r} has zero velocity everywhere; a damper model needs motion "
-                    "(check the velocity column, or derive it from x with derive_velocity / --derive-velocity)"
+                    "v",
+                    f"training record {e.name!r} has zero velocity everywhere; a damper model needs motion "
+                    "(check the velocity column, or derive it from x with derive_velocity / --derive-velocity)",
                 )
         return exps
 

@@ -28,10 +28,16 @@ __all__ = ["BinghamEstimator", "BinghamModel"]
 
 def _coefficients(name: str, values: Any) -> tuple[float, ...]:
     if isinstance(values, (str, bytes)) or not isinstance(values, (Sequence, np.ndarray)):
-        raise DataValidationError(name, f"expected a sequence of polynomial coefficients, got {values!r}")
+        raise DataValidationError(
+            name, f"expected a sequence of polynomial coefficients, got {values!r}"
+        )
     out = []
     for k, v in enumerate(values):
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)):
+        if (
+            isinstance(v, bool)
+            or not isinstance(v, (int, float, np.integer, np.floating))
+            or not math.isfinite(float(v))
+        ):
             raise DataValidationError(name, f"coefficient {k} must be a finite number, got {v!r}")
         out.append(float(v))
     if not out:
@@ -80,11 +86,17 @@ class BinghamModel(FittedModel):
         object.__setattr__(self, "c0", _coefficients("c0", self.c0))
         for name in ("f0", "v_eps"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)):
+            if (
+                isinstance(v, bool)
+                or not isinstance(v, (int, float, np.integer, np.floating))
+                or not math.isfinite(float(v))
+            ):
                 raise DataValidationError(name, f"expected a finite number, got {v!r}")
             object.__setattr__(self, name, float(v))
         if self.v_eps < 0:
-            raise DataValidationError("v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}")
+            raise DataValidationError(
+                "v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}"
+            )
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
 
@@ -103,7 +115,9 @@ class BinghamModel(FittedModel):
             If the input leaves ``input_range`` and ``range_policy == "error"``.
         """
         if not isinstance(experiment, Experiment):
-            raise DataValidationError("experiment", f"expected an Experiment, got {type(experiment).__name__}")
+            raise DataValidationError(
+                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
+            )
         e = self.electrical_input(experiment)
         v = experiment.v
         fc = np.polynomial.polynomial.polyval(e, self.fc)
@@ -152,12 +166,22 @@ class BinghamEstimator(Estimator):
         """
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
-        if isinstance(self.degree, bool) or not isinstance(self.degree, (int, np.integer)) or self.degree < 0:
+        if (
+            isinstance(self.degree, bool)
+            or not isinstance(self.degree, (int, np.integer))
+            or self.degree < 0
+        ):
             raise DataValidationError("degree", f"expected an integer >= 0, got {self.degree!r}")
-        if not (isinstance(self.v_eps, (int, float)) and math.isfinite(self.v_eps) and self.v_eps >= 0):
-            raise DataValidationError("v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}")
+        if not (
+            isinstance(self.v_eps, (int, float)) and math.isfinite(self.v_eps) and self.v_eps >= 0
+        ):
+            raise DataValidationError(
+                "v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}"
+            )
         if self.weighting not in ("record", "none"):
-            raise DataValidationError("weighting", f"expected 'record' or 'none', got {self.weighting!r}")
+            raise DataValidationError(
+                "weighting", f"expected 'record' or 'none', got {self.weighting!r}"
+            )
         exps = self._as_set(data)
         probe = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps)
         deg = int(self.degree)
@@ -169,15 +193,26 @@ class BinghamEstimator(Estimator):
                 if self.weighting == "record":
                     sd = float(np.std(exp.F))
                     if sd == 0.0:
-                        raise DataValidationError("F", f"record {exp.name!r} has constant force; use weighting='none'")
+                        raise DataValidationError(
+                            "F", f"record {exp.name!r} has constant force; use weighting='none'"
+                        )
                     w = 1.0 / (sd * math.sqrt(exp.n))
                 inputs.append(_scale.extrema(exp.electrical(self.input)))
                 for k0 in range(0, exp.n, _scale.QR_BLOCK):
                     sl = slice(k0, k0 + _scale.QR_BLOCK)
                     e, v = exp.electrical(self.input)[sl], exp.v[sl]
                     powers = np.vander(e, deg + 1, increasing=True)
-                    yield np.hstack([powers * probe.sign(v)[:, None], powers * v[:, None], np.ones((e.size, 1)),
-                                     exp.F[sl, None]]) * w
+                    yield (
+                        np.hstack(
+                            [
+                                powers * probe.sign(v)[:, None],
+                                powers * v[:, None],
+                                np.ones((e.size, 1)),
+                                exp.F[sl, None],
+                            ]
+                        )
+                        * w
+                    )
 
         Rf = _scale.fold_qr(blocks())  # Q Rf = [X y]: X c - y = Q (Rf[:, :-1] c - Rf[:, -1])
         n_rows = sum(e.n for e in exps)
@@ -190,7 +225,9 @@ class BinghamEstimator(Estimator):
         X, y = Rf[:, cols], Rf[:, -1]
         coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)
         if rank < X.shape[1]:
-            levels = np.unique(np.round(np.concatenate([e.electrical(self.input) for e in exps]), 9)).size
+            levels = np.unique(
+                np.round(np.concatenate([e.electrical(self.input) for e in exps]), 9)
+            ).size
             raise IdentificationError(
                 f"bingham: regression is rank deficient (rank {rank} of {X.shape[1]}); degree={deg} "
                 f"needs at least {deg + 1} distinct '{self.input}' levels and moving records "
@@ -210,10 +247,14 @@ class BinghamEstimator(Estimator):
             provenance["note"] = note
             warnings.warn(note, UserWarning, stacklevel=2)
         return BinghamModel(
-            fc=tuple(coef[: deg + 1]), c0=tuple(coef[deg + 1 : 2 * deg + 2]), f0=float(coef[-1]),
-            v_eps=float(self.v_eps), input=self.input,
+            fc=tuple(coef[: deg + 1]),
+            c0=tuple(coef[deg + 1 : 2 * deg + 2]),
+            f0=float(coef[-1]),
+            v_eps=float(self.v_eps),
+            input=self.input,
             input_range=(float(e_all.min()), float(e_all.max())),
-            range_policy=self.range_policy, provenance=provenance,
+            range_policy=self.range_policy,
+            provenance=provenance,
         )
 
 

@@ -97,15 +97,21 @@ class LPVModel(FittedModel):
         for name in ("alpha", "beta"):
             arr = np.array(getattr(self, name), dtype=np.float64)
             if arr.ndim != 2:
-                raise DataValidationError(name, f"expected a 2-D (n_m, n_rho+1) array, got shape {arr.shape}")
+                raise DataValidationError(
+                    name, f"expected a 2-D (n_m, n_rho+1) array, got shape {arr.shape}"
+                )
             arr.setflags(write=False)
             set_(self, name, arr)
         if self.alpha.shape != self.beta.shape:
-            raise DataValidationError("beta", f"shape {self.beta.shape} differs from alpha {self.alpha.shape}")
+            raise DataValidationError(
+                "beta", f"shape {self.beta.shape} differs from alpha {self.alpha.shape}"
+            )
         if isinstance(self.zone_laws, Mapping):
             set_(self, "zone_laws", ZoneLaws.from_dict(self.zone_laws))
         if self.input_signal not in ("u", "v"):
-            raise DataValidationError("input_signal", f"expected 'u' or 'v', got {self.input_signal!r}")
+            raise DataValidationError(
+                "input_signal", f"expected 'u' or 'v', got {self.input_signal!r}"
+            )
         if self.input_signal == "u" and self.zone_laws is None:
             raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
         if not self.fs > 0:
@@ -149,7 +155,9 @@ class LPVModel(FittedModel):
         """``rho`` at the record's own rate (range policy applied to the electrical input)."""
         e = self.electrical_input(experiment)
         if self.eta is not None:
-            e = K.first_order_lag(np.ascontiguousarray(e, dtype=np.float64), experiment.dt, self.eta)
+            e = K.first_order_lag(
+                np.ascontiguousarray(e, dtype=np.float64), experiment.dt, self.eta
+            )
         return np.asarray(e, dtype=np.float64)
 
     def model_signals(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
@@ -162,7 +170,9 @@ class LPVModel(FittedModel):
             raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
         else:
             u = self.zone_laws.scheduling_input(v, rho, reading=self.reading)
-        return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(rho, dtype=np.float64)
+        return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(
+            rho, dtype=np.float64
+        )
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N] from the record's velocity and electrical input.
@@ -176,7 +186,8 @@ class LPVModel(FittedModel):
         y, bad = K.simulate_record(u, rho, self.alpha, self.beta, self.force_bound)
         if bad >= 0:
             raise SimulationDivergedError(
-                self.kind, int(bad),
+                self.kind,
+                int(bad),
                 f"|y| exceeded {self.force_bound:.3g} N or became non-finite in record "
                 f"{experiment.name!r} (model rate {self.fs:g} Hz); frozen poles: "
                 f"max |z| = {self.max_pole_modulus():.4f} over rho in {self.rho_range}",
@@ -189,7 +200,11 @@ class LPVModel(FittedModel):
 
         ``rho`` defaults to ``n_grid`` points over ``rho_range``.
         """
-        grid = np.linspace(*self.rho_range, n_grid) if rho is None else np.atleast_1d(np.asarray(rho, float))
+        grid = (
+            np.linspace(*self.rho_range, n_grid)
+            if rho is None
+            else np.atleast_1d(np.asarray(rho, float))
+        )
         return _lpv_fit.frozen_poles(self.alpha, grid)
 
     def max_pole_modulus(self, n_grid: int = 51) -> float:
@@ -208,7 +223,9 @@ class LPVModel(FittedModel):
         """Table of ``alpha`` and ``beta`` (rows ``a_j`` / ``b_j``, columns ``rho^p``)."""
         rows = [("a", j + 1, *self.alpha[j]) for j in range(self.n_m)]
         rows += [("b", j + 1, *self.beta[j]) for j in range(self.n_m)]
-        return pd.DataFrame(rows, columns=["coef", "lag", *[f"rho^{p}" for p in range(self.n_rho + 1)]])
+        return pd.DataFrame(
+            rows, columns=["coef", "lag", *[f"rho^{p}" for p in range(self.n_rho + 1)]]
+        )
 
 
 @dataclass(frozen=True)
@@ -220,7 +237,9 @@ class LTIModel(LPVModel):
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.alpha.shape[1] != 1:
-            raise DataValidationError("alpha", f"an LTI model has n_rho = 0; got {self.alpha.shape[1] - 1}")
+            raise DataValidationError(
+                "alpha", f"an LTI model has n_rho = 0; got {self.alpha.shape[1] - 1}"
+            )
 
 
 # ----------------------------------------------------------------------------- estimators
@@ -314,22 +333,40 @@ class LPVEstimator(Estimator):
         if self.n_m < 1:
             raise DataValidationError("n_m", f"expected an order of at least 1, got {self.n_m}")
         choices = {
-            "input": ("i", "voltage"), "input_signal": ("u", "v"), "reading": ("continuous", "literal"),
-            "laws_by": ("auto", "current", "plateaus", "bins"), "weighting": ("esr", "sse"),
+            "input": ("i", "voltage"),
+            "input_signal": ("u", "v"),
+            "reading": ("continuous", "literal"),
+            "laws_by": ("auto", "current", "plateaus", "bins"),
+            "weighting": ("esr", "sse"),
             "oe_solver": ("gauss-newton", "least_squares"),
-            "range_policy": ("error", "warn", "clip", "ignore"), "stability": ("enforce", "warn"),
+            "range_policy": ("error", "warn", "clip", "ignore"),
+            "stability": ("enforce", "warn"),
         }
         for name, ok in choices.items():
             if getattr(self, name) not in ok:
-                raise DataValidationError(name, f"expected one of {ok}, got {getattr(self, name)!r}")
+                raise DataValidationError(
+                    name, f"expected one of {ok}, got {getattr(self, name)!r}"
+                )
         if self.eta is not None and not (np.isfinite(self.eta) and self.eta > 0):
-            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s], got {self.eta!r}")
+            raise DataValidationError(
+                "eta", f"expected a positive drive-lag rate [1/s], got {self.eta!r}"
+            )
         mfs = self.model_fs
-        if mfs is not None and (isinstance(mfs, bool) or not isinstance(mfs, (int, float)) or not (np.isfinite(mfs) and mfs > 0)):
-            raise DataValidationError("model_fs", f"expected a positive model rate [Hz], got {mfs!r}")
+        if mfs is not None and (
+            isinstance(mfs, bool)
+            or not isinstance(mfs, (int, float))
+            or not (np.isfinite(mfs) and mfs > 0)
+        ):
+            raise DataValidationError(
+                "model_fs", f"expected a positive model rate [Hz], got {mfs!r}"
+            )
 
     def _laws(
-        self, exps: Sequence[Experiment], rhos: list[np.ndarray], prov: dict[str, Any], single: bool = False
+        self,
+        exps: Sequence[Experiment],
+        rhos: list[np.ndarray],
+        prov: dict[str, Any],
+        single: bool = False,
     ) -> ZoneLaws | None:
         if self.input_signal == "v":
             return None
@@ -347,15 +384,24 @@ class LPVEstimator(Estimator):
                 )
             by = "bins" if lacking else "current"
             if lacking:
-                prov["laws_note"] = "laws_by='auto': no record carries metadata 'current'; laws fitted on rho bins"
+                prov["laws_note"] = (
+                    "laws_by='auto': no record carries metadata 'current'; laws fitted on rho bins"
+                )
         if by == "bins":
-            v, F, r = _scale.strided([[e.v for e in exps], [e.F for e in exps], rhos])  # long campaigns
+            v, F, r = _scale.strided(
+                [[e.v for e in exps], [e.F for e in exps], rhos]
+            )  # long campaigns
             fits = zone_fits_binned(v, F, r, n_bins=self.n_bins)
             return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
-        return fit_zone_laws(exps, degree=0 if single else self.laws_degree, by=by, source=self.input)
+        return fit_zone_laws(
+            exps, degree=0 if single else self.laws_degree, by=by, source=self.input
+        )
 
     def fit(
-        self, data: Experiment | Iterable[Experiment], *, record_weights: Sequence[float] | None = None
+        self,
+        data: Experiment | Iterable[Experiment],
+        *,
+        record_weights: Sequence[float] | None = None,
     ) -> LPVModel:
         """Identify the model from one record or a collection (records keep their own start).
 
@@ -380,14 +426,24 @@ class LPVEstimator(Estimator):
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
         raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
         in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
-        rhos = [K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r for r, e in zip(raw, exps)]
+        rhos = [
+            K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r
+            for r, e in zip(raw, exps)
+        ]
         prov: dict[str, Any] = {}
         level = single_level(np.array([_scale.extrema(r) for r in rhos]))  # no concatenated copy
         laws = self._laws(exps, rhos, prov, single=level is not None)
         proto = self.model_cls(
-            alpha=np.zeros((self.n_m, self.n_rho + 1)), beta=np.zeros((self.n_m, self.n_rho + 1)),
-            fs=fs, input_signal=self.input_signal, reading=self.reading, zone_laws=laws, eta=self.eta,
-            input=self.input, input_range=in_range, range_policy="ignore",
+            alpha=np.zeros((self.n_m, self.n_rho + 1)),
+            beta=np.zeros((self.n_m, self.n_rho + 1)),
+            fs=fs,
+            input_signal=self.input_signal,
+            reading=self.reading,
+            zone_laws=laws,
+            eta=self.eta,
+            input=self.input,
+            input_range=in_range,
+            range_policy="ignore",
         )
         F, U, R, w = [], [], [], []
         for e in exps:
@@ -421,10 +477,15 @@ class LPVEstimator(Estimator):
         f_scale = max(max(float(np.max(np.abs(f))) for f in F), 1.0)
         bound = 1e3 * f_scale
         theta, F0 = ls.theta, ls.offset
-        prov.update({
-            "training_records": list(exps.names), "n_samples": int(sum(a.size for a in F)),
-            "settings": _settings_dict(self), "ls_solver": ls.solver, "ls_condition_number": ls.cond,
-        })
+        prov.update(
+            {
+                "training_records": list(exps.names),
+                "n_samples": int(sum(a.size for a in F)),
+                "settings": _settings_dict(self),
+                "ls_solver": ls.solver,
+                "ls_condition_number": ls.cond,
+            }
+        )
         if record_weights is not None:
             prov["record_weights"] = [float(x) for x in user_w]
         enforce = self.stability == "enforce"
@@ -435,45 +496,80 @@ class LPVEstimator(Estimator):
             theta0, shrink = _stable_start(theta, self.n_m, n_p, rho_range, rec, F0, bound)
             if shrink != 1.0:
                 prov["oe_start_pole_scaling"] = shrink
-            rec_oe, windows = _scale.window_records(rec, fs)  # long campaigns: evenly spread windows
+            rec_oe, windows = _scale.window_records(
+                rec, fs
+            )  # long campaigns: evenly spread windows
             th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec_oe, theta0, F0, self.n_m, n_p, offset=self.offset, bound=bound, max_nfev=self.max_nfev,
-                solver=self.oe_solver, rho_grid=grid if enforce else None,
+                rec_oe,
+                theta0,
+                F0,
+                self.n_m,
+                n_p,
+                offset=self.offset,
+                bound=bound,
+                max_nfev=self.max_nfev,
+                solver=self.oe_solver,
+                rho_grid=grid if enforce else None,
             )
             oe_cost = _cost(rec, th_r, f0_r, self.n_m, n_p, bound)
             prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
             if windows is not None:
-                prov.update(oe_windows=windows, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost})
+                prov.update(
+                    oe_windows=windows, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost}
+                )
             ls_ok = not enforce or _pole(theta, self.n_m, n_p, grid)[0] < 1.0
             if oe_cost < ls_cost or not ls_ok:
                 theta, F0 = th_r, f0_r
                 if oe_cost >= ls_cost:
-                    prov["oe_note"] = ("least-squares model has a lower free-run cost but is not frozen-stable; "
-                                       "refined (frozen-stable) model kept")
+                    prov["oe_note"] = (
+                        "least-squares model has a lower free-run cost but is not frozen-stable; "
+                        "refined (frozen-stable) model kept"
+                    )
             else:
-                prov["oe_note"] = "refinement did not lower the free-run cost; least-squares model kept"
+                prov["oe_note"] = (
+                    "refinement did not lower the free-run cost; least-squares model kept"
+                )
         pmax, rho_at, pole = _pole(theta, self.n_m, n_p, grid)
         if enforce and not pmax < 1.0:
             raise IdentificationError(
                 f"{self.kind}: no frozen-stable model: frozen pole z = {pole.real:.4f}{pole.imag:+.4f}j "
                 f"(|z| = {pmax:.4f}) at rho = {rho_at:.4g} of the identified range "
                 f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}]"
-                + ("" if self.refine else "; the least-squares estimate is unstable, set refine=True")
+                + (
+                    ""
+                    if self.refine
+                    else "; the least-squares estimate is unstable, set refine=True"
+                )
                 + " (stability='warn' returns it with a warning)"
             )
-        alpha, beta = (np.pad(c, ((0, 0), (0, self.n_rho + 1 - n_p)))
-                       for c in _lpv_fit.split_theta(theta, self.n_m, n_p))
+        alpha, beta = (
+            np.pad(c, ((0, 0), (0, self.n_rho + 1 - n_p)))
+            for c in _lpv_fit.split_theta(theta, self.n_m, n_p)
+        )
         model = self.model_cls(
-            alpha=alpha, beta=beta, offset=F0, fs=fs, input_signal=self.input_signal, reading=self.reading,
-            zone_laws=laws, eta=self.eta, rho_range=rho_range, force_bound=bound, input=self.input,
-            input_range=in_range, range_policy=self.range_policy, provenance=prov,
+            alpha=alpha,
+            beta=beta,
+            offset=F0,
+            fs=fs,
+            input_signal=self.input_signal,
+            reading=self.reading,
+            zone_laws=laws,
+            eta=self.eta,
+            rho_range=rho_range,
+            force_bound=bound,
+            input=self.input,
+            input_range=in_range,
+            range_policy=self.range_policy,
+            provenance=prov,
         )
         prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0)
         if pmax >= 1.0:
             warnings.warn(
                 f"{self.kind}: identified model is not frozen-stable over rho in "
                 f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}] "
-                f"(max frozen pole modulus {pmax:.4f} at rho = {rho_at:.4g})", RuntimeWarning, stacklevel=2,
+                f"(max frozen pole modulus {pmax:.4f} at rho = {rho_at:.4g})",
+                RuntimeWarning,
+                stacklevel=2,
             )
         return model
 
@@ -488,15 +584,24 @@ def _record_weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
         return np.ones(n)
     w = np.asarray(weights, dtype=np.float64)
     if w.shape != (n,):
-        raise DataValidationError("record_weights", f"expected {n} weights (one per record), got shape {w.shape}")
+        raise DataValidationError(
+            "record_weights", f"expected {n} weights (one per record), got shape {w.shape}"
+        )
     if not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
-        raise DataValidationError("record_weights", f"expected finite weights >= 0, not all zero, got {w.tolist()}")
+        raise DataValidationError(
+            "record_weights", f"expected finite weights >= 0, not all zero, got {w.tolist()}"
+        )
     return w
 
 
 def _stable_start(
-    theta: np.ndarray, n_m: int, n_p: int, rho_range: tuple[float, float], rec: _lpv_fit.Records,
-    F0: float, bound: float,
+    theta: np.ndarray,
+    n_m: int,
+    n_p: int,
+    rho_range: tuple[float, float],
+    rec: _lpv_fit.Records,
+    F0: float,
+    bound: float,
 ) -> tuple[np.ndarray, float]:
     """Start for the refinement whose free run stays bounded on the training records.
 
@@ -518,7 +623,9 @@ def _stable_start(
     )
 
 
-def _cost(rec: _lpv_fit.Records, theta: np.ndarray, F0: float, n_m: int, n_p: int, bound: float) -> float:
+def _cost(
+    rec: _lpv_fit.Records, theta: np.ndarray, F0: float, n_m: int, n_p: int, bound: float
+) -> float:
     alpha, beta = _lpv_fit.split_theta(theta, n_m, n_p)
     total = 0.0
     for r in range(len(rec.u)):
@@ -589,10 +696,18 @@ def select_order(
                     row["train_esr"] = float(np.mean([m.score(e).esr for e in tr]))
                     sc = [m.score(e) for e in va]
                 row.update(
-                    val_esr=float(np.mean([s.esr for s in sc])), val_ssse=float(np.mean([s.ssse for s in sc])),
-                    max_frozen_pole=m.max_pole_modulus(), error="",
+                    val_esr=float(np.mean([s.esr for s in sc])),
+                    val_ssse=float(np.mean([s.ssse for s in sc])),
+                    max_frozen_pole=m.max_pole_modulus(),
+                    error="",
                 )
             except (IdentificationError, SimulationDivergedError, DataValidationError) as exc:
-                row.update(train_esr=np.nan, val_esr=np.nan, val_ssse=np.nan, max_frozen_pole=np.nan, error=str(exc))
+                row.update(
+                    train_esr=np.nan,
+                    val_esr=np.nan,
+                    val_ssse=np.nan,
+                    max_frozen_pole=np.nan,
+                    error=str(exc),
+                )
             rows.append(row)
     return pd.DataFrame(rows).sort_values("val_esr", na_position="last").reset_index(drop=True)

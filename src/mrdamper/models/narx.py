@@ -164,22 +164,46 @@ class NARXModel(FittedModel):
         theta = np.array(self.theta, dtype=np.float64)
         scales = np.array(self.scales, dtype=np.float64)
         if terms.ndim != 2 or terms.shape[0] == 0:
-            raise DataValidationError("terms", f"expected a 2-D (n_terms, degree) array, got shape {terms.shape}")
+            raise DataValidationError(
+                "terms", f"expected a 2-D (n_terms, degree) array, got shape {terms.shape}"
+            )
         if theta.shape != (terms.shape[0],):
-            raise DataValidationError("theta", f"expected shape ({terms.shape[0]},) to match terms, got {theta.shape}")
-        if scales.shape != (len(SIGNALS),) or not np.all(np.isfinite(scales)) or np.any(scales <= 0):
-            raise DataValidationError("scales", f"expected {len(SIGNALS)} positive finite scales, got {scales.tolist()}")
+            raise DataValidationError(
+                "theta", f"expected shape ({terms.shape[0]},) to match terms, got {theta.shape}"
+            )
+        if (
+            scales.shape != (len(SIGNALS),)
+            or not np.all(np.isfinite(scales))
+            or np.any(scales <= 0)
+        ):
+            raise DataValidationError(
+                "scales", f"expected {len(SIGNALS)} positive finite scales, got {scales.tolist()}"
+            )
         if not np.all(np.isfinite(theta)):
             raise DataValidationError("theta", "expected finite coefficients")
-        if base.size and (np.any(base[:, 0] < 0) or np.any(base[:, 0] >= len(SIGNALS)) or np.any(base[:, 1] < 0)):
-            raise DataValidationError("base", f"expected (signal 0..{len(SIGNALS) - 1}, lag >= 0) rows, got {base.tolist()}")
+        if base.size and (
+            np.any(base[:, 0] < 0) or np.any(base[:, 0] >= len(SIGNALS)) or np.any(base[:, 1] < 0)
+        ):
+            raise DataValidationError(
+                "base",
+                f"expected (signal 0..{len(SIGNALS) - 1}, lag >= 0) rows, got {base.tolist()}",
+            )
         if base.size and np.any((base[:, 0] == 0) & (base[:, 1] < 1)):
-            raise DataValidationError("base", "past forces need a lag >= 1 (F[k] cannot explain itself)")
+            raise DataValidationError(
+                "base", "past forces need a lag >= 1 (F[k] cannot explain itself)"
+            )
         if np.any(terms < -1) or np.any(terms >= base.shape[0]):
-            raise DataValidationError("terms", f"expected indices -1..{base.shape[0] - 1}, got {terms.tolist()}")
+            raise DataValidationError(
+                "terms", f"expected indices -1..{base.shape[0] - 1}, got {terms.tolist()}"
+            )
         for name in ("fs", "v0", "force_bound"):
             val = getattr(self, name)
-            if isinstance(val, bool) or not isinstance(val, (int, float, np.integer, np.floating)) or not float(val) > 0 or not math.isfinite(float(val)):
+            if (
+                isinstance(val, bool)
+                or not isinstance(val, (int, float, np.integer, np.floating))
+                or not float(val) > 0
+                or not math.isfinite(float(val))
+            ):
                 raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
             set_(self, name, float(val))
         if self.input not in ("i", "voltage"):
@@ -219,7 +243,9 @@ class NARXModel(FittedModel):
     @property
     def term_names(self) -> list[str]:
         """Readable names of the selected monomials (``"1"`` for the constant)."""
-        return ["*".join(self._base_name(int(j)) for j in row if j >= 0) or "1" for row in self.terms]
+        return [
+            "*".join(self._base_name(int(j)) for j in row if j >= 0) or "1" for row in self.terms
+        ]
 
     def coefficients(self) -> dict[str, float]:
         """Coefficient of each monomial in SI units (force [N] from unscaled signals)."""
@@ -236,17 +262,23 @@ class NARXModel(FittedModel):
     def scaled_signals(self, experiment: Experiment) -> np.ndarray:
         """Scaled signal rows ``(F, x, v, e, tanh_v)`` at the model rate, shape (5, N)."""
         if not isinstance(experiment, Experiment):
-            raise DataValidationError("experiment", f"expected an Experiment, got {type(experiment).__name__}")
+            raise DataValidationError(
+                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
+            )
         e = self.electrical_input(experiment)
-        rows = [to_model_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)
-                for a in (experiment.F, experiment.x, experiment.v, e)]
+        rows = [
+            to_model_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)
+            for a in (experiment.F, experiment.x, experiment.v, e)
+        ]
         rows.append(np.tanh(rows[2] / self.v0))
         S = np.vstack(rows)
         S /= self.scales[:, None]
         if S.shape[1] <= self.max_lag:
             raise DataValidationError(
-                "F", f"record {experiment.name!r} has {S.shape[1]} samples at {self.fs:g} Hz; "
-                f"expected more than the {self.max_lag} initial-condition samples")
+                "F",
+                f"record {experiment.name!r} has {S.shape[1]} samples at {self.fs:g} Hz; "
+                f"expected more than the {self.max_lag} initial-condition samples",
+            )
         return np.ascontiguousarray(S)
 
     def _back(self, f: np.ndarray, experiment: Experiment) -> np.ndarray:
@@ -267,9 +299,11 @@ class NARXModel(FittedModel):
         bad = K.free_run(S, self.base, self.terms, self.theta, self.max_lag, bound)
         if bad >= 0:
             raise SimulationDivergedError(
-                self.kind, int(bad),
+                self.kind,
+                int(bad),
                 f"|F| exceeded {self.force_bound:.3g} N or became non-finite in record "
-                f"{experiment.name!r} (model rate {self.fs:g} Hz)")
+                f"{experiment.name!r} (model rate {self.fs:g} Hz)",
+            )
         return self._back(S[0], experiment)
 
     def one_step_predict(self, experiment: Experiment) -> np.ndarray:
@@ -364,7 +398,12 @@ class NARXEstimator(Estimator):
             val = getattr(self, name)
             if val is None and name in ("v0", "model_fs"):
                 continue
-            if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val) or val <= 0:
+            if (
+                isinstance(val, bool)
+                or not isinstance(val, (int, float))
+                or not math.isfinite(val)
+                or val <= 0
+            ):
                 raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
         if self.bound_factor <= 1:
             raise DataValidationError("bound_factor", f"expected > 1, got {self.bound_factor!r}")
@@ -381,30 +420,55 @@ class NARXEstimator(Estimator):
         """
         self._check()
         exps = self._as_set(data)
-        base, cand = candidate_structure(self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh)
+        base, cand = candidate_structure(
+            self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh
+        )
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
         e_all = np.concatenate([e.electrical(self.input) for e in exps])
         v_max = max(float(np.max(np.abs(e.v))) for e in exps)
         v0 = float(self.v0) if self.v0 is not None else 0.05 * v_max
         if not v0 > 0:
-            raise DataValidationError("v", "every training record has zero velocity; expected motion")
+            raise DataValidationError(
+                "v", "every training record has zero velocity; expected motion"
+            )
         F_max = max(float(np.max(np.abs(e.F))) for e in exps)
-        raw = [F_max] + [max(float(np.max(np.abs(getattr(e, c) if c != "e" else e.electrical(self.input))))
-                             for e in exps) for c in ("x", "v", "e")] + [1.0]
+        raw = (
+            [F_max]
+            + [
+                max(
+                    float(np.max(np.abs(getattr(e, c) if c != "e" else e.electrical(self.input))))
+                    for e in exps
+                )
+                for c in ("x", "v", "e")
+            ]
+            + [1.0]
+        )
         scales = np.array([s if s > 0 else 1.0 for s in raw])
         probe = NARXModel(
-            fs=fs, base=base, terms=cand[:1], theta=np.zeros(1), scales=scales, v0=v0,
-            force_bound=self.bound_factor * max(F_max, 1e-300), input=self.input,
-            input_range=(float(e_all.min()), float(e_all.max())), range_policy="ignore")
+            fs=fs,
+            base=base,
+            terms=cand[:1],
+            theta=np.zeros(1),
+            scales=scales,
+            v0=v0,
+            force_bound=self.bound_factor * max(F_max, 1e-300),
+            input=self.input,
+            input_range=(float(e_all.min()), float(e_all.max())),
+            range_policy="ignore",
+        )
         p = probe.max_lag
         records, weights = [], []
-        lazy = sum(e.n for e in exps) > _scale.WINDOW_THRESHOLD  # long campaigns: one record at a time
+        lazy = (
+            sum(e.n for e in exps) > _scale.WINDOW_THRESHOLD
+        )  # long campaigns: one record at a time
         n_eq = 0
         for e in exps:
             S = probe.scaled_signals(e)
             sd = float(np.std(S[0, p:]))
             if sd == 0.0:
-                raise DataValidationError("F", f"record {e.name!r} has constant force; expected a moving damper")
+                raise DataValidationError(
+                    "F", f"record {e.name!r} has constant force; expected a moving damper"
+                )
             records.append(S)
             weights.append(1.0 / (sd * sd * (S.shape[1] - p)))
             n_eq += S.shape[1] - p
@@ -415,7 +479,8 @@ class NARXEstimator(Estimator):
         if n_eq <= cand.shape[0]:
             raise IdentificationError(
                 f"narx: {n_eq} equations for {cand.shape[0]} candidate terms; expected more "
-                "samples (longer records) or a smaller structure (n_a, n_b, degree)")
+                "samples (longer records) or a smaller structure (n_a, n_b, degree)"
+            )
         # long campaigns: the output-error refinement runs on evenly spread windows (term selection
         # on windows was tried: its least-squares model diverged in free run on a 1 h record)
         fit_recs, fit_w, windows = _scale.narx_windows(records, weights, fs, p)
@@ -432,24 +497,45 @@ class NARXEstimator(Estimator):
             if cost_r < cost_ls:
                 model, cost, refined = _replace(model, theta=theta_r), cost_r, True
         prov = {
-            "method": "OLS-ERR forward selection + least squares" + (" + output-error refinement" if refined else ""),
+            "method": "OLS-ERR forward selection + least squares"
+            + (" + output-error refinement" if refined else ""),
             "records": [e.name for e in exps],
-            "n_equations": int(n_eq), "n_candidates": int(cand.shape[0]),
-            "settings": {"n_a": self.n_a, "n_b": self.n_b, "degree": self.degree,
-                         "output_degree": self.output_degree, "use_tanh": self.use_tanh,
-                         "n_terms": self.n_terms, "refine": self.refine},
-            "err": [float(x) for x in err], "err_total": float(np.sum(err)),
-            "cond": float(cond), "free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost),
-            "refined": refined, "refine_nfev": int(nfev),
+            "n_equations": int(n_eq),
+            "n_candidates": int(cand.shape[0]),
+            "settings": {
+                "n_a": self.n_a,
+                "n_b": self.n_b,
+                "degree": self.degree,
+                "output_degree": self.output_degree,
+                "use_tanh": self.use_tanh,
+                "n_terms": self.n_terms,
+                "refine": self.refine,
+            },
+            "err": [float(x) for x in err],
+            "err_total": float(np.sum(err)),
+            "cond": float(cond),
+            "free_run_cost_ls": float(cost_ls),
+            "free_run_cost": float(cost),
+            "refined": refined,
+            "refine_nfev": int(nfev),
         }
         if windows is not None:
             prov["refine_windows"] = windows
-            prov["full_data_check"] = {"free_run_cost_ls": float(cost_ls), "free_run_cost": float(cost)}
+            prov["full_data_check"] = {
+                "free_run_cost_ls": float(cost_ls),
+                "free_run_cost": float(cost),
+            }
         return _replace(model, provenance=prov)
 
     # --- steps ---------------------------------------------------------------------------
-    def _select(self, records: list[np.ndarray], weights: list[float], base: np.ndarray,
-                cand: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+    def _select(
+        self,
+        records: list[np.ndarray],
+        weights: list[float],
+        base: np.ndarray,
+        cand: np.ndarray,
+        p: int,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """OLS-ERR selection on the weighted, column-normalised augmented Gram matrix."""
         M = cand.shape[0]
         A = np.zeros((M + 1, M + 1))
@@ -468,13 +554,23 @@ class NARXEstimator(Estimator):
         d[d == 0] = 1.0
         A /= d[:, None] * d[None, :]
         A[~np.append(usable, True), :] = 0.0  # constant-zero candidates: never selectable
-        order, err = K.gram_select(A, min(int(self.n_terms), M), float(self.err_tol), float(self.colin_tol))
+        order, err = K.gram_select(
+            A, min(int(self.n_terms), M), float(self.err_tol), float(self.colin_tol)
+        )
         if order.size == 0:
-            raise IdentificationError("narx: no candidate term explains the force (all collinear or zero)")
+            raise IdentificationError(
+                "narx: no candidate term explains the force (all collinear or zero)"
+            )
         return np.asarray(order), np.asarray(err)
 
-    def _least_squares(self, records: list[np.ndarray], weights: list[float], base: np.ndarray,
-                       terms: np.ndarray, p: int) -> tuple[np.ndarray, float]:
+    def _least_squares(
+        self,
+        records: list[np.ndarray],
+        weights: list[float],
+        base: np.ndarray,
+        terms: np.ndarray,
+        p: int,
+    ) -> tuple[np.ndarray, float]:
         # [X y] is reduced block by block to its triangular QR factor R (same least-squares
         # solution and singular values as X itself, never held in memory)
         X, y = _scale.chunked_qr(records, weights, base, terms, p, K.fill_candidates)
@@ -486,11 +582,13 @@ class NARXEstimator(Estimator):
             raise IdentificationError(
                 f"narx: regression of the {X.shape[1]} selected terms is ill-conditioned "
                 f"(condition number {cond:.3g}, expected <= cond_max={self.cond_max:g}); "
-                "raise colin_tol or lower n_terms")
+                "raise colin_tol or lower n_terms"
+            )
         return coef / norms, cond
 
-    def _refine(self, model: NARXModel, records: list[np.ndarray], weights: list[float],
-                p: int) -> tuple[np.ndarray, float, int]:
+    def _refine(
+        self, model: NARXModel, records: list[np.ndarray], weights: list[float], p: int
+    ) -> tuple[np.ndarray, float, int]:
         bound = model.force_bound / model.scales[0]
         meas = [S[0].copy() for S in records]
 
@@ -518,17 +616,28 @@ class NARXEstimator(Estimator):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             sol = optimize.least_squares(
-                lambda th: evaluate(th)[0], model.theta.copy(), jac=lambda th: evaluate(th)[1],
-                method="trf", x_scale="jac", max_nfev=int(self.refine_max_nfev))
+                lambda th: evaluate(th)[0],
+                model.theta.copy(),
+                jac=lambda th: evaluate(th)[1],
+                method="trf",
+                x_scale="jac",
+                max_nfev=int(self.refine_max_nfev),
+            )
         theta = np.asarray(sol.x, dtype=np.float64)
-        return theta, _free_run_cost(_replace(model, theta=theta), records, weights, p), int(sol.nfev)
+        return (
+            theta,
+            _free_run_cost(_replace(model, theta=theta), records, weights, p),
+            int(sol.nfev),
+        )
 
 
 def _replace(model: NARXModel, **changes: Any) -> NARXModel:
     return dataclasses.replace(model, **changes)
 
 
-def _free_run_cost(model: NARXModel, records: list[np.ndarray], weights: list[float], p: int) -> float:
+def _free_run_cost(
+    model: NARXModel, records: list[np.ndarray], weights: list[float], p: int
+) -> float:
     """Weighted free-run squared error (sum over records of ESR-like terms); inf if diverged."""
     bound = model.force_bound / model.scales[0]
     cost = 0.0

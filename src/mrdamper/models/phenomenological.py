@@ -143,18 +143,29 @@ class P15Model(FittedModel):
         if len(W) != 15:
             raise DataValidationError("W", f"p15 has 15 coefficients (5 x 3), got {len(W)}")
         if not all(math.isfinite(w) for w in W) or not math.isfinite(self.f0):
-            raise DataValidationError("W", f"p15 coefficients must be finite, got {W}, f0={self.f0}")
+            raise DataValidationError(
+                "W", f"p15 coefficients must be finite, got {W}, f0={self.f0}"
+            )
         if not self.force_bound > 0:
-            raise DataValidationError("force_bound", f"expected a positive force [N], got {self.force_bound}")
+            raise DataValidationError(
+                "force_bound", f"expected a positive force [N], got {self.force_bound}"
+            )
         if not self.max_step > 0:
-            raise DataValidationError("max_step", f"expected a positive step [s], got {self.max_step}")
+            raise DataValidationError(
+                "max_step", f"expected a positive step [s], got {self.max_step}"
+            )
         if self.eta is not None and not (math.isfinite(self.eta) and self.eta > 0):
-            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+            raise DataValidationError(
+                "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
+            )
         if self.basis not in ("power", "bernstein"):
-            raise DataValidationError("basis", f"expected 'power' or 'bernstein', got {self.basis!r}")
+            raise DataValidationError(
+                "basis", f"expected 'power' or 'bernstein', got {self.basis!r}"
+            )
         if self.basis == "bernstein" and not self.input_range[1] > self.input_range[0]:
             raise DataValidationError(
-                "input_range", f"the Bernstein basis needs lo < hi, got {self.input_range}")
+                "input_range", f"the Bernstein basis needs lo < hi, got {self.input_range}"
+            )
         object.__setattr__(self, "W", W)
         object.__setattr__(self, "f0", float(self.f0))
         object.__setattr__(self, "force_bound", float(self.force_bound))
@@ -171,7 +182,9 @@ class P15Model(FittedModel):
         Wm = self.W_matrix
         if self.basis == "bernstein":
             phi = bernstein_basis(ii, *self.input_range)
-            return np.stack([Wm[j, 0] * phi[0] + Wm[j, 1] * phi[1] + Wm[j, 2] * phi[2] for j in range(5)])
+            return np.stack(
+                [Wm[j, 0] * phi[0] + Wm[j, 1] * phi[1] + Wm[j, 2] * phi[2] for j in range(5)]
+            )
         return np.stack([Wm[j, 0] + Wm[j, 1] * ii + Wm[j, 2] * ii**2 for j in range(5)])
 
     def monomial(self) -> np.ndarray:
@@ -191,7 +204,13 @@ class P15Model(FittedModel):
             B = self.W_matrix
         else:
             R = hi - lo
-            to_i = np.array([[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]])
+            to_i = np.array(
+                [
+                    [1.0, -lo / R, lo**2 / R**2],
+                    [0.0, 1.0 / R, -2 * lo / R**2],
+                    [0.0, 0.0, 1.0 / R**2],
+                ]
+            )
             M = to_i @ BERNSTEIN_TO_POWER  # Bernstein -> monomial
             B = np.linalg.solve(M, self.W_matrix.T).T
         return B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None]
@@ -217,9 +236,14 @@ class P15Model(FittedModel):
             rel[name] = float(np.min(row) / top)
         tol = 0.0 if self.basis == "bernstein" else -1e-9
         stable = rel["m"] > 0 and rel["c"] > 0 and rel["a"] >= tol and rel["b"] >= tol
-        return {"min_bernstein": rel, "stable_by_construction": bool(stable),
-                "passive": bool(stable and rel["w1"] > 0),
-                "outside_range": "held at edge values" if self.basis == "bernstein" else "quadratic extrapolation"}
+        return {
+            "min_bernstein": rel,
+            "stable_by_construction": bool(stable),
+            "passive": bool(stable and rel["w1"] > 0),
+            "outside_range": "held at edge values"
+            if self.basis == "bernstein"
+            else "quadratic extrapolation",
+        }
 
     def substeps(self, dt: float) -> int:
         """Integration steps per sampling interval ``dt`` [s] (at most :data:`MAX_SUBSTEPS`)."""
@@ -241,13 +265,16 @@ class P15Model(FittedModel):
 
     def simulate_steps(self, experiment: Experiment, n_sub: int) -> np.ndarray:
         """Free-run force [N] with ``n_sub`` integration steps per sample (see :meth:`predict`)."""
-        i = _lagged(np.asarray(self.electrical_input(experiment), dtype=np.float64), experiment.dt, self.eta)
+        i = _lagged(
+            np.asarray(self.electrical_input(experiment), dtype=np.float64), experiment.dt, self.eta
+        )
         w3 = self.coefficients(i)[2]
         bad_w3 = np.flatnonzero((w3 == 0) | (np.sign(w3) != np.sign(w3[0])))
         if bad_w3.size:
             k = int(bad_w3[0])
             raise SimulationDivergedError(
-                self.kind, k,
+                self.kind,
+                k,
                 f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} "
                 f"(w3 from {w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
             )
@@ -256,13 +283,30 @@ class P15Model(FittedModel):
         one = np.zeros(1, dtype=np.int64)
         bern = self.basis == "bernstein"
         lo, hi = self.input_range if bern else (0.0, 1.0)
-        F, _, bad = p15i_run(v, i, experiment.dt, self.W_matrix, self.f0, int(bern), lo, hi, int(n_sub),
-                             self.force_bound, one, np.array([experiment.n], dtype=np.int64),
-                             np.array([F0]), np.zeros(1), np.zeros((1, 16)), False, True)
+        F, _, bad = p15i_run(
+            v,
+            i,
+            experiment.dt,
+            self.W_matrix,
+            self.f0,
+            int(bern),
+            lo,
+            hi,
+            int(n_sub),
+            self.force_bound,
+            one,
+            np.array([experiment.n], dtype=np.int64),
+            np.array([F0]),
+            np.zeros(1),
+            np.zeros((1, 16)),
+            False,
+            True,
+        )
         if bad[0] >= 0:
             k = int(bad[0])
             raise SimulationDivergedError(
-                self.kind, k,
+                self.kind,
+                k,
                 f"force left the bound |F| <= {self.force_bound:.4g} N, became non-finite or an implicit "
                 f"stage had no root (t = {experiment.t[k]:.6g} s, {n_sub} steps per sample)",
             )
@@ -361,26 +405,62 @@ class P15Estimator(Estimator):
         i_all = np.concatenate([_scale.extrema(e.electrical(self.input)) for e in raw_all])
         # the range of the raw input also holds every lagged input (a convex combination of it)
         lo, hi = float(np.min(i_all)), float(np.max(i_all))
-        exps = raw if self.eta is None else ExperimentSet(
-            [e.replace(**{self.input: _lagged(e.electrical(self.input), e.dt, self.eta)}) for e in raw]
+        exps = (
+            raw
+            if self.eta is None
+            else ExperimentSet(
+                [
+                    e.replace(**{self.input: _lagged(e.electrical(self.input), e.dt, self.eta)})
+                    for e in raw
+                ]
+            )
         )
         check_levels(np.concatenate([e.electrical(self.input) for e in exps]), lo, hi, self.input)
         form = self.form if self.method == "equation-error" else "monotone"
-        B, f0, ee_info = equation_error(list(exps), self.input, lo, hi, form=form, offset=self.offset,
-                                        cutoff=self.cutoff, order=self.filter_order)
+        B, f0, ee_info = equation_error(
+            list(exps),
+            self.input,
+            lo,
+            hi,
+            form=form,
+            offset=self.offset,
+            cutoff=self.cutoff,
+            order=self.filter_order,
+        )
         span = float(max(np.ptp(e.F) for e in exps))
         bound = 10.0 * span
         oe_info: dict[str, Any] = {}
         if self.method == "output-error":
             states = [filtered_state(e, self.cutoff, self.filter_order) for e in exps]
             B, f0, oe_info = identify_output_error(
-                list(exps), self.input, lo, hi, B, f0, Ff=[s[0] for s in states], Gf=[s[1] for s in states],
-                offset=self.offset, max_step=self.max_step, segment=self.segment,
-                segment_stride=self.segment_stride, shoot_nfev=self.shoot_nfev, max_nfev=self.max_nfev,
-                max_samples=self.max_samples, jacobian=self.jacobian, bound=bound,
+                list(exps),
+                self.input,
+                lo,
+                hi,
+                B,
+                f0,
+                Ff=[s[0] for s in states],
+                Gf=[s[1] for s in states],
+                offset=self.offset,
+                max_step=self.max_step,
+                segment=self.segment,
+                segment_stride=self.segment_stride,
+                shoot_nfev=self.shoot_nfev,
+                max_nfev=self.max_nfev,
+                max_samples=self.max_samples,
+                jacobian=self.jacobian,
+                bound=bound,
             )
-        model = P15Model(W=tuple(B.ravel()), f0=f0, input=self.input, input_range=(lo, hi),
-                         force_bound=bound, max_step=self.max_step, eta=self.eta, basis="bernstein")
+        model = P15Model(
+            W=tuple(B.ravel()),
+            f0=f0,
+            input=self.input,
+            input_range=(lo, hi),
+            force_bound=bound,
+            max_step=self.max_step,
+            eta=self.eta,
+            basis="bernstein",
+        )
         divergence, esr = _simulate_training(model, raw)
         model, step = self._checked_step(model, [e for e in raw if e.name not in divergence])
         w3_grid = model.coefficients(np.linspace(lo, hi, 201))[2]
@@ -408,10 +488,14 @@ class P15Estimator(Estimator):
                 f"(first: {first[0]!r} at sample {first[1]['sample']}); stable_only=True. "
                 f"Use method='output-error' (stable by construction)"
             )
-        return P15Model(**{**model.parameters, "input": self.input, "input_range": (lo, hi)},
-                        provenance=provenance)
+        return P15Model(
+            **{**model.parameters, "input": self.input, "input_range": (lo, hi)},
+            provenance=provenance,
+        )
 
-    def _checked_step(self, model: P15Model, records: list[Experiment]) -> tuple[P15Model, dict[str, Any]]:
+    def _checked_step(
+        self, model: P15Model, records: list[Experiment]
+    ) -> tuple[P15Model, dict[str, Any]]:
         """Halve the model's step until halving it again changes no training free run by more than
         ``step_tolerance`` (at most ``step_refinements`` times); warn if that is not reached."""
         history = []
@@ -421,35 +505,75 @@ class P15Estimator(Estimator):
                 if not last:
                     warnings.simplefilter("ignore", RuntimeWarning)
                 check = step_halving_check(
-                    "p15", records, functools.partial(_run_refined, model), self.step_tolerance)
-            history.append({"max_step": model.max_step, "max_discrepancy": check["max_discrepancy"]})
+                    "p15", records, functools.partial(_run_refined, model), self.step_tolerance
+                )
+            history.append(
+                {"max_step": model.max_step, "max_discrepancy": check["max_discrepancy"]}
+            )
             if check["passed"] or last:
                 break
-            model = dataclasses.replace(model, max_step=0.5 * min(model.max_step, min(e.dt for e in records)))
+            model = dataclasses.replace(
+                model, max_step=0.5 * min(model.max_step, min(e.dt for e in records))
+            )
         return model, {**check, "history": history, "max_step": model.max_step}
 
     def _check_settings(self) -> None:
-        if self.eta is not None and (isinstance(self.eta, bool) or not isinstance(self.eta, (int, float))
-                                     or not (math.isfinite(self.eta) and self.eta > 0)):
-            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
-        if isinstance(self.step_refinements, bool) or not isinstance(self.step_refinements, int) or not (
-                0 <= self.step_refinements <= 10):
-            raise DataValidationError("step_refinements", f"expected an integer in 0..10, got {self.step_refinements!r}")
+        if self.eta is not None and (
+            isinstance(self.eta, bool)
+            or not isinstance(self.eta, (int, float))
+            or not (math.isfinite(self.eta) and self.eta > 0)
+        ):
+            raise DataValidationError(
+                "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
+            )
+        if (
+            isinstance(self.step_refinements, bool)
+            or not isinstance(self.step_refinements, int)
+            or not (0 <= self.step_refinements <= 10)
+        ):
+            raise DataValidationError(
+                "step_refinements", f"expected an integer in 0..10, got {self.step_refinements!r}"
+            )
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
         if self.method not in ("output-error", "equation-error"):
-            raise DataValidationError("method", f"expected 'output-error' or 'equation-error', got {self.method!r}")
-        if self.cutoff is not None and self.cutoff != "auto" and (
-            isinstance(self.cutoff, bool) or not isinstance(self.cutoff, (int, float)) or not self.cutoff > 0
+            raise DataValidationError(
+                "method", f"expected 'output-error' or 'equation-error', got {self.method!r}"
+            )
+        if (
+            self.cutoff is not None
+            and self.cutoff != "auto"
+            and (
+                isinstance(self.cutoff, bool)
+                or not isinstance(self.cutoff, (int, float))
+                or not self.cutoff > 0
+            )
         ):
-            raise DataValidationError("cutoff", f"expected 'auto' or a positive frequency [Hz], got {self.cutoff!r}")
-        if isinstance(self.filter_order, bool) or not isinstance(self.filter_order, int) or not 1 <= self.filter_order <= 8:
-            raise DataValidationError("filter_order", f"expected an integer in 1..8, got {self.filter_order!r}")
+            raise DataValidationError(
+                "cutoff", f"expected 'auto' or a positive frequency [Hz], got {self.cutoff!r}"
+            )
+        if (
+            isinstance(self.filter_order, bool)
+            or not isinstance(self.filter_order, int)
+            or not 1 <= self.filter_order <= 8
+        ):
+            raise DataValidationError(
+                "filter_order", f"expected an integer in 1..8, got {self.filter_order!r}"
+            )
         if self.form not in ("free", "stable", "monotone"):
-            raise DataValidationError("form", f"expected 'free', 'stable' or 'monotone', got {self.form!r}")
+            raise DataValidationError(
+                "form", f"expected 'free', 'stable' or 'monotone', got {self.form!r}"
+            )
         if self.jacobian not in ("sensitivity", "2-point", "3-point"):
-            raise DataValidationError("jacobian", f"expected 'sensitivity', '2-point' or '3-point', got {self.jacobian!r}")
-        for name, low in (("shoot_nfev", 0), ("max_nfev", 0), ("max_samples", 100), ("segment_stride", 1)):
+            raise DataValidationError(
+                "jacobian", f"expected 'sensitivity', '2-point' or '3-point', got {self.jacobian!r}"
+            )
+        for name, low in (
+            ("shoot_nfev", 0),
+            ("max_nfev", 0),
+            ("max_samples", 100),
+            ("segment_stride", 1),
+        ):
             val = getattr(self, name)
             if isinstance(val, bool) or not isinstance(val, int) or val < low:
                 raise DataValidationError(name, f"expected an integer >= {low}, got {val!r}")
@@ -459,7 +583,9 @@ class P15Estimator(Estimator):
                 raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
         for name in ("offset", "stable_only"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise DataValidationError(name, f"expected True or False, got {getattr(self, name)!r}")
+                raise DataValidationError(
+                    name, f"expected True or False, got {getattr(self, name)!r}"
+                )
 
 
 def _run_refined(model: P15Model, e: Experiment, k: int) -> np.ndarray:
@@ -473,7 +599,9 @@ def _lagged(e: np.ndarray, dt: float, eta: float | None) -> np.ndarray:
     return e if eta is None else first_order_lag(e, dt, eta)
 
 
-def _simulate_training(model: P15Model, exps: Iterable[Experiment]) -> tuple[dict[str, Any], dict[str, float]]:
+def _simulate_training(
+    model: P15Model, exps: Iterable[Experiment]
+) -> tuple[dict[str, Any], dict[str, float]]:
     divergence: dict[str, Any] = {}
     esr: dict[str, float] = {}
     for e in exps:

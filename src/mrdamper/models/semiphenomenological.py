@@ -140,18 +140,28 @@ class _SPModel(FittedModel):
                 "S", f"{self.kind} has {len(self.LAYOUT)} coefficients, got {len(S)}"
             )
         if not all(np.isfinite(S)) or not np.isfinite(self.f0):
-            raise DataValidationError("S", f"{self.kind} coefficients must be finite, got {S}, f0={self.f0}")
+            raise DataValidationError(
+                "S", f"{self.kind} coefficients must be finite, got {S}, f0={self.f0}"
+            )
         object.__setattr__(self, "S", S)
         object.__setattr__(self, "f0", float(self.f0))
         if self.eta is not None:
-            if isinstance(self.eta, bool) or not isinstance(self.eta, (int, float)) or not (
-                    np.isfinite(self.eta) and self.eta > 0):
-                raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+            if (
+                isinstance(self.eta, bool)
+                or not isinstance(self.eta, (int, float))
+                or not (np.isfinite(self.eta) and self.eta > 0)
+            ):
+                raise DataValidationError(
+                    "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
+                )
             object.__setattr__(self, "eta", float(self.eta))
         if self.rho_range is not None:
             rr = tuple(float(b) for b in self.rho_range)
             if len(rr) != 2 or not (np.isfinite(rr[0]) and np.isfinite(rr[1]) and rr[0] <= rr[1]):
-                raise DataValidationError("rho_range", f"expected finite (low, high) with low <= high, got {self.rho_range!r}")
+                raise DataValidationError(
+                    "rho_range",
+                    f"expected finite (low, high) with low <= high, got {self.rho_range!r}",
+                )
             object.__setattr__(self, "rho_range", rr)
 
     @classmethod
@@ -205,7 +215,9 @@ class SP1Model(_SPModel):
     """
 
     kind: ClassVar[str] = "sp1"
-    LAYOUT: ClassVar[tuple[tuple[int, int], ...]] = tuple((m, p) for m in range(5) for p in (0, 1, 2))
+    LAYOUT: ClassVar[tuple[tuple[int, int], ...]] = tuple(
+        (m, p) for m in range(5) for p in (0, 1, 2)
+    )
 
 
 @dataclass(frozen=True)
@@ -239,7 +251,13 @@ class SP4Model(_SPModel):
 
     kind: ClassVar[str] = "sp4"
     LAYOUT: ClassVar[tuple[tuple[int, int], ...]] = (
-        (0, 2), (0, 1), (0, 0), (1, 0), (2, 0), (3, 0), (4, 0),
+        (0, 2),
+        (0, 1),
+        (0, 0),
+        (1, 0),
+        (2, 0),
+        (3, 0),
+        (4, 0),
     )
 
 
@@ -300,10 +318,16 @@ class _SPEstimator(Estimator):
         exps = self._as_set(data)
         cls = self.model_class
         comp_all, power_all = cls.layout_arrays()
-        x, v, i, F = _stack(exps, self.input, self.eta, _scale.WINDOW_THRESHOLD)  # long campaigns: an even subset
+        x, v, i, F = _stack(
+            exps, self.input, self.eta, _scale.WINDOW_THRESHOLD
+        )  # long campaigns: an even subset
         level = single_level(i)
         # one level: every component's polynomial in the input reduces to its constant term
-        keep = _single_level_terms(comp_all, power_all) if level is not None else np.ones(comp_all.size, bool)
+        keep = (
+            _single_level_terms(comp_all, power_all)
+            if level is not None
+            else np.ones(comp_all.size, bool)
+        )
         comp, power = comp_all[keep], power_all[keep]
         n_par = comp.size + int(self.offset)
         if F.size < _SAMPLES_PER_PARAMETER * n_par:
@@ -333,10 +357,13 @@ class _SPEstimator(Estimator):
 
             def jac(th: np.ndarray) -> np.ndarray:
                 f0 = th[-1] if self.offset else 0.0
-                return sp_force_jacobian(xa, va, ia, comp, power, th[: comp.size], f0, self.offset)[1]
+                return sp_force_jacobian(xa, va, ia, comp, power, th[: comp.size], f0, self.offset)[
+                    1
+                ]
 
-            return least_squares(fun, theta0, jac=jac, bounds=(lb, ub), method="trf",
-                                 x_scale="jac", max_nfev=nfev)
+            return least_squares(
+                fun, theta0, jac=jac, bounds=(lb, ub), method="trf", x_scale="jac", max_nfev=nfev
+            )
 
         results = []
         for theta0 in starts:
@@ -397,8 +424,13 @@ class _SPEstimator(Estimator):
     def _check_settings(self) -> None:
         if self.input not in ("i", "voltage"):
             raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
-        for name, low in (("n_starts", 1), ("n_candidates", 1), ("max_nfev", 1), ("screen_samples", 100),
-                          ("fit_samples", 100)):
+        for name, low in (
+            ("n_starts", 1),
+            ("n_candidates", 1),
+            ("max_nfev", 1),
+            ("screen_samples", 100),
+            ("fit_samples", 100),
+        ):
             val = getattr(self, name)
             if name == "fit_samples" and val is None:
                 continue
@@ -408,9 +440,14 @@ class _SPEstimator(Estimator):
             raise DataValidationError("seed", f"expected an integer, got {self.seed!r}")
         if not isinstance(self.offset, (bool, np.bool_)):
             raise DataValidationError("offset", f"expected True or False, got {self.offset!r}")
-        if self.eta is not None and (isinstance(self.eta, bool) or not isinstance(self.eta, (int, float))
-                                     or not (np.isfinite(self.eta) and self.eta > 0)):
-            raise DataValidationError("eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}")
+        if self.eta is not None and (
+            isinstance(self.eta, bool)
+            or not isinstance(self.eta, (int, float))
+            or not (np.isfinite(self.eta) and self.eta > 0)
+        ):
+            raise DataValidationError(
+                "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
+            )
 
 
 @dataclass
@@ -447,7 +484,10 @@ class SP4Estimator(_SPEstimator):
 
 # ============================================================================ helpers
 def _stack(
-    exps: Iterable[Experiment], source: ElectricalSource, eta: float | None = None, max_samples: int | None = None
+    exps: Iterable[Experiment],
+    source: ElectricalSource,
+    eta: float | None = None,
+    max_samples: int | None = None,
 ) -> tuple[np.ndarray, ...]:
     """Concatenate the samples of all records (valid for a static map: no state crosses records);
     with ``eta`` the electrical input of each record goes through the drive lag first.
@@ -458,7 +498,11 @@ def _stack(
     cols: dict[str, list[np.ndarray]] = {"x": [], "v": [], "i": [], "F": []}
     exps = list(exps)
     total = sum(e.n for e in exps)
-    keep = _even_subset(total, max_samples) if max_samples is not None and total > max_samples else None
+    keep = (
+        _even_subset(total, max_samples)
+        if max_samples is not None and total > max_samples
+        else None
+    )
     offset = 0
     for e in exps:
         sel: slice | np.ndarray = slice(None)
@@ -486,7 +530,9 @@ def _rms(a: np.ndarray) -> float:
     return r if r > 0 else 1.0
 
 
-def _check_identifiable(cls: type[_SPModel], comp: np.ndarray, power: np.ndarray, inn: np.ndarray, source: str) -> None:
+def _check_identifiable(
+    cls: type[_SPModel], comp: np.ndarray, power: np.ndarray, inn: np.ndarray, source: str
+) -> None:
     """Each component's input polynomial must have full column rank over the training input."""
     levels = np.unique(np.round(inn, 9))
     for m in range(N_COMPONENTS):
@@ -529,7 +575,13 @@ def _bounds(comp: np.ndarray, power: np.ndarray, offset: bool) -> tuple[np.ndarr
 
 
 def _linear_columns(
-    comp: np.ndarray, power: np.ndarray, th: np.ndarray, xn: np.ndarray, vn: np.ndarray, inn: np.ndarray, offset: bool
+    comp: np.ndarray,
+    power: np.ndarray,
+    th: np.ndarray,
+    xn: np.ndarray,
+    vn: np.ndarray,
+    inn: np.ndarray,
+    offset: bool,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Regressors of the coefficients that enter linearly (A, c, d, f0) for a fixed tanh term."""
     lin = np.flatnonzero(np.isin(comp, (0, 3, 4)))
@@ -541,8 +593,14 @@ def _linear_columns(
 
 
 def _linear_starts(
-    comp: np.ndarray, power: np.ndarray, xn: np.ndarray, vn: np.ndarray, inn: np.ndarray,
-    Fn: np.ndarray, est: _SPEstimator, rng: np.random.Generator,
+    comp: np.ndarray,
+    power: np.ndarray,
+    xn: np.ndarray,
+    vn: np.ndarray,
+    inn: np.ndarray,
+    Fn: np.ndarray,
+    est: _SPEstimator,
+    rng: np.random.Generator,
 ) -> list[np.ndarray]:
     """Rank seeded draws of the tanh argument by the cost of the linear least-squares completion."""
     ka = int(np.flatnonzero((comp == 1) & (power == 0))[0])
@@ -582,7 +640,15 @@ def _normal_lstsq(X: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def _to_physical(
-    theta: np.ndarray, comp: np.ndarray, power: np.ndarray, offset: bool, *, xs: float, vs: float, i_s: float, Fs: float
+    theta: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    offset: bool,
+    *,
+    xs: float,
+    vs: float,
+    i_s: float,
+    Fs: float,
 ) -> tuple[np.ndarray, float]:
     """Convert normalised coefficients back to SI: exact rescaling per component and power."""
     comp_scale = np.array([Fs, 1.0 / vs, 1.0 / xs, Fs / vs, Fs / xs])

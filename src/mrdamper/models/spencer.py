@@ -58,9 +58,21 @@ PARAMETER_NAMES: tuple[str, ...] = _k.PARAM_NAMES
 #: SI units of every parameter ("U" is the unit of the electrical input: A or V; z is in the
 #: units of x times A, i.e. metres when A is dimensionless).
 PARAMETER_UNITS: dict[str, str] = {
-    "c0a": "N s/m", "c0b": "N s/(m U)", "k0": "N/m", "c1a": "N s/m", "c1b": "N s/(m U)",
-    "k1": "N/m", "x0": "m", "alpha_a": "N/m", "alpha_b": "N/(m U)", "gamma": "m^-n",
-    "beta": "m^-n", "A": "-", "n": "-", "eta": "1/s", "f0": "N",
+    "c0a": "N s/m",
+    "c0b": "N s/(m U)",
+    "k0": "N/m",
+    "c1a": "N s/m",
+    "c1b": "N s/(m U)",
+    "k1": "N/m",
+    "x0": "m",
+    "alpha_a": "N/m",
+    "alpha_b": "N/(m U)",
+    "gamma": "m^-n",
+    "beta": "m^-n",
+    "A": "-",
+    "n": "-",
+    "eta": "1/s",
+    "f0": "N",
 }
 
 #: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-].
@@ -74,10 +86,21 @@ _INF = math.inf
 #: Default identification bounds (SI). Current-dependence coefficients are non-negative (the
 #: MR effect grows with the field); gamma may take either sign; n stays in [1, 4].
 DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
-    "c0a": (0.0, _INF), "c0b": (0.0, _INF), "k0": (0.0, _INF), "c1a": (0.0, _INF),
-    "c1b": (0.0, _INF), "k1": (-_INF, _INF), "x0": (-_INF, _INF), "alpha_a": (0.0, _INF),
-    "alpha_b": (0.0, _INF), "gamma": (-_INF, _INF), "beta": (0.0, _INF), "A": (0.0, _INF),
-    "n": (1.0, 4.0), "eta": (1e-2, 1e5), "f0": (-_INF, _INF),
+    "c0a": (0.0, _INF),
+    "c0b": (0.0, _INF),
+    "k0": (0.0, _INF),
+    "c1a": (0.0, _INF),
+    "c1b": (0.0, _INF),
+    "k1": (-_INF, _INF),
+    "x0": (-_INF, _INF),
+    "alpha_a": (0.0, _INF),
+    "alpha_b": (0.0, _INF),
+    "gamma": (-_INF, _INF),
+    "beta": (0.0, _INF),
+    "A": (0.0, _INF),
+    "n": (1.0, 4.0),
+    "eta": (1e-2, 1e5),
+    "f0": (-_INF, _INF),
 }
 
 
@@ -149,7 +172,9 @@ class SpencerModel(FittedModel):
         super().__post_init__()
         for name in PARAMETER_NAMES:
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            if isinstance(value, bool) or not isinstance(
+                value, (int, float, np.integer, np.floating)
+            ):
                 raise DataValidationError(name, f"expected a real number, got {value!r}")
             if not math.isfinite(float(value)):
                 raise DataValidationError(name, f"expected a finite number, got {value!r}")
@@ -157,10 +182,17 @@ class SpencerModel(FittedModel):
         if self.n < 1.0:
             raise DataValidationError("n", f"expected a Bouc-Wen exponent >= 1, got {self.n!r}")
         if self.eta < 0.0:
-            raise DataValidationError("eta", f"expected a non-negative filter rate [1/s], got {self.eta!r}")
-        if isinstance(self.substeps, bool) or not isinstance(self.substeps, (int, np.integer)) or self.substeps < 0:
             raise DataValidationError(
-                "substeps", f"expected a non-negative integer (0 = automatic), got {self.substeps!r}"
+                "eta", f"expected a non-negative filter rate [1/s], got {self.eta!r}"
+            )
+        if (
+            isinstance(self.substeps, bool)
+            or not isinstance(self.substeps, (int, np.integer))
+            or self.substeps < 0
+        ):
+            raise DataValidationError(
+                "substeps",
+                f"expected a non-negative integer (0 = automatic), got {self.substeps!r}",
             )
         object.__setattr__(self, "substeps", int(self.substeps))
         if self.input not in ("i", "voltage"):
@@ -192,8 +224,11 @@ class SpencerModel(FittedModel):
             return self.substeps
         e = experiment.electrical(self.input) if electrical is None else electrical
         return auto_substeps(
-            self.parameter_vector(), experiment.dt, float(np.max(np.abs(experiment.v))),
-            float(np.min(e)), float(np.max(e)),
+            self.parameter_vector(),
+            experiment.dt,
+            float(np.max(np.abs(experiment.v))),
+            float(np.min(e)),
+            float(np.max(e)),
         )
 
     def predict(self, experiment: Experiment) -> np.ndarray:
@@ -216,8 +251,15 @@ class SpencerModel(FittedModel):
         e = np.ascontiguousarray(self.electrical_input(experiment), dtype=np.float64)
         nsub = self.substeps_for(experiment, e)
         F, status, sample = _k.simulate(
-            experiment.x, experiment.v, e, experiment.dt, self.parameter_vector(), nsub,
-            float(experiment.x[0]), 0.0, float(e[0]),
+            experiment.x,
+            experiment.v,
+            e,
+            experiment.dt,
+            self.parameter_vector(),
+            nsub,
+            float(experiment.x[0]),
+            0.0,
+            float(e[0]),
         )
         _raise_on_status(status, sample, nsub, experiment.name)
         return F
@@ -228,12 +270,14 @@ def _raise_on_status(status: int, sample: int, nsub: int, name: str) -> None:
         return
     if status == _k.STATUS_BAD_DAMPING:
         raise SimulationDivergedError(
-            "spencer", sample,
+            "spencer",
+            sample,
             f"record {name!r}: damping c0(u) + c1(u) is not positive; the parameters are invalid "
             "for this electrical input",
         )
     raise SimulationDivergedError(
-        "spencer", sample,
+        "spencer",
+        sample,
         f"record {name!r}: state became non-finite or unbounded with {nsub} RK4 sub-steps per "
         "sample (set 'substeps' higher, or check the parameters)",
     )
@@ -266,7 +310,9 @@ def auto_substeps(p: np.ndarray, dt: float, vmax: float, emin: float, emax: floa
     else:
         zmax = abs(A) * 1e-2  # no saturation: a generous guess of the reach of z
     rate = (
-        abs(eta) + abs(k0) / cmin + abs(A) * al_over_c
+        abs(eta)
+        + abs(k0) / cmin
+        + abs(A) * al_over_c
         + n * (abs(bet) + abs(gam)) * zmax ** (n - 1.0) * 1.5 * vmax
     )
     if not math.isfinite(rate):
@@ -288,9 +334,21 @@ def spencer1997(**common: Any) -> SpencerModel:
         Overrides of the common fields (``range_policy``, ``provenance``, ...).
     """
     values: dict[str, Any] = {
-        "c0a": 21.0e2, "c0b": 3.50e2, "k0": 46.9e2, "c1a": 283.0e2, "c1b": 2.95e2,
-        "k1": 5.00e2, "x0": 14.3e-2, "alpha_a": 140.0e2, "alpha_b": 695.0e2,
-        "gamma": 363.0e4, "beta": 363.0e4, "A": 301.0, "n": 2.0, "eta": 190.0, "f0": 0.0,
+        "c0a": 21.0e2,
+        "c0b": 3.50e2,
+        "k0": 46.9e2,
+        "c1a": 283.0e2,
+        "c1b": 2.95e2,
+        "k1": 5.00e2,
+        "x0": 14.3e-2,
+        "alpha_a": 140.0e2,
+        "alpha_b": 695.0e2,
+        "gamma": 363.0e4,
+        "beta": 363.0e4,
+        "A": 301.0,
+        "n": 2.0,
+        "eta": 190.0,
+        "f0": 0.0,
     }
     settings: dict[str, Any] = {
         "input": "voltage",
@@ -391,14 +449,17 @@ class SpencerEstimator(Estimator):
 
         all_exps = self._as_set(data)
         t0, c0 = time.perf_counter(), time.process_time()
-        exps, windows = _scale.window_set(all_exps, budget=_scale.WINDOW_BUDGET_SPENCER)  # long campaigns
+        exps, windows = _scale.window_set(
+            all_exps, budget=_scale.WINDOW_BUDGET_SPENCER
+        )  # long campaigns
         p, common = identify(self, exps)
         if windows is not None:  # the input range of every sample, not only of the windows
             common["input_range"] = _scale.input_range(all_exps, self.input)
         model = SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))
         # stiff model: halving the RK4 step must not change the free run (else warn, see provenance)
         common["provenance"]["step_check"] = step_halving_check(
-            "spencer", exps,
+            "spencer",
+            exps,
             lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
             self.step_tolerance,
         )

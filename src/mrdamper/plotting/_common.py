@@ -9,7 +9,14 @@ import numpy as np
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["PRINT_STYLE", "check_same_length", "legend_outside", "model_color", "new_axes", "window_mask"]
+__all__ = [
+    "PRINT_STYLE",
+    "check_same_length",
+    "legend_outside",
+    "model_color",
+    "new_axes",
+    "window_mask",
+]
 
 #: Matplotlib settings of the report's figures: drawn at the size they are printed (at most
 #: 7 in wide, the text width of an A4 or letter page), so no text is smaller than 7 pt on paper.
@@ -49,7 +56,12 @@ def model_color(label: str, k: int = 0) -> str:
 
 def legend_outside(ax: Any, **kwargs: Any) -> Any:
     """Legend to the right of ``ax``, outside the data area; returns the Legend."""
-    opts: dict[str, Any] = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0, "frameon": False}
+    opts: dict[str, Any] = {
+        "loc": "upper left",
+        "bbox_to_anchor": (1.01, 1.0),
+        "borderaxespad": 0.0,
+        "frameon": False,
+    }
     opts.update(kwargs)
     return ax.legend(**opts)
 
@@ -64,7 +76,9 @@ def new_axes(ax: Any, figsize: tuple[float, float]) -> Any:
     return ax
 
 
-def new_axes_column(axes: Any, n: int, figsize: tuple[float, float], sharex: bool = True) -> np.ndarray:
+def new_axes_column(
+    axes: Any, n: int, figsize: tuple[float, float], sharex: bool = True
+) -> np.ndarray:
     """Return ``axes`` (checked to hold ``n`` Axes) or ``n`` new stacked Axes."""
     if axes is None:
         import matplotlib.pyplot as plt
@@ -81,11 +95,14 @@ def window_mask(t: np.ndarray, window: Sequence[float] | None) -> np.ndarray:
     if window is None:
         return np.ones(t.shape, dtype=bool)
     if len(window) != 2 or not window[0] < window[1]:
-        raise DataValidationError("window", f"expected (t_start, t_stop) with t_start < t_stop [s], got {window!r}")
+        raise DataValidationError(
+            "window", f"expected (t_start, t_stop) with t_start < t_stop [s], got {window!r}"
+        )
     mask = (t >= window[0]) & (t <= window[1])
     if not mask.any():
         raise DataValidationError(
-            "window", f"{tuple(window)} s holds no sample of a record spanning [{t[0]:g}, {t[-1]:g}] s"
+            "window",
+            f"{tuple(window)} s holds no sample of a record spanning [{t[0]:g}, {t[-1]:g}] s",
         )
     return mask
 
@@ -94,5 +111,7 @@ def check_same_length(name: str, values: Any, n: int) -> np.ndarray:
     """Return ``values`` as a float array of length ``n`` or raise naming ``name``."""
     arr = np.asarray(values, dtype=float)
     if arr.ndim != 1 or arr.size != n:
-        raise DataValidationError(name, f"expected {n} samples like the record, got shape {arr.shape}")
+        raise DataValidationError(
+            name, f"expected {n} samples like the record, got shape {arr.shape}"
+        )
     return arr

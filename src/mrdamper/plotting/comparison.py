@@ -58,7 +58,9 @@ def plot_index_boxes(
     """
     for col in ("model", "status", index):
         if col not in results.columns:
-            raise DataValidationError(col, f"results table has no column {col!r} (columns: {list(results.columns)})")
+            raise DataValidationError(
+                col, f"results table has no column {col!r} (columns: {list(results.columns)})"
+            )
     from mrdamper.plotting._common import model_color, new_axes
 
     labels = list(order) if order is not None else list(dict.fromkeys(results["model"]))
@@ -71,8 +73,14 @@ def plot_index_boxes(
     pos = np.arange(1, len(labels) + 1)
     filled = [k for k, d in enumerate(data) if d.size]
     if filled:
-        bp = ax.boxplot([data[k] for k in filled], positions=pos[filled], widths=0.6, patch_artist=True,
-                        medianprops={"color": "k"}, flierprops={"markersize": 3})
+        bp = ax.boxplot(
+            [data[k] for k in filled],
+            positions=pos[filled],
+            widths=0.6,
+            patch_artist=True,
+            medianprops={"color": "k"},
+            flierprops={"markersize": 3},
+        )
         for k, patch in zip(filled, bp["boxes"]):
             patch.set_facecolor(model_color(labels[k], k))
             patch.set_alpha(0.55)
@@ -86,10 +94,20 @@ def plot_index_boxes(
         ax.set_yscale("log")
     for p, m in zip(pos, means):
         text = "failed" if not np.isfinite(m) else f"mean\n{m:.3g}"
-        ax.annotate(text, (p, 0), xycoords=("data", "axes fraction"), xytext=(0, -16),
-                    textcoords="offset points", ha="center", va="top", fontsize=7.5)
+        ax.annotate(
+            text,
+            (p, 0),
+            xycoords=("data", "axes fraction"),
+            xytext=(0, -16),
+            textcoords="offset points",
+            ha="center",
+            va="top",
+            fontsize=7.5,
+        )
     ax.set_ylabel(_INDEX_LABELS.get(index, index))
-    ax.set_title(f"{index.upper() if index in ('esr', 'ssse') else index} per model (mean under each box)")
+    ax.set_title(
+        f"{index.upper() if index in ('esr', 'ssse') else index} per model (mean under each box)"
+    )
     if len(labels) > 7:
         ax.tick_params(axis="x", labelsize=7.5)
     ax.grid(True, axis="y", lw=0.3)
@@ -100,11 +118,15 @@ def _predictions(predictions: Mapping[str, Any], n: int) -> dict[str, np.ndarray
     from mrdamper.plotting._common import check_same_length
 
     if not predictions:
-        raise DataValidationError("predictions", "expected at least one model label -> force array, got none")
+        raise DataValidationError(
+            "predictions", "expected at least one model label -> force array, got none"
+        )
     return {k: check_same_length(f"predictions[{k!r}]", v, n) for k, v in predictions.items()}
 
 
-def _clip_to_measured(ax: Any, F: np.ndarray, preds: Mapping[str, np.ndarray], mask: np.ndarray, margin: float) -> list[str]:
+def _clip_to_measured(
+    ax: Any, F: np.ndarray, preds: Mapping[str, np.ndarray], mask: np.ndarray, margin: float
+) -> list[str]:
     """Limit the force axis to the measured span (+ ``margin`` of it); return models drawn beyond it."""
     lo, hi = float(F[mask].min()), float(F[mask].max())
     pad = margin * max(hi - lo, 1e-9)
@@ -112,8 +134,15 @@ def _clip_to_measured(ax: Any, F: np.ndarray, preds: Mapping[str, np.ndarray], m
     ax.set_ylim(lo, hi)
     beyond = [k for k, v in preds.items() if float(v[mask].min()) < lo or float(v[mask].max()) > hi]
     if beyond:
-        ax.text(0.01, 0.98, "beyond the axes: " + ", ".join(beyond), transform=ax.transAxes, fontsize=7,
-                va="top", color="tab:red")
+        ax.text(
+            0.01,
+            0.98,
+            "beyond the axes: " + ", ".join(beyond),
+            transform=ax.transAxes,
+            fontsize=7,
+            va="top",
+            color="tab:red",
+        )
     return beyond
 
 
@@ -182,8 +211,14 @@ def plot_force_time(
         Lines: ``measured`` then one per model, labelled by model.
     """
     ax = _measured_and_models(
-        experiment, predictions, experiment.t, ax=ax, window=window, clip_margin=clip_margin,
-        figsize=(6.2, 3.4), widths=(1.6, 0.8),
+        experiment,
+        predictions,
+        experiment.t,
+        ax=ax,
+        window=window,
+        clip_margin=clip_margin,
+        figsize=(6.2, 3.4),
+        widths=(1.6, 0.8),
     )
     ax.set_xlabel("t [s]")
     ax.set_title(f"Measured and computed damper force ({experiment.name})")
@@ -222,8 +257,15 @@ def plot_fv_models(
         Lines: ``measured`` then one per model.
     """
     ax = _measured_and_models(
-        experiment, predictions, experiment.v, ax=ax, window=window, clip_margin=clip_margin,
-        figsize=(5.6, 4.2), widths=(1.4, 0.7), alpha=0.85,
+        experiment,
+        predictions,
+        experiment.v,
+        ax=ax,
+        window=window,
+        clip_margin=clip_margin,
+        figsize=(5.6, 4.2),
+        widths=(1.4, 0.7),
+        alpha=0.85,
     )
     ax.set_xlabel("v [m/s]")
     ax.set_title(f"F-v plane, measured and computed ({experiment.name})")

@@ -59,7 +59,9 @@ def plot_fv_map(
     for lev, col in zip(levels, colors):
         v, F = (np.asarray(a, dtype=float) for a in curves[lev])
         if v.shape != F.shape:
-            raise DataValidationError("curves", f"level {lev}: v has shape {v.shape}, F has {F.shape}")
+            raise DataValidationError(
+                "curves", f"level {lev}: v has shape {v.shape}, F has {F.shape}"
+            )
         ax.plot(v, F, ".", ms=1.2, alpha=0.6, color=col, label=f"i = {round(lev, 3):.3g} {unit}")
     ax.set_xlabel("v [m/s]")
     ax.set_ylabel("F [N]")
@@ -100,26 +102,53 @@ def plot_zone_fit(v: Any, F: Any, fit: Any, *, ax: Any = None, unit: str = "A") 
     v = np.asarray(v, dtype=float)
     F = np.asarray(F, dtype=float)
     if v.shape != F.shape or v.ndim != 1 or v.size == 0:
-        raise DataValidationError("F", f"expected 1-D v and F of equal length, got {v.shape} and {F.shape}")
+        raise DataValidationError(
+            "F", f"expected 1-D v and F of equal length, got {v.shape} and {F.shape}"
+        )
     ax = new_axes(ax, (5.2, 4.4))
     ax.plot(v, F, ".", ms=1.2, alpha=0.4, color="0.55", label="measured")
     lo, hi = float(v.min()), float(v.max())
     spans = ((lo, min(fit.v_low, hi)), (fit.v_low, fit.v_high), (max(fit.v_high, lo), hi))
-    for j, ((a, b), name, col) in enumerate(zip(spans, ("zone I", "zone II", "zone III"), ("tab:blue", "tab:red", "tab:green"))):
+    for j, ((a, b), name, col) in enumerate(
+        zip(spans, ("zone I", "zone II", "zone III"), ("tab:blue", "tab:red", "tab:green"))
+    ):
         vv = np.linspace(a, b, 50)
-        ax.plot(vv, fit.m[j] * vv + fit.c[j], lw=2.0, color=col, label=f"{name}: m{j + 1} = {_slope_text(fit.m[j])} N s/m")
+        ax.plot(
+            vv,
+            fit.m[j] * vv + fit.c[j],
+            lw=2.0,
+            color=col,
+            label=f"{name}: m{j + 1} = {_slope_text(fit.m[j])} N s/m",
+        )
     for b, name, ha, dx in ((fit.v_low, "v_low", "right", -2), (fit.v_high, "v_high", "left", 2)):
         ax.axvline(b, ls=":", lw=0.9, color="k")
-        ax.annotate(f"{name} = {b:.3g} m/s", (b, 0.97), xycoords=("data", "axes fraction"), xytext=(dx, 0),
-                    textcoords="offset points", fontsize=7, ha=ha, va="top",
-                    bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
+        ax.annotate(
+            f"{name} = {b:.3g} m/s",
+            (b, 0.97),
+            xycoords=("data", "axes fraction"),
+            xytext=(dx, 0),
+            textcoords="offset points",
+            fontsize=7,
+            ha=ha,
+            va="top",
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8},
+        )
     level = getattr(fit, "level", None)
-    ax.set_title("Three-zone F-v regression" + ("" if level is None else f" at i = {level:.3g} {unit}"))
+    ax.set_title(
+        "Three-zone F-v regression" + ("" if level is None else f" at i = {level:.3g} {unit}")
+    )
     ax.set_xlabel("v [m/s]")
     ax.set_ylabel("F [N]")
     ax.grid(True, lw=0.3)
     from matplotlib.ticker import MaxNLocator
 
     ax.xaxis.set_major_locator(MaxNLocator(nbins=6))
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, fontsize=7.5, markerscale=6, frameon=False)
+    ax.legend(
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.14),
+        ncol=2,
+        fontsize=7.5,
+        markerscale=6,
+        frameon=False,
+    )
     return ax

@@ -74,8 +74,10 @@ def plot_zone_laws(laws: Any, *, axes: Any = None, unit: str = "A") -> np.ndarra
     fig = arr[0, 0].figure
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], ls="", marker="o", color="0.3", label="zone fit at one level (eq. 17)"),
-               Line2D([], [], color="0.3", label="quadratic law across current (eq. 18)")]
+    handles = [
+        Line2D([], [], ls="", marker="o", color="0.3", label="zone fit at one level (eq. 17)"),
+        Line2D([], [], color="0.3", label="quadratic law across current (eq. 18)"),
+    ]
     if fig.get_layout_engine() is not None:
         fig.legend(handles=handles, loc="outside lower center", ncol=2, frameon=False)
     else:

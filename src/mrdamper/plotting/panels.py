@@ -81,7 +81,9 @@ def plot_model_panels(
     if plane not in PLANES:
         raise DataValidationError("plane", f"expected one of {sorted(PLANES)}, got {plane!r}")
     if not predictions:
-        raise DataValidationError("predictions", "expected at least one model label -> force array, got none")
+        raise DataValidationError(
+            "predictions", "expected at least one model label -> force array, got none"
+        )
     if not isinstance(ncols, int) or ncols < 1:
         raise DataValidationError("ncols", f"expected a positive integer, got {ncols!r}")
     failed = dict(failed or {})
@@ -94,11 +96,16 @@ def plot_model_panels(
             continue
         arr = np.asarray(F, dtype=float)
         if arr.shape != (experiment.n,):
-            raise DataValidationError(f"predictions[{k!r}]", f"expected {experiment.n} samples like the record, got shape {arr.shape}")
+            raise DataValidationError(
+                f"predictions[{k!r}]",
+                f"expected {experiment.n} samples like the record, got shape {arr.shape}",
+            )
         preds[k] = arr
     unknown = [k for k in (overlay or ()) if k not in preds]
     if unknown:
-        raise DataValidationError("overlay", f"labels {unknown} are not in predictions ({list(preds)})")
+        raise DataValidationError(
+            "overlay", f"labels {unknown} are not in predictions ({list(preds)})"
+        )
     good = [k for k in preds if k not in failed]
     over = [k for k in (overlay if overlay is not None else good[:3]) if k not in failed]
 
@@ -126,11 +133,23 @@ def plot_model_panels(
     top.set_xlabel(xlabel)
     top.set_ylabel("F [N]")
     left_out = [k for k in labels if k not in over]
-    top.set_title("Measured and " + (", ".join(over) if over else "no model") + " (every model in its own panel below)")
+    top.set_title(
+        "Measured and "
+        + (", ".join(over) if over else "no model")
+        + " (every model in its own panel below)"
+    )
     legend_outside(top)
     if left_out:
-        top.text(1.01, 0.0, "not overlaid:\n" + "\n".join(left_out), transform=top.transAxes, fontsize=7,
-                 va="bottom", ha="left", color="0.35")
+        top.text(
+            1.01,
+            0.0,
+            "not overlaid:\n" + "\n".join(left_out),
+            transform=top.transAxes,
+            fontsize=7,
+            va="bottom",
+            ha="left",
+            color="0.35",
+        )
     shared: Any = None
     for n, k in enumerate(labels):
         r, c = divmod(n, ncols)
@@ -140,20 +159,44 @@ def plot_model_panels(
             shared = ax
         ax.plot(xs, Fm, style, lw=1.5, color="0.8", label="measured")
         if isinstance(preds[k], str):
-            ax.text(0.5, 0.5, "no prediction:\n" + _wrap(preds[k]), transform=ax.transAxes, ha="center",
-                    va="center", fontsize=7, color="tab:red")
+            ax.text(
+                0.5,
+                0.5,
+                "no prediction:\n" + _wrap(preds[k]),
+                transform=ax.transAxes,
+                ha="center",
+                va="center",
+                fontsize=7,
+                color="tab:red",
+            )
         else:
             y = preds[k][mask]
             ax.plot(xs, y, style, lw=0.8, color=model_color(k, n), label=k)
             if not is_failed:
                 ax.set_ylim(*ylim)
                 if float(y.min()) < ylim[0] or float(y.max()) > ylim[1]:
-                    ax.text(0.02, 0.96, "leaves the axes", transform=ax.transAxes, fontsize=7, va="top", color="tab:red")
+                    ax.text(
+                        0.02,
+                        0.96,
+                        "leaves the axes",
+                        transform=ax.transAxes,
+                        fontsize=7,
+                        va="top",
+                        color="tab:red",
+                    )
         extra = titles.get(k, "")
         if is_failed:
             ax.set_title(f"{k}: FAILED, own scale", color="tab:red", fontsize=8.5)
-            ax.text(0.03, 0.03, _wrap(failed[k], 30, 3), transform=ax.transAxes, fontsize=7, va="bottom",
-                    color="tab:red", bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.0})
+            ax.text(
+                0.03,
+                0.03,
+                _wrap(failed[k], 30, 3),
+                transform=ax.transAxes,
+                fontsize=7,
+                va="bottom",
+                color="tab:red",
+                bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.0},
+            )
             for side in ax.spines.values():
                 side.set_edgecolor("tab:red")
         else:

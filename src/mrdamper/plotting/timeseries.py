@@ -110,8 +110,14 @@ def plot_model_tracking(
     if axes is None:
         import matplotlib.pyplot as plt
 
-        _, axes = plt.subplots(3, 1, sharex=True, figsize=(7.0, 5.2), layout="constrained",
-                               gridspec_kw={"height_ratios": [1.6, 1.0, 1.0]})
+        _, axes = plt.subplots(
+            3,
+            1,
+            sharex=True,
+            figsize=(7.0, 5.2),
+            layout="constrained",
+            gridspec_kw={"height_ratios": [1.6, 1.0, 1.0]},
+        )
     axes = new_axes_column(axes, 3, (7.0, 5.2))
     e = experiment
     t = e.t[mask]

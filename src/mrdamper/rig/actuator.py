@@ -52,17 +52,23 @@ class ServoActuator:
     stroke: float = DEFAULT_STROKE
 
     def __post_init__(self) -> None:
-        for name, value, unit in (("bandwidth", self.bandwidth, "Hz"), ("damping", self.damping, "-"),
-                                  ("stroke", self.stroke, "m")):
+        for name, value, unit in (
+            ("bandwidth", self.bandwidth, "Hz"),
+            ("damping", self.damping, "-"),
+            ("stroke", self.stroke, "m"),
+        ):
             if isinstance(value, bool) or not (math.isfinite(float(value)) and float(value) > 0):
-                raise DataValidationError(name, f"expected a finite value > 0 [{unit}], got {value!r}")
+                raise DataValidationError(
+                    name, f"expected a finite value > 0 [{unit}], got {value!r}"
+                )
             object.__setattr__(self, name, float(value))
 
     def discretise(self, fs: float) -> tuple[np.ndarray, np.ndarray]:
         """State transition matrix ``phi`` and input vector ``gamma`` for sampling rate ``fs`` [Hz]."""
         if self.bandwidth >= fs / 2:
             raise DataValidationError(
-                "bandwidth", f"{self.bandwidth:g} Hz is not below the Nyquist frequency {fs / 2:g} Hz"
+                "bandwidth",
+                f"{self.bandwidth:g} Hz is not below the Nyquist frequency {fs / 2:g} Hz",
             )
         phi, gamma = _zoh(self.bandwidth, self.damping, float(fs))
         return phi.copy(), gamma.copy()

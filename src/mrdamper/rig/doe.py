@@ -153,27 +153,41 @@ def record_seeds(seed: int, n: int) -> list[int]:
     return [_seed_int(c) for c in child_seeds(seed, n)]
 
 
-def _current(spec: DoeSequence, fs: float, duration: float, lo: float, hi: float,
-              ss: np.random.SeedSequence) -> np.ndarray:
+def _current(
+    spec: DoeSequence, fs: float, duration: float, lo: float, hi: float, ss: np.random.SeedSequence
+) -> np.ndarray:
     if spec.pattern == "PRBS":
         return prbs(fs, duration, clock_period=PRBS_CLOCK, levels=(lo, hi), seed=ss)
     if spec.pattern == "APRBS":
         return aprbs(fs, duration, low=lo, high=hi, min_hold=APRBS_MIN_HOLD, seed=ss)
     if spec.pattern == "ICPS":
-        return icps(fs, duration, low=lo, high=hi, clock_period=ICPS_CLOCK, n_levels=ICPS_LEVELS, seed=ss)
+        return icps(
+            fs, duration, low=lo, high=hi, clock_period=ICPS_CLOCK, n_levels=ICPS_LEVELS, seed=ss
+        )
     if spec.pattern == "SC":
-        return stepped_current(fs, duration, low=lo, high=hi, n_levels=SC_LEVELS,
-                               direction=spec.direction)  # type: ignore[arg-type]
+        return stepped_current(
+            fs, duration, low=lo, high=hi, n_levels=SC_LEVELS, direction=spec.direction
+        )  # type: ignore[arg-type]
     raise DataValidationError("pattern", f"expected ICPS, APRBS, PRBS or SC, got {spec.pattern!r}")
 
 
-def _displacement(spec: DoeSequence, fs: float, duration: float, stroke: float,
-                  ss: np.random.SeedSequence) -> np.ndarray:
+def _displacement(
+    spec: DoeSequence, fs: float, duration: float, stroke: float, ss: np.random.SeedSequence
+) -> np.ndarray:
     if spec.displacement == "Road Profile":
-        return road_profile(fs, duration, seed=ss, road_class="C", speed=20.0,
-                            max_frequency=spec.max_frequency, stroke=stroke)
+        return road_profile(
+            fs,
+            duration,
+            seed=ss,
+            road_class="C",
+            speed=20.0,
+            max_frequency=spec.max_frequency,
+            stroke=stroke,
+        )
     if spec.displacement == "Long Road Profile":
-        return long_road_profile(fs, duration, seed=ss, max_frequency=spec.max_frequency, stroke=stroke)
+        return long_road_profile(
+            fs, duration, seed=ss, max_frequency=spec.max_frequency, stroke=stroke
+        )
     raise DataValidationError(
         "displacement", f"expected 'Road Profile' or 'Long Road Profile', got {spec.displacement!r}"
     )
@@ -184,13 +198,15 @@ def _check_scale(scale: float, specs: Sequence[DoeSequence]) -> float:
     shortest = min(s.duration for s in specs) * scale
     if shortest < MIN_DURATION:
         raise DataValidationError(
-            "scale", f"{scale:g} makes the shortest record {shortest:g} s; at least {MIN_DURATION:g} s is needed"
+            "scale",
+            f"{scale:g} makes the shortest record {shortest:g} s; at least {MIN_DURATION:g} s is needed",
         )
     return scale
 
 
-def make_record(spec: DoeSequence, replicate: int, record_seed: int, rig: VirtualRig,
-                scale: float = 1.0) -> Experiment:
+def make_record(
+    spec: DoeSequence, replicate: int, record_seed: int, rig: VirtualRig, scale: float = 1.0
+) -> Experiment:
     """Build one DoE record from its sequence, replicate number and record seed.
 
     Parameters
@@ -286,7 +302,11 @@ def table_ii(
     if wanted is not None and not wanted <= {s.experiment for s in TABLE_II}:
         raise DataValidationError("experiments", f"expected numbers 1-8, got {sorted(wanted)}")
     seeds = record_seeds(seed, len(rows))
-    jobs = [(spec, r, s) for (spec, r), s in zip(rows, seeds) if wanted is None or spec.experiment in wanted]
+    jobs = [
+        (spec, r, s)
+        for (spec, r), s in zip(rows, seeds)
+        if wanted is None or spec.experiment in wanted
+    ]
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise DataValidationError("workers", f"expected an int >= 1, got {workers!r}")
     if workers == 1 or len(jobs) < 2:
@@ -308,8 +328,13 @@ def _payload(job: tuple[DoeSequence, int, int], rig: VirtualRig, scale: float) -
     return out
 
 
-def _make_parallel(jobs: list[tuple[DoeSequence, int, int]], rig: VirtualRig, scale: float,
-                   workers: int, progress: Callable[[Experiment], None] | None = None) -> list[Experiment]:
+def _make_parallel(
+    jobs: list[tuple[DoeSequence, int, int]],
+    rig: VirtualRig,
+    scale: float,
+    workers: int,
+    progress: Callable[[Experiment], None] | None = None,
+) -> list[Experiment]:
     """Records in worker processes; each is fully determined by its seed, so order and bytes are
     those of the serial run. Long records go first so the workers finish together."""
     import multiprocessing
@@ -369,8 +394,14 @@ def constant_current_sweep(
     lo, hi = current_range(rig.model, rig)
     levels = np.linspace(lo, hi, 5) if currents is None else np.asarray(currents, dtype=float)
     if levels.ndim != 1 or levels.size == 0:
-        raise DataValidationError("currents", f"expected a non-empty list of levels [A], got {currents!r}")
-    if isinstance(replicates, bool) or not isinstance(replicates, (int, np.integer)) or replicates < 1:
+        raise DataValidationError(
+            "currents", f"expected a non-empty list of levels [A], got {currents!r}"
+        )
+    if (
+        isinstance(replicates, bool)
+        or not isinstance(replicates, (int, np.integer))
+        or replicates < 1
+    ):
         raise DataValidationError("replicates", f"expected an int >= 1, got {replicates!r}")
     seeds = record_seeds(seed, levels.size * int(replicates))
     out = []
@@ -378,12 +409,26 @@ def constant_current_sweep(
     for level in levels:
         for r in range(1, int(replicates) + 1):
             s_x, _, s_rig = child_seeds(seeds[k], 3)
-            x_cmd = road_profile(rig.fs, duration, seed=s_x, max_frequency=max_frequency,
-                                 stroke=rig.actuator.stroke)
+            x_cmd = road_profile(
+                rig.fs, duration, seed=s_x, max_frequency=max_frequency, stroke=rig.actuator.stroke
+            )
             i_cmd = constant(rig.fs, duration, value=float(level))
-            meta = {"pattern": "constant", "current": float(level), "replicate": r,
-                    "duration": float(duration), "max_frequency": float(max_frequency)}
-            out.append(rig.run(x_cmd, i_cmd, seed=s_rig, name=f"cc_{float(level):g}A_rep{r:02d}",
-                               metadata=meta, seed_label=int(seeds[k])))
+            meta = {
+                "pattern": "constant",
+                "current": float(level),
+                "replicate": r,
+                "duration": float(duration),
+                "max_frequency": float(max_frequency),
+            }
+            out.append(
+                rig.run(
+                    x_cmd,
+                    i_cmd,
+                    seed=s_rig,
+                    name=f"cc_{float(level):g}A_rep{r:02d}",
+                    metadata=meta,
+                    seed_label=int(seeds[k]),
+                )
+            )
             k += 1
     return ExperimentSet(out, name=f"constant_current_seed{seed}")

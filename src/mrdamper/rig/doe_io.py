@@ -16,7 +16,15 @@ from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 
-__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "RECORD_FORMATS", "is_doe_folder", "read_doe", "write_doe", "write_records"]
+__all__ = [
+    "MANIFEST_COLUMNS",
+    "MANIFEST_NAME",
+    "RECORD_FORMATS",
+    "is_doe_folder",
+    "read_doe",
+    "write_doe",
+    "write_records",
+]
 
 RecordFormat = Literal["csv", "parquet"]
 #: Record file formats :func:`write_records` writes.
@@ -26,8 +34,16 @@ RECORD_FORMATS: tuple[str, ...] = ("csv", "parquet")
 MANIFEST_NAME = "manifest.csv"
 #: Manifest columns, in order.
 MANIFEST_COLUMNS: tuple[str, ...] = (
-    "name", "experiment", "replicate", "pattern", "displacement", "duration", "max_frequency",
-    "samples", "seed", "file",
+    "name",
+    "experiment",
+    "replicate",
+    "pattern",
+    "displacement",
+    "duration",
+    "max_frequency",
+    "samples",
+    "seed",
+    "file",
 )
 
 
@@ -48,8 +64,14 @@ def _cell(value: Any) -> str:
     return "" if value is None else str(value)
 
 
-def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, force: bool = False,
-                  format: RecordFormat = "csv", progress: Callable[[Path], None] | None = None) -> Path:
+def write_records(
+    records: ExperimentSet,
+    out_dir: str | os.PathLike[str],
+    *,
+    force: bool = False,
+    format: RecordFormat = "csv",
+    progress: Callable[[Path], None] | None = None,
+) -> Path:
     """Write every record as ``<name>.csv`` (SI columns) and ``manifest.csv`` into ``out_dir``.
 
     Parameters
@@ -77,7 +99,9 @@ def write_records(records: ExperimentSet, out_dir: str | os.PathLike[str], *, fo
         If ``out_dir`` is a non-empty folder (or a file) and ``force`` is false.
     """
     if format not in RECORD_FORMATS:
-        raise DataValidationError("format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}")
+        raise DataValidationError(
+            "format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}"
+        )
     out = Path(out_dir)
     _check_out_dir(out, force)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -170,8 +194,14 @@ def write_doe(
 
 
 _MANIFEST_TYPES: dict[str, type] = {
-    "experiment": int, "replicate": int, "pattern": str, "displacement": str, "duration": float,
-    "max_frequency": float, "samples": int, "seed": int,
+    "experiment": int,
+    "replicate": int,
+    "pattern": str,
+    "displacement": str,
+    "duration": float,
+    "max_frequency": float,
+    "samples": int,
+    "seed": int,
 }
 
 
@@ -246,6 +276,8 @@ def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:
         else:
             rec = read_csv(path, name=row["name"], metadata=meta)
         if rec.n != samples:
-            raise DataValidationError("samples", f"{path}: {rec.n} samples, manifest says {samples}")
+            raise DataValidationError(
+                "samples", f"{path}: {rec.n} samples, manifest says {samples}"
+            )
         records.append(rec)
     return ExperimentSet(records, name=root.name)

@@ -37,10 +37,14 @@ class CurrentDriver:
     def __post_init__(self) -> None:
         tau = float(self.time_constant)
         if isinstance(self.time_constant, bool) or not (math.isfinite(tau) and tau >= 0):
-            raise DataValidationError("time_constant", f"expected a finite value >= 0 [s], got {self.time_constant!r}")
+            raise DataValidationError(
+                "time_constant", f"expected a finite value >= 0 [s], got {self.time_constant!r}"
+            )
         lo, hi = (float(b) for b in self.limits)
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-            raise DataValidationError("limits", f"expected finite (low, high) with low < high, got {self.limits!r}")
+            raise DataValidationError(
+                "limits", f"expected finite (low, high) with low < high, got {self.limits!r}"
+            )
         object.__setattr__(self, "time_constant", tau)
         object.__setattr__(self, "limits", (lo, hi))
 
@@ -52,7 +56,8 @@ class CurrentDriver:
         if bad.size:
             k = int(bad[0])
             raise DataValidationError(
-                "i_command", f"value {cmd[k]:.6g} at sample {k} is outside the driver range [{lo:g}, {hi:g}]"
+                "i_command",
+                f"value {cmd[k]:.6g} at sample {k} is outside the driver range [{lo:g}, {hi:g}]",
             )
         alpha = math.exp(-1.0 / (fs * self.time_constant)) if self.time_constant > 0 else 0.0
         return first_order_lag(cmd, alpha, float(cmd[0]))

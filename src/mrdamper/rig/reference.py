@@ -15,7 +15,12 @@ from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 from mrdamper.models.registry import load_model
 
-__all__ = ["DEFAULT_REFERENCE", "REFERENCE_DAMPERS", "available_reference_dampers", "reference_damper"]
+__all__ = [
+    "DEFAULT_REFERENCE",
+    "REFERENCE_DAMPERS",
+    "available_reference_dampers",
+    "reference_damper",
+]
 
 #: Names of the reference dampers the package is meant to ship.
 REFERENCE_DAMPERS: tuple[str, ...] = ("quiroz2022", "spencer1997")
@@ -62,7 +67,9 @@ def reference_damper(name: str = DEFAULT_REFERENCE) -> FittedModel:
     ('spencer', 'i', (0.0, 1.0))
     """
     if name not in REFERENCE_DAMPERS:
-        raise DataValidationError("name", f"unknown reference damper {name!r}; expected one of {list(REFERENCE_DAMPERS)}")
+        raise DataValidationError(
+            "name", f"unknown reference damper {name!r}; expected one of {list(REFERENCE_DAMPERS)}"
+        )
     res = _parameters_dir().joinpath(f"{name}.json")
     if not res.is_file():
         raise FileNotFoundError(

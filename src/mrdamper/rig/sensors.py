@@ -42,11 +42,15 @@ class Sensor:
         for fld in ("noise_std", "resolution"):
             value = float(getattr(self, fld))
             if not (math.isfinite(value) and value >= 0):
-                raise DataValidationError(fld, f"{self.name}: expected a finite value >= 0, got {value!r}")
+                raise DataValidationError(
+                    fld, f"{self.name}: expected a finite value >= 0, got {value!r}"
+                )
             object.__setattr__(self, fld, value)
         lo, hi = (float(b) for b in self.range)
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-            raise DataValidationError("range", f"{self.name}: expected (low, high) with low < high, got {self.range!r}")
+            raise DataValidationError(
+                "range", f"{self.name}: expected (low, high) with low < high, got {self.range!r}"
+            )
         object.__setattr__(self, "range", (lo, hi))
 
     def measure(self, true: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -65,7 +69,11 @@ class Sensor:
                 self.name,
                 f"true value {true[k]:.6g} at sample {k} overloads the sensor range [{lo:g}, {hi:g}]",
             )
-        y = true + self.noise_std * rng.standard_normal(true.size) if self.noise_std > 0 else true.copy()
+        y = (
+            true + self.noise_std * rng.standard_normal(true.size)
+            if self.noise_std > 0
+            else true.copy()
+        )
         if self.resolution > 0:
             y = lo + np.rint((y - lo) / self.resolution) * self.resolution
         return np.clip(y, lo, hi)

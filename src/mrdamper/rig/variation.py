@@ -63,7 +63,9 @@ class DrawnVariation:
     def to_metadata(self) -> dict[str, Any]:
         """Flat metadata entries describing the drawn variation."""
         out: dict[str, Any] = {
-            "force_gain": self.gain, "force_drift": self.drift, "force_offset": self.offset,
+            "force_gain": self.gain,
+            "force_drift": self.drift,
+            "force_offset": self.offset,
         }
         out.update({f"drift_{k}": v for k, v in self.parameters.items()})
         return out
@@ -94,13 +96,17 @@ class ReplicateVariation:
         for name in ("gain_std", "drift_std", "offset_std"):
             value = float(getattr(self, name))
             if not (math.isfinite(value) and value >= 0):
-                raise DataValidationError(name, f"expected a finite standard deviation >= 0, got {value!r}")
+                raise DataValidationError(
+                    name, f"expected a finite standard deviation >= 0, got {value!r}"
+                )
             object.__setattr__(self, name, value)
         clean = {}
         for k, v in dict(self.parameter_std).items():
             fv = float(v)
             if not (math.isfinite(fv) and fv >= 0):
-                raise DataValidationError("parameter_std", f"{k}: expected a relative std >= 0, got {v!r}")
+                raise DataValidationError(
+                    "parameter_std", f"{k}: expected a relative std >= 0, got {v!r}"
+                )
             clean[str(k)] = fv
         object.__setattr__(self, "parameter_std", clean)
 
@@ -116,10 +122,14 @@ class ReplicateVariation:
         rel: dict[str, float] = {}
         params = damper.parameters
         for name in sorted(self.parameter_std):
-            if name not in params or isinstance(params[name], bool) or not isinstance(
-                params[name], (int, float, np.floating, np.integer)
+            if (
+                name not in params
+                or isinstance(params[name], bool)
+                or not isinstance(params[name], (int, float, np.floating, np.integer))
             ):
-                scalars = sorted(k for k, p in params.items() if isinstance(p, (float, np.floating)))
+                scalars = sorted(
+                    k for k, p in params.items() if isinstance(p, (float, np.floating))
+                )
                 raise DataValidationError(
                     "parameter_std",
                     f"{name!r} is not a scalar parameter of {damper.kind!r}; expected one of {scalars}",

@@ -41,7 +41,9 @@ def _command(name: str, values: Any) -> np.ndarray:
     except (TypeError, ValueError) as exc:
         raise DataValidationError(name, f"could not be read as numbers ({exc})") from None
     if arr.ndim != 1 or arr.size < 2:
-        raise DataValidationError(name, f"expected a 1-D array of at least 2 samples, got shape {arr.shape}")
+        raise DataValidationError(
+            name, f"expected a 1-D array of at least 2 samples, got shape {arr.shape}"
+        )
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         raise DataValidationError(name, f"non-finite value at sample {int(bad[0])}")
@@ -67,7 +69,8 @@ def _velocity(x: np.ndarray, fs: float, cutoff: float) -> np.ndarray:
     padlen = 3 * (2 * len(sos) + 1)
     if x.size <= padlen:
         raise DataValidationError(
-            "x_command", f"{x.size} samples are too few for the velocity filter (need more than {padlen})"
+            "x_command",
+            f"{x.size} samples are too few for the velocity filter (need more than {padlen})",
         )
     return np.gradient(sosfiltfilt(sos, x), 1.0 / fs)
 
@@ -122,7 +125,9 @@ class VirtualRig:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "fs", check_positive("fs", self.fs, "Hz"))
-        object.__setattr__(self, "velocity_cutoff", check_positive("velocity_cutoff", self.velocity_cutoff, "Hz"))
+        object.__setattr__(
+            self, "velocity_cutoff", check_positive("velocity_cutoff", self.velocity_cutoff, "Hz")
+        )
         if not self.velocity_cutoff < self.fs / 2:
             raise DataValidationError(
                 "velocity_cutoff",
@@ -211,11 +216,14 @@ class VirtualRig:
         F_model = np.asarray(drawn.damper.predict(plant), dtype=np.float64)
         if F_model.shape != (n,):
             raise DataValidationError(
-                "damper", f"{self.model.kind}.predict returned shape {F_model.shape}, expected ({n},)"
+                "damper",
+                f"{self.model.kind}.predict returned shape {F_model.shape}, expected ({n},)",
             )
         bad = np.flatnonzero(~np.isfinite(F_model))
         if bad.size:
-            raise SimulationDivergedError(self.model.kind, int(bad[0]), "non-finite damper force on the virtual rig")
+            raise SimulationDivergedError(
+                self.model.kind, int(bad[0]), "non-finite damper force on the virtual rig"
+            )
         F_true = drawn.apply(F_model, t)
         x_meas = self.sensors.displacement.measure(x_true, np.random.default_rng(s_x))
         F_meas = self.sensors.force.measure(F_true, np.random.default_rng(s_f))
@@ -229,8 +237,10 @@ class VirtualRig:
             **drawn.to_metadata(),
         )
         v_meas = _velocity(x_meas, fs, self.velocity_cutoff)
-        note = (f"v = central difference of x after zero-phase Butterworth low-pass (order "
-                f"{VELOCITY_FILTER_ORDER}, {self.velocity_cutoff:g} Hz)")
+        note = (
+            f"v = central difference of x after zero-phase Butterworth low-pass (order "
+            f"{VELOCITY_FILTER_ORDER}, {self.velocity_cutoff:g} Hz)"
+        )
         meta["processing"] = (*tuple(meta.get("processing", ())), note)
         meta["velocity_cutoff"] = self.velocity_cutoff
         measured: dict[str, Any] = {ch: e_meas}

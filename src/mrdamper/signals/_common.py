@@ -31,7 +31,9 @@ def check_positive(name: str, value: float, unit: str) -> float:
     try:
         f = float(value)
     except (TypeError, ValueError):
-        raise DataValidationError(name, f"expected a positive number [{unit}], got {value!r}") from None
+        raise DataValidationError(
+            name, f"expected a positive number [{unit}], got {value!r}"
+        ) from None
     if not (math.isfinite(f) and f > 0.0):
         raise DataValidationError(name, f"expected a finite value > 0 [{unit}], got {value!r}")
     return f

@@ -87,6 +87,8 @@ def sine(
     if not (math.isfinite(a) and a >= 0):
         raise DataValidationError("amplitude", f"expected a finite value >= 0, got {amplitude!r}")
     if not (math.isfinite(off) and math.isfinite(ph)):
-        raise DataValidationError("offset/phase", f"expected finite values, got {offset!r}, {phase!r}")
+        raise DataValidationError(
+            "offset/phase", f"expected finite values, got {offset!r}, {phase!r}"
+        )
     t = time_grid(fs, duration)
     return off + a * np.sin(2.0 * np.pi * f * t + ph)

@@ -55,7 +55,11 @@ PRIMITIVE_TAPS: dict[int, tuple[int, ...]] = {
 
 
 def _check_order(order: int) -> int:
-    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order not in PRIMITIVE_TAPS:
+    if (
+        isinstance(order, bool)
+        or not isinstance(order, (int, np.integer))
+        or order not in PRIMITIVE_TAPS
+    ):
         raise DataValidationError(
             "order", f"expected an int register order in 2..32, got {order!r}"
         )

@@ -69,7 +69,8 @@ def _gd0(road_class: str | float) -> float:
         key = road_class.strip().upper()
         if key not in ISO_8608_CLASSES:
             raise DataValidationError(
-                "road_class", f"expected one of {sorted(ISO_8608_CLASSES)} or Gd(n0) [m^3], got {road_class!r}"
+                "road_class",
+                f"expected one of {sorted(ISO_8608_CLASSES)} or Gd(n0) [m^3], got {road_class!r}",
             )
         return ISO_8608_CLASSES[key]
     return check_positive("road_class", road_class, "m^3")
@@ -104,7 +105,9 @@ def temporal_psd(f: np.ndarray | float, road_class: str | float, speed: float) -
     return spatial_psd(f / v, road_class) / v
 
 
-def band_variance(road_class: str | float, speed: float, min_frequency: float, max_frequency: float) -> float:
+def band_variance(
+    road_class: str | float, speed: float, min_frequency: float, max_frequency: float
+) -> float:
     """Displacement variance [m^2] of the band ``[min_frequency, max_frequency]``: the integral of G."""
     fmin, fmax = check_range("min_frequency/max_frequency", min_frequency, max_frequency, "Hz")
     v = check_positive("speed", speed, "m/s")
@@ -139,7 +142,9 @@ def _synthesise(
             f"no frequency bin of a {n / fs:g} s record (resolution {df:g} Hz) lies in "
             f"[{fmin:g}, {fmax:g}] Hz; lengthen the record or widen the band",
         )
-    phases = rng.uniform(0.0, 2.0 * np.pi, size=k.size)  # drawn for every bin: band-independent stream
+    phases = rng.uniform(
+        0.0, 2.0 * np.pi, size=k.size
+    )  # drawn for every bin: band-independent stream
     spec = np.zeros(k.size, dtype=np.complex128)
     g = gd0 * N0**2 * speed / f[band] ** 2
     spec[band] = (n / 2.0) * np.sqrt(2.0 * g * df) * np.exp(1j * phases[band])
@@ -176,7 +181,9 @@ def _to_stroke(x: np.ndarray, stroke: float, fill: float | None) -> np.ndarray:
         return x
     fill = check_positive("fill", fill, "-")
     if fill > 1.0:
-        raise DataValidationError("fill", f"expected 0 < fill <= 1 (fraction of stroke/2), got {fill!r}")
+        raise DataValidationError(
+            "fill", f"expected 0 < fill <= 1 (fraction of stroke/2), got {fill!r}"
+        )
     if peak == 0.0:
         raise DataValidationError("road_class", "the synthesised profile is identically zero")
     return x * (fill * stroke / 2.0 / peak)
@@ -293,7 +300,9 @@ def long_road_profile(
     sec = check_positive("section_duration", section_duration, "s")
     vlo, vhi = check_range("speed_range", speed_range[0], speed_range[1], "m/s")
     if vlo <= 0:
-        raise DataValidationError("speed_range", f"expected positive speeds [m/s], got {speed_range!r}")
+        raise DataValidationError(
+            "speed_range", f"expected positive speeds [m/s], got {speed_range!r}"
+        )
     if not classes:
         raise DataValidationError("classes", "expected at least one ISO 8608 class")
     gd0s = [_gd0(c) for c in classes]
@@ -314,7 +323,15 @@ def long_road_profile(
     for k in range(n_sec):
         a = max(0, edges[k] - half)
         b = min(n, edges[k + 1] + (c - half))
-        s = _synthesise(b - a, fs, gd0s[which[k]], float(speeds[k]), fmin, fmax, np.random.default_rng(seeds[k + 1]))
+        s = _synthesise(
+            b - a,
+            fs,
+            gd0s[which[k]],
+            float(speeds[k]),
+            fmin,
+            fmax,
+            np.random.default_rng(seeds[k + 1]),
+        )
         w = np.ones(b - a)
         if k > 0 and c > 0:  # fade in over [k L - half, k L - half + c)
             w[:c] *= np.sin(0.5 * np.pi * (np.arange(c) + 0.5) / c)

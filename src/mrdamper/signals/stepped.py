@@ -65,9 +65,7 @@ def stepped_current(
             "direction", f"expected 'up', 'down' or 'up-down', got {direction!r}"
         )
     if steps.size > n:
-        raise DataValidationError(
-            "n_levels", f"{steps.size} steps do not fit in {n} samples"
-        )
+        raise DataValidationError("n_levels", f"{steps.size} steps do not fit in {n} samples")
     # step k covers samples [k*n/steps, (k+1)*n/steps): equal dwell within one sample
     index = (np.arange(n) * steps.size) // n
     return steps[index]

@@ -46,8 +46,12 @@ def write_tables(res: StudyResult, d: Path, summary: pd.DataFrame) -> None:
     atomic_write_text(d / "results.csv", res.results.drop(columns=timing).to_csv(index=False))
     keys = [c for c in ("fold", "model", "record") if c in res.results.columns]
     atomic_write_text(d / "timings.csv", res.results[keys + timing].to_csv(index=False))
-    atomic_write_text(d / "summary.csv", summary.drop(columns=timing, errors="ignore").to_csv(index=False))
-    atomic_write_text(d / "fits.csv", res.fits.drop(columns=timing, errors="ignore").to_csv(index=False))
+    atomic_write_text(
+        d / "summary.csv", summary.drop(columns=timing, errors="ignore").to_csv(index=False)
+    )
+    atomic_write_text(
+        d / "fits.csv", res.fits.drop(columns=timing, errors="ignore").to_csv(index=False)
+    )
     atomic_write_text(d / "roles.csv", res.roles.to_csv(index=False))
     atomic_write_text(d / "protocol.json", res.protocol.to_json() + "\n")
     info: dict[str, Any] = {k: v for k, v in res.info.items() if k not in TIMING_INFO}

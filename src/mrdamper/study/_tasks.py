@@ -67,7 +67,12 @@ def fit_task(kind: str, settings: Mapping[str, Any], records: Sequence[Any]) -> 
             train = ExperimentSet([resolve_record(h) for h in records], name="training")
             model = get_estimator(kind, **dict(settings)).fit(train)
             out = {"status": "ok", "model": model.to_dict(), "error": ""}
-        except (IdentificationError, SimulationDivergedError, DataValidationError, OutOfRangeError) as exc:
+        except (
+            IdentificationError,
+            SimulationDivergedError,
+            DataValidationError,
+            OutOfRangeError,
+        ) as exc:
             out = {"status": "fit-failed", "model": None, "error": _message(exc)}
         except Exception as exc:  # noqa: BLE001 - any other failure of a model is a result row, not a crash
             _reraise_interrupt(exc)
@@ -91,7 +96,14 @@ def simulate_task(model: Mapping[str, Any], record: Any, range_policy: str) -> d
     from mrdamper.models import model_from_dict
 
     nan = float("nan")
-    out: dict[str, Any] = {"esr": nan, "ssse": nan, "nrmse": nan, "fit_pct": nan, "sim_time_s": nan, "error": ""}
+    out: dict[str, Any] = {
+        "esr": nan,
+        "ssse": nan,
+        "nrmse": nan,
+        "fit_pct": nan,
+        "sim_time_s": nan,
+        "error": "",
+    }
     with single_threaded_blas(), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:

@@ -72,7 +72,9 @@ def plateau_options(records: ExperimentSet) -> dict[str, float]:
     return {"min_duration": min_duration, "settle": min(0.2, min_duration / 5.0)}
 
 
-def fv_curves(records: ExperimentSet, source: str = "i", by: str | None = None) -> dict[float, tuple[np.ndarray, np.ndarray]]:
+def fv_curves(
+    records: ExperimentSet, source: str = "i", by: str | None = None
+) -> dict[float, tuple[np.ndarray, np.ndarray]]:
     """Pool (v, F) samples per electrical level, as the analysis groups them.
 
     Parameters
@@ -101,7 +103,9 @@ def fv_curves(records: ExperimentSet, source: str = "i", by: str | None = None) 
                 key = next((k for k in pools if abs(k - lev) <= tol), lev)
                 pools.setdefault(key, []).append((e.v[a:b], e.F[a:b]))
     return {
-        lev: _thin(np.concatenate([p[0] for p in pools[lev]]), np.concatenate([p[1] for p in pools[lev]]))
+        lev: _thin(
+            np.concatenate([p[0] for p in pools[lev]]), np.concatenate([p[1] for p in pools[lev]])
+        )
         for lev in sorted(pools)
     }
 

@@ -75,7 +75,10 @@ def default_protocol(data: ExperimentSet) -> tuple[Protocol, str]:
         raise SchemaError("data: no records to study")
     if all("experiment" in e.metadata for e in data):
         proto = doe_protocol()
-        return proto, f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design of experiments)"
+        return (
+            proto,
+            f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design of experiments)",
+        )
     if all("condition" in e.metadata for e in data):
         proto = quiroz_protocol()
         return proto, (
@@ -85,7 +88,9 @@ def default_protocol(data: ExperimentSet) -> tuple[Protocol, str]:
     source = _input_of(data)
     signals = [np.asarray(e.electrical(source)) for e in data]  # type: ignore[arg-type]
     scale = max(float(np.max(np.abs(s))) for s in signals) or 1.0
-    constant = [e for e, s in zip(data, signals) if float(np.ptp(s)) <= CONSTANT_INPUT_TOLERANCE * scale]
+    constant = [
+        e for e, s in zip(data, signals) if float(np.ptp(s)) <= CONSTANT_INPUT_TOLERANCE * scale
+    ]
     levels = {round(float(np.mean(s)) / scale, 3) for e, s in zip(data, signals) if e in constant}
     analysis = None
     what_analysis = "no force-velocity analysis (fewer than 2 constant-input levels)"
@@ -108,4 +113,7 @@ def default_protocol(data: ExperimentSet) -> tuple[Protocol, str]:
         split=split,
         input=source,  # type: ignore[arg-type]
     )
-    return proto, f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to choose)"
+    return (
+        proto,
+        f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to choose)",
+    )

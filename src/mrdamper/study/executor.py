@@ -66,7 +66,9 @@ class DiskRecord:
 
 def pack(e: Experiment) -> PackedRecord:
     """Picklable form of an Experiment."""
-    return PackedRecord(e.name, dict(e.metadata), {c: np.asarray(getattr(e, c)) for c in e.channel_names})
+    return PackedRecord(
+        e.name, dict(e.metadata), {c: np.asarray(getattr(e, c)) for c in e.channel_names}
+    )
 
 
 def resolve_record(handle: Any) -> Experiment:
@@ -202,7 +204,9 @@ class DaskExecutor(StudyExecutor):
             self._client = distributed.Client(scheduler)
             self._own = True
         else:
-            raise DataValidationError("scheduler", f"expected an address string or a Client, got {scheduler!r}")
+            raise DataValidationError(
+                "scheduler", f"expected an address string or a Client, got {scheduler!r}"
+            )
         self.description = f"Dask scheduler {self._client.scheduler.address}"
 
     def share(self, e: Experiment) -> Any:

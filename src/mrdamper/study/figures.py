@@ -35,19 +35,48 @@ __all__ = ["FAILED_ESR", "FIGURES", "failed_models", "make_figures", "overlay_mo
 #: consecutively and names the paper's number beside each.
 FIGURES: dict[str, tuple[int | None, str]] = {
     "fig01_fv_map": (1, "Force-velocity map at each current level (analysis records)."),
-    "fig02_zone_fit": (2, ("Measured F-v samples and the three-zone straight-line regression (eq. 17) at the "
-                          "highest current level.")),
-    "fig03_zone_laws": (3, ("Slopes m_j and intercepts c_j of the three zones against current (points) with the "
-                           "fitted quadratic laws (lines, eq. 18); one panel and scale per quantity.")),
-    "fig04_lti_hysteresis": (4, ("The LTI model (no scheduling) against the measured force: it cannot follow "
-                                "the hysteresis.")),
-    "fig06_lpv_tracking": (6, "Measured and LPV force (top), velocity (middle) and current (bottom)."),
-    "fig07_esr_boxes": (7, "ESR per model over the scored records; the mean is written under each box."),
-    "fig08_ssse_boxes": (8, "SSSE [N] per model over the scored records; the mean is written under each box."),
+    "fig02_zone_fit": (
+        2,
+        (
+            "Measured F-v samples and the three-zone straight-line regression (eq. 17) at the "
+            "highest current level."
+        ),
+    ),
+    "fig03_zone_laws": (
+        3,
+        (
+            "Slopes m_j and intercepts c_j of the three zones against current (points) with the "
+            "fitted quadratic laws (lines, eq. 18); one panel and scale per quantity."
+        ),
+    ),
+    "fig04_lti_hysteresis": (
+        4,
+        (
+            "The LTI model (no scheduling) against the measured force: it cannot follow "
+            "the hysteresis."
+        ),
+    ),
+    "fig06_lpv_tracking": (
+        6,
+        "Measured and LPV force (top), velocity (middle) and current (bottom).",
+    ),
+    "fig07_esr_boxes": (
+        7,
+        "ESR per model over the scored records; the mean is written under each box.",
+    ),
+    "fig08_ssse_boxes": (
+        8,
+        "SSSE [N] per model over the scored records; the mean is written under each box.",
+    ),
     "fig09_force_time": (9, "Measured and computed damper force against time."),
     "fig10_fv_models": (10, "Force-velocity plane, measured and computed."),
-    "fig11_fx_loops": (None, ("Force-displacement loops, measured and computed; the loop area is the energy "
-                             "dissipated per cycle (table below).")),
+    "fig11_fx_loops": (
+        None,
+        (
+            "Force-displacement loops, measured and computed; the loop area is the energy "
+            "dissipated per cycle (table below)."
+        ),
+    ),
 }
 
 #: A model whose mean ESR over the study, or whose ESR on the drawn record, exceeds this [-] is
@@ -80,7 +109,9 @@ def _fig1(res: StudyResult) -> Any:
     an = _first_analysis(res)
     if an is None or not an.curves:
         reasons = {a.error for a in res.analyses.values() if a.error}
-        return "no force-velocity analysis data" + (f" ({'; '.join(sorted(reasons))})" if reasons else "")
+        return "no force-velocity analysis data" + (
+            f" ({'; '.join(sorted(reasons))})" if reasons else ""
+        )
     return plot_fv_map(an.curves, unit="A" if res.protocol.input == "i" else "V").figure
 
 
@@ -139,7 +170,9 @@ def _fig6(res: StudyResult) -> Any:
     sc = res.showcase
     if isinstance(F, str):
         return f"the LPV model failed on {sc.record.name}: {F}"  # type: ignore[union-attr]
-    return plot_model_tracking(sc.record, F, label=label, window=_window(sc), source=res.protocol.input)[0].figure  # type: ignore[union-attr, arg-type]
+    return plot_model_tracking(
+        sc.record, F, label=label, window=_window(sc), source=res.protocol.input
+    )[0].figure  # type: ignore[union-attr, arg-type]
 
 
 def _boxes(index: str) -> Callable[[StudyResult], Any]:
@@ -193,7 +226,11 @@ def failed_models(res: StudyResult, sc: Showcase | None = None) -> dict[str, str
         mean = float(row["esr_mean"]) if row is not None else float("nan")
         if n_ok == 0:
             statuses = res.results.loc[res.results["model"] == label, "status"].value_counts()
-            out[label] = "no successful simulation (" + ", ".join(f"{n} {s}" for s, n in statuses.items()) + ")"
+            out[label] = (
+                "no successful simulation ("
+                + ", ".join(f"{n} {s}" for s, n in statuses.items())
+                + ")"
+            )
         elif np.isfinite(mean) and mean > FAILED_ESR:
             out[label] = f"mean ESR {mean:.3g} > {FAILED_ESR:g} over the study"
         elif sc is not None and isinstance(sc.predictions.get(label), str):
@@ -213,7 +250,10 @@ def overlay_models(res: StudyResult, failed: Mapping[str, str] | None = None) ->
 
     failed = failed_models(res) if failed is None else failed
     summary = res.summary
-    ok = summary[~summary["model"].isin(list(failed)) & np.isfinite(summary["esr_mean"].to_numpy(dtype=float))]
+    ok = summary[
+        ~summary["model"].isin(list(failed))
+        & np.isfinite(summary["esr_mean"].to_numpy(dtype=float))
+    ]
     if res.showcase is not None:
         ok = ok[ok["model"].isin(list(res.showcase.ok()))]
     chosen: list[str] = []
@@ -240,8 +280,15 @@ def _all_models(plane: str) -> Callable[[StudyResult], Any]:
         if plane == "fx":
             titles = _energy_titles(sc, titles)
         preds = {k: sc.predictions[k] for k in res.labels if k in sc.predictions}
-        fig = plot_model_panels(sc.record, preds, plane=plane, overlay=overlay_models(res, failed), failed=failed,
-                                titles=titles, window=_window(sc))
+        fig = plot_model_panels(
+            sc.record,
+            preds,
+            plane=plane,
+            overlay=overlay_models(res, failed),
+            failed=failed,
+            titles=titles,
+            window=_window(sc),
+        )
         fig.suptitle(f"Record {sc.record.name} (scored in fold {sc.fold})", fontsize=9.5)
         return fig
 

@@ -81,8 +81,11 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
         input="voltage",
         models=tuple(models),
         range_policy="clip",
-        settings={"lpv": {"eta": 250.0, "model_fs": 3004.8}, "lti": {"eta": 250.0, "model_fs": 3004.8},
-                  "p15": {"eta": 250.0}},
+        settings={
+            "lpv": {"eta": 250.0, "model_fs": 3004.8},
+            "lti": {"eta": 250.0, "model_fs": 3004.8},
+            "p15": {"eta": 250.0},
+        },
     )
 
 

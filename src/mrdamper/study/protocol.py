@@ -38,7 +38,18 @@ PROTOCOL_SCHEMA = "mrdamper.protocol"
 PROTOCOL_SCHEMA_VERSION = 1
 
 #: Models run by default, in display order; kinds that are not installed are left out.
-DEFAULT_MODELS: tuple[str, ...] = ("lpv", "p15", "sp1", "sp2", "sp3", "sp4", "lti", "spencer", "bingham", "narx")
+DEFAULT_MODELS: tuple[str, ...] = (
+    "lpv",
+    "p15",
+    "sp1",
+    "sp2",
+    "sp3",
+    "sp4",
+    "lti",
+    "spencer",
+    "bingham",
+    "narx",
+)
 
 SplitKind = Literal["fixed", "leave-one-group-out", "k-fold", "time"]
 RangePolicyName = Literal["error", "warn", "clip", "ignore"]
@@ -133,8 +144,14 @@ class Selection:
 
     def describe(self) -> str:
         """One-line human description."""
-        parts = [f"{k} in {list(v)}" if isinstance(v, tuple) else f"{k} = {v!r}" for k, v in self.match.items()]
-        parts += [f"{k} not in {list(v)}" if isinstance(v, tuple) else f"{k} != {v!r}" for k, v in self.exclude.items()]
+        parts = [
+            f"{k} in {list(v)}" if isinstance(v, tuple) else f"{k} = {v!r}"
+            for k, v in self.match.items()
+        ]
+        parts += [
+            f"{k} not in {list(v)}" if isinstance(v, tuple) else f"{k} != {v!r}"
+            for k, v in self.exclude.items()
+        ]
         if self.names:
             parts.append("name matches " + " or ".join(self.names))
         if self.take is not None:
@@ -145,11 +162,15 @@ class Selection:
         """JSON-safe form (the protocol file layout)."""
         out: dict[str, Any] = {}
         if self.match:
-            out["match"] = {k: list(v) if isinstance(v, tuple) else v for k, v in self.match.items()}
+            out["match"] = {
+                k: list(v) if isinstance(v, tuple) else v for k, v in self.match.items()
+            }
         if self.names:
             out["names"] = list(self.names)
         if self.exclude:
-            out["exclude"] = {k: list(v) if isinstance(v, tuple) else v for k, v in self.exclude.items()}
+            out["exclude"] = {
+                k: list(v) if isinstance(v, tuple) else v for k, v in self.exclude.items()
+            }
         if self.group_by is not None:
             out["group_by"] = self.group_by
         if self.take is not None:
@@ -195,13 +216,21 @@ class Split:
         if isinstance(self.k, bool) or not isinstance(self.k, int) or self.k < 2:
             raise SchemaError(f"split.k: expected an integer of at least 2, got {self.k!r}")
         if self.kind == "leave-one-group-out" and not (self.key or self.name_regex):
-            raise SchemaError("split.key: leave-one-group-out needs 'key' or 'name_regex', got neither")
+            raise SchemaError(
+                "split.key: leave-one-group-out needs 'key' or 'name_regex', got neither"
+            )
         if self.name_regex is not None:
             try:
                 re.compile(self.name_regex)
             except re.error as exc:
-                raise SchemaError(f"split.name_regex: invalid regular expression {self.name_regex!r} ({exc})") from None
-        if isinstance(self.fraction, bool) or not isinstance(self.fraction, (int, float)) or not 0.0 < float(self.fraction) < 1.0:
+                raise SchemaError(
+                    f"split.name_regex: invalid regular expression {self.name_regex!r} ({exc})"
+                ) from None
+        if (
+            isinstance(self.fraction, bool)
+            or not isinstance(self.fraction, (int, float))
+            or not 0.0 < float(self.fraction) < 1.0
+        ):
             raise SchemaError(f"split.fraction: expected a number in (0, 1), got {self.fraction!r}")
 
     def group_of(self, e: Experiment) -> Any:
@@ -209,7 +238,9 @@ class Split:
         if self.name_regex is not None:
             m = re.search(self.name_regex, e.name)
             if m is None:
-                raise SchemaError(f"split.name_regex: record name {e.name!r} does not match {self.name_regex!r}")
+                raise SchemaError(
+                    f"split.name_regex: record name {e.name!r} does not match {self.name_regex!r}"
+                )
             return m.group(1) if m.groups() else m.group(0)
         if self.key is None or self.key not in e.metadata:
             raise SchemaError(f"split.key: record {e.name!r} has no metadata {self.key!r}")
@@ -283,7 +314,9 @@ def _as_spec(item: Any) -> ModelSpec:
     if isinstance(item, Mapping):
         unknown = set(item) - {"kind", "settings", "label"}
         if unknown:
-            raise SchemaError(f"models: unknown key(s) {sorted(unknown)}; expected kind, settings, label")
+            raise SchemaError(
+                f"models: unknown key(s) {sorted(unknown)}; expected kind, settings, label"
+            )
         if "kind" not in item:
             raise SchemaError(f"models: entry {dict(item)!r} has no 'kind'")
         return ModelSpec(item["kind"], item.get("settings") or {}, item.get("label") or "")
@@ -351,21 +384,31 @@ class Protocol:
         labels = [s.label for s in specs]
         dup = sorted({x for x in labels if labels.count(x) > 1})
         if dup:
-            raise SchemaError(f"models: duplicate label(s) {dup}; give each entry a distinct 'label'")
+            raise SchemaError(
+                f"models: duplicate label(s) {dup}; give each entry a distinct 'label'"
+            )
         if self.input not in ("i", "voltage"):
             raise SchemaError(f"input: expected 'i' or 'voltage', got {self.input!r}")
         if self.range_policy not in ("error", "warn", "clip", "ignore"):
-            raise SchemaError(f"range_policy: expected error, warn, clip or ignore, got {self.range_policy!r}")
+            raise SchemaError(
+                f"range_policy: expected error, warn, clip or ignore, got {self.range_policy!r}"
+            )
         for name in ("analysis", "train", "score"):
             val = getattr(self, name)
             if val is not None and not isinstance(val, Selection):
                 raise SchemaError(f"{name}: expected a Selection, got {type(val).__name__}")
         if not isinstance(self.split, Split):
             raise SchemaError(f"split: expected a Split, got {type(self.split).__name__}")
-        if not isinstance(self.settings, Mapping) or not all(isinstance(v, Mapping) for v in self.settings.values()):
-            raise SchemaError(f"settings: expected a table of kind = {{setting = value}}, got {self.settings!r}")
+        if not isinstance(self.settings, Mapping) or not all(
+            isinstance(v, Mapping) for v in self.settings.values()
+        ):
+            raise SchemaError(
+                f"settings: expected a table of kind = {{setting = value}}, got {self.settings!r}"
+            )
         object.__setattr__(
-            self, "settings", MappingProxyType({str(k): MappingProxyType(dict(v)) for k, v in self.settings.items()})
+            self,
+            "settings",
+            MappingProxyType({str(k): MappingProxyType(dict(v)) for k, v in self.settings.items()}),
         )
 
     def settings_for(self, spec: ModelSpec) -> dict[str, Any]:
@@ -417,8 +460,21 @@ class Protocol:
 
 
 _TOP_KEYS = {
-    "schema", "schema_version", "name", "description", "input", "analysis", "train", "score",
-    "split", "exclude_trained", "range_policy", "models", "settings", "showcase", "hysteresis_record",
+    "schema",
+    "schema_version",
+    "name",
+    "description",
+    "input",
+    "analysis",
+    "train",
+    "score",
+    "split",
+    "exclude_trained",
+    "range_policy",
+    "models",
+    "settings",
+    "showcase",
+    "hysteresis_record",
 }
 _SEL_KEYS = {"match", "names", "exclude", "group_by", "take"}
 _SPLIT_KEYS = {"kind", "key", "name_regex", "fraction", "k"}
@@ -431,7 +487,9 @@ def _selection(value: Any, where: str) -> Selection:
         raise SchemaError(f"{where}: expected a table/object, got {value!r}")
     unknown = set(value) - _SEL_KEYS
     if unknown:
-        raise SchemaError(f"{where}: unknown key(s) {sorted(unknown)}; expected {sorted(_SEL_KEYS)}")
+        raise SchemaError(
+            f"{where}: unknown key(s) {sorted(unknown)}; expected {sorted(_SEL_KEYS)}"
+        )
     names = value.get("names", ())
     return Selection(
         match=value.get("match") or {},
@@ -451,10 +509,14 @@ def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
         Unknown keys, wrong schema name or version, or invalid values; the message names the key.
     """
     if not isinstance(data, Mapping):
-        raise SchemaError(f"protocol: expected a table/object at top level, got {type(data).__name__}")
+        raise SchemaError(
+            f"protocol: expected a table/object at top level, got {type(data).__name__}"
+        )
     unknown = set(data) - _TOP_KEYS
     if unknown:
-        raise SchemaError(f"protocol: unknown key(s) {sorted(unknown)}; expected some of {sorted(_TOP_KEYS)}")
+        raise SchemaError(
+            f"protocol: unknown key(s) {sorted(unknown)}; expected some of {sorted(_TOP_KEYS)}"
+        )
     if data.get("schema", PROTOCOL_SCHEMA) != PROTOCOL_SCHEMA:
         raise SchemaError(f"schema: expected {PROTOCOL_SCHEMA!r}, got {data.get('schema')!r}")
     if data.get("schema_version", PROTOCOL_SCHEMA_VERSION) != PROTOCOL_SCHEMA_VERSION:
@@ -506,7 +568,9 @@ def load_protocol(path: str | Path) -> Protocol:
         return preset_protocol(path)
     p = Path(path)
     if not p.is_file():
-        raise FileNotFoundError(f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})")
+        raise FileNotFoundError(
+            f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})"
+        )
     text = p.read_text(encoding="utf-8")
     suffix = p.suffix.lower()
     try:

@@ -79,8 +79,10 @@ def _table(df: pd.DataFrame, cls: str = "", digits: int = 4) -> str:
             attr = ' class="text"' if is_text and isinstance(v, str) and len(v) > 30 else ""
             cells.append(f"<td{attr}>{_e(format_number(v, digits))}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
-    return (f'<div class="tablewrap"><table class="{cls}"><thead><tr>{head}</tr></thead>'
-            f"<tbody>{''.join(body)}</tbody></table></div>")
+    return (
+        f'<div class="tablewrap"><table class="{cls}"><thead><tr>{head}</tr></thead>'
+        f"<tbody>{''.join(body)}</tbody></table></div>"
+    )
 
 
 def _unit(res: StudyResult) -> str:
@@ -105,7 +107,10 @@ def _protocol_section(res: StudyResult) -> str:
         ("description", p.description or "-"),
         ("data", res.info.get("data_origin", "not recorded")),
         ("electrical input", p.input),
-        ("force-velocity analysis records", "none" if p.analysis is None else p.analysis.describe()),
+        (
+            "force-velocity analysis records",
+            "none" if p.analysis is None else p.analysis.describe(),
+        ),
         ("identification records", p.train.describe()),
         ("scored records", p.score.describe()),
         ("split", p.split.describe()),
@@ -116,41 +121,67 @@ def _protocol_section(res: StudyResult) -> str:
     out = ['<div class="tablewrap"><table class="left">']
     out += [f'<tr><th>{_e(k)}</th><td class="text">{_e(v)}</td></tr>' for k, v in rows]
     out.append("</table></div>")
-    roles = res.roles.groupby(["fold", "role"], sort=False).agg(records=("record", "count"), samples=("samples", "sum"))
+    roles = res.roles.groupby(["fold", "role"], sort=False).agg(
+        records=("record", "count"), samples=("samples", "sum")
+    )
     roles = roles.reset_index().rename(columns={"samples": "samples [-]"})
     out.append("<p>Records per role and fold:</p>" + _table(roles))
     ov = res.overlap()
     if ov.empty:
-        out.append("<p><b>Train/score overlap:</b> none. No scored record trained a model or the analysis "
-                   "in its fold: every score is on unseen data.</p>")
+        out.append(
+            "<p><b>Train/score overlap:</b> none. No scored record trained a model or the analysis "
+            "in its fold: every score is on unseen data.</p>"
+        )
     else:
-        out.append(f'<p class="warn"><b>Train/score overlap:</b> {len(ov)} scored record(s) also trained '
-                   "in the same fold; their scores are not on unseen data:</p>" + _table(ov))
-    out.append("<details><summary>protocol file (JSON)</summary><pre>" + _e(p.to_json()) + "</pre></details>")
+        out.append(
+            f'<p class="warn"><b>Train/score overlap:</b> {len(ov)} scored record(s) also trained '
+            "in the same fold; their scores are not on unseen data:</p>" + _table(ov)
+        )
+    out.append(
+        "<details><summary>protocol file (JSON)</summary><pre>"
+        + _e(p.to_json())
+        + "</pre></details>"
+    )
     return "\n".join(out)
 
 
 def _headline_text(res: StudyResult) -> tuple[str, str]:
     hl = res.headline()
     cls = "headline" if hl.get("available") else "warn"
-    text = ("<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and SP-1..SP-4): "
-            + _e(hl["text"]) + ". " + _e(PAPER_HEADLINE["text"]))
+    text = (
+        "<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and SP-1..SP-4): "
+        + _e(hl["text"])
+        + ". "
+        + _e(PAPER_HEADLINE["text"])
+    )
     return cls, text
 
 
 def _data_note(res: StudyResult) -> str:
     origin = str(res.info.get("data_origin", ""))
     if _virtual(res):
-        damper = origin[origin.find("(") + 1: origin.rfind(" damper)")] if "(" in origin else "a known"
-        what = "reference model (its kind is not recorded in the files)" if damper == "unknown" else f"{damper} model"
-        note = (f"The records come from the virtual rig, whose damper is a {what} with noise and "
-                "sensor dynamics added.")
+        damper = (
+            origin[origin.find("(") + 1 : origin.rfind(" damper)")] if "(" in origin else "a known"
+        )
+        what = (
+            "reference model (its kind is not recorded in the files)"
+            if damper == "unknown"
+            else f"{damper} model"
+        )
+        note = (
+            f"The records come from the virtual rig, whose damper is a {what} with noise and "
+            "sensor dynamics added."
+        )
         if damper == "spencer":
-            note += (" The <code>spencer</code> estimator therefore has the true structure here: it is a "
-                     "reference, not a competitor.")
+            note += (
+                " The <code>spencer</code> estimator therefore has the true structure here: it is a "
+                "reference, not a competitor."
+            )
         return note
-    return ("The records are measured data: no model has the damper's true structure. Spencer, Bingham and "
-            "NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, LTI).")
+    return (
+        "The records are measured data: no model has the damper's true structure. Spencer, Bingham and "
+        "NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, LTI)."
+    )
 
 
 def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, str]) -> str:
@@ -159,52 +190,84 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, 
     ref = res.headline().get("model", "lpv")
     out.append(_table(summary_table(summary, ref, failed)))
     if failed:
-        out.append('<p class="small">Failed: ' + "; ".join(f"<b>{_e(k)}</b>: {_e(v)}" for k, v in failed.items())
-                   + ".</p>")
+        out.append(
+            '<p class="small">Failed: '
+            + "; ".join(f"<b>{_e(k)}</b>: {_e(v)}" for k, v in failed.items())
+            + ".</p>"
+        )
     out.append(
         '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured force) [-] and SSSE '
         "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is the "
         f"interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) {_e(ref)}'s "
-        "mean ESR is than the row model's mean, 100 (other - " + _e(ref) + ") / other, the way the headline and the "
+        "mean ESR is than the row model's mean, 100 (other - "
+        + _e(ref)
+        + ") / other, the way the headline and the "
         "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an error larger than the signal) or that never "
         "simulated is marked failed; its row stays. Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
-        + _data_note(res) + "</p>")
+        + _data_note(res)
+        + "</p>"
+    )
     return "\n".join(out)
 
 
 def _by_group_section(res: StudyResult) -> str:
     keys = grouping_keys(res.results)
     if not keys:
-        return ("<p>The scored records carry no condition, experiment or current metadata with two or more "
-                "values, so there is no breakdown; every row is in the table at the end.</p>")
-    titles = {"condition": "Mean ESR [-] per test condition (amplitude and frequency)",
-              "experiment": "Mean ESR [-] per experiment (Table II)",
-              "current": f"Mean ESR [-] per current level [{_unit(res)}]"}
+        return (
+            "<p>The scored records carry no condition, experiment or current metadata with two or more "
+            "values, so there is no breakdown; every row is in the table at the end.</p>"
+        )
+    titles = {
+        "condition": "Mean ESR [-] per test condition (amplitude and frequency)",
+        "experiment": "Mean ESR [-] per experiment (Table II)",
+        "current": f"Mean ESR [-] per current level [{_unit(res)}]",
+    }
     out = []
     for key in keys:
-        out.append(f"<h3>{_e(titles[key])}</h3>" + _table(esr_by_table(res.results, key, res.labels, _unit(res)), digits=3))
+        out.append(
+            f"<h3>{_e(titles[key])}</h3>"
+            + _table(esr_by_table(res.results, key, res.labels, _unit(res)), digits=3)
+        )
     if "current" not in keys:
-        out.append('<p class="small">No per-current table: the scored records have no constant current level '
-                   "(the current varies within each record).</p>")
+        out.append(
+            '<p class="small">No per-current table: the scored records have no constant current level '
+            "(the current varies within each record).</p>"
+        )
     return "\n".join(out)
 
 
 def _failures_section(res: StudyResult) -> str:
-    fits = res.fits[["fold", "model", "status", "fit_time_s", "n_train", "train_samples", "error", "note"]]
-    fits = fits.rename(columns={"fit_time_s": "fit time [s]", "n_train": "training records",
-                                "train_samples": "training samples"})
+    fits = res.fits[
+        ["fold", "model", "status", "fit_time_s", "n_train", "train_samples", "error", "note"]
+    ]
+    fits = fits.rename(
+        columns={
+            "fit_time_s": "fit time [s]",
+            "n_train": "training records",
+            "train_samples": "training samples",
+        }
+    )
     out = ["<p>Identification, one row per fold and model:</p>", _table(fits, cls="left")]
     bad = res.results[res.results["status"] != "ok"]
     if bad.empty:
         out.append("<p>Every simulation of every scored record succeeded.</p>")
     else:
-        grp = bad.groupby(["model", "status"], sort=False).agg(rows=("record", "count"), first_error=("error", "first"))
-        out.append(f"<p>{len(bad)} row(s) without scores (kept in <code>results.csv</code>):</p>" + _table(grp.reset_index(), cls="left"))
+        grp = bad.groupby(["model", "status"], sort=False).agg(
+            rows=("record", "count"), first_error=("error", "first")
+        )
+        out.append(
+            f"<p>{len(bad)} row(s) without scores (kept in <code>results.csv</code>):</p>"
+            + _table(grp.reset_index(), cls="left")
+        )
     notes = res.results[(res.results["status"] == "ok") & (res.results["note"].astype(str) != "")]
     if not notes.empty:
-        grp = notes.groupby("model", sort=False).agg(rows=("record", "count"), example=("note", "first"))
-        out.append("<p>Warnings while simulating (e.g. extrapolation outside the identified range):</p>"
-                   + _table(grp.reset_index(), cls="left"))
+        grp = notes.groupby("model", sort=False).agg(
+            rows=("record", "count"), example=("note", "first")
+        )
+        out.append(
+            "<p>Warnings while simulating (e.g. extrapolation outside the identified range):</p>"
+            + _table(grp.reset_index(), cls="left")
+        )
     return "\n".join(out)
 
 
@@ -216,19 +279,31 @@ def _analysis_section(res: StudyResult) -> str:
         if an.laws is None or not hasattr(an.laws, "levels"):
             out.append(f"<p>Fold <code>{_e(fold)}</code>: {_e(an.error or 'no analysis')}</p>")
             continue
-        body = [(f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
-                 "with the largest distance of a per-level fit from its law:</p>")]
+        body = [
+            (
+                f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
+                "with the largest distance of a per-level fit from its law:</p>"
+            )
+        ]
         for title, df in laws_table(an.laws, unit).items():
             body.append(f"<p><b>{_e(title)}</b></p>" + _table(df))
-        body.append("<p>Three-zone fit (eq. 17) at each level:</p>" + _table(analysis_table(an.laws, unit)))
+        body.append(
+            "<p>Three-zone fit (eq. 17) at each level:</p>" + _table(analysis_table(an.laws, unit))
+        )
         if an.notes:
             body.append(f'<p class="small">Warnings of the analysis: {_e(an.notes)}</p>')
         if shown == 0:
             out.append(f"<h3>Fold <code>{_e(fold)}</code></h3>" + "\n".join(body))
         else:
-            out.append(f"<details><summary>Fold <code>{_e(fold)}</code></summary>" + "\n".join(body) + "</details>")
+            out.append(
+                f"<details><summary>Fold <code>{_e(fold)}</code></summary>"
+                + "\n".join(body)
+                + "</details>"
+            )
         shown += 1
-    out.append('<p class="small">Every fold\'s laws are also in <code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>')
+    out.append(
+        '<p class="small">Every fold\'s laws are also in <code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>'
+    )
     return "\n".join(out)
 
 
@@ -239,10 +314,16 @@ def _record_text(res: StudyResult, which: str) -> str:
     el = np.asarray(sc.record.electrical(res.protocol.input), dtype=float)  # type: ignore[arg-type]
     lo, hi = float(np.min(el)), float(np.max(el))
     unit = _unit(res)
-    level = (f"{res.protocol.input} from {lo:.3g} to {hi:.3g} {unit}" if hi - lo > 0.05 * max(abs(hi), 1e-9)
-             else f"{res.protocol.input} = {float(np.mean(el)):.3g} {unit}")
-    why = ("the protocol's choice" if (res.protocol.showcase if which == "showcase" else res.protocol.hysteresis_record)
-           else "the scored record with varying current if any, else the highest current level and widest velocity range")
+    level = (
+        f"{res.protocol.input} from {lo:.3g} to {hi:.3g} {unit}"
+        if hi - lo > 0.05 * max(abs(hi), 1e-9)
+        else f"{res.protocol.input} = {float(np.mean(el)):.3g} {unit}"
+    )
+    why = (
+        "the protocol's choice"
+        if (res.protocol.showcase if which == "showcase" else res.protocol.hysteresis_record)
+        else "the scored record with varying current if any, else the highest current level and widest velocity range"
+    )
     return f"Record <code>{_e(sc.record.name)}</code> ({_e(level)}; fold {_e(sc.fold)}; {_e(why)})."
 
 
@@ -253,13 +334,19 @@ def figure_captions(res: StudyResult, failed: dict[str, str] | None = None) -> d
     caps["fig06_lpv_tracking"] += " " + _record_text(res, "showcase")
     caps["fig04_lti_hysteresis"] += " " + _record_text(res, "hysteresis")
     over = overlay_models(res, failed) if res.showcase is not None else []
-    rule = (f" {_record_text(res, 'showcase')} Top: the measured force with {_e(', '.join(over) or 'no model')} "
-            "(rule: LPV, the best of the paper's classical models and the best other model by mean ESR over the "
-            "study, none of them failed). Below: every model in its own panel on a shared force scale, with its "
-            "ESR on this record.")
+    rule = (
+        f" {_record_text(res, 'showcase')} Top: the measured force with {_e(', '.join(over) or 'no model')} "
+        "(rule: LPV, the best of the paper's classical models and the best other model by mean ESR over the "
+        "study, none of them failed). Below: every model in its own panel on a shared force scale, with its "
+        "ESR on this record."
+    )
     if failed:
-        rule += (" Failed models (" + _e(", ".join(failed)) + ") have a panel of their own with their own force "
-                 "scale, outlined in red.")
+        rule += (
+            " Failed models ("
+            + _e(", ".join(failed))
+            + ") have a panel of their own with their own force "
+            "scale, outlined in red."
+        )
     for name in ("fig09_force_time", "fig10_fv_models", "fig11_fx_loops"):
         caps[name] += rule
     if _virtual(res):
@@ -278,14 +365,18 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
             continue
         ref = f"paper Fig. {paper}" if paper is not None else "not in the paper"
         if isinstance(item, str):
-            skipped.append(f'<li id="{_e(name)}">{_e(ref[0].upper() + ref[1:])}: {_e(FIGURES[name][1])} '
-                           f'<span class="warn">Not drawn: {_e(item)}</span></li>')
+            skipped.append(
+                f'<li id="{_e(name)}">{_e(ref[0].upper() + ref[1:])}: {_e(FIGURES[name][1])} '
+                f'<span class="warn">Not drawn: {_e(item)}</span></li>'
+            )
             continue
         number += 1
         label = f"<b>Figure {number}</b> ({ref})."
         png = Path(item["png"]).read_bytes()
         data = base64.b64encode(png).decode("ascii")
-        width_in = int.from_bytes(png[16:20], "big") / FIGURE_DPI  # IHDR width [px] at the saved resolution
+        width_in = (
+            int.from_bytes(png[16:20], "big") / FIGURE_DPI
+        )  # IHDR width [px] at the saved resolution
         out.append(
             f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" style="width:{width_in:.2f}in" '
             f'alt="Figure {number}: {_e(FIGURES[name][1])}">'
@@ -294,12 +385,16 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
         if name == "fig11_fx_loops":
             tab = energy_table(res.showcase)
             if not tab.empty:
-                out.append("<p>Energy dissipated on this record, W = &int; F v dt: the mean over the complete "
-                           "cycles of the measured displacement, or the whole record when it holds less than one "
-                           "(every force integrated over the same cycles with the measured velocity):</p>"
-                           + _table(energy_display(tab, failed), digits=3))
+                out.append(
+                    "<p>Energy dissipated on this record, W = &int; F v dt: the mean over the complete "
+                    "cycles of the measured displacement, or the whole record when it holds less than one "
+                    "(every force integrated over the same cycles with the measured velocity):</p>"
+                    + _table(energy_display(tab, failed), digits=3)
+                )
     if skipped:
-        out.insert(0, "<p>Figures that this study cannot draw:</p><ul>" + "".join(skipped) + "</ul>")
+        out.insert(
+            0, "<p>Figures that this study cannot draw:</p><ul>" + "".join(skipped) + "</ul>"
+        )
     if not out:
         return "<p>Figures were not requested.</p>"
     note = study_failed_note(res, failed)
@@ -323,31 +418,53 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
     info = res.info
     failed = failed_models(res)
     results_cols = [c for c in res.results.columns if c not in ("note",)]
-    all_rows = res.results[results_cols].rename(columns={
-        "esr": "ESR [-]", "ssse": "SSSE [N]", "nrmse": "NRMSE [-]", "fit_pct": "fit [%]",
-        "fit_time_s": "fit time [s]", "sim_time_s": "simulation time [s]", "current": f"current [{_unit(res)}]",
-        "amplitude": "amplitude [m]", "frequency": "frequency [Hz]"})
+    all_rows = res.results[results_cols].rename(
+        columns={
+            "esr": "ESR [-]",
+            "ssse": "SSSE [N]",
+            "nrmse": "NRMSE [-]",
+            "fit_pct": "fit [%]",
+            "fit_time_s": "fit time [s]",
+            "sim_time_s": "simulation time [s]",
+            "current": f"current [{_unit(res)}]",
+            "amplitude": "amplitude [m]",
+            "frequency": "frequency [Hz]",
+        }
+    )
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f"<title>mrdamper study: {_e(res.protocol.name)}</title><style>{_CSS}</style></head><body>",
         f"<h1>MR damper model comparison: {_e(res.protocol.name)}</h1>",
-        (f'<p class="small">{_e(info.get("n_records", "?"))} records ({_e(info.get("data_origin", "origin not recorded"))}), '
-         f'{_e(info.get("n_folds", "?"))} fold(s), {len(res.specs)} models; seed {_e(info.get("seed"))}; run on '
-         f'{_e(info.get("executor", "?"))} in {float(info.get("wall_time_s", float("nan"))):.1f} s.</p>'),
-        "<h2>Summary</h2>", _summary_section(res, summary, failed),
-        "<h2>ESR per condition and per current level</h2>", _by_group_section(res),
-        "<h2>Protocol</h2>", _protocol_section(res),
-        "<h2>Figures</h2>", _figures_section(res, saved, failed),
-        "<h2>Identification and failures</h2>", _failures_section(res),
-        "<h2>Force-velocity analysis and fitted laws</h2>", _analysis_section(res),
+        (
+            f'<p class="small">{_e(info.get("n_records", "?"))} records ({_e(info.get("data_origin", "origin not recorded"))}), '
+            f"{_e(info.get('n_folds', '?'))} fold(s), {len(res.specs)} models; seed {_e(info.get('seed'))}; run on "
+            f"{_e(info.get('executor', '?'))} in {float(info.get('wall_time_s', float('nan'))):.1f} s.</p>"
+        ),
+        "<h2>Summary</h2>",
+        _summary_section(res, summary, failed),
+        "<h2>ESR per condition and per current level</h2>",
+        _by_group_section(res),
+        "<h2>Protocol</h2>",
+        _protocol_section(res),
+        "<h2>Figures</h2>",
+        _figures_section(res, saved, failed),
+        "<h2>Identification and failures</h2>",
+        _failures_section(res),
+        "<h2>Force-velocity analysis and fitted laws</h2>",
+        _analysis_section(res),
         "<h2>All results</h2>",
-        (f"<details><summary>{len(res.results)} rows (also in <code>results.csv</code>)</summary>"
-         + _table(all_rows, cls="left") + "</details>"),
-        (f'<p class="small">Python {_e(info.get("python", ""))} on {_e(info.get("platform", ""))}. Files next to '
-         "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, analysis/, "
-         "figures/.</p>"),
+        (
+            f"<details><summary>{len(res.results)} rows (also in <code>results.csv</code>)</summary>"
+            + _table(all_rows, cls="left")
+            + "</details>"
+        ),
+        (
+            f'<p class="small">Python {_e(info.get("python", ""))} on {_e(info.get("platform", ""))}. Files next to '
+            "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, analysis/, "
+            "figures/.</p>"
+        ),
         "</body></html>",
     ]
     return "\n".join(parts) + "\n"

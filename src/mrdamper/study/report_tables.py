@@ -69,7 +69,9 @@ def _vs(reference: float, other: float) -> str:
     return f"{abs(g):.1f} % {'lower' if g >= 0 else 'higher'}"
 
 
-def summary_table(summary: pd.DataFrame, reference: str = "lpv", failed: dict[str, str] | None = None) -> pd.DataFrame:
+def summary_table(
+    summary: pd.DataFrame, reference: str = "lpv", failed: dict[str, str] | None = None
+) -> pd.DataFrame:
     """Per-model summary for the report, every header with its unit.
 
     Parameters
@@ -99,20 +101,26 @@ def summary_table(summary: pd.DataFrame, reference: str = "lpv", failed: dict[st
     for k, r in summary.iterrows():
         label = str(r["model"])
         is_ref = label == reference
-        rows.append({
-            "model": label,
-            "status": "failed" if label in failed else "ok",
-            "scored (ok / failed)": f"{int(r['n_ok'])} / {int(r['n_failed'])}",
-            "ESR mean [-]": r["esr_mean"],
-            "ESR median [-]": r["esr_median"],
-            "ESR q1-q3 [-]": _span(r["esr_q1"], r["esr_q3"]),
-            "SSSE mean [N]": r["ssse_mean"],
-            "SSSE q1-q3 [N]": _span(r["ssse_q1"], r["ssse_q3"]),
-            "rank (mean ESR)": int(ranks[k]) if np.isfinite(ranks[k]) else None,
-            f"{reference} ESR vs this model": "reference" if is_ref else _vs(ref_esr, float(r["esr_mean"])),
-            f"{reference} SSSE vs this model": "reference" if is_ref else _vs(ref_ssse, float(r["ssse_mean"])),
-            "fit time [s]": r["fit_time_s"],
-        })
+        rows.append(
+            {
+                "model": label,
+                "status": "failed" if label in failed else "ok",
+                "scored (ok / failed)": f"{int(r['n_ok'])} / {int(r['n_failed'])}",
+                "ESR mean [-]": r["esr_mean"],
+                "ESR median [-]": r["esr_median"],
+                "ESR q1-q3 [-]": _span(r["esr_q1"], r["esr_q3"]),
+                "SSSE mean [N]": r["ssse_mean"],
+                "SSSE q1-q3 [N]": _span(r["ssse_q1"], r["ssse_q3"]),
+                "rank (mean ESR)": int(ranks[k]) if np.isfinite(ranks[k]) else None,
+                f"{reference} ESR vs this model": "reference"
+                if is_ref
+                else _vs(ref_esr, float(r["esr_mean"])),
+                f"{reference} SSSE vs this model": "reference"
+                if is_ref
+                else _vs(ref_ssse, float(r["ssse_mean"])),
+                "fit time [s]": r["fit_time_s"],
+            }
+        )
     out = pd.DataFrame(rows)
     if ref.empty:
         out = out.drop(columns=[c for c in out.columns if c.endswith(" vs this model")])
@@ -147,7 +155,9 @@ def grouping_keys(results: pd.DataFrame) -> list[str]:
     return out
 
 
-def esr_by_table(results: pd.DataFrame, key: str, order: Sequence[str], unit: str = "A") -> pd.DataFrame:
+def esr_by_table(
+    results: pd.DataFrame, key: str, order: Sequence[str], unit: str = "A"
+) -> pd.DataFrame:
     """Mean ESR [-] of each model per value of a metadata column (condition, experiment, current).
 
     Parameters
@@ -211,11 +221,17 @@ def laws_table(laws: Any, unit: str = "A") -> dict[str, pd.DataFrame]:
         if p == 0:
             return base
         den = unit if p == 1 else f"{unit}^{p}"
-        return f"{base}/{den}" if "/" not in base else f"{base.split('/')[0]}/({base.split('/')[1]} {den})"
+        return (
+            f"{base}/{den}"
+            if "/" not in base
+            else f"{base.split('/')[0]}/({base.split('/')[1]} {den})"
+        )
 
     out: dict[str, pd.DataFrame] = {}
-    for title, name, base, g, res in (("slopes m_j(i) [N s/m]", "m", "N s/m", gm, m_res),
-                                      ("intercepts c_j(i) [N]", "c", "N", gc, c_res)):
+    for title, name, base, g, res in (
+        ("slopes m_j(i) [N s/m]", "m", "N s/m", gm, m_res),
+        ("intercepts c_j(i) [N]", "c", "N", gc, c_res),
+    ):
         rows = []
         for j in range(3):
             row: dict[str, Any] = {"law": f"{name}{j + 1} (zone {_ZONES[j]})"}
@@ -225,9 +241,20 @@ def laws_table(laws: Any, unit: str = "A") -> dict[str, pd.DataFrame]:
             rows.append(row)
         out[title] = pd.DataFrame(rows)
     rows = []
-    for name, mu, lev in (("v_high", laws.mu_high, laws.level_v_high), ("v_low", laws.mu_low, laws.level_v_low)):
-        rows.append({"law": name, "gamma_0 [m/s]": mu[1], f"gamma_1 [m/(s {unit})]": mu[0],
-                     "largest |fit - law| [m/s]": float(np.max(np.abs(np.asarray(lev) - (mu[0] * lv + mu[1]))))})
+    for name, mu, lev in (
+        ("v_high", laws.mu_high, laws.level_v_high),
+        ("v_low", laws.mu_low, laws.level_v_low),
+    ):
+        rows.append(
+            {
+                "law": name,
+                "gamma_0 [m/s]": mu[1],
+                f"gamma_1 [m/(s {unit})]": mu[0],
+                "largest |fit - law| [m/s]": float(
+                    np.max(np.abs(np.asarray(lev) - (mu[0] * lv + mu[1])))
+                ),
+            }
+        )
     out["zone limits v(i) [m/s]"] = pd.DataFrame(rows)
     return out
 
@@ -277,15 +304,31 @@ def energy_table(sc: Showcase | None) -> pd.DataFrame:
 
     W0, n0 = energy(e.F)
     basis = f"mean of {n0} cycles" if n0 else "whole record (less than one complete cycle)"
-    rows: list[dict[str, Any]] = [{"model": "measured", "energy_J": W0, "diff_pct": 0.0, "cycles": n0, "basis": basis}]
+    rows: list[dict[str, Any]] = [
+        {"model": "measured", "energy_J": W0, "diff_pct": 0.0, "cycles": n0, "basis": basis}
+    ]
     for label, F in sc.predictions.items():
         if isinstance(F, str):
-            rows.append({"model": label, "energy_J": float("nan"), "diff_pct": float("nan"), "cycles": n0,
-                         "basis": "no prediction"})
+            rows.append(
+                {
+                    "model": label,
+                    "energy_J": float("nan"),
+                    "diff_pct": float("nan"),
+                    "cycles": n0,
+                    "basis": "no prediction",
+                }
+            )
             continue
         Wm, _ = energy(F)
-        rows.append({"model": label, "energy_J": Wm, "diff_pct": 100.0 * (Wm - W0) / abs(W0) if W0 else float("nan"),
-                     "cycles": n0, "basis": basis})
+        rows.append(
+            {
+                "model": label,
+                "energy_J": Wm,
+                "diff_pct": 100.0 * (Wm - W0) / abs(W0) if W0 else float("nan"),
+                "cycles": n0,
+                "basis": basis,
+            }
+        )
     return pd.DataFrame(rows, columns=cols)
 
 
@@ -293,10 +336,17 @@ def energy_display(tab: pd.DataFrame, failed: dict[str, str] | None = None) -> p
     """:func:`energy_table` with headers carrying units and the failed models marked."""
     failed = failed or {}
     per_cycle = bool(len(tab)) and int(tab["cycles"].iloc[0]) > 0
-    out = tab.drop(columns=["cycles"]).rename(columns={
-        "energy_J": "energy per cycle [J]" if per_cycle else "energy over the record [J]",
-        "diff_pct": "model - measured [%]"})
-    out.insert(1, "status", ["" if m == "measured" else ("failed" if m in failed else "ok") for m in tab["model"]])
+    out = tab.drop(columns=["cycles"]).rename(
+        columns={
+            "energy_J": "energy per cycle [J]" if per_cycle else "energy over the record [J]",
+            "diff_pct": "model - measured [%]",
+        }
+    )
+    out.insert(
+        1,
+        "status",
+        ["" if m == "measured" else ("failed" if m in failed else "ok") for m in tab["model"]],
+    )
     return out
 
 
@@ -304,5 +354,8 @@ def study_failed_note(res: StudyResult, failed: dict[str, str]) -> str:
     """One sentence naming the models drawn apart in the shared figures (empty when none)."""
     if not failed:
         return ""
-    return ("Drawn in panels of their own (own force scale), never overlaid: "
-            + "; ".join(f"{k} ({v})" for k, v in failed.items()) + ". Their rows stay in every table.")
+    return (
+        "Drawn in panels of their own (own force scale), never overlaid: "
+        + "; ".join(f"{k} ({v})" for k, v in failed.items())
+        + ". Their rows stay in every table."
+    )

@@ -123,7 +123,9 @@ class StudyResult:
         return plot_index_boxes(self.results, index=index, order=self.labels, ax=ax)
 
     # ------------------------------------------------------------------ writing
-    def write(self, out_dir: str | os.PathLike[str], *, force: bool = False, figures: bool = True) -> Path:
+    def write(
+        self, out_dir: str | os.PathLike[str], *, force: bool = False, figures: bool = True
+    ) -> Path:
         """Write results, summary, models, figures (PNG + SVG) and ``report.html`` to ``out_dir``.
 
         The writing itself is :func:`mrdamper.study.writer.write_study`; see there.
@@ -150,5 +152,3 @@ class StudyResult:
         from mrdamper.study.writer import write_study
 
         return write_study(self, out_dir, force=force, figures=figures)
-
-

@@ -34,7 +34,15 @@ from mrdamper.study.tables import RESULT_COLUMNS
 __all__ = ["META_COLUMNS", "data_origin", "run_study"]
 
 #: Record metadata copied into the results table when present.
-META_COLUMNS: tuple[str, ...] = ("experiment", "replicate", "pattern", "condition", "current", "amplitude", "frequency")
+META_COLUMNS: tuple[str, ...] = (
+    "experiment",
+    "replicate",
+    "pattern",
+    "condition",
+    "current",
+    "amplitude",
+    "frequency",
+)
 
 _LAW_SETTINGS = ("laws", "zone_laws")
 
@@ -118,8 +126,13 @@ def _progress(enabled: bool) -> Any:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     return Progress(
-        TextColumn("{task.description:<12}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-        console=Console(stderr=True), disable=not enabled, transient=False,
+        TextColumn("{task.description:<12}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+        disable=not enabled,
+        transient=False,
     )
 
 
@@ -178,7 +191,9 @@ def run_study(
     analyses: dict[str, AnalysisOutcome] = {}
     for fold in folds:
         if protocol.analysis is None:
-            analyses[fold.name] = AnalysisOutcome(error="no force-velocity analysis in this protocol")
+            analyses[fold.name] = AnalysisOutcome(
+                error="no force-velocity analysis in this protocol"
+            )
         else:
             analyses[fold.name] = run_analysis(fold.analysis, protocol.input)
     settings = {
@@ -210,8 +225,16 @@ def run_study(
         "platform": platform.platform(),
     }
     return StudyResult(
-        protocol=protocol, specs=specs, results=results, fits=fits, roles=roles_frame(folds),
-        models=fitted, analyses=analyses, showcase=showcase, hysteresis=hysteresis, info=info,
+        protocol=protocol,
+        specs=specs,
+        results=results,
+        fits=fits,
+        roles=roles_frame(folds),
+        models=fitted,
+        analyses=analyses,
+        showcase=showcase,
+        hysteresis=hysteresis,
+        info=info,
     )
 
 
@@ -253,16 +276,23 @@ def _execute(
                 except Exception as exc:
                     if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
                         raise KeyboardInterrupt from exc
-                    res = {"status": "fit-failed" if len(tag) == 2 else "sim-failed", "model": None,
-                           "error": f"worker error: {type(exc).__name__}: {exc}", "note": "",
-                           "fit_time_s": float("nan"), "sim_time_s": float("nan")}
+                    res = {
+                        "status": "fit-failed" if len(tag) == 2 else "sim-failed",
+                        "model": None,
+                        "error": f"worker error: {type(exc).__name__}: {exc}",
+                        "note": "",
+                        "fit_time_s": float("nan"),
+                        "sim_time_s": float("nan"),
+                    }
                 if len(tag) == 2:
                     fi, si = tag
                     fit_out[(fi, si)] = res
                     bar.advance(t_fit)
                     if res["status"] == "ok":
                         for ri, e in enumerate(folds[fi].score):
-                            fut2 = ex.submit(simulate_task, res["model"], handle(e), protocol.range_policy)
+                            fut2 = ex.submit(
+                                simulate_task, res["model"], handle(e), protocol.range_policy
+                            )
                             pending[fut2] = (fi, si, ri)
                     else:
                         bar.advance(t_sim, len(folds[fi].score))
@@ -284,21 +314,46 @@ def _tables(
     for fi, fold in enumerate(folds):
         for si, spec in enumerate(specs):
             fr = fit_out[(fi, si)]
-            fit_rows.append({
-                "fold": fold.name, "model": spec.label, "kind": spec.kind, "status": fr["status"],
-                "fit_time_s": fr["fit_time_s"], "n_train": len(fold.train),
-                "train_samples": int(sum(e.n for e in fold.train)),
-                "note": fr.get("note", ""), "error": fr.get("error", ""),
-            })
+            fit_rows.append(
+                {
+                    "fold": fold.name,
+                    "model": spec.label,
+                    "kind": spec.kind,
+                    "status": fr["status"],
+                    "fit_time_s": fr["fit_time_s"],
+                    "n_train": len(fold.train),
+                    "train_samples": int(sum(e.n for e in fold.train)),
+                    "note": fr.get("note", ""),
+                    "error": fr.get("error", ""),
+                }
+            )
             for ri, e in enumerate(fold.score):
-                row: dict[str, Any] = {"fold": fold.name, "model": spec.label, "kind": spec.kind, "record": e.name,
-                                       "fit_time_s": fr["fit_time_s"]}
+                row: dict[str, Any] = {
+                    "fold": fold.name,
+                    "model": spec.label,
+                    "kind": spec.kind,
+                    "record": e.name,
+                    "fit_time_s": fr["fit_time_s"],
+                }
                 if fr["status"] != "ok":
-                    row.update(status=fr["status"], esr=nan, ssse=nan, nrmse=nan, fit_pct=nan, sim_time_s=nan,
-                               note=fr.get("note", ""), error=fr.get("error", ""))
+                    row.update(
+                        status=fr["status"],
+                        esr=nan,
+                        ssse=nan,
+                        nrmse=nan,
+                        fit_pct=nan,
+                        sim_time_s=nan,
+                        note=fr.get("note", ""),
+                        error=fr.get("error", ""),
+                    )
                 else:
                     sr = sim_out[(fi, si, ri)]
-                    row.update({k: sr.get(k, nan) for k in ("status", "esr", "ssse", "nrmse", "fit_pct", "sim_time_s")})
+                    row.update(
+                        {
+                            k: sr.get(k, nan)
+                            for k in ("status", "esr", "ssse", "nrmse", "fit_pct", "sim_time_s")
+                        }
+                    )
                     row["note"], row["error"] = sr.get("note", ""), sr.get("error", "")
                 for k in meta_present:
                     row[k] = e.metadata.get(k)
@@ -336,14 +391,21 @@ def _informative(folds: list[Fold], source: str) -> tuple[Fold, Experiment] | No
 
     def key(k: int) -> tuple[bool, int, float]:
         el, e = levels[k], cands[k][1]
-        return (float(np.ptp(el)) > 0.1 * span, round(20 * float(np.mean(np.abs(el))) / span), float(np.std(e.v)))
+        return (
+            float(np.ptp(el)) > 0.1 * span,
+            round(20 * float(np.mean(np.abs(el))) / span),
+            float(np.std(e.v)),
+        )
 
     best = max(range(len(cands)), key=lambda k: (key(k), -k))
     return cands[best]
 
 
 def _showcases(
-    folds: list[Fold], specs: Sequence[ModelSpec], fitted: Mapping[tuple[str, str], Any], protocol: Protocol
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    fitted: Mapping[tuple[str, str], Any],
+    protocol: Protocol,
 ) -> tuple[Showcase | None, Showcase | None]:
     """Predictions of every model on the figure records (Figs. 4, 6, 9, 10, 11).
 
@@ -354,8 +416,15 @@ def _showcases(
     kinds = {s.label: s.kind for s in specs}
 
     def make(fold: Fold, e: Experiment) -> Showcase:
-        ms = {s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted}
-        return Showcase(fold=fold.name, record=e, predictions=_predict_all(ms, e, protocol.range_policy), kinds=kinds)
+        ms = {
+            s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted
+        }
+        return Showcase(
+            fold=fold.name,
+            record=e,
+            predictions=_predict_all(ms, e, protocol.range_policy),
+            kinds=kinds,
+        )
 
     show = hyst = None
     if protocol.showcase is None:

@@ -99,7 +99,9 @@ def selection_folds(
     if not (isinstance(n_folds, int) and n_folds >= 2):
         raise DataValidationError("n_folds", f"expected an integer >= 2, got {n_folds!r}")
     if folds not in ("auto", "condition", "record", "time"):
-        raise DataValidationError("folds", f"expected auto, condition, record or time, got {folds!r}")
+        raise DataValidationError(
+            "folds", f"expected auto, condition, record or time, got {folds!r}"
+        )
     conditions = {e.metadata.get("condition") for e in exps}
     has_cond = None not in conditions and len(conditions) >= 2
     if folds == "auto":
@@ -107,12 +109,17 @@ def selection_folds(
     if folds == "condition":
         if not has_cond:
             raise DataValidationError(
-                "folds", "'condition' needs metadata 'condition' on every record and at least two conditions"
+                "folds",
+                "'condition' needs metadata 'condition' on every record and at least two conditions",
             )
-        return "condition", [(str(c), tr, te) for c, tr, te in exps.leave_one_group_out("condition")]
+        return "condition", [
+            (str(c), tr, te) for c, tr, te in exps.leave_one_group_out("condition")
+        ]
     if folds == "record":
         if len(exps) < 2:
-            raise DataValidationError("folds", "'record' needs at least two records; use 'time' for one record")
+            raise DataValidationError(
+                "folds", "'record' needs at least two records; use 'time' for one record"
+            )
         names = sorted(exps.names)
         k = min(n_folds, len(names))
         groups = [set(names[j::k]) for j in range(k)]
@@ -132,8 +139,13 @@ def selection_folds(
         parts = [e.slice(0, a, name=f"{e.name}[:{a}]")] if a > 0 else []
         if b < e.n:
             parts.append(e.slice(b, None, name=f"{e.name}[{b}:]"))
-        out.append((f"block {j + 1}/{n_folds}", ExperimentSet(parts),
-                    ExperimentSet([e.slice(a, b, name=f"{e.name}[{a}:{b}]")])))
+        out.append(
+            (
+                f"block {j + 1}/{n_folds}",
+                ExperimentSet(parts),
+                ExperimentSet([e.slice(a, b, name=f"{e.name}[{a}:{b}]")]),
+            )
+        )
     return "time", out
 
 
@@ -176,8 +188,10 @@ def cross_validate(
     notes: list[str] = []
     rates = sorted({e.fs for e in exps})
     if len(rates) > 1:
-        notes.append(f"records have rates {rates} Hz: discrete models ({', '.join(_DISCRETE)}) run at "
-                     f"the lowest, {rates[0]:g} Hz")
+        notes.append(
+            f"records have rates {rates} Hz: discrete models ({', '.join(_DISCRETE)}) run at "
+            f"the lowest, {rates[0]:g} Hz"
+        )
     rows: list[dict[str, Any]] = []
     fit_times: dict[str, list[float]] = {k: [] for k in kinds}
     for kind in kinds:
@@ -186,10 +200,21 @@ def cross_validate(
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    model = get_estimator(kind, **{"input": input, **extra.get(kind, {})}).fit(train)
+                    model = get_estimator(kind, **{"input": input, **extra.get(kind, {})}).fit(
+                        train
+                    )
             except Exception as exc:  # noqa: BLE001 - a failing kind is a row of the table
-                rows += [{"model": kind, "fold": label, "record": e.name, "esr": np.nan, "clipped": False,
-                          "error": f"fit: {type(exc).__name__}: {exc}"} for e in test]
+                rows += [
+                    {
+                        "model": kind,
+                        "fold": label,
+                        "record": e.name,
+                        "esr": np.nan,
+                        "clipped": False,
+                        "error": f"fit: {type(exc).__name__}: {exc}",
+                    }
+                    for e in test
+                ]
                 continue
             fit_times[kind].append(time.perf_counter() - t0)
             for e in test:
@@ -198,11 +223,27 @@ def cross_validate(
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
                         esr = model.with_range_policy("clip").score(e).esr
-                    rows.append({"model": kind, "fold": label, "record": e.name, "esr": float(esr),
-                                 "clipped": clipped, "error": ""})
+                    rows.append(
+                        {
+                            "model": kind,
+                            "fold": label,
+                            "record": e.name,
+                            "esr": float(esr),
+                            "clipped": clipped,
+                            "error": "",
+                        }
+                    )
                 except Exception as exc:  # noqa: BLE001 - reported
-                    rows.append({"model": kind, "fold": label, "record": e.name, "esr": np.nan,
-                                 "clipped": clipped, "error": f"simulate: {type(exc).__name__}: {exc}"})
+                    rows.append(
+                        {
+                            "model": kind,
+                            "fold": label,
+                            "record": e.name,
+                            "esr": np.nan,
+                            "clipped": clipped,
+                            "error": f"simulate: {type(exc).__name__}: {exc}",
+                        }
+                    )
     scores = pd.DataFrame(rows, columns=["model", "fold", "record", "esr", "clipped", "error"])
     table = _summarise(scores, kinds, fit_times)
     recommended, reason = _recommend(table, split, len(parts))
@@ -219,24 +260,28 @@ def _outside(model: Any, e: Experiment) -> bool:
     return False
 
 
-def _summarise(scores: pd.DataFrame, kinds: list[str], fit_times: dict[str, list[float]]) -> pd.DataFrame:
+def _summarise(
+    scores: pd.DataFrame, kinds: list[str], fit_times: dict[str, list[float]]
+) -> pd.DataFrame:
     out = []
     for k in kinds:
         s = scores[scores["model"] == k]
         failed_folds = s.loc[s["error"] != "", "fold"].nunique()
         errs = s.loc[s["error"] != "", "error"]
         esr = s["esr"].dropna()
-        out.append({
-            "model": k,
-            "mean_esr": float(esr.mean()) if failed_folds == 0 and len(esr) else np.nan,
-            "median_esr": float(esr.median()) if len(esr) else np.nan,
-            "worst_esr": float(esr.max()) if len(esr) else np.nan,
-            "folds_ok": int(s["fold"].nunique() - failed_folds),
-            "folds_failed": int(failed_folds),
-            "clipped": int(s["clipped"].sum()),
-            "fit_s": float(np.mean(fit_times[k])) if fit_times[k] else np.nan,
-            "error": str(errs.iloc[0])[:120] if len(errs) else "",
-        })
+        out.append(
+            {
+                "model": k,
+                "mean_esr": float(esr.mean()) if failed_folds == 0 and len(esr) else np.nan,
+                "median_esr": float(esr.median()) if len(esr) else np.nan,
+                "worst_esr": float(esr.max()) if len(esr) else np.nan,
+                "folds_ok": int(s["fold"].nunique() - failed_folds),
+                "folds_failed": int(failed_folds),
+                "clipped": int(s["clipped"].sum()),
+                "fit_s": float(np.mean(fit_times[k])) if fit_times[k] else np.nan,
+                "error": str(errs.iloc[0])[:120] if len(errs) else "",
+            }
+        )
     t = pd.DataFrame(out).set_index("model")
     return t.sort_values(["mean_esr", "median_esr"], na_position="last")
 
@@ -246,8 +291,10 @@ def _recommend(table: pd.DataFrame, split: str, n: int) -> tuple[str | None, str
     if ok.empty:
         return None, f"no model kind fitted and simulated on all {n} {split} folds"
     best = str(ok.index[0])
-    reason = (f"{best} has the lowest mean free-run ESR on the left-out data, {ok['mean_esr'].iloc[0]:.3g} "
-              f"over {n} {split} folds (worst left-out record {ok['worst_esr'].iloc[0]:.3g})")
+    reason = (
+        f"{best} has the lowest mean free-run ESR on the left-out data, {ok['mean_esr'].iloc[0]:.3g} "
+        f"over {n} {split} folds (worst left-out record {ok['worst_esr'].iloc[0]:.3g})"
+    )
     if len(ok) > 1:
         gap = ok["mean_esr"].iloc[1] / ok["mean_esr"].iloc[0] - 1.0
         reason += f"; next: {ok.index[1]} {ok['mean_esr'].iloc[1]:.3g}"

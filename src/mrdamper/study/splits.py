@@ -47,7 +47,9 @@ def _without(data: ExperimentSet, names: set[str]) -> ExperimentSet:
 def _time_part(e: Experiment, fraction: float, head: bool) -> Experiment:
     cut = round(fraction * e.n)
     if cut < 2 or e.n - cut < 2:
-        raise SchemaError(f"split.fraction: record {e.name!r} has {e.n} samples, too few to cut at {fraction:g}")
+        raise SchemaError(
+            f"split.fraction: record {e.name!r} has {e.n} samples, too few to cut at {fraction:g}"
+        )
     pct = f"{fraction:.0%}"
     if head:
         return e.slice(0, cut, name=f"{e.name}[:{pct}]")
@@ -62,13 +64,21 @@ def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
     SchemaError
         If a fold would have no training or no scoring record; the message names the selection.
     """
-    analysis = protocol.analysis.select(data) if protocol.analysis is not None else ExperimentSet([], data.name)
+    analysis = (
+        protocol.analysis.select(data)
+        if protocol.analysis is not None
+        else ExperimentSet([], data.name)
+    )
     train = protocol.train.select(data)
     score = protocol.score.select(data)
     split = protocol.split
     folds: list[Fold] = []
     if split.kind == "fixed":
-        sc = _without(score, set(train.names) | set(analysis.names)) if protocol.exclude_trained else score
+        sc = (
+            _without(score, set(train.names) | set(analysis.names))
+            if protocol.exclude_trained
+            else score
+        )
         folds.append(Fold("all", analysis, train, sc))
     elif split.kind == "time":
         f = float(split.fraction)
@@ -124,5 +134,13 @@ def roles_frame(folds: list[Fold]) -> pd.DataFrame:
     for f in folds:
         for role, s in (("analysis", f.analysis), ("train", f.train), ("score", f.score)):
             for e in s:
-                rows.append({"fold": f.name, "record": e.name, "role": role, "samples": e.n, "duration_s": e.duration})
+                rows.append(
+                    {
+                        "fold": f.name,
+                        "record": e.name,
+                        "role": role,
+                        "samples": e.n,
+                        "duration_s": e.duration,
+                    }
+                )
     return pd.DataFrame(rows, columns=["fold", "record", "role", "samples", "duration_s"])

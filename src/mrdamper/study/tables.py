@@ -14,12 +14,31 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["PAPER_CLASSICAL", "PAPER_HEADLINE", "RESULT_COLUMNS", "TIMING_COLUMNS", "headline", "improvement_pct", "summarize"]
+__all__ = [
+    "PAPER_CLASSICAL",
+    "PAPER_HEADLINE",
+    "RESULT_COLUMNS",
+    "TIMING_COLUMNS",
+    "headline",
+    "improvement_pct",
+    "summarize",
+]
 
 #: Columns of ``results.csv`` in order (record metadata columns follow).
 RESULT_COLUMNS: tuple[str, ...] = (
-    "fold", "model", "kind", "record", "status", "esr", "ssse", "nrmse", "fit_pct",
-    "fit_time_s", "sim_time_s", "note", "error",
+    "fold",
+    "model",
+    "kind",
+    "record",
+    "status",
+    "esr",
+    "ssse",
+    "nrmse",
+    "fit_pct",
+    "fit_time_s",
+    "sim_time_s",
+    "note",
+    "error",
 )
 #: Columns that hold wall-clock times (they differ between otherwise identical runs).
 TIMING_COLUMNS: tuple[str, ...] = ("fit_time_s", "sim_time_s")
@@ -35,15 +54,26 @@ PAPER_HEADLINE: dict[str, Any] = {
     "esr_improvement_pct": 51.0,
     "ssse_improvement_pct": 36.8,
     "text": "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
-            "model (SP-1), on its own test rig.",
+    "model (SP-1), on its own test rig.",
 }
 
 _SUMMARY_COLUMNS = (
-    "model", "kind", "n_ok", "n_failed",
-    "esr_mean", "esr_median", "esr_q1", "esr_q3",
-    "ssse_mean", "ssse_median", "ssse_q1", "ssse_q3",
-    "esr_gain_of_best_pct", "ssse_gain_of_best_pct",
-    "fit_time_s", "sim_time_s",
+    "model",
+    "kind",
+    "n_ok",
+    "n_failed",
+    "esr_mean",
+    "esr_median",
+    "esr_q1",
+    "esr_q3",
+    "ssse_mean",
+    "ssse_median",
+    "ssse_q1",
+    "ssse_q3",
+    "esr_gain_of_best_pct",
+    "ssse_gain_of_best_pct",
+    "fit_time_s",
+    "sim_time_s",
 )
 
 
@@ -97,7 +127,14 @@ def summarize(results: pd.DataFrame, order: Sequence[str] | None = None) -> pd.D
         row["fit_time_s"] = float(np.nansum(fits)) if fits.size else float("nan")
         row["sim_time_s"] = float(np.nansum(sub["sim_time_s"].to_numpy(dtype=float)))
         rows.append(row)
-    out = pd.DataFrame(rows, columns=[c for c in _SUMMARY_COLUMNS if c not in ("esr_gain_of_best_pct", "ssse_gain_of_best_pct")])
+    out = pd.DataFrame(
+        rows,
+        columns=[
+            c
+            for c in _SUMMARY_COLUMNS
+            if c not in ("esr_gain_of_best_pct", "ssse_gain_of_best_pct")
+        ],
+    )
     for idx in ("esr", "ssse"):
         means = out[f"{idx}_mean"].to_numpy(dtype=float)
         gains = np.full(len(out), np.nan)

@@ -34,7 +34,9 @@ def _slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "fold"
 
 
-def write_study(res: StudyResult, out_dir: str | os.PathLike[str], *, force: bool = False, figures: bool = True) -> Path:
+def write_study(
+    res: StudyResult, out_dir: str | os.PathLike[str], *, force: bool = False, figures: bool = True
+) -> Path:
     """Write results, summary, models, figures (PNG + SVG) and ``report.html`` to ``out_dir``.
 
     Parameters
@@ -124,7 +126,9 @@ def save_figures(figs: Mapping[str, Any], folder: Path) -> dict[str, Any]:
             files = {}
             for fmt in FIGURE_FORMATS:
                 p = folder / f"{name}.{fmt}"
-                fig.savefig(p, format=fmt, dpi=FIGURE_DPI, bbox_inches="tight", metadata=_fig_metadata(fmt))
+                fig.savefig(
+                    p, format=fmt, dpi=FIGURE_DPI, bbox_inches="tight", metadata=_fig_metadata(fmt)
+                )
                 files[fmt] = p
             saved[name] = files
             plt.close(fig)
@@ -169,7 +173,9 @@ def _swap_into_place(tmp: Path, out: Path, force: bool) -> None:
         os.replace(tmp, out)
         return
     if not force:  # re-check: the folder may have been filled meanwhile
-        raise OutputExistsError(f"{out}: folder filled while writing; pass force=True to replace it")
+        raise OutputExistsError(
+            f"{out}: folder filled while writing; pass force=True to replace it"
+        )
     trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
     os.replace(out, trash / out.name)
     os.replace(tmp, out)

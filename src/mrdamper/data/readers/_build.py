@@ -20,7 +20,14 @@ from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_c
 from mrdamper.data.units import to_si
 from mrdamper.errors import DataValidationError, Note
 
-__all__ = ["JITTER_LIMIT", "ReadOptions", "build_experiment", "estimate_rate", "existing_file", "numeric_column"]
+__all__ = [
+    "JITTER_LIMIT",
+    "ReadOptions",
+    "build_experiment",
+    "estimate_rate",
+    "existing_file",
+    "numeric_column",
+]
 
 #: Largest deviation of a time column from a straight line, in sample intervals, that is taken
 #: as rounding of the printed time (rate estimated, time regenerated, with a note) rather than
@@ -129,7 +136,9 @@ def estimate_rate(t: np.ndarray) -> tuple[float, float] | None:
     return fs, dev
 
 
-def _missing(channel: str, what: str, headers: list[str], source: str, hint: str = "") -> DataValidationError:
+def _missing(
+    channel: str, what: str, headers: list[str], source: str, hint: str = ""
+) -> DataValidationError:
     return DataValidationError(
         channel,
         f"no {what} column in {source} (found {headers}; recognised names: "
@@ -173,7 +182,9 @@ def build_experiment(
     """
     src = str(path)
     headers = [str(h) for h in raw]
-    specs: dict[str, ColumnSpec] = resolve_columns(headers, columns=columns, units=units, source=src)
+    specs: dict[str, ColumnSpec] = resolve_columns(
+        headers, columns=columns, units=units, source=src
+    )
     n_rows = {len(np.ravel(np.asarray(v))) for v in raw.values()}
     if len(n_rows) > 1:
         lengths = {h: len(np.ravel(np.asarray(v))) for h, v in raw.items()}
@@ -184,7 +195,8 @@ def build_experiment(
 
     if fs is not None and resample_fs is not None:
         raise DataValidationError(
-            "fs", "give either fs (declared rate, time regenerated) or resample_fs (interpolation), not both"
+            "fs",
+            "give either fs (declared rate, time regenerated) or resample_fs (interpolation), not both",
         )
     if "t" not in specs and fs is None:
         raise _missing("t", "time", headers, src, " or declare the rate with fs= (--fs)")
@@ -249,7 +261,9 @@ def build_experiment(
             time_tolerance=time_tolerance,
         )
     except DataValidationError as exc:
-        if not (exc.field == "t" and "not uniform" in str(exc) and fs is None and resample_fs is None):
+        if not (
+            exc.field == "t" and "not uniform" in str(exc) and fs is None and resample_fs is None
+        ):
             raise
         est = estimate_rate(arrays["t"])
         if est is None:
@@ -269,14 +283,21 @@ def build_experiment(
         warnings.warn(note, Note, stacklevel=2)
         meta["repairs"] = tuple(meta.get("repairs", ())) + (note,)
         exp = Experiment.from_arrays(
-            **arrays, name=rec_name, metadata=meta, nan_policy=nan_policy, max_gap=max_gap,
-            resample_fs=resample_fs, time_tolerance=time_tolerance,
+            **arrays,
+            name=rec_name,
+            metadata=meta,
+            nan_policy=nan_policy,
+            max_gap=max_gap,
+            resample_fs=resample_fs,
+            time_tolerance=time_tolerance,
         )
     if derive is not None:
         from mrdamper.data.preprocessing import velocity_from_displacement
 
         exp = velocity_from_displacement(exp, cutoff=None if derive is True else float(derive))
-    found = check_plausibility({c: getattr(exp, c) for c in ("x", "v", "F", "i", "voltage")}, src, plausible_max)
+    found = check_plausibility(
+        {c: getattr(exp, c) for c in ("x", "v", "F", "i", "voltage")}, src, plausible_max
+    )
     if found:
         exp = exp.replace(metadata={**dict(exp.metadata), "implausible": tuple(found)})
     return exp
@@ -294,5 +315,6 @@ def _check_derive(derive_velocity: Any) -> bool | float | None:
     ):
         return float(derive_velocity)
     raise DataValidationError(
-        "derive_velocity", f"expected False, True or a positive cut-off [Hz], got {derive_velocity!r}"
+        "derive_velocity",
+        f"expected False, True or a positive cut-off [Hz], got {derive_velocity!r}",
     )

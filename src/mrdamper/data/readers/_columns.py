@@ -126,7 +126,8 @@ def resolve_columns(
             )
         if src not in headers:
             raise DataValidationError(
-                "columns", f"column {src!r} (mapped to {ch!r}) not found in {source}; found {headers}"
+                "columns",
+                f"column {src!r} (mapped to {ch!r}) not found in {source}; found {headers}",
             )
         if ch in chosen:
             raise DataValidationError(
@@ -179,7 +180,9 @@ def _declared_units(
         elif key in by_source:
             ch = by_source[key]
         elif key in headers:
-            raise UnitError(key, f"a unit is declared for column {key!r}, which is not read as a channel")
+            raise UnitError(
+                key, f"a unit is declared for column {key!r}, which is not read as a channel"
+            )
         else:
             raise UnitError(
                 key,

@@ -143,7 +143,9 @@ def read_csv(
         raise DataValidationError("path", f"{p} is a directory; use read_directory")
     with p.open("r", encoding="utf-8-sig", errors="replace") as fh:
         sample = fh.read(65536)
-    body = "\n".join(ln for ln in sample.splitlines() if not (comment and ln.lstrip().startswith(comment)))
+    body = "\n".join(
+        ln for ln in sample.splitlines() if not (comment and ln.lstrip().startswith(comment))
+    )
     if not body.strip():
         raise DataValidationError("file", f"{p} is empty; expected a header row and data rows")
     delim = sep if sep is not None else sniff_delimiter(body)
@@ -158,9 +160,13 @@ def read_csv(
             engine="c" if len(delim) == 1 or delim == r"\s+" else "python",
         )
     except pd.errors.EmptyDataError:
-        raise DataValidationError("file", f"{p} is empty; expected a header row and data rows") from None
+        raise DataValidationError(
+            "file", f"{p} is empty; expected a header row and data rows"
+        ) from None
     except pd.errors.ParserError as exc:
-        raise DataValidationError("file", f"{p} could not be parsed with sep={delim!r}: {exc}") from None
+        raise DataValidationError(
+            "file", f"{p} could not be parsed with sep={delim!r}: {exc}"
+        ) from None
     headers = _raw_headers(body, delim)
     if headers is not None and len(headers) != len(set(headers)):
         dup = next(h for h in headers if headers.count(h) > 1)

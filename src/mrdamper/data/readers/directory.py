@@ -17,12 +17,17 @@ from mrdamper.data.readers.parquet_reader import read_parquet
 from mrdamper.data.units import UNITS
 from mrdamper.errors import DataValidationError
 
-__all__ = ["DEFAULT_PATTERN", "SUFFIX_READERS", "parse_file_name", "read", "read_directory", "read_file"]
+__all__ = [
+    "DEFAULT_PATTERN",
+    "SUFFIX_READERS",
+    "parse_file_name",
+    "read",
+    "read_directory",
+    "read_file",
+]
 
 #: File-name pattern of the constant-current sine records (``sine_5mm_3Hz_0.5A.csv``).
-DEFAULT_PATTERN = (
-    r"sine_(?P<condition>(?P<amplitude_mm>[\d.]+)mm_(?P<frequency>[\d.]+)Hz)_(?P<current>[\d.]+)A\.csv"
-)
+DEFAULT_PATTERN = r"sine_(?P<condition>(?P<amplitude_mm>[\d.]+)mm_(?P<frequency>[\d.]+)Hz)_(?P<current>[\d.]+)A\.csv"
 
 #: File suffix (lower case) -> reader.
 SUFFIX_READERS: dict[str, Any] = {
@@ -89,7 +94,8 @@ def parse_file_name(file_name: str, pattern: str | re.Pattern[str]) -> dict[str,
             value: Any = float(text) * (factor if factor is not None else 1.0)
         elif factor is not None:
             raise DataValidationError(
-                key, f"file name {file_name!r} gives {text!r}, expected a number (unit suffix in group name)"
+                key,
+                f"file name {file_name!r} gives {text!r}, expected a number (unit suffix in group name)",
             )
         else:
             value = text
@@ -103,11 +109,16 @@ def _compile(pattern: str | re.Pattern[str]) -> re.Pattern[str]:
     try:
         return re.compile(pattern)
     except re.error as exc:
-        raise DataValidationError("pattern", f"{pattern!r} is not a valid regular expression ({exc})") from None
+        raise DataValidationError(
+            "pattern", f"{pattern!r} is not a valid regular expression ({exc})"
+        ) from None
 
 
 def _natural_key(text: str) -> list[Any]:
-    return [(0, float(tok), "") if tok[0].isdigit() else (1, 0.0, tok) for tok in re.findall(r"\d+(?:\.\d+)?|\D+", text)]
+    return [
+        (0, float(tok), "") if tok[0].isdigit() else (1, 0.0, tok)
+        for tok in re.findall(r"\d+(?:\.\d+)?|\D+", text)
+    ]
 
 
 def read_file(path: str | os.PathLike[str], **kwargs: Any) -> Experiment:
@@ -138,7 +149,11 @@ def read_file(path: str | os.PathLike[str], **kwargs: Any) -> Experiment:
         raise DataValidationError(
             "path", f"{p}: unknown file type {p.suffix!r}; expected one of {sorted(SUFFIX_READERS)}"
         )
-    kw = {k: v for k, v in kwargs.items() if k not in FORMAT_OPTIONS or p.suffix.lower() in FORMAT_OPTIONS[k]}
+    kw = {
+        k: v
+        for k, v in kwargs.items()
+        if k not in FORMAT_OPTIONS or p.suffix.lower() in FORMAT_OPTIONS[k]
+    }
     return reader(p, **kw)
 
 
@@ -205,7 +220,8 @@ def read_directory(
         if f.is_symlink() and not f.exists():
             if parse_file_name(f.name, rx) is not None:
                 raise DataValidationError(
-                    "path", f"{f} is a broken symbolic link (its target {os.readlink(f)!r} does not exist)"
+                    "path",
+                    f"{f} is a broken symbolic link (its target {os.readlink(f)!r} does not exist)",
                 )
             continue
         if not f.is_file():

@@ -53,7 +53,12 @@ def _vectors(items: Mapping[str, Any]) -> tuple[dict[str, np.ndarray], list[str]
     skipped: list[str] = []
     for key, val in items.items():
         arr = np.asarray(val)
-        if arr.dtype.kind in "iufcb" and arr.ndim >= 1 and max(arr.shape) == arr.size and arr.size > 1:
+        if (
+            arr.dtype.kind in "iufcb"
+            and arr.ndim >= 1
+            and max(arr.shape) == arr.size
+            and arr.size > 1
+        ):
             out[str(key)] = arr.ravel()
         else:
             skipped.append(str(key))
@@ -66,7 +71,9 @@ def _read_v5(p: Path, struct: str | None) -> tuple[dict[str, np.ndarray], list[s
     try:
         mat = loadmat(str(p), simplify_cells=True)
     except Exception as exc:  # noqa: BLE001
-        raise DataValidationError("file", f"{p} could not be read as a MATLAB v5 file ({exc})") from None
+        raise DataValidationError(
+            "file", f"{p} could not be read as a MATLAB v5 file ({exc})"
+        ) from None
     variables = {k: v for k, v in mat.items() if not k.startswith("__")}
     if struct is not None:
         if struct not in variables or not isinstance(variables[struct], dict):
@@ -161,7 +168,8 @@ def read_mat(
         raise DataValidationError("file", f"{p}: unsupported MATLAB file version {version}")
     if not raw:
         raise DataValidationError(
-            "file", f"{p} holds no numeric vector variables (found {skipped}); expected t, x, v, F, i ..."
+            "file",
+            f"{p} holds no numeric vector variables (found {skipped}); expected t, x, v, F, i ...",
         )
     meta = {"mat_version": version}
     if struct is not None:

@@ -84,7 +84,9 @@ def read_parquet(
         try:
             info = json.loads(kv[PARQUET_METADATA_KEY].decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise DataValidationError("file", f"{p}: stored mrdamper metadata is not JSON ({exc})") from None
+            raise DataValidationError(
+                "file", f"{p}: stored mrdamper metadata is not JSON ({exc})"
+            ) from None
         stored = dict(info.get("metadata", {}))
         for key in ("source", "columns", "units", "ignored_columns"):
             stored.pop(key, None)  # provenance of the original file; this file is the source now
