@@ -86,7 +86,7 @@ def select(
     res = cross_validate(
         records,
         models=models,
-        folds=folds,
+        folds=folds,  # type: ignore[arg-type]
         n_folds=n_folds,
         input=source,  # type: ignore[arg-type]
         settings=_kind_settings(settings),

@@ -166,8 +166,13 @@ def _current(
         )
     if spec.pattern == "SC":
         return stepped_current(
-            fs, duration, low=lo, high=hi, n_levels=SC_LEVELS, direction=spec.direction
-        )  # type: ignore[arg-type]
+            fs,
+            duration,
+            low=lo,
+            high=hi,
+            n_levels=SC_LEVELS,
+            direction=spec.direction,  # type: ignore[arg-type]
+        )
     raise DataValidationError("pattern", f"expected ICPS, APRBS, PRBS or SC, got {spec.pattern!r}")
 
 

@@ -168,11 +168,13 @@ def _fig6(res: StudyResult) -> Any:
         return "no LPV model in this study"
     label, F = hit
     sc = res.showcase
+    if sc is None:
+        return "no showcase record in this study"
     if isinstance(F, str):
-        return f"the LPV model failed on {sc.record.name}: {F}"  # type: ignore[union-attr]
+        return f"the LPV model failed on {sc.record.name}: {F}"
     return plot_model_tracking(
         sc.record, F, label=label, window=_window(sc), source=res.protocol.input
-    )[0].figure  # type: ignore[union-attr, arg-type]
+    )[0].figure
 
 
 def _boxes(index: str) -> Callable[[StudyResult], Any]:
