@@ -1,5 +1,5 @@
-"""Wall time of ``mrdamper demo`` (full Table II at 1 kHz, all models) and ``mrdamper demo --quick``,
-each with 1 worker (in-process) and 2 worker processes side by side, in the same run.
+"""Wall time of ``mrdamper demo`` (full Table II at 1 kHz, all models) and ``mrdamper demo
+--quick``, each with 1 worker (in-process) and 2 worker processes side by side, in the same run.
 
 Targets on a 2-core machine: full demo < 180 s, quick demo < 60 s.
 
@@ -80,7 +80,7 @@ def run(mode: str, workers: int, root: Path) -> dict[str, object]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--no-full", action="store_true", help="skip the full-length demo")
     ap.add_argument(
         "--quick", action="store_true", help="only the --quick demo (same as --no-full)"
@@ -145,9 +145,10 @@ def main() -> None:
     for r in rows:
         print(f"{r['mode']} / {r['workers']} worker(s): {r['headline']}")
     for mode in df["mode"].unique():
-        same = df.loc[df["mode"] == mode, "results_sha1"].nunique() == 1
+        same = len(set(df.loc[df["mode"] == mode, "results_sha1"])) == 1
         print(
-            f"{mode}: results.csv without timing columns identical across worker counts: {'yes' if same else 'NO'}"
+            f"{mode}: results.csv without timing columns identical across worker counts: "
+            f"{'yes' if same else 'NO'}"
         )
 
 

@@ -116,8 +116,9 @@ def bench_quiroz() -> str:
             m = LPVEstimator(model_fs=200.0).fit(s)
             times.append(time.perf_counter() - t0)
     return (
-        f"Quiroz: LPV identification incl. zone laws + LS + OE refinement on all {len(s)} sine records "
-        f"({m.provenance['n_samples']} samples at 200 Hz, {m.provenance.get('oe_nfev')} evaluations): "
+        "Quiroz: LPV identification incl. zone laws + LS + OE refinement on all "
+        f"{len(s)} sine records ({m.provenance['n_samples']} samples at 200 Hz, "
+        f"{m.provenance.get('oe_nfev')} evaluations): "
         f"min {min(times):.2f} s, max {max(times):.2f} s (target < 5 s)"
     )
 
@@ -132,7 +133,8 @@ def main() -> None:
     )
     name, t_ours, t_peer, rel, t_build = bench_least_squares()
     print(
-        f"| {name} | {t_ours:.4f} | {t_peer:.4f} | numpy.linalg.lstsq (X prebuilt, {t_build:.3f} s not counted) | "
+        f"| {name} | {t_ours:.4f} | {t_peer:.4f} | "
+        f"numpy.linalg.lstsq (X prebuilt, {t_build:.3f} s not counted) | "
         f"speed-up {t_peer / t_ours:.1f}x, max rel. diff {rel:.1e} | >= 5x, <= 1e-8 |"
     )
     print()

@@ -1,4 +1,5 @@
-"""P-15 identification on the 30 Quiroz unfiltered records: sensitivity Jacobian vs finite differences.
+"""P-15 identification on the 30 Quiroz unfiltered records: sensitivity Jacobian vs finite
+differences.
 
 Both runs use the default output-error estimator (multiple shooting, then free run) on the same
 records with the same evaluation budgets; only the Jacobian differs: the exact discrete
@@ -8,8 +9,8 @@ the other, so their ratio is meaningful on a loaded machine; the absolute times 
 
 Usage::
 
-    python benchmarks/bench_p15.py            # default budgets (shoot_nfev=30, max_nfev=20), ~2-4 min
-    python benchmarks/bench_p15.py --quick    # budgets 4 and 2 (a smoke run of the same comparison)
+    python benchmarks/bench_p15.py          # default budgets (shoot_nfev=30, max_nfev=20), ~2-4 min
+    python benchmarks/bench_p15.py --quick  # budgets 4 and 2 (a smoke run of the same comparison)
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ def run(data: ExperimentSet, jacobian: str, budgets: dict[str, int]) -> dict[str
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", type=Path, default=DATA / "quiroz2022_utfsm" / "sine_unfiltered")
     ap.add_argument("--quick", action="store_true", help="small evaluation budgets (smoke run)")
     args = ap.parse_args(argv)

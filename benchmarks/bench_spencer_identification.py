@@ -1,4 +1,5 @@
-"""Spencer identification on the 30 Quiroz unfiltered records: sensitivity Jacobian vs finite differences.
+"""Spencer identification on the 30 Quiroz unfiltered records: sensitivity Jacobian vs finite
+differences.
 
 Both runs use the same estimator, data, starts (3, seed 0), scaling and bounds; only the Jacobian
 differs (forward sensitivities integrated with the state vs SciPy's 2-point finite differences).
@@ -47,7 +48,7 @@ def run(label: str, data: ExperimentSet, jacobian: str) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument(
         "--full-peer", action="store_true", help="run finite differences on all 30 records"
@@ -71,7 +72,8 @@ def main() -> None:
     sens = table[table.jacobian == "sensitivity"].iloc[-1]
     fd = table[table.jacobian == "2-point"].iloc[-1]
     print(
-        f"finite differences / sensitivities on the same records: wall x{fd.wall_s / sens.wall_s:.2f}, "
+        "finite differences / sensitivities on the same records: "
+        f"wall x{fd.wall_s / sens.wall_s:.2f}, "
         f"cpu x{fd.cpu_s / sens.cpu_s:.2f}; mean ESR {fd.mean_esr:.4f} vs {sens.mean_esr:.4f}"
     )
 

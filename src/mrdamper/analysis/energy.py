@@ -3,10 +3,11 @@
 A cycle runs from one upward crossing of the displacement through its mid-range to the next.
 Crossings are detected with a hysteresis band (a Schmitt trigger) so sensor noise near the
 mid-range does not split a cycle: a cycle starts where the displacement last rose through ``mid``
-before it reached ``mid + band * half_range``, after having been below ``mid - band * half_range``. The work done on the damper over a cycle is
-``W = integral F v dt`` [J] (trapezoidal rule over the samples), which equals the loop area
-``closed integral F dx`` when ``v = dx/dt``. Cycle boundaries come from the displacement only, so
-the measured force and every model's force are integrated over the same cycles.
+before it reached ``mid + band * half_range``, after having been below ``mid - band * half_range``.
+The work done on the damper over a cycle is ``W = integral F v dt`` [J] (trapezoidal rule over the
+samples), which equals the loop area ``closed integral F dx`` when ``v = dx/dt``. Cycle boundaries
+come from the displacement only, so the measured force and every model's force are integrated over
+the same cycles.
 """
 
 from __future__ import annotations
@@ -109,7 +110,9 @@ def energy_per_cycle(t: Any, x: Any, v: Any, F: Any, band: float = 0.1) -> np.nd
 
     >>> import numpy as np
     >>> t = np.arange(0, 2, 1e-4); w = 2 * np.pi * 2; X = 0.01
-    >>> W = energy_per_cycle(t, X * np.sin(w * t), X * w * np.cos(w * t), 1000 * X * w * np.cos(w * t))
+    >>> W = energy_per_cycle(
+    ...     t, X * np.sin(w * t), X * w * np.cos(w * t), 1000 * X * w * np.cos(w * t)
+    ... )
     >>> bool(np.allclose(W, np.pi * 1000 * w * X**2, rtol=1e-3))
     True
     """

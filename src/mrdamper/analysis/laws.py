@@ -160,7 +160,8 @@ class ZoneLaws:
             out.append(
                 f"zone limits must satisfy v_low < 0 < v_high over [{self.rho_range[0]:.4g}, "
                 f"{self.rho_range[1]:.4g}]; got v_high in "
-                f"[{vh.min():.4g}, {vh.max():.4g}] m/s, v_low in [{vl.min():.4g}, {vl.max():.4g}] m/s"
+                f"[{vh.min():.4g}, {vh.max():.4g}] m/s, v_low in "
+                f"[{vl.min():.4g}, {vl.max():.4g}] m/s"
             )
         return out
 
@@ -187,7 +188,8 @@ class ZoneLaws:
         return df
 
     def plot(self, axes: Any = None) -> Any:
-        """Three panels: slopes, intercepts and zone limits against level (points: fits, lines: laws)."""
+        """Three panels: slopes, intercepts and zone limits against level (points: fits, lines:
+        laws)."""
         import matplotlib.pyplot as plt
 
         if axes is None:
@@ -386,8 +388,9 @@ def fit_zone_laws(
     for f in fits:
         if not f.central_is_steepest:
             warnings.warn(
-                f"zone fit at level {f.level:g}: central slope m2={f.m[1]:.4g} N s/m is not the biggest "
-                f"(m1={f.m[0]:.4g}, m3={f.m[2]:.4g}); the normalisation of eq. (20) assumes it is",
+                f"zone fit at level {f.level:g}: central slope m2={f.m[1]:.4g} N s/m is not the "
+                f"biggest (m1={f.m[0]:.4g}, m3={f.m[2]:.4g}); the normalisation of eq. (20) "
+                "assumes it is",
                 ZoneLawWarning,
                 stacklevel=2,
             )

@@ -7,11 +7,12 @@ dynamic allocation, no globals that change: all state lives in a caller-owned st
 * ``double <name>_step(<name>_state *s, double x, double v, double input)``: forward model, one
   sample: the damper force [N] for displacement ``x`` [m], velocity ``v`` [m/s] and the electrical
   input [A] or [V] at this sample (clipped to the identified input range);
-* ``double <name>_inverse_step(<name>_state *s, double x, double v, double F_desired, double *F_out)``:
-  the regularised inverse (:func:`mrdamper.control.inverse_current`, method ``"regularised"``),
-  one sample: returns the input (for an LPV model with a drive lag, the scheduling value ``rho``;
-  the driver command is the lead filter of :func:`mrdamper.control.driver_command`) and writes the
-  force the model gives with it to ``*F_out`` (may be NULL);
+* ``double <name>_inverse_step(<name>_state *s, double x, double v, double F_desired,
+  double *F_out)``: the regularised inverse (:func:`mrdamper.control.inverse_current`, method
+  ``"regularised"``), one sample: returns the input (for an LPV model with a drive lag, the
+  scheduling value ``rho``; the driver command is the lead filter of
+  :func:`mrdamper.control.driver_command`) and writes the force the model gives with it to
+  ``*F_out`` (may be NULL);
 * ``void <name>_run(...)`` / ``<name>_inverse_run(...)``: the step functions over arrays.
 
 Model kinds with C export: ``lpv`` and ``lti`` (the input-output recursion of eq. 9 with the zone
@@ -71,6 +72,8 @@ def _arr2(a: Any) -> str:
     return "{" + ", ".join(_arr1(row) for row in np.asarray(a)) + "}"
 
 
+# C templates for str.format ({{ and }} are literal braces). A line longer than 100 columns is
+# split into adjacent raw strings, which join into the one C line.
 _COMMON = r"""
 static double {p}_dmax(double a, double b) {{ return a > b ? a : b; }}
 static double {p}_dmin(double a, double b) {{ return a < b ? a : b; }}
@@ -82,7 +85,8 @@ static const double {P}_RATE_STEP = {rate_step}; /* largest input change per sam
 static const int {P}_N_GRID = {n_grid};
 """
 
-_LPV = r"""
+_LPV = (
+    r"""
 #define {P}_N_M {n_m}
 #define {P}_N_P {n_p}
 #define {P}_N_D {n_d}
@@ -133,7 +137,8 @@ static void {p}_coefficients(const {p}_state *s, double *cf)
     int p, j;
     for (p = 0; p < {P}_N_P; ++p) {{
         double acc = 0.0;
-        for (j = 0; j < {P}_N_M && j < s->k; ++j) acc += {P}_BETA[j][p] * s->u[j] - {P}_ALPHA[j][p] * s->y[j];
+        for (j = 0; j < {P}_N_M && j < s->k; ++j) acc += {P}_BETA[j][p] * s->u[j]"""
+    r""" - {P}_ALPHA[j][p] * s->y[j];
         cf[p] = acc;
     }}
     cf[0] += {P}_OFFSET;
@@ -178,6 +183,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
     return F;
 }}
 """
+)
 
 _LPV_DPOLY = r"""
 static const double {P}_HI = {hi}; /* upper input limit of the inverse */
@@ -190,13 +196,15 @@ static double {p}_dpoly(const double *c, int n, double r)
 }}
 """
 
-_LPV_HORIZON = r"""
+_LPV_HORIZON = (
+    r"""
 static const int {P}_HORIZON = {horizon}; /* lead horizon [samples] of the drive-lag inverse */
 static const double {P}_GOLDEN = {golden};
 
 /* mean squared force error over the horizon: this sample at r, then the model run on with the
    command w held, the velocity v held and the same target */
-static double {p}_hcost(const {p}_state *s, const double *cf, double r, double w, double v, double target)
+static double {p}_hcost(const {p}_state *s, const double *cf, double r, double w, double v,"""
+    r""" double target)
 {{
     double ys[{P}_N_M], us[{P}_N_M], c2[{P}_N_P], F, e, acc, rr;
     int j, q, h, nv = s->k < {P}_N_M ? (int)s->k : {P}_N_M;
@@ -230,7 +238,8 @@ static double {p}_hcost(const {p}_state *s, const double *cf, double r, double w
     return acc / {P}_HORIZON;
 }}
 
-static double {p}_hj(const {p}_state *s, const double *cf, double r, double prev, double hold, double v,
+static double {p}_hj(const {p}_state *s, const double *cf, double r, double prev,"""
+    r""" double hold, double v,
                      double target)
 {{
     double w = (r - {P}_LAG * prev) / (1.0 - {P}_LAG), d = r - hold;
@@ -239,7 +248,8 @@ static double {p}_hj(const {p}_state *s, const double *cf, double r, double prev
 
 /* rho on [a, b] minimising the horizon cost of the command it implies: grid scan, then golden
    section on the grid intervals either side of the best point */
-static double {p}_hstep(const {p}_state *s, const double *cf, double a, double b, double prev, double hold,
+static double {p}_hstep(const {p}_state *s, const double *cf, double a, double b,"""
+    r""" double prev, double hold,
                         double v, double target)
 {{
     double best = {p}_dmin({p}_dmax(hold, a), b), best_j, h, lo, hi, m, jm;
@@ -258,7 +268,8 @@ static double {p}_hstep(const {p}_state *s, const double *cf, double a, double b
     hi = {p}_dmin(b, best + h);
     for (it = 0; it < {n_golden}; ++it) {{
         double c1 = hi - {P}_GOLDEN * (hi - lo), c3 = lo + {P}_GOLDEN * (hi - lo);
-        if ({p}_hj(s, cf, c1, prev, hold, v, target) <= {p}_hj(s, cf, c3, prev, hold, v, target)) hi = c3;
+        if ({p}_hj(s, cf, c1, prev, hold, v, target)"""
+    r""" <= {p}_hj(s, cf, c3, prev, hold, v, target)) hi = c3;
         else lo = c1;
     }}
     m = 0.5 * (lo + hi);
@@ -267,8 +278,10 @@ static double {p}_hstep(const {p}_state *s, const double *cf, double a, double b
     return best;
 }}
 """
+)
 
-_LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
+_LPV_INVERSE = (
+    r"""double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
 {{
     double cf[{P}_N_P];
     double a = {P}_LO, b = {P}_HI, prev = s->rho, hold, r, F;
@@ -292,11 +305,14 @@ _LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, dou
         }}
     }}
     hold = prev;
-    if ({P}_LAG >= 0.0 && s->k >= 2) hold = {p}_dmin({p}_dmax({P}_LAG * prev + (1.0 - {P}_LAG) * s->w, a), b);
-    if ({P}_LAG >= 0.0 && s->k >= 2 && {P}_HORIZON > 1) r = {p}_hstep(s, cf, a, b, prev, hold, v, F_desired);
+    if ({P}_LAG >= 0.0 && s->k >= 2) hold ="""
+    r""" {p}_dmin({p}_dmax({P}_LAG * prev + (1.0 - {P}_LAG) * s->w, a), b);
+    if ({P}_LAG >= 0.0 && s->k >= 2 && {P}_HORIZON > 1)"""
+    r""" r = {p}_hstep(s, cf, a, b, prev, hold, v, F_desired);
     else r = {p}_solve(cf, F_desired, a, b, hold);
     if ({P}_LAG >= 0.0) {{ /* command of the previous sample (the lead of the lag) */
-        s->w = s->k <= 1 ? r : {p}_dmin({p}_dmax((r - {P}_LAG * prev) / (1.0 - {P}_LAG), {P}_LO), {P}_HI);
+        s->w = s->k <= 1 ? r :"""
+    r""" {p}_dmin({p}_dmax((r - {P}_LAG * prev) / (1.0 - {P}_LAG), {P}_LO), {P}_HI);
     }}
     F = {p}_poly(cf, {P}_N_P, r);
     {p}_commit(s, F, v, r);
@@ -304,6 +320,7 @@ _LPV_INVERSE = r"""double {p}_inverse_step({p}_state *s, double x, double v, dou
     return r;
 }}
 """
+)
 
 _STATIC = r"""
 #define {P}_N_THETA {n_theta}
@@ -382,7 +399,8 @@ static double {p}_dforce(double x, double v, double i)
 }}
 """
 
-_SOLVE = r"""
+_SOLVE = (
+    r"""
 /* slope of the regularised objective (half its derivative) */
 static double {p}_slope({args}, double target, double r, double prev)
 {{
@@ -412,14 +430,17 @@ static double {p}_solve({args}, double target, double a, double b, double prev)
     g = {p}_slope({call}, target, best, prev);
     if (g > 0.0 && best > a) {{
         double lo = {p}_dmax(a, best - h);
-        if ({p}_slope({call}, target, lo, prev) < 0.0) best = {p}_bisect({call}, target, prev, lo, best);
+        if ({p}_slope({call}, target, lo, prev) < 0.0)"""
+    r""" best = {p}_bisect({call}, target, prev, lo, best);
     }} else if (g < 0.0 && best < b) {{
         double hi = {p}_dmin(b, best + h);
-        if ({p}_slope({call}, target, hi, prev) > 0.0) best = {p}_bisect({call}, target, prev, best, hi);
+        if ({p}_slope({call}, target, hi, prev) > 0.0)"""
+    r""" best = {p}_bisect({call}, target, prev, best, hi);
     }}
     return best;
 }}
 """
+)
 
 _BISECT = r"""
 static double {p}_bisect({args}, double target, double prev, double a, double b)
@@ -448,8 +469,10 @@ void {p}_run(long n, const double *x, const double *v, const double *input, doub
 }}
 """
 
-_INVERSE_RUN = r"""
-void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired, double *input, double *F)
+_INVERSE_RUN = (
+    r"""
+void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired,"""
+    r""" double *input, double *F)
 {{
     {p}_state s;
     long k;
@@ -457,6 +480,7 @@ void {p}_inverse_run(long n, const double *x, const double *v, const double *F_d
     for (k = 0; k < n; ++k) input[k] = {p}_inverse_step(&s, x[k], v[k], F_desired[k], &F[k]);
 }}
 """
+)
 
 
 def _solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str) -> str:
@@ -529,7 +553,8 @@ def c_source(
     v_ref : float
         Velocity setting the default ``reg`` [m/s].
     rate : float, optional
-        Input rate bound of the inverse [input unit/s]; needs the sample time (``dt`` or an LPV model's rate).
+        Input rate bound of the inverse [input unit/s]; needs the sample time (``dt`` or an LPV
+        model's rate).
     n_grid : int
         Search grid of the inverse.
     dt : float, optional
@@ -599,10 +624,12 @@ def c_source(
             n_golden=K.N_GOLDEN,
         )
         state = (
-            f"typedef struct {{\n    double y[{model.n_m}]; /* past outputs y[k-1-j] (force minus offset) [N] */\n"
+            f"typedef struct {{\n    double y[{model.n_m}]; "
+            "/* past outputs y[k-1-j] (force minus offset) [N] */\n"
             f"    double u[{model.n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
             "    double rho; /* scheduling value of the last sample */\n"
-            "    double w; /* forward: input of the last sample; inverse: last command (drive lag) */\n"
+            "    double w; "
+            "/* forward: input of the last sample; inverse: last command (drive lag) */\n"
             f"    long k; /* samples taken */\n}} {p}_state;\n"
         )
         body = _LPV.format(**fmt)
@@ -645,15 +672,19 @@ def c_source(
     ]
     if has_inverse:
         protos += [
-            f"double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out);",
             (
-                f"void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired, "
-                "double *input, double *F);"
+                f"double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, "
+                "double *F_out);"
+            ),
+            (
+                f"void {p}_inverse_run(long n, const double *x, const double *v, "
+                "const double *F_desired, double *input, double *F);"
             ),
         ]
     header = (
         f"/* {name}.h: {kind} damper model exported by mrdamper (C99, no dynamic allocation).\n"
-        f" * Units: x [m], v [m/s], input [{unit}] clipped to [{model.input_range[0]!r}, {model.input_range[1]!r}] "
+        f" * Units: x [m], v [m/s], input [{unit}] clipped to "
+        f"[{model.input_range[0]!r}, {model.input_range[1]!r}] "
         f"(inverse: [{lo!r}, {hi!r}]), force [N].\n * Sample rate: {rate_note}.\n"
         f" * Inverse: regularisation weight {lam!r} N/{unit}, grid {n_grid}. */\n"
         f"#ifndef {guard}\n#define {guard}\n\n{state}\n"
@@ -671,7 +702,8 @@ def c_source(
 def export_c(
     model: Any, out_dir: str | Path, *, name: str = "mrd_damper", force: bool = False, **kwargs: Any
 ) -> tuple[Path, Path]:
-    """Write ``<out_dir>/<name>.h`` and ``<name>.c`` atomically (see :func:`c_source` for the options).
+    """Write ``<out_dir>/<name>.h`` and ``<name>.c`` atomically (see :func:`c_source` for the
+    options).
 
     Returns
     -------
