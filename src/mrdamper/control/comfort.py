@@ -4,11 +4,13 @@ The weighting is the product of four analogue filters (ISO 2631-1:1997 Annex A; 
 parameters are listed in ISO 8041), with ``s = j 2 pi f`` and ``w_n = 2 pi f_n``:
 
 * band limiting, high-pass ``H_h = s^2 / (s^2 + w1 s / Q1 + w1^2)`` and low-pass
-  ``H_l = w2^2 / (s^2 + w2 s / Q2 + w2^2)``; ``f1 = 0.4 Hz``, ``f2 = 100 Hz``, ``Q1 = Q2 = 1/sqrt(2)``;
+  ``H_l = w2^2 / (s^2 + w2 s / Q2 + w2^2)``; ``f1 = 0.4 Hz``, ``f2 = 100 Hz``,
+  ``Q1 = Q2 = 1/sqrt(2)``;
 * acceleration-velocity transition ``H_t = (1 + s / w3) / (1 + s / (Q4 w4) + s^2 / w4^2)``;
   ``f3 = f4 = 12.5 Hz``, ``Q4 = 0.63``;
 * upward step ``H_s = (s^2 + w5 s / Q5 + w5^2) / (s^2 + w6 s / Q6 + w6^2)``;
-  ``f5 = 2.37 Hz``, ``Q5 = 0.91``, ``f6 = 3.35 Hz``, ``Q6 = 0.91`` (gain ``(f5/f6)^2`` at low frequency, 1 at high).
+  ``f5 = 2.37 Hz``, ``Q5 = 0.91``, ``f6 = 3.35 Hz``, ``Q6 = 0.91`` (gain ``(f5/f6)^2`` at low
+  frequency, 1 at high).
 
 :func:`weighted_rms` applies the weighting in the frequency domain on the record's FFT grid
 (``|Wk(f)|`` times the spectrum; Parseval gives the RMS): exact for the record taken as one period,

@@ -1,4 +1,5 @@
-"""Export an identified LPV (or LTI) model to a file control-design tools read (MATLAB ``.mat`` or JSON).
+"""Export an identified LPV (or LTI) model to a file control-design tools read (MATLAB ``.mat`` or
+JSON).
 
 The file holds everything needed to rebuild the model outside mrdamper (all arrays ``float64``;
 index ``p`` runs over powers of ``rho``, ``p = 0 .. n_rho``; MATLAB's third index is ``p + 1``):
@@ -19,7 +20,8 @@ name               shape                  meaning
 ``rho_max``
 ``rho_name``       string                 ``"i"`` (coil current [A]) or ``"voltage"`` [V]; with a
                                           drive lag ``rho`` is that input through the lag
-``eta``            scalar                 drive-lag rate [1/s] (NaN: none), ``drho/dt = -eta (rho - input)``
+``eta``            scalar                 drive-lag rate [1/s] (NaN: none),
+                                          ``drho/dt = -eta (rho - input)``
 ``rho_grid``       (G,)                   grid over the scheduling range
 ``A_grid``         (n_m, n_m, G)          frozen ``A(rho)`` on the grid
 ``C_grid``         (1, n_m, G)            frozen ``C(rho)`` on the grid
@@ -28,7 +30,8 @@ name               shape                  meaning
 ``max_pole_modulus`` (G,)                 largest frozen-pole modulus on the grid (< 1 stable)
 ``input_signal``   string                 ``"u"`` (zone-law input) or ``"v"`` (raw velocity)
 ``reading``        string                 reading of eq. 22 (``"continuous"`` or ``"literal"``)
-``gamma_m``        (3, d+1)               zone slopes ``m_j(rho) = sum_p gamma_m[j-1, p] rho^p`` [N s/m]
+``gamma_m``        (3, d+1)               zone slopes ``m_j(rho) = sum_p gamma_m[j-1, p] rho^p``
+                                          [N s/m]
 ``gamma_c``        (3, d+1)               zone intercepts ``c_j(rho)`` [N]
 ``mu_high``        (2,)                   ``v_high(rho) = mu_high[0] rho + mu_high[1]`` [m/s]
 ``mu_low``         (2,)                   ``v_low(rho) = mu_low[0] rho + mu_low[1]`` [m/s]
@@ -69,7 +72,8 @@ _VERSION = 1
 
 
 def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
-    """The export content as a dict of plain values and ``float64`` arrays (see the module docstring).
+    """The export content as a dict of plain values and ``float64`` arrays (see the module
+    docstring).
 
     Parameters
     ----------
@@ -167,7 +171,8 @@ def export_lpv(
         Output file.
     format : {"mat", "json"}
         MATLAB v5 file (:func:`scipy.io.savemat`; read with ``load`` in MATLAB or
-        :func:`scipy.io.loadmat`) or JSON (arrays as ``{"__ndarray__", "dtype", "shape"}``, row-major).
+        :func:`scipy.io.loadmat`) or JSON (arrays as ``{"__ndarray__", "dtype", "shape"}``,
+        row-major).
     rho_grid : array_like, optional
         Grid of the frozen matrices and poles (default 21 points over the scheduling range).
     force : bool
@@ -191,8 +196,9 @@ def export_lpv(
     pmax = model.max_pole_modulus() if hasattr(model, "max_pole_modulus") else 0.0
     if pmax >= 1.0:
         warnings.warn(
-            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen pole "
-            f"modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control design",
+            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen "
+            f"pole modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control "
+            "design",
             RuntimeWarning,
             stacklevel=2,
         )

@@ -88,7 +88,8 @@ class QuarterCar:
     m_u : float
         Unsprung mass [kg] (40: wheel, tyre, hub, brake, part of the links).
     k_s : float
-        Suspension spring rate at the wheel [N/m] (20 000: body mode ``sqrt(k_s/m_s)/2pi`` = 1.3 Hz).
+        Suspension spring rate at the wheel [N/m] (20 000: body mode ``sqrt(k_s/m_s)/2pi`` =
+        1.3 Hz).
     k_t : float
         Tyre vertical stiffness [N/m] (200 000: wheel-hop mode about 12 Hz).
     c_t : float
@@ -162,7 +163,8 @@ class Controller:
         ``c_sky z_s'`` when ``z_s' v > 0``, else 0. ``groundhook``: ``-c_ground z_u'`` when
         ``-z_u' v > 0``, else 0. ``hybrid``: ``alpha`` skyhook + ``(1 - alpha)`` groundhook.
     c_sky, c_ground : float
-        Gains [N s/m] (default 3000 each, about 0.6 of the body's critical damping with the defaults).
+        Gains [N s/m] (default 3000 each, about 0.6 of the body's critical damping with the
+        defaults).
     alpha : float
         Hybrid weight [-].
     """
@@ -430,7 +432,8 @@ def simulate_quarter_car(
     Parameters
     ----------
     model : FittedModel or LinearDamper
-        LPV model (kind ``lpv``), static map (``sp1``..``sp4``, ``bingham``) or :class:`LinearDamper`.
+        LPV model (kind ``lpv``), static map (``sp1``..``sp4``, ``bingham``) or
+        :class:`LinearDamper`.
     road : Road
         Road at the plant rate. With an LPV damper its rate must be an integer multiple of the
         model rate (the control sample is the model sample).
@@ -482,7 +485,8 @@ def simulate_quarter_car(
         if n_sub < 1 or abs(ratio - n_sub) > 1e-9 * ratio:
             raise DataValidationError(
                 "road",
-                f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an integer multiple",
+                f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an "
+                "integer multiple",
             )
         if model.eta is not None:
             arrays["lag"] = float(np.exp(-model.eta / model.fs))
@@ -509,7 +513,8 @@ def simulate_quarter_car(
     }[ctrl.kind]
     i_const = hi if ctrl.kind == "hard" else lo
     mr = car.motion_ratio
-    # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the model
+    # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the
+    # model
     car_arr = np.array([car.m_s, car.m_u, car.k_s, car.k_t, car.c_t], dtype=np.float64)
     gains = np.array([ctrl.c_sky / mr**2, ctrl.c_ground / mr**2, ctrl.alpha, i_const])
     zr = np.ascontiguousarray(road.z, dtype=np.float64)

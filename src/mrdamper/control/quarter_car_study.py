@@ -116,7 +116,8 @@ class ControllerComparison:
         return fig
 
     def plot_spectra(self, road: str | None = None, nperseg: int | None = None) -> Any:
-        """Body-acceleration PSD and road-to-acceleration transmissibility (Welch, H1) per controller.
+        """Body-acceleration PSD and road-to-acceleration transmissibility (Welch, H1) per
+        controller.
 
         Returns
         -------
@@ -183,7 +184,8 @@ def compare_controllers(
     seed : int
         Seed of the road phases (the same road for every controller).
     **sim_kw
-        Passed to :func:`~mrdamper.control.quarter_car.simulate_quarter_car` (``reg``, ``rate``, ...).
+        Passed to :func:`~mrdamper.control.quarter_car.simulate_quarter_car` (``reg``, ``rate``,
+        ...).
     """
     fs = default_rate(model) if fs is None else float(fs)
     ctrls = [Controller(c) if isinstance(c, str) else c for c in controllers]

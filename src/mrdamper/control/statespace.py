@@ -138,7 +138,8 @@ def to_control(model: Any, rho: float) -> Any:
         import control
     except ImportError as exc:  # pragma: no cover - depends on the installation
         raise ImportError(
-            'to_control needs python-control; install the extra with: pip install "mrdamper[control]"'
+            "to_control needs python-control; install the extra with: "
+            'pip install "mrdamper[control]"'
         ) from exc
     ss = state_space(model, rho)
     return control.ss(ss.A, ss.B, ss.C, ss.D, ss.dt)
@@ -172,7 +173,8 @@ def frozen_stability(model: Any, n_grid: int = 51, rho: Any = None) -> pd.DataFr
 
 
 def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = None) -> np.ndarray:
-    """Simulate the state-space LPV system ``z[k+1] = A(rho[k]) z[k] + B u[k]``, ``f = C(rho[k]) z + F0``.
+    """Simulate the state-space LPV system ``z[k+1] = A(rho[k]) z[k] + B u[k]``,
+    ``f = C(rho[k]) z + F0``.
 
     Parameters
     ----------
@@ -242,7 +244,8 @@ class ControlGrid:
 
 
 def control_grid(model: Any, rho: Any = None, n_grid: int = 11) -> ControlGrid:
-    """python-control systems of the LPV model at ``rho`` (default ``n_grid`` points over its range).
+    """python-control systems of the LPV model at ``rho`` (default ``n_grid`` points over its
+    range).
 
     Raises
     ------

@@ -142,7 +142,8 @@ class Experiment:
                 raise DataValidationError(
                     ch,
                     f"{bad.size} non-finite value(s), first at sample {bad[0]} "
-                    f"(t index {bad[0]}); use nan_policy in Experiment.from_arrays or a reader (command line: --nan-policy interpolate)",
+                    f"(t index {bad[0]}); use nan_policy in Experiment.from_arrays or a reader "
+                    "(command line: --nan-policy interpolate)",
                 )
         _check_time_base(self.t, self.time_tolerance)
 
@@ -345,7 +346,8 @@ def _check_time_base(t: np.ndarray, tol: float) -> None:
             "t",
             f"time base is not uniform: interval before sample {k} is {d[k - 1]:.6g} s, median "
             f"interval {dt:.6g} s (relative tolerance {tol:g}); resample with "
-            f"Experiment.from_arrays(resample_fs=...) or a reader's resample_fs (command line: --resample-fs)",
+            "Experiment.from_arrays(resample_fs=...) or a reader's resample_fs "
+            "(command line: --resample-fs)",
         )
 
 

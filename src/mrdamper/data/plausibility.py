@@ -94,8 +94,9 @@ def check_plausibility(
         if val > bounds[key]:
             what = "x: stroke (peak-to-peak)" if key == "stroke" else f"{key}: largest magnitude"
             msgs.append(
-                f"{what} {val:.4g} {_UNITS[key]} in {source} exceeds the plausible {bounds[key]:g} {_UNITS[key]}; "
-                f"check the declared units (override with plausible_max={{'{key}': ...}}, command line "
+                f"{what} {val:.4g} {_UNITS[key]} in {source} exceeds the plausible "
+                f"{bounds[key]:g} {_UNITS[key]}; check the declared units "
+                f"(override with plausible_max={{'{key}': ...}}, command line "
                 f"--plausible-max {key}=...)"
             )
     for m in msgs:

@@ -194,7 +194,10 @@ def velocity_from_displacement(
     cut = estimate_velocity_cutoff(exp) if cutoff is None else _positive("cutoff", cutoff)
     xf = _zero_phase_lowpass(exp.x, cut, exp.fs, int(order), "x")
     v = np.gradient(xf, exp.t)
-    note = f"v = central difference of x after zero-phase Butterworth low-pass (order {order}, {cut:g} Hz)"
+    note = (
+        "v = central difference of x after zero-phase Butterworth low-pass "
+        f"(order {order}, {cut:g} Hz)"
+    )
     return exp.replace(v=v, metadata=_log(exp, note, velocity_cutoff=cut))
 
 

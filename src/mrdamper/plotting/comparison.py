@@ -51,7 +51,9 @@ def plot_index_boxes(
     Examples
     --------
     >>> import pandas as pd
-    >>> df = pd.DataFrame({"model": ["a", "a", "b", "b"], "status": "ok", "esr": [0.1, 0.2, 0.3, 0.5]})
+    >>> df = pd.DataFrame(
+    ...     {"model": ["a", "a", "b", "b"], "status": "ok", "esr": [0.1, 0.2, 0.3, 0.5]}
+    ... )
     >>> ax = plot_index_boxes(df, "esr")
     >>> [t.get_text() for t in ax.get_xticklabels()]
     ['a', 'b']
@@ -127,7 +129,8 @@ def _predictions(predictions: Mapping[str, Any], n: int) -> dict[str, np.ndarray
 def _clip_to_measured(
     ax: Any, F: np.ndarray, preds: Mapping[str, np.ndarray], mask: np.ndarray, margin: float
 ) -> list[str]:
-    """Limit the force axis to the measured span (+ ``margin`` of it); return models drawn beyond it."""
+    """Limit the force axis to the measured span (+ ``margin`` of it); return models drawn beyond
+    it."""
     lo, hi = float(F[mask].min()), float(F[mask].max())
     pad = margin * max(hi - lo, 1e-9)
     lo, hi = lo - pad, hi + pad

@@ -64,7 +64,8 @@ class ServoActuator:
             object.__setattr__(self, name, float(value))
 
     def discretise(self, fs: float) -> tuple[np.ndarray, np.ndarray]:
-        """State transition matrix ``phi`` and input vector ``gamma`` for sampling rate ``fs`` [Hz]."""
+        """State transition matrix ``phi`` and input vector ``gamma`` for sampling rate ``fs``
+        [Hz]."""
         if self.bandwidth >= fs / 2:
             raise DataValidationError(
                 "bandwidth",
@@ -88,7 +89,8 @@ class ServoActuator:
             k = int(np.argmax(np.abs(cmd)))
             raise DataValidationError(
                 "x_command",
-                f"reaches {cmd[k]:.5g} m at sample {k}, outside +-stroke/2 = {half:g} m about mid-stroke",
+                f"reaches {cmd[k]:.5g} m at sample {k}, outside +-stroke/2 = {half:g} m about "
+                "mid-stroke",
             )
         phi, gamma = self.discretise(fs)
         x, v = second_order_track(cmd, phi, gamma, float(cmd[0]), 0.0)
@@ -97,7 +99,7 @@ class ServoActuator:
             k = int(over[0])
             raise DataValidationError(
                 "x_command",
-                f"the actuator overshoots to {x[k]:.5g} m at sample {k}, outside +-stroke/2 = {half:g} m; "
-                f"reduce the command amplitude",
+                f"the actuator overshoots to {x[k]:.5g} m at sample {k}, outside "
+                f"+-stroke/2 = {half:g} m; reduce the command amplitude",
             )
         return x, v

@@ -49,8 +49,8 @@ def icps(
         Dwell time of each value [s] (the "increased" clock period; default 1 s).
     n_levels : int
         Number of equally spaced current levels in ``[low, high]``. With 2 (default) the signal is a
-        maximum-length PRBS between ``low`` and ``high`` clocked at ``clock_period``; with more, each
-        clock period holds a level drawn uniformly (seeded) from the ``n_levels`` levels.
+        maximum-length PRBS between ``low`` and ``high`` clocked at ``clock_period``; with more,
+        each clock period holds a level drawn uniformly (seeded) from the ``n_levels`` levels.
     seed : int or numpy.random.SeedSequence
         Register state / level draws.
 

@@ -108,7 +108,8 @@ def temporal_psd(f: np.ndarray | float, road_class: str | float, speed: float) -
 def band_variance(
     road_class: str | float, speed: float, min_frequency: float, max_frequency: float
 ) -> float:
-    """Displacement variance [m^2] of the band ``[min_frequency, max_frequency]``: the integral of G."""
+    """Displacement variance [m^2] of the band ``[min_frequency, max_frequency]``: the integral of
+    G."""
     fmin, fmax = check_range("min_frequency/max_frequency", min_frequency, max_frequency, "Hz")
     v = check_positive("speed", speed, "m/s")
     return _gd0(road_class) * N0**2 * v * (1.0 / fmin - 1.0 / fmax)
@@ -175,8 +176,9 @@ def _to_stroke(x: np.ndarray, stroke: float, fill: float | None) -> np.ndarray:
         if peak > stroke / 2:
             raise DataValidationError(
                 "fill",
-                f"the physical profile reaches {peak:.4g} m, outside +-stroke/2 = {stroke / 2:.4g} m; "
-                f"choose a milder road class or lower speed, or give fill to scale it",
+                f"the physical profile reaches {peak:.4g} m, outside "
+                f"+-stroke/2 = {stroke / 2:.4g} m; choose a milder road class or lower speed, "
+                "or give fill to scale it",
             )
         return x
     fill = check_positive("fill", fill, "-")

@@ -47,8 +47,9 @@ def stepped_current(
     Examples
     --------
     >>> i = stepped_current(10.0, 2.0, low=0.0, high=1.0, n_levels=2)
-    >>> i.tolist()
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]
+    >>> i.tolist()  # doctest: +NORMALIZE_WHITESPACE
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+     1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]
     """
     n = n_samples(fs, duration)
     lo, hi = check_range("low/high", low, high, "A")

@@ -70,7 +70,8 @@ def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
         raise DataValidationError(
             name,
             f"non-numeric value {ser.iloc[k]!r} at data row {k} of {source} "
-            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',', command line --decimal ,)",
+            f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',', "
+            "command line --decimal ,)",
         )
     return num.to_numpy(dtype=np.float64, na_value=np.nan)
 
@@ -95,9 +96,9 @@ def _regenerate_time(t: np.ndarray | None, n: int, fs: Any, source: str) -> tupl
         raise DataValidationError(
             "t",
             f"time column of {source} departs from t0 + k/{fs:g} by {dev:.6g} s "
-            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong (fs / --fs "
-            "declares the records' own sampling rate; a model's rate is the estimator setting model_fs, "
-            "command line --set model_fs=...)",
+            f"(> half a sample interval) at sample {k}: samples are missing or fs is wrong "
+            "(fs / --fs declares the records' own sampling rate; a model's rate is the estimator "
+            "setting model_fs, command line --set model_fs=...)",
         )
     return tn, (
         f"time regenerated as t0 + k / {fs:g} Hz; largest deviation of the file's time column "
@@ -164,7 +165,8 @@ def build_experiment(
     plausible_max: Mapping[str, float] | None = None,
     stored_metadata: Mapping[str, Any] | None = None,
 ) -> Experiment:
-    """Build an Experiment from ``{source column: values}``; see :func:`~mrdamper.data.readers.read_csv`.
+    """Build an Experiment from ``{source column: values}``; see
+    :func:`~mrdamper.data.readers.read_csv`.
 
     Parameters
     ----------
@@ -177,7 +179,9 @@ def build_experiment(
 
     Other Parameters
     ----------------
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata
+        As for :func:`~mrdamper.data.readers.read_csv`.
+    time_tolerance, plausible_max
         As for :func:`~mrdamper.data.readers.read_csv`.
     """
     src = str(path)
@@ -196,7 +200,8 @@ def build_experiment(
     if fs is not None and resample_fs is not None:
         raise DataValidationError(
             "fs",
-            "give either fs (declared rate, time regenerated) or resample_fs (interpolation), not both",
+            "give either fs (declared rate, time regenerated) or resample_fs (interpolation), "
+            "not both",
         )
     if "t" not in specs and fs is None:
         raise _missing("t", "time", headers, src, " or declare the rate with fs= (--fs)")
@@ -208,7 +213,8 @@ def build_experiment(
         raise DataValidationError(
             "i",
             f"no electrical input in {src}: found {headers}; need a current column (names "
-            f"{list(COLUMN_ALIASES['i'])}) or a voltage column (names {list(COLUMN_ALIASES['voltage'])})",
+            f"{list(COLUMN_ALIASES['i'])}) or a voltage column "
+            f"(names {list(COLUMN_ALIASES['voltage'])})",
         )
     derive = _check_derive(derive_velocity)
     if "v" not in specs and derive is None:
@@ -217,8 +223,8 @@ def build_experiment(
             "velocity",
             headers,
             src,
-            ", or pass derive_velocity=True (or a cut-off [Hz]; command line: --derive-velocity) to compute it from x; see "
-            "mrdamper.data.preprocessing.velocity_from_displacement",
+            ", or pass derive_velocity=True (or a cut-off [Hz]; command line: --derive-velocity) "
+            "to compute it from x; see mrdamper.data.preprocessing.velocity_from_displacement",
         )
     if "v" in specs and derive is not None:
         raise DataValidationError(
@@ -269,16 +275,16 @@ def build_experiment(
         if est is None:
             raise DataValidationError(
                 "t",
-                f"{src}: {str(exc)[3:]}; if the file's time column is only rounded, declare the rate "
-                "with fs= (command line: --fs); if the sampling really was irregular, interpolate with "
-                "resample_fs= (command line: --resample-fs)",
+                f"{src}: {str(exc)[3:]}; if the file's time column is only rounded, declare the "
+                "rate with fs= (command line: --fs); if the sampling really was irregular, "
+                "interpolate with resample_fs= (command line: --resample-fs)",
             ) from None
         fs_est, jitter = est
         arrays["t"], _ = _regenerate_time(arrays["t"], n, fs_est, src)
         note = (
-            f"time column of {src} is not uniform but stays within {jitter:.3g} sample intervals of a "
-            f"straight line (rounded values); rate estimated as {fs_est:.10g} Hz and time regenerated "
-            "as t0 + k/fs (declare the rate with fs= / --fs to silence this)"
+            f"time column of {src} is not uniform but stays within {jitter:.3g} sample intervals "
+            f"of a straight line (rounded values); rate estimated as {fs_est:.10g} Hz and time "
+            "regenerated as t0 + k/fs (declare the rate with fs= / --fs to silence this)"
         )
         warnings.warn(note, Note, stacklevel=2)
         meta["repairs"] = tuple(meta.get("repairs", ())) + (note,)

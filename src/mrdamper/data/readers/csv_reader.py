@@ -136,7 +136,9 @@ def read_csv(
     Examples
     --------
     >>> from mrdamper.data.readers import read_csv
-    >>> e = read_csv("rig.csv", columns={"Force_kN": "F"}, units={"F": "kN", "x": "mm"})  # doctest: +SKIP
+    >>> e = read_csv(  # doctest: +SKIP
+    ...     "rig.csv", columns={"Force_kN": "F"}, units={"F": "kN", "x": "mm"}
+    ... )
     """
     p = existing_file(path)
     if p.is_dir():

@@ -27,7 +27,10 @@ __all__ = [
 ]
 
 #: File-name pattern of the constant-current sine records (``sine_5mm_3Hz_0.5A.csv``).
-DEFAULT_PATTERN = r"sine_(?P<condition>(?P<amplitude_mm>[\d.]+)mm_(?P<frequency>[\d.]+)Hz)_(?P<current>[\d.]+)A\.csv"
+DEFAULT_PATTERN = (
+    r"sine_(?P<condition>(?P<amplitude_mm>[\d.]+)mm_(?P<frequency>[\d.]+)Hz)"
+    r"_(?P<current>[\d.]+)A\.csv"
+)
 
 #: File suffix (lower case) -> reader.
 SUFFIX_READERS: dict[str, Any] = {
@@ -95,7 +98,8 @@ def parse_file_name(file_name: str, pattern: str | re.Pattern[str]) -> dict[str,
         elif factor is not None:
             raise DataValidationError(
                 key,
-                f"file name {file_name!r} gives {text!r}, expected a number (unit suffix in group name)",
+                f"file name {file_name!r} gives {text!r}, expected a number "
+                "(unit suffix in group name)",
             )
         else:
             value = text

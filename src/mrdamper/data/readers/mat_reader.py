@@ -142,7 +142,9 @@ def read_mat(
         The file.
     struct : str, optional
         Name of a struct variable whose fields are the channels; default: top-level variables.
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata
+        See :func:`~mrdamper.data.readers.read_csv` (``columns`` maps variable names).
+    time_tolerance, plausible_max
         See :func:`~mrdamper.data.readers.read_csv` (``columns`` maps variable names).
 
     Returns

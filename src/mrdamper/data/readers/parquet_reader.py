@@ -55,7 +55,9 @@ def read_parquet(
     ----------
     path : path-like
         The file.
-    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata, time_tolerance, plausible_max
+    columns, units, nan_policy, max_gap, resample_fs, fs, derive_velocity, name, metadata
+        See :func:`~mrdamper.data.readers.read_csv`.
+    time_tolerance, plausible_max
         See :func:`~mrdamper.data.readers.read_csv`.
 
     Returns
