@@ -1,4 +1,5 @@
-"""The project's own lint and type checks pass: ``ruff check src tests benchmarks`` and ``mypy src``.
+"""The project's own lint and type checks pass: ``ruff check src tests benchmarks`` and
+``mypy src``.
 
 Both run as subprocesses of this interpreter (``python -m ruff`` / ``python -m mypy``) from the
 repository root, so they read the settings in ``pyproject.toml``. mypy runs without its

@@ -1,4 +1,5 @@
-"""``mrdamper export`` and ``mrdamper inverse`` on temporary files: outputs, refusals, one-line errors."""
+"""``mrdamper export`` and ``mrdamper inverse`` on temporary files: outputs, refusals, one-line
+errors."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""``mrdamper fit / simulate / score``: round trip on synthetic CSV files, refusals, one-line errors."""
+"""``mrdamper fit / simulate / score``: round trip on synthetic CSV files, refusals, one-line
+errors."""
 
 from __future__ import annotations
 

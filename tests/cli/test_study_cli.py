@@ -1,4 +1,5 @@
-"""``mrdamper study`` and ``mrdamper demo`` end to end on tiny data (real estimators, real readers)."""
+"""``mrdamper study`` and ``mrdamper demo`` end to end on tiny data (real estimators, real
+readers)."""
 
 from __future__ import annotations
 

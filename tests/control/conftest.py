@@ -39,8 +39,8 @@ def dyke_record(dyke_csv: Path) -> Any:
 
 @pytest.fixture(scope="session")
 def dyke_models(dyke_record: Any) -> dict[str, Any]:
-    """LPV (full rate) and SP-1, both with the voltage input through the drive lag eta = 250 1/s, fitted
-    on the first 70 %."""
+    """LPV (full rate) and SP-1, both with the voltage input through the drive lag eta = 250 1/s,
+    fitted on the first 70 %."""
     from mrdamper.models.lpv import LPVEstimator
     from mrdamper.models.semiphenomenological import SP1Estimator
 

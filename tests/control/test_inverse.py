@@ -1,5 +1,6 @@
-"""Inverse model, exact per-sample method: round trips (force -> current -> force), saturation, drive-lag
-lead, bad input. The regularised method (the default) is tested in test_inverse_regularised.py."""
+"""Inverse model, exact per-sample method: round trips (force -> current -> force), saturation,
+drive-lag lead, bad input. The regularised method (the default) is tested in
+test_inverse_regularised.py."""
 
 from __future__ import annotations
 
@@ -154,7 +155,8 @@ def test_static_unreachable_targets() -> None:
     m = BinghamModel(fc=(50.0, 400.0), c0=(800.0, 900.0), input_range=(0.0, 2.0))
     e, _ = _motion(seed=1)
     moving = np.abs(e.v) > 1e-3
-    # force opposite to the velocity: the damper can only dissipate -> smallest force, lowest current
+    # force opposite to the velocity: the damper can only dissipate -> smallest force, lowest
+    # current
     res = inverse_current(m, e, -500.0 * np.sign(e.v), method="exact")
     assert res.saturated[moving].all()
     np.testing.assert_allclose(res.i[moving], 0.0, atol=1e-9)

@@ -1,5 +1,6 @@
 """Quarter car: the simulator against the analytic transmissibility of the linear quarter car
-(python-control), ISO 2631 Wk against the standard's tabulated values, controllers on a real model."""
+(python-control), ISO 2631 Wk against the standard's tabulated values, controllers on a real
+model."""
 
 from __future__ import annotations
 
@@ -103,7 +104,8 @@ def test_static_map_with_drive_lag_in_the_loop() -> None:
     road = iso_road("C", duration=4.0, fs=1000.0, seed=1)
     r = simulate_quarter_car(lagged, road, "skyhook")
     assert np.all((r.i >= 0.0) & (r.i <= 2.0))
-    # the commanded input, passed through the drive lag, is what the damper saw: replaying it gives its force
+    # the commanded input, passed through the drive lag, is what the damper saw: replaying it gives
+    # its force
     from mrdamper.data import Experiment
 
     e = Experiment(t=r.t, x=r.z_s - r.z_u, v=r.v_s - r.v_u, F=r.F, i=r.i, name="replay")

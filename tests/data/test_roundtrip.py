@@ -162,7 +162,10 @@ def _write_mat73(path: Path, variables: dict[str, np.ndarray], group: str | None
             "label", data=np.frombuffer(b"rig A", dtype=np.uint8).astype(np.uint16)[:, None]
         )
         txt.attrs["MATLAB_class"] = np.bytes_("char")
-    header = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 ."
+    header = (
+        b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 "
+        b"HDF5 schema 1.00 ."
+    )
     header = header.ljust(116, b" ") + b"\x00" * 8 + b"\x00\x02" + b"IM"
     with open(path, "r+b") as fh:
         fh.write(header)

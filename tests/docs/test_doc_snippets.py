@@ -153,5 +153,6 @@ def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
         if proc.returncode != 0:
             tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-15:])
             pytest.fail(
-                f"{b.page}:{b.line} ({b.lang}) exited {proc.returncode}:\n{code}\n--- output ---\n{tail}"
+                f"{b.page}:{b.line} ({b.lang}) exited {proc.returncode}:\n{code}\n"
+                f"--- output ---\n{tail}"
             )

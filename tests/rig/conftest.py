@@ -1,4 +1,5 @@
-"""A tiny, fast test damper for the rig tests (the shipped reference damper is tested separately)."""
+"""A tiny, fast test damper for the rig tests (the shipped reference damper is tested
+separately)."""
 
 from __future__ import annotations
 

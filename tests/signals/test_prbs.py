@@ -26,7 +26,8 @@ def _prime_factors(m: int) -> list[int]:
 
 
 def _polymulmod(a: int, b: int, mod: int, deg: int) -> int:
-    """Product of GF(2) polynomials a*b reduced modulo ``mod`` (degree ``deg``); ints as bit sets."""
+    """Product of GF(2) polynomials a*b reduced modulo ``mod`` (degree ``deg``); ints as bit
+    sets."""
     r = 0
     while b:
         if b & 1:
