@@ -41,23 +41,47 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
     return distinct[0]
 
 
-def rename_setting(kind: str, old: str, new: str, old_value: object, new_value: object) -> object:
+def rename_setting(
+    kind: str,
+    old: str,
+    new: str,
+    old_value: object,
+    new_value: object,
+    reason: str = "",
+) -> object:
     """Value of a setting given under its old name ``old`` (with a :class:`Note`); ``new_value``
-    when the old name was not used. Both names with different values is an error."""
+    when the old name was not used. Both names with different values is an error.
+
+    Parameters
+    ----------
+    kind : str
+        Model kind (for the messages).
+    old, new : str
+        Old and current setting names.
+    old_value, new_value : object
+        Values given under each name (None: not given).
+    reason : str
+        Why the name changed, appended to the note in brackets (optional).
+    """
     if old_value is None:
         return new_value
     if new_value is not None and new_value != old_value:
         raise DataValidationError(
             old,
-            f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old name of {new}",
+            f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old "
+            f"name of {new}",
         )
+    why = f" ({reason})" if reason else ""
     warnings.warn(
-        f"{kind}: setting {old!r} is now called {new!r} (the model's own rate, not a record's "
-        f"sampling rate); using {new}={old_value!r}",
+        f"{kind}: setting {old!r} is now called {new!r}{why}; using {new}={old_value!r}",
         Note,
         stacklevel=4,
     )
     return old_value
+
+
+#: Reason given in the note for the old name ``fs`` of ``model_fs``.
+MODEL_FS_REASON = "the model's own rate, not a record's sampling rate"
 
 
 def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:

@@ -80,9 +80,17 @@ def available_models() -> list[str]:
 
 
 def get_estimator(kind: str, **settings: Any) -> Estimator:
-    """Instantiate the estimator of ``kind`` with ``settings``."""
+    """Instantiate the estimator of ``kind`` with ``settings``.
+
+    Raises
+    ------
+    SchemaError
+        An unknown kind.
+    DataValidationError
+        A setting the estimator does not take (the message names it and lists the others).
+    """
     _load(kind)
-    return _ESTIMATORS[kind](**settings)
+    return _ESTIMATORS[kind].from_settings(**settings)
 
 
 def model_class(kind: str) -> type[FittedModel]:

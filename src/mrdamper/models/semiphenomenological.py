@@ -66,11 +66,10 @@ True
 
 from __future__ import annotations
 
-import time
 import warnings
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -81,7 +80,15 @@ from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._sp_kernels import N_COMPONENTS, sp_force, sp_force_jacobian
-from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
 from mrdamper.models.registry import register
 
 __all__ = [
@@ -288,6 +295,8 @@ class _SPEstimator(Estimator):
     eta : float or None
         Drive-lag rate [1/s]: the map is fitted to the electrical input passed through the lag
         (per record, see the module docstring); ``None`` (default): no lag.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Range policy of the fitted model.
     """
 
     input: ElectricalSource = "i"
@@ -300,32 +309,29 @@ class _SPEstimator(Estimator):
     fit_samples: int | None = 20000
     eta: float | None = None
 
-    model_class: ClassVar[type[_SPModel]] = _SPModel
+    range_policy: RangePolicy = "error"
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> _SPModel:
-        """Identify the model from one record or a collection of records.
+    model_class: ClassVar[type[FittedModel]] = _SPModel
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Multi-start nonlinear least squares of the map (see the module docstring).
 
         Raises
         ------
-        DataValidationError
-            If a setting is invalid or a record lacks the ``input`` channel.
         IdentificationError
             Too few samples, an input that does not vary enough to identify the current
             dependence, a force without variance, or no start converged to a finite cost.
         """
-        t_start = time.perf_counter()
-        self._check_settings()
-        exps = self._as_set(data)
-        cls = self.model_class
+        exps = data.records
+        cls = cast(type[_SPModel], self.model_class)
         comp_all, power_all = cls.layout_arrays()
         x, v, i, F = _stack(
             exps, self.input, self.eta, _scale.WINDOW_THRESHOLD
         )  # long campaigns: an even subset
-        level = single_level(i)
         # one level: every component's polynomial in the input reduces to its constant term
         keep = (
             _single_level_terms(comp_all, power_all)
-            if level is not None
+            if data.single
             else np.ones(comp_all.size, bool)
         )
         comp, power = comp_all[keep], power_all[keep]
@@ -384,7 +390,7 @@ class _SPEstimator(Estimator):
             warnings.warn(
                 f"{cls.kind}: least squares stopped at max_nfev={self.max_nfev} before converging",
                 RuntimeWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
         S_kept, f0 = _to_physical(final.x, comp, power, self.offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
         S = np.zeros(comp_all.size)
@@ -405,49 +411,34 @@ class _SPEstimator(Estimator):
             "message": str(final.message),
             "training_rms_error": rms,
             "training_esr": float(rms**2 / Fs**2),
-            "elapsed_s": time.perf_counter() - t_start,
         }
-        if level is not None and not np.all(keep):
-            note = single_level_note(cls.kind, self.input, level)
-            provenance["note"] = note
-            warnings.warn(note, UserWarning, stacklevel=2)
-        return cls(
-            S=tuple(S),
-            f0=f0,
-            input=self.input,
-            input_range=_scale.input_range(exps, self.input),
+        return Identified(
+            parameters={
+                "S": tuple(S),
+                "f0": f0,
+                "eta": self.eta,
+                "rho_range": None if self.eta is None else (float(np.min(i)), float(np.max(i))),
+            },
             provenance=provenance,
-            eta=self.eta,
-            rho_range=None if self.eta is None else (float(np.min(i)), float(np.max(i))),
         )
 
-    def _check_settings(self) -> None:
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+    def _validate(self) -> None:
+        super()._validate()
         for name, low in (
             ("n_starts", 1),
             ("n_candidates", 1),
             ("max_nfev", 1),
             ("screen_samples", 100),
-            ("fit_samples", 100),
         ):
-            val = getattr(self, name)
-            if name == "fit_samples" and val is None:
-                continue
-            if isinstance(val, bool) or not isinstance(val, (int, np.integer)) or val < low:
-                raise DataValidationError(name, f"expected an integer >= {low}, got {val!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
-            raise DataValidationError("seed", f"expected an integer, got {self.seed!r}")
-        if not isinstance(self.offset, (bool, np.bool_)):
-            raise DataValidationError("offset", f"expected True or False, got {self.offset!r}")
-        if self.eta is not None and (
-            isinstance(self.eta, bool)
-            or not isinstance(self.eta, (int, float))
-            or not (np.isfinite(self.eta) and self.eta > 0)
-        ):
-            raise DataValidationError(
-                "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
-            )
+            check_int(name, getattr(self, name), low)
+        check_int("fit_samples", self.fit_samples, 100, allow_none=True)
+        check_int("seed", self.seed, None)
+        check_number(
+            "eta",
+            self.eta,
+            allow_none=True,
+            what="a positive drive-lag rate [1/s] or None",
+        )
 
 
 @dataclass
@@ -455,7 +446,7 @@ class SP1Estimator(_SPEstimator):
     """Identifies :class:`SP1Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp1"
-    model_class: ClassVar[type[_SPModel]] = SP1Model
+    model_class: ClassVar[type[FittedModel]] = SP1Model
 
 
 @dataclass
@@ -463,7 +454,7 @@ class SP2Estimator(_SPEstimator):
     """Identifies :class:`SP2Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp2"
-    model_class: ClassVar[type[_SPModel]] = SP2Model
+    model_class: ClassVar[type[FittedModel]] = SP2Model
 
 
 @dataclass
@@ -471,7 +462,7 @@ class SP3Estimator(_SPEstimator):
     """Identifies :class:`SP3Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp3"
-    model_class: ClassVar[type[_SPModel]] = SP3Model
+    model_class: ClassVar[type[FittedModel]] = SP3Model
 
 
 @dataclass
@@ -479,7 +470,7 @@ class SP4Estimator(_SPEstimator):
     """Identifies :class:`SP4Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp4"
-    model_class: ClassVar[type[_SPModel]] = SP4Model
+    model_class: ClassVar[type[FittedModel]] = SP4Model
 
 
 # ============================================================================ helpers
