@@ -103,15 +103,20 @@ def check_levels(i: np.ndarray, lo: float, hi: float, source: str) -> None:
         )
 
 
-def _form_bounds(form: str, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on the scaled Bernstein coefficients that impose the sign constraints of ``form``."""
+def _form_bounds(form: str, n_basis: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the scaled Bernstein coefficients (``n_basis`` per quadratic, ``n`` unknowns)
+    that impose the sign constraints of ``form``."""
     lb, ub = np.full(n, -np.inf), np.full(n, np.inf)
+
+    def row(j: int) -> slice:
+        return slice(j * n_basis, (j + 1) * n_basis)
+
     if form != "free":
-        ub[3:6] = -1e-9  # w2 Bernstein coefficients < 0
-        ub[6:9] = -1e-9  # w3 < 0
-        ub[12:15] = 0.0  # w5 <= 0
+        ub[row(1)] = -1e-9  # w2 Bernstein coefficients < 0
+        ub[row(2)] = -1e-9  # w3 < 0
+        ub[row(4)] = 0.0  # w5 <= 0
     if form == "monotone":
-        ub[9:12] = 0.0  # w4 <= 0: g(F) increasing, no bistable branch
+        ub[row(3)] = 0.0  # w4 <= 0: g(F) increasing, no bistable branch
     return lb, ub
 
 
@@ -125,8 +130,13 @@ def equation_error(
     offset: bool,
     cutoff: float | str | None,
     order: int,
+    single: bool = False,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Least squares of the P-15 relation on filtered derivatives.
+
+    With ``single`` (training input at one level, ``lo == hi``) each ``w_j`` is a constant: one
+    coefficient per quadratic is identified and returned in all three Bernstein columns (the
+    Bernstein coefficients of a constant).
 
     Returns
     -------
@@ -139,18 +149,22 @@ def equation_error(
     """
     parts = [regressors(e, source, cutoff, order) for e in exps]
     y = np.concatenate([p[0] for p in parts])
-    n_par = 15 + int(offset)
+    n_basis = 1 if single else 3
+    n_par = 5 * n_basis + int(offset)
     if y.size < SAMPLES_PER_PARAMETER * n_par:
         raise IdentificationError(
             f"data: p15 has {n_par} parameters and needs at least {SAMPLES_PER_PARAMETER * n_par} "
             f"samples after trimming the filter edges, got {y.size}"
         )
     i_reg = np.concatenate([p[1] for p in parts])
-    check_levels(i_reg, lo, hi, source)
     cols = np.concatenate([p[2] for p in parts], axis=0)  # (n, 5): v, dF, ddF, F^3, F^5
-    s = (i_reg - lo) / (hi - lo)
-    basis = np.stack([(1 - s) ** 2, 2 * s * (1 - s), s**2], axis=1)
-    X = (cols[:, :, None] * basis[:, None, :]).reshape(y.size, 15)
+    if single:
+        basis = np.ones((y.size, 1))
+    else:
+        check_levels(i_reg, lo, hi, source)
+        s = (i_reg - lo) / (hi - lo)
+        basis = np.stack([(1 - s) ** 2, 2 * s * (1 - s), s**2], axis=1)
+    X = (cols[:, :, None] * basis[:, None, :]).reshape(y.size, 5 * n_basis)
     if offset:
         X = np.concatenate([X, np.ones((y.size, 1))], axis=1)
     norms = np.sqrt(np.einsum("ij,ij->j", X, X))
@@ -168,11 +182,12 @@ def equation_error(
     if not cond < COND_FAIL:
         raise IdentificationError(
             f"data: p15 regression is ill-conditioned (condition number {cond:.3g} > {COND_FAIL:g}); "
-            f"the records do not excite all 15 terms (vary velocity amplitude and {source})"
+            f"the records do not excite all {5 * n_basis} terms (vary velocity amplitude and "
+            f"{source})"
         )
     if cond > COND_WARN:
         warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=3)
-    lb, ub = _form_bounds(form, X.shape[1])
+    lb, ub = _form_bounds(form, n_basis, X.shape[1])
     if form == "free":
         theta = np.linalg.solve(gram, np.einsum("ij,i->j", Xs, ys))
     else:
@@ -185,4 +200,7 @@ def equation_error(
         "equation_error_rms": resid,
         "cutoff_hz": {e.name: cutoff_hz(cutoff, e.fs) for e in exps},
     }
-    return coef[:15].reshape(5, 3), float(coef[15]) if offset else 0.0, info
+    B = coef[: 5 * n_basis].reshape(5, n_basis)
+    if single:
+        B = np.repeat(B, 3, axis=1)
+    return B, float(coef[5 * n_basis]) if offset else 0.0, info

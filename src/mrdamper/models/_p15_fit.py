@@ -138,27 +138,44 @@ class _Problem:
     f_scale: float
     offset: bool
     max_samples: int
+    single: bool = False
     nfev: int = 0
     njev: int = 0
     failures: int = 0
 
     @property
+    def n_coef(self) -> int:
+        """Unknown Bernstein coefficients: 15, or 5 at a single level (one per quadratic)."""
+        return 5 if self.single else 15
+
+    @property
     def n_par(self) -> int:
-        return 16 if self.offset else 15
+        return self.n_coef + int(self.offset)
 
     def unpack(self, theta: np.ndarray) -> tuple[np.ndarray, float]:
-        """Bernstein coefficients of ``w`` (signed, 5 x 3) and ``f0`` from the unknowns."""
-        B = SIGNS[:, None] * np.exp(np.clip(theta[:15], -700.0, 700.0)).reshape(5, 3)
-        f0 = float(theta[15] * self.f_scale) if self.offset else 0.0
+        """Bernstein coefficients of ``w`` (signed, 5 x 3) and ``f0`` from the unknowns (at a
+        single level the three coefficients of a quadratic are equal: a constant)."""
+        c = self.n_coef
+        mag = np.exp(np.clip(theta[:c], -700.0, 700.0)).reshape(5, c // 5)
+        B = SIGNS[:, None] * (np.repeat(mag, 3, axis=1) if self.single else mag)
+        f0 = float(theta[c] * self.f_scale) if self.offset else 0.0
         return B, f0
 
     def chain(self, theta: np.ndarray) -> np.ndarray:
-        """d (Bernstein coefficients, f0) / d theta (diagonal)."""
-        d = np.empty(self.n_par)
-        d[:15] = (SIGNS[:, None] * np.exp(np.clip(theta[:15], -700.0, 700.0)).reshape(5, 3)).ravel()
+        """d (Bernstein coefficients, f0) / d theta (diagonal; 16 entries, the full coefficients)."""
+        B, _ = self.unpack(theta)
+        d = np.empty(16 if self.offset else 15)
+        d[:15] = B.ravel()
         if self.offset:
             d[15] = self.f_scale
         return d
+
+    def reduce(self, J: np.ndarray) -> np.ndarray:
+        """Jacobian columns of the full coefficients -> columns of the unknowns."""
+        if not self.single:
+            return J
+        out = J[:, :15].reshape(J.shape[0], 5, 3).sum(axis=2)
+        return np.concatenate([out, J[:, 15:]], axis=1)
 
     def segments(
         self, r: _Rec, mode: str, seg_len: int, seg_stride: int
@@ -175,7 +192,7 @@ class _Problem:
         """Weighted residuals (and Jacobian w.r.t. theta) of every record."""
         B, f0 = self.unpack(theta)
         chain = self.chain(theta)
-        m = self.n_par
+        m = chain.size
         res, jac = [], []
         n_total = sum(r.F.size for r in self.recs)
         stride = max(1, math.ceil(n_total / self.max_samples))
@@ -222,7 +239,7 @@ class _Problem:
                     rr[(idx >= k) & (idx < b)] = _PENALTY * weight * r.std
             res.append(rr)
             if with_jac:
-                Jr = J[idx] * chain[None, :] * weight
+                Jr = self.reduce(J[idx] * chain[None, :] * weight)
                 if np.any(failed):
                     for a, b, k in zip(st[failed], en[failed], bad[failed]):
                         Jr[(idx >= k) & (idx < b)] = 0.0
@@ -249,12 +266,16 @@ def identify_output_error(
     max_samples: int,
     jacobian: str,
     bound: float,
+    single: bool = False,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Run the two stages from Bernstein coefficients ``B0`` (signed, 5 x 3) and offset ``f00``.
 
     Returns the Bernstein coefficients (signed, positive-form) and offset of the fit, and a
-    provenance dictionary.
+    provenance dictionary. With ``single`` (one input level) each quadratic is a constant: one
+    unknown per quadratic, its three Bernstein coefficients equal; ``hi`` may equal ``lo``.
     """
+    if single:
+        hi = lo + 1.0  # any interval: the basis sums to one and the rows are constant
     t0 = time.perf_counter()
     recs = []
     for e, ff, gf in zip(exps, Ff, Gf):
@@ -273,7 +294,7 @@ def identify_output_error(
             )
         )
     f_scale = float(max(np.std(e.F) for e in exps)) or 1.0
-    prob = _Problem(recs, lo, hi, bound, f_scale, offset, max_samples)
+    prob = _Problem(recs, lo, hi, bound, f_scale, offset, max_samples, single)
     # start: magnitudes of the equation-error Bernstein coefficients with the positive signs,
     # floored at 1e-3 of the largest coefficient of the same quadratic (or a scale-based value)
     mag = SIGNS[:, None] * B0
@@ -283,6 +304,8 @@ def identify_output_error(
         top = float(np.max(mag[j]))
         floor = 1e-3 * top if top > 0 else floors[j]
         start[j] = np.maximum(mag[j], floor)
+    if single:
+        start = start[:, :1]
     theta = np.concatenate([np.log(start).ravel(), [f00 / f_scale] if offset else []])
     stages: list[dict[str, Any]] = []
 
@@ -313,7 +336,8 @@ def identify_output_error(
         r0 = fun(theta0)
         lb = np.full(theta0.size, -np.inf)
         ub = np.full(theta0.size, np.inf)
-        lb[:15], ub[:15] = theta0[:15] - 40.0, theta0[:15] + 40.0
+        c = prob.n_coef
+        lb[:c], ub[:c] = theta0[:c] - 40.0, theta0[:c] + 40.0
         sol = least_squares(
             fun,
             theta0,
