@@ -205,7 +205,7 @@ def test_free_run_starts_from_rest_and_ignores_the_measured_force() -> None:
 
 def test_sensitivities_match_finite_differences() -> None:
     """The kernel's discrete sensitivities against central differences of the same kernel."""
-    from mrdamper.models._p15_implicit import p15i_run
+    from mrdamper.models._p15_kernels import p15i_run
 
     e = _record(n=2000, seed=8)
     one = np.zeros(1, dtype=np.int64)

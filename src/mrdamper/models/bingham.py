@@ -10,7 +10,7 @@ records.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
@@ -18,8 +18,8 @@ import numpy as np
 
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import DataValidationError, IdentificationError
-from mrdamper.models import _scale
+from mrdamper.errors import DataValidationError
+from mrdamper.models._bingham_fit import identify
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -176,57 +176,12 @@ class BinghamEstimator(Estimator):
         IdentificationError
             The regression is rank deficient (e.g. fewer input levels than ``degree + 1``).
         """
-        exps = data.records
         sign = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps).sign
         # one level: fc and c0 reduce to constants
         deg = 0 if data.single else int(self.degree)
-
-        def blocks() -> Iterator[np.ndarray]:  # weighted rows [X y], folded into a QR factor
-            for exp, el in zip(exps, data.electrical):
-                w = 1.0
-                if self.weighting == "record":
-                    sd = float(np.std(exp.F))
-                    if sd == 0.0:
-                        raise DataValidationError(
-                            "F", f"record {exp.name!r} has constant force; use weighting='none'"
-                        )
-                    w = 1.0 / (sd * math.sqrt(exp.n))
-                for k0 in range(0, exp.n, _scale.QR_BLOCK):
-                    sl = slice(k0, k0 + _scale.QR_BLOCK)
-                    e, v = el[sl], exp.v[sl]
-                    powers = np.vander(e, deg + 1, increasing=True)
-                    yield (
-                        np.hstack(
-                            [
-                                powers * sign(v)[:, None],
-                                powers * v[:, None],
-                                np.ones((e.size, 1)),
-                                exp.F[sl, None],
-                            ]
-                        )
-                        * w
-                    )
-
-        Rf = _scale.fold_qr(blocks())  # Q Rf = [X y]: X c - y = Q (Rf[:, :-1] c - Rf[:, -1])
-        n_rows = sum(e.n for e in exps)
-        X, y = Rf[:, :-1], Rf[:, -1]
-        coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)
-        if rank < X.shape[1]:
-            levels = np.unique(np.round(np.concatenate(data.electrical), 9)).size
-            raise IdentificationError(
-                f"bingham: regression is rank deficient (rank {rank} of {X.shape[1]}); "
-                f"degree={deg} needs at least {deg + 1} distinct '{self.input}' levels and "
-                f"moving records (found {levels} level(s))"
-            )
-        provenance = {
-            "method": "linear least squares",
-            "records": [e.name for e in exps],
-            "n_samples": int(n_rows),
-            "weighting": self.weighting,
-            "degree": deg,
-            "cond_X": float(sv[0] / sv[-1]),
-            "weighted_rms_residual": float(np.linalg.norm(X @ coef - y) / math.sqrt(n_rows)),
-        }
+        coef, provenance = identify(
+            data.records, data.electrical, deg, self.weighting, sign, self.input
+        )
         return Identified(
             parameters={
                 "fc": tuple(coef[: deg + 1]),

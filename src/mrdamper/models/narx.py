@@ -37,19 +37,18 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import warnings
 from collections.abc import Mapping
 from dataclasses import InitVar, dataclass
 from typing import Any, ClassVar, cast
 
 import numpy as np
-from scipy import optimize
 
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
+from mrdamper.models._narx_fit import free_run_cost, least_squares_terms, refine, select_terms
 from mrdamper.models._rates import (
     MODEL_FS_REASON,
     model_rate,
@@ -72,7 +71,6 @@ __all__ = ["NARXEstimator", "NARXModel", "candidate_structure"]
 
 #: Signal rows of the kernels' ``S`` array (``e`` is the model's electrical input).
 SIGNALS: tuple[str, ...] = ("F", "x", "v", "e", "tanh_v")
-_BLOCK = 2048
 #: Default budget of the output-error refinement (residual evaluations).
 _DEFAULT_MAX_NFEV = 40
 _NFEV_REASON = "the same name as every other estimator's iteration budget"
@@ -501,18 +499,24 @@ class NARXEstimator(Estimator):
         # long campaigns: the output-error refinement runs on evenly spread windows (term selection
         # on windows was tried: its least-squares model diverged in free run on a 1 h record)
         fit_recs, fit_w, windows = _scale.narx_windows(records, weights, fs, p)
-        order, err = self._select(records, weights, base, cand, p)
+        order, err = select_terms(
+            records, weights, base, cand, p, self.n_terms, self.err_tol, self.colin_tol
+        )
         terms = cand[order]
-        theta, cond = self._least_squares(records, weights, base, terms, p)
-        model = _replace(probe, terms=terms, theta=theta)
-        cost_ls = _free_run_cost(model, records, weights, p)
+        theta, cond = least_squares_terms(records, weights, base, terms, p, self.cond_max)
+        model = dataclasses.replace(probe, terms=terms, theta=theta)
+        bound = model.force_bound / model.scales[0]
+        cost_ls = free_run_cost(base, terms, theta, bound, records, weights, p)
         cost, nfev, refined = cost_ls, 0, False
         if self.refine:
-            theta_r, cost_r, nfev = self._refine(model, list(fit_recs), fit_w, p)
+            theta_r, cost_r, nfev = refine(
+                base, terms, theta, bound, list(fit_recs), fit_w, p, self.max_nfev
+            )
             if windows is not None:  # full-data check of the refined coefficients
-                cost_r = _free_run_cost(_replace(model, theta=theta_r), records, weights, p)
+                cost_r = free_run_cost(base, terms, theta_r, bound, records, weights, p)
             if cost_r < cost_ls:
-                model, cost, refined = _replace(model, theta=theta_r), cost_r, True
+                model = dataclasses.replace(model, theta=theta_r)
+                cost, refined = cost_r, True
         prov: dict[str, Any] = {
             "method": "OLS-ERR forward selection + least squares"
             + (" + output-error refinement" if refined else ""),
@@ -543,127 +547,6 @@ class NARXEstimator(Estimator):
                 "free_run_cost": float(cost),
             }
         return Identified(parameters=model.parameters, provenance=prov)
-
-    # --- steps ---------------------------------------------------------------------------
-    def _select(
-        self,
-        records: list[np.ndarray],
-        weights: list[float],
-        base: np.ndarray,
-        cand: np.ndarray,
-        p: int,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """OLS-ERR selection on the weighted, column-normalised augmented Gram matrix."""
-        M = cand.shape[0]
-        A = np.zeros((M + 1, M + 1))
-        blk = np.empty((_BLOCK, M + 1))
-        for S, w in zip(records, weights, strict=True):
-            sw = math.sqrt(w)
-            for k0 in range(p, S.shape[1], _BLOCK):
-                k1 = min(k0 + _BLOCK, S.shape[1])
-                B = blk[: k1 - k0]
-                K.fill_candidates(S, base, cand, k0, k1, B[:, :M])
-                B[:, M] = S[0, k0:k1]
-                B *= sw
-                A += B.T @ B
-        d = np.sqrt(np.diag(A)).copy()
-        usable = d[:M] > 0
-        d[d == 0] = 1.0
-        A /= d[:, None] * d[None, :]
-        A[~np.append(usable, True), :] = 0.0  # constant-zero candidates: never selectable
-        order, err = K.gram_select(
-            A, min(int(self.n_terms), M), float(self.err_tol), float(self.colin_tol)
-        )
-        if order.size == 0:
-            raise IdentificationError(
-                "narx: no candidate term explains the force (all collinear or zero)"
-            )
-        return np.asarray(order), np.asarray(err)
-
-    def _least_squares(
-        self,
-        records: list[np.ndarray],
-        weights: list[float],
-        base: np.ndarray,
-        terms: np.ndarray,
-        p: int,
-    ) -> tuple[np.ndarray, float]:
-        # [X y] is reduced block by block to its triangular QR factor R (same least-squares
-        # solution and singular values as X itself, never held in memory)
-        X, y = _scale.chunked_qr(records, weights, base, terms, p, K.fill_candidates)
-        norms = np.linalg.norm(X, axis=0)
-        Xn = X / norms
-        coef, _, rank, sv = np.linalg.lstsq(Xn, y, rcond=None)
-        cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
-        if rank < X.shape[1] or cond > self.cond_max:
-            raise IdentificationError(
-                f"narx: regression of the {X.shape[1]} selected terms is ill-conditioned "
-                f"(condition number {cond:.3g}, expected <= cond_max={self.cond_max:g}); "
-                "raise colin_tol or lower n_terms"
-            )
-        return coef / norms, cond
-
-    def _refine(
-        self, model: NARXModel, records: list[np.ndarray], weights: list[float], p: int
-    ) -> tuple[np.ndarray, float, int]:
-        bound = model.force_bound / model.scales[0]
-        meas = [S[0].copy() for S in records]
-
-        def residual_and_jac(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            res, jac = [], []
-            for S, f, w in zip(records, meas, weights, strict=True):
-                Sw = S.copy()
-                J, bad = K.free_run_sensitivity(Sw, model.base, model.terms, theta, p, bound)
-                if bad >= 0:
-                    Sw[0, bad:] = np.sign(Sw[0, bad - 1] if bad > 0 else 1.0) * bound
-                sw = math.sqrt(w)
-                res.append(sw * (Sw[0, p:] - f[p:]))
-                jac.append(sw * J[p:])
-            return np.concatenate(res), np.vstack(jac)
-
-        cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-        def evaluate(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            key = theta.tobytes()
-            if key not in cache:
-                cache.clear()
-                cache[key] = residual_and_jac(theta)
-            return cache[key]
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            sol = optimize.least_squares(
-                lambda th: evaluate(th)[0],
-                model.theta.copy(),
-                jac=lambda th: evaluate(th)[1],
-                method="trf",
-                x_scale="jac",
-                max_nfev=int(self.max_nfev),
-            )
-        theta = np.asarray(sol.x, dtype=np.float64)
-        return (
-            theta,
-            _free_run_cost(_replace(model, theta=theta), records, weights, p),
-            int(sol.nfev),
-        )
-
-
-def _replace(model: NARXModel, **changes: Any) -> NARXModel:
-    return dataclasses.replace(model, **changes)
-
-
-def _free_run_cost(
-    model: NARXModel, records: list[np.ndarray], weights: list[float], p: int
-) -> float:
-    """Weighted free-run squared error (sum over records of ESR-like terms); inf if diverged."""
-    bound = model.force_bound / model.scales[0]
-    cost = 0.0
-    for S, w in zip(records, weights, strict=True):
-        Sw = S.copy()
-        if K.free_run(Sw, model.base, model.terms, model.theta, p, bound) >= 0:
-            return math.inf
-        cost += w * float(np.sum((Sw[0, p:] - S[0, p:]) ** 2))
-    return cost
 
 
 register(NARXEstimator, NARXModel)

@@ -23,7 +23,7 @@ equilibrium, which is globally asymptotically stable (proof in ``docs/models.md`
 Simulation
 ----------
 ``(F, dF/dt)`` is integrated with the two-stage L-stable SDIRK2 scheme of
-:mod:`mrdamper.models._p15_implicit`, ``ceil(dt / max_step)`` steps per sample, ``v`` and ``i``
+:mod:`mrdamper.models._p15_kernels`, ``ceil(dt / max_step)`` steps per sample, ``v`` and ``i``
 linear between samples. L-stability keeps the stiff part of the force ODE (fast force relaxation
 at large ``|F|``) stable at any step; the step is chosen for accuracy and checked by the
 estimator: the free run of every training record is repeated with half the step and the change
@@ -43,7 +43,7 @@ Identification
 measured state over short segments, then free-run least squares; forward sensitivities of the
 compiled integrator), started from the ``form="monotone"`` equation-error fit.
 ``method="equation-error"``: the paper's reading, linear least squares of the relation on
-filtered derivatives (:mod:`mrdamper.models._p15_eqerr`), ``form="free"`` (literal),
+filtered derivatives (:mod:`mrdamper.models._p15_fit`), ``form="free"`` (literal),
 ``"stable"`` or ``"monotone"`` (sign constraints on the Bernstein coefficients).
 
 Examples
@@ -79,15 +79,17 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
-from mrdamper.models._p15_eqerr import check_levels, equation_error, filtered_state
 from mrdamper.models._p15_fit import (
     BERNSTEIN_TO_POWER,
     bernstein_basis,
+    check_levels,
+    equation_error,
+    filtered_state,
     identify_output_error,
     rest_state,
     to_monomial,
 )
-from mrdamper.models._p15_implicit import p15i_run
+from mrdamper.models._p15_kernels import p15i_run
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import (
     Estimator,
