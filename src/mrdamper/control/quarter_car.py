@@ -369,7 +369,7 @@ class QuarterCarResult:
 
 def _damper_arrays(model: Any) -> dict[str, Any]:
     """The model as kernel arrays (static map or LPV); unsupported kinds raise TypeError."""
-    from mrdamper.models.lpv import LPVModel, LTIModel
+    from mrdamper.models.protocols import InvertibleModel, ScheduledForm
 
     empty2 = np.zeros((1, 1))
     out: dict[str, Any] = {
@@ -393,7 +393,7 @@ def _damper_arrays(model: Any) -> dict[str, Any]:
             comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c])
         )
         return out
-    if isinstance(model, LPVModel) and not isinstance(model, LTIModel):
+    if isinstance(model, InvertibleModel) and isinstance(model.inverse_form(), ScheduledForm):
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
         out.update(
             is_lpv=True,

@@ -29,6 +29,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.protocols import StaticMapForm
 from mrdamper.models.registry import register
 
 __all__ = ["BinghamEstimator", "BinghamModel"]
@@ -112,6 +113,33 @@ class BinghamModel(FittedModel):
         """``sign(v)`` or ``tanh(v / v_eps)`` [-]."""
         return np.sign(v) if self.v_eps == 0.0 else np.tanh(v / self.v_eps)
 
+    def force(self, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
+        """Evaluate the model on plain arrays (no range policy) [N].
+
+        Parameters
+        ----------
+        x, v, i : ndarray
+            Displacement [m] (unused: the model does not depend on it), velocity [m/s],
+            electrical input [A or V].
+        """
+        fc = np.polynomial.polynomial.polyval(i, self.fc)
+        c0 = np.polynomial.polynomial.polyval(i, self.c0)
+        return np.asarray(fc * self.sign(v) + c0 * v + self.f0)
+
+    def inverse_form(self) -> StaticMapForm:
+        """The model as a static map of the control kernels: ``fc(i) tanh(v / v_eps) + c0(i) v +
+        f0``, the exact sign written ``tanh(1e300 v)`` when ``v_eps = 0`` (invertible, see
+        :class:`~mrdamper.models.protocols.InvertibleModel`)."""
+        comp = [0] * len(self.fc) + [1] + [3] * len(self.c0)
+        power = list(range(len(self.fc))) + [0] + list(range(len(self.c0)))
+        slope = 1e300 if self.v_eps == 0.0 else 1.0 / self.v_eps
+        return StaticMapForm(
+            np.asarray(comp, dtype=np.int64),
+            np.asarray(power, dtype=np.int64),
+            np.asarray([*self.fc, slope, *self.c0], dtype=np.float64),
+            float(self.f0),
+        )
+
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Force [N] from the record's velocity and electrical input.
 
@@ -126,11 +154,7 @@ class BinghamModel(FittedModel):
             raise DataValidationError(
                 "experiment", f"expected an Experiment, got {type(experiment).__name__}"
             )
-        e = self.electrical_input(experiment)
-        v = experiment.v
-        fc = np.polynomial.polynomial.polyval(e, self.fc)
-        c0 = np.polynomial.polynomial.polyval(e, self.c0)
-        return fc * self.sign(v) + c0 * v + self.f0
+        return self.force(experiment.x, experiment.v, self.electrical_input(experiment))
 
 
 @dataclass

@@ -36,13 +36,6 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _lpv_fit, _scale
 from mrdamper.models import _lpv_kernels as K
-from mrdamper.models._rates import (
-    MODEL_FS_REASON,
-    model_rate,
-    rename_setting,
-    to_model_rate,
-    to_record_rate,
-)
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -52,9 +45,25 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.protocols import ScheduledForm
+from mrdamper.models.rates import (
+    MODEL_FS_REASON,
+    model_rate,
+    rename_setting,
+    to_model_rate,
+    to_record_rate,
+)
 from mrdamper.models.registry import register
 
-__all__ = ["LPVEstimator", "LPVModel", "LTIEstimator", "LTIModel", "select_order"]
+__all__ = [
+    "LPVEstimator",
+    "LPVModel",
+    "LTIEstimator",
+    "LTIModel",
+    "TransferFunctionModel",
+    "model_signals",
+    "select_order",
+]
 
 InputSignal = Literal["u", "v"]
 
@@ -119,8 +128,12 @@ def model_signals(
 
 # ----------------------------------------------------------------------------- fitted models
 @dataclass(frozen=True)
-class LPVModel(FittedModel):
-    """Identified LPV input-output damper model (immutable).
+class TransferFunctionModel(FittedModel):
+    """The input-output transfer-function structure shared by the LPV and LTI models (immutable).
+
+    Use :class:`LPVModel` (scheduled coefficients) or :class:`LTIModel` (``n_rho = 0``); this
+    class holds what they share: parameters, signal pipeline, free-run prediction and frozen
+    poles.
 
     Attributes
     ----------
@@ -145,7 +158,7 @@ class LPVModel(FittedModel):
         Free-run output magnitude regarded as divergence [N].
     """
 
-    kind: ClassVar[str] = "lpv"
+    kind: ClassVar[str] = "abstract"
 
     alpha: np.ndarray = field(default_factory=lambda: np.zeros((1, 1)))
     beta: np.ndarray = field(default_factory=lambda: np.zeros((1, 1)))
@@ -294,8 +307,44 @@ class LPVModel(FittedModel):
 
 
 @dataclass(frozen=True)
-class LTIModel(LPVModel):
-    """The LPV structure without scheduling of the coefficients (``n_rho = 0``)."""
+class LPVModel(TransferFunctionModel):
+    """Identified LPV input-output damper model (see :class:`TransferFunctionModel` for the
+    attributes). Invertible (:class:`~mrdamper.models.protocols.InvertibleModel`): its force at a
+    sample is a polynomial in the present scheduling variable."""
+
+    kind: ClassVar[str] = "lpv"
+
+    def inverse_form(self) -> ScheduledForm:
+        """The model as the plain arrays of the control kernels (zone laws included)."""
+        laws = self.zone_laws
+        if self.input_signal == "v" or laws is None:
+            gm, gc, mu_h, mu_l = np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
+        else:
+            gm = np.ascontiguousarray(laws.gamma_m, dtype=np.float64)
+            gc = np.ascontiguousarray(laws.gamma_c, dtype=np.float64)
+            mu_h = np.asarray(laws.mu_high, dtype=np.float64)
+            mu_l = np.asarray(laws.mu_low, dtype=np.float64)
+        return ScheduledForm(
+            alpha=np.ascontiguousarray(self.alpha),
+            beta=np.ascontiguousarray(self.beta),
+            offset=float(self.offset),
+            fs=self.fs,
+            eta=self.eta,
+            input_signal=self.input_signal,
+            reading=self.reading,
+            gamma_m=gm,
+            gamma_c=gc,
+            mu_high=mu_h,
+            mu_low=mu_l,
+        )
+
+
+@dataclass(frozen=True)
+class LTIModel(TransferFunctionModel):
+    """The LPV structure without scheduling of the coefficients (``n_rho = 0``; paper Fig. 4).
+
+    Not invertible: its force does not depend on the present electrical input.
+    """
 
     kind: ClassVar[str] = "lti"
 
@@ -442,7 +491,7 @@ class LPVEstimator(Estimator):
         data: Experiment | Iterable[Experiment],
         *,
         record_weights: Sequence[float] | None = None,
-    ) -> LPVModel:
+    ) -> TransferFunctionModel:
         """Identify the model from one record or a collection (records keep their own start).
 
         Parameters
@@ -471,7 +520,7 @@ class LPVEstimator(Estimator):
                 RuntimeWarning,
                 stacklevel=2,
             )
-        return cast(LPVModel, model)
+        return cast(TransferFunctionModel, model)
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """Joint least squares, then output-error refinement under frozen stability."""

@@ -49,13 +49,6 @@ from mrdamper.errors import DataValidationError, IdentificationError, Simulation
 from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
 from mrdamper.models._narx_fit import free_run_cost, least_squares_terms, refine, select_terms
-from mrdamper.models._rates import (
-    MODEL_FS_REASON,
-    model_rate,
-    rename_setting,
-    to_model_rate,
-    to_record_rate,
-)
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -64,6 +57,13 @@ from mrdamper.models.base import (
     TrainingData,
     check_int,
     check_number,
+)
+from mrdamper.models.rates import (
+    MODEL_FS_REASON,
+    model_rate,
+    rename_setting,
+    to_model_rate,
+    to_record_rate,
 )
 from mrdamper.models.registry import register
 

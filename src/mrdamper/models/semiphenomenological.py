@@ -87,6 +87,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.protocols import StaticMapForm
 from mrdamper.models.registry import register
 
 __all__ = [
@@ -98,13 +99,14 @@ __all__ = [
     "SP3Model",
     "SP4Estimator",
     "SP4Model",
+    "SPModel",
 ]
 
 
 # ============================================================================ fitted models
 @dataclass(frozen=True)
-class _SPModel(FittedModel):
-    """Common behaviour of the SP-k fitted models (abstract; use SP1Model ... SP4Model).
+class SPModel(FittedModel):
+    """Common behaviour of the SP-k fitted models (use SP1Model ... SP4Model).
 
     Attributes
     ----------
@@ -192,6 +194,12 @@ class _SPModel(FittedModel):
         xa, va, ia = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, i))
         return sp_force(xa, va, ia, comp, power, np.asarray(self.S, dtype=np.float64), self.f0)
 
+    def inverse_form(self) -> StaticMapForm:
+        """The map as the plain arrays of the control kernels (invertible, see
+        :class:`~mrdamper.models.protocols.InvertibleModel`)."""
+        comp, power = self.layout_arrays()
+        return StaticMapForm(comp, power, np.asarray(self.S, dtype=np.float64), self.f0, self.eta)
+
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N]: direct evaluation on the record's x, v and electrical input
         (through the drive lag when ``eta`` is set; the range policy applies to the input)."""
@@ -202,7 +210,7 @@ class _SPModel(FittedModel):
 
 
 @dataclass(frozen=True)
-class SP1Model(_SPModel):
+class SP1Model(SPModel):
     """SP-1: ``F = S1(i) tanh(S2(i) v + S3(i) x) + S4(i) v + S5(i) x + f0``.
 
     ``S`` holds 15 coefficients: ``S_j(i) = S[3(j-1)] + S[3(j-1)+1] i + S[3(j-1)+2] i^2`` for
@@ -217,7 +225,7 @@ class SP1Model(_SPModel):
 
 
 @dataclass(frozen=True)
-class SP2Model(_SPModel):
+class SP2Model(SPModel):
     """SP-2: ``F = S1 i tanh(S2 v + S3 x) + S4 v + S5 x + f0``.
 
     ``S = (S1 [N/A], S2 [s/m], S3 [1/m], S4 [N s/m], S5 [N/m])`` (per V with ``input="voltage"``).
@@ -228,7 +236,7 @@ class SP2Model(_SPModel):
 
 
 @dataclass(frozen=True)
-class SP3Model(_SPModel):
+class SP3Model(SPModel):
     """SP-3: ``F = (S1 i + S2) tanh(S3 v + S4 x) + S5 v + S6 x + f0``.
 
     ``S = (S1 [N/A], S2 [N], S3 [s/m], S4 [1/m], S5 [N s/m], S6 [N/m])``.
@@ -239,7 +247,7 @@ class SP3Model(_SPModel):
 
 
 @dataclass(frozen=True)
-class SP4Model(_SPModel):
+class SP4Model(SPModel):
     """SP-4: ``F = (S1 i^2 + S2 i + S3) tanh(S4 v + S5 x) + S6 v + S7 x + f0``.
 
     ``S = (S1 [N/A^2], S2 [N/A], S3 [N], S4 [s/m], S5 [1/m], S6 [N s/m], S7 [N/m])``.
@@ -300,7 +308,7 @@ class _SPEstimator(Estimator):
 
     range_policy: RangePolicy = "error"
 
-    model_class: ClassVar[type[FittedModel]] = _SPModel
+    model_class: ClassVar[type[FittedModel]] = SPModel
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """Multi-start nonlinear least squares of the map (see the module docstring).
@@ -311,7 +319,7 @@ class _SPEstimator(Estimator):
             Too few samples, an input that does not vary enough to identify the current
             dependence, a force without variance, or no start converged to a finite cost.
         """
-        cls = cast(type[_SPModel], self.model_class)
+        cls = cast(type[SPModel], self.model_class)
         comp_all, power_all = cls.layout_arrays()
         x, v, i, F = stack(
             data.records, self.input, self.eta, _scale.WINDOW_THRESHOLD
