@@ -674,6 +674,19 @@ def export_c(
 ) -> tuple[Path, Path]:
     """Write ``<out_dir>/<name>.h`` and ``<name>.c`` atomically (see :func:`c_source` for the options).
 
+    Parameters
+    ----------
+    model : FittedModel
+        LPV, LTI, SP-1..SP-4 or Bingham model.
+    out_dir : str or Path
+        Folder of the two files (created if missing).
+    name : str
+        C identifier used as file stem and prefix of every symbol.
+    force : bool
+        Overwrite existing files.
+    **kwargs
+        Options of :func:`c_source` (``n_grid``, ``reg``, ...).
+
     Returns
     -------
     (Path, Path)

@@ -588,6 +588,13 @@ def force_authority(model: Any, v_ref: float) -> float:
     for an LPV model the force is the frozen-``rho`` steady state
     ``F0 + sum_j b_j(rho) / (1 + sum_j a_j(rho)) u(v_ref, rho)``. It sets the scale of the
     default regularisation weight.
+
+    Parameters
+    ----------
+    model : InvertibleModel
+        LPV model or static map.
+    v_ref : float
+        Velocity at which the steady force is taken [m/s].
     """
     lo, hi = model_input_limits(model)
     if not hi > lo:

@@ -220,6 +220,21 @@ def iso_road(
 
     Uses :func:`mrdamper.signals.road_profile` with ``fill=None`` (no scaling) and a 0.5 s fade in
     and out; the band ``[min_frequency, max_frequency]`` [Hz] bounds the synthesis.
+
+    Parameters
+    ----------
+    road_class : str
+        ISO 8608 class ``"A"`` .. ``"H"``.
+    speed : float
+        Vehicle speed [m/s].
+    duration : float
+        Length of the road signal [s].
+    fs : float
+        Sampling rate [Hz].
+    seed : int
+        Seed of the random phases.
+    min_frequency, max_frequency : float
+        Temporal frequency band of the synthesis [Hz].
     """
     from mrdamper.signals.road import road_profile
 
@@ -247,7 +262,23 @@ def bump_road(
     fs: float = 1000.0,
     start: float = 0.5,
 ) -> Road:
-    """One ``(1 - cos)`` bump of ``height`` [m] and ``length`` [m] reached after ``start`` [s]."""
+    """One ``(1 - cos)`` bump of ``height`` [m] and ``length`` [m] reached after ``start`` [s].
+
+    Parameters
+    ----------
+    height : float
+        Bump height [m].
+    length : float
+        Bump length along the road [m].
+    speed : float
+        Vehicle speed [m/s].
+    duration : float
+        Length of the road signal [s].
+    fs : float
+        Sampling rate [Hz].
+    start : float
+        Time at which the wheel reaches the bump [s].
+    """
     h = _pos("height", height, "m")
     L = _pos("length", length, "m")
     V = _pos("speed", speed, "m/s")

@@ -84,6 +84,8 @@ def check_input_range(
         What to do when values leave ``bounds`` by more than ``tolerance`` times the range width.
     field_name, model : str
         Used in the message.
+    tolerance : float
+        Relative slack on the bounds, as a fraction of the range width (at least 1) [-].
 
     Returns
     -------
@@ -115,6 +117,13 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
     """The one level of a constant electrical input, or None when it takes more than one value.
 
     ``values`` is constant when its spread is at most ``rel_tol * max(1, max |values|)``.
+
+    Parameters
+    ----------
+    values : ndarray
+        Electrical input [A] or [V] (or its extremes).
+    rel_tol : float
+        Relative spread below which the input is one level [-].
     """
     lo, hi = float(np.min(values)), float(np.max(values))
     if hi - lo <= rel_tol * max(1.0, abs(lo), abs(hi)):
@@ -123,7 +132,17 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
 
 
 def single_level_note(kind: str, source: str, level: float) -> str:
-    """One-line note for a model identified at a single electrical level (also emitted as a warning)."""
+    """One-line note for a model identified at a single electrical level (also emitted as a warning).
+
+    Parameters
+    ----------
+    kind : str
+        Model kind.
+    source : {"i", "voltage"}
+        Electrical input channel.
+    level : float
+        The level [A] or [V].
+    """
     unit = "A" if source == "i" else "V"
     return (
         f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws are "
@@ -133,7 +152,13 @@ def single_level_note(kind: str, source: str, level: float) -> str:
 
 # ----------------------------------------------------------------------------- JSON encoding
 def encode_value(value: Any) -> Any:
-    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly)."""
+    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly).
+
+    Parameters
+    ----------
+    value : object
+        Number, array, sequence or mapping of them.
+    """
     if isinstance(value, np.ndarray):
         return {
             "__ndarray__": value.ravel().tolist(),
@@ -155,7 +180,13 @@ def encode_value(value: Any) -> Any:
 
 
 def decode_value(value: Any) -> Any:
-    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed)."""
+    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed).
+
+    Parameters
+    ----------
+    value : object
+        JSON data written by :func:`encode_value`.
+    """
     if isinstance(value, dict):
         if "__ndarray__" in value:
             arr = np.array(value["__ndarray__"], dtype=value.get("dtype", "float64"))
@@ -371,6 +402,13 @@ class Identified:
 
     The common fields (``input``, ``input_range``, ``range_policy``, timings, the single-level
     note) are added by :meth:`Estimator.fit`.
+
+    Attributes
+    ----------
+    parameters : mapping
+        Keyword arguments of the family's fitted-model class (its own fields only).
+    provenance : mapping
+        Facts about the identification (solver, costs, records, notes); no wall-clock times.
     """
 
     parameters: Mapping[str, Any]
@@ -523,7 +561,24 @@ class Estimator(abc.ABC):
 def check_choice(
     name: str, value: Any, choices: Sequence[Any], *, allow_none: bool = False
 ) -> None:
-    """Refuse ``value`` unless it is one of ``choices`` (or None with ``allow_none``)."""
+    """Refuse ``value`` unless it is one of ``choices`` (or None with ``allow_none``).
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    choices : sequence
+        Accepted values.
+    allow_none : bool
+        Also accept None.
+
+    Raises
+    ------
+    DataValidationError
+        Naming the setting, the accepted values and the value given.
+    """
     if value is None and allow_none:
         return
     if isinstance(value, Hashable) and value in choices and not isinstance(value, bool):
@@ -533,7 +588,15 @@ def check_choice(
 
 
 def check_bool(name: str, value: Any) -> None:
-    """Refuse anything but True / False."""
+    """Refuse anything but True / False.
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    """
     if not isinstance(value, (bool, np.bool_)):
         raise DataValidationError(name, f"expected True or False, got {value!r}")
 
@@ -546,8 +609,19 @@ def check_int(
     *,
     allow_none: bool = False,
 ) -> None:
-    """Refuse anything but an integer in ``[low, high]`` (None: no bound; the value None is
-    accepted with ``allow_none``)."""
+    """Refuse anything but an integer in ``[low, high]``.
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    low, high : int or None
+        Inclusive bounds; None: unbounded on that side.
+    allow_none : bool
+        Also accept None.
+    """
     if value is None and allow_none:
         return
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
@@ -570,8 +644,23 @@ def check_number(
     allow_none: bool = False,
     what: str = "a positive finite number",
 ) -> None:
-    """Refuse anything but a finite real number above ``low`` (at least ``low`` unless
-    ``strict``) and below ``high`` (or None with ``allow_none``); ``what`` words the message."""
+    """Refuse anything but a finite real number above ``low`` and below ``high``.
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    low, high : float
+        Bounds: ``value > low`` (``>=`` unless ``strict``) and ``value < high``.
+    strict : bool
+        Exclude ``low`` itself.
+    allow_none : bool
+        Also accept None.
+    what : str
+        What was expected, in words (in the message).
+    """
     if value is None and allow_none:
         return
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)

@@ -681,6 +681,17 @@ def select_order(
 ) -> pd.DataFrame:
     """Fit every ``(n_m, n_rho)`` on ``train`` and score it in free run on ``validation``.
 
+    Parameters
+    ----------
+    train, validation : Experiment or iterable of Experiment
+        Records that identify / score every candidate.
+    orders : sequence of int
+        Candidate model orders ``n_m``.
+    rho_degrees : sequence of int
+        Candidate degrees ``n_rho``.
+    **settings
+        Other :class:`LPVEstimator` settings.
+
     Returns
     -------
     DataFrame

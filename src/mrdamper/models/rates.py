@@ -24,6 +24,15 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
     ``model_fs`` when set; otherwise the lowest sampling rate of the training records. When the
     records have different rates and ``model_fs`` is not set, a one-line :class:`Note` says which
     rate was taken (records at other rates are resampled to it, see :func:`to_model_rate`).
+
+    Parameters
+    ----------
+    rates : sequence of float
+        Sampling rates of the training records [Hz].
+    model_fs : float or None
+        Model rate set by the user [Hz].
+    kind : str
+        Model kind (for the note).
     """
     if model_fs is not None:
         return float(model_fs)
@@ -92,6 +101,13 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     Equal rates return ``x`` itself (as float64). A model rate above the record rate
     (up-sampling) interpolates linearly and says so with a ``RuntimeWarning``: the model then
     sees no content above the record's Nyquist frequency.
+
+    Parameters
+    ----------
+    x : ndarray
+        Signal at ``fs_in``.
+    fs_in, fs_out : float
+        Rates of the signal and of the result [Hz].
     """
     if abs(fs_in - fs_out) <= 1e-9 * fs_out:
         return np.asarray(x, dtype=np.float64)
@@ -110,7 +126,17 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
 
 
 def to_record_rate(y: np.ndarray, fs_model: float, experiment: Experiment) -> np.ndarray:
-    """Interpolate a model-rate signal ``y`` back onto the record's samples (identity at equal rates)."""
+    """Interpolate a model-rate signal ``y`` back onto the record's samples (identity at equal rates).
+
+    Parameters
+    ----------
+    y : ndarray
+        Signal at the model rate.
+    fs_model : float
+        Model rate [Hz].
+    experiment : Experiment
+        The record whose samples the result is interpolated onto.
+    """
     if abs(experiment.fs - fs_model) <= 1e-9 * fs_model:
         return y
     return np.interp(np.arange(experiment.n) * experiment.dt, np.arange(y.size) / fs_model, y)
