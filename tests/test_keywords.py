@@ -174,3 +174,14 @@ def test_documented_names_parses_numpydoc() -> None:
     c : int
     """
     assert documented_names(doc) == {"a", "b", "settings"}
+
+
+def test_unknown_fit_option_is_refused_naming_it() -> None:
+    import numpy as np
+
+    t = np.arange(200) / 100.0
+    e = mrdamper.Experiment(t=t, x=0 * t, v=np.sin(t), F=np.sin(t), i=0.5 + 0 * t)
+    for kind in ("bingham", "lpv"):
+        with pytest.raises(DataValidationError, match="colour") as info:
+            get_estimator(kind).fit(e, colour="red")  # checked before any work
+        assert info.value.field == "colour" and "\n" not in str(info.value)

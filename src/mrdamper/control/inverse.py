@@ -79,7 +79,7 @@ from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
-from mrdamper.models.protocols import InvertibleModel, ScheduledForm, StaticMapForm
+from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -380,7 +380,7 @@ def inverse_current(
                 else ""
             )
         )
-    scheduled = isinstance(model.inverse_form(), ScheduledForm)
+    sched = scheduled_form(model)
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     t, x, v = _motion(experiment_or_arrays)
@@ -403,8 +403,8 @@ def inverse_current(
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
     if method == "regularised":
-        if scheduled:
-            dt_inv = 1.0 / model.fs
+        if sched is not None:
+            dt_inv = 1.0 / sched.fs
         else:
             dt_inv = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
         lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi, dt_inv)
@@ -416,8 +416,8 @@ def inverse_current(
             raise DataValidationError(
                 "horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}"
             )
-        if scheduled:
-            n_h = horizon_samples(model.eta, 1.0 / model.fs, horizon)
+        if sched is not None:
+            n_h = horizon_samples(sched.eta, 1.0 / sched.fs, horizon)
             rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate, n_h)
         else:
             comp, power, theta, f0 = static_map_arrays(model)
@@ -441,7 +441,7 @@ def inverse_current(
                 lag,
             )
             w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
-    elif scheduled:
+    elif sched is not None:
         rho, w, sat = _lpv_any_rate(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
     else:
         if getattr(model, "eta", None) is not None:
@@ -599,7 +599,7 @@ def force_authority(model: Any, v_ref: float) -> float:
     lo, hi = model_input_limits(model)
     if not hi > lo:
         raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
-    if isinstance(model, InvertibleModel) and isinstance(model.inverse_form(), ScheduledForm):
+    if scheduled_form(model) is not None:
 
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))

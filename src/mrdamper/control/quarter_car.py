@@ -400,7 +400,7 @@ class QuarterCarResult:
 
 def _damper_arrays(model: Any) -> dict[str, Any]:
     """The model as kernel arrays (static map or LPV); unsupported kinds raise TypeError."""
-    from mrdamper.models.protocols import InvertibleModel, ScheduledForm
+    from mrdamper.models.protocols import scheduled_form
 
     empty2 = np.zeros((1, 1))
     out: dict[str, Any] = {
@@ -424,13 +424,14 @@ def _damper_arrays(model: Any) -> dict[str, Any]:
             comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c])
         )
         return out
-    if isinstance(model, InvertibleModel) and isinstance(model.inverse_form(), ScheduledForm):
+    form = scheduled_form(model)
+    if form is not None:
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
         out.update(
             is_lpv=True,
-            alpha=np.ascontiguousarray(model.alpha),
-            beta=np.ascontiguousarray(model.beta),
-            offset=float(model.offset),
+            alpha=form.alpha,
+            beta=form.beta,
+            offset=form.offset,
             mode=mode,
             gm=gm,
             gc=gc,

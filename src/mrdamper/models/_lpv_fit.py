@@ -78,7 +78,16 @@ class LSResult:
     n_eq: int
 
 
-def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
+def _solve(
+    y: Any,
+    u: Any,
+    rho: Any,
+    starts: np.ndarray,
+    w: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+) -> tuple[np.ndarray, float, str, int]:
     if isinstance(u, _scale.RecordList):  # long campaigns: record by record, never concatenated
         G, g, _, n_eq = _scale.lpv_gram_records(y, u, rho, w, n_m, n_p, with_const, K.gram_pass)
     else:
@@ -251,7 +260,7 @@ def refine_output_error(
 
 def _normal_eq(
     rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
-):
+) -> tuple[float, np.ndarray, np.ndarray]:
     P = 2 * n_m * n_p
     alpha, beta = split_theta(x, n_m, n_p)
     f0 = float(x[P]) if offset else F0

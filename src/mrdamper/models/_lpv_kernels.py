@@ -156,7 +156,9 @@ def build_regressors(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragm
     return X, t
 
 
-def simulate_record(u, rho, alpha, beta, bound):
+def simulate_record(
+    u: np.ndarray, rho: np.ndarray, alpha: np.ndarray, beta: np.ndarray, bound: float
+) -> tuple[np.ndarray, int]:
     """Free-run output of one record from zero initial conditions (dispatcher).
 
     Orders ``n_m <= 4`` with ``n_rho <= 2`` run in a fused kernel with the coefficients held in

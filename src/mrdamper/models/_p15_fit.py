@@ -264,7 +264,7 @@ def to_monomial(B: np.ndarray, lo: float, hi: float) -> np.ndarray:
         [[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]]
     )
     M = to_i @ BERNSTEIN_TO_POWER
-    return np.einsum("jk,rk->rj", M, B)
+    return np.asarray(np.einsum("jk,rk->rj", M, B))
 
 
 def bernstein_basis(i: float | np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -289,10 +289,10 @@ def rest_state(w: np.ndarray, f0: float, v0: float) -> float:
         return float(u)
 
     def h(F: np.ndarray) -> np.ndarray:
-        return F - u - w[3] * F**3 - w[4] * F**5
+        return np.asarray(F - u - w[3] * F**3 - w[4] * F**5)
 
     def gp(F: np.ndarray) -> np.ndarray:
-        return 1.0 - 3.0 * w[3] * F**2 - 5.0 * w[4] * F**4
+        return np.asarray(1.0 - 3.0 * w[3] * F**2 - 5.0 * w[4] * F**4)
 
     # polish with Newton (np.roots is accurate only to a few ulps of the largest root)
     for _ in range(3):

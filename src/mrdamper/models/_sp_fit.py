@@ -300,7 +300,7 @@ def _normal_lstsq(X: np.ndarray, y: np.ndarray) -> np.ndarray:
     norms[norms == 0] = 1.0
     Xs = X / norms
     coef, *_ = np.linalg.lstsq(Xs.T @ Xs, Xs.T @ y, rcond=1e-12)
-    return coef / norms
+    return np.asarray(coef / norms)
 
 
 def _to_physical(

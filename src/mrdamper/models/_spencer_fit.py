@@ -22,6 +22,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from mrdamper.data import ExperimentSet
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models import _spencer_kernels as _k
 from mrdamper.models._spencer_kernels import PARAM_NAMES as PARAMETER_NAMES
@@ -55,7 +56,7 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
 class FitSettings:
     """The estimator settings the identification uses (see ``FitSettings``)."""
 
-    input: str
+    input: ElectricalSource
     start: Mapping[str, float] | None
     fixed: Mapping[str, float] | None
     bounds: Mapping[str, tuple[float, float]] | None
@@ -193,7 +194,7 @@ def _regression(recs: list[_Record]) -> np.ndarray:
     y = np.concatenate(rhs)
     # the electrical columns are exactly collinear with the others when e is one constant value
     coef, *_ = np.linalg.lstsq(X, y, rcond=1e-10)
-    return coef
+    return np.asarray(coef)
 
 
 def _map_start(

@@ -107,7 +107,7 @@ def check_input_range(
         warnings.warn(msg + " (extrapolating)", RuntimeWarning, stacklevel=3)
         return values
     if policy == "clip":
-        return np.clip(values, lo, hi)
+        return np.asarray(np.clip(values, lo, hi))
     if policy == "ignore":
         return values
     raise OutOfRangeError(f"range_policy: expected error/warn/clip/ignore, got {policy!r}")
@@ -439,6 +439,8 @@ class Estimator(abc.ABC):
     kind: ClassVar[str] = "abstract"
     #: Fitted-model class built by :meth:`fit`.
     model_class: ClassVar[type[FittedModel]]
+    #: Names of the per-fit options the family's :meth:`_identify` takes (others are refused).
+    fit_options: ClassVar[tuple[str, ...]] = ()
     #: Old setting name -> current name. Old names are still accepted, with a note.
     renamed_settings: ClassVar[Mapping[str, str]] = {}
 
@@ -485,6 +487,13 @@ class Estimator(abc.ABC):
             The identified model, an immutable value.
         """
         t0, c0 = time.perf_counter(), time.process_time()
+        unknown = [k for k in options if k not in self.fit_options]
+        if unknown:
+            raise DataValidationError(
+                unknown[0],
+                f"{self.kind}: fit takes no option {unknown[0]!r}; its options are "
+                f"{list(self.fit_options)}",
+            )
         self._validate()
         prepared = self._prepare(self._as_set(data))
         result = self._identify(prepared, **options)

@@ -223,12 +223,12 @@ class TransferFunctionModel(FittedModel):
     def a(self, rho: Any) -> np.ndarray:
         """Denominator coefficients ``a_1..a_n`` at ``rho``; shape ``rho.shape + (n_m,)``."""
         r = np.asarray(rho, dtype=float)
-        return (r[..., None, None] ** np.arange(self.n_rho + 1) * self.alpha).sum(-1)
+        return np.asarray((r[..., None, None] ** np.arange(self.n_rho + 1) * self.alpha).sum(-1))
 
     def b(self, rho: Any) -> np.ndarray:
         """Numerator coefficients ``b_1..b_n`` at ``rho`` [N s/m]; shape ``rho.shape + (n_m,)``."""
         r = np.asarray(rho, dtype=float)
-        return (r[..., None, None] ** np.arange(self.n_rho + 1) * self.beta).sum(-1)
+        return np.asarray((r[..., None, None] ** np.arange(self.n_rho + 1) * self.beta).sum(-1))
 
     # --- signals -------------------------------------------------------------------------
     def scheduling_variable(self, experiment: Experiment) -> np.ndarray:
@@ -413,6 +413,7 @@ class LPVEstimator(Estimator):
 
     kind: ClassVar[str] = "lpv"
     model_class: ClassVar[type[FittedModel]] = LPVModel
+    fit_options: ClassVar[tuple[str, ...]] = ("record_weights",)
 
     n_m: int = 3
     n_rho: int = 2
@@ -491,6 +492,7 @@ class LPVEstimator(Estimator):
         data: Experiment | Iterable[Experiment],
         *,
         record_weights: Sequence[float] | None = None,
+        **options: Any,
     ) -> TransferFunctionModel:
         """Identify the model from one record or a collection (records keep their own start).
 
@@ -502,6 +504,8 @@ class LPVEstimator(Estimator):
             One non-negative weight per record [-], multiplying that record's share of the
             least-squares and output-error costs (on top of ``weighting``); e.g. to mix measured
             records with synthetic ones without duplicating records. Default: all 1.
+        **options
+            Refused (an error names the option): the LPV estimator takes no other option.
 
         Raises
         ------
@@ -509,7 +513,9 @@ class LPVEstimator(Estimator):
             Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
             ``stability="enforce"``) no frozen-stable model; the message names the pole.
         """
-        model = super().fit(data, record_weights=record_weights)
+        model = cast(
+            TransferFunctionModel, super().fit(data, record_weights=record_weights, **options)
+        )
         pmax = float(model.provenance["max_frozen_pole"])
         if pmax >= 1.0:
             lo, hi = model.rho_range
@@ -520,7 +526,7 @@ class LPVEstimator(Estimator):
                 RuntimeWarning,
                 stacklevel=2,
             )
-        return cast(TransferFunctionModel, model)
+        return model
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """Joint least squares, then output-error refinement under frozen stability."""

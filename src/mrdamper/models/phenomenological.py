@@ -225,7 +225,7 @@ class P15Model(FittedModel):
             )
             M = to_i @ BERNSTEIN_TO_POWER  # Bernstein -> monomial
             B = np.linalg.solve(M, self.W_matrix.T).T
-        return B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None]
+        return np.asarray(B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None])
 
     def stability_certificate(self) -> dict[str, Any]:
         """Check the sufficient conditions for stability on ``input_range`` (``docs/models.md``).

@@ -24,7 +24,7 @@ import numpy as np
 
 from mrdamper.data import Experiment
 
-__all__ = ["InvertibleModel", "ScheduledForm", "StaticMapForm"]
+__all__ = ["InvertibleModel", "ScheduledForm", "StaticMapForm", "scheduled_form"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,3 +115,18 @@ class InvertibleModel(Protocol):
     def with_range_policy(self, policy: Any) -> Any:
         """Copy of the model with another out-of-range policy."""
         ...
+
+
+def scheduled_form(model: object) -> ScheduledForm | None:
+    """The :class:`ScheduledForm` of an invertible LPV-type model, None for any other model.
+
+    Parameters
+    ----------
+    model : object
+        Any model.
+    """
+    if isinstance(model, InvertibleModel):
+        form = model.inverse_form()
+        if isinstance(form, ScheduledForm):
+            return form
+    return None

@@ -122,7 +122,7 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     if abs(q - round(q)) < 1e-9 and round(q) >= 2:
         return np.asarray(sps.resample_poly(x, 1, round(q), padtype="line"), dtype=np.float64)
     n = int(np.floor((x.size - 1) * fs_out / fs_in + 1e-9)) + 1
-    return np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x)
+    return np.asarray(np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x))
 
 
 def to_record_rate(y: np.ndarray, fs_model: float, experiment: Experiment) -> np.ndarray:
@@ -139,4 +139,5 @@ def to_record_rate(y: np.ndarray, fs_model: float, experiment: Experiment) -> np
     """
     if abs(experiment.fs - fs_model) <= 1e-9 * fs_model:
         return y
-    return np.interp(np.arange(experiment.n) * experiment.dt, np.arange(y.size) / fs_model, y)
+    t_record = np.arange(experiment.n) * experiment.dt
+    return np.asarray(np.interp(t_record, np.arange(y.size) / fs_model, y))

@@ -251,7 +251,7 @@ class SpencerModel(FittedModel):
             float(e[0]),
         )
         _raise_on_status(status, sample, nsub, experiment.name)
-        return F
+        return np.asarray(F)
 
 
 def _raise_on_status(status: int, sample: int, nsub: int, name: str) -> None:
