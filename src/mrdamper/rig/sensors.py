@@ -93,7 +93,7 @@ def _current() -> Sensor:
 
 @dataclass(frozen=True)
 class SensorSuite:
-    """The rig's three transducers.
+    """The rig's three transducers (defaults: typical laboratory hardware, 16-bit converters).
 
     Parameters
     ----------
@@ -104,8 +104,6 @@ class SensorSuite:
     electrical : Sensor
         Current transducer; default 0-5 A range, noise 2 mA RMS, step 76 uA (for a damper
         driven by command voltage the same channel reads volts).
-
-    The defaults are typical laboratory hardware with 16-bit converters.
     """
 
     displacement: Sensor = field(default_factory=_lvdt)
