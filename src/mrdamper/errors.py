@@ -97,6 +97,11 @@ def interrupt_in_chain(exc: BaseException) -> bool:
 
     A compiled kernel interrupted by Ctrl-C can surface as ``SystemError`` whose cause or context
     is the ``KeyboardInterrupt``; such an error is an interruption, not a failure of the model.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception to inspect (with its ``__cause__`` / ``__context__`` chain).
     """
     seen: set[int] = set()
     cur: BaseException | None = exc

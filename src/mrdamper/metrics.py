@@ -37,13 +37,25 @@ def _pair(measured: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.nda
 
 
 def ssse(measured: ArrayLike, predicted: ArrayLike) -> float:
-    """Paper eq. (23): ``sqrt(mean((F - F_hat)**2))`` [N] (an RMS error)."""
+    """Paper eq. (23): ``sqrt(mean((F - F_hat)**2))`` [N] (an RMS error).
+
+    Parameters
+    ----------
+    measured, predicted : array_like
+        Measured and predicted force [N], same shape.
+    """
     F, Fh = _pair(measured, predicted)
     return float(np.sqrt(np.mean((F - Fh) ** 2)))
 
 
 def esr(measured: ArrayLike, predicted: ArrayLike) -> float:
-    """Paper eq. (24): ``mean((F - F_hat)**2) / var(F)`` [-] (error-to-signal ratio)."""
+    """Paper eq. (24): ``mean((F - F_hat)**2) / var(F)`` [-] (error-to-signal ratio).
+
+    Parameters
+    ----------
+    measured, predicted : array_like
+        Measured and predicted force [N], same shape.
+    """
     F, Fh = _pair(measured, predicted)
     var = float(np.var(F))
     if var == 0.0 or np.sqrt(var) <= _CONSTANT_FORCE * float(np.max(np.abs(F))):
@@ -55,12 +67,24 @@ def esr(measured: ArrayLike, predicted: ArrayLike) -> float:
 
 
 def nrmse(measured: ArrayLike, predicted: ArrayLike) -> float:
-    """RMS error divided by the standard deviation of the measured force [-] (``sqrt(ESR)``)."""
+    """RMS error divided by the standard deviation of the measured force [-] (``sqrt(ESR)``).
+
+    Parameters
+    ----------
+    measured, predicted : array_like
+        Measured and predicted force [N], same shape.
+    """
     return float(np.sqrt(esr(measured, predicted)))
 
 
 def fit_percent(measured: ArrayLike, predicted: ArrayLike) -> float:
-    """Normalised fit ``100 * (1 - ||F - F_hat|| / ||F - mean(F)||)`` [%] (100 is perfect)."""
+    """Normalised fit ``100 * (1 - ||F - F_hat|| / ||F - mean(F)||)`` [%] (100 is perfect).
+
+    Parameters
+    ----------
+    measured, predicted : array_like
+        Measured and predicted force [N], same shape.
+    """
     return float(100.0 * (1.0 - nrmse(measured, predicted)))
 
 
@@ -92,6 +116,11 @@ class Scores:
 
 def score_arrays(measured: ArrayLike, predicted: ArrayLike) -> Scores:
     """Compute every index for one measured / predicted force pair.
+
+    Parameters
+    ----------
+    measured, predicted : array_like
+        Measured and predicted force [N], same shape.
 
     Raises
     ------

@@ -105,11 +105,11 @@ def test_setting_the_model_does_not_take(
     tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert (
-        _exit_code(["fit", "sp1", str(data_dir), "--out", str(tmp_path / "m.json"), "--order", "3"])
+        _exit_code(["fit", "sp1", str(data_dir), "--out", str(tmp_path / "m.json"), "--n-m", "3"])
         == 2
     )
     err = capsys.readouterr().err
-    assert "--order: model 'sp1' does not take the setting 'order'" in err and "n_starts" in err
+    assert "--n-m: model 'sp1' does not take the setting 'n_m'" in err and "n_starts" in err
     assert (
         _exit_code(
             ["fit", "p15", str(data_dir), "--out", str(tmp_path / "m.json"), "--set", "colour=red"]
@@ -162,11 +162,11 @@ def test_missing_data_path(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert "no such file or folder" in capsys.readouterr().err
 
 
-def test_generic_options_map_to_the_estimator_names() -> None:
-    from mrdamper.cli.models import _setting_name, estimator_settings
+def test_options_are_the_estimator_setting_names() -> None:
+    from mrdamper.cli.models import estimator_settings
 
-    assert _setting_name("order", ["n_m", "n_rho", "input"]) == "n_m"
-    assert _setting_name("rho_degree", ["n_m", "n_rho"]) == "n_rho"
-    assert _setting_name("order", ["order", "n_m"]) == "order"
-    assert _setting_name("order", estimator_settings("sp1")) == "order"  # then refused by fit
+    assert {"n_m", "n_rho"} <= set(estimator_settings("lpv"))
     assert "n_starts" in estimator_settings("sp1") and "form" in estimator_settings("p15")
+    assert "max_nfev" in estimator_settings("narx") and "refine_max_nfev" not in (
+        estimator_settings("narx")
+    )

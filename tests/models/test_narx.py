@@ -241,3 +241,14 @@ def test_quiroz_one_fold_smoke(quiroz_unfiltered_dir: Path) -> None:
     esr = [m.score(e).esr for e in test]
     assert np.all(np.isfinite(esr))
     assert np.mean(esr) < 0.5  # loose sanity bound: clearly better than predicting the mean force
+
+
+def test_old_setting_name_refine_max_nfev_is_accepted_with_a_note() -> None:
+    from mrdamper.errors import DataValidationError, Note
+    from mrdamper.models import get_estimator
+
+    with pytest.warns(Note, match="'refine_max_nfev' is now called 'max_nfev'"):
+        est = get_estimator("narx", refine_max_nfev=7)
+    assert est.max_nfev == 7
+    with pytest.raises(DataValidationError, match="refine_max_nfev"):
+        get_estimator("narx", refine_max_nfev=7, max_nfev=9)

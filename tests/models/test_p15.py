@@ -205,7 +205,7 @@ def test_free_run_starts_from_rest_and_ignores_the_measured_force() -> None:
 
 def test_sensitivities_match_finite_differences() -> None:
     """The kernel's discrete sensitivities against central differences of the same kernel."""
-    from mrdamper.models._p15_implicit import p15i_run
+    from mrdamper.models._p15_kernels import p15i_run
 
     e = _record(n=2000, seed=8)
     one = np.zeros(1, dtype=np.int64)
@@ -281,10 +281,14 @@ def test_json_round_trip_is_bit_identical(tmp_path: Path) -> None:
     assert type(get_estimator("p15")) is P15Estimator
 
 
-def test_constant_current_is_not_identifiable() -> None:
+def test_constant_current_gives_constant_coefficients() -> None:
     e = _record(current=0.5)
-    with pytest.raises(IdentificationError, match="constant.*rank 1 of 3"):
-        P15Estimator().fit(e)
+    with pytest.warns(UserWarning, match=r"one i level.*\[0.5, 0.5\] A"):
+        m = P15Estimator().fit(e)
+    assert m.input_range == (0.5, 0.5) and m.basis == "power"
+    assert np.all(m.W_matrix[:, 1:] == 0.0) and np.all(m.W_matrix[:, 0] != 0.0)
+    assert m.stability_certificate()["stable_by_construction"]
+    assert m.score(e).esr < 0.5
 
 
 def test_two_levels_are_not_enough() -> None:

@@ -1,8 +1,6 @@
 """Every model kind fits data taken at one constant current: its current laws reduce to constants,
-its identified range is that level, and other levels follow the range policy.
-
-P-15 is the exception kept for now: its identification (quadratics in the current from filtered
-derivatives) still needs three levels."""
+its identified range is that level, a one-line note says so, and other levels follow the range
+policy. The fit template of :class:`mrdamper.models.Estimator` does this for every kind."""
 
 from __future__ import annotations
 
@@ -16,15 +14,7 @@ from mrdamper.rig import reference_damper
 
 LEVEL = 0.5
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 30}}
-KINDS = ["lpv", "lti", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
-REDUCED = {
-    "lpv",
-    "lti",
-    "sp1",
-    "sp3",
-    "sp4",
-    "bingham",
-}  # kinds whose current laws had to be reduced
+KINDS = ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
 
 
 def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:
@@ -61,9 +51,8 @@ def test_fits_one_level(kind: str, one_level: list[Experiment]) -> None:
         warnings.simplefilter("always")
         m = get_estimator(kind, **FAST.get(kind, {})).fit(one_level)
     notes = [str(w.message) for w in caught if "one i level" in str(w.message)]
-    if kind in REDUCED:
-        assert len(notes) == 1 and "[0.5, 0.5] A" in notes[0], notes
-        assert m.provenance["note"] == notes[0]
+    assert len(notes) == 1 and "[0.5, 0.5] A" in notes[0], notes
+    assert m.provenance["note"] == notes[0]
     assert m.input_range == (LEVEL, LEVEL)
     test = _sine(0.008, 2.0, LEVEL, "test")
     other = test.replace(i=np.full(test.n, 1.0))
@@ -96,3 +85,19 @@ def test_sp1_higher_current_coefficients_are_zero(one_level: list[Experiment]) -
     _, power = m.layout_arrays()
     S = np.asarray(m.S)
     assert np.all(S[power > 0] == 0.0) and np.all(S[power == 0] != 0.0)
+
+
+def test_p15_coefficients_are_constant(one_level: list[Experiment]) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        m = get_estimator("p15").fit(one_level)
+    assert np.all(m.W_matrix[:, 1:] == 0.0)
+    w = m.coefficients(np.array([0.0, 0.5, 1.0]))
+    assert np.all(w == w[:, :1])
+
+
+def test_spencer_current_terms_are_zero(one_level: list[Experiment]) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = get_estimator("spencer", **FAST["spencer"]).fit(one_level)
+    assert m.c0b == 0.0 and m.c1b == 0.0 and m.alpha_b == 0.0

@@ -84,7 +84,7 @@ def test_unknown_model_or_setting_is_refused_before_running(doe) -> None:
     with pytest.raises(SchemaError, match="unknown kind 'nope'"):
         run_study(doe, doe_protocol(), ["nope"], workers=1, progress=False)
     with pytest.raises(
-        SchemaError, match=r"models.toy.settings: .*unexpected keyword argument 'order'"
+        SchemaError, match=r"models.toy.settings: .*does not take the setting 'order'"
     ):
         run_study(doe, doe_protocol(), [ModelSpec("toy", {"order": 3})], workers=1, progress=False)
 

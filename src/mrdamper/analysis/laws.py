@@ -268,6 +268,10 @@ def zone_fits_by_level(
         equal current are pooled. With ``by="plateaus"`` each record's electrical input (``source``)
         is cut into constant plateaus (stepped-current SC records) and plateaus of equal level
         (within ``plateau_tolerance``) are pooled across records.
+    by : {"current", "plateaus"}
+        How records are grouped into levels (see ``data``).
+    source : {"i", "voltage"}
+        Electrical input channel whose plateaus are used with ``by="plateaus"``.
     symmetric : bool
         Impose ``v_low = -v_high`` in each fit.
     plateau_tolerance : float, optional
@@ -318,6 +322,15 @@ def zone_fits_binned(
 
     Useful when the electrical input never holds a constant level long enough for plateaus
     (e.g. a drive-lag-filtered switching voltage). Each fit's level is the bin's mean ``rho``.
+
+    Parameters
+    ----------
+    v, F, rho : sequence of ndarray
+        Velocity [m/s], force [N] and level (e.g. filtered current [A]) of each record.
+    n_bins : int
+        Number of equal-count bins of ``rho``.
+    symmetric : bool
+        Fit the zones symmetric in velocity (see :func:`fit_zones`).
     """
     vv, FF, rr = (np.concatenate([np.asarray(a, float).ravel() for a in s]) for s in (v, F, rho))
     if not (vv.size == FF.size == rr.size):
@@ -357,6 +370,8 @@ def fit_zone_laws(
     strict : bool
         If true, laws that break the paper's assumptions over the level range (see
         :meth:`ZoneLaws.problems`) raise :class:`IdentificationError`; otherwise they warn.
+    **level_options
+        Options of :func:`zone_fits_by_level` for records (``by``, ``source``, ...).
 
     Returns
     -------

@@ -12,10 +12,9 @@
 
 from __future__ import annotations
 
-import dataclasses
-import inspect
 import json
 import sys
+import typing
 from pathlib import Path
 from typing import Annotated, Any, cast
 
@@ -29,7 +28,7 @@ from mrdamper.models.registry import get_estimator, load_model
 
 __all__ = ["estimator_settings", "parse_settings", "read_records", "register"]
 
-_RANGE_POLICIES = ("error", "warn", "clip", "ignore")
+_RANGE_POLICIES: tuple[str, ...] = typing.get_args(RangePolicy)
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -52,11 +51,7 @@ def read_records(
 
 def estimator_settings(kind: str) -> list[str]:
     """Names of the settings the estimator of ``kind`` accepts."""
-    est = type(get_estimator(kind))
-    if dataclasses.is_dataclass(est):
-        return [f.name for f in dataclasses.fields(est) if f.init]
-    params = inspect.signature(est).parameters
-    return [n for n, p in params.items() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    return type(get_estimator(kind)).settings_names()
 
 
 def parse_settings(items: list[str] | None) -> dict[str, Any]:
@@ -73,21 +68,6 @@ def parse_settings(items: list[str] | None) -> dict[str, Any]:
         except json.JSONDecodeError:
             out[key] = value
     return out
-
-
-#: Command-line option -> estimator setting names it may stand for, in order of preference.
-_ALIASES: dict[str, tuple[str, ...]] = {
-    "order": ("order", "n_m"),
-    "rho_degree": ("rho_degree", "n_rho"),
-}
-
-
-def _setting_name(option: str, accepted: list[str]) -> str:
-    """The estimator's name for a generic option (``--order`` is ``n_m`` for the LPV model)."""
-    for name in _ALIASES.get(option, (option,)):
-        if name in accepted:
-            return name
-    return option
 
 
 def _choose_input(records: list[Experiment]) -> str:
@@ -123,15 +103,12 @@ def fit(
             "--input", help="Electrical input: i | voltage (default: the channel every record has)."
         ),
     ] = None,
-    order: Annotated[
-        int | None, typer.Option("--order", help="Model order (setting 'order' or 'n_m').")
+    n_m: Annotated[
+        int | None, typer.Option("--n-m", help="Model order of the LPV / LTI model (n_m).")
     ] = None,
-    rho_degree: Annotated[
+    n_rho: Annotated[
         int | None,
-        typer.Option(
-            "--rho-degree",
-            help="Degree in the scheduling variable (setting 'rho_degree' or 'n_rho').",
-        ),
+        typer.Option("--n-rho", help="Degree of the LPV coefficients in rho (n_rho)."),
     ] = None,
     refine: Annotated[
         bool | None,
@@ -163,14 +140,14 @@ def fit(
     records = read_records(list(data), pattern, read_kw)
     given: dict[str, Any] = {
         "input": input_ or _choose_input(records),
-        "order": order,
-        "rho_degree": rho_degree,
+        "n_m": n_m,
+        "n_rho": n_rho,
         "refine": refine,
         "seed": seed,
         "n_starts": n_starts,
         "offset": offset,
     }
-    given = {_setting_name(k, accepted): v for k, v in given.items() if v is not None}
+    given = {k: v for k, v in given.items() if v is not None}
     given.update(parse_settings(settings))
     renamed = getattr(type(get_estimator(model)), "renamed_settings", {})
     unknown = [k for k in given if k not in accepted and k not in renamed]

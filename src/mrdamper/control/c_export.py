@@ -560,7 +560,8 @@ def c_source(
     dt : float, optional
         Sample time [s] of a static map's inverse (only used with ``rate``).
     """
-    from mrdamper.models.lpv import LPVModel, LTIModel
+    from mrdamper.models.lpv import TransferFunctionModel
+    from mrdamper.models.protocols import InvertibleModel
 
     kind = getattr(model, "kind", type(model).__name__)
     if kind not in C_KINDS:
@@ -569,7 +570,7 @@ def c_source(
         raise DataValidationError("name", f"expected a C identifier, got {name!r}")
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
-    if not isinstance(model, LPVModel) and getattr(model, "eta", None) is not None:
+    if not isinstance(model, TransferFunctionModel) and getattr(model, "eta", None) is not None:
         raise DataValidationError(
             "model",
             f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
@@ -577,8 +578,8 @@ def c_source(
         )
     p, P = name, name.upper()
     lo, hi = model_input_limits(model)
-    has_inverse = not isinstance(model, LTIModel)
-    is_lpv = isinstance(model, LPVModel)
+    has_inverse = isinstance(model, InvertibleModel)
+    is_lpv = isinstance(model, TransferFunctionModel)
     if is_lpv:
         step_dt = 1.0 / model.fs
     else:
@@ -704,6 +705,19 @@ def export_c(
 ) -> tuple[Path, Path]:
     """Write ``<out_dir>/<name>.h`` and ``<name>.c`` atomically (see :func:`c_source` for the
     options).
+
+    Parameters
+    ----------
+    model : FittedModel
+        LPV, LTI, SP-1..SP-4 or Bingham model.
+    out_dir : str or Path
+        Folder of the two files (created if missing).
+    name : str
+        C identifier used as file stem and prefix of every symbol.
+    force : bool
+        Overwrite existing files.
+    **kwargs
+        Options of :func:`c_source` (``n_grid``, ``reg``, ...).
 
     Returns
     -------

@@ -45,7 +45,13 @@ WK_PARAMETERS: dict[str, float] = {
 
 
 def wk_response(f: Any) -> np.ndarray:
-    """Complex frequency response of ``Wk`` at frequencies ``f`` [Hz] (``f >= 0``)."""
+    """Complex frequency response of ``Wk`` at frequencies ``f`` [Hz] (``f >= 0``).
+
+    Parameters
+    ----------
+    f : array_like
+        Frequencies [Hz], non-negative.
+    """
     fa = np.asarray(f, dtype=float)
     if np.any(fa < 0) or not np.all(np.isfinite(fa)):
         raise DataValidationError("f", "expected finite frequencies >= 0 [Hz]")
@@ -79,5 +85,13 @@ def weight_signal(acceleration: Any, fs: float) -> np.ndarray:
 
 
 def weighted_rms(acceleration: Any, fs: float) -> float:
-    """RMS of the ``Wk``-weighted acceleration [m/s^2] (ISO 2631-1 ``a_w``)."""
+    """RMS of the ``Wk``-weighted acceleration [m/s^2] (ISO 2631-1 ``a_w``).
+
+    Parameters
+    ----------
+    acceleration : array_like
+        Vertical acceleration [m/s^2] sampled at ``fs``.
+    fs : float
+        Sampling rate [Hz].
+    """
     return float(np.sqrt(np.mean(weight_signal(acceleration, fs) ** 2)))

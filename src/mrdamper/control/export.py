@@ -81,9 +81,9 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     rho_grid : array_like, optional
         Scheduling values for the frozen matrices and poles; default 21 points over the range.
     """
-    from mrdamper.models.lpv import LPVModel
+    from mrdamper.models.lpv import TransferFunctionModel
 
-    if not isinstance(model, LPVModel):
+    if not isinstance(model, TransferFunctionModel):
         kind = getattr(model, "kind", type(model).__name__)
         raise DataValidationError(
             "model",

@@ -79,6 +79,7 @@ from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
+from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -368,21 +369,18 @@ def inverse_current(
     OutOfRangeError
         ``i_range`` outside the model's identified input range.
     """
-    from mrdamper.models.bingham import BinghamModel
-    from mrdamper.models.lpv import LPVModel, LTIModel
-    from mrdamper.models.semiphenomenological import _SPModel
-
-    if isinstance(model, LTIModel) or not isinstance(model, (LPVModel, _SPModel, BinghamModel)):
+    if not isinstance(model, InvertibleModel):
         kind = getattr(model, "kind", type(model).__name__)
         raise TypeError(
-            f"model: no inverse for kind {kind!r}; supported kinds are 'lpv' (dynamic, causal per-sample "
-            f"solution) and the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham'"
+            f"model: no inverse for kind {kind!r}; supported kinds are 'lpv' (dynamic, causal "
+            f"per-sample solution) and the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham'"
             + (
                 " (an LTI model's force does not depend on the present current)"
                 if kind == "lti"
                 else ""
             )
         )
+    sched = scheduled_form(model)
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     t, x, v = _motion(experiment_or_arrays)
@@ -405,8 +403,8 @@ def inverse_current(
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
     if method == "regularised":
-        if isinstance(model, LPVModel):
-            dt_inv = 1.0 / model.fs
+        if sched is not None:
+            dt_inv = 1.0 / sched.fs
         else:
             dt_inv = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
         lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi, dt_inv)
@@ -418,8 +416,8 @@ def inverse_current(
             raise DataValidationError(
                 "horizon", f"expected a lead horizon >= 0 [s], got {horizon!r}"
             )
-        if isinstance(model, LPVModel):
-            n_h = horizon_samples(model.eta, 1.0 / model.fs, horizon)
+        if sched is not None:
+            n_h = horizon_samples(sched.eta, 1.0 / sched.fs, horizon)
             rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate, n_h)
         else:
             comp, power, theta, f0 = static_map_arrays(model)
@@ -443,7 +441,7 @@ def inverse_current(
                 lag,
             )
             w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
-    elif isinstance(model, LPVModel):
+    elif sched is not None:
         rho, w, sat = _lpv_any_rate(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
     else:
         if getattr(model, "eta", None) is not None:
@@ -482,10 +480,10 @@ def _lpv_any_rate(
     """The LPV inverse of a record at any rate: solved at the model rate, as ``simulate`` runs it.
 
     A record at another rate is resampled to the model rate on the way in (the same resampling
-    as the model's prediction, :func:`mrdamper.models._rates.to_model_rate`); the input is
+    as the model's prediction, :func:`mrdamper.models.rates.to_model_rate`); the input is
     interpolated back onto the record's samples, with a note.
     """
-    from mrdamper.models._rates import to_model_rate
+    from mrdamper.models.rates import to_model_rate
 
     if t.size < 2:
         raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
@@ -575,23 +573,9 @@ def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, f
     theta : ndarray
     f0 : float [N]
     """
-    from mrdamper.models.bingham import BinghamModel
-    from mrdamper.models.semiphenomenological import _SPModel
-
-    if isinstance(model, _SPModel):
-        comp, power = model.layout_arrays()
-        return comp, power, np.asarray(model.S, dtype=np.float64), float(model.f0)
-    if isinstance(model, BinghamModel):
-        comp_l = [0] * len(model.fc) + [1] + [3] * len(model.c0)
-        power_l = list(range(len(model.fc))) + [0] + list(range(len(model.c0)))
-        slope = 1e300 if model.v_eps == 0.0 else 1.0 / model.v_eps
-        theta_l = [*model.fc, slope, *model.c0]
-        return (
-            np.asarray(comp_l, dtype=np.int64),
-            np.asarray(power_l, dtype=np.int64),
-            np.asarray(theta_l, dtype=np.float64),
-            float(model.f0),
-        )
+    form = model.inverse_form() if isinstance(model, InvertibleModel) else None
+    if isinstance(form, StaticMapForm):
+        return form.comp, form.power, form.theta, float(form.f0)
     raise TypeError(
         f"model: kind {getattr(model, 'kind', type(model).__name__)!r} is not a static map"
     )
@@ -604,13 +588,18 @@ def force_authority(model: Any, v_ref: float) -> float:
     for an LPV model the force is the frozen-``rho`` steady state
     ``F0 + sum_j b_j(rho) / (1 + sum_j a_j(rho)) u(v_ref, rho)``. It sets the scale of the
     default regularisation weight.
-    """
-    from mrdamper.models.lpv import LPVModel
 
+    Parameters
+    ----------
+    model : InvertibleModel
+        LPV model or static map.
+    v_ref : float
+        Velocity at which the steady force is taken [m/s].
+    """
     lo, hi = model_input_limits(model)
     if not hi > lo:
         raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
-    if isinstance(model, LPVModel):
+    if scheduled_form(model) is not None:
 
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
@@ -712,7 +701,7 @@ def _lpv_reg(
     n_h: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Regularised LPV inverse at the model rate; records at another rate are resampled in and out."""
-    from mrdamper.models._rates import to_model_rate
+    from mrdamper.models.rates import to_model_rate
 
     if t.size < 2:
         raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
@@ -758,7 +747,8 @@ def _lpv_reg(
 
 
 def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Zone-law arrays of an LPV model for the kernels: ``(mode, gamma_m, gamma_c, mu_high, mu_low)``."""
+    """Zone-law arrays of an LPV or LTI model for the kernels: ``(mode, gamma_m, gamma_c,
+    mu_high, mu_low)``."""
     laws = model.zone_laws
     if model.input_signal == "v" or laws is None:
         return K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
@@ -773,12 +763,6 @@ def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray,
 
 
 def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
-    from mrdamper.models.bingham import BinghamModel
-
-    if isinstance(model, BinghamModel):
-        fc = np.polynomial.polynomial.polyval(i, model.fc)
-        c0 = np.polynomial.polynomial.polyval(i, model.c0)
-        return np.asarray(fc * model.sign(v) + c0 * v + model.f0)
     xb, vb, ib = np.broadcast_arrays(x, v, i)
     shape = xb.shape
     return np.asarray(model.force(xb.ravel(), vb.ravel(), ib.ravel())).reshape(shape)

@@ -112,5 +112,11 @@ def check_inverse(
 
 
 def check_inverse_frame(checks: list[InverseCheck]) -> pd.DataFrame:
-    """One row per :class:`InverseCheck` (columns are its attributes)."""
+    """One row per :class:`InverseCheck` (columns are its attributes).
+
+    Parameters
+    ----------
+    checks : list of InverseCheck
+        Results of :func:`check_inverse` (one per record).
+    """
     return pd.DataFrame([asdict(c) for c in checks])

@@ -222,6 +222,21 @@ def iso_road(
 
     Uses :func:`mrdamper.signals.road_profile` with ``fill=None`` (no scaling) and a 0.5 s fade in
     and out; the band ``[min_frequency, max_frequency]`` [Hz] bounds the synthesis.
+
+    Parameters
+    ----------
+    road_class : str
+        ISO 8608 class ``"A"`` .. ``"H"``.
+    speed : float
+        Vehicle speed [m/s].
+    duration : float
+        Length of the road signal [s].
+    fs : float
+        Sampling rate [Hz].
+    seed : int
+        Seed of the random phases.
+    min_frequency, max_frequency : float
+        Temporal frequency band of the synthesis [Hz].
     """
     from mrdamper.signals.road import road_profile
 
@@ -249,7 +264,23 @@ def bump_road(
     fs: float = 1000.0,
     start: float = 0.5,
 ) -> Road:
-    """One ``(1 - cos)`` bump of ``height`` [m] and ``length`` [m] reached after ``start`` [s]."""
+    """One ``(1 - cos)`` bump of ``height`` [m] and ``length`` [m] reached after ``start`` [s].
+
+    Parameters
+    ----------
+    height : float
+        Bump height [m].
+    length : float
+        Bump length along the road [m].
+    speed : float
+        Vehicle speed [m/s].
+    duration : float
+        Length of the road signal [s].
+    fs : float
+        Sampling rate [Hz].
+    start : float
+        Time at which the wheel reaches the bump [s].
+    """
     h = _pos("height", height, "m")
     L = _pos("length", length, "m")
     V = _pos("speed", speed, "m/s")
@@ -371,7 +402,7 @@ class QuarterCarResult:
 
 def _damper_arrays(model: Any) -> dict[str, Any]:
     """The model as kernel arrays (static map or LPV); unsupported kinds raise TypeError."""
-    from mrdamper.models.lpv import LPVModel, LTIModel
+    from mrdamper.models.protocols import scheduled_form
 
     empty2 = np.zeros((1, 1))
     out: dict[str, Any] = {
@@ -395,13 +426,14 @@ def _damper_arrays(model: Any) -> dict[str, Any]:
             comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c])
         )
         return out
-    if isinstance(model, LPVModel) and not isinstance(model, LTIModel):
+    form = scheduled_form(model)
+    if form is not None:
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
         out.update(
             is_lpv=True,
-            alpha=np.ascontiguousarray(model.alpha),
-            beta=np.ascontiguousarray(model.beta),
-            offset=float(model.offset),
+            alpha=form.alpha,
+            beta=form.beta,
+            offset=form.offset,
             mode=mode,
             gm=gm,
             gc=gc,

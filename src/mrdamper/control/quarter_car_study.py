@@ -183,6 +183,8 @@ def compare_controllers(
         Plant rate [Hz] (default :func:`default_rate`).
     seed : int
         Seed of the road phases (the same road for every controller).
+    bump_height, bump_length : float
+        Height and length of the bump [m].
     **sim_kw
         Passed to :func:`~mrdamper.control.quarter_car.simulate_quarter_car` (``reg``, ``rate``,
         ...).

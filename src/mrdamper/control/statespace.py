@@ -129,6 +129,13 @@ def state_space(model: Any, rho: float) -> StateSpaceMatrices:
 def to_control(model: Any, rho: float) -> Any:
     """Frozen-``rho`` model as a discrete ``control.StateSpace`` (needs the ``control`` extra).
 
+    Parameters
+    ----------
+    model : LPVModel or LTIModel
+        The transfer-function model.
+    rho : float
+        Frozen scheduling value.
+
     Raises
     ------
     ImportError
@@ -183,6 +190,8 @@ def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = 
         LPV input at the model rate [m/s].
     rho : array_like or float
         Scheduling variable at the model rate (a scalar means constant).
+    bound : float, optional
+        Output magnitude regarded as divergence [N]; default the model's ``force_bound``.
 
     Returns
     -------
@@ -246,6 +255,16 @@ class ControlGrid:
 def control_grid(model: Any, rho: Any = None, n_grid: int = 11) -> ControlGrid:
     """python-control systems of the LPV model at ``rho`` (default ``n_grid`` points over its
     range).
+
+    Parameters
+    ----------
+    model : LPVModel or LTIModel
+        The transfer-function model.
+    rho : array_like, optional
+        Scheduling values at which to freeze the model; default ``n_grid`` points over
+        ``rho_range``.
+    n_grid : int
+        Number of grid points when ``rho`` is None.
 
     Raises
     ------

@@ -3,9 +3,13 @@
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
+    Identified,
+    RangePolicy,
     SimulationResult,
+    TrainingData,
     check_input_range,
 )
+from mrdamper.models.protocols import InvertibleModel, ScheduledForm, StaticMapForm
 from mrdamper.models.registry import (
     available_models,
     get_estimator,
@@ -19,7 +23,13 @@ from mrdamper.models.registry import (
 __all__ = [
     "Estimator",
     "FittedModel",
+    "Identified",
+    "InvertibleModel",
+    "RangePolicy",
+    "ScheduledForm",
     "SimulationResult",
+    "StaticMapForm",
+    "TrainingData",
     "available_models",
     "check_input_range",
     "get_estimator",

@@ -5,6 +5,7 @@ keeps its own initial conditions)."""
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,13 +16,17 @@ from scipy import optimize
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models import _scale
+from mrdamper.models._lpv_kernels import frozen_poles, largest_frozen_pole, split_theta
 
 __all__ = [
     "STABILITY_GRID",
     "STABILITY_LIMIT",
+    "LPVFit",
     "LSResult",
     "Records",
+    "free_run_cost",
     "frozen_poles",
+    "identify",
     "largest_frozen_pole",
     "ls_identify",
     "refine_output_error",
@@ -73,13 +78,16 @@ class LSResult:
     n_eq: int
 
 
-def split_theta(theta: np.ndarray, n_m: int, n_p: int) -> tuple[np.ndarray, np.ndarray]:
-    """``theta = [alpha.ravel(), beta.ravel()]`` -> ``alpha, beta`` of shape ``(n_m, n_p)``."""
-    k = n_m * n_p
-    return theta[:k].reshape(n_m, n_p).copy(), theta[k : 2 * k].reshape(n_m, n_p).copy()
-
-
-def _solve(y, u, rho, starts, w, n_m, n_p, with_const):
+def _solve(
+    y: Any,
+    u: Any,
+    rho: Any,
+    starts: np.ndarray,
+    w: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+) -> tuple[np.ndarray, float, str, int]:
     if isinstance(u, _scale.RecordList):  # long campaigns: record by record, never concatenated
         G, g, _, n_eq = _scale.lpv_gram_records(y, u, rho, w, n_m, n_p, with_const, K.gram_pass)
     else:
@@ -162,36 +170,6 @@ def ls_identify(rec: Records, n_m: int, n_p: int, offset: bool) -> LSResult:
     return LSResult(theta=th, offset=F0, cond=cond, solver=solver, n_eq=n_eq)
 
 
-def frozen_poles(alpha: np.ndarray, rho_grid: np.ndarray) -> np.ndarray:
-    """Poles of ``z^n + a_1(rho) z^(n-1) + ... + a_n(rho)`` for each ``rho``; shape (len, n_m)."""
-    n_m, n_p = alpha.shape
-    out = np.empty((rho_grid.size, n_m), dtype=complex)
-    for k, r in enumerate(rho_grid):
-        a = alpha @ (r ** np.arange(n_p))
-        out[k] = np.roots(np.r_[1.0, a]) if n_m else np.empty(0)
-    return out
-
-
-def largest_frozen_pole(alpha: np.ndarray, rho_grid: np.ndarray) -> tuple[float, float, complex]:
-    """Largest frozen-pole modulus over ``rho_grid``, the ``rho`` where it occurs and the pole.
-
-    The poles are the eigenvalues of the companion matrices of ``z^n + a_1(rho) z^(n-1) + ...``,
-    computed for the whole grid at once.
-    """
-    n_m, n_p = alpha.shape
-    a = (np.asarray(rho_grid, float)[:, None] ** np.arange(n_p)) @ alpha.T  # (G, n_m)
-    C = np.zeros((a.shape[0], n_m, n_m))
-    C[:, 0, :] = -a
-    if n_m > 1:
-        C[:, np.arange(1, n_m), np.arange(n_m - 1)] = 1.0
-    ev = np.linalg.eigvals(C)
-    if not np.all(np.isfinite(ev)):
-        return float("inf"), float(rho_grid[0]), complex("nan")
-    mod = np.abs(ev)
-    g, j = np.unravel_index(int(np.argmax(mod)), mod.shape)
-    return float(mod[g, j]), float(rho_grid[g]), complex(ev[g, j])
-
-
 def refine_output_error(
     rec: Records,
     theta0: np.ndarray,
@@ -207,10 +185,11 @@ def refine_output_error(
 ) -> tuple[np.ndarray, float, optimize.OptimizeResult]:
     """Minimise the weighted free-run (simulation) error from a least-squares start.
 
-    ``solver="gauss-newton"`` (default): Levenberg-Marquardt on the Gauss-Newton normal equations
-    ``J^T J``, ``J^T e`` accumulated by :func:`~mrdamper.models._lpv_kernels.oe_normal_equations`
-    in one pass per record without storing the Jacobian. ``solver="least_squares"``:
-    ``scipy.optimize.least_squares`` (MINPACK Levenberg-Marquardt) with the analytic Jacobian of
+    ``solver="gauss-newton"`` (default): :func:`_levenberg_marquardt` on the Gauss-Newton normal
+    equations ``J^T J``, ``J^T e`` accumulated by
+    :func:`~mrdamper.models._lpv_kernels.oe_normal_equations` in one pass per record without
+    storing the Jacobian. ``solver="least_squares"``: ``scipy.optimize.least_squares`` (MINPACK
+    Levenberg-Marquardt) with the analytic Jacobian of
     :func:`~mrdamper.models._lpv_kernels.simulate_sensitivity` (slower: it stores and factors
     ``J``). A candidate whose free run diverges is rejected (infinite cost / large residuals).
 
@@ -220,13 +199,26 @@ def refine_output_error(
     frozen-stable start stays frozen-stable.
     """
     P = 2 * n_m * n_p
+    x0 = np.r_[theta0, F0] if offset else theta0.copy()
+    if solver == "gauss-newton":
+        return _levenberg_marquardt(
+            rec,
+            x0,
+            n_m,
+            n_p,
+            offset=offset,
+            F0=F0,
+            bound=bound,
+            max_iter=max_nfev,
+            rho_grid=rho_grid,
+        )
     sw = np.sqrt(rec.weights)
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+    last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # residuals and Jacobian at one point
 
     def evaluate(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         key = p.tobytes()
-        if key in cache:
-            return cache[key]
+        if key in last:
+            return last[key]
         alpha, beta = split_theta(p, n_m, n_p)
         f0 = float(p[P]) if offset else F0
         res, jacs = [], []
@@ -246,23 +238,10 @@ def refine_output_error(
                 Jr = np.column_stack((Jr, np.full(e.size, sw[r])))
             jacs.append(Jr)
         out = (np.concatenate(res), np.vstack(jacs))
-        cache.clear()
-        cache[key] = out
+        last.clear()
+        last[key] = out
         return out
 
-    x0 = np.r_[theta0, F0] if offset else theta0.copy()
-    if solver == "gauss-newton":
-        return _levenberg_marquardt(
-            rec,
-            x0,
-            n_m,
-            n_p,
-            offset=offset,
-            F0=F0,
-            bound=bound,
-            max_iter=max_nfev,
-            rho_grid=rho_grid,
-        )
     sol = optimize.least_squares(
         lambda p: evaluate(p)[0],
         x0,
@@ -281,7 +260,7 @@ def refine_output_error(
 
 def _normal_eq(
     rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
-):
+) -> tuple[float, np.ndarray, np.ndarray]:
     P = 2 * n_m * n_p
     alpha, beta = split_theta(x, n_m, n_p)
     f0 = float(x[P]) if offset else F0
@@ -301,25 +280,91 @@ def _normal_eq(
     return cost, g, H
 
 
-def _free_run_cost(
-    rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
+def free_run_cost(
+    rec: Records, alpha: np.ndarray, beta: np.ndarray, f0: float, bound: float
 ) -> float:
-    P = 2 * n_m * n_p
-    alpha, beta = split_theta(x, n_m, n_p)
-    f0 = float(x[P]) if offset else F0
+    """Weighted free-run squared error ``sum_r w_r |y_r + f0 - F_r|^2`` over the records [N^2]
+    (``inf`` when a record's free run leaves ``bound`` or becomes non-finite)."""
     total = 0.0
     for r in range(len(rec.u)):
         y, bad = K.simulate_record(rec.u[r], rec.rho[r], alpha, beta, bound)
         if bad >= 0:
-            return np.inf
+            return float("inf")
         e = y + f0 - rec.F[r]
         total += rec.weights[r] * float(e @ e)
     return total
 
 
+def _cost_of(
+    rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
+) -> float:
+    """:func:`free_run_cost` of the unknowns ``x = [theta, f0]`` (``f0 = F0`` without offset)."""
+    alpha, beta = split_theta(x, n_m, n_p)
+    return free_run_cost(rec, alpha, beta, float(x[2 * n_m * n_p]) if offset else F0, bound)
+
+
+#: Levenberg-Marquardt constants of :func:`_levenberg_marquardt` (see its docstring).
+LM_DAMPING_START = 1e-4
+LM_DAMPING_MIN = 1e-12
+LM_DAMPING_MAX = 1e12
+LM_DAMPING_ACCEPT = 1.0 / 3.0
+LM_DAMPING_REJECT = 4.0
+LM_DAMPING_SINGULAR = 10.0
+LM_DIAG_FLOOR = 1e-300
+LM_REL_TOL = 1e-7
+
+
 def _levenberg_marquardt(
-    rec, x0, n_m, n_p, *, offset, F0, bound, max_iter, tol=1e-7, rho_grid=None
-):
+    rec: Records,
+    x0: np.ndarray,
+    n_m: int,
+    n_p: int,
+    *,
+    offset: bool,
+    F0: float,
+    bound: float,
+    max_iter: int,
+    tol: float = LM_REL_TOL,
+    rho_grid: np.ndarray | None = None,
+) -> tuple[np.ndarray, float, optimize.OptimizeResult]:
+    """Levenberg-Marquardt minimisation of the weighted free-run cost of the LPV model.
+
+    What is solved: ``min_x C(x)``, ``C(x) = sum_r w_r |y_r(x) + f0 - F_r|^2``, the weighted
+    squared free-run error over the records (:func:`free_run_cost`), over the unknowns
+    ``x = [alpha.ravel(), beta.ravel()]`` (plus ``f0`` with ``offset``). ``y_r(x)`` is the free
+    run of record ``r`` from rest.
+
+    How: at the current ``x`` the kernel accumulates the Gauss-Newton normal equations
+    ``H = J^T W J`` and ``g = J^T W e`` (``J`` the sensitivity of the free run, never stored).
+    Each iteration solves, by Cholesky, the Jacobi-scaled damped system
+    ``(D^-1 H D^-1 + lam I) D dx = -D^-1 g`` with ``D = sqrt(diag H)`` (floored at
+    :data:`LM_DIAG_FLOOR` so that a zero column does not divide by zero). The candidate
+    ``x + dx`` is accepted only if its free-run cost is lower (a diverging free run, or with
+    ``rho_grid`` a frozen pole of modulus ``>= STABILITY_LIMIT`` on the grid, counts as infinite
+    cost); the damping ``lam`` then shrinks by :data:`LM_DAMPING_ACCEPT` (not below
+    :data:`LM_DAMPING_MIN`), otherwise it grows by :data:`LM_DAMPING_REJECT` and the step is
+    retried. A damped matrix that is not positive definite raises ``lam`` by
+    :data:`LM_DAMPING_SINGULAR`. ``lam`` starts at :data:`LM_DAMPING_START`, a nearly pure
+    Gauss-Newton step, since the start is the least-squares estimate.
+
+    Stops (``status``) after ``max_iter`` accepted steps (0), when an accepted step lowers the
+    cost by less than the relative ``tol`` (1), or when no step with ``lam`` below
+    :data:`LM_DAMPING_MAX` lowers the cost (2: a local minimum within precision).
+
+    Returns
+    -------
+    theta : ndarray
+        ``[alpha.ravel(), beta.ravel()]`` at the minimum.
+    f0 : float
+        Offset [N] (``F0`` when not estimated).
+    result : OptimizeResult
+        ``x``, ``cost`` (the free-run cost), ``nfev`` (cost evaluations) and ``status``.
+
+    Raises
+    ------
+    IdentificationError
+        If the free run of the start ``x0`` already diverges.
+    """
     P = 2 * n_m * n_p
     x = x0.copy()
     cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
@@ -327,18 +372,18 @@ def _levenberg_marquardt(
         raise IdentificationError(
             "lpv: the free run of the least-squares start diverges; cannot refine"
         )
-    lam = 1e-4
+    lam = LM_DAMPING_START
     nfev, status = 1, 0
     for _ in range(max_iter):
-        d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+        d = np.sqrt(np.maximum(np.diag(H), LM_DIAG_FLOOR))
         Hs = H / np.outer(d, d)
         gs = g / d
         step_ok = False
-        while lam < 1e12:
+        while lam < LM_DAMPING_MAX:
             try:
                 c, low = scipy.linalg.cho_factor(Hs + lam * np.eye(Hs.shape[0]), check_finite=False)
             except np.linalg.LinAlgError:
-                lam *= 10.0
+                lam *= LM_DAMPING_SINGULAR
                 continue
             dx = -scipy.linalg.cho_solve((c, low), gs, check_finite=False) / d
             xn = x + dx
@@ -349,16 +394,16 @@ def _levenberg_marquardt(
             ):
                 cn = np.inf  # leaves the frozen-stable set over the identified range: rejected
             else:
-                cn = _free_run_cost(rec, xn, n_m, n_p, offset, F0, bound)
+                cn = _cost_of(rec, xn, n_m, n_p, offset, F0, bound)
             nfev += 1
             if cn < cost:
                 rel = (cost - cn) / cost
                 x = xn
                 cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
-                lam = max(lam / 3.0, 1e-12)
+                lam = max(lam * LM_DAMPING_ACCEPT, LM_DAMPING_MIN)
                 step_ok = True
                 break
-            lam *= 4.0
+            lam *= LM_DAMPING_REJECT
         if not step_ok:
             status = 2  # no decrease possible: at a (local) minimum within precision
             break
@@ -367,3 +412,128 @@ def _levenberg_marquardt(
             break
     sol = optimize.OptimizeResult(x=x, cost=cost, nfev=nfev, status=status)
     return x[:P].copy(), (float(x[P]) if offset else F0), sol
+
+
+# ----------------------------------------------------------------------------- whole identification
+@dataclass
+class LPVFit:
+    """Result of :func:`identify`.
+
+    Attributes
+    ----------
+    theta : ndarray
+        ``[alpha.ravel(), beta.ravel()]`` with ``n_p`` powers of ``rho``.
+    offset : float
+        Output offset ``F0`` [N].
+    largest_pole : (float, float, complex)
+        Largest frozen-pole modulus over the stability grid, the ``rho`` where it occurs, the pole.
+    provenance : dict
+        Solver facts: least-squares solver and condition number, free-run costs, refinement
+        evaluations, status and notes.
+    """
+
+    theta: np.ndarray
+    offset: float
+    largest_pole: tuple[float, float, complex]
+    provenance: dict[str, Any]
+
+
+def identify(
+    rec: Records,
+    n_m: int,
+    n_p: int,
+    *,
+    offset: bool,
+    bound: float,
+    refine: bool,
+    max_nfev: int,
+    solver: str,
+    enforce_stability: bool,
+    rho_range: tuple[float, float],
+    windows: Callable[[Records], tuple[Records, dict[str, Any] | None]],
+) -> LPVFit:
+    """Least squares, then (with ``refine``) output-error refinement from a stable start.
+
+    The refined model is kept when it lowers the free-run cost on every training sample, or when
+    the least-squares model is not frozen-stable and ``enforce_stability`` holds. ``windows``
+    gives the records the refinement runs on (evenly spread windows of long campaigns, with a
+    provenance entry, or the records themselves and None).
+    """
+    ls = ls_identify(rec, n_m, n_p, offset)
+    theta, F0 = ls.theta, ls.offset
+    prov: dict[str, Any] = {"ls_solver": ls.solver, "ls_condition_number": ls.cond}
+    grid = np.linspace(*rho_range, STABILITY_GRID)
+    ls_cost = free_run_cost(rec, *split_theta(theta, n_m, n_p), F0, bound)
+    prov["ls_free_run_cost"] = ls_cost
+    if refine:
+        theta0, shrink = _stable_start(theta, n_m, n_p, grid, rec, F0, bound)
+        if shrink != 1.0:
+            prov["oe_start_pole_scaling"] = shrink
+        rec_oe, win = windows(rec)
+        th_r, f0_r, sol = refine_output_error(
+            rec_oe,
+            theta0,
+            F0,
+            n_m,
+            n_p,
+            offset=offset,
+            bound=bound,
+            max_nfev=max_nfev,
+            solver=solver,
+            rho_grid=grid if enforce_stability else None,
+        )
+        oe_cost = free_run_cost(rec, *split_theta(th_r, n_m, n_p), f0_r, bound)
+        prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
+        if win is not None:
+            prov.update(oe_windows=win, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost})
+        ls_ok = (
+            not enforce_stability
+            or largest_frozen_pole(split_theta(theta, n_m, n_p)[0], grid)[0] < 1.0
+        )
+        if oe_cost < ls_cost or not ls_ok:
+            theta, F0 = th_r, f0_r
+            if oe_cost >= ls_cost:
+                prov["oe_note"] = (
+                    "least-squares model has a lower free-run cost but is not frozen-stable; "
+                    "refined (frozen-stable) model kept"
+                )
+        else:
+            prov["oe_note"] = "refinement did not lower the free-run cost; least-squares model kept"
+    pole = largest_frozen_pole(split_theta(theta, n_m, n_p)[0], grid)
+    return LPVFit(theta=theta, offset=F0, largest_pole=pole, provenance=prov)
+
+
+#: Pole scaling of :func:`_stable_start`: target modulus of the largest frozen pole, and the
+#: factor by which the scaling shrinks while the time-varying free run still diverges.
+START_POLE_MODULUS = 0.98
+START_SHRINK = 0.95
+START_TRIES = 20
+
+
+def _stable_start(
+    theta: np.ndarray,
+    n_m: int,
+    n_p: int,
+    grid: np.ndarray,
+    rec: Records,
+    F0: float,
+    bound: float,
+) -> tuple[np.ndarray, float]:
+    """Start for the refinement whose free run stays bounded on the training records.
+
+    An equation-error estimate can be frozen-unstable. Scaling ``a_j`` by ``lambda**j`` scales
+    every frozen pole by ``lambda``, so ``lambda = START_POLE_MODULUS / max|pole|`` (then smaller
+    by :data:`START_SHRINK`, if the time-varying run still diverges) gives a frozen-stable start
+    with the same pole pattern.
+    """
+    alpha, beta = split_theta(theta, n_m, n_p)
+    pmax = largest_frozen_pole(alpha, grid)[0]
+    lam = 1.0 if pmax < STABILITY_LIMIT else START_POLE_MODULUS / pmax
+    for _ in range(START_TRIES):
+        al = alpha * (lam ** np.arange(1, n_m + 1))[:, None]
+        if np.isfinite(free_run_cost(rec, al, beta, F0, bound)):
+            return np.r_[al.ravel(), beta.ravel()], lam
+        lam *= START_SHRINK
+    raise IdentificationError(
+        "lpv: no bounded free run found from the least-squares estimate; try a lower order n_m"
+    )

@@ -18,9 +18,12 @@ from numba import njit
 __all__ = [
     "build_regressors",
     "first_order_lag",
+    "frozen_poles",
     "gram_pass",
+    "largest_frozen_pole",
     "simulate_record",
     "simulate_sensitivity",
+    "split_theta",
 ]
 
 _BLOCK = 512
@@ -153,7 +156,9 @@ def build_regressors(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragm
     return X, t
 
 
-def simulate_record(u, rho, alpha, beta, bound):
+def simulate_record(
+    u: np.ndarray, rho: np.ndarray, alpha: np.ndarray, beta: np.ndarray, bound: float
+) -> tuple[np.ndarray, int]:
     """Free-run output of one record from zero initial conditions (dispatcher).
 
     Orders ``n_m <= 4`` with ``n_rho <= 2`` run in a fused kernel with the coefficients held in
@@ -470,3 +475,40 @@ def oe_normal_equations(
             g += part @ eb[:fill]
             fill = 0
     return weight * cost, g, H, -1
+
+
+# ----------------------------------------------------------------------------- coefficients, poles
+def split_theta(theta: np.ndarray, n_m: int, n_p: int) -> tuple[np.ndarray, np.ndarray]:
+    """``theta = [alpha.ravel(), beta.ravel()]`` -> ``alpha, beta`` of shape ``(n_m, n_p)``."""
+    k = n_m * n_p
+    return theta[:k].reshape(n_m, n_p).copy(), theta[k : 2 * k].reshape(n_m, n_p).copy()
+
+
+def frozen_poles(alpha: np.ndarray, rho_grid: np.ndarray) -> np.ndarray:
+    """Poles of ``z^n + a_1(rho) z^(n-1) + ... + a_n(rho)`` for each ``rho``; shape (len, n_m)."""
+    n_m, n_p = alpha.shape
+    out = np.empty((rho_grid.size, n_m), dtype=complex)
+    for k, r in enumerate(rho_grid):
+        a = alpha @ (r ** np.arange(n_p))
+        out[k] = np.roots(np.r_[1.0, a]) if n_m else np.empty(0)
+    return out
+
+
+def largest_frozen_pole(alpha: np.ndarray, rho_grid: np.ndarray) -> tuple[float, float, complex]:
+    """Largest frozen-pole modulus over ``rho_grid``, the ``rho`` where it occurs and the pole.
+
+    The poles are the eigenvalues of the companion matrices of ``z^n + a_1(rho) z^(n-1) + ...``,
+    computed for the whole grid at once.
+    """
+    n_m, n_p = alpha.shape
+    a = (np.asarray(rho_grid, float)[:, None] ** np.arange(n_p)) @ alpha.T  # (G, n_m)
+    C = np.zeros((a.shape[0], n_m, n_m))
+    C[:, 0, :] = -a
+    if n_m > 1:
+        C[:, np.arange(1, n_m), np.arange(n_m - 1)] = 1.0
+    ev = np.linalg.eigvals(C)
+    if not np.all(np.isfinite(ev)):
+        return float("inf"), float(rho_grid[0]), complex("nan")
+    mod = np.abs(ev)
+    g, j = np.unravel_index(int(np.argmax(mod)), mod.shape)
+    return float(mod[g, j]), float(rho_grid[g]), complex(ev[g, j])

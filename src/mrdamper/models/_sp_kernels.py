@@ -16,10 +16,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["N_COMPONENTS", "sp_force", "sp_force_jacobian"]
+__all__ = ["COMPONENTS", "N_COMPONENTS", "sp_force", "sp_force_jacobian"]
 
 #: Number of components of the SP map (A, a, b, c, d).
 N_COMPONENTS = 5
+#: Names of the five components of the SP map, in kernel order.
+COMPONENTS = ("A", "a", "b", "c", "d")
 
 
 @njit(cache=True)

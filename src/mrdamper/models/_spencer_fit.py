@@ -1,4 +1,4 @@
-"""Identification machinery of the Spencer model (private; used by ``SpencerEstimator.fit``).
+"""Identification machinery of the Spencer model (private; used by ``FitSettings.fit``).
 
 * Records are simulated separately from their own rest state; residuals are stacked.
 * Unknowns are scaled (``p = scale * q``) so the optimiser works on numbers of order one.
@@ -16,20 +16,62 @@ import math
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from mrdamper.data import ExperimentSet
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models import _spencer_kernels as _k
-from mrdamper.models.spencer import DEFAULT_BOUNDS, PARAMETER_NAMES, auto_substeps
+from mrdamper.models._spencer_kernels import PARAM_NAMES as PARAMETER_NAMES
+from mrdamper.models._spencer_kernels import auto_substeps
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.models.spencer import SpencerEstimator
+__all__ = ["COND_WARNING", "DEFAULT_BOUNDS", "FitSettings", "check_settings", "identify"]
 
-__all__ = ["COND_WARNING", "identify"]
+_INF = math.inf
+#: Default identification bounds (SI). Current-dependence coefficients are non-negative (the
+#: MR effect grows with the field); gamma may take either sign; n stays in [1, 4].
+DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
+    "c0a": (0.0, _INF),
+    "c0b": (0.0, _INF),
+    "k0": (0.0, _INF),
+    "c1a": (0.0, _INF),
+    "c1b": (0.0, _INF),
+    "k1": (-_INF, _INF),
+    "x0": (-_INF, _INF),
+    "alpha_a": (0.0, _INF),
+    "alpha_b": (0.0, _INF),
+    "gamma": (-_INF, _INF),
+    "beta": (0.0, _INF),
+    "A": (0.0, _INF),
+    "n": (1.0, 4.0),
+    "eta": (1e-2, 1e5),
+    "f0": (-_INF, _INF),
+}
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """The estimator settings the identification uses (see ``FitSettings``)."""
+
+    input: ElectricalSource
+    start: Mapping[str, float] | None
+    fixed: Mapping[str, float] | None
+    bounds: Mapping[str, tuple[float, float]] | None
+    n_starts: int
+    seed: int
+    weighting: str
+    jacobian: str
+    max_nfev: int
+    screen_nfev: int
+    ftol: float
+    xtol: float
+    gtol: float
+    substeps: int
+    fix_eta: str
+
 
 #: Condition number of J^T J (scaled unknowns) above which the fit is reported ill-conditioned.
 COND_WARNING = 1e10
@@ -45,6 +87,8 @@ _PENALTY = 1e3
 DEFAULT_FIXED = {"x0": 0.0, "A": 1.0}
 #: Scaling of the unknowns inside least_squares (they are already scaled by their start values).
 X_SCALE: Any = 1.0
+#: Input-dependent terms fixed at 0 when the training input takes a single level.
+SINGLE_LEVEL_FIXED = ("c0b", "c1b", "alpha_b")
 _IDX = {n: k for k, n in enumerate(PARAMETER_NAMES)}
 
 
@@ -63,37 +107,9 @@ class _Record:
     sl: slice
 
 
-def _check_settings(est: SpencerEstimator) -> None:
-    if est.input not in ("i", "voltage"):
-        raise DataValidationError("input", f"expected 'i' or 'voltage', got {est.input!r}")
-    for name in ("n_starts", "max_nfev", "screen_nfev"):
-        v = getattr(est, name)
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-            raise DataValidationError(name, f"expected a positive integer, got {v!r}")
-    if (
-        isinstance(est.substeps, bool)
-        or not isinstance(est.substeps, (int, np.integer))
-        or est.substeps < 0
-    ):
-        raise DataValidationError(
-            "substeps", f"expected an integer >= 0 (0 = automatic), got {est.substeps!r}"
-        )
-    tol = est.step_tolerance
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < math.inf:
-        raise DataValidationError(
-            "step_tolerance", f"expected a positive finite number (ESR units), got {tol!r}"
-        )
-    choices = {
-        "weighting": ("record", "none"),
-        "jacobian": ("sensitivity", "2-point", "3-point"),
-        "fix_eta": ("auto", "never", "always"),
-        "range_policy": ("error", "warn", "clip", "ignore"),
-    }
-    for name, allowed in choices.items():
-        if getattr(est, name) not in allowed:
-            raise DataValidationError(
-                name, f"expected one of {allowed}, got {getattr(est, name)!r}"
-            )
+def check_settings(est: FitSettings) -> None:
+    """Check the parameter mappings ``start``, ``fixed`` and ``bounds`` (the other settings are
+    checked by the estimator)."""
     for name in ("start", "fixed", "bounds"):
         mapping = getattr(est, name)
         if mapping is None:
@@ -125,7 +141,7 @@ def _check_settings(est: SpencerEstimator) -> None:
             raise DataValidationError(f"bounds[{name!r}]", f"expected low < high, got ({lo}, {hi})")
 
 
-def _records(est: SpencerEstimator, exps: ExperimentSet) -> list[_Record]:
+def _records(est: FitSettings, exps: ExperimentSet) -> list[_Record]:
     recs = []
     offset = 0
     n_rec = len(exps)
@@ -178,7 +194,7 @@ def _regression(recs: list[_Record]) -> np.ndarray:
     y = np.concatenate(rhs)
     # the electrical columns are exactly collinear with the others when e is one constant value
     coef, *_ = np.linalg.lstsq(X, y, rcond=1e-10)
-    return coef
+    return np.asarray(coef)
 
 
 def _map_start(
@@ -275,15 +291,25 @@ def _constant_input(recs: list[_Record]) -> bool:
     return all(r.emax - r.emin <= 1e-12 * max(1.0, abs(r.emax)) for r in recs)
 
 
-def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, dict[str, Any]]:
-    """Run the identification; return the parameter vector and the common model fields."""
-    _check_settings(est)
+def identify(
+    est: FitSettings, exps: ExperimentSet, *, single: bool = False
+) -> tuple[np.ndarray, dict[str, Any]]:
+    """Run the identification; return the parameter vector (:data:`PARAMETER_NAMES` order) and
+    the provenance.
+
+    With ``single`` (the electrical input takes one level in all the records) the laws in the
+    input are constants: ``c0b``, ``c1b`` and ``alpha_b`` are fixed at 0 unless given in
+    ``fixed``.
+    """
     recs = _records(est, exps)
     notes: list[str] = []
     if est.fixed is None:
         fixed: dict[str, float] = dict(DEFAULT_FIXED)
     else:  # an explicit mapping replaces the defaults
         fixed = {k: float(v) for k, v in est.fixed.items()}
+    if single:
+        for name in SINGLE_LEVEL_FIXED:
+            fixed.setdefault(name, 0.0)
     start_user = {k: float(v) for k, v in (est.start or {}).items()}
     constant = _constant_input(recs)
     if "eta" not in fixed and (est.fix_eta == "always" or (est.fix_eta == "auto" and constant)):
@@ -397,22 +423,20 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
             f"spencer: identification is ill-conditioned (cond(J^T J) = {cond:.3g} in scaled "
             "unknowns); some parameters are not determined by these records",
             RuntimeWarning,
-            stacklevel=3,
+            stacklevel=4,
         )
     if not converged:
         warnings.warn(
             f"spencer: optimiser stopped before convergence ({final.message}); raise max_nfev",
             RuntimeWarning,
-            stacklevel=3,
+            stacklevel=4,
         )
     resid = obj.residuals(final.x)
     rec_esr = {}
     for r in recs:
         err = resid[r.sl] / r.weight
         rec_esr[r.name] = float(np.mean(err**2) / np.var(r.F))
-    emin = min(r.emin for r in recs)
-    emax = max(r.emax for r in recs)
-    provenance = {
+    provenance: dict[str, Any] = {
         "method": "bounded nonlinear least squares on the free-run simulation error "
         "(scipy.optimize.least_squares, trf); records simulated separately from rest",
         "jacobian": "forward sensitivities (RK4)"
@@ -443,13 +467,7 @@ def identify(est: SpencerEstimator, exps: ExperimentSet) -> tuple[np.ndarray, di
         "substeps": int(est.substeps) if est.substeps > 0 else "automatic",
         "notes": notes,
     }
-    common = {
-        "input": est.input,
-        "input_range": (emin, emax),
-        "range_policy": est.range_policy,
-        "provenance": provenance,
-    }
-    return p_hat, common
+    return p_hat, provenance
 
 
 def _scale_floors(recs: list[_Record], force_scale: float) -> dict[str, float]:

@@ -18,15 +18,20 @@ Status codes returned by the kernels: 0 ok, 1 the state became non-finite or lef
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 __all__ = [
+    "MAX_AUTO_SUBSTEPS",
     "N_PARAMS",
     "PARAM_NAMES",
     "STATUS_BAD_DAMPING",
     "STATUS_DIVERGED",
     "STATUS_OK",
+    "SUBSTEP_RATE_PRODUCT",
+    "auto_substeps",
     "simulate",
     "simulate_sens",
 ]
@@ -346,3 +351,49 @@ def simulate_sens(x, v, e, dt, p, nsub, y0, z0, u0, cols):
         if _bad_state(s[0], s[1], s[2], x[k + 1]):
             return F, G, STATUS_DIVERGED, k + 1
     return F, G, STATUS_OK, -1
+
+
+# ----------------------------------------------------------------------------- step size
+#: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-].
+#: The rate is an upper estimate, and RK4 is stable up to about 2.8 for real eigenvalues; the
+#: resulting error against a tight reference is checked in tests/models/test_spencer.py.
+SUBSTEP_RATE_PRODUCT = 2.0
+#: Upper limit of automatic sub-steps per sampling interval.
+MAX_AUTO_SUBSTEPS = 2000
+
+
+def auto_substeps(p: np.ndarray, dt: float, vmax: float, emin: float, emax: float) -> int:
+    """Sub-steps per sampling interval from an upper estimate of the model's fastest rate.
+
+    Parameters
+    ----------
+    p : ndarray
+        Parameters in :data:`PARAM_NAMES` order.
+    dt : float
+        Sampling interval [s].
+    vmax : float
+        Largest absolute velocity of the record [m/s].
+    emin, emax : float
+        Range of the electrical input [A] or [V] (u stays inside it).
+    """
+    c0a, c0b, k0, c1a, c1b, _, _, ala, alb, gam, bet, A, n, eta, _ = (float(a) for a in p)
+    damping = [c0a + c0b * u + c1a + c1b * u for u in (emin, emax)]
+    cmin = min(damping)
+    if not cmin > 0.0:
+        return 1  # the kernel reports the invalid damping at the first sample
+    # alpha(u) / C(u) is linear-fractional in u, so its extremes lie at the ends of the range
+    al_over_c = max(abs(ala + alb * u) / c for u, c in zip((emin, emax), damping))
+    shape = bet + gam
+    if shape > 0.0 and A != 0.0:
+        zmax = (abs(A) / shape) ** (1.0 / n)
+    else:
+        zmax = abs(A) * 1e-2  # no saturation: a generous guess of the reach of z
+    rate = (
+        abs(eta)
+        + abs(k0) / cmin
+        + abs(A) * al_over_c
+        + n * (abs(bet) + abs(gam)) * zmax ** (n - 1.0) * 1.5 * vmax
+    )
+    if not math.isfinite(rate):
+        return MAX_AUTO_SUBSTEPS
+    return int(min(MAX_AUTO_SUBSTEPS, max(1, math.ceil(dt * rate / SUBSTEP_RATE_PRODUCT))))

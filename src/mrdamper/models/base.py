@@ -16,11 +16,12 @@ import dataclasses
 import json
 import math
 import time
+import typing
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 import pandas as pd
@@ -37,9 +38,15 @@ __all__ = [
     "TIMING_PROVENANCE",
     "Estimator",
     "FittedModel",
+    "Identified",
     "RangePolicy",
     "SimulationResult",
+    "TrainingData",
+    "check_bool",
+    "check_choice",
     "check_input_range",
+    "check_int",
+    "check_number",
     "decode_value",
     "encode_value",
     "single_level",
@@ -77,6 +84,8 @@ def check_input_range(
         What to do when values leave ``bounds`` by more than ``tolerance`` times the range width.
     field_name, model : str
         Used in the message.
+    tolerance : float
+        Relative slack on the bounds, as a fraction of the range width (at least 1) [-].
 
     Returns
     -------
@@ -98,7 +107,7 @@ def check_input_range(
         warnings.warn(msg + " (extrapolating)", RuntimeWarning, stacklevel=3)
         return values
     if policy == "clip":
-        return np.clip(values, lo, hi)
+        return np.asarray(np.clip(values, lo, hi))
     if policy == "ignore":
         return values
     raise OutOfRangeError(f"range_policy: expected error/warn/clip/ignore, got {policy!r}")
@@ -108,6 +117,13 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
     """The one level of a constant electrical input, or None when it takes more than one value.
 
     ``values`` is constant when its spread is at most ``rel_tol * max(1, max |values|)``.
+
+    Parameters
+    ----------
+    values : ndarray
+        Electrical input [A] or [V] (or its extremes).
+    rel_tol : float
+        Relative spread below which the input is one level [-].
     """
     lo, hi = float(np.min(values)), float(np.max(values))
     if hi - lo <= rel_tol * max(1.0, abs(lo), abs(hi)):
@@ -116,7 +132,17 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
 
 
 def single_level_note(kind: str, source: str, level: float) -> str:
-    """One-line note for a model identified at a single electrical level (also emitted as a warning)."""
+    """One-line note for a model identified at a single electrical level (also emitted as a warning).
+
+    Parameters
+    ----------
+    kind : str
+        Model kind.
+    source : {"i", "voltage"}
+        Electrical input channel.
+    level : float
+        The level [A] or [V].
+    """
     unit = "A" if source == "i" else "V"
     return (
         f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws are "
@@ -126,7 +152,13 @@ def single_level_note(kind: str, source: str, level: float) -> str:
 
 # ----------------------------------------------------------------------------- JSON encoding
 def encode_value(value: Any) -> Any:
-    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly)."""
+    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly).
+
+    Parameters
+    ----------
+    value : object
+        Number, array, sequence or mapping of them.
+    """
     if isinstance(value, np.ndarray):
         return {
             "__ndarray__": value.ravel().tolist(),
@@ -148,7 +180,13 @@ def encode_value(value: Any) -> Any:
 
 
 def decode_value(value: Any) -> Any:
-    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed)."""
+    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed).
+
+    Parameters
+    ----------
+    value : object
+        JSON data written by :func:`encode_value`.
+    """
     if isinstance(value, dict):
         if "__ndarray__" in value:
             arr = np.array(value["__ndarray__"], dtype=value.get("dtype", "float64"))
@@ -326,20 +364,191 @@ class FittedModel(abc.ABC):
         return atomic_write_text(path, text + "\n", force=force)
 
 
+@dataclass(frozen=True, eq=False)
+class TrainingData:
+    """Training records as :meth:`Estimator.fit` hands them to a family's identification step.
+
+    Attributes
+    ----------
+    records : ExperimentSet
+        The training records (validated: at least one, each with motion).
+    input : {"i", "voltage"}
+        Electrical input channel of the estimator.
+    electrical : tuple of ndarray
+        That channel of every record, contiguous float64 [A] or [V] (read-only views).
+    input_range : (float, float)
+        Range of the electrical input over every sample of every record [A] or [V]: the model's
+        identified range.
+    level : float or None
+        The one level of the input when it is constant over every record (see
+        :func:`single_level`); the family then reduces its laws in the input to constants.
+    """
+
+    records: ExperimentSet
+    input: ElectricalSource
+    electrical: tuple[np.ndarray, ...]
+    input_range: tuple[float, float]
+    level: float | None
+
+    @property
+    def single(self) -> bool:
+        """True when the electrical input takes one level over all the training data."""
+        return self.level is not None
+
+
+@dataclass(frozen=True, eq=False)
+class Identified:
+    """What a family's identification step returns: the model's own parameters and provenance.
+
+    The common fields (``input``, ``input_range``, ``range_policy``, timings, the single-level
+    note) are added by :meth:`Estimator.fit`.
+
+    Attributes
+    ----------
+    parameters : mapping
+        Keyword arguments of the family's fitted-model class (its own fields only).
+    provenance : mapping
+        Facts about the identification (solver, costs, records, notes); no wall-clock times.
+    """
+
+    parameters: Mapping[str, Any]
+    provenance: Mapping[str, Any] = field(default_factory=dict)
+
+
 class Estimator(abc.ABC):
     """Identifies one model family. Holds settings only; ``fit`` returns a FittedModel.
 
-    Subclasses are (mutable, non-frozen) dataclasses whose fields are the settings, plus a class
-    attribute ``kind`` matching the fitted model's ``kind``.
+    Subclasses are (mutable, non-frozen) dataclasses whose fields are the settings, plus the class
+    attributes ``kind`` (matching the fitted model's ``kind``) and ``model_class``. They implement
+    one method, :meth:`_identify`, and extend :meth:`_validate` for checks that the field types do
+    not express. :meth:`fit` does everything else, the same way for every family:
+
+    1. validate the settings (:meth:`_validate`: every ``Literal`` field against its choices,
+       every ``bool`` field is a bool, then the family's own checks);
+    2. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
+       without motion);
+    3. read the electrical input of every record, its identified range and whether it takes a
+       single level (:class:`TrainingData`);
+    4. call :meth:`_identify`;
+    5. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
+       and provenance (the single-level note, wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
+
+    At a single level the note (:func:`single_level_note`) is also emitted as a ``UserWarning``.
     """
 
     kind: ClassVar[str] = "abstract"
+    #: Fitted-model class built by :meth:`fit`.
+    model_class: ClassVar[type[FittedModel]]
+    #: Names of the per-fit options the family's :meth:`_identify` takes (others are refused).
+    fit_options: ClassVar[tuple[str, ...]] = ()
     #: Old setting name -> current name. Old names are still accepted, with a note.
     renamed_settings: ClassVar[Mapping[str, str]] = {}
 
-    @abc.abstractmethod
-    def fit(self, data: Experiment | Iterable[Experiment]) -> FittedModel:
-        """Identify the model from one record or a collection of records."""
+    @classmethod
+    def settings_names(cls) -> list[str]:
+        """Names of the settings this estimator takes (its init fields, old names excluded)."""
+        if not dataclasses.is_dataclass(cls):
+            return []
+        return [
+            f.name for f in dataclasses.fields(cls) if f.init and f.name not in cls.renamed_settings
+        ]
+
+    @classmethod
+    def from_settings(cls, **settings: Any) -> Estimator:
+        """The estimator with ``settings``; an unknown setting is refused, naming it.
+
+        Raises
+        ------
+        DataValidationError
+            A setting this estimator does not take (the message lists the ones it takes).
+        """
+        accepted = cls.settings_names()
+        unknown = [k for k in settings if k not in accepted and k not in cls.renamed_settings]
+        if unknown:
+            raise DataValidationError(
+                unknown[0],
+                f"{cls.kind} does not take the setting {unknown[0]!r}; its settings are {accepted}",
+            )
+        return cls(**settings)
+
+    def fit(self, data: Experiment | Iterable[Experiment], **options: Any) -> FittedModel:
+        """Identify the model from one record or a collection of records.
+
+        Parameters
+        ----------
+        data : Experiment or iterable of Experiment
+            Training records (never modified).
+        **options
+            Per-fit options of the family (e.g. ``record_weights`` of the LPV estimator).
+
+        Returns
+        -------
+        FittedModel
+            The identified model, an immutable value.
+        """
+        t0, c0 = time.perf_counter(), time.process_time()
+        unknown = [k for k in options if k not in self.fit_options]
+        if unknown:
+            raise DataValidationError(
+                unknown[0],
+                f"{self.kind}: fit takes no option {unknown[0]!r}; its options are "
+                f"{list(self.fit_options)}",
+            )
+        self._validate()
+        prepared = self._prepare(self._as_set(data))
+        result = self._identify(prepared, **options)
+        provenance = dict(result.provenance)
+        if prepared.level is not None:
+            note = single_level_note(self.kind, prepared.input, prepared.level)
+            provenance["note"] = note
+            warnings.warn(note, UserWarning, stacklevel=2)
+        provenance["elapsed_s"] = time.perf_counter() - t0
+        provenance["cpu_s"] = time.process_time() - c0
+        return self.model_class(
+            **result.parameters,
+            input=prepared.input,
+            input_range=prepared.input_range,
+            range_policy=getattr(self, "range_policy", "error"),
+            provenance=provenance,
+        )
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """The family's identification step on the prepared training data (to implement)."""
+        raise NotImplementedError(f"{type(self).__name__} does not implement _identify")
+
+    def _validate(self) -> None:
+        """Check the settings: ``Literal`` fields against their choices and ``bool`` fields.
+
+        Families extend it (call ``super()._validate()``) with the checks of
+        :func:`check_int`, :func:`check_number` for numbers.
+        """
+        if not dataclasses.is_dataclass(self):
+            return
+        hints = _type_hints(type(self))
+        for f in dataclasses.fields(self):
+            hint = hints.get(f.name)
+            value = getattr(self, f.name)
+            choices = _literal_choices(hint)
+            if choices is not None:
+                check_choice(f.name, value, choices[0], allow_none=choices[1])
+            elif hint is bool:
+                check_bool(f.name, value)
+
+    def _prepare(self, records: ExperimentSet) -> TrainingData:
+        source = cast(ElectricalSource, getattr(self, "input", "i"))
+        check_choice("input", source, ("i", "voltage"))
+        electrical = tuple(
+            np.ascontiguousarray(e.electrical(source), dtype=np.float64) for e in records
+        )
+        ext = np.array([[float(np.min(a)), float(np.max(a))] for a in electrical])
+        lo, hi = float(ext[:, 0].min()), float(ext[:, 1].max())
+        return TrainingData(
+            records=records,
+            input=source,
+            electrical=electrical,
+            input_range=(lo, hi),
+            level=single_level(np.array([lo, hi])),
+        )
 
     @staticmethod
     def _as_set(data: Experiment | Iterable[Experiment]) -> ExperimentSet:
@@ -350,10 +559,145 @@ class Estimator(abc.ABC):
             if not np.any(np.abs(e.v) > 0.0):
                 raise DataValidationError(
                     "v",
-                    f"training record {e.name!r} has zero velocity everywhere; a damper model needs motion "
-                    "(check the velocity column, or derive it from x with derive_velocity / --derive-velocity)",
+                    f"training record {e.name!r} has zero velocity everywhere; a damper model "
+                    "needs motion (check the velocity column, or derive it from x with "
+                    "derive_velocity / --derive-velocity)",
                 )
         return exps
+
+
+# ----------------------------------------------------------------------------- settings checks
+def check_choice(
+    name: str, value: Any, choices: Sequence[Any], *, allow_none: bool = False
+) -> None:
+    """Refuse ``value`` unless it is one of ``choices`` (or None with ``allow_none``).
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    choices : sequence
+        Accepted values.
+    allow_none : bool
+        Also accept None.
+
+    Raises
+    ------
+    DataValidationError
+        Naming the setting, the accepted values and the value given.
+    """
+    if value is None and allow_none:
+        return
+    if isinstance(value, Hashable) and value in choices and not isinstance(value, bool):
+        return
+    expected = ", ".join(repr(c) for c in choices) + (" or None" if allow_none else "")
+    raise DataValidationError(name, f"expected one of {expected}, got {value!r}")
+
+
+def check_bool(name: str, value: Any) -> None:
+    """Refuse anything but True / False.
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise DataValidationError(name, f"expected True or False, got {value!r}")
+
+
+def check_int(
+    name: str,
+    value: Any,
+    low: int | None = 0,
+    high: int | None = None,
+    *,
+    allow_none: bool = False,
+) -> None:
+    """Refuse anything but an integer in ``[low, high]``.
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    low, high : int or None
+        Inclusive bounds; None: unbounded on that side.
+    allow_none : bool
+        Also accept None.
+    """
+    if value is None and allow_none:
+        return
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    if ok and (low is None or value >= low) and (high is None or value <= high):
+        return
+    if low is None:
+        rng = "" if high is None else f" <= {high}"
+    else:
+        rng = f" >= {low}" if high is None else f" in {low}..{high}"
+    raise DataValidationError(name, f"expected an integer{rng}, got {value!r}")
+
+
+def check_number(
+    name: str,
+    value: Any,
+    *,
+    low: float = 0.0,
+    high: float = math.inf,
+    strict: bool = True,
+    allow_none: bool = False,
+    what: str = "a positive finite number",
+) -> None:
+    """Refuse anything but a finite real number above ``low`` and below ``high``.
+
+    Parameters
+    ----------
+    name : str
+        Setting name (in the message).
+    value : object
+        The value given.
+    low, high : float
+        Bounds: ``value > low`` (``>=`` unless ``strict``) and ``value < high``.
+    strict : bool
+        Exclude ``low`` itself.
+    allow_none : bool
+        Also accept None.
+    what : str
+        What was expected, in words (in the message).
+    """
+    if value is None and allow_none:
+        return
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if ok:
+        v = float(value)
+        above = v > low if strict else v >= low
+        if math.isfinite(v) and above and v < high:
+            return
+    raise DataValidationError(name, f"expected {what}, got {value!r}")
+
+
+def _type_hints(cls: type) -> dict[str, Any]:
+    try:
+        return typing.get_type_hints(cls)
+    except (NameError, TypeError):  # an annotation that does not resolve: no literal checks
+        return {}
+
+
+def _literal_choices(hint: Any) -> tuple[tuple[Any, ...], bool] | None:
+    """``(choices, allows None)`` of a ``Literal[...]`` or ``Literal[...] | None`` hint."""
+    if typing.get_origin(hint) is Literal:
+        return typing.get_args(hint), False
+    args = typing.get_args(hint)
+    if args and type(None) in args:
+        rest = [a for a in args if a is not type(None)]
+        if len(rest) == 1 and typing.get_origin(rest[0]) is Literal:
+            return typing.get_args(rest[0]), True
+    return None
 
 
 def _has_nan(value: Any) -> bool:

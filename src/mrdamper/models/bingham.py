@@ -10,17 +10,26 @@ records.
 from __future__ import annotations
 
 import math
-import warnings
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from mrdamper.data import Experiment
-from mrdamper.errors import DataValidationError, IdentificationError
-from mrdamper.models import _scale
-from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
+from mrdamper.data.experiment import ElectricalSource
+from mrdamper.errors import DataValidationError
+from mrdamper.models._bingham_fit import identify
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
+from mrdamper.models.protocols import StaticMapForm
 from mrdamper.models.registry import register
 
 __all__ = ["BinghamEstimator", "BinghamModel"]
@@ -104,6 +113,33 @@ class BinghamModel(FittedModel):
         """``sign(v)`` or ``tanh(v / v_eps)`` [-]."""
         return np.sign(v) if self.v_eps == 0.0 else np.tanh(v / self.v_eps)
 
+    def force(self, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
+        """Evaluate the model on plain arrays (no range policy) [N].
+
+        Parameters
+        ----------
+        x, v, i : ndarray
+            Displacement [m] (unused: the model does not depend on it), velocity [m/s],
+            electrical input [A or V].
+        """
+        fc = np.polynomial.polynomial.polyval(i, self.fc)
+        c0 = np.polynomial.polynomial.polyval(i, self.c0)
+        return np.asarray(fc * self.sign(v) + c0 * v + self.f0)
+
+    def inverse_form(self) -> StaticMapForm:
+        """The model as a static map of the control kernels: ``fc(i) tanh(v / v_eps) + c0(i) v +
+        f0``, the exact sign written ``tanh(1e300 v)`` when ``v_eps = 0`` (invertible, see
+        :class:`~mrdamper.models.protocols.InvertibleModel`)."""
+        comp = [0] * len(self.fc) + [1] + [3] * len(self.c0)
+        power = list(range(len(self.fc))) + [0] + list(range(len(self.c0)))
+        slope = 1e300 if self.v_eps == 0.0 else 1.0 / self.v_eps
+        return StaticMapForm(
+            np.asarray(comp, dtype=np.int64),
+            np.asarray(power, dtype=np.int64),
+            np.asarray([*self.fc, slope, *self.c0], dtype=np.float64),
+            float(self.f0),
+        )
+
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Force [N] from the record's velocity and electrical input.
 
@@ -118,11 +154,7 @@ class BinghamModel(FittedModel):
             raise DataValidationError(
                 "experiment", f"expected an Experiment, got {type(experiment).__name__}"
             )
-        e = self.electrical_input(experiment)
-        v = experiment.v
-        fc = np.polynomial.polynomial.polyval(e, self.fc)
-        c0 = np.polynomial.polynomial.polyval(e, self.c0)
-        return fc * self.sign(v) + c0 * v + self.f0
+        return self.force(experiment.x, experiment.v, self.electrical_input(experiment))
 
 
 @dataclass
@@ -147,113 +179,40 @@ class BinghamEstimator(Estimator):
     """
 
     kind: ClassVar[str] = "bingham"
+    model_class: ClassVar[type[FittedModel]] = BinghamModel
 
-    input: Literal["i", "voltage"] = "i"
+    input: ElectricalSource = "i"
     degree: int = 2
     v_eps: float = 0.0
     weighting: Literal["record", "none"] = "record"
-    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    range_policy: RangePolicy = "error"
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> BinghamModel:
-        """Identify the model.
+    def _validate(self) -> None:
+        super()._validate()
+        check_int("degree", self.degree, 0)
+        check_number("v_eps", self.v_eps, strict=False, what="a smoothing velocity >= 0 [m/s]")
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Weighted linear least squares over all records (blockwise QR, never one big matrix).
 
         Raises
         ------
-        DataValidationError
-            Bad settings or a record without the chosen input channel.
         IdentificationError
             The regression is rank deficient (e.g. fewer input levels than ``degree + 1``).
         """
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
-        if (
-            isinstance(self.degree, bool)
-            or not isinstance(self.degree, (int, np.integer))
-            or self.degree < 0
-        ):
-            raise DataValidationError("degree", f"expected an integer >= 0, got {self.degree!r}")
-        if not (
-            isinstance(self.v_eps, (int, float)) and math.isfinite(self.v_eps) and self.v_eps >= 0
-        ):
-            raise DataValidationError(
-                "v_eps", f"expected a smoothing velocity >= 0 [m/s], got {self.v_eps!r}"
-            )
-        if self.weighting not in ("record", "none"):
-            raise DataValidationError(
-                "weighting", f"expected 'record' or 'none', got {self.weighting!r}"
-            )
-        exps = self._as_set(data)
-        probe = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps)
-        deg = int(self.degree)
-        inputs: list[np.ndarray] = []  # [min, max] of each record's input, filled while folding
-
-        def blocks() -> Iterator[np.ndarray]:  # weighted rows [X y], folded into a QR factor
-            for exp in exps:
-                w = 1.0
-                if self.weighting == "record":
-                    sd = float(np.std(exp.F))
-                    if sd == 0.0:
-                        raise DataValidationError(
-                            "F", f"record {exp.name!r} has constant force; use weighting='none'"
-                        )
-                    w = 1.0 / (sd * math.sqrt(exp.n))
-                inputs.append(_scale.extrema(exp.electrical(self.input)))
-                for k0 in range(0, exp.n, _scale.QR_BLOCK):
-                    sl = slice(k0, k0 + _scale.QR_BLOCK)
-                    e, v = exp.electrical(self.input)[sl], exp.v[sl]
-                    powers = np.vander(e, deg + 1, increasing=True)
-                    yield (
-                        np.hstack(
-                            [
-                                powers * probe.sign(v)[:, None],
-                                powers * v[:, None],
-                                np.ones((e.size, 1)),
-                                exp.F[sl, None],
-                            ]
-                        )
-                        * w
-                    )
-
-        Rf = _scale.fold_qr(blocks())  # Q Rf = [X y]: X c - y = Q (Rf[:, :-1] c - Rf[:, -1])
-        n_rows = sum(e.n for e in exps)
-        e_all = np.concatenate(inputs)
-        level = single_level(e_all)
-        cols = list(range(2 * (deg + 1) + 1))
-        if level is not None and deg > 0:  # one level: fc and c0 reduce to constants
-            cols = [0, deg + 1, cols[-1]]
-            deg = 0
-        X, y = Rf[:, cols], Rf[:, -1]
-        coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)
-        if rank < X.shape[1]:
-            levels = np.unique(
-                np.round(np.concatenate([e.electrical(self.input) for e in exps]), 9)
-            ).size
-            raise IdentificationError(
-                f"bingham: regression is rank deficient (rank {rank} of {X.shape[1]}); degree={deg} "
-                f"needs at least {deg + 1} distinct '{self.input}' levels and moving records "
-                f"(found {levels} level(s))"
-            )
-        provenance = {
-            "method": "linear least squares",
-            "records": [e.name for e in exps],
-            "n_samples": int(n_rows),
-            "weighting": self.weighting,
-            "degree": deg,
-            "cond_X": float(sv[0] / sv[-1]),
-            "weighted_rms_residual": float(np.linalg.norm(X @ coef - y) / math.sqrt(n_rows)),
-        }
-        if level is not None and deg != int(self.degree):
-            note = single_level_note(self.kind, self.input, level)
-            provenance["note"] = note
-            warnings.warn(note, UserWarning, stacklevel=2)
-        return BinghamModel(
-            fc=tuple(coef[: deg + 1]),
-            c0=tuple(coef[deg + 1 : 2 * deg + 2]),
-            f0=float(coef[-1]),
-            v_eps=float(self.v_eps),
-            input=self.input,
-            input_range=(float(e_all.min()), float(e_all.max())),
-            range_policy=self.range_policy,
+        sign = BinghamModel(fc=(0.0,), c0=(0.0,), v_eps=self.v_eps).sign
+        # one level: fc and c0 reduce to constants
+        deg = 0 if data.single else int(self.degree)
+        coef, provenance = identify(
+            data.records, data.electrical, deg, self.weighting, sign, self.input
+        )
+        return Identified(
+            parameters={
+                "fc": tuple(coef[: deg + 1]),
+                "c0": tuple(coef[deg + 1 : 2 * deg + 2]),
+                "f0": float(coef[-1]),
+                "v_eps": float(self.v_eps),
+            },
             provenance=provenance,
         )
 

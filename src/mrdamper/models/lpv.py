@@ -24,7 +24,7 @@ import dataclasses
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import InitVar, dataclass, field
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 import pandas as pd
@@ -32,28 +32,108 @@ import pandas as pd
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _lpv_fit, _scale
 from mrdamper.models import _lpv_kernels as K
-from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
-from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
+from mrdamper.models.protocols import ScheduledForm
+from mrdamper.models.rates import (
+    MODEL_FS_REASON,
+    model_rate,
+    rename_setting,
+    to_model_rate,
+    to_record_rate,
+)
 from mrdamper.models.registry import register
 
-__all__ = ["LPVEstimator", "LPVModel", "LTIEstimator", "LTIModel", "select_order"]
+__all__ = [
+    "LPVEstimator",
+    "LPVModel",
+    "LTIEstimator",
+    "LTIModel",
+    "TransferFunctionModel",
+    "model_signals",
+    "select_order",
+]
 
 InputSignal = Literal["u", "v"]
 
 
-# ----------------------------------------------------------------------------- signal helpers
-def _distinct_levels(rho: np.ndarray, tol: float) -> int:
-    r = np.sort(rho)
-    return int(1 + np.count_nonzero(np.diff(r) > tol))
+# ----------------------------------------------------------------------------- signal pipeline
+def model_signals(
+    experiment: Experiment,
+    electrical: np.ndarray,
+    *,
+    fs: float,
+    eta: float | None,
+    input_signal: InputSignal,
+    zone_laws: ZoneLaws | None,
+    reading: Reading,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The LPV model's input ``u`` and scheduling variable ``rho`` at the model rate, one record.
+
+    The one pipeline from a record to the model's signals, used by prediction and identification:
+
+    1. ``rho``: the electrical input [A] or [V] (range policy already applied by the caller),
+       through the drive lag ``d rho/dt = -eta (rho - input)`` when ``eta`` is set, resampled
+       from the record rate to ``fs``;
+    2. the velocity [m/s], resampled to ``fs``;
+    3. ``u``: the scheduling input of the zone laws at ``(v, rho)`` (``input_signal="u"``,
+       reading ``reading`` of eq. 22) or the velocity itself (``input_signal="v"``).
+
+    Parameters
+    ----------
+    experiment : Experiment
+        The record (its velocity, rate and time step are used).
+    electrical : ndarray
+        Its electrical input [A] or [V], at the record rate.
+    fs : float
+        Model rate [Hz].
+    eta : float or None
+        Drive-lag rate [1/s]; None: ``rho`` is the electrical input.
+    input_signal : {"u", "v"}
+        LPV input.
+    zone_laws : ZoneLaws or None
+        Laws that build ``u`` (needed for ``input_signal="u"``).
+    reading : {"continuous", "literal"}
+        Reading of eq. (22).
+
+    Returns
+    -------
+    u, rho : ndarray
+        Contiguous float64 arrays at the model rate: ``u`` [m/s], ``rho`` [A] or [V].
+    """
+    rho = np.ascontiguousarray(electrical, dtype=np.float64)
+    if eta is not None:
+        rho = K.first_order_lag(rho, experiment.dt, eta)
+    rho = to_model_rate(np.asarray(rho, dtype=np.float64), experiment.fs, fs)
+    v = to_model_rate(np.asarray(experiment.v), experiment.fs, fs)
+    if input_signal == "v":
+        u = v
+    elif zone_laws is None:
+        raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
+    else:
+        u = zone_laws.scheduling_input(v, rho, reading=reading)
+    return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(rho, dtype=np.float64)
 
 
 # ----------------------------------------------------------------------------- fitted models
 @dataclass(frozen=True)
-class LPVModel(FittedModel):
-    """Identified LPV input-output damper model (immutable).
+class TransferFunctionModel(FittedModel):
+    """The input-output transfer-function structure shared by the LPV and LTI models (immutable).
+
+    Use :class:`LPVModel` (scheduled coefficients) or :class:`LTIModel` (``n_rho = 0``); this
+    class holds what they share: parameters, signal pipeline, free-run prediction and frozen
+    poles.
 
     Attributes
     ----------
@@ -78,7 +158,7 @@ class LPVModel(FittedModel):
         Free-run output magnitude regarded as divergence [N].
     """
 
-    kind: ClassVar[str] = "lpv"
+    kind: ClassVar[str] = "abstract"
 
     alpha: np.ndarray = field(default_factory=lambda: np.zeros((1, 1)))
     beta: np.ndarray = field(default_factory=lambda: np.zeros((1, 1)))
@@ -143,12 +223,12 @@ class LPVModel(FittedModel):
     def a(self, rho: Any) -> np.ndarray:
         """Denominator coefficients ``a_1..a_n`` at ``rho``; shape ``rho.shape + (n_m,)``."""
         r = np.asarray(rho, dtype=float)
-        return (r[..., None, None] ** np.arange(self.n_rho + 1) * self.alpha).sum(-1)
+        return np.asarray((r[..., None, None] ** np.arange(self.n_rho + 1) * self.alpha).sum(-1))
 
     def b(self, rho: Any) -> np.ndarray:
         """Numerator coefficients ``b_1..b_n`` at ``rho`` [N s/m]; shape ``rho.shape + (n_m,)``."""
         r = np.asarray(rho, dtype=float)
-        return (r[..., None, None] ** np.arange(self.n_rho + 1) * self.beta).sum(-1)
+        return np.asarray((r[..., None, None] ** np.arange(self.n_rho + 1) * self.beta).sum(-1))
 
     # --- signals -------------------------------------------------------------------------
     def scheduling_variable(self, experiment: Experiment) -> np.ndarray:
@@ -161,17 +241,15 @@ class LPVModel(FittedModel):
         return np.asarray(e, dtype=np.float64)
 
     def model_signals(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
-        """``(u, rho)`` at the model rate ``fs`` for one record."""
-        rho = to_model_rate(self.scheduling_variable(experiment), experiment.fs, self.fs)
-        v = to_model_rate(np.asarray(experiment.v), experiment.fs, self.fs)
-        if self.input_signal == "v":
-            u = v
-        elif self.zone_laws is None:  # excluded by __post_init__; kept for type narrowing
-            raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
-        else:
-            u = self.zone_laws.scheduling_input(v, rho, reading=self.reading)
-        return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(
-            rho, dtype=np.float64
+        """``(u, rho)`` at the model rate ``fs`` for one record (see :func:`model_signals`)."""
+        return model_signals(
+            experiment,
+            self.electrical_input(experiment),
+            fs=self.fs,
+            eta=self.eta,
+            input_signal=self.input_signal,
+            zone_laws=self.zone_laws,
+            reading=self.reading,
         )
 
     def predict(self, experiment: Experiment) -> np.ndarray:
@@ -205,7 +283,7 @@ class LPVModel(FittedModel):
             if rho is None
             else np.atleast_1d(np.asarray(rho, float))
         )
-        return _lpv_fit.frozen_poles(self.alpha, grid)
+        return K.frozen_poles(self.alpha, grid)
 
     def max_pole_modulus(self, n_grid: int = 51) -> float:
         """Largest frozen-pole modulus over ``rho_range`` [-] (< 1: frozen-stable)."""
@@ -229,8 +307,44 @@ class LPVModel(FittedModel):
 
 
 @dataclass(frozen=True)
-class LTIModel(LPVModel):
-    """The LPV structure without scheduling of the coefficients (``n_rho = 0``)."""
+class LPVModel(TransferFunctionModel):
+    """Identified LPV input-output damper model (see :class:`TransferFunctionModel` for the
+    attributes). Invertible (:class:`~mrdamper.models.protocols.InvertibleModel`): its force at a
+    sample is a polynomial in the present scheduling variable."""
+
+    kind: ClassVar[str] = "lpv"
+
+    def inverse_form(self) -> ScheduledForm:
+        """The model as the plain arrays of the control kernels (zone laws included)."""
+        laws = self.zone_laws
+        if self.input_signal == "v" or laws is None:
+            gm, gc, mu_h, mu_l = np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
+        else:
+            gm = np.ascontiguousarray(laws.gamma_m, dtype=np.float64)
+            gc = np.ascontiguousarray(laws.gamma_c, dtype=np.float64)
+            mu_h = np.asarray(laws.mu_high, dtype=np.float64)
+            mu_l = np.asarray(laws.mu_low, dtype=np.float64)
+        return ScheduledForm(
+            alpha=np.ascontiguousarray(self.alpha),
+            beta=np.ascontiguousarray(self.beta),
+            offset=float(self.offset),
+            fs=self.fs,
+            eta=self.eta,
+            input_signal=self.input_signal,
+            reading=self.reading,
+            gamma_m=gm,
+            gamma_c=gc,
+            mu_high=mu_h,
+            mu_low=mu_l,
+        )
+
+
+@dataclass(frozen=True)
+class LTIModel(TransferFunctionModel):
+    """The LPV structure without scheduling of the coefficients (``n_rho = 0``; paper Fig. 4).
+
+    Not invertible: its force does not depend on the present electrical input.
+    """
 
     kind: ClassVar[str] = "lti"
 
@@ -298,11 +412,12 @@ class LPVEstimator(Estimator):
     """
 
     kind: ClassVar[str] = "lpv"
-    model_cls: ClassVar[type[LPVModel]] = LPVModel
+    model_class: ClassVar[type[FittedModel]] = LPVModel
+    fit_options: ClassVar[tuple[str, ...]] = ("record_weights",)
 
     n_m: int = 3
     n_rho: int = 2
-    input: Literal["i", "voltage"] = "i"
+    input: ElectricalSource = "i"
     eta: float | None = None
     input_signal: InputSignal = "u"
     reading: Reading = "continuous"
@@ -316,50 +431,25 @@ class LPVEstimator(Estimator):
     refine: bool = True
     max_nfev: int = 60
     oe_solver: Literal["gauss-newton", "least_squares"] = "gauss-newton"
-    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    range_policy: RangePolicy = "error"
     stability: Literal["enforce", "warn"] = "enforce"
     fs: InitVar[float | None] = None
 
     renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
 
     def __post_init__(self, fs: float | None) -> None:
-        self.model_fs = rename_setting(self.kind, "fs", "model_fs", fs, self.model_fs)  # type: ignore[assignment]
+        self.model_fs = cast(
+            "float | None",
+            rename_setting(self.kind, "fs", "model_fs", fs, self.model_fs, MODEL_FS_REASON),
+        )
 
     def _validate(self) -> None:
-        for name in ("n_m", "n_rho", "laws_degree", "n_bins", "max_nfev"):
-            val = getattr(self, name)
-            if not isinstance(val, (int, np.integer)) or isinstance(val, bool) or val < 0:
-                raise DataValidationError(name, f"expected a non-negative integer, got {val!r}")
-        if self.n_m < 1:
-            raise DataValidationError("n_m", f"expected an order of at least 1, got {self.n_m}")
-        choices = {
-            "input": ("i", "voltage"),
-            "input_signal": ("u", "v"),
-            "reading": ("continuous", "literal"),
-            "laws_by": ("auto", "current", "plateaus", "bins"),
-            "weighting": ("esr", "sse"),
-            "oe_solver": ("gauss-newton", "least_squares"),
-            "range_policy": ("error", "warn", "clip", "ignore"),
-            "stability": ("enforce", "warn"),
-        }
-        for name, ok in choices.items():
-            if getattr(self, name) not in ok:
-                raise DataValidationError(
-                    name, f"expected one of {ok}, got {getattr(self, name)!r}"
-                )
-        if self.eta is not None and not (np.isfinite(self.eta) and self.eta > 0):
-            raise DataValidationError(
-                "eta", f"expected a positive drive-lag rate [1/s], got {self.eta!r}"
-            )
-        mfs = self.model_fs
-        if mfs is not None and (
-            isinstance(mfs, bool)
-            or not isinstance(mfs, (int, float))
-            or not (np.isfinite(mfs) and mfs > 0)
-        ):
-            raise DataValidationError(
-                "model_fs", f"expected a positive model rate [Hz], got {mfs!r}"
-            )
+        super()._validate()
+        check_int("n_m", self.n_m, 1)
+        for name in ("n_rho", "laws_degree", "n_bins", "max_nfev"):
+            check_int(name, getattr(self, name), 0)
+        check_number("eta", self.eta, allow_none=True, what="a positive drive-lag rate [1/s]")
+        check_number("model_fs", self.model_fs, allow_none=True, what="a positive model rate [Hz]")
 
     def _laws(
         self,
@@ -402,7 +492,8 @@ class LPVEstimator(Estimator):
         data: Experiment | Iterable[Experiment],
         *,
         record_weights: Sequence[float] | None = None,
-    ) -> LPVModel:
+        **options: Any,
+    ) -> TransferFunctionModel:
         """Identify the model from one record or a collection (records keep their own start).
 
         Parameters
@@ -413,6 +504,8 @@ class LPVEstimator(Estimator):
             One non-negative weight per record [-], multiplying that record's share of the
             least-squares and output-error costs (on top of ``weighting``); e.g. to mix measured
             records with synthetic ones without duplicating records. Default: all 1.
+        **options
+            Refused (an error names the option): the LPV estimator takes no other option.
 
         Raises
         ------
@@ -420,36 +513,46 @@ class LPVEstimator(Estimator):
             Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
             ``stability="enforce"``) no frozen-stable model; the message names the pole.
         """
-        self._validate()
-        exps = self._as_set(data)
+        model = cast(
+            TransferFunctionModel, super().fit(data, record_weights=record_weights, **options)
+        )
+        pmax = float(model.provenance["max_frozen_pole"])
+        if pmax >= 1.0:
+            lo, hi = model.rho_range
+            warnings.warn(
+                f"{self.kind}: identified model is not frozen-stable over rho in "
+                f"[{lo:.4g}, {hi:.4g}] (max frozen pole modulus {pmax:.4f} at rho = "
+                f"{model.provenance['max_frozen_pole_rho']:.4g})",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+        return model
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Joint least squares, then output-error refinement under frozen stability."""
+        exps = data.records
+        record_weights = options.get("record_weights")
         user_w = _record_weights(record_weights, len(exps))
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
-        raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
-        in_range = (min(float(r.min()) for r in raw), max(float(r.max()) for r in raw))
         rhos = [
             K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r
-            for r, e in zip(raw, exps)
+            for r, e in zip(data.electrical, exps)
         ]
         prov: dict[str, Any] = {}
-        level = single_level(np.array([_scale.extrema(r) for r in rhos]))  # no concatenated copy
-        laws = self._laws(exps, rhos, prov, single=level is not None)
-        proto = self.model_cls(
-            alpha=np.zeros((self.n_m, self.n_rho + 1)),
-            beta=np.zeros((self.n_m, self.n_rho + 1)),
-            fs=fs,
-            input_signal=self.input_signal,
-            reading=self.reading,
-            zone_laws=laws,
-            eta=self.eta,
-            input=self.input,
-            input_range=in_range,
-            range_policy="ignore",
-        )
+        laws = self._laws(exps, rhos, prov, single=data.single)
         F, U, R, w = [], [], [], []
-        for e in exps:
-            u, rho = proto.model_signals(e)
-            Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
+        for e, el in zip(exps, data.electrical):
             e.require_samples(self.n_m + 2, "LPV identification")
+            u, rho = model_signals(
+                e,
+                el,
+                fs=fs,
+                eta=self.eta,
+                input_signal=self.input_signal,
+                zone_laws=laws,
+                reading=self.reading,
+            )
+            Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
             U.append(u)
             R.append(rho)
@@ -458,83 +561,50 @@ class LPVEstimator(Estimator):
         weights = np.asarray(w) * user_w
         weights = weights / weights.mean()
         rho_range = _scale.input_range_of(R)
-        tol = 1e-9 * max(1.0, abs(rho_range[1]))
-        long = sum(r.size for r in R) > _scale.WINDOW_THRESHOLD  # long campaigns: record by record
-        n_lev = _scale.distinct_levels(R, tol) if long else _distinct_levels(np.concatenate(R), tol)
         n_p = self.n_rho + 1
-        reduced_laws = self.input_signal == "u" and self.zone_laws is None and self.laws_degree > 0
-        if level is not None and (n_p > 1 or reduced_laws):
+        if data.single:
             n_p = 1  # one level: coefficients and laws are constants (higher powers exactly 0)
-            prov["note"] = single_level_note(self.kind, self.input, level)
-            warnings.warn(prov["note"], UserWarning, stacklevel=2)
-        elif n_lev < n_p:
-            raise IdentificationError(
-                f"{self.kind}: rho takes {n_lev} distinct value(s) in the training data; degree "
-                f"n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current levels or lower n_rho)"
-            )
+        else:
+            tol = 1e-9 * max(1.0, abs(rho_range[1]))
+            n_lev = _scale.distinct_levels(R, tol)
+            if n_lev < n_p:
+                raise IdentificationError(
+                    f"{self.kind}: rho takes {n_lev} distinct value(s) in the training data; "
+                    f"degree n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current "
+                    "levels or lower n_rho)"
+                )
         rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
-        ls = _lpv_fit.ls_identify(rec, self.n_m, n_p, self.offset)
         f_scale = max(max(float(np.max(np.abs(f))) for f in F), 1.0)
         bound = 1e3 * f_scale
-        theta, F0 = ls.theta, ls.offset
         prov.update(
             {
                 "training_records": list(exps.names),
                 "n_samples": int(sum(a.size for a in F)),
                 "settings": _settings_dict(self),
-                "ls_solver": ls.solver,
-                "ls_condition_number": ls.cond,
             }
         )
         if record_weights is not None:
             prov["record_weights"] = [float(x) for x in user_w]
-        enforce = self.stability == "enforce"
-        grid = np.linspace(*rho_range, _lpv_fit.STABILITY_GRID)
-        ls_cost = _cost(rec, theta, F0, self.n_m, n_p, bound)
-        prov["ls_free_run_cost"] = ls_cost
-        if self.refine:
-            theta0, shrink = _stable_start(theta, self.n_m, n_p, rho_range, rec, F0, bound)
-            if shrink != 1.0:
-                prov["oe_start_pole_scaling"] = shrink
-            rec_oe, windows = _scale.window_records(
-                rec, fs
-            )  # long campaigns: evenly spread windows
-            th_r, f0_r, sol = _lpv_fit.refine_output_error(
-                rec_oe,
-                theta0,
-                F0,
-                self.n_m,
-                n_p,
-                offset=self.offset,
-                bound=bound,
-                max_nfev=self.max_nfev,
-                solver=self.oe_solver,
-                rho_grid=grid if enforce else None,
-            )
-            oe_cost = _cost(rec, th_r, f0_r, self.n_m, n_p, bound)
-            prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
-            if windows is not None:
-                prov.update(
-                    oe_windows=windows, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost}
-                )
-            ls_ok = not enforce or _pole(theta, self.n_m, n_p, grid)[0] < 1.0
-            if oe_cost < ls_cost or not ls_ok:
-                theta, F0 = th_r, f0_r
-                if oe_cost >= ls_cost:
-                    prov["oe_note"] = (
-                        "least-squares model has a lower free-run cost but is not frozen-stable; "
-                        "refined (frozen-stable) model kept"
-                    )
-            else:
-                prov["oe_note"] = (
-                    "refinement did not lower the free-run cost; least-squares model kept"
-                )
-        pmax, rho_at, pole = _pole(theta, self.n_m, n_p, grid)
-        if enforce and not pmax < 1.0:
+        fit = _lpv_fit.identify(
+            rec,
+            self.n_m,
+            n_p,
+            offset=self.offset,
+            bound=bound,
+            refine=self.refine,
+            max_nfev=self.max_nfev,
+            solver=self.oe_solver,
+            enforce_stability=self.stability == "enforce",
+            rho_range=rho_range,
+            windows=lambda r: _scale.window_records(r, fs),  # long campaigns
+        )
+        prov.update(fit.provenance)
+        pmax, rho_at, pole = fit.largest_pole
+        if self.stability == "enforce" and not pmax < 1.0:
             raise IdentificationError(
-                f"{self.kind}: no frozen-stable model: frozen pole z = {pole.real:.4f}{pole.imag:+.4f}j "
-                f"(|z| = {pmax:.4f}) at rho = {rho_at:.4g} of the identified range "
-                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}]"
+                f"{self.kind}: no frozen-stable model: frozen pole z = "
+                f"{pole.real:.4f}{pole.imag:+.4f}j (|z| = {pmax:.4f}) at rho = {rho_at:.4g} of "
+                f"the identified range [{rho_range[0]:.4g}, {rho_range[1]:.4g}]"
                 + (
                     ""
                     if self.refine
@@ -544,38 +614,24 @@ class LPVEstimator(Estimator):
             )
         alpha, beta = (
             np.pad(c, ((0, 0), (0, self.n_rho + 1 - n_p)))
-            for c in _lpv_fit.split_theta(theta, self.n_m, n_p)
+            for c in K.split_theta(fit.theta, self.n_m, n_p)
         )
-        model = self.model_cls(
-            alpha=alpha,
-            beta=beta,
-            offset=F0,
-            fs=fs,
-            input_signal=self.input_signal,
-            reading=self.reading,
-            zone_laws=laws,
-            eta=self.eta,
-            rho_range=rho_range,
-            force_bound=bound,
-            input=self.input,
-            input_range=in_range,
-            range_policy=self.range_policy,
+        prov.update(max_frozen_pole=pmax, max_frozen_pole_rho=rho_at, frozen_stable=pmax < 1.0)
+        return Identified(
+            parameters={
+                "alpha": alpha,
+                "beta": beta,
+                "offset": fit.offset,
+                "fs": fs,
+                "input_signal": self.input_signal,
+                "reading": self.reading,
+                "zone_laws": laws,
+                "eta": self.eta,
+                "rho_range": rho_range,
+                "force_bound": bound,
+            },
             provenance=prov,
         )
-        prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0)
-        if pmax >= 1.0:
-            warnings.warn(
-                f"{self.kind}: identified model is not frozen-stable over rho in "
-                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}] "
-                f"(max frozen pole modulus {pmax:.4f} at rho = {rho_at:.4g})",
-                RuntimeWarning,
-                stacklevel=2,
-            )
-        return model
-
-
-def _pole(theta: np.ndarray, n_m: int, n_p: int, grid: np.ndarray) -> tuple[float, float, complex]:
-    return _lpv_fit.largest_frozen_pole(_lpv_fit.split_theta(theta, n_m, n_p)[0], grid)
 
 
 def _record_weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
@@ -594,49 +650,6 @@ def _record_weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
     return w
 
 
-def _stable_start(
-    theta: np.ndarray,
-    n_m: int,
-    n_p: int,
-    rho_range: tuple[float, float],
-    rec: _lpv_fit.Records,
-    F0: float,
-    bound: float,
-) -> tuple[np.ndarray, float]:
-    """Start for the refinement whose free run stays bounded on the training records.
-
-    An equation-error estimate can be frozen-unstable. Scaling ``a_j`` by ``lambda**j`` scales
-    every frozen pole by ``lambda``, so ``lambda = 0.98 / max|pole|`` (then smaller, if the
-    time-varying run still diverges) gives a frozen-stable start with the same pole pattern.
-    """
-    alpha, beta = _lpv_fit.split_theta(theta, n_m, n_p)
-    pmax = _lpv_fit.largest_frozen_pole(alpha, np.linspace(*rho_range, _lpv_fit.STABILITY_GRID))[0]
-    lam = 1.0 if pmax < _lpv_fit.STABILITY_LIMIT else 0.98 / pmax
-    for _ in range(20):
-        al = alpha * (lam ** np.arange(1, n_m + 1))[:, None]
-        th = np.r_[al.ravel(), beta.ravel()]
-        if np.isfinite(_cost(rec, th, F0, n_m, n_p, bound)):
-            return th, lam
-        lam *= 0.95
-    raise IdentificationError(
-        "lpv: no bounded free run found from the least-squares estimate; try a lower order n_m"
-    )
-
-
-def _cost(
-    rec: _lpv_fit.Records, theta: np.ndarray, F0: float, n_m: int, n_p: int, bound: float
-) -> float:
-    alpha, beta = _lpv_fit.split_theta(theta, n_m, n_p)
-    total = 0.0
-    for r in range(len(rec.u)):
-        y, bad = K.simulate_record(rec.u[r], rec.rho[r], alpha, beta, bound)
-        if bad >= 0:
-            return float("inf")
-        e = y + F0 - rec.F[r]
-        total += rec.weights[r] * float(e @ e)
-    return total
-
-
 def _settings_dict(est: Estimator) -> dict[str, Any]:
     out = {}
     for f in dataclasses.fields(est):  # type: ignore[arg-type]
@@ -650,7 +663,7 @@ class LTIEstimator(LPVEstimator):
     """Identify an :class:`LTIModel`: the LPV estimator with ``n_rho = 0``."""
 
     kind: ClassVar[str] = "lti"
-    model_cls: ClassVar[type[LPVModel]] = LTIModel
+    model_class: ClassVar[type[FittedModel]] = LTIModel
     n_rho: int = 0
 
     def _validate(self) -> None:
@@ -673,6 +686,17 @@ def select_order(
     **settings: Any,
 ) -> pd.DataFrame:
     """Fit every ``(n_m, n_rho)`` on ``train`` and score it in free run on ``validation``.
+
+    Parameters
+    ----------
+    train, validation : Experiment or iterable of Experiment
+        Records that identify / score every candidate.
+    orders : sequence of int
+        Candidate model orders ``n_m``.
+    rho_degrees : sequence of int
+        Candidate degrees ``n_rho``.
+    **settings
+        Other :class:`LPVEstimator` settings.
 
     Returns
     -------

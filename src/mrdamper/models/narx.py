@@ -37,27 +37,43 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import InitVar, dataclass
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, cast
 
 import numpy as np
-from scipy import optimize
 
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
-from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models._narx_fit import free_run_cost, least_squares_terms, refine, select_terms
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
+from mrdamper.models.rates import (
+    MODEL_FS_REASON,
+    model_rate,
+    rename_setting,
+    to_model_rate,
+    to_record_rate,
+)
 from mrdamper.models.registry import register
 
 __all__ = ["NARXEstimator", "NARXModel", "candidate_structure"]
 
 #: Signal rows of the kernels' ``S`` array (``e`` is the model's electrical input).
 SIGNALS: tuple[str, ...] = ("F", "x", "v", "e", "tanh_v")
-_BLOCK = 2048
+#: Default budget of the output-error refinement (residual evaluations).
+_DEFAULT_MAX_NFEV = 40
+_NFEV_REASON = "the same name as every other estimator's iteration budget"
 
 
 # ----------------------------------------------------------------------------- structure
@@ -347,8 +363,9 @@ class NARXEstimator(Estimator):
         their squared norm are skipped [-].
     refine : bool
         Refine the coefficients on the free-run (output) error of the training records.
-    refine_max_nfev : int
-        Budget of residual evaluations of the refinement.
+    max_nfev : int
+        Budget of residual evaluations of the refinement (``refine_max_nfev`` is its old name,
+        still accepted with a note).
     model_fs : float or None
         Model rate [Hz]; None: the lowest training record rate (with a note when the records'
         rates differ). ``fs`` is its old name, still accepted.
@@ -361,8 +378,9 @@ class NARXEstimator(Estimator):
     """
 
     kind: ClassVar[str] = "narx"
+    model_class: ClassVar[type[FittedModel]] = NARXModel
 
-    input: Literal["i", "voltage"] = "i"
+    input: ElectricalSource = "i"
     n_a: int = 2
     n_b: int = 1
     degree: int = 3
@@ -373,71 +391,68 @@ class NARXEstimator(Estimator):
     err_tol: float = 1e-10
     colin_tol: float = 1e-8
     refine: bool = True
-    refine_max_nfev: int = 40
+    max_nfev: int = _DEFAULT_MAX_NFEV
     model_fs: float | None = None
     cond_max: float = 1e8
     bound_factor: float = 10.0
-    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    range_policy: RangePolicy = "error"
     fs: InitVar[float | None] = None
+    refine_max_nfev: InitVar[int | None] = None
 
-    renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
+    renamed_settings: ClassVar[Mapping[str, str]] = {
+        "fs": "model_fs",
+        "refine_max_nfev": "max_nfev",
+    }
 
-    def __post_init__(self, fs: float | None) -> None:
-        self.model_fs = rename_setting(self.kind, "fs", "model_fs", fs, self.model_fs)  # type: ignore[assignment]
+    def __post_init__(self, fs: float | None, refine_max_nfev: int | None) -> None:
+        self.model_fs = cast(
+            "float | None",
+            rename_setting(self.kind, "fs", "model_fs", fs, self.model_fs, MODEL_FS_REASON),
+        )
+        given = None if self.max_nfev == _DEFAULT_MAX_NFEV else self.max_nfev
+        renamed = rename_setting(
+            self.kind, "refine_max_nfev", "max_nfev", refine_max_nfev, given, _NFEV_REASON
+        )
+        if renamed is not None:
+            self.max_nfev = cast(int, renamed)
 
-    def _check(self) -> None:
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
-        _int_setting("n_terms", self.n_terms, 1)
-        _int_setting("refine_max_nfev", self.refine_max_nfev, 1)
+    def _validate(self) -> None:
+        super()._validate()
+        check_int("n_terms", self.n_terms, 1)
+        check_int("max_nfev", self.max_nfev, 1)
         for name in ("err_tol", "colin_tol"):
-            val = getattr(self, name)
-            if not isinstance(val, (int, float)) or isinstance(val, bool) or not 0 <= val < 1:
-                raise DataValidationError(name, f"expected a number in [0, 1), got {val!r}")
-        for name in ("v0", "model_fs", "cond_max", "bound_factor"):
-            val = getattr(self, name)
-            if val is None and name in ("v0", "model_fs"):
-                continue
-            if (
-                isinstance(val, bool)
-                or not isinstance(val, (int, float))
-                or not math.isfinite(val)
-                or val <= 0
-            ):
-                raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
-        if self.bound_factor <= 1:
-            raise DataValidationError("bound_factor", f"expected > 1, got {self.bound_factor!r}")
+            check_number(
+                name, getattr(self, name), strict=False, high=1.0, what="a number in [0, 1)"
+            )
+        for name in ("v0", "model_fs"):
+            check_number(name, getattr(self, name), allow_none=True)
+        check_number("cond_max", self.cond_max)
+        check_number("bound_factor", self.bound_factor, low=1.0, what="a finite number > 1")
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> NARXModel:
-        """Identify the model from one record or several (each keeps its initial conditions).
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Term selection, least squares and optional output-error refinement (module docstring).
 
         Raises
         ------
         DataValidationError
-            Bad settings, a missing channel, a constant-force or too-short record.
+            A constant-force or too-short record.
         IdentificationError
             Fewer equations than candidates, nothing selectable, or ill-conditioned regression.
         """
-        self._check()
-        exps = self._as_set(data)
+        exps = data.records
         base, cand = candidate_structure(
             self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh
         )
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
-        e_all = np.concatenate([e.electrical(self.input) for e in exps])
         v_max = max(float(np.max(np.abs(e.v))) for e in exps)
         v0 = float(self.v0) if self.v0 is not None else 0.05 * v_max
-        if not v0 > 0:
-            raise DataValidationError(
-                "v", "every training record has zero velocity; expected motion"
-            )
         F_max = max(float(np.max(np.abs(e.F))) for e in exps)
         raw = (
             [F_max]
             + [
                 max(
-                    float(np.max(np.abs(getattr(e, c) if c != "e" else e.electrical(self.input))))
-                    for e in exps
+                    float(np.max(np.abs(getattr(e, c) if c != "e" else el)))
+                    for e, el in zip(exps, data.electrical)
                 )
                 for c in ("x", "v", "e")
             ]
@@ -453,7 +468,7 @@ class NARXEstimator(Estimator):
             v0=v0,
             force_bound=self.bound_factor * max(F_max, 1e-300),
             input=self.input,
-            input_range=(float(e_all.min()), float(e_all.max())),
+            input_range=data.input_range,
             range_policy="ignore",
         )
         p = probe.max_lag
@@ -484,19 +499,25 @@ class NARXEstimator(Estimator):
         # long campaigns: the output-error refinement runs on evenly spread windows (term selection
         # on windows was tried: its least-squares model diverged in free run on a 1 h record)
         fit_recs, fit_w, windows = _scale.narx_windows(records, weights, fs, p)
-        order, err = self._select(records, weights, base, cand, p)
+        order, err = select_terms(
+            records, weights, base, cand, p, self.n_terms, self.err_tol, self.colin_tol
+        )
         terms = cand[order]
-        theta, cond = self._least_squares(records, weights, base, terms, p)
-        model = _replace(probe, terms=terms, theta=theta, range_policy=self.range_policy)
-        cost_ls = _free_run_cost(model, records, weights, p)
+        theta, cond = least_squares_terms(records, weights, base, terms, p, self.cond_max)
+        model = dataclasses.replace(probe, terms=terms, theta=theta)
+        bound = model.force_bound / model.scales[0]
+        cost_ls = free_run_cost(base, terms, theta, bound, records, weights, p)
         cost, nfev, refined = cost_ls, 0, False
         if self.refine:
-            theta_r, cost_r, nfev = self._refine(model, list(fit_recs), fit_w, p)
+            theta_r, cost_r, nfev = refine(
+                base, terms, theta, bound, list(fit_recs), fit_w, p, self.max_nfev
+            )
             if windows is not None:  # full-data check of the refined coefficients
-                cost_r = _free_run_cost(_replace(model, theta=theta_r), records, weights, p)
+                cost_r = free_run_cost(base, terms, theta_r, bound, records, weights, p)
             if cost_r < cost_ls:
-                model, cost, refined = _replace(model, theta=theta_r), cost_r, True
-        prov = {
+                model = dataclasses.replace(model, theta=theta_r)
+                cost, refined = cost_r, True
+        prov: dict[str, Any] = {
             "method": "OLS-ERR forward selection + least squares"
             + (" + output-error refinement" if refined else ""),
             "records": [e.name for e in exps],
@@ -525,128 +546,7 @@ class NARXEstimator(Estimator):
                 "free_run_cost_ls": float(cost_ls),
                 "free_run_cost": float(cost),
             }
-        return _replace(model, provenance=prov)
-
-    # --- steps ---------------------------------------------------------------------------
-    def _select(
-        self,
-        records: list[np.ndarray],
-        weights: list[float],
-        base: np.ndarray,
-        cand: np.ndarray,
-        p: int,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """OLS-ERR selection on the weighted, column-normalised augmented Gram matrix."""
-        M = cand.shape[0]
-        A = np.zeros((M + 1, M + 1))
-        blk = np.empty((_BLOCK, M + 1))
-        for S, w in zip(records, weights, strict=True):
-            sw = math.sqrt(w)
-            for k0 in range(p, S.shape[1], _BLOCK):
-                k1 = min(k0 + _BLOCK, S.shape[1])
-                B = blk[: k1 - k0]
-                K.fill_candidates(S, base, cand, k0, k1, B[:, :M])
-                B[:, M] = S[0, k0:k1]
-                B *= sw
-                A += B.T @ B
-        d = np.sqrt(np.diag(A)).copy()
-        usable = d[:M] > 0
-        d[d == 0] = 1.0
-        A /= d[:, None] * d[None, :]
-        A[~np.append(usable, True), :] = 0.0  # constant-zero candidates: never selectable
-        order, err = K.gram_select(
-            A, min(int(self.n_terms), M), float(self.err_tol), float(self.colin_tol)
-        )
-        if order.size == 0:
-            raise IdentificationError(
-                "narx: no candidate term explains the force (all collinear or zero)"
-            )
-        return np.asarray(order), np.asarray(err)
-
-    def _least_squares(
-        self,
-        records: list[np.ndarray],
-        weights: list[float],
-        base: np.ndarray,
-        terms: np.ndarray,
-        p: int,
-    ) -> tuple[np.ndarray, float]:
-        # [X y] is reduced block by block to its triangular QR factor R (same least-squares
-        # solution and singular values as X itself, never held in memory)
-        X, y = _scale.chunked_qr(records, weights, base, terms, p, K.fill_candidates)
-        norms = np.linalg.norm(X, axis=0)
-        Xn = X / norms
-        coef, _, rank, sv = np.linalg.lstsq(Xn, y, rcond=None)
-        cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
-        if rank < X.shape[1] or cond > self.cond_max:
-            raise IdentificationError(
-                f"narx: regression of the {X.shape[1]} selected terms is ill-conditioned "
-                f"(condition number {cond:.3g}, expected <= cond_max={self.cond_max:g}); "
-                "raise colin_tol or lower n_terms"
-            )
-        return coef / norms, cond
-
-    def _refine(
-        self, model: NARXModel, records: list[np.ndarray], weights: list[float], p: int
-    ) -> tuple[np.ndarray, float, int]:
-        bound = model.force_bound / model.scales[0]
-        meas = [S[0].copy() for S in records]
-
-        def residual_and_jac(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            res, jac = [], []
-            for S, f, w in zip(records, meas, weights, strict=True):
-                Sw = S.copy()
-                J, bad = K.free_run_sensitivity(Sw, model.base, model.terms, theta, p, bound)
-                if bad >= 0:
-                    Sw[0, bad:] = np.sign(Sw[0, bad - 1] if bad > 0 else 1.0) * bound
-                sw = math.sqrt(w)
-                res.append(sw * (Sw[0, p:] - f[p:]))
-                jac.append(sw * J[p:])
-            return np.concatenate(res), np.vstack(jac)
-
-        cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-        def evaluate(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            key = theta.tobytes()
-            if key not in cache:
-                cache.clear()
-                cache[key] = residual_and_jac(theta)
-            return cache[key]
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            sol = optimize.least_squares(
-                lambda th: evaluate(th)[0],
-                model.theta.copy(),
-                jac=lambda th: evaluate(th)[1],
-                method="trf",
-                x_scale="jac",
-                max_nfev=int(self.refine_max_nfev),
-            )
-        theta = np.asarray(sol.x, dtype=np.float64)
-        return (
-            theta,
-            _free_run_cost(_replace(model, theta=theta), records, weights, p),
-            int(sol.nfev),
-        )
-
-
-def _replace(model: NARXModel, **changes: Any) -> NARXModel:
-    return dataclasses.replace(model, **changes)
-
-
-def _free_run_cost(
-    model: NARXModel, records: list[np.ndarray], weights: list[float], p: int
-) -> float:
-    """Weighted free-run squared error (sum over records of ESR-like terms); inf if diverged."""
-    bound = model.force_bound / model.scales[0]
-    cost = 0.0
-    for S, w in zip(records, weights, strict=True):
-        Sw = S.copy()
-        if K.free_run(Sw, model.base, model.terms, model.theta, p, bound) >= 0:
-            return math.inf
-        cost += w * float(np.sum((Sw[0, p:] - S[0, p:]) ** 2))
-    return cost
+        return Identified(parameters=model.parameters, provenance=prov)
 
 
 register(NARXEstimator, NARXModel)

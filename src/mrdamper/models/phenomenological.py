@@ -23,7 +23,7 @@ equilibrium, which is globally asymptotically stable (proof in ``docs/models.md`
 Simulation
 ----------
 ``(F, dF/dt)`` is integrated with the two-stage L-stable SDIRK2 scheme of
-:mod:`mrdamper.models._p15_implicit`, ``ceil(dt / max_step)`` steps per sample, ``v`` and ``i``
+:mod:`mrdamper.models._p15_kernels`, ``ceil(dt / max_step)`` steps per sample, ``v`` and ``i``
 linear between samples. L-stability keeps the stiff part of the force ODE (fast force relaxation
 at large ``|F|``) stable at any step; the step is chosen for accuracy and checked by the
 estimator: the free run of every training record is repeated with half the step and the change
@@ -43,7 +43,7 @@ Identification
 measured state over short segments, then free-run least squares; forward sensitivities of the
 compiled integrator), started from the ``form="monotone"`` equation-error fit.
 ``method="equation-error"``: the paper's reading, linear least squares of the relation on
-filtered derivatives (:mod:`mrdamper.models._p15_eqerr`), ``form="free"`` (literal),
+filtered derivatives (:mod:`mrdamper.models._p15_fit`), ``form="free"`` (literal),
 ``"stable"`` or ``"monotone"`` (sign constraints on the Bernstein coefficients).
 
 Examples
@@ -67,7 +67,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import time
 import warnings
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
@@ -78,18 +77,29 @@ import numpy as np
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
+from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
-from mrdamper.models._p15_eqerr import check_levels, equation_error, filtered_state
 from mrdamper.models._p15_fit import (
     BERNSTEIN_TO_POWER,
     bernstein_basis,
+    check_levels,
+    equation_error,
+    filtered_state,
     identify_output_error,
     rest_state,
     to_monomial,
 )
-from mrdamper.models._p15_implicit import p15i_run
+from mrdamper.models._p15_kernels import p15i_run
 from mrdamper.models._step_check import step_halving_check
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
 from mrdamper.models.registry import register
 
 __all__ = ["P15Estimator", "P15Model"]
@@ -198,9 +208,11 @@ class P15Model(FittedModel):
         ``input_range``: a row of non-negative coefficients proves that quadratic non-negative on
         the whole range."""
         lo, hi = self.input_range
-        if not hi > lo:
-            raise DataValidationError("input_range", f"expected lo < hi, got {self.input_range}")
-        if self.basis == "bernstein":
+        if hi < lo:
+            raise DataValidationError("input_range", f"expected lo <= hi, got {self.input_range}")
+        if hi == lo:  # a one-point range: the Bernstein coefficients are the values there
+            B = np.repeat(self.coefficients(lo)[:, None], 3, axis=1)
+        elif self.basis == "bernstein":
             B = self.W_matrix
         else:
             R = hi - lo
@@ -213,7 +225,7 @@ class P15Model(FittedModel):
             )
             M = to_i @ BERNSTEIN_TO_POWER  # Bernstein -> monomial
             B = np.linalg.solve(M, self.W_matrix.T).T
-        return B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None]
+        return np.asarray(B * np.array([1.0, -1.0, -1.0, -1.0, -1.0])[:, None])
 
     def stability_certificate(self) -> dict[str, Any]:
         """Check the sufficient conditions for stability on ``input_range`` (``docs/models.md``).
@@ -362,6 +374,8 @@ class P15Estimator(Estimator):
         How many times the fit may halve the model's step to meet ``step_tolerance``.
     eta : float or None
         Drive-lag rate [1/s] of the electrical input (see :class:`P15Model`); ``None``: none.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Range policy of the fitted model.
     """
 
     input: ElectricalSource = "i"
@@ -381,30 +395,30 @@ class P15Estimator(Estimator):
     step_tolerance: float = 1e-4
     step_refinements: int = 3
     eta: float | None = None
+    range_policy: RangePolicy = "error"
 
     kind: ClassVar[str] = "p15"
+    model_class: ClassVar[type[FittedModel]] = P15Model
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> P15Model:
-        """Identify P-15 from one record or a collection of records.
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Equation-error start, then (by default) output-error fit; step check of the result.
+
+        At a single input level the five coefficient quadratics are constants (one coefficient
+        each; the model is stored in the power basis with its range that one level).
 
         Raises
         ------
         DataValidationError
-            Invalid setting, a record without the ``input`` channel, or a cut-off at or above
-            a record's Nyquist frequency.
+            A cut-off at or above a record's Nyquist frequency.
         IdentificationError
-            Too few samples, an input with fewer than three distinct levels, an ill-conditioned
-            regression, or (with ``stable_only``) a diverging training simulation.
+            Too few samples, an input with fewer than three distinct levels (and more than one),
+            an ill-conditioned regression, or (with ``stable_only``) a diverging training
+            simulation.
         """
-        t_start = time.perf_counter()
-        self._check_settings()
-        from mrdamper.models import _scale
-
-        raw_all = self._as_set(data)
+        raw_all = data.records
         raw, windows = _scale.window_set(raw_all, budget=_scale.WINDOW_BUDGET_P15)  # long campaigns
-        i_all = np.concatenate([_scale.extrema(e.electrical(self.input)) for e in raw_all])
         # the range of the raw input also holds every lagged input (a convex combination of it)
-        lo, hi = float(np.min(i_all)), float(np.max(i_all))
+        lo, hi = data.input_range
         exps = (
             raw
             if self.eta is None
@@ -415,7 +429,10 @@ class P15Estimator(Estimator):
                 ]
             )
         )
-        check_levels(np.concatenate([e.electrical(self.input) for e in exps]), lo, hi, self.input)
+        if not data.single:
+            check_levels(
+                np.concatenate([e.electrical(self.input) for e in exps]), lo, hi, self.input
+            )
         form = self.form if self.method == "equation-error" else "monotone"
         B, f0, ee_info = equation_error(
             list(exps),
@@ -426,6 +443,7 @@ class P15Estimator(Estimator):
             offset=self.offset,
             cutoff=self.cutoff,
             order=self.filter_order,
+            single=data.single,
         )
         span = float(max(np.ptp(e.F) for e in exps))
         bound = 10.0 * span
@@ -450,16 +468,23 @@ class P15Estimator(Estimator):
                 max_samples=self.max_samples,
                 jacobian=self.jacobian,
                 bound=bound,
+                single=data.single,
             )
+        if data.single:  # constants: the power basis, W[:, 0] = w_j, higher powers exactly 0
+            W = np.zeros((5, 3))
+            W[:, 0] = B[:, 0]
+            basis: Literal["power", "bernstein"] = "power"
+        else:
+            W, basis = B, "bernstein"
         model = P15Model(
-            W=tuple(B.ravel()),
+            W=tuple(W.ravel()),
             f0=f0,
             input=self.input,
             input_range=(lo, hi),
             force_bound=bound,
             max_step=self.max_step,
             eta=self.eta,
-            basis="bernstein",
+            basis=basis,
         )
         divergence, esr = _simulate_training(model, raw)
         model, step = self._checked_step(model, [e for e in raw if e.name not in divergence])
@@ -480,7 +505,6 @@ class P15Estimator(Estimator):
         if windows is not None:
             provenance["windows"] = windows
             provenance["full_data_check"] = _scale.full_data_esr(model, raw_all)
-        provenance["elapsed_s"] = time.perf_counter() - t_start
         if self.stable_only and divergence:
             first = next(iter(divergence.items()))
             raise IdentificationError(
@@ -488,10 +512,7 @@ class P15Estimator(Estimator):
                 f"(first: {first[0]!r} at sample {first[1]['sample']}); stable_only=True. "
                 f"Use method='output-error' (stable by construction)"
             )
-        return P15Model(
-            **{**model.parameters, "input": self.input, "input_range": (lo, hi)},
-            provenance=provenance,
-        )
+        return Identified(parameters=model.parameters, provenance=provenance)
 
     def _checked_step(
         self, model: P15Model, records: list[Experiment]
@@ -517,75 +538,26 @@ class P15Estimator(Estimator):
             )
         return model, {**check, "history": history, "max_step": model.max_step}
 
-    def _check_settings(self) -> None:
-        if self.eta is not None and (
-            isinstance(self.eta, bool)
-            or not isinstance(self.eta, (int, float))
-            or not (math.isfinite(self.eta) and self.eta > 0)
-        ):
-            raise DataValidationError(
-                "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
+    def _validate(self) -> None:
+        super()._validate()
+        check_number(
+            "eta", self.eta, allow_none=True, what="a positive drive-lag rate [1/s] or None"
+        )
+        check_int("step_refinements", self.step_refinements, 0, 10)
+        if self.cutoff != "auto":
+            check_number(
+                "cutoff", self.cutoff, allow_none=True, what="'auto' or a positive frequency [Hz]"
             )
-        if (
-            isinstance(self.step_refinements, bool)
-            or not isinstance(self.step_refinements, int)
-            or not (0 <= self.step_refinements <= 10)
-        ):
-            raise DataValidationError(
-                "step_refinements", f"expected an integer in 0..10, got {self.step_refinements!r}"
-            )
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
-        if self.method not in ("output-error", "equation-error"):
-            raise DataValidationError(
-                "method", f"expected 'output-error' or 'equation-error', got {self.method!r}"
-            )
-        if (
-            self.cutoff is not None
-            and self.cutoff != "auto"
-            and (
-                isinstance(self.cutoff, bool)
-                or not isinstance(self.cutoff, (int, float))
-                or not self.cutoff > 0
-            )
-        ):
-            raise DataValidationError(
-                "cutoff", f"expected 'auto' or a positive frequency [Hz], got {self.cutoff!r}"
-            )
-        if (
-            isinstance(self.filter_order, bool)
-            or not isinstance(self.filter_order, int)
-            or not 1 <= self.filter_order <= 8
-        ):
-            raise DataValidationError(
-                "filter_order", f"expected an integer in 1..8, got {self.filter_order!r}"
-            )
-        if self.form not in ("free", "stable", "monotone"):
-            raise DataValidationError(
-                "form", f"expected 'free', 'stable' or 'monotone', got {self.form!r}"
-            )
-        if self.jacobian not in ("sensitivity", "2-point", "3-point"):
-            raise DataValidationError(
-                "jacobian", f"expected 'sensitivity', '2-point' or '3-point', got {self.jacobian!r}"
-            )
+        check_int("filter_order", self.filter_order, 1, 8)
         for name, low in (
             ("shoot_nfev", 0),
             ("max_nfev", 0),
             ("max_samples", 100),
             ("segment_stride", 1),
         ):
-            val = getattr(self, name)
-            if isinstance(val, bool) or not isinstance(val, int) or val < low:
-                raise DataValidationError(name, f"expected an integer >= {low}, got {val!r}")
+            check_int(name, getattr(self, name), low)
         for name in ("max_step", "segment", "step_tolerance"):
-            val = getattr(self, name)
-            if isinstance(val, bool) or not isinstance(val, (int, float)) or not 0 < val < math.inf:
-                raise DataValidationError(name, f"expected a positive finite number, got {val!r}")
-        for name in ("offset", "stable_only"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise DataValidationError(
-                    name, f"expected True or False, got {getattr(self, name)!r}"
-                )
+            check_number(name, getattr(self, name))
 
 
 def _run_refined(model: P15Model, e: Experiment, k: int) -> np.ndarray:

@@ -44,7 +44,15 @@ _FITTED: dict[str, type[FittedModel]] = {}
 
 
 def register(estimator: type[Estimator], fitted: type[FittedModel]) -> None:
-    """Register an estimator / fitted-model pair under ``fitted.kind``."""
+    """Register an estimator / fitted-model pair under ``fitted.kind``.
+
+    Parameters
+    ----------
+    estimator : type of Estimator
+        Estimator class (its ``kind`` must equal the model's).
+    fitted : type of FittedModel
+        Fitted-model class.
+    """
     kind = fitted.kind
     if estimator.kind != kind:
         raise ValueError(f"kind: estimator says {estimator.kind!r}, model says {kind!r}")
@@ -80,25 +88,58 @@ def available_models() -> list[str]:
 
 
 def get_estimator(kind: str, **settings: Any) -> Estimator:
-    """Instantiate the estimator of ``kind`` with ``settings``."""
+    """Instantiate the estimator of ``kind`` with ``settings``.
+
+    Parameters
+    ----------
+    kind : str
+        Model kind (see :func:`known_kinds`).
+    **settings
+        Estimator settings (see the estimator's docstring).
+
+    Raises
+    ------
+    SchemaError
+        An unknown kind.
+    DataValidationError
+        A setting the estimator does not take (the message names it and lists the others).
+    """
     _load(kind)
-    return _ESTIMATORS[kind](**settings)
+    return _ESTIMATORS[kind].from_settings(**settings)
 
 
 def model_class(kind: str) -> type[FittedModel]:
-    """The fitted-model class of ``kind``."""
+    """The fitted-model class of ``kind``.
+
+    Parameters
+    ----------
+    kind : str
+        Model kind (see :func:`known_kinds`).
+    """
     _load(kind)
     return _FITTED[kind]
 
 
 def model_from_dict(data: dict[str, Any]) -> FittedModel:
-    """Rebuild any saved model from its dict (dispatch on ``kind``)."""
+    """Rebuild any saved model from its dict (dispatch on ``kind``).
+
+    Parameters
+    ----------
+    data : dict
+        The dict written by :meth:`FittedModel.to_dict`.
+    """
     _check_schema(data)
     return model_class(data["kind"]).from_dict(data)
 
 
 def load_model(path: str | Path) -> FittedModel:
-    """Load a model saved with :meth:`FittedModel.save`."""
+    """Load a model saved with :meth:`FittedModel.save`.
+
+    Parameters
+    ----------
+    path : str or Path
+        Model file (JSON).
+    """
     p = Path(path)
     try:
         data = json.loads(p.read_text(encoding="utf-8"))

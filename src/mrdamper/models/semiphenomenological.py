@@ -66,22 +66,28 @@ True
 
 from __future__ import annotations
 
-import time
-import warnings
-from collections.abc import Iterable
 from dataclasses import asdict, dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.errors import DataValidationError
 from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
-from mrdamper.models._sp_kernels import N_COMPONENTS, sp_force, sp_force_jacobian
-from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
+from mrdamper.models._sp_fit import identify, single_level_terms, stack
+from mrdamper.models._sp_kernels import COMPONENTS, sp_force
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
+from mrdamper.models.protocols import StaticMapForm
 from mrdamper.models.registry import register
 
 __all__ = [
@@ -93,22 +99,14 @@ __all__ = [
     "SP3Model",
     "SP4Estimator",
     "SP4Model",
+    "SPModel",
 ]
-
-#: Names of the five components of the SP map, in kernel order.
-COMPONENTS = ("A", "a", "b", "c", "d")
-#: Upper bound of the normalised tanh velocity coefficient (see module docstring).
-_TANH_SLOPE_MAX = 1e3
-#: Largest accepted condition number of an input-power matrix (identifiability check).
-_MAX_INPUT_COND = 1e6
-#: Samples required per coefficient.
-_SAMPLES_PER_PARAMETER = 10
 
 
 # ============================================================================ fitted models
 @dataclass(frozen=True)
-class _SPModel(FittedModel):
-    """Common behaviour of the SP-k fitted models (abstract; use SP1Model ... SP4Model).
+class SPModel(FittedModel):
+    """Common behaviour of the SP-k fitted models (use SP1Model ... SP4Model).
 
     Attributes
     ----------
@@ -196,6 +194,12 @@ class _SPModel(FittedModel):
         xa, va, ia = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, i))
         return sp_force(xa, va, ia, comp, power, np.asarray(self.S, dtype=np.float64), self.f0)
 
+    def inverse_form(self) -> StaticMapForm:
+        """The map as the plain arrays of the control kernels (invertible, see
+        :class:`~mrdamper.models.protocols.InvertibleModel`)."""
+        comp, power = self.layout_arrays()
+        return StaticMapForm(comp, power, np.asarray(self.S, dtype=np.float64), self.f0, self.eta)
+
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N]: direct evaluation on the record's x, v and electrical input
         (through the drive lag when ``eta`` is set; the range policy applies to the input)."""
@@ -206,7 +210,7 @@ class _SPModel(FittedModel):
 
 
 @dataclass(frozen=True)
-class SP1Model(_SPModel):
+class SP1Model(SPModel):
     """SP-1: ``F = S1(i) tanh(S2(i) v + S3(i) x) + S4(i) v + S5(i) x + f0``.
 
     ``S`` holds 15 coefficients: ``S_j(i) = S[3(j-1)] + S[3(j-1)+1] i + S[3(j-1)+2] i^2`` for
@@ -221,7 +225,7 @@ class SP1Model(_SPModel):
 
 
 @dataclass(frozen=True)
-class SP2Model(_SPModel):
+class SP2Model(SPModel):
     """SP-2: ``F = S1 i tanh(S2 v + S3 x) + S4 v + S5 x + f0``.
 
     ``S = (S1 [N/A], S2 [s/m], S3 [1/m], S4 [N s/m], S5 [N/m])`` (per V with ``input="voltage"``).
@@ -232,7 +236,7 @@ class SP2Model(_SPModel):
 
 
 @dataclass(frozen=True)
-class SP3Model(_SPModel):
+class SP3Model(SPModel):
     """SP-3: ``F = (S1 i + S2) tanh(S3 v + S4 x) + S5 v + S6 x + f0``.
 
     ``S = (S1 [N/A], S2 [N], S3 [s/m], S4 [1/m], S5 [N s/m], S6 [N/m])``.
@@ -243,7 +247,7 @@ class SP3Model(_SPModel):
 
 
 @dataclass(frozen=True)
-class SP4Model(_SPModel):
+class SP4Model(SPModel):
     """SP-4: ``F = (S1 i^2 + S2 i + S3) tanh(S4 v + S5 x) + S6 v + S7 x + f0``.
 
     ``S = (S1 [N/A^2], S2 [N/A], S3 [N], S4 [s/m], S5 [1/m], S6 [N s/m], S7 [N/m])``.
@@ -288,6 +292,8 @@ class _SPEstimator(Estimator):
     eta : float or None
         Drive-lag rate [1/s]: the map is fitted to the electrical input passed through the lag
         (per record, see the module docstring); ``None`` (default): no lag.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Range policy of the fitted model.
     """
 
     input: ElectricalSource = "i"
@@ -300,154 +306,81 @@ class _SPEstimator(Estimator):
     fit_samples: int | None = 20000
     eta: float | None = None
 
-    model_class: ClassVar[type[_SPModel]] = _SPModel
+    range_policy: RangePolicy = "error"
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> _SPModel:
-        """Identify the model from one record or a collection of records.
+    model_class: ClassVar[type[FittedModel]] = SPModel
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Multi-start nonlinear least squares of the map (see the module docstring).
 
         Raises
         ------
-        DataValidationError
-            If a setting is invalid or a record lacks the ``input`` channel.
         IdentificationError
             Too few samples, an input that does not vary enough to identify the current
             dependence, a force without variance, or no start converged to a finite cost.
         """
-        t_start = time.perf_counter()
-        self._check_settings()
-        exps = self._as_set(data)
-        cls = self.model_class
+        cls = cast(type[SPModel], self.model_class)
         comp_all, power_all = cls.layout_arrays()
-        x, v, i, F = _stack(
-            exps, self.input, self.eta, _scale.WINDOW_THRESHOLD
+        x, v, i, F = stack(
+            data.records, self.input, self.eta, _scale.WINDOW_THRESHOLD
         )  # long campaigns: an even subset
-        level = single_level(i)
         # one level: every component's polynomial in the input reduces to its constant term
         keep = (
-            _single_level_terms(comp_all, power_all)
-            if level is not None
-            else np.ones(comp_all.size, bool)
+            single_level_terms(comp_all, power_all) if data.single else np.ones(comp_all.size, bool)
         )
-        comp, power = comp_all[keep], power_all[keep]
-        n_par = comp.size + int(self.offset)
-        if F.size < _SAMPLES_PER_PARAMETER * n_par:
-            raise IdentificationError(
-                f"data: {cls.kind} has {n_par} parameters and needs at least "
-                f"{_SAMPLES_PER_PARAMETER * n_par} samples, got {F.size}"
-            )
-        Fs = float(np.std(F))
-        if not Fs > 0:
-            raise IdentificationError("F: training force has zero variance; nothing to identify")
-        xs, vs = _rms(x), _rms(v)
-        i_s = float(np.max(np.abs(i))) or 1.0
-        xn, vn, inn, Fn = x / xs, v / vs, i / i_s, F / Fs
-        sub = _even_subset(F.size, self.screen_samples)
-        _check_identifiable(cls, comp, power, inn[sub], self.input)
-
-        lb, ub = _bounds(comp, power, self.offset)
-        rng = np.random.default_rng(self.seed)
-        starts = _linear_starts(comp, power, xn[sub], vn[sub], inn[sub], Fn[sub], self, rng)
-
-        def solve(theta0: np.ndarray, idx: np.ndarray | slice, nfev: int) -> Any:
-            xa, va, ia, Fa = (np.ascontiguousarray(a[idx]) for a in (xn, vn, inn, Fn))
-
-            def fun(th: np.ndarray) -> np.ndarray:
-                f0 = th[-1] if self.offset else 0.0
-                return sp_force(xa, va, ia, comp, power, th[: comp.size], f0) - Fa
-
-            def jac(th: np.ndarray) -> np.ndarray:
-                f0 = th[-1] if self.offset else 0.0
-                return sp_force_jacobian(xa, va, ia, comp, power, th[: comp.size], f0, self.offset)[
-                    1
-                ]
-
-            return least_squares(
-                fun, theta0, jac=jac, bounds=(lb, ub), method="trf", x_scale="jac", max_nfev=nfev
-            )
-
-        results = []
-        for theta0 in starts:
-            try:
-                res = solve(np.clip(theta0, lb, ub), sub, self.max_nfev)
-            except (ValueError, FloatingPointError, np.linalg.LinAlgError):
-                continue
-            if np.isfinite(res.cost) and np.all(np.isfinite(res.x)):
-                results.append(res)
-        if not results:
-            raise IdentificationError(f"{cls.kind}: no start converged to a finite cost")
-        best = min(results, key=lambda r: r.cost)
-        full = _even_subset(F.size, self.fit_samples)
-        final = solve(best.x, full, self.max_nfev)
-        if not (np.isfinite(final.cost) and np.all(np.isfinite(final.x))):
-            final = best
-        if final.status == 0:
-            warnings.warn(
-                f"{cls.kind}: least squares stopped at max_nfev={self.max_nfev} before converging",
-                RuntimeWarning,
-                stacklevel=2,
-            )
-        S_kept, f0 = _to_physical(final.x, comp, power, self.offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
+        S_kept, f0, provenance = identify(
+            cls.kind,
+            self.input,
+            comp_all[keep],
+            power_all[keep],
+            x,
+            v,
+            i,
+            F,
+            offset=self.offset,
+            seed=self.seed,
+            n_starts=self.n_starts,
+            n_candidates=self.n_candidates,
+            max_nfev=self.max_nfev,
+            screen_samples=self.screen_samples,
+            fit_samples=self.fit_samples,
+        )
         S = np.zeros(comp_all.size)
         S[keep] = S_kept
-        rms = float(np.sqrt(2.0 * final.cost / final.fun.size) * Fs)
         provenance = {
             "estimator": type(self).__name__,
             "settings": asdict(self),
-            "training_records": list(exps.names),
-            "n_samples": int(sum(e.n for e in exps)),
-            "n_samples_stacked": int(F.size),
-            "n_screen_samples": int(sub.size),
-            "n_fit_samples": int(full.size),
-            "scales": {"x": xs, "v": vs, "input": i_s, "F": Fs},
-            "start_costs": sorted(float(r.cost) for r in results),
-            "nfev": int(final.nfev),
-            "status": int(final.status),
-            "message": str(final.message),
-            "training_rms_error": rms,
-            "training_esr": float(rms**2 / Fs**2),
-            "elapsed_s": time.perf_counter() - t_start,
+            "training_records": list(data.records.names),
+            "n_samples": int(sum(e.n for e in data.records)),
+            **provenance,
         }
-        if level is not None and not np.all(keep):
-            note = single_level_note(cls.kind, self.input, level)
-            provenance["note"] = note
-            warnings.warn(note, UserWarning, stacklevel=2)
-        return cls(
-            S=tuple(S),
-            f0=f0,
-            input=self.input,
-            input_range=_scale.input_range(exps, self.input),
+        return Identified(
+            parameters={
+                "S": tuple(S),
+                "f0": f0,
+                "eta": self.eta,
+                "rho_range": None if self.eta is None else (float(np.min(i)), float(np.max(i))),
+            },
             provenance=provenance,
-            eta=self.eta,
-            rho_range=None if self.eta is None else (float(np.min(i)), float(np.max(i))),
         )
 
-    def _check_settings(self) -> None:
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+    def _validate(self) -> None:
+        super()._validate()
         for name, low in (
             ("n_starts", 1),
             ("n_candidates", 1),
             ("max_nfev", 1),
             ("screen_samples", 100),
-            ("fit_samples", 100),
         ):
-            val = getattr(self, name)
-            if name == "fit_samples" and val is None:
-                continue
-            if isinstance(val, bool) or not isinstance(val, (int, np.integer)) or val < low:
-                raise DataValidationError(name, f"expected an integer >= {low}, got {val!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
-            raise DataValidationError("seed", f"expected an integer, got {self.seed!r}")
-        if not isinstance(self.offset, (bool, np.bool_)):
-            raise DataValidationError("offset", f"expected True or False, got {self.offset!r}")
-        if self.eta is not None and (
-            isinstance(self.eta, bool)
-            or not isinstance(self.eta, (int, float))
-            or not (np.isfinite(self.eta) and self.eta > 0)
-        ):
-            raise DataValidationError(
-                "eta", f"expected a positive drive-lag rate [1/s] or None, got {self.eta!r}"
-            )
+            check_int(name, getattr(self, name), low)
+        check_int("fit_samples", self.fit_samples, 100, allow_none=True)
+        check_int("seed", self.seed, None)
+        check_number(
+            "eta",
+            self.eta,
+            allow_none=True,
+            what="a positive drive-lag rate [1/s] or None",
+        )
 
 
 @dataclass
@@ -455,7 +388,7 @@ class SP1Estimator(_SPEstimator):
     """Identifies :class:`SP1Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp1"
-    model_class: ClassVar[type[_SPModel]] = SP1Model
+    model_class: ClassVar[type[FittedModel]] = SP1Model
 
 
 @dataclass
@@ -463,7 +396,7 @@ class SP2Estimator(_SPEstimator):
     """Identifies :class:`SP2Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp2"
-    model_class: ClassVar[type[_SPModel]] = SP2Model
+    model_class: ClassVar[type[FittedModel]] = SP2Model
 
 
 @dataclass
@@ -471,7 +404,7 @@ class SP3Estimator(_SPEstimator):
     """Identifies :class:`SP3Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp3"
-    model_class: ClassVar[type[_SPModel]] = SP3Model
+    model_class: ClassVar[type[FittedModel]] = SP3Model
 
 
 @dataclass
@@ -479,182 +412,7 @@ class SP4Estimator(_SPEstimator):
     """Identifies :class:`SP4Model` (see :class:`_SPEstimator` for the settings)."""
 
     kind: ClassVar[str] = "sp4"
-    model_class: ClassVar[type[_SPModel]] = SP4Model
-
-
-# ============================================================================ helpers
-def _stack(
-    exps: Iterable[Experiment],
-    source: ElectricalSource,
-    eta: float | None = None,
-    max_samples: int | None = None,
-) -> tuple[np.ndarray, ...]:
-    """Concatenate the samples of all records (valid for a static map: no state crosses records);
-    with ``eta`` the electrical input of each record goes through the drive lag first.
-
-    With more than ``max_samples`` samples in all, only an evenly spaced subset of that many is
-    gathered (record by record: the whole concatenation is never built).
-    """
-    cols: dict[str, list[np.ndarray]] = {"x": [], "v": [], "i": [], "F": []}
-    exps = list(exps)
-    total = sum(e.n for e in exps)
-    keep = (
-        _even_subset(total, max_samples)
-        if max_samples is not None and total > max_samples
-        else None
-    )
-    offset = 0
-    for e in exps:
-        sel: slice | np.ndarray = slice(None)
-        if keep is not None:
-            lo, hi = np.searchsorted(keep, [offset, offset + e.n])
-            sel = keep[lo:hi] - offset
-        offset += e.n
-        el = np.ascontiguousarray(e.electrical(source), dtype=np.float64)
-        cols["i"].append((el if eta is None else first_order_lag(el, e.dt, eta))[sel])
-        cols["x"].append(e.x[sel])
-        cols["v"].append(e.v[sel])
-        cols["F"].append(e.F[sel])
-    return tuple(np.ascontiguousarray(np.concatenate(cols[k])) for k in ("x", "v", "i", "F"))
-
-
-def _even_subset(n: int, size: int | None) -> np.ndarray:
-    """Indices of ``size`` samples evenly spaced over ``0 .. n-1`` (all samples if ``size`` is None)."""
-    if size is None or size >= n:
-        return np.arange(n)
-    return np.unique(np.linspace(0, n - 1, size).astype(np.int64))
-
-
-def _rms(a: np.ndarray) -> float:
-    r = float(np.sqrt(np.mean(a * a)))
-    return r if r > 0 else 1.0
-
-
-def _check_identifiable(
-    cls: type[_SPModel], comp: np.ndarray, power: np.ndarray, inn: np.ndarray, source: str
-) -> None:
-    """Each component's input polynomial must have full column rank over the training input."""
-    levels = np.unique(np.round(inn, 9))
-    for m in range(N_COMPONENTS):
-        pw = power[comp == m]
-        if pw.size == 0:
-            continue
-        V = np.stack([inn**p for p in pw], axis=1)
-        norms = np.linalg.norm(V, axis=0)
-        if np.any(norms == 0):
-            raise IdentificationError(
-                f"{source}: {cls.kind} component {COMPONENTS[m]} has a term in {source}^{int(pw[norms == 0][0])} "
-                f"but the training input is zero everywhere; records with a non-zero input are needed"
-            )
-        sv = np.linalg.svd(V / norms, compute_uv=False)
-        if sv[-1] <= sv[0] / _MAX_INPUT_COND:
-            rank = int(np.sum(sv > sv[0] / _MAX_INPUT_COND))
-            raise IdentificationError(
-                f"{source}: {cls.kind} component {COMPONENTS[m]} is a polynomial with {pw.size} "
-                f"coefficients in {source} but the training input takes {min(levels.size, 99)} "
-                f"distinct value(s) (numerical rank {rank} of {pw.size}); it is not identifiable: "
-                f"train on records with at least {pw.size} distinct {source} levels"
-            )
-
-
-def _single_level_terms(comp: np.ndarray, power: np.ndarray) -> np.ndarray:
-    """Mask keeping, per component, only its lowest power of the input (the constant law)."""
-    keep = np.zeros(comp.size, bool)
-    for m in np.unique(comp):
-        idx = np.flatnonzero(comp == m)
-        keep[idx[np.argmin(power[idx])]] = True
-    return keep
-
-
-def _bounds(comp: np.ndarray, power: np.ndarray, offset: bool) -> tuple[np.ndarray, np.ndarray]:
-    n = comp.size + int(offset)
-    lb, ub = np.full(n, -np.inf), np.full(n, np.inf)
-    k = np.flatnonzero((comp == 1) & (power == 0))
-    lb[k], ub[k] = 0.0, _TANH_SLOPE_MAX
-    return lb, ub
-
-
-def _linear_columns(
-    comp: np.ndarray,
-    power: np.ndarray,
-    th: np.ndarray,
-    xn: np.ndarray,
-    vn: np.ndarray,
-    inn: np.ndarray,
-    offset: bool,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Regressors of the coefficients that enter linearly (A, c, d, f0) for a fixed tanh term."""
-    lin = np.flatnonzero(np.isin(comp, (0, 3, 4)))
-    base = {0: th, 3: vn, 4: xn}
-    cols = [base[int(comp[k])] * inn ** power[k] for k in lin]
-    if offset:
-        cols.append(np.ones_like(xn))
-    return np.stack(cols, axis=1), lin
-
-
-def _linear_starts(
-    comp: np.ndarray,
-    power: np.ndarray,
-    xn: np.ndarray,
-    vn: np.ndarray,
-    inn: np.ndarray,
-    Fn: np.ndarray,
-    est: _SPEstimator,
-    rng: np.random.Generator,
-) -> list[np.ndarray]:
-    """Rank seeded draws of the tanh argument by the cost of the linear least-squares completion."""
-    ka = int(np.flatnonzero((comp == 1) & (power == 0))[0])
-    kb = int(np.flatnonzero((comp == 2) & (power == 0))[0])
-    n_par = comp.size + int(est.offset)
-    slopes = 10.0 ** rng.uniform(-0.5, 2.0, est.n_candidates)
-    ratios = rng.uniform(-1.0, 1.0, est.n_candidates)
-    ratios[: max(1, est.n_candidates // 8)] = 0.0  # always try a tanh without displacement term
-    scored = []
-    for a, r in zip(slopes, ratios):
-        z = a * vn + a * r * xn
-        X, lin = _linear_columns(comp, power, np.tanh(z), xn, vn, inn, est.offset)
-        coef = _normal_lstsq(X, Fn)
-        cost = float(np.sum((X @ coef - Fn) ** 2))
-        theta = np.zeros(n_par)
-        theta[ka], theta[kb] = a, a * r
-        theta[lin] = coef[: lin.size]
-        if est.offset:
-            theta[-1] = coef[-1]
-        if np.isfinite(cost):
-            scored.append((cost, theta))
-    scored.sort(key=lambda ct: ct[0])
-    return [th for _, th in scored[: est.n_starts]]
-
-
-def _normal_lstsq(X: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least squares through column-equilibrated normal equations (small p, tall X).
-
-    Used for the cheap screening of starts only; a (nearly) singular system returns a
-    minimum-norm solution via ``lstsq`` on the small Gram matrix.
-    """
-    norms = np.sqrt(np.einsum("ij,ij->j", X, X))
-    norms[norms == 0] = 1.0
-    Xs = X / norms
-    coef, *_ = np.linalg.lstsq(Xs.T @ Xs, Xs.T @ y, rcond=1e-12)
-    return coef / norms
-
-
-def _to_physical(
-    theta: np.ndarray,
-    comp: np.ndarray,
-    power: np.ndarray,
-    offset: bool,
-    *,
-    xs: float,
-    vs: float,
-    i_s: float,
-    Fs: float,
-) -> tuple[np.ndarray, float]:
-    """Convert normalised coefficients back to SI: exact rescaling per component and power."""
-    comp_scale = np.array([Fs, 1.0 / vs, 1.0 / xs, Fs / vs, Fs / xs])
-    S = theta[: comp.size] * comp_scale[comp] / i_s ** power.astype(float)
-    f0 = float(theta[-1] * Fs) if offset else 0.0
-    return S, f0
+    model_class: ClassVar[type[FittedModel]] = SP4Model
 
 
 for _est, _mod in (

@@ -28,24 +28,41 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
 
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models import _scale
 from mrdamper.models import _spencer_kernels as _k
+from mrdamper.models._spencer_fit import DEFAULT_BOUNDS, FitSettings, check_settings, identify
+from mrdamper.models._spencer_kernels import (
+    MAX_AUTO_SUBSTEPS,
+    SUBSTEP_RATE_PRODUCT,
+    auto_substeps,
+)
 from mrdamper.models._step_check import step_halving_check
-from mrdamper.models.base import Estimator, FittedModel
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
 from mrdamper.models.registry import register
 
 __all__ = [
     "DEFAULT_BOUNDS",
+    "MAX_AUTO_SUBSTEPS",
     "PARAMETER_NAMES",
     "PARAMETER_UNITS",
+    "SUBSTEP_RATE_PRODUCT",
     "SpencerEstimator",
     "SpencerModel",
     "auto_substeps",
@@ -73,34 +90,6 @@ PARAMETER_UNITS: dict[str, str] = {
     "n": "-",
     "eta": "1/s",
     "f0": "N",
-}
-
-#: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-].
-#: The rate is an upper estimate, and RK4 is stable up to about 2.8 for real eigenvalues; the
-#: resulting error against a tight reference is checked in tests/models/test_spencer.py.
-SUBSTEP_RATE_PRODUCT = 2.0
-#: Upper limit of automatic sub-steps per sampling interval.
-MAX_AUTO_SUBSTEPS = 2000
-
-_INF = math.inf
-#: Default identification bounds (SI). Current-dependence coefficients are non-negative (the
-#: MR effect grows with the field); gamma may take either sign; n stays in [1, 4].
-DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
-    "c0a": (0.0, _INF),
-    "c0b": (0.0, _INF),
-    "k0": (0.0, _INF),
-    "c1a": (0.0, _INF),
-    "c1b": (0.0, _INF),
-    "k1": (-_INF, _INF),
-    "x0": (-_INF, _INF),
-    "alpha_a": (0.0, _INF),
-    "alpha_b": (0.0, _INF),
-    "gamma": (-_INF, _INF),
-    "beta": (0.0, _INF),
-    "A": (0.0, _INF),
-    "n": (1.0, 4.0),
-    "eta": (1e-2, 1e5),
-    "f0": (-_INF, _INF),
 }
 
 
@@ -262,7 +251,7 @@ class SpencerModel(FittedModel):
             float(e[0]),
         )
         _raise_on_status(status, sample, nsub, experiment.name)
-        return F
+        return np.asarray(F)
 
 
 def _raise_on_status(status: int, sample: int, nsub: int, name: str) -> None:
@@ -281,43 +270,6 @@ def _raise_on_status(status: int, sample: int, nsub: int, name: str) -> None:
         f"record {name!r}: state became non-finite or unbounded with {nsub} RK4 sub-steps per "
         "sample (set 'substeps' higher, or check the parameters)",
     )
-
-
-def auto_substeps(p: np.ndarray, dt: float, vmax: float, emin: float, emax: float) -> int:
-    """Sub-steps per sampling interval from an upper estimate of the model's fastest rate.
-
-    Parameters
-    ----------
-    p : ndarray
-        Parameters in :data:`PARAMETER_NAMES` order.
-    dt : float
-        Sampling interval [s].
-    vmax : float
-        Largest absolute velocity of the record [m/s].
-    emin, emax : float
-        Range of the electrical input [A] or [V] (u stays inside it).
-    """
-    c0a, c0b, k0, c1a, c1b, _, _, ala, alb, gam, bet, A, n, eta, _ = (float(a) for a in p)
-    damping = [c0a + c0b * u + c1a + c1b * u for u in (emin, emax)]
-    cmin = min(damping)
-    if not cmin > 0.0:
-        return 1  # the kernel reports the invalid damping at the first sample
-    # alpha(u) / C(u) is linear-fractional in u, so its extremes lie at the ends of the range
-    al_over_c = max(abs(ala + alb * u) / c for u, c in zip((emin, emax), damping))
-    shape = bet + gam
-    if shape > 0.0 and A != 0.0:
-        zmax = (abs(A) / shape) ** (1.0 / n)
-    else:
-        zmax = abs(A) * 1e-2  # no saturation: a generous guess of the reach of z
-    rate = (
-        abs(eta)
-        + abs(k0) / cmin
-        + abs(A) * al_over_c
-        + n * (abs(bet) + abs(gam)) * zmax ** (n - 1.0) * 1.5 * vmax
-    )
-    if not math.isfinite(rate):
-        return MAX_AUTO_SUBSTEPS
-    return int(min(MAX_AUTO_SUBSTEPS, max(1, math.ceil(dt * rate / SUBSTEP_RATE_PRODUCT))))
 
 
 def spencer1997(**common: Any) -> SpencerModel:
@@ -415,8 +367,9 @@ class SpencerEstimator(Estimator):
     """
 
     kind: ClassVar[str] = "spencer"
+    model_class: ClassVar[type[FittedModel]] = SpencerModel
 
-    input: Literal["i", "voltage"] = "i"
+    input: ElectricalSource = "i"
     start: Mapping[str, float] | None = None
     fixed: Mapping[str, float] | None = None
     bounds: Mapping[str, tuple[float, float]] | None = None
@@ -431,44 +384,50 @@ class SpencerEstimator(Estimator):
     gtol: float = 1e-8
     substeps: int = 0
     fix_eta: Literal["auto", "never", "always"] = "auto"
-    range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
+    range_policy: RangePolicy = "error"
     step_tolerance: float = 1e-4
 
-    def fit(self, data: Experiment | Iterable[Experiment]) -> SpencerModel:
-        """Identify the model from one record or a collection of records.
+    def _validate(self) -> None:
+        super()._validate()
+        for name in ("n_starts", "max_nfev", "screen_nfev"):
+            check_int(name, getattr(self, name), 1)
+        check_int("substeps", self.substeps, 0)
+        check_number(
+            "step_tolerance", self.step_tolerance, what="a positive finite number (ESR units)"
+        )
+        check_settings(self._fit_settings())
+
+    def _fit_settings(self) -> FitSettings:
+        names = [f.name for f in dataclasses.fields(FitSettings)]
+        return FitSettings(**{n: getattr(self, n) for n in names})
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Bounded nonlinear least squares on the free-run error (:mod:`._spencer_fit`), then the
+        step-halving check of the result.
 
         Raises
         ------
-        DataValidationError
-            Bad settings, or a record without the chosen electrical input channel.
         IdentificationError
             Every start diverged, or the optimiser returned a non-finite result.
         """
-        from mrdamper.models import _scale
-        from mrdamper.models._spencer_fit import identify
-
-        all_exps = self._as_set(data)
-        t0, c0 = time.perf_counter(), time.process_time()
         exps, windows = _scale.window_set(
-            all_exps, budget=_scale.WINDOW_BUDGET_SPENCER
+            data.records, budget=_scale.WINDOW_BUDGET_SPENCER
         )  # long campaigns
-        p, common = identify(self, exps)
-        if windows is not None:  # the input range of every sample, not only of the windows
-            common["input_range"] = _scale.input_range(all_exps, self.input)
-        model = SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))
+        p, provenance = identify(self._fit_settings(), exps, single=data.single)
+        params: dict[str, Any] = {n: float(v) for n, v in zip(PARAMETER_NAMES, p)}
+        params["substeps"] = max(0, int(self.substeps))
+        model = SpencerModel(**params, input=self.input, input_range=data.input_range)
         # stiff model: halving the RK4 step must not change the free run (else warn, see provenance)
-        common["provenance"]["step_check"] = step_halving_check(
+        provenance["step_check"] = step_halving_check(
             "spencer",
             exps,
             lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
             self.step_tolerance,
         )
         if windows is not None:
-            common["provenance"]["windows"] = windows
-            common["provenance"]["full_data_check"] = _scale.full_data_esr(model, all_exps)
-        common["provenance"]["elapsed_s"] = time.perf_counter() - t0
-        common["provenance"]["cpu_s"] = time.process_time() - c0
-        return SpencerModel.from_vector(p, **common, substeps=max(0, int(self.substeps)))
+            provenance["windows"] = windows
+            provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
+        return Identified(parameters=params, provenance=provenance)
 
 
 register(SpencerEstimator, SpencerModel)

@@ -93,14 +93,17 @@ def _current() -> Sensor:
 
 @dataclass(frozen=True)
 class SensorSuite:
-    """The rig's three transducers.
+    """The rig's three transducers (defaults: typical laboratory hardware, 16-bit converters).
 
-    Defaults (typical laboratory hardware, 16-bit converters):
-
-    * ``displacement``: LVDT, +-25 mm range, noise 5 um RMS, step 0.76 um.
-    * ``force``: load cell, +-5 kN range, noise 2 N RMS, step 0.15 N.
-    * ``electrical``: current transducer, 0-5 A range, noise 2 mA RMS, step 76 uA (for a damper
-      driven by command voltage the same channel reads volts).
+    Parameters
+    ----------
+    displacement : Sensor
+        Displacement transducer; default an LVDT, +-25 mm range, noise 5 um RMS, step 0.76 um.
+    force : Sensor
+        Load cell; default +-5 kN range, noise 2 N RMS, step 0.15 N.
+    electrical : Sensor
+        Current transducer; default 0-5 A range, noise 2 mA RMS, step 76 uA (for a damper
+        driven by command voltage the same channel reads volts).
     """
 
     displacement: Sensor = field(default_factory=_lvdt)

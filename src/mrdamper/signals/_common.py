@@ -61,6 +61,13 @@ def n_samples(fs: float, duration: float) -> int:
 
     The grid is ``t = k / fs`` for ``k = 0 .. round(duration * fs) - 1``, so a 30 s record at
     1 kHz has exactly 30 000 samples.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    duration : float
+        Record duration [s].
     """
     fs = check_positive("fs", fs, "Hz")
     duration = check_positive("duration", duration, "s")

@@ -99,6 +99,15 @@ def temporal_psd(f: np.ndarray | float, road_class: str | float, speed: float) -
     """One-sided temporal displacement PSD at vehicle speed ``speed`` [m^2/Hz].
 
     ``G(f) = Gd(f / V) / V`` with ``f`` [Hz] and ``V`` [m/s].
+
+    Parameters
+    ----------
+    f : ndarray or float
+        Temporal frequency [Hz].
+    road_class : str or float
+        ISO 8608 class (``"A"`` .. ``"H"``) or the reference PSD ``Gd(n0)`` [m^3].
+    speed : float
+        Vehicle speed [m/s].
     """
     v = check_positive("speed", speed, "m/s")
     f = np.asarray(f, dtype=float)
@@ -108,8 +117,19 @@ def temporal_psd(f: np.ndarray | float, road_class: str | float, speed: float) -
 def band_variance(
     road_class: str | float, speed: float, min_frequency: float, max_frequency: float
 ) -> float:
-    """Displacement variance [m^2] of the band ``[min_frequency, max_frequency]``: the integral of
-    G."""
+    """Displacement variance [m^2] of the band ``[min_frequency, max_frequency]``.
+
+    The integral of G over the band.
+
+    Parameters
+    ----------
+    road_class : str or float
+        ISO 8608 class (``"A"`` .. ``"H"``) or the reference PSD ``Gd(n0)`` [m^3].
+    speed : float
+        Vehicle speed [m/s].
+    min_frequency, max_frequency : float
+        Temporal frequency band [Hz].
+    """
     fmin, fmax = check_range("min_frequency/max_frequency", min_frequency, max_frequency, "Hz")
     v = check_positive("speed", speed, "m/s")
     return _gd0(road_class) * N0**2 * v * (1.0 / fmin - 1.0 / fmax)

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
-from mrdamper.errors import SchemaError, interrupt_in_chain
+from mrdamper.errors import DataValidationError, SchemaError, interrupt_in_chain
 from mrdamper.study._tasks import fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
@@ -65,7 +65,7 @@ def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict
     out = protocol.settings_for(spec)
     try:
         est = get_estimator(spec.kind, **out)
-    except TypeError as exc:
+    except (TypeError, DataValidationError) as exc:  # an unknown setting is refused, naming it
         raise SchemaError(f"models.{spec.label}.settings: {exc}") from None
     fields = _estimator_fields(est)
     if "input" in fields and "input" not in out:

@@ -70,6 +70,13 @@ def parse_file_name(file_name: str, pattern: str | re.Pattern[str]) -> dict[str,
     is stored without the suffix and converted to SI (``amplitude_mm="5"`` gives
     ``amplitude=0.005``). Groups that did not take part in the match are left out.
 
+    Parameters
+    ----------
+    file_name : str
+        File name (without folder).
+    pattern : str or re.Pattern
+        Regular expression with named groups that must match the whole name.
+
     Returns
     -------
     dict or None

@@ -24,6 +24,15 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
     ``model_fs`` when set; otherwise the lowest sampling rate of the training records. When the
     records have different rates and ``model_fs`` is not set, a one-line :class:`Note` says which
     rate was taken (records at other rates are resampled to it, see :func:`to_model_rate`).
+
+    Parameters
+    ----------
+    rates : sequence of float
+        Sampling rates of the training records [Hz].
+    model_fs : float or None
+        Model rate set by the user [Hz].
+    kind : str
+        Model kind (for the note).
     """
     if model_fs is not None:
         return float(model_fs)
@@ -41,23 +50,47 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
     return distinct[0]
 
 
-def rename_setting(kind: str, old: str, new: str, old_value: object, new_value: object) -> object:
+def rename_setting(
+    kind: str,
+    old: str,
+    new: str,
+    old_value: object,
+    new_value: object,
+    reason: str = "",
+) -> object:
     """Value of a setting given under its old name ``old`` (with a :class:`Note`); ``new_value``
-    when the old name was not used. Both names with different values is an error."""
+    when the old name was not used. Both names with different values is an error.
+
+    Parameters
+    ----------
+    kind : str
+        Model kind (for the messages).
+    old, new : str
+        Old and current setting names.
+    old_value, new_value : object
+        Values given under each name (None: not given).
+    reason : str
+        Why the name changed, appended to the note in brackets (optional).
+    """
     if old_value is None:
         return new_value
     if new_value is not None and new_value != old_value:
         raise DataValidationError(
             old,
-            f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old name of {new}",
+            f"{kind}: both {old}={old_value!r} and {new}={new_value!r} given; {old} is the old "
+            f"name of {new}",
         )
+    why = f" ({reason})" if reason else ""
     warnings.warn(
-        f"{kind}: setting {old!r} is now called {new!r} (the model's own rate, not a record's "
-        f"sampling rate); using {new}={old_value!r}",
+        f"{kind}: setting {old!r} is now called {new!r}{why}; using {new}={old_value!r}",
         Note,
         stacklevel=4,
     )
     return old_value
+
+
+#: Reason given in the note for the old name ``fs`` of ``model_fs``.
+MODEL_FS_REASON = "the model's own rate, not a record's sampling rate"
 
 
 def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
@@ -68,6 +101,13 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     Equal rates return ``x`` itself (as float64). A model rate above the record rate
     (up-sampling) interpolates linearly and says so with a ``RuntimeWarning``: the model then
     sees no content above the record's Nyquist frequency.
+
+    Parameters
+    ----------
+    x : ndarray
+        Signal at ``fs_in``.
+    fs_in, fs_out : float
+        Rates of the signal and of the result [Hz].
     """
     if abs(fs_in - fs_out) <= 1e-9 * fs_out:
         return np.asarray(x, dtype=np.float64)
@@ -82,11 +122,22 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     if abs(q - round(q)) < 1e-9 and round(q) >= 2:
         return np.asarray(sps.resample_poly(x, 1, round(q), padtype="line"), dtype=np.float64)
     n = int(np.floor((x.size - 1) * fs_out / fs_in + 1e-9)) + 1
-    return np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x)
+    return np.asarray(np.interp(np.arange(n) / fs_out, np.arange(x.size) / fs_in, x))
 
 
 def to_record_rate(y: np.ndarray, fs_model: float, experiment: Experiment) -> np.ndarray:
-    """Interpolate a model-rate signal ``y`` back onto the record's samples (identity at equal rates)."""
+    """Interpolate a model-rate signal ``y`` back onto the record's samples (identity at equal rates).
+
+    Parameters
+    ----------
+    y : ndarray
+        Signal at the model rate.
+    fs_model : float
+        Model rate [Hz].
+    experiment : Experiment
+        The record whose samples the result is interpolated onto.
+    """
     if abs(experiment.fs - fs_model) <= 1e-9 * fs_model:
         return y
-    return np.interp(np.arange(experiment.n) * experiment.dt, np.arange(y.size) / fs_model, y)
+    t_record = np.arange(experiment.n) * experiment.dt
+    return np.asarray(np.interp(t_record, np.arange(y.size) / fs_model, y))
