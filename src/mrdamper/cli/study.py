@@ -180,7 +180,7 @@ def study(
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Fit and score every model of a protocol on DATA; write tables, models, figures and report.html."""
-    from mrdamper.study import default_protocol, load_protocol, run_study
+    from mrdamper.study import default_protocol, load_protocol, run_study, write_study
 
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
@@ -203,7 +203,7 @@ def study(
         seed=seed,
         progress=not no_progress,
     )
-    res.write(out, force=force)
+    write_study(res, out, force=force)
     print_summary(res, out)
 
 
@@ -236,7 +236,7 @@ def demo(
 
     from rich.console import Console
 
-    from mrdamper.study import doe_protocol, run_study
+    from mrdamper.study import doe_protocol, run_study, write_study
 
     _check_out(out, force)
     _headless()
@@ -266,7 +266,7 @@ def demo(
     res = run_study(
         data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
     )
-    res.write(out, force=force)
+    write_study(res, out, force=force)
     print_summary(res, out)
     console.print(
         f"Done in {time.perf_counter() - t0:.0f} s. Open {out / 'report.html'} in a browser.",

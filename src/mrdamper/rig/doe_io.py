@@ -5,13 +5,11 @@ from __future__ import annotations
 import csv
 import io
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
 
-from mrdamper._io import atomic_write_text, check_output
+from mrdamper._io import atomic_write_text, check_output, write_folder
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
@@ -104,11 +102,8 @@ def write_records(
         )
     out = Path(out_dir)
     _check_out_dir(out, force)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    # everything is written into a private sibling folder first, then moved into place, so a
-    # failure (disk full, interruption) leaves neither partial files nor an empty folder
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
-    try:
+
+    def build(tmp: Path) -> None:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(MANIFEST_COLUMNS)
@@ -126,29 +121,11 @@ def write_records(
             row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
             w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
         atomic_write_text(tmp / MANIFEST_NAME, buf.getvalue())
-        _usual_folder_mode(tmp)
-        if not out.exists():
-            os.replace(tmp, out)
-        elif not any(out.iterdir()):
-            out.rmdir()
-            os.replace(tmp, out)
-        else:  # force: move the new files in, replacing files of the same name
-            for f in sorted(tmp.iterdir()):
-                os.replace(f, out / f.name)
-    except OSError as exc:
-        if exc.errno is None or isinstance(exc, FileExistsError):
-            raise
-        raise OSError(exc.errno, exc.strerror, str(out)) from exc  # name the output folder
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+
+    # built in a private sibling folder, then moved into place (with force: merged into the
+    # existing folder), so a failure leaves neither partial files nor an empty folder
+    write_folder(out, build, force=force, mode="merge")
     return out / MANIFEST_NAME
-
-
-def _usual_folder_mode(folder: Path) -> None:
-    """``mkdtemp`` folders are private (0700); give the finished folder an ordinary mode."""
-    umask = os.umask(0)
-    os.umask(umask)
-    folder.chmod(0o777 & ~umask)
 
 
 def write_doe(

@@ -1,15 +1,26 @@
 """Preset protocols: the Table II design of experiments, the Quiroz sine records (leave one
-condition out) and the Dyke random-excitation record (70 % / 30 % in time)."""
+condition out) and the Dyke random-excitation record (70 % / 30 % in time), and
+:func:`load_protocol`, which reads a protocol file or a preset name."""
 
 from __future__ import annotations
 
+import json
+import tomllib
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from mrdamper.errors import SchemaError
-from mrdamper.study.protocol import Protocol, Selection, Split
+from mrdamper.study.protocol import Protocol, Selection, Split, protocol_from_dict
 
-__all__ = ["PRESETS", "doe_protocol", "dyke_protocol", "preset_protocol", "quiroz_protocol"]
+__all__ = [
+    "PRESETS",
+    "doe_protocol",
+    "dyke_protocol",
+    "load_protocol",
+    "preset_protocol",
+    "quiroz_protocol",
+]
 
 
 def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
@@ -97,3 +108,34 @@ def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
     if name not in PRESETS:
         raise SchemaError(f"protocol: unknown preset {name!r}; expected one of {sorted(PRESETS)}")
     return PRESETS[name](models)
+
+
+def load_protocol(path: str | Path) -> Protocol:
+    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the path does not exist and is not a preset name.
+    SchemaError
+        If the file cannot be parsed or does not follow the schema (see ``docs/study.md``).
+    """
+    if isinstance(path, str) and path in PRESETS:
+        return preset_protocol(path)
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(
+            f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})"
+        )
+    text = p.read_text(encoding="utf-8")
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".toml":
+            data = tomllib.loads(text)
+        elif suffix == ".json":
+            data = json.loads(text)
+        else:
+            raise SchemaError(f"{p}: protocol file must end in .json or .toml, got {suffix!r}")
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SchemaError(f"{p}: cannot parse protocol file ({exc})") from None
+    return protocol_from_dict(data)

@@ -11,15 +11,13 @@ from __future__ import annotations
 import fnmatch
 import json
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
 from mrdamper.data import Experiment, ExperimentSet
-from mrdamper.data.experiment_set import _equal
+from mrdamper.data.experiment_set import metadata_equal
 from mrdamper.errors import SchemaError
 
 __all__ = [
@@ -30,7 +28,6 @@ __all__ = [
     "Protocol",
     "Selection",
     "Split",
-    "load_protocol",
     "protocol_from_dict",
 ]
 
@@ -119,12 +116,12 @@ class Selection:
             if key not in e.metadata:
                 return False
             options = want if isinstance(want, tuple) else (want,)
-            if not any(_equal(e.metadata[key], w) for w in options):
+            if not any(metadata_equal(e.metadata[key], w) for w in options):
                 return False
         for key, bad in self.exclude.items():
             if key in e.metadata:
                 options = bad if isinstance(bad, tuple) else (bad,)
-                if any(_equal(e.metadata[key], w) for w in options):
+                if any(metadata_equal(e.metadata[key], w) for w in options):
                     return False
         return not self.names or any(fnmatch.fnmatchcase(e.name, g) for g in self.names)
 
@@ -550,36 +547,3 @@ def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
         showcase=data.get("showcase"),
         hysteresis_record=data.get("hysteresis_record"),
     )
-
-
-def load_protocol(path: str | Path) -> Protocol:
-    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
-
-    Raises
-    ------
-    FileNotFoundError
-        If the path does not exist and is not a preset name.
-    SchemaError
-        If the file cannot be parsed or does not follow the schema (see ``docs/study.md``).
-    """
-    from mrdamper.study.presets import PRESETS, preset_protocol
-
-    if isinstance(path, str) and path in PRESETS:
-        return preset_protocol(path)
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(
-            f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})"
-        )
-    text = p.read_text(encoding="utf-8")
-    suffix = p.suffix.lower()
-    try:
-        if suffix == ".toml":
-            data = tomllib.loads(text)
-        elif suffix == ".json":
-            data = json.loads(text)
-        else:
-            raise SchemaError(f"{p}: protocol file must end in .json or .toml, got {suffix!r}")
-    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise SchemaError(f"{p}: cannot parse protocol file ({exc})") from None
-    return protocol_from_dict(data)

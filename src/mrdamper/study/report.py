@@ -15,12 +15,12 @@ import base64
 import html
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from mrdamper.study.figures import FIGURES, failed_models, overlay_models
+from mrdamper.study.figures import FIGURE_DPI, FIGURES, failed_models, overlay_models
 from mrdamper.study.report_tables import (
     analysis_table,
     energy_display,
@@ -32,11 +32,8 @@ from mrdamper.study.report_tables import (
     study_failed_note,
     summary_table,
 )
+from mrdamper.study.result import StudyResult
 from mrdamper.study.tables import PAPER_HEADLINE
-from mrdamper.study.writer import FIGURE_DPI
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import StudyResult
 
 __all__ = ["figure_captions", "render_report"]
 

@@ -8,15 +8,13 @@ comparison cells that read as a sentence ("74.8 % lower").
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.tables import improvement_pct
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import Showcase, StudyResult
 
 __all__ = [
     "analysis_table",

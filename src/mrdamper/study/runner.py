@@ -168,7 +168,8 @@ def run_study(
     Returns
     -------
     StudyResult
-        Results, summary, fitted models, analysis and figure data; ``.write(out_dir)`` saves all.
+        Results, summary, fitted models, analysis and figure data (a value; write it with
+        :func:`~mrdamper.study.writer.write_study`).
 
     Raises
     ------
