@@ -32,7 +32,10 @@ from mrdamper.errors import DataValidationError
 
 __all__ = [
     "DaskExecutor",
+    "DiskRecord",
+    "PackedRecord",
     "ProcessExecutor",
+    "RecordHandle",
     "SerialExecutor",
     "StudyExecutor",
     "default_workers",
@@ -64,6 +67,11 @@ class DiskRecord:
     paths: dict[str, str]
 
 
+#: What a task receives for a record: the record itself (in-process), its arrays, its ``.npy``
+#: files, or (Dask) a future of a :class:`PackedRecord` that the scheduler resolves.
+RecordHandle = Experiment | PackedRecord | DiskRecord
+
+
 def pack(e: Experiment) -> PackedRecord:
     """Picklable form of an Experiment."""
     return PackedRecord(
@@ -71,8 +79,18 @@ def pack(e: Experiment) -> PackedRecord:
     )
 
 
-def resolve_record(handle: Any) -> Experiment:
-    """Rebuild an :class:`Experiment` from whatever handle a task received."""
+def resolve_record(handle: RecordHandle) -> Experiment:
+    """Rebuild an :class:`Experiment` from whatever handle a task received.
+
+    Parameters
+    ----------
+    handle : Experiment, PackedRecord or DiskRecord
+        The record as shared by an executor.
+
+    Returns
+    -------
+    Experiment
+    """
     if isinstance(handle, Experiment):
         return handle
     if isinstance(handle, PackedRecord):

@@ -12,9 +12,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from mrdamper.data import Experiment
+from mrdamper.models import FittedModel
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
 from mrdamper.study.tables import headline, summarize
@@ -40,10 +43,10 @@ class Showcase:
 
     fold: str
     record: Experiment
-    predictions: Mapping[str, Any]
+    predictions: Mapping[str, NDArray[np.float64] | str]
     kinds: Mapping[str, str] = field(default_factory=dict)
 
-    def ok(self) -> dict[str, Any]:
+    def ok(self) -> dict[str, NDArray[np.float64]]:
         """Only the successful predictions."""
         return {k: v for k, v in self.predictions.items() if not isinstance(v, str)}
 
@@ -79,7 +82,7 @@ class StudyResult:
     results: pd.DataFrame
     fits: pd.DataFrame
     roles: pd.DataFrame
-    models: Mapping[tuple[str, str], Any]
+    models: Mapping[tuple[str, str], FittedModel]
     analyses: Mapping[str, AnalysisOutcome]
     showcase: Showcase | None = None
     hysteresis: Showcase | None = None

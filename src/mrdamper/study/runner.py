@@ -15,14 +15,15 @@ import inspect
 import platform
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.errors import SchemaError, interrupt_in_chain
-from mrdamper.study._tasks import fit_task, simulate_task
+from mrdamper.models import FittedModel
+from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
@@ -45,6 +46,7 @@ META_COLUMNS: tuple[str, ...] = (
 )
 
 _LAW_SETTINGS = ("laws", "zone_laws")
+_O = TypeVar("_O", FitOutcome, SimOutcome)
 
 #: Typical identification cost rank per kind (most expensive first). Fits are submitted in this
 #: order so the longest task starts first and the others fill the remaining workers; results do
@@ -202,8 +204,8 @@ def run_study(
         for fi, fold in enumerate(folds)
         for si, spec in enumerate(specs)
     }
-    fit_out: dict[tuple[int, int], dict[str, Any]] = {}
-    sim_out: dict[tuple[int, int, int], dict[str, Any]] = {}
+    fit_out: dict[tuple[int, int], FitOutcome] = {}
+    sim_out: dict[tuple[int, int, int], SimOutcome] = {}
     executor = make_executor(workers, scheduler)
     try:
         _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
@@ -245,8 +247,8 @@ def _execute(
     specs: Sequence[ModelSpec],
     settings: Mapping[tuple[int, int], dict[str, Any]],
     protocol: Protocol,
-    fit_out: dict[tuple[int, int], dict[str, Any]],
-    sim_out: dict[tuple[int, int, int], dict[str, Any]],
+    fit_out: dict[tuple[int, int], FitOutcome],
+    sim_out: dict[tuple[int, int, int], SimOutcome],
     show: bool,
 ) -> None:
     handles: dict[int, Any] = {}
@@ -257,56 +259,60 @@ def _execute(
         return handles[id(e)]
 
     n_sims = sum(len(f.score) for f in folds) * len(specs)
-    pending: dict[Any, tuple[int, ...]] = {}
+    fits: dict[Any, tuple[int, int]] = {}  # future -> (fold, model)
+    sims: dict[Any, tuple[int, int, int]] = {}  # future -> (fold, model, scored record)
     trains = [[handle(e) for e in fold.train] for fold in folds]
     order = sorted(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
         key=lambda k: (_COST_RANK.get(specs[k[1]].kind, len(_COST_RANK)), k),
     )
     for fi, si in order:
-        pending[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
+        fits[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
     with _progress(show) as bar:
         t_fit = bar.add_task("fitting", total=len(folds) * len(specs))
         t_sim = bar.add_task("simulating", total=n_sims)
-        while pending:
-            done, _ = ex.wait_first(list(pending))
+        while fits or sims:
+            done, _ = ex.wait_first([*fits, *sims])
             for fut in done:
-                tag = pending.pop(fut)
-                try:
-                    res = fut.result()
-                except Exception as exc:
-                    if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
-                        raise KeyboardInterrupt from exc
-                    res = {
-                        "status": "fit-failed" if len(tag) == 2 else "sim-failed",
-                        "model": None,
-                        "error": f"worker error: {type(exc).__name__}: {exc}",
-                        "note": "",
-                        "fit_time_s": float("nan"),
-                        "sim_time_s": float("nan"),
-                    }
-                if len(tag) == 2:
-                    fi, si = tag
-                    fit_out[(fi, si)] = res
+                if fut in fits:
+                    fi, si = fits.pop(fut)
+                    fr = _outcome(fut, FitOutcome)
+                    fit_out[(fi, si)] = fr
                     bar.advance(t_fit)
-                    if res["status"] == "ok":
+                    if fr.ok:
                         for ri, e in enumerate(folds[fi].score):
-                            fut2 = ex.submit(
-                                simulate_task, res["model"], handle(e), protocol.range_policy
-                            )
-                            pending[fut2] = (fi, si, ri)
+                            sims[
+                                ex.submit(simulate_task, fr.model, handle(e), protocol.range_policy)
+                            ] = (fi, si, ri)
                     else:
                         bar.advance(t_sim, len(folds[fi].score))
                 else:
-                    sim_out[tag] = res  # type: ignore[index]
+                    sim_out[sims.pop(fut)] = _outcome(fut, SimOutcome)
                     bar.advance(t_sim)
+
+
+def _outcome(fut: Any, kind: type[_O]) -> _O:
+    """The task's outcome, or a failed one when the worker itself raised."""
+    try:
+        res = fut.result()
+    except Exception as exc:
+        if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+            raise KeyboardInterrupt from exc
+        why = f"worker error: {type(exc).__name__}: {exc}"
+        failed = (
+            FitOutcome.failed(why) if kind is FitOutcome else SimOutcome.failed("sim-failed", why)
+        )
+        return failed  # type: ignore[return-value]
+    if not isinstance(res, kind):
+        raise TypeError(f"task returned {type(res).__name__}, expected {kind.__name__}")
+    return res
 
 
 def _tables(
     folds: list[Fold],
     specs: Sequence[ModelSpec],
-    fit_out: Mapping[tuple[int, int], dict[str, Any]],
-    sim_out: Mapping[tuple[int, int, int], dict[str, Any]],
+    fit_out: Mapping[tuple[int, int], FitOutcome],
+    sim_out: Mapping[tuple[int, int, int], SimOutcome],
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     nan = float("nan")
     rows: list[dict[str, Any]] = []
@@ -320,12 +326,12 @@ def _tables(
                     "fold": fold.name,
                     "model": spec.label,
                     "kind": spec.kind,
-                    "status": fr["status"],
-                    "fit_time_s": fr["fit_time_s"],
+                    "status": fr.status,
+                    "fit_time_s": fr.fit_time_s,
                     "n_train": len(fold.train),
                     "train_samples": int(sum(e.n for e in fold.train)),
-                    "note": fr.get("note", ""),
-                    "error": fr.get("error", ""),
+                    "note": fr.note,
+                    "error": fr.error,
                 }
             )
             for ri, e in enumerate(fold.score):
@@ -334,28 +340,31 @@ def _tables(
                     "model": spec.label,
                     "kind": spec.kind,
                     "record": e.name,
-                    "fit_time_s": fr["fit_time_s"],
+                    "fit_time_s": fr.fit_time_s,
                 }
-                if fr["status"] != "ok":
+                if not fr.ok:
                     row.update(
-                        status=fr["status"],
+                        status=fr.status,
                         esr=nan,
                         ssse=nan,
                         nrmse=nan,
                         fit_pct=nan,
                         sim_time_s=nan,
-                        note=fr.get("note", ""),
-                        error=fr.get("error", ""),
+                        note=fr.note,
+                        error=fr.error,
                     )
                 else:
                     sr = sim_out[(fi, si, ri)]
                     row.update(
-                        {
-                            k: sr.get(k, nan)
-                            for k in ("status", "esr", "ssse", "nrmse", "fit_pct", "sim_time_s")
-                        }
+                        status=sr.status,
+                        esr=sr.esr,
+                        ssse=sr.ssse,
+                        nrmse=sr.nrmse,
+                        fit_pct=sr.fit_pct,
+                        sim_time_s=sr.sim_time_s,
+                        note=sr.note,
+                        error=sr.error,
                     )
-                    row["note"], row["error"] = sr.get("note", ""), sr.get("error", "")
                 for k in meta_present:
                     row[k] = e.metadata.get(k)
                 rows.append(row)
@@ -364,16 +373,16 @@ def _tables(
 
 
 def _fitted_models(
-    folds: list[Fold], specs: Sequence[ModelSpec], fit_out: Mapping[tuple[int, int], dict[str, Any]]
-) -> dict[tuple[str, str], Any]:
+    folds: list[Fold], specs: Sequence[ModelSpec], fit_out: Mapping[tuple[int, int], FitOutcome]
+) -> dict[tuple[str, str], FittedModel]:
     from mrdamper.models import model_from_dict
 
-    out: dict[tuple[str, str], Any] = {}
+    out: dict[tuple[str, str], FittedModel] = {}
     for fi, fold in enumerate(folds):
         for si, spec in enumerate(specs):
             res = fit_out[(fi, si)]
-            if res["status"] == "ok" and res.get("model") is not None:
-                out[(fold.name, spec.label)] = model_from_dict(res["model"])
+            if res.ok and res.model is not None:
+                out[(fold.name, spec.label)] = model_from_dict(dict(res.model))
     return out
 
 
