@@ -10,7 +10,7 @@ Examples
 """
 
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
-from mrdamper.study.default import default_protocol
+from mrdamper.study.default import choose_protocol, default_protocol
 from mrdamper.study.executor import make_executor
 from mrdamper.study.presets import (
     doe_protocol,
@@ -27,6 +27,7 @@ from mrdamper.study.protocol import (
     Split,
     protocol_from_dict,
 )
+from mrdamper.study.records import study_records
 from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.runner import run_study
 from mrdamper.study.selection import SelectionResult, cross_validate
@@ -45,6 +46,7 @@ __all__ = [
     "Showcase",
     "Split",
     "StudyResult",
+    "choose_protocol",
     "cross_validate",
     "default_protocol",
     "doe_protocol",
@@ -58,6 +60,7 @@ __all__ = [
     "quiroz_protocol",
     "run_analysis",
     "run_study",
+    "study_records",
     "summarize",
     "write_study",
 ]

@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from mrdamper.data import Experiment
 from mrdamper.errors import (
     DataValidationError,
     IdentificationError,
@@ -23,6 +24,7 @@ from mrdamper.errors import (
     SimulationDivergedError,
     interrupt_in_chain,
 )
+from mrdamper.models import FittedModel
 from mrdamper.study._threads import single_threaded_blas
 from mrdamper.study.executor import RecordHandle, resolve_record
 
@@ -88,6 +90,9 @@ class SimOutcome:
         Why it failed (empty when ok).
     note : str
         Up to three distinct warnings raised while simulating.
+    outside_range : bool
+        The record's electrical input leaves the range the model was identified on (the
+        protocol's range policy then decides: extrapolate, clip or refuse).
     """
 
     status: SimStatus
@@ -98,11 +103,14 @@ class SimOutcome:
     sim_time_s: float = _NAN
     error: str = ""
     note: str = ""
+    outside_range: bool = False
 
     @classmethod
-    def failed(cls, status: SimStatus, error: str, note: str = "") -> SimOutcome:
+    def failed(
+        cls, status: SimStatus, error: str, note: str = "", outside_range: bool = False
+    ) -> SimOutcome:
         """A simulation that did not give scores, with its status and reason."""
-        return cls(status, error=error, note=note)
+        return cls(status, error=error, note=note, outside_range=outside_range)
 
 
 def _message(exc: BaseException) -> str:
@@ -190,12 +198,15 @@ def simulate_task(model: Mapping[str, Any], record: RecordHandle, range_policy: 
     """
     from mrdamper.models import model_from_dict
 
+    outside = False
     with single_threaded_blas(), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         out: SimOutcome
         try:
             exp = resolve_record(record)
-            fitted = model_from_dict(dict(model)).with_range_policy(range_policy)  # type: ignore[arg-type]
+            saved = model_from_dict(dict(model))
+            outside = _outside_range(saved, exp)
+            fitted = saved.with_range_policy(range_policy)  # type: ignore[arg-type]
             res = fitted.simulate(exp)
             try:
                 s = res.scores
@@ -217,4 +228,15 @@ def simulate_task(model: Mapping[str, Any], record: RecordHandle, range_policy: 
         except Exception as exc:  # noqa: BLE001 - any other failure of a model is a result row, not a crash
             _reraise_interrupt(exc)
             out = SimOutcome.failed("sim-failed", _message(exc))
-    return dataclasses.replace(out, note=_notes(caught))
+    return dataclasses.replace(out, note=_notes(caught), outside_range=outside)
+
+
+def _outside_range(model: FittedModel, exp: Experiment) -> bool:
+    """True when ``exp``'s electrical input leaves the model's identified range."""
+    try:
+        model.with_range_policy("error").electrical_input(exp)
+    except OutOfRangeError:
+        return True
+    except Exception:  # noqa: BLE001 - a missing channel is reported by the simulation itself
+        return False
+    return False

@@ -32,6 +32,16 @@ def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
       only, which keeps identification time bounded.
     * Scoring: every other record of experiments 1-8; records used for the analysis or the
       identification are never scored (``exclude_trained``).
+
+    Parameters
+    ----------
+    models : sequence
+        Models to run: kinds (``"lpv"``), :class:`~mrdamper.study.ModelSpec` or dicts; empty:
+        every installed default model.
+
+    Returns
+    -------
+    Protocol
     """
     return Protocol(
         name="doe",
@@ -59,6 +69,16 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
     analysis and the models on the other conditions. The condition is the metadata ``condition``
     that the folder reader takes from the file name
     (``sine_5mm_3Hz_0.5A`` -> ``5mm_3Hz``).
+
+    Parameters
+    ----------
+    models : sequence
+        Models to run: kinds (``"lpv"``), :class:`~mrdamper.study.ModelSpec` or dicts; empty:
+        every installed default model.
+
+    Returns
+    -------
+    Protocol
     """
     return Protocol(
         name="quiroz-loco",
@@ -81,6 +101,16 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
     (``docs/results.md``); P-15's coefficients follow the same drive-lagged voltage. The test
     part's voltage exceeds the training range by < 0.1 %, so models are scored with
     ``range_policy="clip"``.
+
+    Parameters
+    ----------
+    models : sequence
+        Models to run: kinds (``"lpv"``), :class:`~mrdamper.study.ModelSpec` or dicts; empty:
+        every installed default model.
+
+    Returns
+    -------
+    Protocol
     """
     return Protocol(
         name="dyke-70-30",
@@ -104,7 +134,19 @@ PRESETS = {"doe": doe_protocol, "quiroz": quiroz_protocol, "dyke": dyke_protocol
 
 
 def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
-    """A preset protocol by name: ``"doe"``, ``"quiroz"`` or ``"dyke"``."""
+    """A preset protocol by name: ``"doe"``, ``"quiroz"`` or ``"dyke"``.
+
+    Parameters
+    ----------
+    name : {"doe", "quiroz", "dyke"}
+        The preset.
+    models : sequence
+        Models to run (as for :func:`doe_protocol`).
+
+    Returns
+    -------
+    Protocol
+    """
     if name not in PRESETS:
         raise SchemaError(f"protocol: unknown preset {name!r}; expected one of {sorted(PRESETS)}")
     return PRESETS[name](models)
@@ -112,6 +154,15 @@ def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
 
 def load_protocol(path: str | Path) -> Protocol:
     """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
+
+    Parameters
+    ----------
+    path : str or Path
+        Protocol file, or a preset name.
+
+    Returns
+    -------
+    Protocol
 
     Raises
     ------

@@ -14,11 +14,12 @@ import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
-from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.data import ExperimentSet, SourceSet
 from mrdamper.data.experiment_set import metadata_equal
 from mrdamper.errors import SchemaError
+from mrdamper.study.records import Record, Records, same_kind
 
 __all__ = [
     "DEFAULT_MODELS",
@@ -111,7 +112,7 @@ class Selection:
             if not self.group_by:
                 raise SchemaError("group_by: 'take' needs a metadata key to group by, got none")
 
-    def _accepts(self, e: Experiment) -> bool:
+    def _accepts(self, e: Record) -> bool:
         for key, want in self.match.items():
             if key not in e.metadata:
                 return False
@@ -125,8 +126,18 @@ class Selection:
                     return False
         return not self.names or any(fnmatch.fnmatchcase(e.name, g) for g in self.names)
 
-    def select(self, data: ExperimentSet) -> ExperimentSet:
-        """Return the selected records, in data order."""
+    @overload
+    def select(self, data: ExperimentSet) -> ExperimentSet: ...
+    @overload
+    def select(self, data: SourceSet) -> SourceSet: ...
+    def select(self, data: Records) -> Records:
+        """Return the selected records, in data order (a set of the same kind as ``data``).
+
+        Parameters
+        ----------
+        data : ExperimentSet or SourceSet
+            Records to select from (only names and metadata are looked at).
+        """
         chosen = [e for e in data if self._accepts(e)]
         if self.take is not None and self.group_by:
             counts: dict[Any, int] = {}
@@ -137,7 +148,7 @@ class Selection:
                     kept.append(e)
                 counts[g] = counts.get(g, 0) + 1
             chosen = kept
-        return ExperimentSet(chosen, name=data.name)
+        return same_kind(data, chosen)
 
     def describe(self) -> str:
         """One-line human description."""
@@ -230,8 +241,14 @@ class Split:
         ):
             raise SchemaError(f"split.fraction: expected a number in (0, 1), got {self.fraction!r}")
 
-    def group_of(self, e: Experiment) -> Any:
-        """Group value of a record (leave-one-group-out)."""
+    def group_of(self, e: Record) -> Any:
+        """Group value of a record (leave-one-group-out).
+
+        Parameters
+        ----------
+        e : Experiment or RecordSource
+            The record (its name and metadata).
+        """
         if self.name_regex is not None:
             m = re.search(self.name_regex, e.name)
             if m is None:
@@ -499,6 +516,15 @@ def _selection(value: Any, where: str) -> Selection:
 
 def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
     """Build a :class:`Protocol` from its dict form (a parsed JSON or TOML protocol file).
+
+    Parameters
+    ----------
+    data : mapping
+        The protocol's keys (see ``docs/study.md``).
+
+    Returns
+    -------
+    Protocol
 
     Raises
     ------

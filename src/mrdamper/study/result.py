@@ -20,6 +20,7 @@ from mrdamper.data import Experiment
 from mrdamper.models import FittedModel
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
+from mrdamper.study.selection import SelectionResult
 from mrdamper.study.tables import headline, summarize
 
 __all__ = ["Showcase", "StudyResult"]
@@ -75,6 +76,10 @@ class StudyResult:
         Records and predictions drawn in Figs. 6, 9, 10 and Fig. 4.
     info : dict
         Seed, executor, wall time, platform.
+    selection : SelectionResult or None
+        The model-selection table and recommendation of ``mrdamper select``, computed from this
+        study's held-out scores (scored records that trained nothing in their fold), with the
+        rule of :func:`~mrdamper.study.selection.cross_validate`.
     """
 
     protocol: Protocol
@@ -87,6 +92,7 @@ class StudyResult:
     showcase: Showcase | None = None
     hysteresis: Showcase | None = None
     info: Mapping[str, Any] = field(default_factory=dict)
+    selection: SelectionResult | None = None
 
     @property
     def labels(self) -> list[str]:

@@ -20,7 +20,8 @@ from typing import Any, TypeVar
 import numpy as np
 import pandas as pd
 
-from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.data import Experiment, ExperimentSet, SourceSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import SchemaError, interrupt_in_chain
 from mrdamper.models import FittedModel
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
@@ -28,7 +29,9 @@ from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
+from mrdamper.study.records import Record, Records, as_list, as_loaded, load_all
 from mrdamper.study.result import Showcase, StudyResult
+from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_from_scores
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
@@ -81,8 +84,13 @@ def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict
     return out
 
 
-def data_origin(data: Iterable[Experiment]) -> str:
+def data_origin(data: Iterable[Record]) -> str:
     """Where the records come from, for the report's wording.
+
+    Parameters
+    ----------
+    data : iterable of Experiment or RecordSource
+        The study's records (their metadata).
 
     Returns
     -------
@@ -98,7 +106,7 @@ def data_origin(data: Iterable[Experiment]) -> str:
     return "measured"
 
 
-def _pick(records: Iterable[Experiment], pattern: str | None) -> Experiment | None:
+def _pick(records: Iterable[Record], pattern: str | None) -> Record | None:
     for e in records:
         if pattern is None or fnmatch.fnmatchcase(e.name, pattern):
             return e
@@ -139,7 +147,7 @@ def _progress(enabled: bool) -> Any:
 
 
 def run_study(
-    data: ExperimentSet | Iterable[Experiment],
+    data: ExperimentSet | SourceSet | Iterable[Experiment],
     protocol: Protocol | None = None,
     models: Sequence[str | ModelSpec | Mapping[str, Any]] | None = None,
     *,
@@ -152,8 +160,10 @@ def run_study(
 
     Parameters
     ----------
-    data : ExperimentSet or iterable of Experiment
-        All records of the study (never modified).
+    data : ExperimentSet, SourceSet or iterable of Experiment
+        All records of the study (never modified). Records in memory are shared with the
+        workers; sources (:func:`mrdamper.data.record_sources`) are read by the workers that
+        use them, so this process holds only the analysis and figure records, one set at a time.
     protocol : Protocol, optional
         Roles of the records and models; default :func:`~mrdamper.study.protocol.doe_protocol`.
     models : sequence, optional
@@ -180,7 +190,7 @@ def run_study(
         scoring records. Model failures do not raise: they are rows with a status.
     """
     t_start = time.perf_counter()
-    data = as_experiment_set(data, name="data")
+    records: Records = data if isinstance(data, SourceSet) else as_experiment_set(data, name="data")
     protocol = protocol or doe_protocol()
     if models is not None:
         protocol = protocol.with_models([_as_spec(m) for m in models])
@@ -190,7 +200,7 @@ def run_study(
     protocol = protocol.with_models(specs)  # the saved protocol lists the models actually run
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise SchemaError(f"seed: expected an integer, got {seed!r}")
-    folds = make_folds(data, protocol)
+    folds = make_folds(records, protocol)
     analyses: dict[str, AnalysisOutcome] = {}
     for fold in folds:
         if protocol.analysis is None:
@@ -198,7 +208,7 @@ def run_study(
                 error="no force-velocity analysis in this protocol"
             )
         else:
-            analyses[fold.name] = run_analysis(fold.analysis, protocol.input)
+            analyses[fold.name] = run_analysis(load_all(fold.analysis), protocol.input)
     settings = {
         (fi, si): _settings(spec, protocol, int(seed), analyses[fold.name].laws)
         for fi, fold in enumerate(folds)
@@ -215,15 +225,16 @@ def run_study(
     executor.close()
     results, fits = _tables(folds, specs, fit_out, sim_out)
     fitted = _fitted_models(folds, specs, fit_out)
+    selection = _selection(folds, specs, fit_out, sim_out, protocol)
     showcase, hysteresis = _showcases(folds, specs, fitted, protocol)
     info = {
         "seed": int(seed),
         "executor": executor.description,
         "wall_time_s": time.perf_counter() - t_start,
-        "n_records": len(data),
-        "data_origin": data_origin(data),
+        "n_records": len(records),
+        "data_origin": data_origin(records),
         "n_folds": len(folds),
-        "sources": sorted({str(e.metadata["source"]) for e in data if e.metadata.get("source")}),
+        "sources": sorted({str(e.metadata["source"]) for e in records if e.metadata.get("source")}),
         "python": platform.python_version(),
         "platform": platform.platform(),
     }
@@ -238,6 +249,7 @@ def run_study(
         showcase=showcase,
         hysteresis=hysteresis,
         info=info,
+        selection=selection,
     )
 
 
@@ -253,7 +265,7 @@ def _execute(
 ) -> None:
     handles: dict[int, Any] = {}
 
-    def handle(e: Experiment) -> Any:
+    def handle(e: Record) -> Any:
         if id(e) not in handles:
             handles[id(e)] = ex.share(e)
         return handles[id(e)]
@@ -280,7 +292,7 @@ def _execute(
                     fit_out[(fi, si)] = fr
                     bar.advance(t_fit)
                     if fr.ok:
-                        for ri, e in enumerate(folds[fi].score):
+                        for ri, e in enumerate(as_list(folds[fi].score)):
                             sims[
                                 ex.submit(simulate_task, fr.model, handle(e), protocol.range_policy)
                             ] = (fi, si, ri)
@@ -334,7 +346,7 @@ def _tables(
                     "error": fr.error,
                 }
             )
-            for ri, e in enumerate(fold.score):
+            for ri, e in enumerate(as_list(fold.score)):
                 row: dict[str, Any] = {
                     "fold": fold.name,
                     "model": spec.label,
@@ -372,6 +384,48 @@ def _tables(
     return results, pd.DataFrame(fit_rows)
 
 
+def _selection(
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    fit_out: Mapping[tuple[int, int], FitOutcome],
+    sim_out: Mapping[tuple[int, int, int], SimOutcome],
+    protocol: Protocol,
+) -> SelectionResult:
+    """The model-selection table of ``mrdamper select`` from this study's held-out scores.
+
+    Only scored records that neither trained the models nor the analysis of their fold count
+    (a protocol may score training records; those scores are not held out). A fold fails for a
+    model when its fit failed or one of its held-out simulations did not give a score.
+    """
+    rows: list[dict[str, Any]] = []
+    fit_times: dict[str, list[float]] = {s.label: [] for s in specs}
+    for fi, fold in enumerate(folds):
+        trained = set(fold.train.names) | set(fold.analysis.names)
+        for si, spec in enumerate(specs):
+            fr = fit_out[(fi, si)]
+            if fr.ok:
+                fit_times[spec.label].append(fr.fit_time_s)
+            for ri, e in enumerate(as_list(fold.score)):
+                if e.name in trained:
+                    continue
+                row: dict[str, Any] = {"model": spec.label, "fold": fold.name, "record": e.name}
+                if not fr.ok:
+                    row.update(esr=float("nan"), clipped=False, error=f"fit: {fr.error}")
+                else:
+                    sr = sim_out[(fi, si, ri)]
+                    ok = sr.status == "ok"
+                    row.update(
+                        esr=sr.esr if ok else float("nan"),
+                        clipped=sr.outside_range,
+                        error="" if ok else f"{sr.status}: {sr.error}",
+                    )
+                rows.append(row)
+    scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
+    return selection_from_scores(
+        scores, [s.label for s in specs], fit_times, protocol.split.kind, len(folds)
+    )
+
+
 def _fitted_models(
     folds: list[Fold], specs: Sequence[ModelSpec], fit_out: Mapping[tuple[int, int], FitOutcome]
 ) -> dict[tuple[str, str], FittedModel]:
@@ -386,29 +440,31 @@ def _fitted_models(
     return out
 
 
-def _informative(folds: list[Fold], source: str) -> tuple[Fold, Experiment] | None:
+def _informative(folds: list[Fold], source: ElectricalSource) -> tuple[Fold, Record] | None:
     """The scored record that shows the most of a current-scheduled model (default showcase).
 
     Preference: a record whose electrical input varies (more than 10 % of the span over all
     scored records), then the highest mean electrical level, then the widest velocity spread;
-    ties keep the first in fold and record order.
+    ties keep the first in fold and record order. Record sources are read one at a time.
     """
     cands = [(f, e) for f in folds for e in f.score]
     if not cands:
         return None
-    levels = [np.asarray(e.electrical(source), dtype=np.float64) for _, e in cands]  # type: ignore[arg-type]
-    span = max(float(np.ptp(np.concatenate(levels))), 1e-12)
+    stats = [_record_stats(as_loaded(e), source) for _, e in cands]
+    span = max(max(hi for _, hi, _, _ in stats) - min(lo for lo, _, _, _ in stats), 1e-12)
 
     def key(k: int) -> tuple[bool, int, float]:
-        el, e = levels[k], cands[k][1]
-        return (
-            float(np.ptp(el)) > 0.1 * span,
-            round(20 * float(np.mean(np.abs(el))) / span),
-            float(np.std(e.v)),
-        )
+        lo, hi, mean_abs, v_std = stats[k]
+        return (hi - lo > 0.1 * span, round(20 * mean_abs / span), v_std)
 
     best = max(range(len(cands)), key=lambda k: (key(k), -k))
     return cands[best]
+
+
+def _record_stats(e: Experiment, source: ElectricalSource) -> tuple[float, float, float, float]:
+    """``(min input, max input, mean |input|, std of v)`` of one record."""
+    el = np.asarray(e.electrical(source), dtype=np.float64)
+    return float(np.min(el)), float(np.max(el)), float(np.mean(np.abs(el))), float(np.std(e.v))
 
 
 def _showcases(
@@ -425,10 +481,11 @@ def _showcases(
     """
     kinds = {s.label: s.kind for s in specs}
 
-    def make(fold: Fold, e: Experiment) -> Showcase:
+    def make(fold: Fold, rec: Record) -> Showcase:
         ms = {
             s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted
         }
+        e = as_loaded(rec)
         return Showcase(
             fold=fold.name,
             record=e,
