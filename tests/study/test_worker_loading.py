@@ -91,3 +91,30 @@ def test_a_file_changed_after_planning_is_refused(tmp_path: Path, doe: Experimen
 def test_unknown_load_mode_is_refused(doe_folder: Path) -> None:
     with pytest.raises(DataValidationError, match="load"):
         study_records(doe_folder, load="later")  # type: ignore[arg-type]
+
+
+def _cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    from mrdamper.cli.main import main
+
+    try:
+        main(args)
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    return code, capsys.readouterr().err
+
+
+def test_cli_load_option(
+    doe_folder: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    common = ["study", str(doe_folder), "--models", "bingham", "--workers", "1", "--no-progress"]
+    outs = {}
+    for mode in ("worker", "parent"):
+        out = tmp_path / mode
+        code, err = _cli([*common, "--out", str(out), "--load", mode], capsys)
+        assert code == 0, err
+        outs[mode] = (out / "results.csv").read_bytes()
+    assert outs["worker"] == outs["parent"]
+    code, err = _cli([*common, "--out", str(tmp_path / "x"), "--load", "later"], capsys)
+    assert code == 2 and "load" in err and "later" in err
+    assert not (tmp_path / "x").exists()
