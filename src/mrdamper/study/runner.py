@@ -19,11 +19,14 @@ from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
+from mrdamper.analysis import ZoneLaws
 from mrdamper.data import Experiment, ExperimentSet, SourceSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import SchemaError, interrupt_in_chain
-from mrdamper.models import FittedModel
+from mrdamper.models import Estimator, FittedModel
+from mrdamper.models.base import RangePolicy
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
@@ -57,13 +60,15 @@ _O = TypeVar("_O", FitOutcome, SimOutcome)
 _COST_RANK: dict[str, int] = {"spencer": 0, "lpv": 1, "p15": 2, "sp1": 3, "sp4": 4, "lti": 5}
 
 
-def _estimator_fields(est: Any) -> set[str]:
+def _estimator_fields(est: Estimator) -> set[str]:
     if dataclasses.is_dataclass(est):
         return {f.name for f in dataclasses.fields(est)}
     return set(inspect.signature(type(est)).parameters)
 
 
-def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict[str, Any]:
+def _settings(
+    spec: ModelSpec, protocol: Protocol, seed: int, laws: ZoneLaws | None
+) -> dict[str, Any]:
     """Estimator settings of ``spec`` with the protocol's input, the study seed and the fold's laws."""
     from mrdamper.models import get_estimator
 
@@ -113,11 +118,13 @@ def _pick(records: Iterable[Record], pattern: str | None) -> Record | None:
     return None
 
 
-def _predict_all(models: Mapping[str, Any], e: Experiment, policy: str) -> dict[str, Any]:
+def _predict_all(
+    models: Mapping[str, FittedModel], e: Experiment, policy: RangePolicy
+) -> dict[str, NDArray[np.float64] | str]:
     """Label -> predicted force [N] or the error text, for the figures."""
     import warnings
 
-    out: dict[str, Any] = {}
+    out: dict[str, NDArray[np.float64] | str] = {}
     for label, m in models.items():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -470,7 +477,7 @@ def _record_stats(e: Experiment, source: ElectricalSource) -> tuple[float, float
 def _showcases(
     folds: list[Fold],
     specs: Sequence[ModelSpec],
-    fitted: Mapping[tuple[str, str], Any],
+    fitted: Mapping[tuple[str, str], FittedModel],
     protocol: Protocol,
 ) -> tuple[Showcase | None, Showcase | None]:
     """Predictions of every model on the figure records (Figs. 4, 6, 9, 10, 11).
