@@ -693,5 +693,5 @@ def test_requires_python_matches_the_standard_library_used() -> None:
     assert (
         meta["project"]["requires-python"] == ">=3.11"
     )  # protocol files are read with tomllib (3.11+)
-    assert "import tomllib" in (REPO / "src" / "mrdamper" / "study" / "protocol.py").read_text()
+    assert "import tomllib" in (REPO / "src" / "mrdamper" / "study" / "presets.py").read_text()
     assert meta["tool"]["mypy"]["python_version"] == "3.11"

@@ -36,3 +36,55 @@ def test_written_files_get_the_umask_mode(tmp_path) -> None:
     finally:
         os.umask(umask)
     assert (p.stat().st_mode & 0o777) == 0o644
+
+
+def _build(files: dict[str, str]):
+    def build(tmp) -> None:
+        for name, text in files.items():
+            atomic_write_text(tmp / name, text)
+
+    return build
+
+
+def test_folder_replace_and_merge(tmp_path) -> None:
+    from mrdamper._io import write_folder
+
+    out = tmp_path / "out"
+    write_folder(out, _build({"a.txt": "1", "b.txt": "1"}))
+    with pytest.raises(OutputExistsError):
+        write_folder(out, _build({"a.txt": "2"}))
+    write_folder(out, _build({"a.txt": "2"}), force=True, mode="merge")
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"a.txt": "2", "b.txt": "1"}
+    write_folder(out, _build({"c.txt": "3"}), force=True, mode="replace")
+    assert [p.name for p in out.iterdir()] == ["c.txt"]
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary left
+
+
+def test_folder_failure_leaves_target_untouched(tmp_path) -> None:
+    from mrdamper._io import write_folder
+
+    out = tmp_path / "out"
+    write_folder(out, _build({"a.txt": "1"}))
+
+    def boom(tmp) -> None:
+        atomic_write_text(tmp / "a.txt", "partial")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_folder(out, boom, force=True)
+    assert (out / "a.txt").read_text() == "1"
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_folder_gets_the_mode_of_an_ordinary_folder(tmp_path) -> None:
+    import os
+
+    from mrdamper._io import write_folder
+
+    umask = os.umask(0o027)
+    try:
+        out = write_folder(tmp_path / "out", _build({"a.txt": "1"}))
+    finally:
+        os.umask(umask)
+    assert (out.stat().st_mode & 0o777) == 0o750
+    assert ((out / "a.txt").stat().st_mode & 0o777) == 0o640

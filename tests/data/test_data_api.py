@@ -15,20 +15,30 @@ def test_data_exports() -> None:
             "COLUMN_ALIASES",
             "Experiment",
             "ExperimentSet",
+            "RecordSource",
+            "SourceSet",
             "as_experiment_set",
             "read",
             "read_csv",
             "read_directory",
             "read_mat",
             "read_parquet",
+            "read_records",
+            "record_sources",
             "write_csv",
             "write_parquet",
         ]
     )
     assert sorted(readers.__all__) == sorted(
         [
+            "ANY_RECORD_FILE",
             "COLUMN_ALIASES",
             "DEFAULT_PATTERN",
+            "RecordFile",
+            "RecordSource",
+            "SourceSet",
+            "directory_files",
+            "is_doe_folder",
             "parse_file_name",
             "read",
             "read_csv",
@@ -36,6 +46,9 @@ def test_data_exports() -> None:
             "read_file",
             "read_mat",
             "read_parquet",
+            "read_records",
+            "record_files",
+            "record_sources",
         ]
     )
 

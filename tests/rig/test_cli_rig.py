@@ -156,13 +156,13 @@ def test_fit_reads_a_doe_folder_through_its_manifest(
 
 
 def test_study_reads_a_doe_folder_as_virtual_rig_records(fast_damper: None, tmp_path: Path) -> None:
-    from mrdamper.cli.study import load_data
+    from mrdamper.data import read_records
     from mrdamper.rig.doe_io import is_doe_folder
     from mrdamper.study.runner import data_origin
 
     out = tmp_path / "doe"
     main(["rig", "doe", "--out", str(out), "--scale", "0.07", "--fs", "200", "--no-progress"])
-    data = load_data(out)
+    data = read_records(out)
     assert len(data) == 61 and all(e.metadata["source"] == "virtual rig" for e in data)
     assert data_origin(data).startswith("virtual rig")  # the report's captions follow this
     other = tmp_path / "mine"

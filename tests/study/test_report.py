@@ -15,7 +15,15 @@ import numpy as np
 import pytest
 
 from mrdamper.data import ExperimentSet
-from mrdamper.study import ModelSpec, Protocol, Selection, Split, doe_protocol, run_study
+from mrdamper.study import (
+    ModelSpec,
+    Protocol,
+    Selection,
+    Split,
+    doe_protocol,
+    run_study,
+    write_study,
+)
 from mrdamper.study.figures import FAILED_ESR, failed_models, make_figures, overlay_models
 from mrdamper.study.report import render_report
 from mrdamper.study.report_tables import energy_table, esr_by_table, laws_table, summary_table
@@ -93,7 +101,7 @@ def test_tables_keep_failed_rows_with_status_units_and_comparisons(result) -> No
 
 
 def test_report_html_rows_rounding_and_failed_note(result, tmp_path) -> None:
-    out = result.write(tmp_path / "out")
+    out = write_study(result, tmp_path / "out")
     html = (out / "report.html").read_text()
     assert "Drawn in panels of their own" in html and "wild (mean ESR" in html
     cells = re.findall(r"<td[^>]*>([^<]*)</td>", html)
@@ -175,7 +183,7 @@ def test_report_tables_fit_the_browser_window(result, tmp_path, width) -> None:
     browser = find_browser()
     if browser is None:
         pytest.skip("no headless browser (chromium) installed: apt-get install chromium")
-    out = result.write(tmp_path / "out")
+    out = write_study(result, tmp_path / "out")
     got = layout_problems(out / "report.html", width, browser, tmp_path)
     assert got["tables"] >= 8
     assert got["problems"] == []

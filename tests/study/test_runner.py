@@ -13,7 +13,7 @@ import pytest
 
 from mrdamper.errors import OutputExistsError, SchemaError
 from mrdamper.models import load_model
-from mrdamper.study import ModelSpec, doe_protocol, run_study
+from mrdamper.study import ModelSpec, doe_protocol, run_study, write_study
 from mrdamper.study.tables import TIMING_COLUMNS
 
 MODELS = ["toy", "toyfail", "toydiverge"]
@@ -90,7 +90,7 @@ def test_unknown_model_or_setting_is_refused_before_running(doe) -> None:
 
 
 def test_write_outputs_and_report(result, tmp_path) -> None:
-    out = result.write(tmp_path / "out")
+    out = write_study(result, tmp_path / "out")
     names = {p.name for p in out.iterdir()}
     assert {
         "results.csv",
@@ -140,13 +140,13 @@ def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> 
     out.mkdir()
     (out / "keep.txt").write_text("x")
     with pytest.raises(OutputExistsError, match="not empty; pass --force"):
-        result.write(out, figures=False)
+        write_study(result, out, figures=False)
     assert (out / "keep.txt").exists()
-    result.write(out, force=True, figures=False)
+    write_study(result, out, force=True, figures=False)
     assert not (out / "keep.txt").exists() and (out / "report.html").exists()
     empty = tmp_path / "empty"
     empty.mkdir()
-    result.write(empty, figures=False)
+    write_study(result, empty, figures=False)
     assert (empty / "results.csv").exists()
 
 
@@ -160,7 +160,7 @@ def test_interrupted_write_leaves_nothing_that_looks_complete(
 
     monkeypatch.setattr(report, "render_report", boom)
     with pytest.raises(KeyboardInterrupt):
-        result.write(tmp_path / "out", figures=False)
+        write_study(result, tmp_path / "out", figures=False)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -175,7 +175,7 @@ def test_report_renders_in_a_headless_browser(result, tmp_path) -> None:
     )
     if browser is None:
         pytest.skip("no headless browser (chromium) installed to render report.html")
-    out = result.write(tmp_path / "out")
+    out = write_study(result, tmp_path / "out")
     shot = tmp_path / "shot.png"
     subprocess.run(
         [

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mrdamper.study import Protocol, Selection, Split, doe_protocol, run_study
+from mrdamper.study import Protocol, Selection, Split, doe_protocol, run_study, write_study
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +31,7 @@ def test_quick_doe_study_with_real_models(short_doe, tmp_path) -> None:
     # the static SP-2 map describes a damper's F-v hysteresis better than a linear model does
     s = res.summary.set_index("model")
     assert s.loc["sp2", "esr_mean"] < s.loc["lti", "esr_mean"]
-    out = res.write(tmp_path / "out")
+    out = write_study(res, tmp_path / "out")
     figs = {p.stem for p in (out / "figures").glob("*.png")}
     assert {
         "fig01_fv_map",

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-import tempfile
+import secrets
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
@@ -34,11 +34,8 @@ def atomic_write_with(
     """
     p = check_writable(path, force)
     p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".part", dir=p.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
+    tmp_path = _new_temp_file(p)
     try:
-        _apply_default_mode(tmp_path)
         writer(tmp_path)
         if p.exists() and not force:  # re-check: another process may have written meanwhile
             raise OutputExistsError(f"{p}: appeared while writing; pass force=True to overwrite")
@@ -56,11 +53,21 @@ def atomic_write_with(
     return p
 
 
-def _apply_default_mode(path: Path) -> None:
-    """Give a ``mkstemp`` file (created 0600) the mode a plain ``open`` would: 0666 minus umask."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)
+def _new_temp_file(target: Path) -> Path:
+    """Create an empty, unused ``.<name>.<random>.part`` file beside ``target``.
+
+    It is created like a plain ``open`` would create it (mode 0666 filtered by the umask, by the
+    operating system), so the finished file has ordinary permissions without reading the umask.
+    """
+    for _ in range(100):
+        tmp = target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(f"{target.parent}: no free temporary name")  # pragma: no cover
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, force: bool = False) -> Path:

@@ -17,14 +17,13 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
+from mrdamper.analysis.levels import GroupBy, pool_by_level
 from mrdamper.analysis.scheduling import Reading, scheduling_input_arrays
-from mrdamper.analysis.zones import ZoneFit, fit_zones, segment_plateaus
-from mrdamper.data import Experiment, as_experiment_set
+from mrdamper.analysis.zones import ZoneFit, fit_zones
+from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError
 
 __all__ = ["ZoneLawWarning", "ZoneLaws", "fit_zone_laws", "zone_fits_binned", "zone_fits_by_level"]
-
-GroupBy = Literal["current", "plateaus"]
 
 
 class ZoneLawWarning(UserWarning):
@@ -279,27 +278,14 @@ def zone_fits_by_level(
     min_duration, settle : float
         Shortest plateau kept and time skipped after each step [s].
     """
-    exps = as_experiment_set(data, name="zones")
-    pools: dict[float, list[tuple[np.ndarray, np.ndarray]]] = {}
-    if by == "current":
-        for e in exps:
-            if "current" not in e.metadata:
-                raise DataValidationError(
-                    "current", f"record {e.name!r} has no metadata 'current'; use by='plateaus'"
-                )
-            pools.setdefault(float(e.metadata["current"]), []).append((e.v, e.F))
-    elif by == "plateaus":
-        sig = [e.electrical(source) for e in exps]
-        span = max(float(np.ptp(s)) for s in sig)
-        tol = plateau_tolerance if plateau_tolerance is not None else max(0.02 * span, 1e-9)
-        for e, s in zip(exps, sig):
-            for a, b, lev in segment_plateaus(
-                s, e.dt, tolerance=tol, min_duration=min_duration, settle=settle
-            ):
-                key = next((k for k in pools if abs(k - lev) <= tol), lev)
-                pools.setdefault(key, []).append((e.v[a:b], e.F[a:b]))
-    else:
-        raise DataValidationError("by", f"expected 'current' or 'plateaus', got {by!r}")
+    pools = pool_by_level(
+        data,
+        by=by,
+        source=source,
+        tolerance=plateau_tolerance,
+        min_duration=min_duration,
+        settle=settle,
+    )
     if not pools:
         raise IdentificationError("zone_fits_by_level: no constant-level data found")
     fits = []

@@ -19,10 +19,7 @@ import typer
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError
 
-__all__ = ["ANY_RECORD_FILE", "READER_OPTIONS", "read_paths", "reader_kwargs", "reader_options"]
-
-#: Regex for any record file in a folder (used when the sine-record pattern matches nothing).
-ANY_RECORD_FILE = r".*\.(csv|txt|tsv|dat|parquet|pq|mat)"
+__all__ = ["READER_OPTIONS", "read_paths", "reader_kwargs", "reader_options"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -194,13 +191,16 @@ def read_paths(
 ) -> list[Experiment]:
     """Read every file and folder of ``paths`` into one list of records, in the order given.
 
+    Folders are resolved by :func:`mrdamper.data.readers.record_files`, the one rule every
+    command and the study use (a DoE manifest, else ``pattern``, else the sine-record pattern
+    when a file name matches it, else every record file).
+
     Parameters
     ----------
     paths : list of Path
         Record files and folders.
     pattern : str or None
-        File-name regex for folders (named groups become metadata). When None, a folder uses the
-        sine-record pattern if any of its file names matches it, else :data:`ANY_RECORD_FILE`.
+        File-name regex for folders (named groups become metadata).
     read_kw : mapping
         Options of the file readers (see :func:`mrdamper.data.readers.read_csv`).
 
@@ -213,24 +213,6 @@ def read_paths(
     FileNotFoundError
         If a path does not exist.
     """
-    from mrdamper.data.readers import DEFAULT_PATTERN, parse_file_name, read_directory, read_file
-    from mrdamper.rig.doe_io import is_doe_folder, read_doe
+    from mrdamper.data.readers import record_files
 
-    records: list[Experiment] = []
-    for p in paths:
-        if not p.exists():
-            raise FileNotFoundError(f"{p}: no such file or folder")
-        if p.is_dir() and pattern is None and is_doe_folder(p):
-            records.extend(
-                read_doe(p)
-            )  # a folder written by 'mrdamper rig doe': its manifest lists the records
-            continue
-        if p.is_dir():
-            pat = pattern
-            if pat is None:
-                matches = any(parse_file_name(f.name, DEFAULT_PATTERN) for f in p.iterdir())
-                pat = DEFAULT_PATTERN if matches else ANY_RECORD_FILE
-            records.extend(read_directory(p, pat, **read_kw))
-        else:
-            records.append(read_file(p, **read_kw))
-    return records
+    return [f.read() for f in record_files(paths, pattern, **read_kw)]

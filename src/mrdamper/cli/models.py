@@ -71,10 +71,11 @@ def parse_settings(items: list[str] | None) -> dict[str, Any]:
 
 
 def _choose_input(records: list[Experiment]) -> str:
-    if all(e.i is not None for e in records):
-        return "i"
-    if all(e.voltage is not None for e in records):
-        return "voltage"
+    from mrdamper.data.inspection import common_input
+
+    source = common_input(records)
+    if source is not None:
+        return source
     raise DataValidationError(
         "--input",
         "the records do not all share one electrical channel ('i' or 'voltage'); choose --input",

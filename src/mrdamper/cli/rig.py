@@ -25,20 +25,9 @@ rig_app = typer.Typer(
 
 
 def _damper(spec: str | None):  # type: ignore[no-untyped-def]
-    from mrdamper.models.registry import load_model
-    from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
+    from mrdamper.rig.reference import resolve_damper
 
-    if spec is None:
-        return None
-    if spec in REFERENCE_DAMPERS:
-        return reference_damper(spec)
-    path = Path(spec)
-    if path.suffix.lower() == ".json" or path.exists():
-        return load_model(path)
-    raise DataValidationError(
-        "--damper",
-        f"expected a reference damper name {list(REFERENCE_DAMPERS)} or a model JSON file, got {spec!r}",
-    )
+    return resolve_damper(spec)
 
 
 @rig_app.command("doe")

@@ -8,17 +8,15 @@ before any computation starts.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
 import typer
 
-from mrdamper.cli._records import ANY_RECORD_FILE, reader_options
-from mrdamper.data import ExperimentSet
+from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError, SchemaError
 
-__all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "load_data", "print_summary", "register", "study"]
+__all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "print_summary", "register", "study"]
 
 #: Duration scale of the Table II records in ``demo --quick`` (30 s -> 3 s, 600 s -> 60 s).
 QUICK_SCALE = 0.1
@@ -37,41 +35,6 @@ def _check_out(out: Path, force: bool, inputs: list[Path] | None = None) -> None
     from mrdamper._io import check_output
 
     check_output(out, force=force, folder=True, inputs=inputs or [])
-
-
-def load_data(path: Path, pattern: str | None = None, **read_kw: Any) -> ExperimentSet:
-    """Read the study's records from a file or a folder.
-
-    Folders: with ``pattern`` the file names must match it (named groups become metadata);
-    without it, a folder written by ``mrdamper rig doe`` is read through its manifest
-    (:func:`mrdamper.rig.doe_io.read_doe`: metadata and ``source="virtual rig"``), otherwise the sine-record
-    pattern is tried and then every CSV / Parquet / MAT file. ``read_kw`` go to the file reader
-    (e.g. ``fs`` to regenerate a rounded time column).
-    """
-    from mrdamper.data.readers import DEFAULT_PATTERN, read_directory, read_file
-    from mrdamper.rig.doe_io import is_doe_folder, read_doe
-
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file or folder")
-    if path.is_file():
-        e = read_file(path, **read_kw)
-        return ExperimentSet([e], name=path.stem)
-    if pattern is not None:
-        try:
-            re.compile(pattern)
-        except re.error as exc:
-            raise DataValidationError(
-                "pattern", f"{pattern!r} is not a valid regular expression ({exc})"
-            ) from None
-        return read_directory(path, pattern, **read_kw)
-    if is_doe_folder(path):  # written by 'mrdamper rig doe': SI files listed with their metadata
-        return read_doe(path)
-    try:
-        return read_directory(path, DEFAULT_PATTERN, **read_kw)
-    except DataValidationError as exc:
-        if exc.field != "pattern":
-            raise
-    return read_directory(path, ANY_RECORD_FILE, **read_kw)
 
 
 def _models(models: str | None) -> list[str] | None:
@@ -177,23 +140,25 @@ def study(
     seed: int = typer.Option(0, "--seed", help="Seed given to every estimator that takes one."),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
+    load: str = typer.Option(
+        "worker",
+        "--load",
+        help="Where records are read: worker (by the tasks that use them; this process keeps "
+        "headers only) or parent (all into memory first).",
+    ),
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Fit and score every model of a protocol on DATA; write tables, models, figures and report.html."""
-    from mrdamper.study import default_protocol, load_protocol, run_study
+    from mrdamper.study import choose_protocol, run_study, study_records, write_study
 
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
     _check_out(out, force, [data])
     _headless()
     kinds = _models(models)
-    records = load_data(data, pattern, **(read_kw or {}))
-    if protocol is not None:
-        proto = load_protocol(protocol)
-        typer.echo(f"{len(records)} records from {data}; protocol {proto.name!r}", err=True)
-    else:
-        proto, why = default_protocol(records)
-        typer.echo(f"{len(records)} records from {data}; {why}", err=True)
+    records = study_records(data, pattern, load=load, **(read_kw or {}))  # type: ignore[arg-type]
+    proto, why = choose_protocol(records, protocol)
+    typer.echo(f"{len(records)} records from {data}; {why}", err=True)
     res = run_study(
         records,
         proto,
@@ -203,7 +168,7 @@ def study(
         seed=seed,
         progress=not no_progress,
     )
-    res.write(out, force=force)
+    write_study(res, out, force=force)
     print_summary(res, out)
 
 
@@ -236,7 +201,7 @@ def demo(
 
     from rich.console import Console
 
-    from mrdamper.study import doe_protocol, run_study
+    from mrdamper.study import doe_protocol, run_study, write_study
 
     _check_out(out, force)
     _headless()
@@ -266,7 +231,7 @@ def demo(
     res = run_study(
         data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
     )
-    res.write(out, force=force)
+    write_study(res, out, force=force)
     print_summary(res, out)
     console.print(
         f"Done in {time.perf_counter() - t0:.0f} s. Open {out / 'report.html'} in a browser.",

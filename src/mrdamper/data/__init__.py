@@ -4,11 +4,15 @@ from mrdamper.data.experiment import CHANNELS, Experiment
 from mrdamper.data.experiment_set import ExperimentSet, as_experiment_set
 from mrdamper.data.readers import (
     COLUMN_ALIASES,
+    RecordSource,
+    SourceSet,
     read,
     read_csv,
     read_directory,
     read_mat,
     read_parquet,
+    read_records,
+    record_sources,
 )
 from mrdamper.data.writers import write_csv, write_parquet
 
@@ -17,12 +21,16 @@ __all__ = [
     "COLUMN_ALIASES",
     "Experiment",
     "ExperimentSet",
+    "RecordSource",
+    "SourceSet",
     "as_experiment_set",
     "read",
     "read_csv",
     "read_directory",
     "read_mat",
     "read_parquet",
+    "read_records",
+    "record_sources",
     "write_csv",
     "write_parquet",
 ]

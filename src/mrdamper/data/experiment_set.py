@@ -15,7 +15,7 @@ import pandas as pd
 from mrdamper.data.experiment import Experiment
 from mrdamper.errors import DataValidationError
 
-__all__ = ["ExperimentSet", "as_experiment_set"]
+__all__ = ["ExperimentSet", "as_experiment_set", "metadata_equal"]
 
 
 class ExperimentSet(Sequence[Experiment]):
@@ -102,7 +102,7 @@ class ExperimentSet(Sequence[Experiment]):
                     return False
                 have = e.metadata[k]
                 options = want if isinstance(want, (list, tuple, set, frozenset)) else (want,)
-                if not any(_equal(have, w) for w in options):
+                if not any(metadata_equal(have, w) for w in options):
                     return False
             return True
 
@@ -164,7 +164,21 @@ class ExperimentSet(Sequence[Experiment]):
         return pd.DataFrame(rows)
 
 
-def _equal(a: Any, b: Any) -> bool:
+def metadata_equal(a: Any, b: Any) -> bool:
+    """True when two metadata values match: numbers within a relative 1e-9, anything else by ``==``.
+
+    The one rule by which :meth:`ExperimentSet.filter` and the study's record selections compare
+    a record's metadata with a wanted value (so ``0.5`` matches ``0.5000000001``).
+
+    Parameters
+    ----------
+    a, b : object
+        Metadata values (numbers, strings, ...).
+
+    Returns
+    -------
+    bool
+    """
     if isinstance(a, (int, float, np.floating, np.integer)) and isinstance(
         b, (int, float, np.floating, np.integer)
     ):

@@ -16,6 +16,7 @@ Figs. 9-11 small multiples :func:`plot_model_panels` (overlay + one panel per mo
 ========================  ============================================================
 """
 
+from mrdamper.plotting._common import PRINT_STYLE
 from mrdamper.plotting.comparison import plot_force_time, plot_fv_models, plot_index_boxes
 from mrdamper.plotting.fv import plot_fv_map, plot_zone_fit
 from mrdamper.plotting.laws import plot_zone_laws
@@ -23,6 +24,7 @@ from mrdamper.plotting.panels import plot_model_panels
 from mrdamper.plotting.timeseries import plot_lti_hysteresis, plot_model_tracking
 
 __all__ = [
+    "PRINT_STYLE",
     "plot_force_time",
     "plot_fv_map",
     "plot_fv_models",

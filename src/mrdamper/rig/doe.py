@@ -40,7 +40,6 @@ import numpy as np
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
-from mrdamper.rig.doe_io import read_doe, write_doe  # re-exported: the DoE's file side
 from mrdamper.rig.virtual_rig import VirtualRig
 from mrdamper.signals import (
     aprbs,
@@ -51,7 +50,7 @@ from mrdamper.signals import (
     road_profile,
     stepped_current,
 )
-from mrdamper.signals._common import check_positive, child_seeds
+from mrdamper.signals.common import check_positive, child_seeds
 
 __all__ = [
     "APRBS_MIN_HOLD",
@@ -63,10 +62,8 @@ __all__ = [
     "DoeSequence",
     "constant_current_sweep",
     "make_record",
-    "read_doe",
     "record_seeds",
     "table_ii",
-    "write_doe",
 ]
 
 Pattern = Literal["ICPS", "APRBS", "PRBS", "SC"]

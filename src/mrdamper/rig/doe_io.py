@@ -5,14 +5,18 @@ from __future__ import annotations
 import csv
 import io
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Literal
 
-from mrdamper._io import atomic_write_text, check_output
+from mrdamper._io import atomic_write_text, check_output, write_folder
 from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.data.readers.manifest import (
+    MANIFEST_COLUMNS,
+    MANIFEST_NAME,
+    is_doe_folder,
+    manifest_rows,
+)
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 
@@ -29,22 +33,6 @@ __all__ = [
 RecordFormat = Literal["csv", "parquet"]
 #: Record file formats :func:`write_records` writes.
 RECORD_FORMATS: tuple[str, ...] = ("csv", "parquet")
-
-#: File name of the manifest written beside the records.
-MANIFEST_NAME = "manifest.csv"
-#: Manifest columns, in order.
-MANIFEST_COLUMNS: tuple[str, ...] = (
-    "name",
-    "experiment",
-    "replicate",
-    "pattern",
-    "displacement",
-    "duration",
-    "max_frequency",
-    "samples",
-    "seed",
-    "file",
-)
 
 
 def _write_csv(record: Experiment, path: Path, force: bool) -> None:
@@ -104,11 +92,8 @@ def write_records(
         )
     out = Path(out_dir)
     _check_out_dir(out, force)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    # everything is written into a private sibling folder first, then moved into place, so a
-    # failure (disk full, interruption) leaves neither partial files nor an empty folder
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
-    try:
+
+    def build(tmp: Path) -> None:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(MANIFEST_COLUMNS)
@@ -126,29 +111,11 @@ def write_records(
             row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
             w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
         atomic_write_text(tmp / MANIFEST_NAME, buf.getvalue())
-        _usual_folder_mode(tmp)
-        if not out.exists():
-            os.replace(tmp, out)
-        elif not any(out.iterdir()):
-            out.rmdir()
-            os.replace(tmp, out)
-        else:  # force: move the new files in, replacing files of the same name
-            for f in sorted(tmp.iterdir()):
-                os.replace(f, out / f.name)
-    except OSError as exc:
-        if exc.errno is None or isinstance(exc, FileExistsError):
-            raise
-        raise OSError(exc.errno, exc.strerror, str(out)) from exc  # name the output folder
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+
+    # built in a private sibling folder, then moved into place (with force: merged into the
+    # existing folder), so a failure leaves neither partial files nor an empty folder
+    write_folder(out, build, force=force, mode="merge")
     return out / MANIFEST_NAME
-
-
-def _usual_folder_mode(folder: Path) -> None:
-    """``mkdtemp`` folders are private (0700); give the finished folder an ordinary mode."""
-    umask = os.umask(0)
-    os.umask(umask)
-    folder.chmod(0o777 & ~umask)
 
 
 def write_doe(
@@ -193,38 +160,13 @@ def write_doe(
     return write_records(records, out_dir, force=force)
 
 
-_MANIFEST_TYPES: dict[str, type] = {
-    "experiment": int,
-    "replicate": int,
-    "pattern": str,
-    "displacement": str,
-    "duration": float,
-    "max_frequency": float,
-    "samples": int,
-    "seed": int,
-}
-
-
-def is_doe_folder(folder: str | os.PathLike[str]) -> bool:
-    """True when ``folder`` holds a manifest written by :func:`write_records` (every manifest column).
-
-    The one test of "this folder came from ``mrdamper rig doe``" that every reader of folders uses
-    before :func:`read_doe`; a folder with some other ``manifest.csv`` is read as ordinary records.
-    """
-    manifest = Path(folder) / MANIFEST_NAME
-    if not manifest.is_file():
-        return False
-    with manifest.open(newline="", encoding="utf-8") as fh:
-        header = next(csv.reader(fh), [])
-    return all(c in header for c in MANIFEST_COLUMNS)
-
-
 def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:
     """Read a folder written by :func:`write_doe` / ``mrdamper rig doe`` back into an ExperimentSet.
 
     The manifest gives the record files, names and metadata (``experiment``, ``replicate``,
     ``pattern``, ``displacement``, ``duration``, ``max_frequency``, ``seed``;
-    ``source="virtual rig"``); each CSV is read with :func:`mrdamper.data.readers.read_csv`.
+    ``source="virtual rig"``; :func:`mrdamper.data.readers.manifest.manifest_rows`). Every
+    reader of folders (:func:`mrdamper.data.readers.read_records`) reads such a folder this way.
 
     Parameters
     ----------
@@ -244,40 +186,8 @@ def read_doe(folder: str | os.PathLike[str]) -> ExperimentSet:
         If the manifest lacks a column, a cell has the wrong type, or a record's sample count
         differs from the manifest.
     """
-    from mrdamper.data.readers import read_csv
+    from mrdamper.data.readers import RecordFile
 
-    root = Path(folder)
-    manifest = root / MANIFEST_NAME
-    if not manifest.is_file():
-        raise FileNotFoundError(f"{manifest}: no DoE manifest (write one with mrdamper rig doe)")
-    with manifest.open(newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
-    missing = [c for c in MANIFEST_COLUMNS if rows and c not in rows[0]]
-    if missing:
-        raise DataValidationError("manifest", f"{manifest}: missing column(s) {missing}")
-    records = []
-    for k, row in enumerate(rows):
-        meta: dict[str, Any] = {"source": "virtual rig"}
-        for col, typ in _MANIFEST_TYPES.items():
-            try:
-                meta[col] = typ(row[col])
-            except ValueError:
-                raise DataValidationError(
-                    col, f"{manifest} row {k + 1}: {row[col]!r} is not a valid {typ.__name__}"
-                ) from None
-        samples = meta.pop("samples")
-        path = root / row["file"]
-        if not path.is_file():
-            raise FileNotFoundError(f"{path}: listed in {manifest} but missing")
-        if path.suffix.lower() == ".parquet":
-            from mrdamper.data.readers import read_parquet
-
-            rec = read_parquet(path, name=row["name"], metadata=meta)
-        else:
-            rec = read_csv(path, name=row["name"], metadata=meta)
-        if rec.n != samples:
-            raise DataValidationError(
-                "samples", f"{path}: {rec.n} samples, manifest says {samples}"
-            )
-        records.append(rec)
-    return ExperimentSet(records, name=root.name)
+    rows = manifest_rows(folder)  # raises for a missing manifest, column, cell type or file
+    files = [RecordFile(str(f), name, meta, {}, samples) for f, name, meta, samples in rows]
+    return ExperimentSet([f.read() for f in files], name=Path(folder).name)

@@ -20,6 +20,7 @@ __all__ = [
     "REFERENCE_DAMPERS",
     "available_reference_dampers",
     "reference_damper",
+    "resolve_damper",
 ]
 
 #: Names of the reference dampers the package is meant to ship.
@@ -78,3 +79,38 @@ def reference_damper(name: str = DEFAULT_REFERENCE) -> FittedModel:
         )
     with resources.as_file(res) as path:
         return load_model(path)
+
+
+def resolve_damper(spec: str | None) -> FittedModel | None:
+    """The damper a command names: a shipped reference damper or a saved model file.
+
+    Parameters
+    ----------
+    spec : str or None
+        A name of :data:`REFERENCE_DAMPERS`, or the path of a model JSON file; None for the
+        default (the caller's default reference damper).
+
+    Returns
+    -------
+    FittedModel or None
+        None when ``spec`` is None.
+
+    Raises
+    ------
+    DataValidationError
+        ``spec`` is neither a reference damper name nor a ``.json`` / existing file.
+    """
+    from pathlib import Path
+
+    if spec is None:
+        return None
+    if spec in REFERENCE_DAMPERS:
+        return reference_damper(spec)
+    path = Path(spec)
+    if path.suffix.lower() == ".json" or path.exists():
+        return load_model(path)
+    raise DataValidationError(
+        "--damper",
+        f"expected a reference damper name {list(REFERENCE_DAMPERS)} or a model JSON file, "
+        f"got {spec!r}",
+    )

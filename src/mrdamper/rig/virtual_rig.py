@@ -30,7 +30,7 @@ from mrdamper.rig.actuator import ServoActuator
 from mrdamper.rig.driver import CurrentDriver
 from mrdamper.rig.sensors import SensorSuite
 from mrdamper.rig.variation import ReplicateVariation
-from mrdamper.signals._common import SeedLike, as_seed_sequence, check_positive, child_seeds
+from mrdamper.signals.common import SeedLike, as_seed_sequence, check_positive, child_seeds
 
 __all__ = ["VirtualRig"]
 

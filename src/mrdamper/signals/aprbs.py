@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mrdamper.signals._common import (
+from mrdamper.signals.common import (
     SeedLike,
     check_range,
     child_seeds,

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals._common import check_positive, n_samples, time_grid
+from mrdamper.signals.common import check_positive, n_samples, time_grid
 
 __all__ = ["constant", "n_samples", "sine", "time_grid"]
 

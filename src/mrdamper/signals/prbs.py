@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals._common import SeedLike, as_rng, hold_samples, sample_grid
 from mrdamper.signals._signal_kernels import lfsr_bits
+from mrdamper.signals.common import SeedLike, as_rng, hold_samples, sample_grid
 
 __all__ = ["PRIMITIVE_TAPS", "mls", "prbs", "prbs_order_for"]
 

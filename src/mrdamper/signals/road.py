@@ -34,7 +34,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals._common import (
+from mrdamper.signals.common import (
     SeedLike,
     as_rng,
     check_positive,

@@ -7,7 +7,7 @@ from typing import Literal
 import numpy as np
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals._common import check_int_at_least, check_range, n_samples
+from mrdamper.signals.common import check_int_at_least, check_range, n_samples
 
 __all__ = ["StepDirection", "stepped_current"]
 

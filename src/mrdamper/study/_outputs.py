@@ -15,16 +15,14 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import pandas as pd
 
 from mrdamper._io import atomic_write_text, check_output
 from mrdamper.errors import OutputExistsError
+from mrdamper.study.result import StudyResult
 from mrdamper.study.tables import TIMING_COLUMNS
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import StudyResult
 
 __all__ = ["TIMING_INFO", "naming_output", "prepare_out", "write_tables"]
 

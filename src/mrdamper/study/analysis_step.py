@@ -86,27 +86,14 @@ def fv_curves(
     by : {"current", "plateaus"}, optional
         Grouping; default ``"current"`` when every record has metadata ``current``.
     """
-    from mrdamper.analysis import segment_plateaus
+    from mrdamper.analysis import level_grouping, pool_by_level
 
-    by = by or ("current" if all("current" in e.metadata for e in records) else "plateaus")
-    pools: dict[float, list[tuple[np.ndarray, np.ndarray]]] = {}
-    if by == "current":
-        for e in records:
-            pools.setdefault(float(e.metadata["current"]), []).append((e.v, e.F))
-    else:
-        sig = [e.electrical(source) for e in records]  # type: ignore[arg-type]
-        span = max(float(np.ptp(s)) for s in sig) if sig else 0.0
-        tol = max(0.02 * span, 1e-9)
-        opts = plateau_options(records)
-        for e, s in zip(records, sig):
-            for a, b, lev in segment_plateaus(s, e.dt, tolerance=tol, **opts):
-                key = next((k for k in pools if abs(k - lev) <= tol), lev)
-                pools.setdefault(key, []).append((e.v[a:b], e.F[a:b]))
+    group = by or level_grouping(records)
+    opts = plateau_options(records) if group == "plateaus" else {}
+    pools = pool_by_level(records, by=group, source=source, **opts)  # type: ignore[arg-type]
     return {
-        lev: _thin(
-            np.concatenate([p[0] for p in pools[lev]]), np.concatenate([p[1] for p in pools[lev]])
-        )
-        for lev in sorted(pools)
+        lev: _thin(np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces]))
+        for lev, pieces in pools.items()
     }
 
 
@@ -125,10 +112,10 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
     if len(records) == 0:
         return AnalysisOutcome(error="no analysis records selected")
     try:
-        from mrdamper.analysis import fit_zone_laws, zone_fits_by_level
+        from mrdamper.analysis import fit_zone_laws, level_grouping, zone_fits_by_level
     except ImportError as exc:  # pragma: no cover - analysis ships with the package
         return AnalysisOutcome(error=f"analysis unavailable: {exc}")
-    by = "current" if all("current" in e.metadata for e in records) else "plateaus"
+    by = level_grouping(records)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         fits: Sequence[Any] = ()

@@ -23,15 +23,24 @@ The choice and its reason come back as one line, which ``mrdamper study`` prints
 from __future__ import annotations
 
 import glob
+from pathlib import Path
 
 import numpy as np
 
-from mrdamper.data import ExperimentSet
+from mrdamper.data.experiment import ElectricalSource
+from mrdamper.data.inspection import common_input
 from mrdamper.errors import SchemaError
-from mrdamper.study.presets import doe_protocol, quiroz_protocol
+from mrdamper.study.presets import doe_protocol, load_protocol, quiroz_protocol
 from mrdamper.study.protocol import Protocol, Selection, Split
+from mrdamper.study.records import Record, Records, as_list, as_loaded
 
-__all__ = ["CONSTANT_INPUT_TOLERANCE", "DEFAULT_K", "DEFAULT_TIME_FRACTION", "default_protocol"]
+__all__ = [
+    "CONSTANT_INPUT_TOLERANCE",
+    "DEFAULT_K",
+    "DEFAULT_TIME_FRACTION",
+    "choose_protocol",
+    "default_protocol",
+]
 
 #: Largest number of folds of the default k-fold split.
 DEFAULT_K = 5
@@ -42,24 +51,30 @@ DEFAULT_TIME_FRACTION = 0.7
 CONSTANT_INPUT_TOLERANCE = 0.01
 
 
-def _input_of(data: ExperimentSet) -> str:
-    if all(e.i is not None for e in data):
-        return "i"
-    if all(e.voltage is not None for e in data):
-        return "voltage"
+def _input_of(data: Records) -> ElectricalSource:
+    source = common_input(data)
+    if source is not None:
+        return source
     raise SchemaError(
         "protocol: the records do not share one electrical channel (some have only 'i', others only "
         "'voltage'); pass --protocol FILE naming the input"
     )
 
 
-def default_protocol(data: ExperimentSet) -> tuple[Protocol, str]:
+def _levels(e: Record, source: ElectricalSource) -> tuple[float, float, float]:
+    """``(max |input|, input range, mean input)`` of one record (a source is read for it)."""
+    s = np.asarray(as_loaded(e).electrical(source))
+    return float(np.max(np.abs(s))), float(np.ptp(s)), float(np.mean(s))
+
+
+def default_protocol(data: Records) -> tuple[Protocol, str]:
     """The protocol for ``data`` when none is given, and one line saying which and why.
 
     Parameters
     ----------
-    data : ExperimentSet
-        Every record of the study.
+    data : ExperimentSet or SourceSet
+        Every record of the study (sources are read one at a time when the choice needs the
+        electrical input).
 
     Returns
     -------
@@ -86,12 +101,14 @@ def default_protocol(data: ExperimentSet) -> tuple[Protocol, str]:
             "condition out)"
         )
     source = _input_of(data)
-    signals = [np.asarray(e.electrical(source)) for e in data]  # type: ignore[arg-type]
-    scale = max(float(np.max(np.abs(s))) for s in signals) or 1.0
+    stats = [_levels(e, source) for e in data]
+    scale = max(peak for peak, _, _ in stats) or 1.0
     constant = [
-        e for e, s in zip(data, signals) if float(np.ptp(s)) <= CONSTANT_INPUT_TOLERANCE * scale
+        e for e, (_, rng, _) in zip(as_list(data), stats) if rng <= CONSTANT_INPUT_TOLERANCE * scale
     ]
-    levels = {round(float(np.mean(s)) / scale, 3) for e, s in zip(data, signals) if e in constant}
+    levels = {
+        round(mean / scale, 3) for _, rng, mean in stats if rng <= CONSTANT_INPUT_TOLERANCE * scale
+    }
     analysis = None
     what_analysis = "no force-velocity analysis (fewer than 2 constant-input levels)"
     if len(levels) >= 2:
@@ -111,9 +128,30 @@ def default_protocol(data: ExperimentSet) -> tuple[Protocol, str]:
         train=Selection(),
         score=Selection(),
         split=split,
-        input=source,  # type: ignore[arg-type]
+        input=source,
     )
     return (
         proto,
         f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to choose)",
     )
+
+
+def choose_protocol(data: Records, protocol: str | Path | None = None) -> tuple[Protocol, str]:
+    """The study's protocol: a file or preset when given, else :func:`default_protocol`.
+
+    Parameters
+    ----------
+    data : ExperimentSet or SourceSet
+        Every record of the study.
+    protocol : str or Path, optional
+        Protocol file (``.json`` / ``.toml``) or preset name (``doe``, ``quiroz``, ``dyke``).
+
+    Returns
+    -------
+    (Protocol, str)
+        The protocol and one line saying which it is (and why, when chosen from the records).
+    """
+    if protocol is not None:
+        proto = load_protocol(protocol)
+        return proto, f"protocol {proto.name!r}"
+    return default_protocol(data)

@@ -8,8 +8,11 @@ Three implementations share one interface (:class:`StudyExecutor`):
   instead of being pickled into every task.
 * :class:`DaskExecutor` submits to a ``dask.distributed`` scheduler; records are scattered once.
 
-Records travel as plain arrays and a metadata dict (``Experiment`` holds a read-only mapping that
-does not pickle) and are rebuilt, validated, in the worker.
+Records in memory travel as plain arrays and a metadata dict (``Experiment`` holds a read-only
+mapping that does not pickle) and are rebuilt, validated, in the worker. Records given as
+:class:`~mrdamper.data.RecordSource` travel as their source (a path, reader options and a header)
+and are read by the worker that needs them, with every executor: the study's process never holds
+them all. (On a Dask cluster the workers must then see the same files.)
 """
 
 from __future__ import annotations
@@ -27,12 +30,15 @@ from typing import Any
 
 import numpy as np
 
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, RecordSource
 from mrdamper.errors import DataValidationError
 
 __all__ = [
     "DaskExecutor",
+    "DiskRecord",
+    "PackedRecord",
     "ProcessExecutor",
+    "RecordHandle",
     "SerialExecutor",
     "StudyExecutor",
     "default_workers",
@@ -64,6 +70,11 @@ class DiskRecord:
     paths: dict[str, str]
 
 
+#: What a task receives for a record: the record itself (in-process), its source (read by the
+#: task), its arrays, its ``.npy`` files, or (Dask) a future of a :class:`PackedRecord`.
+RecordHandle = Experiment | RecordSource | PackedRecord | DiskRecord
+
+
 def pack(e: Experiment) -> PackedRecord:
     """Picklable form of an Experiment."""
     return PackedRecord(
@@ -71,15 +82,27 @@ def pack(e: Experiment) -> PackedRecord:
     )
 
 
-def resolve_record(handle: Any) -> Experiment:
-    """Rebuild an :class:`Experiment` from whatever handle a task received."""
+def resolve_record(handle: RecordHandle) -> Experiment:
+    """Rebuild an :class:`Experiment` from whatever handle a task received.
+
+    Parameters
+    ----------
+    handle : Experiment, RecordSource, PackedRecord or DiskRecord
+        The record as shared by an executor (a source is read here).
+
+    Returns
+    -------
+    Experiment
+    """
     if isinstance(handle, Experiment):
         return handle
+    if isinstance(handle, RecordSource):
+        return handle.load()
     if isinstance(handle, PackedRecord):
         return Experiment(**handle.arrays, name=handle.name, metadata=handle.metadata)  # type: ignore[arg-type]
     if isinstance(handle, DiskRecord):
         arrays = {c: np.load(p, mmap_mode="r") for c, p in handle.paths.items()}
-        return Experiment(**arrays, name=handle.name, metadata=handle.metadata)  # type: ignore[arg-type]
+        return Experiment(**arrays, name=handle.name, metadata=handle.metadata)
     raise DataValidationError("record", f"unexpected record handle of type {type(handle).__name__}")
 
 
@@ -89,8 +112,14 @@ class StudyExecutor(abc.ABC):
     #: Human description shown in the report (e.g. ``"2 local processes"``).
     description: str = ""
 
-    def share(self, e: Experiment) -> Any:
-        """Make a record available to tasks; returns the handle to pass as a task argument."""
+    def share(self, e: Experiment | RecordSource) -> Any:
+        """Make a record available to tasks; returns the handle to pass as a task argument.
+
+        Parameters
+        ----------
+        e : Experiment or RecordSource
+            The record; a source is passed as it is (tasks read it).
+        """
         return e
 
     @abc.abstractmethod
@@ -148,7 +177,9 @@ class ProcessExecutor(StudyExecutor):
         self._count = 0
         self.description = f"{workers} local process{'es' if workers > 1 else ''}"
 
-    def share(self, e: Experiment) -> DiskRecord:
+    def share(self, e: Experiment | RecordSource) -> DiskRecord | RecordSource:
+        if isinstance(e, RecordSource):
+            return e
         self._count += 1
         paths = {}
         for c in e.channel_names:
@@ -196,12 +227,15 @@ class DaskExecutor(StudyExecutor):
                 "a Dask scheduler was given but dask.distributed is not installed; "
                 "install the 'distributed' extra: pip install 'mrdamper[distributed]'"
             ) from None
-        self._distributed = distributed
-        if isinstance(scheduler, distributed.Client):
+        # dask.distributed has no type hints: its objects are handled as Any here
+        self._distributed: Any = distributed
+        client_type: Any = distributed.Client
+        self._client: Any
+        if isinstance(scheduler, client_type):
             self._client = scheduler
             self._own = False
         elif isinstance(scheduler, str) and scheduler:
-            self._client = distributed.Client(scheduler)
+            self._client = client_type(scheduler)
             self._own = True
         else:
             raise DataValidationError(
@@ -209,7 +243,9 @@ class DaskExecutor(StudyExecutor):
             )
         self.description = f"Dask scheduler {self._client.scheduler.address}"
 
-    def share(self, e: Experiment) -> Any:
+    def share(self, e: Experiment | RecordSource) -> Any:
+        if isinstance(e, RecordSource):
+            return e
         return self._client.scatter(pack(e), hash=False)
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Any:

@@ -14,22 +14,34 @@ rules, stated in their captions:
   over the study, none of them failed. Every model, overlaid or not, also has its own panel.
 
 All figures are drawn at print size (7 in wide at most, text of 7 pt or more; see
-:data:`mrdamper.plotting._common.PRINT_STYLE`).
+:data:`mrdamper.plotting.PRINT_STYLE`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mrdamper.errors import interrupt_in_chain
+from mrdamper.study.result import Showcase, StudyResult
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import Showcase, StudyResult
+__all__ = [
+    "FAILED_ESR",
+    "FIGURES",
+    "FIGURE_DPI",
+    "FIGURE_FORMATS",
+    "failed_models",
+    "make_figures",
+    "overlay_models",
+    "record_esr",
+]
 
-__all__ = ["FAILED_ESR", "FIGURES", "failed_models", "make_figures", "overlay_models", "record_esr"]
+#: File formats every figure is saved in.
+FIGURE_FORMATS: tuple[str, ...] = ("png", "svg")
+#: Resolution of the PNG figures [dots per inch]: sharp when printed at their drawn size.
+FIGURE_DPI = 150
 
 #: Figure file name -> (paper figure number or None, caption). The report numbers its figures
 #: consecutively and names the paper's number beside each.
@@ -329,7 +341,7 @@ def make_figures(res: StudyResult) -> dict[str, Any]:
     """Draw every figure; name -> Figure, or the reason (str) it was not drawn."""
     import matplotlib
 
-    from mrdamper.plotting._common import PRINT_STYLE
+    from mrdamper.plotting import PRINT_STYLE
 
     out: dict[str, Any] = {}
     with matplotlib.rc_context(PRINT_STYLE):  # type: ignore[arg-type]

@@ -1,15 +1,26 @@
 """Preset protocols: the Table II design of experiments, the Quiroz sine records (leave one
-condition out) and the Dyke random-excitation record (70 % / 30 % in time)."""
+condition out) and the Dyke random-excitation record (70 % / 30 % in time), and
+:func:`load_protocol`, which reads a protocol file or a preset name."""
 
 from __future__ import annotations
 
+import json
+import tomllib
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from mrdamper.errors import SchemaError
-from mrdamper.study.protocol import Protocol, Selection, Split
+from mrdamper.study.protocol import Protocol, Selection, Split, protocol_from_dict
 
-__all__ = ["PRESETS", "doe_protocol", "dyke_protocol", "preset_protocol", "quiroz_protocol"]
+__all__ = [
+    "PRESETS",
+    "doe_protocol",
+    "dyke_protocol",
+    "load_protocol",
+    "preset_protocol",
+    "quiroz_protocol",
+]
 
 
 def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
@@ -21,6 +32,16 @@ def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
       only, which keeps identification time bounded.
     * Scoring: every other record of experiments 1-8; records used for the analysis or the
       identification are never scored (``exclude_trained``).
+
+    Parameters
+    ----------
+    models : sequence
+        Models to run: kinds (``"lpv"``), :class:`~mrdamper.study.ModelSpec` or dicts; empty:
+        every installed default model.
+
+    Returns
+    -------
+    Protocol
     """
     return Protocol(
         name="doe",
@@ -48,6 +69,16 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
     analysis and the models on the other conditions. The condition is the metadata ``condition``
     that the folder reader takes from the file name
     (``sine_5mm_3Hz_0.5A`` -> ``5mm_3Hz``).
+
+    Parameters
+    ----------
+    models : sequence
+        Models to run: kinds (``"lpv"``), :class:`~mrdamper.study.ModelSpec` or dicts; empty:
+        every installed default model.
+
+    Returns
+    -------
+    Protocol
     """
     return Protocol(
         name="quiroz-loco",
@@ -70,6 +101,16 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
     (``docs/results.md``); P-15's coefficients follow the same drive-lagged voltage. The test
     part's voltage exceeds the training range by < 0.1 %, so models are scored with
     ``range_policy="clip"``.
+
+    Parameters
+    ----------
+    models : sequence
+        Models to run: kinds (``"lpv"``), :class:`~mrdamper.study.ModelSpec` or dicts; empty:
+        every installed default model.
+
+    Returns
+    -------
+    Protocol
     """
     return Protocol(
         name="dyke-70-30",
@@ -93,7 +134,59 @@ PRESETS = {"doe": doe_protocol, "quiroz": quiroz_protocol, "dyke": dyke_protocol
 
 
 def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
-    """A preset protocol by name: ``"doe"``, ``"quiroz"`` or ``"dyke"``."""
+    """A preset protocol by name: ``"doe"``, ``"quiroz"`` or ``"dyke"``.
+
+    Parameters
+    ----------
+    name : {"doe", "quiroz", "dyke"}
+        The preset.
+    models : sequence
+        Models to run (as for :func:`doe_protocol`).
+
+    Returns
+    -------
+    Protocol
+    """
     if name not in PRESETS:
         raise SchemaError(f"protocol: unknown preset {name!r}; expected one of {sorted(PRESETS)}")
     return PRESETS[name](models)
+
+
+def load_protocol(path: str | Path) -> Protocol:
+    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
+
+    Parameters
+    ----------
+    path : str or Path
+        Protocol file, or a preset name.
+
+    Returns
+    -------
+    Protocol
+
+    Raises
+    ------
+    FileNotFoundError
+        If the path does not exist and is not a preset name.
+    SchemaError
+        If the file cannot be parsed or does not follow the schema (see ``docs/study.md``).
+    """
+    if isinstance(path, str) and path in PRESETS:
+        return preset_protocol(path)
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(
+            f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})"
+        )
+    text = p.read_text(encoding="utf-8")
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".toml":
+            data = tomllib.loads(text)
+        elif suffix == ".json":
+            data = json.loads(text)
+        else:
+            raise SchemaError(f"{p}: protocol file must end in .json or .toml, got {suffix!r}")
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SchemaError(f"{p}: cannot parse protocol file ({exc})") from None
+    return protocol_from_dict(data)

@@ -11,16 +11,15 @@ from __future__ import annotations
 import fnmatch
 import json
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
-from mrdamper.data import Experiment, ExperimentSet
-from mrdamper.data.experiment_set import _equal
+from mrdamper.data import ExperimentSet, SourceSet
+from mrdamper.data.experiment_set import metadata_equal
 from mrdamper.errors import SchemaError
+from mrdamper.study.records import Record, Records, same_kind
 
 __all__ = [
     "DEFAULT_MODELS",
@@ -30,7 +29,6 @@ __all__ = [
     "Protocol",
     "Selection",
     "Split",
-    "load_protocol",
     "protocol_from_dict",
 ]
 
@@ -114,22 +112,32 @@ class Selection:
             if not self.group_by:
                 raise SchemaError("group_by: 'take' needs a metadata key to group by, got none")
 
-    def _accepts(self, e: Experiment) -> bool:
+    def _accepts(self, e: Record) -> bool:
         for key, want in self.match.items():
             if key not in e.metadata:
                 return False
             options = want if isinstance(want, tuple) else (want,)
-            if not any(_equal(e.metadata[key], w) for w in options):
+            if not any(metadata_equal(e.metadata[key], w) for w in options):
                 return False
         for key, bad in self.exclude.items():
             if key in e.metadata:
                 options = bad if isinstance(bad, tuple) else (bad,)
-                if any(_equal(e.metadata[key], w) for w in options):
+                if any(metadata_equal(e.metadata[key], w) for w in options):
                     return False
         return not self.names or any(fnmatch.fnmatchcase(e.name, g) for g in self.names)
 
-    def select(self, data: ExperimentSet) -> ExperimentSet:
-        """Return the selected records, in data order."""
+    @overload
+    def select(self, data: ExperimentSet) -> ExperimentSet: ...
+    @overload
+    def select(self, data: SourceSet) -> SourceSet: ...
+    def select(self, data: Records) -> Records:
+        """Return the selected records, in data order (a set of the same kind as ``data``).
+
+        Parameters
+        ----------
+        data : ExperimentSet or SourceSet
+            Records to select from (only names and metadata are looked at).
+        """
         chosen = [e for e in data if self._accepts(e)]
         if self.take is not None and self.group_by:
             counts: dict[Any, int] = {}
@@ -140,7 +148,7 @@ class Selection:
                     kept.append(e)
                 counts[g] = counts.get(g, 0) + 1
             chosen = kept
-        return ExperimentSet(chosen, name=data.name)
+        return same_kind(data, chosen)
 
     def describe(self) -> str:
         """One-line human description."""
@@ -233,8 +241,14 @@ class Split:
         ):
             raise SchemaError(f"split.fraction: expected a number in (0, 1), got {self.fraction!r}")
 
-    def group_of(self, e: Experiment) -> Any:
-        """Group value of a record (leave-one-group-out)."""
+    def group_of(self, e: Record) -> Any:
+        """Group value of a record (leave-one-group-out).
+
+        Parameters
+        ----------
+        e : Experiment or RecordSource
+            The record (its name and metadata).
+        """
         if self.name_regex is not None:
             m = re.search(self.name_regex, e.name)
             if m is None:
@@ -503,6 +517,15 @@ def _selection(value: Any, where: str) -> Selection:
 def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
     """Build a :class:`Protocol` from its dict form (a parsed JSON or TOML protocol file).
 
+    Parameters
+    ----------
+    data : mapping
+        The protocol's keys (see ``docs/study.md``).
+
+    Returns
+    -------
+    Protocol
+
     Raises
     ------
     SchemaError
@@ -550,36 +573,3 @@ def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
         showcase=data.get("showcase"),
         hysteresis_record=data.get("hysteresis_record"),
     )
-
-
-def load_protocol(path: str | Path) -> Protocol:
-    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
-
-    Raises
-    ------
-    FileNotFoundError
-        If the path does not exist and is not a preset name.
-    SchemaError
-        If the file cannot be parsed or does not follow the schema (see ``docs/study.md``).
-    """
-    from mrdamper.study.presets import PRESETS, preset_protocol
-
-    if isinstance(path, str) and path in PRESETS:
-        return preset_protocol(path)
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(
-            f"{p}: protocol file not found (or use a preset: {', '.join(PRESETS)})"
-        )
-    text = p.read_text(encoding="utf-8")
-    suffix = p.suffix.lower()
-    try:
-        if suffix == ".toml":
-            data = tomllib.loads(text)
-        elif suffix == ".json":
-            data = json.loads(text)
-        else:
-            raise SchemaError(f"{p}: protocol file must end in .json or .toml, got {suffix!r}")
-    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise SchemaError(f"{p}: cannot parse protocol file ({exc})") from None
-    return protocol_from_dict(data)

@@ -15,12 +15,12 @@ import base64
 import html
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from mrdamper.study.figures import FIGURES, failed_models, overlay_models
+from mrdamper.study.figures import FIGURE_DPI, FIGURES, failed_models, overlay_models
 from mrdamper.study.report_tables import (
     analysis_table,
     energy_display,
@@ -29,14 +29,12 @@ from mrdamper.study.report_tables import (
     format_number,
     grouping_keys,
     laws_table,
+    selection_table,
     study_failed_note,
     summary_table,
 )
+from mrdamper.study.result import StudyResult
 from mrdamper.study.tables import PAPER_HEADLINE
-from mrdamper.study.writer import FIGURE_DPI
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import StudyResult
 
 __all__ = ["figure_captions", "render_report"]
 
@@ -97,7 +95,7 @@ def _model_text(p: Any, spec: Any) -> str:
     settings = p.settings_for(spec)
     extra = [spec.kind] if spec.label != spec.kind else []
     extra += [f"{k}={v!r}" for k, v in settings.items()]
-    return spec.label + (f" ({', '.join(extra)})" if extra else "")
+    return str(spec.label) + (f" ({', '.join(extra)})" if extra else "")
 
 
 def _protocol_section(res: StudyResult) -> str:
@@ -210,6 +208,38 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, 
     return "\n".join(out)
 
 
+def _selection_section(res: StudyResult) -> str:
+    sel = res.selection
+    if sel is None:
+        return "<p>No model-selection table: this study result carries none.</p>"
+    n_scores = len(sel.scores)
+    rec = (
+        f"<p><b>Recommended: {_e(sel.recommended)}.</b> {_e(sel.reason)}.</p>"
+        if sel.recommended is not None
+        else f"<p><b>No recommendation:</b> {_e(sel.reason)}.</p>"
+    )
+    return "\n".join(
+        [
+            rec,
+            _table(selection_table(sel)),
+            (
+                '<p class="small">The table of <code>mrdamper select</code>, computed from this study\'s '
+                f"own held-out scores ({n_scores} model &times; record scores over the protocol's "
+                f"{sel.n_folds} {_e(sel.split)} fold(s)), not by fitting again: only scored records that "
+                "trained neither the models nor the analysis of their fold count. ESR in free run [-]; "
+                "a model whose fit or any held-out simulation failed in a fold fails that fold and is not "
+                "recommended. The recommendation is the lowest mean ESR among the models that passed "
+                "every fold, as <code>mrdamper select</code> decides (a runner-up within 5 % is named as "
+                "a tie). <i>Outside range</i>: held-out records whose electrical input leaves the range "
+                "the model was identified on (handled by the protocol's range policy, "
+                f"<code>{_e(res.protocol.range_policy)}</code>). <code>mrdamper select</code> itself "
+                "chooses its own folds (by condition, record or time) and clips out-of-range inputs, so "
+                "its numbers can differ.</p>"
+            ),
+        ]
+    )
+
+
 def _by_group_section(res: StudyResult) -> str:
     keys = grouping_keys(res.results)
     if not keys:
@@ -311,7 +341,7 @@ def _record_text(res: StudyResult, which: str) -> str:
     sc = res.showcase if which == "showcase" else res.hysteresis
     if sc is None:
         return ""
-    el = np.asarray(sc.record.electrical(res.protocol.input), dtype=float)  # type: ignore[arg-type]
+    el = np.asarray(sc.record.electrical(res.protocol.input), dtype=float)
     lo, hi = float(np.min(el)), float(np.max(el))
     unit = _unit(res)
     level = (
@@ -444,6 +474,8 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         ),
         "<h2>Summary</h2>",
         _summary_section(res, summary, failed),
+        "<h2>Which model for this damper?</h2>",
+        _selection_section(res),
         "<h2>ESR per condition and per current level</h2>",
         _by_group_section(res),
         "<h2>Protocol</h2>",

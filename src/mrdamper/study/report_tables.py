@@ -7,16 +7,15 @@ comparison cells that read as a sentence ("74.8 % lower").
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from mrdamper.study.result import Showcase, StudyResult
+from mrdamper.study.selection import SelectionResult
 from mrdamper.study.tables import improvement_pct
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import Showcase, StudyResult
 
 __all__ = [
     "analysis_table",
@@ -67,6 +66,39 @@ def _vs(reference: float, other: float) -> str:
     if not np.isfinite(g):
         return ""
     return f"{abs(g):.1f} % {'lower' if g >= 0 else 'higher'}"
+
+
+def selection_table(selection: SelectionResult) -> pd.DataFrame:
+    """The model-selection table (``mrdamper select``'s columns) with units, for the report.
+
+    Parameters
+    ----------
+    selection : SelectionResult
+        The study's selection (:attr:`StudyResult.selection`).
+
+    Returns
+    -------
+    DataFrame
+        Columns: model, recommended (``yes`` on the recommended row), mean, median and worst ESR
+        over the held-out records [-], folds ok / failed, held-out records outside the model's
+        identified range, mean fit time [s] and the first failure.
+    """
+    t = selection.table
+    return pd.DataFrame(
+        {
+            "model": [str(k) for k in t.index],
+            "recommended": ["yes" if k == selection.recommended else "" for k in t.index],
+            "ESR mean [-]": t["mean_esr"].to_numpy(),
+            "ESR median [-]": t["median_esr"].to_numpy(),
+            "ESR worst [-]": t["worst_esr"].to_numpy(),
+            "folds ok / failed": [
+                f"{int(a)} / {int(b)}" for a, b in zip(t["folds_ok"], t["folds_failed"])
+            ],
+            "outside range": t["clipped"].astype(int).to_numpy(),
+            "fit time [s]": t["fit_s"].to_numpy(),
+            "failure": [str(x) for x in t["error"]],
+        }
+    )
 
 
 def summary_table(
@@ -178,8 +210,11 @@ def esr_by_table(
         empty when none), and ``records ok / scored``.
     """
     vals = sorted(results[key].dropna().unique(), key=_natural)
-    names = {"current": lambda x: f"{format_number(x)} {unit}", "experiment": lambda x: f"exp {x}"}
-    head = names.get(key, str)
+    names: dict[str, Callable[[Any], str]] = {
+        "current": lambda x: f"{format_number(x)} {unit}",
+        "experiment": lambda x: f"exp {x}",
+    }
+    head: Callable[[Any], str] = names.get(key, str)
     if key == "experiment" and "pattern" in results.columns:
         pat = results.dropna(subset=["pattern"]).groupby(key)["pattern"].first().to_dict()
 

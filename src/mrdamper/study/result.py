@@ -1,22 +1,26 @@
 """The outcome of a study: a value holding tables, fitted models and the figure records.
 
-Writing it (CSV, JSON, figures, ``report.html``) is :mod:`mrdamper.study.writer`'s job;
-:meth:`StudyResult.write` only hands the result to it.
+A :class:`StudyResult` draws nothing and writes nothing: its figures are
+:func:`mrdamper.study.figures.make_figures`, its report :func:`mrdamper.study.report.render_report`
+and its folder :func:`mrdamper.study.writer.write_study`. Those modules import this one, never
+the reverse.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from mrdamper.data import Experiment
+from mrdamper.models import FittedModel
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
+from mrdamper.study.selection import SelectionResult
 from mrdamper.study.tables import headline, summarize
 
 __all__ = ["Showcase", "StudyResult"]
@@ -40,10 +44,10 @@ class Showcase:
 
     fold: str
     record: Experiment
-    predictions: Mapping[str, Any]
+    predictions: Mapping[str, NDArray[np.float64] | str]
     kinds: Mapping[str, str] = field(default_factory=dict)
 
-    def ok(self) -> dict[str, Any]:
+    def ok(self) -> dict[str, NDArray[np.float64]]:
         """Only the successful predictions."""
         return {k: v for k, v in self.predictions.items() if not isinstance(v, str)}
 
@@ -72,6 +76,10 @@ class StudyResult:
         Records and predictions drawn in Figs. 6, 9, 10 and Fig. 4.
     info : dict
         Seed, executor, wall time, platform.
+    selection : SelectionResult or None
+        The model-selection table and recommendation of ``mrdamper select``, computed from this
+        study's held-out scores (scored records that trained nothing in their fold), with the
+        rule of :func:`~mrdamper.study.selection.cross_validate`.
     """
 
     protocol: Protocol
@@ -79,11 +87,12 @@ class StudyResult:
     results: pd.DataFrame
     fits: pd.DataFrame
     roles: pd.DataFrame
-    models: Mapping[tuple[str, str], Any]
+    models: Mapping[tuple[str, str], FittedModel]
     analyses: Mapping[str, AnalysisOutcome]
     showcase: Showcase | None = None
     hysteresis: Showcase | None = None
     info: Mapping[str, Any] = field(default_factory=dict)
+    selection: SelectionResult | None = None
 
     @property
     def labels(self) -> list[str]:
@@ -110,45 +119,19 @@ class StudyResult:
         tr = r[r["role"] != "score"][["fold", "record", "role"]]
         return sc.merge(tr, on=["fold", "record"], how="inner")
 
-    def figures(self) -> dict[str, Any]:
-        """Build every figure: name -> matplotlib Figure (or the reason it was skipped, a str)."""
-        from mrdamper.study.figures import make_figures
-
-        return make_figures(self)
-
     def plot(self, index: str = "esr", ax: Any = None) -> Any:
-        """Box plot of an index per model (Figs. 7 and 8); returns the Axes."""
-        from mrdamper.plotting import plot_index_boxes
+        """Box plot of an index per model (Figs. 7 and 8); returns the Axes.
 
-        return plot_index_boxes(self.results, index=index, order=self.labels, ax=ax)
-
-    # ------------------------------------------------------------------ writing
-    def write(
-        self, out_dir: str | os.PathLike[str], *, force: bool = False, figures: bool = True
-    ) -> Path:
-        """Write results, summary, models, figures (PNG + SVG) and ``report.html`` to ``out_dir``.
-
-        The writing itself is :func:`mrdamper.study.writer.write_study`; see there.
+        A thin call of :func:`mrdamper.plotting.plot_index_boxes` on :attr:`results`; the report's
+        figures are :func:`mrdamper.study.figures.make_figures`.
 
         Parameters
         ----------
-        out_dir : path
-            Target folder. It must not exist or be empty, unless ``force``.
-        force : bool
-            Replace an existing non-empty folder (only once the new one is complete).
-        figures : bool
-            Also draw the figures (and embed them in the report).
-
-        Returns
-        -------
-        Path
-            ``out_dir``.
-
-        Raises
-        ------
-        OutputExistsError
-            ``out_dir`` exists, is not an empty folder and ``force`` is false.
+        index : str
+            Column of :attr:`results` to plot (``"esr"``, ``"ssse"``, ``"nrmse"``, ``"fit_pct"``).
+        ax : matplotlib Axes, optional
+            Axes to draw on (a new figure when None).
         """
-        from mrdamper.study.writer import write_study
+        from mrdamper.plotting import plot_index_boxes
 
-        return write_study(self, out_dir, force=force, figures=figures)
+        return plot_index_boxes(self.results, index=index, order=self.labels, ax=ax)

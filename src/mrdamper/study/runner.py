@@ -15,19 +15,26 @@ import inspect
 import platform
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
-from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.analysis import ZoneLaws
+from mrdamper.data import Experiment, ExperimentSet, SourceSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SchemaError, interrupt_in_chain
-from mrdamper.study._tasks import fit_task, simulate_task
+from mrdamper.models import Estimator, FittedModel
+from mrdamper.models.base import RangePolicy
+from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
+from mrdamper.study.records import Record, Records, as_list, as_loaded, load_all
 from mrdamper.study.result import Showcase, StudyResult
+from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_from_scores
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
@@ -45,6 +52,7 @@ META_COLUMNS: tuple[str, ...] = (
 )
 
 _LAW_SETTINGS = ("laws", "zone_laws")
+_O = TypeVar("_O", FitOutcome, SimOutcome)
 
 #: Typical identification cost rank per kind (most expensive first). Fits are submitted in this
 #: order so the longest task starts first and the others fill the remaining workers; results do
@@ -52,13 +60,15 @@ _LAW_SETTINGS = ("laws", "zone_laws")
 _COST_RANK: dict[str, int] = {"spencer": 0, "lpv": 1, "p15": 2, "sp1": 3, "sp4": 4, "lti": 5}
 
 
-def _estimator_fields(est: Any) -> set[str]:
+def _estimator_fields(est: Estimator) -> set[str]:
     if dataclasses.is_dataclass(est):
         return {f.name for f in dataclasses.fields(est)}
     return set(inspect.signature(type(est)).parameters)
 
 
-def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict[str, Any]:
+def _settings(
+    spec: ModelSpec, protocol: Protocol, seed: int, laws: ZoneLaws | None
+) -> dict[str, Any]:
     """Estimator settings of ``spec`` with the protocol's input, the study seed and the fold's laws."""
     from mrdamper.models import get_estimator
 
@@ -79,8 +89,13 @@ def _settings(spec: ModelSpec, protocol: Protocol, seed: int, laws: Any) -> dict
     return out
 
 
-def data_origin(data: Iterable[Experiment]) -> str:
+def data_origin(data: Iterable[Record]) -> str:
     """Where the records come from, for the report's wording.
+
+    Parameters
+    ----------
+    data : iterable of Experiment or RecordSource
+        The study's records (their metadata).
 
     Returns
     -------
@@ -96,18 +111,20 @@ def data_origin(data: Iterable[Experiment]) -> str:
     return "measured"
 
 
-def _pick(records: Iterable[Experiment], pattern: str | None) -> Experiment | None:
+def _pick(records: Iterable[Record], pattern: str | None) -> Record | None:
     for e in records:
         if pattern is None or fnmatch.fnmatchcase(e.name, pattern):
             return e
     return None
 
 
-def _predict_all(models: Mapping[str, Any], e: Experiment, policy: str) -> dict[str, Any]:
+def _predict_all(
+    models: Mapping[str, FittedModel], e: Experiment, policy: RangePolicy
+) -> dict[str, NDArray[np.float64] | str]:
     """Label -> predicted force [N] or the error text, for the figures."""
     import warnings
 
-    out: dict[str, Any] = {}
+    out: dict[str, NDArray[np.float64] | str] = {}
     for label, m in models.items():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -137,7 +154,7 @@ def _progress(enabled: bool) -> Any:
 
 
 def run_study(
-    data: ExperimentSet | Iterable[Experiment],
+    data: ExperimentSet | SourceSet | Iterable[Experiment],
     protocol: Protocol | None = None,
     models: Sequence[str | ModelSpec | Mapping[str, Any]] | None = None,
     *,
@@ -150,8 +167,10 @@ def run_study(
 
     Parameters
     ----------
-    data : ExperimentSet or iterable of Experiment
-        All records of the study (never modified).
+    data : ExperimentSet, SourceSet or iterable of Experiment
+        All records of the study (never modified). Records in memory are shared with the
+        workers; sources (:func:`mrdamper.data.record_sources`) are read by the workers that
+        use them, so this process holds only the analysis and figure records, one set at a time.
     protocol : Protocol, optional
         Roles of the records and models; default :func:`~mrdamper.study.protocol.doe_protocol`.
     models : sequence, optional
@@ -168,7 +187,8 @@ def run_study(
     Returns
     -------
     StudyResult
-        Results, summary, fitted models, analysis and figure data; ``.write(out_dir)`` saves all.
+        Results, summary, fitted models, analysis and figure data (a value; write it with
+        :func:`~mrdamper.study.writer.write_study`).
 
     Raises
     ------
@@ -177,7 +197,7 @@ def run_study(
         scoring records. Model failures do not raise: they are rows with a status.
     """
     t_start = time.perf_counter()
-    data = as_experiment_set(data, name="data")
+    records: Records = data if isinstance(data, SourceSet) else as_experiment_set(data, name="data")
     protocol = protocol or doe_protocol()
     if models is not None:
         protocol = protocol.with_models([_as_spec(m) for m in models])
@@ -187,7 +207,7 @@ def run_study(
     protocol = protocol.with_models(specs)  # the saved protocol lists the models actually run
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise SchemaError(f"seed: expected an integer, got {seed!r}")
-    folds = make_folds(data, protocol)
+    folds = make_folds(records, protocol)
     analyses: dict[str, AnalysisOutcome] = {}
     for fold in folds:
         if protocol.analysis is None:
@@ -195,14 +215,14 @@ def run_study(
                 error="no force-velocity analysis in this protocol"
             )
         else:
-            analyses[fold.name] = run_analysis(fold.analysis, protocol.input)
+            analyses[fold.name] = run_analysis(load_all(fold.analysis), protocol.input)
     settings = {
         (fi, si): _settings(spec, protocol, int(seed), analyses[fold.name].laws)
         for fi, fold in enumerate(folds)
         for si, spec in enumerate(specs)
     }
-    fit_out: dict[tuple[int, int], dict[str, Any]] = {}
-    sim_out: dict[tuple[int, int, int], dict[str, Any]] = {}
+    fit_out: dict[tuple[int, int], FitOutcome] = {}
+    sim_out: dict[tuple[int, int, int], SimOutcome] = {}
     executor = make_executor(workers, scheduler)
     try:
         _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
@@ -212,15 +232,16 @@ def run_study(
     executor.close()
     results, fits = _tables(folds, specs, fit_out, sim_out)
     fitted = _fitted_models(folds, specs, fit_out)
+    selection = _selection(folds, specs, fit_out, sim_out, protocol)
     showcase, hysteresis = _showcases(folds, specs, fitted, protocol)
     info = {
         "seed": int(seed),
         "executor": executor.description,
         "wall_time_s": time.perf_counter() - t_start,
-        "n_records": len(data),
-        "data_origin": data_origin(data),
+        "n_records": len(records),
+        "data_origin": data_origin(records),
         "n_folds": len(folds),
-        "sources": sorted({str(e.metadata["source"]) for e in data if e.metadata.get("source")}),
+        "sources": sorted({str(e.metadata["source"]) for e in records if e.metadata.get("source")}),
         "python": platform.python_version(),
         "platform": platform.platform(),
     }
@@ -235,6 +256,7 @@ def run_study(
         showcase=showcase,
         hysteresis=hysteresis,
         info=info,
+        selection=selection,
     )
 
 
@@ -244,68 +266,72 @@ def _execute(
     specs: Sequence[ModelSpec],
     settings: Mapping[tuple[int, int], dict[str, Any]],
     protocol: Protocol,
-    fit_out: dict[tuple[int, int], dict[str, Any]],
-    sim_out: dict[tuple[int, int, int], dict[str, Any]],
+    fit_out: dict[tuple[int, int], FitOutcome],
+    sim_out: dict[tuple[int, int, int], SimOutcome],
     show: bool,
 ) -> None:
     handles: dict[int, Any] = {}
 
-    def handle(e: Experiment) -> Any:
+    def handle(e: Record) -> Any:
         if id(e) not in handles:
             handles[id(e)] = ex.share(e)
         return handles[id(e)]
 
     n_sims = sum(len(f.score) for f in folds) * len(specs)
-    pending: dict[Any, tuple[int, ...]] = {}
+    fits: dict[Any, tuple[int, int]] = {}  # future -> (fold, model)
+    sims: dict[Any, tuple[int, int, int]] = {}  # future -> (fold, model, scored record)
     trains = [[handle(e) for e in fold.train] for fold in folds]
     order = sorted(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
         key=lambda k: (_COST_RANK.get(specs[k[1]].kind, len(_COST_RANK)), k),
     )
     for fi, si in order:
-        pending[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
+        fits[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
     with _progress(show) as bar:
         t_fit = bar.add_task("fitting", total=len(folds) * len(specs))
         t_sim = bar.add_task("simulating", total=n_sims)
-        while pending:
-            done, _ = ex.wait_first(list(pending))
+        while fits or sims:
+            done, _ = ex.wait_first([*fits, *sims])
             for fut in done:
-                tag = pending.pop(fut)
-                try:
-                    res = fut.result()
-                except Exception as exc:
-                    if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
-                        raise KeyboardInterrupt from exc
-                    res = {
-                        "status": "fit-failed" if len(tag) == 2 else "sim-failed",
-                        "model": None,
-                        "error": f"worker error: {type(exc).__name__}: {exc}",
-                        "note": "",
-                        "fit_time_s": float("nan"),
-                        "sim_time_s": float("nan"),
-                    }
-                if len(tag) == 2:
-                    fi, si = tag
-                    fit_out[(fi, si)] = res
+                if fut in fits:
+                    fi, si = fits.pop(fut)
+                    fr = _outcome(fut, FitOutcome)
+                    fit_out[(fi, si)] = fr
                     bar.advance(t_fit)
-                    if res["status"] == "ok":
-                        for ri, e in enumerate(folds[fi].score):
-                            fut2 = ex.submit(
-                                simulate_task, res["model"], handle(e), protocol.range_policy
-                            )
-                            pending[fut2] = (fi, si, ri)
+                    if fr.ok:
+                        for ri, e in enumerate(as_list(folds[fi].score)):
+                            sims[
+                                ex.submit(simulate_task, fr.model, handle(e), protocol.range_policy)
+                            ] = (fi, si, ri)
                     else:
                         bar.advance(t_sim, len(folds[fi].score))
                 else:
-                    sim_out[tag] = res  # type: ignore[index]
+                    sim_out[sims.pop(fut)] = _outcome(fut, SimOutcome)
                     bar.advance(t_sim)
+
+
+def _outcome(fut: Any, kind: type[_O]) -> _O:
+    """The task's outcome, or a failed one when the worker itself raised."""
+    try:
+        res = fut.result()
+    except Exception as exc:
+        if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+            raise KeyboardInterrupt from exc
+        why = f"worker error: {type(exc).__name__}: {exc}"
+        failed = (
+            FitOutcome.failed(why) if kind is FitOutcome else SimOutcome.failed("sim-failed", why)
+        )
+        return failed  # type: ignore[return-value]
+    if not isinstance(res, kind):
+        raise TypeError(f"task returned {type(res).__name__}, expected {kind.__name__}")
+    return res
 
 
 def _tables(
     folds: list[Fold],
     specs: Sequence[ModelSpec],
-    fit_out: Mapping[tuple[int, int], dict[str, Any]],
-    sim_out: Mapping[tuple[int, int, int], dict[str, Any]],
+    fit_out: Mapping[tuple[int, int], FitOutcome],
+    sim_out: Mapping[tuple[int, int, int], SimOutcome],
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     nan = float("nan")
     rows: list[dict[str, Any]] = []
@@ -319,42 +345,45 @@ def _tables(
                     "fold": fold.name,
                     "model": spec.label,
                     "kind": spec.kind,
-                    "status": fr["status"],
-                    "fit_time_s": fr["fit_time_s"],
+                    "status": fr.status,
+                    "fit_time_s": fr.fit_time_s,
                     "n_train": len(fold.train),
                     "train_samples": int(sum(e.n for e in fold.train)),
-                    "note": fr.get("note", ""),
-                    "error": fr.get("error", ""),
+                    "note": fr.note,
+                    "error": fr.error,
                 }
             )
-            for ri, e in enumerate(fold.score):
+            for ri, e in enumerate(as_list(fold.score)):
                 row: dict[str, Any] = {
                     "fold": fold.name,
                     "model": spec.label,
                     "kind": spec.kind,
                     "record": e.name,
-                    "fit_time_s": fr["fit_time_s"],
+                    "fit_time_s": fr.fit_time_s,
                 }
-                if fr["status"] != "ok":
+                if not fr.ok:
                     row.update(
-                        status=fr["status"],
+                        status=fr.status,
                         esr=nan,
                         ssse=nan,
                         nrmse=nan,
                         fit_pct=nan,
                         sim_time_s=nan,
-                        note=fr.get("note", ""),
-                        error=fr.get("error", ""),
+                        note=fr.note,
+                        error=fr.error,
                     )
                 else:
                     sr = sim_out[(fi, si, ri)]
                     row.update(
-                        {
-                            k: sr.get(k, nan)
-                            for k in ("status", "esr", "ssse", "nrmse", "fit_pct", "sim_time_s")
-                        }
+                        status=sr.status,
+                        esr=sr.esr,
+                        ssse=sr.ssse,
+                        nrmse=sr.nrmse,
+                        fit_pct=sr.fit_pct,
+                        sim_time_s=sr.sim_time_s,
+                        note=sr.note,
+                        error=sr.error,
                     )
-                    row["note"], row["error"] = sr.get("note", ""), sr.get("error", "")
                 for k in meta_present:
                     row[k] = e.metadata.get(k)
                 rows.append(row)
@@ -362,49 +391,93 @@ def _tables(
     return results, pd.DataFrame(fit_rows)
 
 
+def _selection(
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    fit_out: Mapping[tuple[int, int], FitOutcome],
+    sim_out: Mapping[tuple[int, int, int], SimOutcome],
+    protocol: Protocol,
+) -> SelectionResult:
+    """The model-selection table of ``mrdamper select`` from this study's held-out scores.
+
+    Only scored records that neither trained the models nor the analysis of their fold count
+    (a protocol may score training records; those scores are not held out). A fold fails for a
+    model when its fit failed or one of its held-out simulations did not give a score.
+    """
+    rows: list[dict[str, Any]] = []
+    fit_times: dict[str, list[float]] = {s.label: [] for s in specs}
+    for fi, fold in enumerate(folds):
+        trained = set(fold.train.names) | set(fold.analysis.names)
+        for si, spec in enumerate(specs):
+            fr = fit_out[(fi, si)]
+            if fr.ok:
+                fit_times[spec.label].append(fr.fit_time_s)
+            for ri, e in enumerate(as_list(fold.score)):
+                if e.name in trained:
+                    continue
+                row: dict[str, Any] = {"model": spec.label, "fold": fold.name, "record": e.name}
+                if not fr.ok:
+                    row.update(esr=float("nan"), clipped=False, error=f"fit: {fr.error}")
+                else:
+                    sr = sim_out[(fi, si, ri)]
+                    ok = sr.status == "ok"
+                    row.update(
+                        esr=sr.esr if ok else float("nan"),
+                        clipped=sr.outside_range,
+                        error="" if ok else f"{sr.status}: {sr.error}",
+                    )
+                rows.append(row)
+    scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
+    return selection_from_scores(
+        scores, [s.label for s in specs], fit_times, protocol.split.kind, len(folds)
+    )
+
+
 def _fitted_models(
-    folds: list[Fold], specs: Sequence[ModelSpec], fit_out: Mapping[tuple[int, int], dict[str, Any]]
-) -> dict[tuple[str, str], Any]:
+    folds: list[Fold], specs: Sequence[ModelSpec], fit_out: Mapping[tuple[int, int], FitOutcome]
+) -> dict[tuple[str, str], FittedModel]:
     from mrdamper.models import model_from_dict
 
-    out: dict[tuple[str, str], Any] = {}
+    out: dict[tuple[str, str], FittedModel] = {}
     for fi, fold in enumerate(folds):
         for si, spec in enumerate(specs):
             res = fit_out[(fi, si)]
-            if res["status"] == "ok" and res.get("model") is not None:
-                out[(fold.name, spec.label)] = model_from_dict(res["model"])
+            if res.ok and res.model is not None:
+                out[(fold.name, spec.label)] = model_from_dict(dict(res.model))
     return out
 
 
-def _informative(folds: list[Fold], source: str) -> tuple[Fold, Experiment] | None:
+def _informative(folds: list[Fold], source: ElectricalSource) -> tuple[Fold, Record] | None:
     """The scored record that shows the most of a current-scheduled model (default showcase).
 
     Preference: a record whose electrical input varies (more than 10 % of the span over all
     scored records), then the highest mean electrical level, then the widest velocity spread;
-    ties keep the first in fold and record order.
+    ties keep the first in fold and record order. Record sources are read one at a time.
     """
     cands = [(f, e) for f in folds for e in f.score]
     if not cands:
         return None
-    levels = [np.asarray(e.electrical(source), dtype=np.float64) for _, e in cands]  # type: ignore[arg-type]
-    span = max(float(np.ptp(np.concatenate(levels))), 1e-12)
+    stats = [_record_stats(as_loaded(e), source) for _, e in cands]
+    span = max(max(hi for _, hi, _, _ in stats) - min(lo for lo, _, _, _ in stats), 1e-12)
 
     def key(k: int) -> tuple[bool, int, float]:
-        el, e = levels[k], cands[k][1]
-        return (
-            float(np.ptp(el)) > 0.1 * span,
-            round(20 * float(np.mean(np.abs(el))) / span),
-            float(np.std(e.v)),
-        )
+        lo, hi, mean_abs, v_std = stats[k]
+        return (hi - lo > 0.1 * span, round(20 * mean_abs / span), v_std)
 
     best = max(range(len(cands)), key=lambda k: (key(k), -k))
     return cands[best]
 
 
+def _record_stats(e: Experiment, source: ElectricalSource) -> tuple[float, float, float, float]:
+    """``(min input, max input, mean |input|, std of v)`` of one record."""
+    el = np.asarray(e.electrical(source), dtype=np.float64)
+    return float(np.min(el)), float(np.max(el)), float(np.mean(np.abs(el))), float(np.std(e.v))
+
+
 def _showcases(
     folds: list[Fold],
     specs: Sequence[ModelSpec],
-    fitted: Mapping[tuple[str, str], Any],
+    fitted: Mapping[tuple[str, str], FittedModel],
     protocol: Protocol,
 ) -> tuple[Showcase | None, Showcase | None]:
     """Predictions of every model on the figure records (Figs. 4, 6, 9, 10, 11).
@@ -415,10 +488,11 @@ def _showcases(
     """
     kinds = {s.label: s.kind for s in specs}
 
-    def make(fold: Fold, e: Experiment) -> Showcase:
+    def make(fold: Fold, rec: Record) -> Showcase:
         ms = {
             s.label: fitted[(fold.name, s.label)] for s in specs if (fold.name, s.label) in fitted
         }
+        e = as_loaded(rec)
         return Showcase(
             fold=fold.name,
             record=e,

@@ -31,7 +31,16 @@ import pandas as pd
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.errors import DataValidationError, OutOfRangeError
 
-__all__ = ["SelectionResult", "cross_validate", "selection_folds"]
+__all__ = [
+    "SCORE_COLUMNS",
+    "SelectionResult",
+    "cross_validate",
+    "selection_folds",
+    "selection_from_scores",
+]
+
+#: Columns of :attr:`SelectionResult.scores`.
+SCORE_COLUMNS: tuple[str, ...] = ("model", "fold", "record", "esr", "clipped", "error")
 
 FoldKind = Literal["auto", "condition", "record", "time"]
 #: Discrete-time model kinds: they need one model rate when records have different rates.
@@ -244,10 +253,52 @@ def cross_validate(
                             "error": f"simulate: {type(exc).__name__}: {exc}",
                         }
                     )
-    scores = pd.DataFrame(rows, columns=["model", "fold", "record", "esr", "clipped", "error"])
-    table = _summarise(scores, kinds, fit_times)
-    recommended, reason = _recommend(table, split, len(parts))
-    return SelectionResult(table, scores, split, len(parts), recommended, reason, notes)
+    scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
+    return selection_from_scores(scores, kinds, fit_times, split, len(parts), notes)
+
+
+def selection_from_scores(
+    scores: pd.DataFrame,
+    kinds: Sequence[str],
+    fit_times: Mapping[str, Sequence[float]],
+    split: str,
+    n_folds: int,
+    notes: Sequence[str] = (),
+) -> SelectionResult:
+    """The selection table and recommendation from held-out scores, by the rule of
+    :func:`cross_validate` (lowest mean ESR among the kinds that passed every fold).
+
+    :func:`cross_validate` calls it on its own folds; a study calls it on the scores of its
+    protocol's folds (:attr:`mrdamper.study.StudyResult.selection`).
+
+    Parameters
+    ----------
+    scores : DataFrame
+        One row per (model, fold, left-out record) with the columns :data:`SCORE_COLUMNS`:
+        ``esr`` (NaN when it failed), ``clipped`` (bool: the record left the model's range),
+        ``error`` (empty when ok; a non-empty error fails the model's fold).
+    kinds : sequence of str
+        Models in table order before sorting (every one gets a row).
+    fit_times : mapping
+        Model -> fit times of its successful fits [s].
+    split : str
+        Fold kind, for the reason text.
+    n_folds : int
+        Number of folds.
+    notes : sequence of str
+        Notes carried into the result.
+
+    Returns
+    -------
+    SelectionResult
+    """
+    missing = [c for c in SCORE_COLUMNS if c not in scores.columns]
+    if missing:
+        raise DataValidationError("scores", f"missing column(s) {missing}")
+    times = {k: list(fit_times.get(k, ())) for k in kinds}
+    table = _summarise(scores, list(kinds), times)
+    recommended, reason = _recommend(table, split, n_folds)
+    return SelectionResult(table, scores.copy(), split, n_folds, recommended, reason, list(notes))
 
 
 def _outside(model: Any, e: Experiment) -> bool:
@@ -261,7 +312,7 @@ def _outside(model: Any, e: Experiment) -> bool:
 
 
 def _summarise(
-    scores: pd.DataFrame, kinds: list[str], fit_times: dict[str, list[float]]
+    scores: pd.DataFrame, kinds: list[str], fit_times: Mapping[str, Sequence[float]]
 ) -> pd.DataFrame:
     out = []
     for k in kinds:
@@ -288,12 +339,13 @@ def _summarise(
 
 def _recommend(table: pd.DataFrame, split: str, n: int) -> tuple[str | None, str]:
     ok = table.dropna(subset=["mean_esr"])
+    folds = f"{n} {split} fold{'s' if n != 1 else ''}"
     if ok.empty:
-        return None, f"no model kind fitted and simulated on all {n} {split} folds"
+        return None, f"no model kind fitted and simulated on all {folds}"
     best = str(ok.index[0])
     reason = (
         f"{best} has the lowest mean free-run ESR on the left-out data, {ok['mean_esr'].iloc[0]:.3g} "
-        f"over {n} {split} folds (worst left-out record {ok['worst_esr'].iloc[0]:.3g})"
+        f"over {folds} (worst left-out record {ok['worst_esr'].iloc[0]:.3g})"
     )
     if len(ok) > 1:
         gap = ok["mean_esr"].iloc[1] / ok["mean_esr"].iloc[0] - 1.0

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import SchemaError
 from mrdamper.study.protocol import Protocol
+from mrdamper.study.records import Record, Records, as_list, same_kind
 
 __all__ = ["Fold", "make_folds", "roles_frame"]
 
@@ -26,25 +26,28 @@ class Fold:
     ----------
     name : str
         Fold name (``"all"``, ``"condition=5mm_3Hz"``, ``"time 70/30"``).
-    analysis : ExperimentSet
+    analysis : ExperimentSet or SourceSet
         Records of the force-velocity analysis (may be empty).
-    train : ExperimentSet
+    train : ExperimentSet or SourceSet
         Records that identify the models.
-    score : ExperimentSet
+    score : ExperimentSet or SourceSet
         Records that are scored.
+
+    The sets are of the kind of the study's data: records in memory, or sources read where they
+    are used (:class:`~mrdamper.data.RecordSource`).
     """
 
     name: str
-    analysis: ExperimentSet
-    train: ExperimentSet
-    score: ExperimentSet
+    analysis: Records
+    train: Records
+    score: Records
 
 
-def _without(data: ExperimentSet, names: set[str]) -> ExperimentSet:
-    return ExperimentSet([e for e in data if e.name not in names], name=data.name)
+def _without(data: Records, names: set[str]) -> Records:
+    return same_kind(data, [e for e in data if e.name not in names])
 
 
-def _time_part(e: Experiment, fraction: float, head: bool) -> Experiment:
+def _time_part(e: Record, fraction: float, head: bool) -> Record:
     cut = round(fraction * e.n)
     if cut < 2 or e.n - cut < 2:
         raise SchemaError(
@@ -56,8 +59,20 @@ def _time_part(e: Experiment, fraction: float, head: bool) -> Experiment:
     return e.slice(cut, None, name=f"{e.name}[{pct}:]")
 
 
-def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
+def make_folds(data: Records, protocol: Protocol) -> list[Fold]:
     """Build the folds of ``protocol`` on ``data``.
+
+    Parameters
+    ----------
+    data : ExperimentSet or SourceSet
+        Every record of the study (only headers are needed, except for time splits, which read
+        a source once to time its parts).
+    protocol : Protocol
+        Selections and split.
+
+    Returns
+    -------
+    list of Fold
 
     Raises
     ------
@@ -65,9 +80,7 @@ def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
         If a fold would have no training or no scoring record; the message names the selection.
     """
     analysis = (
-        protocol.analysis.select(data)
-        if protocol.analysis is not None
-        else ExperimentSet([], data.name)
+        protocol.analysis.select(data) if protocol.analysis is not None else same_kind(data, [])
     )
     train = protocol.train.select(data)
     score = protocol.score.select(data)
@@ -85,18 +98,18 @@ def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
         folds.append(
             Fold(
                 f"time {f:.0%}/{1 - f:.0%}",
-                ExperimentSet([_time_part(e, f, True) for e in analysis], name=data.name),
-                ExperimentSet([_time_part(e, f, True) for e in train], name=data.name),
-                ExperimentSet([_time_part(e, f, False) for e in score], name=data.name),
+                same_kind(data, [_time_part(e, f, True) for e in analysis]),
+                same_kind(data, [_time_part(e, f, True) for e in train]),
+                same_kind(data, [_time_part(e, f, False) for e in score]),
             )
         )
     elif split.kind == "k-fold":
         k = min(int(split.k), len(score))
         for j in range(k):
-            scored = {e.name for pos, e in enumerate(score) if pos % k == j}
-            tr = ExperimentSet([e for e in train if e.name not in scored], name=data.name)
-            an = ExperimentSet([e for e in analysis if e.name not in scored], name=data.name)
-            sc = ExperimentSet([e for e in score if e.name in scored], name=data.name)
+            scored = {e.name for pos, e in enumerate(as_list(score)) if pos % k == j}
+            tr = same_kind(data, [e for e in train if e.name not in scored])
+            an = same_kind(data, [e for e in analysis if e.name not in scored])
+            sc = same_kind(data, [e for e in score if e.name in scored])
             if protocol.exclude_trained:
                 sc = _without(sc, set(tr.names) | set(an.names))
             folds.append(Fold(f"fold {j + 1} of {k}", an, tr, sc))
@@ -108,9 +121,9 @@ def make_folds(data: ExperimentSet, protocol: Protocol) -> list[Fold]:
             if g not in order:
                 order.append(g)
         for g in order:
-            tr = ExperimentSet([e for e in train if split.group_of(e) != g], name=data.name)
-            an = ExperimentSet([e for e in analysis if split.group_of(e) != g], name=data.name)
-            sc = ExperimentSet([e for e in score if split.group_of(e) == g], name=data.name)
+            tr = same_kind(data, [e for e in train if split.group_of(e) != g])
+            an = same_kind(data, [e for e in analysis if split.group_of(e) != g])
+            sc = same_kind(data, [e for e in score if split.group_of(e) == g])
             if protocol.exclude_trained:
                 sc = _without(sc, set(tr.names) | set(an.names))
             folds.append(Fold(f"{label}={g}", an, tr, sc))

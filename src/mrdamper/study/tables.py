@@ -151,6 +151,13 @@ def headline(summary: pd.DataFrame, model: str = "lpv") -> dict[str, Any]:
     The classical models are P-15 and SP-1..SP-4 (:data:`PAPER_CLASSICAL`), as in the paper's
     Section V; every other model's comparison is in the summary's gain columns.
 
+    Parameters
+    ----------
+    summary : DataFrame
+        :func:`summarize` output.
+    model : str
+        Label of the model compared (LPV by default).
+
     Returns
     -------
     dict

@@ -1,9 +1,12 @@
 """Writing a :class:`~mrdamper.study.result.StudyResult` to a folder.
 
-:func:`write_study` builds everything in a hidden temporary folder beside the target and renames
-it into place at the very end, so an interrupted or failed write never leaves a folder that looks
-complete. ``report.html`` is written last inside it. The result object only holds values; this
-module and :mod:`mrdamper.study.report` turn them into files.
+:func:`write_study` builds everything in a private temporary folder beside the target and moves
+it into place at the very end (:func:`mrdamper._io.write_folder`, ``mode="replace"``), so an
+interrupted or failed write never leaves a folder that looks complete. ``report.html`` is written
+last inside it. The result object only holds values; this module, :mod:`mrdamper.study.figures`
+and :mod:`mrdamper.study.report` turn them into files. Layering (no circles)::
+
+    result (value) <- figures, report_tables <- report <- writer
 """
 
 from __future__ import annotations
@@ -11,23 +14,17 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from mrdamper._io import atomic_write_text
-from mrdamper.errors import OutputExistsError
+from mrdamper._io import atomic_write_text, write_folder
+from mrdamper.study import report
+from mrdamper.study._outputs import naming_output, prepare_out, write_tables
+from mrdamper.study.figures import FIGURE_DPI, FIGURE_FORMATS, make_figures
+from mrdamper.study.result import StudyResult
 
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.study.result import StudyResult
-
-__all__ = ["FIGURE_DPI", "FIGURE_FORMATS", "save_figures", "write_study"]
-
-FIGURE_FORMATS: tuple[str, ...] = ("png", "svg")
-#: Resolution of the PNG figures [dots per inch]: sharp when printed at their drawn size.
-FIGURE_DPI = 150
+__all__ = ["save_figures", "write_study"]
 
 
 def _slug(text: str) -> str:
@@ -63,28 +60,15 @@ def write_study(
         ``out_dir`` is an input, holds one, is the working folder or one of its ancestors, or
         cannot be written (checked before anything is written).
     """
-    from mrdamper.study._outputs import naming_output, prepare_out
-
     out = prepare_out(res, out_dir, force)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
-        _write_into(res, tmp, figures)
-        _swap_into_place(tmp, out, force)
+        write_folder(out, lambda tmp: _write_into(res, tmp, figures), force=force, mode="replace")
     except OSError as exc:
-        shutil.rmtree(tmp, ignore_errors=True)
         raise naming_output(exc, out) from exc
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return Path(out_dir)
 
 
 def _write_into(res: StudyResult, d: Path, figures: bool) -> None:
-    from mrdamper.study import report
-    from mrdamper.study._outputs import write_tables
-    from mrdamper.study.figures import make_figures
-
     summary = res.summary
     write_tables(res, d, summary)
     for (fold, label), model in res.models.items():
@@ -142,41 +126,3 @@ def _fig_metadata(fmt: str) -> dict[str, Any]:
     if fmt == "png":
         return {"Software": None}
     return {}
-
-
-def _umask() -> int:
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("Umask:"):
-                return int(line.split()[1], 8)
-    except OSError:
-        pass
-    return 0o022
-
-
-def _usual_permissions(folder: Path) -> None:
-    """Give the finished folder the permissions of an ordinary folder (temporary files are private)."""
-    mask = _umask()
-    folder.chmod(0o777 & ~mask)
-    for p in folder.rglob("*"):
-        p.chmod((0o777 if p.is_dir() else 0o666) & ~mask)
-
-
-def _swap_into_place(tmp: Path, out: Path, force: bool) -> None:
-    """Move the finished folder ``tmp`` to ``out`` (replacing an empty one, or any one if ``force``)."""
-    _usual_permissions(tmp)
-    if not out.exists():
-        os.replace(tmp, out)
-        return
-    if not any(out.iterdir()):
-        out.rmdir()
-        os.replace(tmp, out)
-        return
-    if not force:  # re-check: the folder may have been filled meanwhile
-        raise OutputExistsError(
-            f"{out}: folder filled while writing; pass force=True to replace it"
-        )
-    trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-    os.replace(out, trash / out.name)
-    os.replace(tmp, out)
-    shutil.rmtree(trash, ignore_errors=True)

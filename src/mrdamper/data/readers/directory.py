@@ -20,6 +20,7 @@ from mrdamper.errors import DataValidationError
 __all__ = [
     "DEFAULT_PATTERN",
     "SUFFIX_READERS",
+    "directory_files",
     "parse_file_name",
     "read",
     "read_directory",
@@ -219,6 +220,44 @@ def read_directory(
     ['sine_5mm_3Hz_0.5A']
     """
     root = Path(path)
+    records = [
+        read_file(f, name=rec_name, metadata={**dict(metadata or {}), **meta}, **read_kwargs)
+        for rec_name, f, meta in directory_files(root, pattern, recursive=recursive)
+    ]
+    return ExperimentSet(records, name=name or root.name)
+
+
+def directory_files(
+    path: str | os.PathLike[str],
+    pattern: str | re.Pattern[str] = DEFAULT_PATTERN,
+    *,
+    recursive: bool = False,
+) -> list[tuple[str, Path, dict[str, Any]]]:
+    """The files :func:`read_directory` reads, without reading them.
+
+    Parameters
+    ----------
+    path : path-like
+        The folder.
+    pattern : str or compiled regex
+        Regular expression the whole file name must match (named groups become metadata).
+    recursive : bool
+        Also search sub-folders.
+
+    Returns
+    -------
+    list of (str, Path, dict)
+        ``(record name, file, metadata from the name)`` in natural order of the names.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder does not exist.
+    DataValidationError
+        If ``path`` is not a folder, the pattern is invalid, no file matches it, or a matching
+        name is a broken symbolic link.
+    """
+    root = Path(path)
     if not root.exists():
         raise FileNotFoundError(f"{root}: no such folder")
     if not root.is_dir():
@@ -250,11 +289,7 @@ def read_directory(
             f"{' ...' if len(others) > 5 else ''})",
         )
     found.sort(key=lambda item: _natural_key(item[0]))
-    records = []
-    for rec_name, f, meta in found:
-        merged = {**dict(metadata or {}), **meta}
-        records.append(read_file(f, name=rec_name, metadata=merged, **read_kwargs))
-    return ExperimentSet(records, name=name or root.name)
+    return found
 
 
 def read(path: str | os.PathLike[str], **kwargs: Any) -> Experiment | ExperimentSet:

@@ -1,4 +1,4 @@
-"""Private helpers shared by the signal generators: time grids, seeds and argument checks."""
+"""Helpers shared by the signal generators and the virtual rig: time grids, seeds, checks."""
 
 from __future__ import annotations
 

@@ -1,0 +1,178 @@
+"""The package is layered: no import circles, no private module or name used across packages.
+
+Every module of ``src/mrdamper`` is parsed with :mod:`ast` (imports inside functions and under
+``TYPE_CHECKING`` included, since a circle hidden in a function is still a circle). Two rules:
+
+* the graph "module A imports module B" has no cycle;
+* a module never imports a private module (a path part with a leading underscore) or a private
+  name of another package. ``mrdamper._io`` is shared by design; within one subpackage (for
+  example ``models.lpv`` -> ``models._lpv_kernels``) private imports are the point of privacy.
+
+A failure prints every offending edge.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PKG = SRC / "mrdamper"
+#: Private modules every package may use.
+SHARED_PRIVATE = ("mrdamper._io",)
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted(PKG.rglob("*.py"))}
+
+
+def _resolve(current: str, is_pkg: bool, level: int, module: str | None) -> str:
+    if level == 0:
+        return module or ""
+    base = current.split(".") if is_pkg else current.split(".")[:-1]
+    base = base[: len(base) - (level - 1)]
+    return ".".join([*base, module] if module else base)
+
+
+def _imports(name: str, path: Path, known: set[str]) -> Iterator[tuple[str, str | None, int]]:
+    """``(imported module, imported name or None, line)`` for every import of ``mrdamper``."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    is_pkg = path.name == "__init__.py"
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "mrdamper":
+                    yield alias.name, None, node.lineno
+        elif isinstance(node, ast.ImportFrom):
+            mod = _resolve(name, is_pkg, node.level, node.module)
+            if mod.split(".")[0] != "mrdamper":
+                continue
+            for alias in node.names:
+                sub = f"{mod}.{alias.name}"
+                if sub in known:  # "from mrdamper.study import writer": a module
+                    yield sub, None, node.lineno
+                else:
+                    yield mod, alias.name, node.lineno
+
+
+def _package(module: str, known_pkgs: set[str]) -> str:
+    """The subpackage a module belongs to (``mrdamper.study.runner`` -> ``mrdamper.study``)."""
+    parts = module.split(".")
+    return ".".join(parts[:2]) if len(parts) > 1 and ".".join(parts[:2]) in known_pkgs else module
+
+
+def _is_private(module: str) -> bool:
+    return any(part.startswith("_") and part != "__init__" for part in module.split(".")[1:])
+
+
+def _graph() -> tuple[dict[str, set[str]], list[str]]:
+    mods = _modules()
+    known = set(mods)
+    pkgs = {m for m, p in mods.items() if p.name == "__init__.py"}
+    edges: dict[str, set[str]] = {m: set() for m in mods}
+    private: dict[str, None] = {}  # ordered, one entry per offending import
+    for name, path in mods.items():
+        for target, imported, line in _imports(name, path, known):
+            if target not in known:
+                continue
+            if target != name:
+                edges[name].add(target)
+            if _package(target, pkgs) == _package(name, pkgs):
+                continue
+            where = f"{path.relative_to(SRC)}:{line}"
+            if _is_private(target) and not target.startswith(SHARED_PRIVATE):
+                private[f"{name} -> {target} (private module, {where})"] = None
+            elif (
+                imported is not None and imported.startswith("_") and not imported.startswith("__")
+            ):
+                private[f"{name} -> {target}.{imported} (private name, {where})"] = None
+    return edges, list(private)
+
+
+def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """Every strongly connected component with more than one module (Tarjan), as a cycle path."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    comps: list[list[str]] = []
+    counter = [0]
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in sorted(edges[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                comps.append(sorted(comp))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return comps
+
+
+def _cycle_edges(comp: list[str], edges: dict[str, set[str]]) -> list[str]:
+    members = set(comp)
+    return [f"{a} -> {b}" for a in comp for b in sorted(edges[a] & members)]
+
+
+def test_modules_found() -> None:
+    mods = _modules()
+    assert "mrdamper.study.runner" in mods and "mrdamper.models.base" in mods
+
+
+def test_no_import_cycles() -> None:
+    edges = _graph()[0]
+    comps = _cycles(edges)
+    text = "\n\n".join("\n".join(_cycle_edges(c, edges)) for c in comps)
+    assert not comps, f"{len(comps)} import circle(s); edges inside each:\n{text}"
+
+
+def test_no_private_imports_across_packages() -> None:
+    private = _graph()[1]
+    assert not private, "private imports across packages:\n" + "\n".join(private)
+
+
+@pytest.mark.parametrize(
+    ("current", "is_pkg", "level", "module", "expected"),
+    [
+        ("mrdamper.study.runner", False, 1, "tables", "mrdamper.study.tables"),
+        ("mrdamper.study", True, 1, "runner", "mrdamper.study.runner"),
+        ("mrdamper.study.runner", False, 2, "data", "mrdamper.data"),
+        ("mrdamper.study.runner", False, 0, "mrdamper.data", "mrdamper.data"),
+    ],
+)
+def test_relative_imports_resolved(
+    current: str, is_pkg: bool, level: int, module: str, expected: str
+) -> None:
+    assert _resolve(current, is_pkg, level, module) == expected
+
+
+def test_cycle_finder_finds_a_circle() -> None:
+    edges = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert _cycles(edges) == [["a", "b", "c"]]
