@@ -281,6 +281,14 @@ def test_json_round_trip_is_bit_identical(tmp_path: Path) -> None:
     assert type(get_estimator("p15")) is P15Estimator
 
 
+def test_model_file_holds_no_timing_at_any_depth(tmp_path: Path) -> None:
+    fitted = P15Estimator().fit(_record(seed=5))
+    text = fitted.save(tmp_path / "p15.json").read_text()
+    assert "elapsed_s" in fitted.provenance  # the fit is timed in memory ...
+    for key in ("elapsed_s", "cpu_s", "fit_seconds", "fit_time_s"):  # ... never in the file
+        assert f'"{key}"' not in text, key
+
+
 def test_constant_current_gives_constant_coefficients() -> None:
     e = _record(current=0.5)
     with pytest.warns(UserWarning, match=r"one i level.*\[0.5, 0.5\] A"):
