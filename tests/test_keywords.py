@@ -38,6 +38,7 @@ SUBPACKAGES = [
 ]
 MODEL_MODULES = [
     "base",
+    "settings",
     "registry",
     "protocols",
     "rates",

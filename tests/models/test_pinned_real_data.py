@@ -11,10 +11,10 @@ chooses on the training part (its grid search is not rerun here), and every mode
   cheapest fold: it removes the most samples from training): mean test ESR over its five records.
 * Dyke (``ranran_50.csv``), first 70 % trains, last 30 % tests: test ESR.
 
-How the values were produced: the code as it stood before the estimator skeleton was unified,
-``OPENBLAS_NUM_THREADS=1``, running exactly the fits below (``repr`` of the mean ESR, rounded
-here to 6 significant digits). They agree with the per-fold Quiroz table and the Dyke table of
-``docs/results.md`` ("Every model side by side") to the 3 digits printed there.
+How the values were produced: the code as it stood before the estimator skeleton was unified
+(commit e032958), ``OPENBLAS_NUM_THREADS=1``, running exactly the fits below (``repr`` of the
+mean ESR, rounded here to 6 significant digits). They agree with the per-fold Quiroz table and the
+Dyke table of ``docs/results.md`` ("Every model side by side") to the 3 digits printed there.
 """
 
 from __future__ import annotations

@@ -16,9 +16,8 @@ import dataclasses
 import json
 import math
 import time
-import typing
 import warnings
-from collections.abc import Hashable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Literal, cast
@@ -31,6 +30,14 @@ from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
+from mrdamper.models.settings import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_number,
+    literal_choices,
+    type_hints,
+)
 
 __all__ = [
     "SCHEMA_NAME",
@@ -524,11 +531,11 @@ class Estimator(abc.ABC):
         """
         if not dataclasses.is_dataclass(self):
             return
-        hints = _type_hints(type(self))
+        hints = type_hints(type(self))
         for f in dataclasses.fields(self):
             hint = hints.get(f.name)
             value = getattr(self, f.name)
-            choices = _literal_choices(hint)
+            choices = literal_choices(hint)
             if choices is not None:
                 check_choice(f.name, value, choices[0], allow_none=choices[1])
             elif hint is bool:
@@ -564,140 +571,6 @@ class Estimator(abc.ABC):
                     "derive_velocity / --derive-velocity)",
                 )
         return exps
-
-
-# ----------------------------------------------------------------------------- settings checks
-def check_choice(
-    name: str, value: Any, choices: Sequence[Any], *, allow_none: bool = False
-) -> None:
-    """Refuse ``value`` unless it is one of ``choices`` (or None with ``allow_none``).
-
-    Parameters
-    ----------
-    name : str
-        Setting name (in the message).
-    value : object
-        The value given.
-    choices : sequence
-        Accepted values.
-    allow_none : bool
-        Also accept None.
-
-    Raises
-    ------
-    DataValidationError
-        Naming the setting, the accepted values and the value given.
-    """
-    if value is None and allow_none:
-        return
-    if isinstance(value, Hashable) and value in choices and not isinstance(value, bool):
-        return
-    expected = ", ".join(repr(c) for c in choices) + (" or None" if allow_none else "")
-    raise DataValidationError(name, f"expected one of {expected}, got {value!r}")
-
-
-def check_bool(name: str, value: Any) -> None:
-    """Refuse anything but True / False.
-
-    Parameters
-    ----------
-    name : str
-        Setting name (in the message).
-    value : object
-        The value given.
-    """
-    if not isinstance(value, (bool, np.bool_)):
-        raise DataValidationError(name, f"expected True or False, got {value!r}")
-
-
-def check_int(
-    name: str,
-    value: Any,
-    low: int | None = 0,
-    high: int | None = None,
-    *,
-    allow_none: bool = False,
-) -> None:
-    """Refuse anything but an integer in ``[low, high]``.
-
-    Parameters
-    ----------
-    name : str
-        Setting name (in the message).
-    value : object
-        The value given.
-    low, high : int or None
-        Inclusive bounds; None: unbounded on that side.
-    allow_none : bool
-        Also accept None.
-    """
-    if value is None and allow_none:
-        return
-    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    if ok and (low is None or value >= low) and (high is None or value <= high):
-        return
-    if low is None:
-        rng = "" if high is None else f" <= {high}"
-    else:
-        rng = f" >= {low}" if high is None else f" in {low}..{high}"
-    raise DataValidationError(name, f"expected an integer{rng}, got {value!r}")
-
-
-def check_number(
-    name: str,
-    value: Any,
-    *,
-    low: float = 0.0,
-    high: float = math.inf,
-    strict: bool = True,
-    allow_none: bool = False,
-    what: str = "a positive finite number",
-) -> None:
-    """Refuse anything but a finite real number above ``low`` and below ``high``.
-
-    Parameters
-    ----------
-    name : str
-        Setting name (in the message).
-    value : object
-        The value given.
-    low, high : float
-        Bounds: ``value > low`` (``>=`` unless ``strict``) and ``value < high``.
-    strict : bool
-        Exclude ``low`` itself.
-    allow_none : bool
-        Also accept None.
-    what : str
-        What was expected, in words (in the message).
-    """
-    if value is None and allow_none:
-        return
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if ok:
-        v = float(value)
-        above = v > low if strict else v >= low
-        if math.isfinite(v) and above and v < high:
-            return
-    raise DataValidationError(name, f"expected {what}, got {value!r}")
-
-
-def _type_hints(cls: type) -> dict[str, Any]:
-    try:
-        return typing.get_type_hints(cls)
-    except (NameError, TypeError):  # an annotation that does not resolve: no literal checks
-        return {}
-
-
-def _literal_choices(hint: Any) -> tuple[tuple[Any, ...], bool] | None:
-    """``(choices, allows None)`` of a ``Literal[...]`` or ``Literal[...] | None`` hint."""
-    if typing.get_origin(hint) is Literal:
-        return typing.get_args(hint), False
-    args = typing.get_args(hint)
-    if args and type(None) in args:
-        rest = [a for a in args if a is not type(None)]
-        if len(rest) == 1 and typing.get_origin(rest[0]) is Literal:
-            return typing.get_args(rest[0]), True
-    return None
 
 
 def _has_nan(value: Any) -> bool:
