@@ -27,29 +27,6 @@ _BLOCK = 512
 
 
 @njit(cache=True)
-def _fill_row(row, pw, y, u, rho, k, n_m, n_p, with_const, scale):  # pragma: no cover - numba
-    r = rho[k]
-    pw[0] = scale
-    for p in range(1, n_p):
-        pw[p] = pw[p - 1] * r
-    c = 0
-    for j in range(1, n_m + 1):
-        yk = -y[k - j]
-        for p in range(n_p):
-            row[c] = yk * pw[p]
-            c += 1
-    for j in range(1, n_m + 1):
-        uk = u[k - j]
-        for p in range(n_p):
-            row[c] = uk * pw[p]
-            c += 1
-    if with_const:
-        for p in range(n_p):
-            row[c] = pw[p]
-            c += 1
-
-
-@njit(cache=True)
 def _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw):  # pragma: no cover - numba
     """Columns of samples ``a:b`` of the regression, transposed into ``bt[:, :b-a]``."""
     L = b - a
@@ -133,23 +110,60 @@ def gram_pass(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no c
     return G, g, yy, n_eq
 
 
-@njit(cache=True)
-def build_regressors(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no cover - numba
-    """Materialise the weighted regression matrix ``X`` and target (QR fall-back, benchmarks)."""
+def build_regressors(
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    starts: np.ndarray,
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Materialise the weighted regression matrix ``X`` and target (QR fall-back, benchmarks).
+
+    Plain NumPy, one column of a record at a time (no compiled kernel: nothing here is
+    recursive). Row ``i`` of record ``r`` (sample ``k``) holds ``sqrt(w_r) rho[k]**p`` times
+    ``-y[k-j]``, ``u[k-j]`` and, with ``with_const``, one; the powers are formed as running
+    products ``(sqrt(w_r) rho) rho ...``, the same operations as in :func:`gram_pass`.
+
+    Returns
+    -------
+    X : float64[:, :]
+        Shape ``(n_eq, 2 n_m n_p [+ n_p])``.
+    t : float64[:]
+        ``sqrt(w_r) y[k]`` [N].
+    """
+    n_m, n_p = int(n_m), int(n_p)
     P = 2 * n_m * n_p + (n_p if with_const else 0)
-    n_eq = 0
-    for r in range(starts.size - 1):
-        n_eq += max(starts[r + 1] - starts[r] - n_m, 0)
-    X = np.empty((n_eq, P))
-    t = np.empty(n_eq)
-    pw = np.empty(n_p)
+    lengths = np.maximum(np.diff(np.asarray(starts, dtype=np.int64)) - n_m, 0)
+    X = np.empty((int(lengths.sum()), P))
+    t = np.empty(X.shape[0])
     i = 0
-    for r in range(starts.size - 1):
-        sw = np.sqrt(weights[r])
-        for k in range(starts[r] + n_m, starts[r + 1]):
-            _fill_row(X[i], pw, y, u, rho, k, n_m, n_p, with_const, sw)
-            t[i] = y[k] * sw
-            i += 1
+    for r, L in enumerate(lengths.tolist()):
+        if L == 0:
+            continue
+        a = int(starts[r]) + n_m
+        b = a + L
+        pw = np.empty((n_p, L))
+        pw[0] = np.sqrt(weights[r])
+        for p in range(1, n_p):
+            np.multiply(pw[p - 1], rho[a:b], out=pw[p])
+        Xr = X[i : i + L]
+        c = 0
+        for j in range(1, n_m + 1):
+            yk = -y[a - j : b - j]
+            for p in range(n_p):
+                np.multiply(yk, pw[p], out=Xr[:, c])
+                c += 1
+        for j in range(1, n_m + 1):
+            for p in range(n_p):
+                np.multiply(u[a - j : b - j], pw[p], out=Xr[:, c])
+                c += 1
+        if with_const:
+            Xr[:, c : c + n_p] = pw.T
+        np.multiply(y[a:b], pw[0], out=t[i : i + L])
+        i += L
     return X, t
 
 

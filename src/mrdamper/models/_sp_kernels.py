@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from mrdamper._kernels import readonly
+
 __all__ = ["N_COMPONENTS", "sp_force", "sp_force_jacobian"]
 
 #: Number of components of the SP map (A, a, b, c, d).
@@ -32,8 +34,52 @@ def _components(
         out[comp[k]] += theta[k] * ii ** power[k]
 
 
-@njit(cache=True)
 def sp_force(
+    x: np.ndarray,
+    v: np.ndarray,
+    i: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    theta: np.ndarray,
+    f0: float,
+) -> np.ndarray:
+    """Evaluate the SP force map sample by sample (see :func:`_sp_force`; arrays are passed
+    read-only so the kernel has one signature)."""
+    return _sp_force(*_args(x, v, i, comp, power, theta), float(f0))  # type: ignore[no-any-return]
+
+
+def sp_force_jacobian(
+    x: np.ndarray,
+    v: np.ndarray,
+    i: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    theta: np.ndarray,
+    f0: float,
+    with_offset: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Force map and its analytic Jacobian (see :func:`_sp_force_jacobian`)."""
+    return _sp_force_jacobian(  # type: ignore[no-any-return]
+        *_args(x, v, i, comp, power, theta), float(f0), bool(with_offset)
+    )
+
+
+def _args(
+    x: np.ndarray,
+    v: np.ndarray,
+    i: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    theta: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    f, n = np.float64, np.int64
+    return tuple(
+        readonly(a, t) for a, t in ((x, f), (v, f), (i, f), (comp, n), (power, n), (theta, f))
+    )
+
+
+@njit(cache=True)
+def _sp_force(
     x: np.ndarray,
     v: np.ndarray,
     i: np.ndarray,
@@ -70,7 +116,7 @@ def sp_force(
 
 
 @njit(cache=True)
-def sp_force_jacobian(
+def _sp_force_jacobian(
     x: np.ndarray,
     v: np.ndarray,
     i: np.ndarray,

@@ -24,7 +24,7 @@ from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.errors import SchemaError, interrupt_in_chain
 from mrdamper.study._tasks import fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
-from mrdamper.study.executor import StudyExecutor, make_executor
+from mrdamper.study.executor import ProcessExecutor, StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
 from mrdamper.study.result import Showcase, StudyResult
@@ -238,6 +238,19 @@ def run_study(
     )
 
 
+def _compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
+    """With several local workers, compile the kernels the models need before the first fit,
+    split over the workers so each is compiled once (see :mod:`mrdamper._kernels`); the fits then
+    load them from numba's cache. Nothing to do when they are cached or with one worker."""
+    if not isinstance(ex, ProcessExecutor) or ex.workers < 2:
+        return
+    from mrdamper._kernels import compile_kernels, plan
+
+    futures = [ex.submit(compile_kernels, group) for group in plan(kinds, ex.workers)]
+    for fut in futures:
+        fut.exception()  # wait; a kernel that failed here compiles (and reports) at first use
+
+
 def _execute(
     ex: StudyExecutor,
     folds: list[Fold],
@@ -262,6 +275,7 @@ def _execute(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
         key=lambda k: (_COST_RANK.get(specs[k[1]].kind, len(_COST_RANK)), k),
     )
+    _compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
         pending[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
     with _progress(show) as bar:
