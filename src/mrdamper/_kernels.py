@@ -43,8 +43,7 @@ _P15 = "mrdamper.models._p15_implicit"
 Item = tuple[str, str, str, float]
 
 _LPV_ITEMS: tuple[Item, ...] = (
-    (_LPV, "gram_pass", "f1 f1 f1 i1 f1 I I B", 2.0),
-    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 1.3),
+    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 2.5),
     (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.7),
 )
 _SP_ITEMS: tuple[Item, ...] = (

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from scipy.linalg import blas as _blas
 
 __all__ = [
     "build_regressors",
@@ -24,46 +25,66 @@ __all__ = [
 ]
 
 _BLOCK = 512
+#: Blocks of the regression filled at once by :func:`gram_pass` (memory ``P x 16384`` values).
+_CHUNK = 32
 
 
-@njit(cache=True)
-def _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw):  # pragma: no cover - numba
-    """Columns of samples ``a:b`` of the regression, transposed into ``bt[:, :b-a]``."""
-    L = b - a
-    P = bt.shape[0]
-    pw = np.empty((n_p, L))
-    for q in range(L):
-        pw[0, q] = sw
+def _fill_blocks(
+    bt: np.ndarray,
+    yb: np.ndarray,
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    a: int,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+    sw: float,
+) -> None:
+    """Regression columns of the samples from ``a`` on, in blocks: ``bt[k, :, q]`` is sample
+    ``a + k * L + q`` (``bt`` of shape ``(nb, P, L)``), ``yb[k, q]`` its weighted target."""
+    nb, _, L = bt.shape
+    n = nb * L
+    pw = np.empty((n_p, nb, L))
+    pw[0] = sw
     for p in range(1, n_p):
-        for q in range(L):
-            pw[p, q] = pw[p - 1, q] * rho[a + q]
+        np.multiply(pw[p - 1], rho[a : a + n].reshape(nb, L), out=pw[p])
+    neg = -pw
     c = 0
     for j in range(1, n_m + 1):
+        yj = y[a - j : a - j + n].reshape(nb, L)
         for p in range(n_p):
-            for q in range(L):
-                bt[c, q] = -pw[p, q] * y[a + q - j]
+            np.multiply(neg[p], yj, out=bt[:, c])
             c += 1
     for j in range(1, n_m + 1):
+        uj = u[a - j : a - j + n].reshape(nb, L)
         for p in range(n_p):
-            for q in range(L):
-                bt[c, q] = pw[p, q] * u[a + q - j]
+            np.multiply(pw[p], uj, out=bt[:, c])
             c += 1
     if with_const:
         for p in range(n_p):
-            for q in range(L):
-                bt[c, q] = pw[p, q]
+            bt[:, c] = pw[p]
             c += 1
-    for q in range(L):
-        yb[q] = y[a + q] * sw
-    return P
+    np.multiply(y[a : a + n].reshape(nb, L), sw, out=yb)
 
 
-@njit(cache=True)
-def gram_pass(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no cover - numba
+def gram_pass(
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    starts: np.ndarray,
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Accumulate ``X^T W X``, ``X^T W y`` and ``y^T W y`` without materialising ``X``.
 
-    The regression is filled block by block (``_BLOCK`` samples, column-wise so the fill
-    vectorises) and each block is added to the Gram matrix with one matrix product.
+    The regression is filled with NumPy (:data:`_CHUNK` blocks at a time) in blocks of
+    :data:`_BLOCK` samples stored transposed (``P x _BLOCK``), and each block is added to the
+    sums with one BLAS ``dgemm`` (and ``dgemv``, ``ddot``), block after block in sample order:
+    the operations and their order of the compiled kernel this replaced (same sums bit for bit,
+    ``tests/models/test_lpv.py``), without its compilation.
 
     Parameters
     ----------
@@ -82,32 +103,41 @@ def gram_pass(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no c
     -------
     G, g, yy, n_eq
     """
+    n_m, n_p = int(n_m), int(n_p)
     P = 2 * n_m * n_p + (n_p if with_const else 0)
     G = np.zeros((P, P))
     g = np.zeros(P)
     yy = 0.0
     n_eq = 0
-    bt = np.empty((P, _BLOCK))
-    yb = np.empty(_BLOCK)
-    for r in range(starts.size - 1):
-        sw = np.sqrt(weights[r])
-        a = starts[r] + n_m
-        while a < starts[r + 1]:
-            b = min(a + _BLOCK, starts[r + 1])
-            L = b - a
-            _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw)
-            if L == _BLOCK:
-                G += bt @ bt.T
-                g += bt @ yb
-                yy += yb @ yb
-            else:
-                part = np.ascontiguousarray(bt[:, :L])
-                G += part @ part.T
-                g += part @ yb[:L]
-                yy += yb[:L] @ yb[:L]
-            n_eq += L
-            a = b
-    return G, g, yy, n_eq
+    bt = np.empty((_CHUNK, P, _BLOCK))
+    yb = np.empty((_CHUNK, _BLOCK))
+    for r in range(len(starts) - 1):
+        sw = float(np.sqrt(weights[r]))
+        a, end = int(starts[r]) + n_m, int(starts[r + 1])
+        while a < end:
+            nb = min(_CHUNK, (end - a) // _BLOCK)
+            if nb > 0:
+                bts, ybs, L = bt[:nb], yb[:nb], _BLOCK
+            else:  # the record's last, partial block
+                nb, L = 1, end - a
+                bts, ybs = np.empty((1, P, L)), np.empty((1, L))
+            _fill_blocks(bts, ybs, y, u, rho, a, n_m, n_p, bool(with_const), sw)
+            # one product per block, then the blocks' sums added in order (np.add.reduce
+            # along the first axis adds row after row)
+            Gk = np.empty((nb + 1, P, P))
+            Gk[0] = G
+            for k in range(nb):
+                Gk[k + 1] = _blas.dgemm(1.0, bts[k].T, bts[k].T, trans_a=1).T
+            G = np.add.reduce(Gk, axis=0)
+            gk = np.empty((nb + 1, P))
+            gk[0] = g
+            np.matmul(bts, ybs[:, :, None], out=gk[1:, :, None])
+            g = np.add.reduce(gk, axis=0)
+            for k in range(nb):
+                yy += float(ybs[k] @ ybs[k])
+            n_eq += nb * L
+            a += nb * L
+    return G, g, float(yy), n_eq
 
 
 def build_regressors(
