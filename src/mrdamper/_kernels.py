@@ -9,26 +9,43 @@ kernel it calls. Two things keep that cost down:
   frozen model's coefficients) and a writable one are different argument types to numba, so the
   same kernel called with both is compiled twice. The wrappers of the kernel modules pass input
   arrays through :func:`readonly` (a read-only view, never a copy), so each compiles once.
-* **Compile ahead, split over the workers.** :data:`KERNELS` lists, per model kind, the kernels
-  its identification and simulation call and their argument types. A study with several local
-  worker processes first compiles the kernels its model kinds need that are not cached yet, split
-  into one group per worker (by module, largest first), so each is compiled once on the machine
-  and the workers compile in parallel; the fits then load them from the cache. Kernels already cached are
-  not touched (a second run does no extra work).
+* **Compile ahead, in parallel, once per machine.** :data:`KERNELS` lists, per model kind, the
+  kernels its identification and simulation call and their argument types. A study with several
+  local worker processes first has every worker compile the kernels its model kinds need that are
+  not cached yet, module by module, each module claimed by one process (:func:`compile_claimed`),
+  so each kernel is compiled once on the machine and the workers compile in parallel; the fits
+  then load them from the cache. ``mrdamper demo`` starts this in a background process before it
+  generates its records (:func:`compile_ahead`). Kernels already cached are not touched: a second
+  run only reads the cache indexes.
 
 The costs in :data:`KERNELS` are compile times [s] measured by ``benchmarks/bench_compile.py``
-(CPU time on the 2-core reference machine); they only balance the groups.
+(CPU time on the 2-core reference machine); they only order the modules, largest first, so the
+processes finish at about the same time.
 """
 
 from __future__ import annotations
 
 import importlib
+import multiprocessing
+import os
+import shutil
+import tempfile
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["KERNELS", "compile_kernels", "is_cached", "plan", "readonly"]
+__all__ = [
+    "KERNELS",
+    "claim_folder",
+    "compile_ahead",
+    "compile_claimed",
+    "compile_kernels",
+    "finish_ahead",
+    "is_cached",
+    "readonly",
+]
 
 _LPV = "mrdamper.models._lpv_kernels"
 _SPENCER = "mrdamper.models._spencer_kernels"
@@ -88,13 +105,13 @@ def _types(code: str) -> tuple[Any, ...]:
     from numba import types as nt
 
     scalars = {"F": nt.float64, "I": nt.int64, "B": nt.boolean}
-    out = []
+    out: list[Any] = []
     for tok in code.split():
         if tok in scalars:
             out.append(scalars[tok])
             continue
-        dtype = nt.float64 if tok[0] == "f" else nt.int64
-        layout = "A" if "A" in tok else "C"
+        dtype: Any = nt.float64 if tok[0] == "f" else nt.int64
+        layout: Any = "A" if "A" in tok else "C"
         out.append(nt.Array(dtype, int(tok[1]), layout, readonly="r" in tok))
     return tuple(out)
 
@@ -114,12 +131,11 @@ def is_cached(item: Item) -> bool:
         return False
 
 
-def plan(kinds: Iterable[str], groups: int) -> list[list[Item]]:
-    """Kernels of ``kinds`` not cached yet, split into at most ``groups`` lists of similar cost.
+def _todo(kinds: Iterable[str]) -> list[list[Item]]:
+    """Kernels of ``kinds`` not cached yet, by module (largest module first).
 
-    The kernels of one module stay in one list (they share helper functions and numba's own
-    compiled helpers, which each process would otherwise compile again); modules go largest first
-    to the least loaded list. Empty lists are dropped (an empty plan when everything is cached).
+    The kernels of one module are compiled together, in one process: they share helper functions
+    and numba's own compiled helpers, which another process would compile again.
     """
     items: dict[tuple[str, str, str], Item] = {}
     for kind in kinds:
@@ -129,13 +145,7 @@ def plan(kinds: Iterable[str], groups: int) -> list[list[Item]]:
     for it in items.values():
         if not is_cached(it):
             modules.setdefault(it[0], []).append(it)
-    out: list[list[Item]] = [[] for _ in range(max(1, groups))]
-    load = [0.0] * len(out)
-    for todo in sorted(modules.values(), key=lambda m: -sum(it[3] for it in m)):
-        j = load.index(min(load))
-        out[j].extend(sorted(todo, key=lambda it: -it[3]))
-        load[j] += sum(it[3] for it in todo)
-    return [g for g in out if g]
+    return sorted(modules.values(), key=lambda m: -sum(it[3] for it in m))
 
 
 def compile_kernels(items: Sequence[Item]) -> int:
@@ -152,3 +162,66 @@ def compile_kernels(items: Sequence[Item]) -> int:
         except Exception:  # noqa: BLE001, S112 - see the docstring
             continue
     return done
+
+
+def compile_claimed(kinds: Sequence[str], claim_dir: str) -> int:
+    """Compile the uncached kernels of ``kinds``, module by module, skipping modules that another
+    process has claimed: a module is claimed by creating a file named after it in ``claim_dir``
+    (atomic). Every process given the same ``claim_dir`` runs this; each module is compiled once.
+    Returns the number of kernel signatures compiled here."""
+    done = 0
+    for items in _todo(kinds):
+        try:
+            os.close(os.open(os.path.join(claim_dir, items[0][0]), os.O_CREAT | os.O_EXCL))
+        except FileExistsError:
+            continue
+        except OSError:  # claim folder gone: the study has started without us
+            break
+        done += compile_kernels(items)
+    return done
+
+
+@dataclass
+class _Ahead:
+    process: Any
+    claim_dir: str
+
+
+_AHEAD: _Ahead | None = None
+
+
+def compile_ahead(kinds: Sequence[str]) -> None:
+    """Start compiling the uncached kernels of ``kinds`` in a background process, now.
+
+    For a command that has other work to do first (``mrdamper demo`` generates its records): the
+    compilation runs on another core meanwhile. The study picks it up (:func:`claim_folder`) and
+    compiles the modules not yet claimed in its own processes, then waits for this one
+    (:func:`finish_ahead`). Nothing starts when every kernel is cached.
+    """
+    global _AHEAD
+    if _AHEAD is not None or not _todo(kinds):
+        return
+    claim_dir = tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    methods = multiprocessing.get_all_start_methods()
+    ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    proc = ctx.Process(target=compile_claimed, args=(list(kinds), claim_dir), daemon=True)
+    proc.start()
+    _AHEAD = _Ahead(proc, claim_dir)
+
+
+def claim_folder() -> str | None:
+    """Claim folder of the background compilation started by :func:`compile_ahead`, if any."""
+    return None if _AHEAD is None else _AHEAD.claim_dir
+
+
+def finish_ahead(cancel: bool = False) -> None:
+    """Wait for the background compilation (it stops after the modules it claimed) and clean up;
+    ``cancel`` stops it instead (the command failed or was interrupted)."""
+    global _AHEAD
+    if _AHEAD is None:
+        return
+    if cancel and _AHEAD.process.is_alive():
+        _AHEAD.process.terminate()
+    _AHEAD.process.join()
+    shutil.rmtree(_AHEAD.claim_dir, ignore_errors=True)
+    _AHEAD = None

@@ -13,6 +13,8 @@ analytic Jacobian with respect to ``theta`` (and ``f0``).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
@@ -45,7 +47,7 @@ def sp_force(
 ) -> np.ndarray:
     """Evaluate the SP force map sample by sample (see :func:`_sp_force`; arrays are passed
     read-only so the kernel has one signature)."""
-    return _sp_force(*_args(x, v, i, comp, power, theta), float(f0))  # type: ignore[no-any-return]
+    return _SP_FORCE(*_args(x, v, i, comp, power, theta), float(f0))  # type: ignore[no-any-return]
 
 
 def sp_force_jacobian(
@@ -59,7 +61,7 @@ def sp_force_jacobian(
     with_offset: bool,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Force map and its analytic Jacobian (see :func:`_sp_force_jacobian`)."""
-    return _sp_force_jacobian(  # type: ignore[no-any-return]
+    return _SP_FORCE_JACOBIAN(  # type: ignore[no-any-return]
         *_args(x, v, i, comp, power, theta), float(f0), bool(with_offset)
     )
 
@@ -162,3 +164,8 @@ def _sp_force_jacobian(
         if with_offset:
             J[s, p] = 1.0
     return F, J
+
+
+# the dispatchers, untyped for the wrappers above (numba's stubs type a call by its first overload)
+_SP_FORCE: Any = _sp_force
+_SP_FORCE_JACOBIAN: Any = _sp_force_jacobian

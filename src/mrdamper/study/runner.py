@@ -13,6 +13,8 @@ import dataclasses
 import fnmatch
 import inspect
 import platform
+import shutil
+import tempfile
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -239,16 +241,33 @@ def run_study(
 
 
 def _compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
-    """With several local workers, compile the kernels the models need before the first fit,
-    split over the workers so each is compiled once (see :mod:`mrdamper._kernels`); the fits then
-    load them from numba's cache. Nothing to do when they are cached or with one worker."""
-    if not isinstance(ex, ProcessExecutor) or ex.workers < 2:
-        return
-    from mrdamper._kernels import compile_kernels, plan
+    """Compile the kernels the models need before the first fit, each once on the machine, in
+    parallel: every local worker (and a background compilation the command started, see
+    :func:`mrdamper._kernels.compile_ahead`) takes whole kernel modules not cached yet. The fits
+    then load them from numba's cache. Nothing to do with one worker and no background
+    compilation, or when every kernel is cached."""
+    from mrdamper import _kernels
 
-    futures = [ex.submit(compile_kernels, group) for group in plan(kinds, ex.workers)]
-    for fut in futures:
-        fut.exception()  # wait; a kernel that failed here compiles (and reports) at first use
+    claim_dir = _kernels.claim_folder()
+    workers = ex.workers if isinstance(ex, ProcessExecutor) else 1
+    parallel = workers > 1
+    if claim_dir is None and not parallel:
+        return
+    own = claim_dir is None
+    claim_dir = claim_dir or tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    try:
+        if parallel:
+            futures = [
+                ex.submit(_kernels.compile_claimed, list(kinds), claim_dir) for _ in range(workers)
+            ]
+            for fut in futures:
+                fut.exception()  # wait; a kernel that failed here compiles at first use
+        else:
+            _kernels.compile_claimed(list(kinds), claim_dir)
+    finally:
+        _kernels.finish_ahead()
+        if own:
+            shutil.rmtree(claim_dir, ignore_errors=True)
 
 
 def _execute(
