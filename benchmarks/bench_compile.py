@@ -67,7 +67,8 @@ if os.environ.get("MRD_COMPILE_LOG"):
 """
 
 
-def _merge(logdir: Path) -> dict[str, dict]:
+def merge(logdir: Path) -> dict[str, dict]:
+    """Per-kernel compile records of every process that wrote to ``logdir``, added up."""
     out: dict[str, dict] = {}
     for p in sorted(logdir.glob("*.json")):
         for k, r in json.loads(p.read_text()).items():
@@ -86,21 +87,30 @@ def _cpu() -> float:
     return ru.ru_utime + ru.ru_stime
 
 
-def _run(args: list[str], cache: Path, logdir: Path, root: Path) -> tuple[float, float]:
+def profile_env(root: Path, logdir: Path) -> dict[str, str]:
+    """Environment that makes every Python process started with it (and its children) record
+    its numba compilations into ``logdir`` (through a ``sitecustomize`` module in ``root``)."""
     logdir.mkdir()
     code = root / "profile.py"
     code.write_text(_PROFILE)
     boot = root / "boot"
     boot.mkdir(exist_ok=True)
     (boot / "sitecustomize.py").write_text(_SITE)
+    path = os.environ.get("PYTHONPATH", "")
+    return {
+        "MRD_COMPILE_LOG": str(logdir),
+        "MRD_PROFILE_CODE": str(code),
+        "PYTHONPATH": os.pathsep.join(p for p in (str(boot), path) if p),
+    }
+
+
+def _run(args: list[str], cache: Path, logdir: Path, root: Path) -> tuple[float, float]:
     env = dict(os.environ)
+    env.update(profile_env(root, logdir))
     env.update(
         NUMBA_CACHE_DIR=str(cache),
-        MRD_COMPILE_LOG=str(logdir),
-        MRD_PROFILE_CODE=str(code),
         MPLBACKEND="Agg",
         OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"),
-        PYTHONPATH=os.pathsep.join(p for p in (str(boot), env.get("PYTHONPATH", "")) if p),
     )
     c0 = _cpu()
     t0 = time.perf_counter()
@@ -139,9 +149,9 @@ def main() -> None:
         base = ["demo", "--no-progress", "--workers", str(args.workers)]
         base += [] if args.full else ["--quick"]
         first = _run([*base, "--out", str(root / "out1")], cache, root / "log1", root)
-        rec1 = _merge(root / "log1")
+        rec1 = merge(root / "log1")
         second = _run([*base, "--out", str(root / "out2")], cache, root / "log2", root)
-        rec2 = _merge(root / "log2")
+        rec2 = merge(root / "log2")
     mode = "demo" if args.full else "demo --quick"
     print(
         f"python {sys.version.split()[0]}, numba {_numba_version()}, {os.cpu_count()} CPUs, "
