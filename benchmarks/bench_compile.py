@@ -6,6 +6,7 @@ Usage::
     python benchmarks/bench_compile.py --full          # the full demo
     python benchmarks/bench_compile.py --workers 2     # as the default demo (two processes)
     python benchmarks/bench_compile.py --signatures    # also list every compiled signature
+    python benchmarks/bench_compile.py --models sp1    # only these model kinds (quick check)
 
 The demo runs in a fresh process with ``NUMBA_CACHE_DIR`` pointing at a new empty folder, so
 every kernel it needs is compiled (as on a fresh install), then a second time with the cache the
@@ -140,6 +141,7 @@ def main() -> None:
     ap.add_argument("--full", action="store_true", help="the full demo instead of --quick")
     ap.add_argument("--workers", type=int, default=1, help="worker processes of the demo")
     ap.add_argument("--signatures", action="store_true", help="list every compiled signature")
+    ap.add_argument("--models", help="comma-separated model kinds (default: the demo's)")
     ap.add_argument("--json", type=Path, help="also write the per-kernel records to this file")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-compile-") as tmp:
@@ -148,11 +150,14 @@ def main() -> None:
         cache.mkdir()
         base = ["demo", "--no-progress", "--workers", str(args.workers)]
         base += [] if args.full else ["--quick"]
+        base += ["--models", args.models] if args.models else []
         first = _run([*base, "--out", str(root / "out1")], cache, root / "log1", root)
         rec1 = merge(root / "log1")
         second = _run([*base, "--out", str(root / "out2")], cache, root / "log2", root)
         rec2 = merge(root / "log2")
-    mode = "demo" if args.full else "demo --quick"
+    mode = ("demo" if args.full else "demo --quick") + (
+        f" --models {args.models}" if args.models else ""
+    )
     print(
         f"python {sys.version.split()[0]}, numba {_numba_version()}, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.2f} (1 min, at the end); `mrdamper {mode}`, "
