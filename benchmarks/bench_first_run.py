@@ -12,15 +12,15 @@ files are new copies, so no compiled-kernel cache exists. The demo then runs twi
 environment, each time in a fresh process; the second run finds the kernels the first one cached.
 Target: first run <= 1.3 x the second.
 
-With ``--profile`` both runs also record the compilation of every numba kernel (wall time of each
-top-level compile, from numba's event API) and print the ten costliest.
+With ``--profile`` both runs also record the compilation of every numba kernel in every process of
+the demo (CPU time, from numba's event API, as ``bench_compile.py``) and print the costliest.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -30,46 +30,40 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 TARGET = 1.3
 
-_PROFILE = r"""
-import atexit, json, runpy, sys, time
-from numba.core import event
-stack, tot = [], {}
-class L(event.Listener):
-    def on_start(self, ev):
-        stack.append(time.perf_counter())
-    def on_end(self, ev):
-        dt = time.perf_counter() - stack.pop()
-        if not stack:
-            f = ev.data["dispatcher"].py_func
-            k = f.__module__ + "." + f.__qualname__
-            tot[k] = tot.get(k, 0.0) + dt
-event.register("numba:compile", L())
-atexit.register(lambda: print("COMPILE " + json.dumps(tot), file=sys.stderr))
-sys.argv = ["mrdamper"] + sys.argv[1:]
-runpy.run_module("mrdamper", run_name="__main__")
-"""
-
 
 def _run(
-    python: Path, out: Path, quick: bool, profile: bool, cwd: Path
-) -> tuple[float, dict[str, float]]:
+    python: Path, out: Path, quick: bool, profile: bool, cwd: Path, tag: str
+) -> tuple[float, float, dict[str, dict]]:
     args = ["demo", "--out", str(out), "--no-progress"] + (["--quick"] if quick else [])
-    cmd = (
-        [str(python), "-c", _PROFILE, *args] if profile else [str(python), "-m", "mrdamper", *args]
-    )
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR")}
     env.update(MPLBACKEND="Agg", OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"))
+    if profile:  # record the compilations of every process (the demo's workers included)
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from bench_compile import profile_env
+
+        env.update(profile_env(cwd, cwd / f"compile-log-{tag}"))
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd, check=False)
+    proc = subprocess.run(
+        [str(python), "-m", "mrdamper", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=cwd,
+        check=False,
+    )
     wall = time.perf_counter() - t0
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = ru.ru_utime + ru.ru_stime - ru0.ru_utime - ru0.ru_stime
     if proc.returncode != 0:
         print(proc.stdout, proc.stderr, sep="\n", file=sys.stderr)
         raise SystemExit(f"demo failed (exit {proc.returncode})")
-    compiles: dict[str, float] = {}
-    for line in proc.stderr.splitlines():
-        if line.startswith("COMPILE "):
-            compiles = json.loads(line[len("COMPILE ") :])
-    return wall, compiles
+    compiles: dict[str, dict] = {}
+    if profile:
+        from bench_compile import merge
+
+        compiles = merge(cwd / f"compile-log-{tag}")
+    return wall, cpu, compiles
 
 
 def main() -> None:
@@ -119,22 +113,29 @@ def main() -> None:
             raise SystemExit(
                 f"the fresh environment imports mrdamper from {where}, not from the new install"
             )
-        first, c1 = _run(python, root / "out1", args.quick, args.profile, root)
-        second, c2 = _run(python, root / "out2", args.quick, args.profile, root)
+        first, cpu1, c1 = _run(python, root / "out1", args.quick, args.profile, root, "1")
+        second, cpu2, c2 = _run(python, root / "out2", args.quick, args.profile, root, "2")
     mode = "demo --quick" if args.quick else "demo"
     ratio = first / second
     print(
-        f"\n| case | wall [s] |\n|---|---|\n| first `{mode}` (empty kernel cache) | {first:.1f} |\n"
-        f"| second `{mode}` | {second:.1f} |\n| ratio first / second | {ratio:.2f} "
-        f"(target <= {TARGET}: {'met' if ratio <= TARGET else 'NOT met'}) |"
+        f"\nload average at the end {os.getloadavg()[0]:.2f} (1 min)\n"
+        f"\n| case | wall [s] | CPU, all processes [s] |\n|---|---|---|\n"
+        f"| first `{mode}` (empty kernel cache) | {first:.1f} | {cpu1:.1f} |\n"
+        f"| second `{mode}` | {second:.1f} | {cpu2:.1f} |\n"
+        f"| ratio first / second | {ratio:.2f} (target <= {TARGET}: "
+        f"{'met' if ratio <= TARGET else 'NOT met'}) | {cpu1 / cpu2:.2f} |"
     )
     if args.profile:
-        print(
-            f"\nkernel compilation: first run {sum(c1.values()):.1f} s in {len(c1)} kernels, "
-            f"second run {sum(c2.values()):.1f} s in {len(c2)} kernels"
-        )
-        for k, v in sorted(c1.items(), key=lambda kv: -kv[1])[:10]:
-            print(f"  {v:6.2f} s  {k}")
+        for label, rec in (("first", c1), ("second", c2)):
+            print(
+                f"\nkernel compilation, {label} run (all processes): "
+                f"{sum(r['cpu'] for r in rec.values()):.1f} s CPU, "
+                f"{sum(r['n'] for r in rec.values())} signatures of {len(rec)} functions",
+                end="",
+            )
+        print("\ncostliest in the first run (own compile CPU [s], signatures):")
+        for k, r in sorted(c1.items(), key=lambda kv: -kv[1]["cpu"])[:12]:
+            print(f"  {r['cpu']:6.2f} s  {r['n']}  {k}")
 
 
 if __name__ == "__main__":

@@ -249,3 +249,21 @@ def test_quiroz_one_fold_accuracy(quiroz_unfiltered_dir) -> None:
         m = LPVEstimator(model_fs=200.0).fit(train)
     esr = np.mean([m.score(e).esr for e in test])
     assert esr < 0.04
+
+
+def test_gram_pass_matches_the_regression_matrix() -> None:
+    """The blockwise Gram sums (records longer and shorter than a chunk, partial last blocks)
+    equal ``X^T X``, ``X^T t``, ``t^T t`` of the materialised regression (an independent path)."""
+    rng = np.random.default_rng(5)
+    lens = [3, 700, 2 * K._BLOCK * K._CHUNK + 1000, K._BLOCK + 4]
+    n = sum(lens)
+    starts = np.concatenate([[0], np.cumsum(lens)]).astype(np.int64)
+    y, u, rho = rng.standard_normal(n), rng.standard_normal(n), rng.uniform(0.0, 1.0, n)
+    w = rng.uniform(0.2, 2.0, len(lens))
+    for n_m, n_p, with_const in ((3, 3, True), (2, 1, False), (5, 2, True)):
+        G, g, yy, n_eq = K.gram_pass(y, u, rho, starts, w, n_m, n_p, with_const)
+        X, t = K.build_regressors(y, u, rho, starts, w, n_m, n_p, with_const)
+        assert n_eq == X.shape[0] == sum(max(L - n_m, 0) for L in lens)
+        np.testing.assert_allclose(G, X.T @ X, rtol=1e-12, atol=1e-12 * np.abs(G).max())
+        np.testing.assert_allclose(g, X.T @ t, rtol=1e-12, atol=1e-12 * np.abs(g).max())
+        assert yy == pytest.approx(float(t @ t), rel=1e-12)

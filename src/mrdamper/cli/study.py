@@ -201,6 +201,7 @@ def demo(
 
     from rich.console import Console
 
+    from mrdamper import _kernels
     from mrdamper.study import doe_protocol, run_study, write_study
 
     _check_out(out, force)
@@ -222,15 +223,24 @@ def demo(
         f"(durations x {sc:g}, 1 kHz, seed {seed}), then every model identified and scored.",
         highlight=False,
     )
-    data = table_ii(seed=seed, scale=sc)
+    # on a fresh installation, compile the models' kernels on another core meanwhile
+    _kernels.compile_ahead(kinds or [s.kind for s in doe_protocol().resolved_models()])
+    try:
+        data = table_ii(seed=seed, scale=sc)
+    except BaseException:
+        _kernels.finish_ahead(cancel=True)
+        raise
     n = sum(e.n for e in data)
     console.print(
         f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in {time.perf_counter() - t0:.1f} s.",
         highlight=False,
     )
-    res = run_study(
-        data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
-    )
+    try:
+        res = run_study(
+            data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
+        )
+    finally:
+        _kernels.finish_ahead(cancel=True)  # no-op: the study waited for it
     write_study(res, out, force=force)
     print_summary(res, out)
     console.print(

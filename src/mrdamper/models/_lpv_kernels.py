@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from scipy.linalg import blas as _blas
 
 __all__ = [
     "build_regressors",
@@ -27,69 +28,66 @@ __all__ = [
 ]
 
 _BLOCK = 512
+#: Blocks of the regression filled at once by :func:`gram_pass` (memory ``P x 16384`` values).
+_CHUNK = 32
 
 
-@njit(cache=True)
-def _fill_row(row, pw, y, u, rho, k, n_m, n_p, with_const, scale):  # pragma: no cover - numba
-    r = rho[k]
-    pw[0] = scale
+def _fill_blocks(
+    bt: np.ndarray,
+    yb: np.ndarray,
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    a: int,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+    sw: float,
+) -> None:
+    """Regression columns of the samples from ``a`` on, in blocks: ``bt[k, :, q]`` is sample
+    ``a + k * L + q`` (``bt`` of shape ``(nb, P, L)``), ``yb[k, q]`` its weighted target."""
+    nb, _, L = bt.shape
+    n = nb * L
+    pw = np.empty((n_p, nb, L))
+    pw[0] = sw
     for p in range(1, n_p):
-        pw[p] = pw[p - 1] * r
+        np.multiply(pw[p - 1], rho[a : a + n].reshape(nb, L), out=pw[p])
+    neg = -pw
     c = 0
     for j in range(1, n_m + 1):
-        yk = -y[k - j]
+        yj = y[a - j : a - j + n].reshape(nb, L)
         for p in range(n_p):
-            row[c] = yk * pw[p]
+            np.multiply(neg[p], yj, out=bt[:, c])
             c += 1
     for j in range(1, n_m + 1):
-        uk = u[k - j]
+        uj = u[a - j : a - j + n].reshape(nb, L)
         for p in range(n_p):
-            row[c] = uk * pw[p]
+            np.multiply(pw[p], uj, out=bt[:, c])
             c += 1
     if with_const:
         for p in range(n_p):
-            row[c] = pw[p]
+            bt[:, c] = pw[p]
             c += 1
+    np.multiply(y[a : a + n].reshape(nb, L), sw, out=yb)
 
 
-@njit(cache=True)
-def _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw):  # pragma: no cover - numba
-    """Columns of samples ``a:b`` of the regression, transposed into ``bt[:, :b-a]``."""
-    L = b - a
-    P = bt.shape[0]
-    pw = np.empty((n_p, L))
-    for q in range(L):
-        pw[0, q] = sw
-    for p in range(1, n_p):
-        for q in range(L):
-            pw[p, q] = pw[p - 1, q] * rho[a + q]
-    c = 0
-    for j in range(1, n_m + 1):
-        for p in range(n_p):
-            for q in range(L):
-                bt[c, q] = -pw[p, q] * y[a + q - j]
-            c += 1
-    for j in range(1, n_m + 1):
-        for p in range(n_p):
-            for q in range(L):
-                bt[c, q] = pw[p, q] * u[a + q - j]
-            c += 1
-    if with_const:
-        for p in range(n_p):
-            for q in range(L):
-                bt[c, q] = pw[p, q]
-            c += 1
-    for q in range(L):
-        yb[q] = y[a + q] * sw
-    return P
-
-
-@njit(cache=True)
-def gram_pass(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no cover - numba
+def gram_pass(
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    starts: np.ndarray,
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+) -> tuple[np.ndarray, np.ndarray, float, int]:
     """Accumulate ``X^T W X``, ``X^T W y`` and ``y^T W y`` without materialising ``X``.
 
-    The regression is filled block by block (``_BLOCK`` samples, column-wise so the fill
-    vectorises) and each block is added to the Gram matrix with one matrix product.
+    The regression is filled with NumPy (:data:`_CHUNK` blocks at a time) in blocks of
+    :data:`_BLOCK` samples stored transposed (``P x _BLOCK``), and each block is added to the
+    sums with one BLAS ``dgemm`` (and ``dgemv``, ``ddot``), block after block in sample order:
+    the operations and their order of the compiled kernel this replaced (same sums bit for bit,
+    ``tests/models/test_lpv.py``), without its compilation.
 
     Parameters
     ----------
@@ -108,51 +106,97 @@ def gram_pass(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no c
     -------
     G, g, yy, n_eq
     """
+    n_m, n_p = int(n_m), int(n_p)
     P = 2 * n_m * n_p + (n_p if with_const else 0)
     G = np.zeros((P, P))
     g = np.zeros(P)
     yy = 0.0
     n_eq = 0
-    bt = np.empty((P, _BLOCK))
-    yb = np.empty(_BLOCK)
-    for r in range(starts.size - 1):
-        sw = np.sqrt(weights[r])
-        a = starts[r] + n_m
-        while a < starts[r + 1]:
-            b = min(a + _BLOCK, starts[r + 1])
-            L = b - a
-            _fill_block_t(bt, yb, y, u, rho, a, b, n_m, n_p, with_const, sw)
-            if L == _BLOCK:
-                G += bt @ bt.T
-                g += bt @ yb
-                yy += yb @ yb
-            else:
-                part = np.ascontiguousarray(bt[:, :L])
-                G += part @ part.T
-                g += part @ yb[:L]
-                yy += yb[:L] @ yb[:L]
-            n_eq += L
-            a = b
-    return G, g, yy, n_eq
+    bt = np.empty((_CHUNK, P, _BLOCK))
+    yb = np.empty((_CHUNK, _BLOCK))
+    for r in range(len(starts) - 1):
+        sw = float(np.sqrt(weights[r]))
+        a, end = int(starts[r]) + n_m, int(starts[r + 1])
+        while a < end:
+            nb = min(_CHUNK, (end - a) // _BLOCK)
+            if nb > 0:
+                bts, ybs, L = bt[:nb], yb[:nb], _BLOCK
+            else:  # the record's last, partial block
+                nb, L = 1, end - a
+                bts, ybs = np.empty((1, P, L)), np.empty((1, L))
+            _fill_blocks(bts, ybs, y, u, rho, a, n_m, n_p, bool(with_const), sw)
+            # one product per block, then the blocks' sums added in order (np.add.reduce
+            # along the first axis adds row after row)
+            Gk = np.empty((nb + 1, P, P))
+            Gk[0] = G
+            for k in range(nb):
+                Gk[k + 1] = _blas.dgemm(1.0, bts[k].T, bts[k].T, trans_a=1).T
+            G = np.add.reduce(Gk, axis=0)
+            gk = np.empty((nb + 1, P))
+            gk[0] = g
+            np.matmul(bts, ybs[:, :, None], out=gk[1:, :, None])
+            g = np.add.reduce(gk, axis=0)
+            for k in range(nb):
+                yy += float(ybs[k] @ ybs[k])
+            n_eq += nb * L
+            a += nb * L
+    return G, g, float(yy), n_eq
 
 
-@njit(cache=True)
-def build_regressors(y, u, rho, starts, weights, n_m, n_p, with_const):  # pragma: no cover - numba
-    """Materialise the weighted regression matrix ``X`` and target (QR fall-back, benchmarks)."""
+def build_regressors(
+    y: np.ndarray,
+    u: np.ndarray,
+    rho: np.ndarray,
+    starts: np.ndarray,
+    weights: np.ndarray,
+    n_m: int,
+    n_p: int,
+    with_const: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Materialise the weighted regression matrix ``X`` and target (QR fall-back, benchmarks).
+
+    Plain NumPy, one column of a record at a time (no compiled kernel: nothing here is
+    recursive). Row ``i`` of record ``r`` (sample ``k``) holds ``sqrt(w_r) rho[k]**p`` times
+    ``-y[k-j]``, ``u[k-j]`` and, with ``with_const``, one; the powers are formed as running
+    products ``(sqrt(w_r) rho) rho ...``, the same operations as in :func:`gram_pass`.
+
+    Returns
+    -------
+    X : float64[:, :]
+        Shape ``(n_eq, 2 n_m n_p [+ n_p])``.
+    t : float64[:]
+        ``sqrt(w_r) y[k]`` [N].
+    """
+    n_m, n_p = int(n_m), int(n_p)
     P = 2 * n_m * n_p + (n_p if with_const else 0)
-    n_eq = 0
-    for r in range(starts.size - 1):
-        n_eq += max(starts[r + 1] - starts[r] - n_m, 0)
-    X = np.empty((n_eq, P))
-    t = np.empty(n_eq)
-    pw = np.empty(n_p)
+    lengths = np.maximum(np.diff(np.asarray(starts, dtype=np.int64)) - n_m, 0)
+    X = np.empty((int(lengths.sum()), P))
+    t = np.empty(X.shape[0])
     i = 0
-    for r in range(starts.size - 1):
-        sw = np.sqrt(weights[r])
-        for k in range(starts[r] + n_m, starts[r + 1]):
-            _fill_row(X[i], pw, y, u, rho, k, n_m, n_p, with_const, sw)
-            t[i] = y[k] * sw
-            i += 1
+    for r, L in enumerate(lengths.tolist()):
+        if L == 0:
+            continue
+        a = int(starts[r]) + n_m
+        b = a + L
+        pw = np.empty((n_p, L))
+        pw[0] = np.sqrt(weights[r])
+        for p in range(1, n_p):
+            np.multiply(pw[p - 1], rho[a:b], out=pw[p])
+        Xr = X[i : i + L]
+        c = 0
+        for j in range(1, n_m + 1):
+            yk = -y[a - j : b - j]
+            for p in range(n_p):
+                np.multiply(yk, pw[p], out=Xr[:, c])
+                c += 1
+        for j in range(1, n_m + 1):
+            for p in range(n_p):
+                np.multiply(u[a - j : b - j], pw[p], out=Xr[:, c])
+                c += 1
+        if with_const:
+            Xr[:, c : c + n_p] = pw.T
+        np.multiply(y[a:b], pw[0], out=t[i : i + L])
+        i += L
     return X, t
 
 

@@ -17,7 +17,42 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from mrdamper._kernels import readonly
+
 __all__ = ["fill_candidates", "free_run", "free_run_sensitivity", "gram_select"]
+
+
+def fill_candidates(
+    S: np.ndarray, base: np.ndarray, slots: np.ndarray, k0: int, k1: int, out: np.ndarray
+) -> None:
+    """Rows ``k0 .. k1-1`` of the regression matrix into ``out[: k1 - k0]`` (terms as columns).
+
+    ``base`` and ``slots`` are passed read-only so each kernel has one signature."""
+    _fill_candidates(S, _ri(base), _ri(slots), int(k0), int(k1), out)
+
+
+def free_run(
+    S: np.ndarray, base: np.ndarray, slots: np.ndarray, theta: np.ndarray, p: int, bound: float
+) -> int:
+    """Simulate ``S[0, p:]`` in place from ``S[0, :p]``; first diverging sample or -1.
+
+    A sample diverges when its scaled force is not finite or exceeds ``bound`` in magnitude;
+    the simulation stops there (later samples are left untouched).
+    """
+    return int(_free_run(S, _ri(base), _ri(slots), readonly(theta), int(p), float(bound)))
+
+
+def free_run_sensitivity(
+    S: np.ndarray, base: np.ndarray, slots: np.ndarray, theta: np.ndarray, p: int, bound: float
+) -> tuple[np.ndarray, int]:
+    """Free run as :func:`free_run` plus ``J[k, j] = d f[k] / d theta[j]`` (see
+    :func:`_free_run_sensitivity`); returns ``(J, bad)``."""
+    J, bad = _free_run_sensitivity(S, _ri(base), _ri(slots), readonly(theta), int(p), float(bound))
+    return J, int(bad)
+
+
+def _ri(a: np.ndarray) -> np.ndarray:
+    return readonly(a, np.int64)
 
 
 @njit(cache=True)
@@ -37,7 +72,7 @@ def _term(bv, slots, t):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def fill_candidates(S, base, slots, k0, k1, out):  # pragma: no cover - numba
+def _fill_candidates(S, base, slots, k0, k1, out):  # pragma: no cover - numba
     """Rows ``k0 .. k1-1`` of the regression matrix into ``out[: k1 - k0]`` (terms as columns)."""
     bv = np.empty(base.shape[0])
     for q in range(k1 - k0):
@@ -47,7 +82,7 @@ def fill_candidates(S, base, slots, k0, k1, out):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def free_run(S, base, slots, theta, p, bound):  # pragma: no cover - numba
+def _free_run(S, base, slots, theta, p, bound):  # pragma: no cover - numba
     """Simulate ``S[0, p:]`` in place from ``S[0, :p]``; first diverging sample or -1.
 
     A sample diverges when its scaled force is not finite or exceeds ``bound`` in magnitude;
@@ -67,7 +102,7 @@ def free_run(S, base, slots, theta, p, bound):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def free_run_sensitivity(S, base, slots, theta, p, bound):  # pragma: no cover - numba
+def _free_run_sensitivity(S, base, slots, theta, p, bound):  # pragma: no cover - numba
     """Free run as :func:`free_run` plus ``J[k, j] = d f[k] / d theta[j]``.
 
     The sensitivity obeys ``J[k] = phi(k) + sum_t theta_t sum_{s: force slot}

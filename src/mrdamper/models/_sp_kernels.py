@@ -13,8 +13,12 @@ analytic Jacobian with respect to ``theta`` (and ``f0``).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
+
+from mrdamper._kernels import readonly
 
 __all__ = ["COMPONENTS", "N_COMPONENTS", "sp_force", "sp_force_jacobian"]
 
@@ -34,8 +38,52 @@ def _components(
         out[comp[k]] += theta[k] * ii ** power[k]
 
 
-@njit(cache=True)
 def sp_force(
+    x: np.ndarray,
+    v: np.ndarray,
+    i: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    theta: np.ndarray,
+    f0: float,
+) -> np.ndarray:
+    """Evaluate the SP force map sample by sample (see :func:`_sp_force`; arrays are passed
+    read-only so the kernel has one signature)."""
+    return _SP_FORCE(*_args(x, v, i, comp, power, theta), float(f0))
+
+
+def sp_force_jacobian(
+    x: np.ndarray,
+    v: np.ndarray,
+    i: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    theta: np.ndarray,
+    f0: float,
+    with_offset: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Force map and its analytic Jacobian (see :func:`_sp_force_jacobian`)."""
+    return _SP_FORCE_JACOBIAN(
+        *_args(x, v, i, comp, power, theta), float(f0), bool(with_offset)
+    )
+
+
+def _args(
+    x: np.ndarray,
+    v: np.ndarray,
+    i: np.ndarray,
+    comp: np.ndarray,
+    power: np.ndarray,
+    theta: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    f, n = np.float64, np.int64
+    return tuple(
+        readonly(a, t) for a, t in ((x, f), (v, f), (i, f), (comp, n), (power, n), (theta, f))
+    )
+
+
+@njit(cache=True)
+def _sp_force(
     x: np.ndarray,
     v: np.ndarray,
     i: np.ndarray,
@@ -72,7 +120,7 @@ def sp_force(
 
 
 @njit(cache=True)
-def sp_force_jacobian(
+def _sp_force_jacobian(
     x: np.ndarray,
     v: np.ndarray,
     i: np.ndarray,
@@ -118,3 +166,8 @@ def sp_force_jacobian(
         if with_offset:
             J[s, p] = 1.0
     return F, J
+
+
+# the dispatchers, untyped for the wrappers above (numba's stubs type a call by its first overload)
+_SP_FORCE: Any = _sp_force
+_SP_FORCE_JACOBIAN: Any = _sp_force_jacobian

@@ -175,6 +175,7 @@ class ProcessExecutor(StudyExecutor):
         list(self._pool.map(_ping, range(workers)))
         self._dir = Path(tempfile.mkdtemp(prefix="mrdamper-study-"))
         self._count = 0
+        self.workers = workers
         self.description = f"{workers} local process{'es' if workers > 1 else ''}"
 
     def share(self, e: Experiment | RecordSource) -> DiskRecord | RecordSource:

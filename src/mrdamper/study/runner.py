@@ -13,6 +13,8 @@ import dataclasses
 import fnmatch
 import inspect
 import platform
+import shutil
+import tempfile
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, TypeVar
@@ -29,7 +31,7 @@ from mrdamper.models import Estimator, FittedModel
 from mrdamper.models.base import RangePolicy
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
-from mrdamper.study.executor import StudyExecutor, make_executor
+from mrdamper.study.executor import ProcessExecutor, StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
 from mrdamper.study.records import Record, Records, as_list, as_loaded, load_all
@@ -260,6 +262,36 @@ def run_study(
     )
 
 
+def _compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
+    """Compile the kernels the models need before the first fit, each once on the machine, in
+    parallel: every local worker (and a background compilation the command started, see
+    :func:`mrdamper._kernels.compile_ahead`) takes whole kernel modules not cached yet. The fits
+    then load them from numba's cache. Nothing to do with one worker and no background
+    compilation, or when every kernel is cached."""
+    from mrdamper import _kernels
+
+    claim_dir = _kernels.claim_folder()
+    workers = ex.workers if isinstance(ex, ProcessExecutor) else 1
+    parallel = workers > 1
+    if claim_dir is None and not parallel:
+        return
+    own = claim_dir is None
+    claim_dir = claim_dir or tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    try:
+        if parallel:
+            futures = [
+                ex.submit(_kernels.compile_claimed, list(kinds), claim_dir) for _ in range(workers)
+            ]
+            for fut in futures:
+                fut.exception()  # wait; a kernel that failed here compiles at first use
+        else:
+            _kernels.compile_claimed(list(kinds), claim_dir)
+    finally:
+        _kernels.finish_ahead()
+        if own:
+            shutil.rmtree(claim_dir, ignore_errors=True)
+
+
 def _execute(
     ex: StudyExecutor,
     folds: list[Fold],
@@ -285,6 +317,7 @@ def _execute(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
         key=lambda k: (_COST_RANK.get(specs[k[1]].kind, len(_COST_RANK)), k),
     )
+    _compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
         fits[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
     with _progress(show) as bar:

@@ -1,0 +1,227 @@
+"""Compiled-kernel housekeeping (private): one argument type per kernel, compiled once per machine.
+
+numba compiles a kernel for every distinct tuple of argument types it is called with and keeps the
+machine code in its on-disk cache (``njit(cache=True)``, files beside the kernel module). On a fresh
+installation that cache is empty, and the first run of a command pays the compilation of every
+kernel it calls. Two things keep that cost down:
+
+* **One signature per kernel.** A read-only array (a record's channel, a memory-mapped file, a
+  frozen model's coefficients) and a writable one are different argument types to numba, so the
+  same kernel called with both is compiled twice. The wrappers of the kernel modules pass input
+  arrays through :func:`readonly` (a read-only view, never a copy), so each compiles once.
+* **Compile ahead, in parallel, once per machine.** :data:`KERNELS` lists, per model kind, the
+  kernels its identification and simulation call and their argument types. A study with several
+  local worker processes first has every worker compile the kernels its model kinds need that are
+  not cached yet, module by module, each module claimed by one process (:func:`compile_claimed`),
+  so each kernel is compiled once on the machine and the workers compile in parallel; the fits
+  then load them from the cache. ``mrdamper demo`` starts this in a background process before it
+  generates its records (:func:`compile_ahead`). Kernels already cached are not touched: a second
+  run only reads the cache indexes.
+
+The costs in :data:`KERNELS` are compile times [s] measured by ``benchmarks/bench_compile.py``
+(CPU time on the 2-core reference machine); they only order the modules, largest first, so the
+processes finish at about the same time.
+"""
+
+from __future__ import annotations
+
+import importlib
+import multiprocessing
+import os
+import shutil
+import tempfile
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "KERNELS",
+    "claim_folder",
+    "compile_ahead",
+    "compile_claimed",
+    "compile_kernels",
+    "finish_ahead",
+    "is_cached",
+    "readonly",
+]
+
+_LPV = "mrdamper.models._lpv_kernels"
+_SPENCER = "mrdamper.models._spencer_kernels"
+_SP = "mrdamper.models._sp_kernels"
+_NARX = "mrdamper.models._narx_kernels"
+_P15 = "mrdamper.models._p15_kernels"
+
+#: One kernel signature: module, kernel (numba dispatcher) name, argument types, compile cost [s].
+#: Argument codes: ``F`` float64, ``I`` int64, ``B`` bool; arrays ``f`` (float64) or ``i``
+#: (int64), then the number of dimensions, then ``r`` for read-only and ``A`` for any layout
+#: (default: C-contiguous, writable).
+Item = tuple[str, str, str, float]
+
+_LPV_ITEMS: tuple[Item, ...] = (
+    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 2.5),
+    (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.7),
+)
+_SP_ITEMS: tuple[Item, ...] = (
+    (_SP, "_sp_force", "f1r f1r f1r i1r i1r f1r F", 1.1),
+    (_SP, "_sp_force_jacobian", "f1r f1r f1r i1r i1r f1r F B", 0.4),
+)
+
+#: Kernels (with the argument types of the library's calls) that each model kind's fit and
+#: simulation run; kinds without compiled kernels are absent.
+KERNELS: dict[str, tuple[Item, ...]] = {
+    "lpv": _LPV_ITEMS,
+    "lti": _LPV_ITEMS,
+    "p15": ((_P15, "p15i_run", "f1r f1r F f2 F I F F I F i1 i1 f1 f1 f2 B B", 3.0),),
+    "sp1": _SP_ITEMS,
+    "sp2": _SP_ITEMS,
+    "sp3": _SP_ITEMS,
+    "sp4": _SP_ITEMS,
+    "spencer": (
+        (_SPENCER, "simulate_sens", "f1r f1r f1r F f1 I F F F i1", 3.9),
+        (_SPENCER, "simulate", "f1r f1r f1r F f1 I F F F", 1.3),
+    ),
+    "narx": (
+        (_NARX, "_free_run_sensitivity", "f2 i2r i2r f1r I F", 0.7),
+        (_NARX, "_free_run", "f2 i2r i2r f1r I F", 0.6),
+        (_NARX, "gram_select", "f2 I F F", 0.6),
+        (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.5),
+    ),
+}
+
+
+def readonly(a: Any, dtype: Any = np.float64) -> np.ndarray:
+    """``a`` as a C-contiguous array of ``dtype`` that is read-only (a view: no copy when ``a``
+    already has that type and layout), so that kernels see one argument type."""
+    out = np.ascontiguousarray(a, dtype=dtype)
+    if out.flags.writeable:
+        out = out.view()
+        out.flags.writeable = False
+    return out
+
+
+def _types(code: str) -> tuple[Any, ...]:
+    from numba import types as nt
+
+    scalars = {"F": nt.float64, "I": nt.int64, "B": nt.boolean}
+    out: list[Any] = []
+    for tok in code.split():
+        if tok in scalars:
+            out.append(scalars[tok])
+            continue
+        dtype: Any = nt.float64 if tok[0] == "f" else nt.int64
+        layout: Any = "A" if "A" in tok else "C"
+        out.append(nt.Array(dtype, int(tok[1]), layout, readonly="r" in tok))
+    return tuple(out)
+
+
+def _dispatcher(item: Item) -> Any:
+    return getattr(importlib.import_module(item[0]), item[1])
+
+
+def is_cached(item: Item) -> bool:
+    """True when the on-disk cache holds ``item``'s machine code (False when unsure)."""
+    try:
+        disp = _dispatcher(item)
+        cache = disp._cache
+        key = cache._index_key(_types(item[2]), disp.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001 - numba internals; unsure means "compile it"
+        return False
+
+
+def _todo(kinds: Iterable[str]) -> list[list[Item]]:
+    """Kernels of ``kinds`` not cached yet, by module (largest module first).
+
+    The kernels of one module are compiled together, in one process: they share helper functions
+    and numba's own compiled helpers, which another process would compile again.
+    """
+    items: dict[tuple[str, str, str], Item] = {}
+    for kind in kinds:
+        for it in KERNELS.get(str(kind), ()):
+            items[it[:3]] = it
+    modules: dict[str, list[Item]] = {}
+    for it in items.values():
+        if not is_cached(it):
+            modules.setdefault(it[0], []).append(it)
+    return sorted(modules.values(), key=lambda m: -sum(it[3] for it in m))
+
+
+def compile_kernels(items: Sequence[Item]) -> int:
+    """Compile (or load from the cache) every kernel signature of ``items``; return how many.
+
+    A kernel that fails to compile here is skipped: it is then compiled at its first call, where
+    the error surfaces with its context.
+    """
+    done = 0
+    for it in items:
+        try:
+            _dispatcher(it).compile(_types(it[2]))
+            done += 1
+        except Exception:  # noqa: BLE001, S112 - see the docstring
+            continue
+    return done
+
+
+def compile_claimed(kinds: Sequence[str], claim_dir: str) -> int:
+    """Compile the uncached kernels of ``kinds``, module by module, skipping modules that another
+    process has claimed: a module is claimed by creating a file named after it in ``claim_dir``
+    (atomic). Every process given the same ``claim_dir`` runs this; each module is compiled once.
+    Returns the number of kernel signatures compiled here."""
+    done = 0
+    for items in _todo(kinds):
+        try:
+            os.close(os.open(os.path.join(claim_dir, items[0][0]), os.O_CREAT | os.O_EXCL))
+        except FileExistsError:
+            continue
+        except OSError:  # claim folder gone: the study has started without us
+            break
+        done += compile_kernels(items)
+    return done
+
+
+@dataclass
+class _Ahead:
+    process: Any
+    claim_dir: str
+
+
+_AHEAD: _Ahead | None = None
+
+
+def compile_ahead(kinds: Sequence[str]) -> None:
+    """Start compiling the uncached kernels of ``kinds`` in a background process, now.
+
+    For a command that has other work to do first (``mrdamper demo`` generates its records): the
+    compilation runs on another core meanwhile. The study picks it up (:func:`claim_folder`) and
+    compiles the modules not yet claimed in its own processes, then waits for this one
+    (:func:`finish_ahead`). Nothing starts when every kernel is cached.
+    """
+    global _AHEAD
+    if _AHEAD is not None or not _todo(kinds):
+        return
+    claim_dir = tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    methods = multiprocessing.get_all_start_methods()
+    ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    proc = ctx.Process(target=compile_claimed, args=(list(kinds), claim_dir), daemon=True)
+    proc.start()
+    _AHEAD = _Ahead(proc, claim_dir)
+
+
+def claim_folder() -> str | None:
+    """Claim folder of the background compilation started by :func:`compile_ahead`, if any."""
+    return None if _AHEAD is None else _AHEAD.claim_dir
+
+
+def finish_ahead(cancel: bool = False) -> None:
+    """Wait for the background compilation (it stops after the modules it claimed) and clean up;
+    ``cancel`` stops it instead (the command failed or was interrupted)."""
+    global _AHEAD
+    if _AHEAD is None:
+        return
+    if cancel and _AHEAD.process.is_alive():
+        _AHEAD.process.terminate()
+    _AHEAD.process.join()
+    shutil.rmtree(_AHEAD.claim_dir, ignore_errors=True)
+    _AHEAD = None
