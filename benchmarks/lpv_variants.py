@@ -13,7 +13,9 @@ damper's field lag; rig only, where the current varies), a 1 kHz model rate on Q
 200 Hz records up-sampled), and training data augmented with
 broadband records from a Spencer model fitted on the same training records
 (:func:`mrdamper.models.augment.reference_records`, sine sweeps or band-limited noise up to
-20 Hz, half of the training weight).
+20 Hz, half of the training weight), and the hysteretic input (``input_signal="hysteretic"``:
+a Dahl pre-yield state in the zone-law input, :mod:`mrdamper.analysis.hysteretic`) with its
+stroke scale and pre-yield share chosen on the training records, or fixed at two grid points.
 
 Run::
 
@@ -54,6 +56,9 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "model_fs=1000": {"model_fs": 1000.0},
     "aug sweep": {"augment": "sweep"},
     "aug noise": {"augment": "noise"},
+    "hysteretic": {"input_signal": "hysteretic"},
+    "hysteretic 0.1 mm/0.25": {"input_signal": "hysteretic", "stroke": 1e-4, "blend": 0.25},
+    "hysteretic 0.1 mm/0.5": {"input_signal": "hysteretic", "stroke": 1e-4, "blend": 0.5},
 }
 
 
@@ -85,6 +90,9 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--scenarios", nargs="*", choices=list(G.SCENARIOS), default=list(G.SCENARIOS))
+    ap.add_argument(
+        "--variants", nargs="*", choices=list(VARIANTS), default=list(VARIANTS), metavar="VARIANT"
+    )
     args = ap.parse_args(argv)
     rows = []
     t0 = time.perf_counter()
@@ -96,6 +104,8 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                 sc.train
             )
         for label, extra in VARIANTS.items():
+            if label not in args.variants:
+                continue
             if "eta" in extra and name != "rig":
                 continue  # constant current (Quiroz) or already filtered (Dyke): nothing to filter
             if "model_fs" in extra and not name.startswith("quiroz"):

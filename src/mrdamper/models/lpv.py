@@ -33,7 +33,7 @@ from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _lpv_fit, _scale
+from mrdamper.models import _lpv_fit, _lpv_inputs, _scale
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models._rates import model_rate, rename_setting, to_model_rate, to_record_rate
 from mrdamper.models.base import Estimator, FittedModel, single_level, single_level_note
@@ -41,7 +41,7 @@ from mrdamper.models.registry import register
 
 __all__ = ["LPVEstimator", "LPVModel", "LTIEstimator", "LTIModel", "select_order"]
 
-InputSignal = Literal["u", "v"]
+InputSignal = Literal["u", "v", "hysteretic"]
 
 
 # ----------------------------------------------------------------------------- signal helpers
@@ -64,8 +64,11 @@ class LPVModel(FittedModel):
         Output force offset ``F0`` [N].
     fs : float
         Sampling rate the discrete model runs at [Hz].
-    input_signal : {"u", "v"}
-        LPV input: the scheduling input of the zone laws, or the raw velocity.
+    input_signal : {"u", "v", "hysteretic"}
+        LPV input: the scheduling input of the zone laws, the raw velocity, or the zone-law input
+        with a hysteretic pre-yield state (:mod:`mrdamper.analysis.hysteretic`).
+    stroke, blend : float or None
+        Stroke scale [m] and pre-yield share [-] of the hysteretic input (None otherwise).
     reading : {"continuous", "literal"}
         Reading of eq. (22) used to build ``u``.
     zone_laws : ZoneLaws or None
@@ -90,9 +93,12 @@ class LPVModel(FittedModel):
     eta: float | None = None
     rho_range: tuple[float, float] = (0.0, 0.0)
     force_bound: float = 1e9
+    stroke: float | None = None
+    blend: float | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        _lpv_inputs.check_model(self)  # hysteretic input: stroke and blend
         set_ = object.__setattr__
         for name in ("alpha", "beta"):
             arr = np.array(getattr(self, name), dtype=np.float64)
@@ -108,11 +114,11 @@ class LPVModel(FittedModel):
             )
         if isinstance(self.zone_laws, Mapping):
             set_(self, "zone_laws", ZoneLaws.from_dict(self.zone_laws))
-        if self.input_signal not in ("u", "v"):
+        if self.input_signal not in ("u", "v", "hysteretic"):
             raise DataValidationError(
-                "input_signal", f"expected 'u' or 'v', got {self.input_signal!r}"
+                "input_signal", f"expected 'u', 'v' or 'hysteretic', got {self.input_signal!r}"
             )
-        if self.input_signal == "u" and self.zone_laws is None:
+        if self.input_signal != "v" and self.zone_laws is None:
             raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
         if not self.fs > 0:
             raise DataValidationError("fs", f"expected a positive rate [Hz], got {self.fs}")
@@ -166,6 +172,8 @@ class LPVModel(FittedModel):
         v = to_model_rate(np.asarray(experiment.v), experiment.fs, self.fs)
         if self.input_signal == "v":
             u = v
+        elif self.input_signal == "hysteretic":
+            u = _lpv_inputs.model_input(self, v, rho)
         elif self.zone_laws is None:  # excluded by __post_init__; kept for type narrowing
             raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
         else:
@@ -258,8 +266,12 @@ class LPVEstimator(Estimator):
     eta : float, optional
         Drive-lag rate [1/s] of a first-order filter on the electrical input (e.g. command
         voltage). None: ``rho`` is the electrical input itself.
-    input_signal : {"u", "v"}
-        LPV input: the zone-law scheduling input (paper) or the raw velocity (ablation).
+    input_signal : {"u", "v", "hysteretic"}
+        LPV input: the zone-law scheduling input (paper), the raw velocity (ablation), or the
+        zone-law input with a hysteretic pre-yield state (:mod:`mrdamper.analysis.hysteretic`).
+    stroke, blend : float, optional
+        Stroke scale [m] and pre-yield share [-] of the hysteretic input; when either is None
+        it is chosen on the training records (lowest mean free-run training ESR over a grid).
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
@@ -318,6 +330,8 @@ class LPVEstimator(Estimator):
     oe_solver: Literal["gauss-newton", "least_squares"] = "gauss-newton"
     range_policy: Literal["error", "warn", "clip", "ignore"] = "error"
     stability: Literal["enforce", "warn"] = "enforce"
+    stroke: float | None = None
+    blend: float | None = None
     fs: InitVar[float | None] = None
 
     renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
@@ -334,7 +348,7 @@ class LPVEstimator(Estimator):
             raise DataValidationError("n_m", f"expected an order of at least 1, got {self.n_m}")
         choices = {
             "input": ("i", "voltage"),
-            "input_signal": ("u", "v"),
+            "input_signal": ("u", "v", "hysteretic"),
             "reading": ("continuous", "literal"),
             "laws_by": ("auto", "current", "plateaus", "bins"),
             "weighting": ("esr", "sse"),
@@ -422,6 +436,8 @@ class LPVEstimator(Estimator):
         """
         self._validate()
         exps = self._as_set(data)
+        if _lpv_inputs.needs_choice(self):  # hysteretic input: stroke / blend on training data
+            return _lpv_inputs.fit_choosing(self, exps, record_weights)
         user_w = _record_weights(record_weights, len(exps))
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
         raw = [np.asarray(e.electrical(self.input), dtype=np.float64) for e in exps]
@@ -444,6 +460,7 @@ class LPVEstimator(Estimator):
             input=self.input,
             input_range=in_range,
             range_policy="ignore",
+            **_lpv_inputs.model_settings(self),
         )
         F, U, R, w = [], [], [], []
         for e in exps:
@@ -462,7 +479,7 @@ class LPVEstimator(Estimator):
         long = sum(r.size for r in R) > _scale.WINDOW_THRESHOLD  # long campaigns: record by record
         n_lev = _scale.distinct_levels(R, tol) if long else _distinct_levels(np.concatenate(R), tol)
         n_p = self.n_rho + 1
-        reduced_laws = self.input_signal == "u" and self.zone_laws is None and self.laws_degree > 0
+        reduced_laws = self.input_signal != "v" and self.zone_laws is None and self.laws_degree > 0
         if level is not None and (n_p > 1 or reduced_laws):
             n_p = 1  # one level: coefficients and laws are constants (higher powers exactly 0)
             prov["note"] = single_level_note(self.kind, self.input, level)
@@ -561,6 +578,7 @@ class LPVEstimator(Estimator):
             input_range=in_range,
             range_policy=self.range_policy,
             provenance=prov,
+            **_lpv_inputs.model_settings(self),
         )
         prov.update(max_frozen_pole=pmax, frozen_stable=pmax < 1.0)
         if pmax >= 1.0:
