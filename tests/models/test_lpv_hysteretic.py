@@ -142,7 +142,7 @@ def test_fit_on_rig_records(rig_data) -> None:
     static input misses; both fit the training sines."""
     train, test = rig_data
     hys = _fit(train, input_signal="hysteretic", stroke=X_Y, blend=0.5)
-    static = _fit(train)
+    static = _fit(train, input_signal="u")
     assert hys.is_frozen_stable() and hys.provenance["frozen_stable"]
     assert np.mean([hys.score(e).esr for e in train]) < 0.01
     e_hys, e_static = hys.score(test[0]).esr, static.score(test[0]).esr
@@ -152,7 +152,7 @@ def test_fit_on_rig_records(rig_data) -> None:
 
 def test_choice_on_training_records_and_round_trip(rig_data) -> None:
     train, test = rig_data
-    m = _fit(train[::2], input_signal="hysteretic", blend=0.5)  # stroke chosen
+    m = _fit(train[::2], blend=0.5)  # the default input; stroke chosen
     rows = m.provenance["hysteretic_choice"]
     assert [r["stroke"] for r in rows] == list(_lpv_inputs.STROKES)
     best = min(rows, key=lambda r: r["train_esr"])
@@ -162,7 +162,7 @@ def test_choice_on_training_records_and_round_trip(rig_data) -> None:
     assert (back.stroke, back.blend, back.input_signal) == (m.stroke, 0.5, "hysteretic")
     np.testing.assert_array_equal(back.predict(test[0]), m.predict(test[0]))
     # an old file (no stroke / blend fields) still loads as a static-input model
-    d = _fit(train[:3]).to_dict()
+    d = _fit(train[:3], input_signal="u").to_dict()
     d["parameters"].pop("stroke")
     d["parameters"].pop("blend")
     assert LPVModel.from_dict(d).input_signal == "u"
@@ -171,7 +171,7 @@ def test_choice_on_training_records_and_round_trip(rig_data) -> None:
 def test_settings_and_refusals(rig_data) -> None:
     train, _ = rig_data
     with pytest.raises(DataValidationError, match="stroke.*input_signal='hysteretic' only"):
-        LPVEstimator(stroke=1e-4).fit(train)
+        LPVEstimator(input_signal="u", stroke=1e-4).fit(train)
     with pytest.raises(DataValidationError, match="blend"):
         LPVEstimator(input_signal="hysteretic", stroke=1e-4, blend=2.0).fit(train)
     with pytest.raises(DataValidationError, match="reading"):

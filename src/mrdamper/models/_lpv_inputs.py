@@ -74,7 +74,8 @@ def check_model(model: Any) -> None:
         )
     if model.reading != "continuous":
         raise DataValidationError(
-            "reading", f"the hysteretic input builds on the continuous reading, got {model.reading!r}"
+            "reading",
+            f"the hysteretic input builds on the continuous reading, got {model.reading!r}",
         )
     object.__setattr__(model, "stroke", _check_stroke(model.stroke))
     object.__setattr__(model, "blend", _check_blend(model.blend))
@@ -123,34 +124,46 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     blends = BLENDS if est.blend is None else (float(est.blend),)
     w = np.ones(len(exps)) if record_weights is None else np.asarray(record_weights, dtype=float)
     rows: list[dict[str, Any]] = []
-    best: tuple[float, Any] | None = None
+    best: tuple[float, Any, list[Any]] | None = None
     first_error = ""
     for x_y in strokes:
         for lam in blends:
             cand = dataclasses.replace(est, stroke=x_y, blend=lam)
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", UserWarning)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
                     model = cand.fit(exps, record_weights=record_weights)
+                except IdentificationError as exc:
+                    first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {exc}"
+                    rows.append({"stroke": x_y, "blend": lam, "train_esr": None, "error": str(exc)})
+                    continue
+                try:
                     esr = [model.with_range_policy("ignore").score(e).esr for e in exps]
-                score = float(np.average(esr, weights=w))
-            except (IdentificationError, SimulationDivergedError) as exc:
-                first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {exc}"
-                rows.append({"stroke": x_y, "blend": lam, "train_esr": None, "error": str(exc)})
-                continue
-            rows.append({"stroke": x_y, "blend": lam, "train_esr": score, "error": ""})
+                    score, err = float(np.average(esr, weights=w)), ""
+                except SimulationDivergedError as exc:  # e.g. an unrefined, unstable candidate
+                    score, err = float("inf"), str(exc)
+            rows.append({"stroke": x_y, "blend": lam, "train_esr": score, "error": err})
             if best is None or score < best[0]:
-                best = (score, model)
+                best = (score, model, list(caught))
     if best is None:
         raise IdentificationError(
             f"{est.kind}: no hysteretic-input candidate could be fitted; {first_error}"
         )
+    seen = set()
+    for w_ in best[2]:  # the kept candidate's warnings and notes, once each
+        key = (w_.category, str(w_.message))
+        if key not in seen:
+            seen.add(key)
+            warnings.warn(w_.message, w_.category, stacklevel=3)
     model = best[1]
     prov = {**model.provenance, "hysteretic_choice": rows}
     prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
     prov["hysteretic_note"] = (
         f"stroke = {model.stroke:g} m and blend = {model.blend:g} chosen on the training records "
         f"(lowest mean free-run ESR of {len(rows)} candidates)"
+        if np.isfinite(best[0])
+        else f"every candidate diverged in free run on the training records; the first "
+        f"(stroke = {model.stroke:g} m, blend = {model.blend:g}) is returned"
     )
     return dataclasses.replace(model, provenance=prov)
 

@@ -266,9 +266,10 @@ class LPVEstimator(Estimator):
     eta : float, optional
         Drive-lag rate [1/s] of a first-order filter on the electrical input (e.g. command
         voltage). None: ``rho`` is the electrical input itself.
-    input_signal : {"u", "v", "hysteretic"}
-        LPV input: the zone-law scheduling input (paper), the raw velocity (ablation), or the
-        zone-law input with a hysteretic pre-yield state (:mod:`mrdamper.analysis.hysteretic`).
+    input_signal : {"hysteretic", "u", "v"}
+        LPV input: the zone-law input with a hysteretic pre-yield state (default,
+        :mod:`mrdamper.analysis.hysteretic`), the paper's static zone-law input ``u`` (needed by
+        the inverse and the state-space / C exports), or the raw velocity (ablation).
     stroke, blend : float, optional
         Stroke scale [m] and pre-yield share [-] of the hysteretic input; when either is None
         it is chosen on the training records (lowest mean free-run training ESR over a grid).
@@ -316,7 +317,7 @@ class LPVEstimator(Estimator):
     n_rho: int = 2
     input: Literal["i", "voltage"] = "i"
     eta: float | None = None
-    input_signal: InputSignal = "u"
+    input_signal: InputSignal = "hysteretic"
     reading: Reading = "continuous"
     zone_laws: ZoneLaws | None = None
     laws_by: Literal["auto", "current", "plateaus", "bins"] = "auto"
