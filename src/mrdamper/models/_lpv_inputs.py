@@ -19,6 +19,7 @@ import numpy as np
 from mrdamper.analysis.hysteretic import hysteretic_input
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
+from mrdamper.models import _scale
 
 __all__ = [
     "BLENDS",
@@ -113,7 +114,10 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     """Fit every grid candidate of ``stroke`` / ``blend``; keep the lowest mean training ESR.
 
     The criterion is the mean free-run ESR over the training records (weighted by
-    ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises.
+    ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises. On
+    long campaigns (more samples than the windowing threshold of :mod:`mrdamper.models._scale`)
+    the candidates are fitted and scored on evenly spread windows of the records, and the chosen
+    candidate is then fitted on every record.
 
     Raises
     ------
@@ -122,6 +126,15 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     """
     strokes = STROKES if est.stroke is None else (float(est.stroke),)
     blends = BLENDS if est.blend is None else (float(est.blend),)
+    plan = _scale.plan_windows([e.n for e in exps], min(e.fs for e in exps))
+    full, full_weights = exps, record_weights
+    if plan is not None:  # long campaign: choose on windows, refit the choice on everything
+        exps = ExperimentSet(
+            [exps[r].slice(a, b, name=f"{exps[r].name}[{a}:{b}]") for r, a, b in plan],
+            name="windows",
+        )
+        if record_weights is not None:
+            record_weights = [float(record_weights[r]) for r, _, _ in plan]
     w = np.ones(len(exps)) if record_weights is None else np.asarray(record_weights, dtype=float)
     rows: list[dict[str, Any]] = []
     best: tuple[float, Any, list[Any]] | None = None
@@ -149,6 +162,11 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
         raise IdentificationError(
             f"{est.kind}: no hysteretic-input candidate could be fitted; {first_error}"
         )
+    if plan is not None:
+        model = dataclasses.replace(est, stroke=best[1].stroke, blend=best[1].blend).fit(
+            full, record_weights=full_weights
+        )
+        best = (best[0], model, [])
     seen = set()
     for w_ in best[2]:  # the kept candidate's warnings and notes, once each
         key = (w_.category, str(w_.message))
@@ -158,6 +176,12 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     model = best[1]
     prov = {**model.provenance, "hysteretic_choice": rows}
     prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
+    if plan is not None:
+        prov["hysteretic_windows"] = {
+            "windows": len(plan),
+            "samples_used": int(sum(b - a for _, a, b in plan)),
+            "note": "stroke and blend chosen on evenly spread windows; the model fitted on all",
+        }
     prov["hysteretic_note"] = (
         f"stroke = {model.stroke:g} m and blend = {model.blend:g} chosen on the training records "
         f"(lowest mean free-run ESR of {len(rows)} candidates)"
