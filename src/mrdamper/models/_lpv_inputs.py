@@ -36,6 +36,10 @@ __all__ = [
 STROKES: tuple[float, ...] = (5e-5, 1e-4, 2e-4)
 #: Candidate pre-yield shares ``lambda`` [-] when ``blend`` is not given.
 BLENDS: tuple[float, ...] = (0.25, 0.5)
+#: Training samples above which the candidates are compared on windows of the records, and the
+#: samples those windows hold (20 s windows): the comparison costs six fits.
+CHOICE_THRESHOLD = 250_000
+CHOICE_BUDGET = 120_000
 
 
 def _check_stroke(value: Any) -> float:
@@ -115,9 +119,9 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
 
     The criterion is the mean free-run ESR over the training records (weighted by
     ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises. On
-    long campaigns (more samples than the windowing threshold of :mod:`mrdamper.models._scale`)
-    the candidates are fitted and scored on evenly spread windows of the records, and the chosen
-    candidate is then fitted on every record.
+    long campaigns (more than :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
+    scored on evenly spread 20 s windows of the records (:data:`CHOICE_BUDGET` samples in all), and
+    the chosen candidate is then fitted on every record.
 
     Raises
     ------
@@ -126,7 +130,12 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     """
     strokes = STROKES if est.stroke is None else (float(est.stroke),)
     blends = BLENDS if est.blend is None else (float(est.blend),)
-    plan = _scale.plan_windows([e.n for e in exps], min(e.fs for e in exps))
+    plan = _scale.plan_windows(
+        [e.n for e in exps],
+        min(e.fs for e in exps),
+        threshold=CHOICE_THRESHOLD,
+        budget=CHOICE_BUDGET,
+    )
     full, full_weights = exps, record_weights
     if plan is not None:  # long campaign: choose on windows, refit the choice on everything
         exps = ExperimentSet(
