@@ -40,6 +40,8 @@ BLENDS: tuple[float, ...] = (0.25, 0.5)
 #: samples those windows hold (20 s windows): the comparison costs six fits.
 CHOICE_THRESHOLD = 250_000
 CHOICE_BUDGET = 120_000
+#: Output-error iteration budget of each candidate's fit (the chosen one is refitted in full).
+CHOICE_NFEV = 10
 
 
 def _check_stroke(value: Any) -> float:
@@ -118,7 +120,9 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     """Fit every grid candidate of ``stroke`` / ``blend``; keep the lowest mean training ESR.
 
     The criterion is the mean free-run ESR over the training records (weighted by
-    ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises. On
+    ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises, of each
+    candidate fitted with at most :data:`CHOICE_NFEV` output-error iterations; the chosen
+    candidate is then fitted with the estimator's full budget. On
     long campaigns (more than :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
     scored on evenly spread 20 s windows of the records (:data:`CHOICE_BUDGET` samples in all), and
     the chosen candidate is then fitted on every record.
@@ -146,13 +150,15 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
             record_weights = [float(record_weights[r]) for r, _, _ in plan]
     w = np.ones(len(exps)) if record_weights is None else np.asarray(record_weights, dtype=float)
     rows: list[dict[str, Any]] = []
-    best: tuple[float, Any, list[Any]] | None = None
+    best: tuple[float, float, float] | None = None
     first_error = ""
     for x_y in strokes:
         for lam in blends:
-            cand = dataclasses.replace(est, stroke=x_y, blend=lam)
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
+            cand = dataclasses.replace(
+                est, stroke=x_y, blend=lam, max_nfev=min(est.max_nfev, CHOICE_NFEV)
+            )
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
                 try:
                     model = cand.fit(exps, record_weights=record_weights)
                 except IdentificationError as exc:
@@ -166,23 +172,13 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
                     score, err = float("inf"), str(exc)
             rows.append({"stroke": x_y, "blend": lam, "train_esr": score, "error": err})
             if best is None or score < best[0]:
-                best = (score, model, list(caught))
+                best = (score, x_y, lam)
     if best is None:
         raise IdentificationError(
             f"{est.kind}: no hysteretic-input candidate could be fitted; {first_error}"
         )
-    if plan is not None:
-        model = dataclasses.replace(est, stroke=best[1].stroke, blend=best[1].blend).fit(
-            full, record_weights=full_weights
-        )
-        best = (best[0], model, [])
-    seen = set()
-    for w_ in best[2]:  # the kept candidate's warnings and notes, once each
-        key = (w_.category, str(w_.message))
-        if key not in seen:
-            seen.add(key)
-            warnings.warn(w_.message, w_.category, stacklevel=3)
-    model = best[1]
+    final = dataclasses.replace(est, stroke=best[1], blend=best[2])
+    model = final.fit(full, record_weights=full_weights)
     prov = {**model.provenance, "hysteretic_choice": rows}
     prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
     if plan is not None:
@@ -193,7 +189,8 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
         }
     prov["hysteretic_note"] = (
         f"stroke = {model.stroke:g} m and blend = {model.blend:g} chosen on the training records "
-        f"(lowest mean free-run ESR of {len(rows)} candidates)"
+        f"(lowest mean free-run ESR of {len(rows)} candidates, each refined with at most "
+        f"{min(est.max_nfev, CHOICE_NFEV)} iterations)"
         if np.isfinite(best[0])
         else f"every candidate diverged in free run on the training records; the first "
         f"(stroke = {model.stroke:g} m, blend = {model.blend:g}) is returned"
