@@ -119,7 +119,9 @@ class LPVModel(FittedModel):
                 "input_signal", f"expected 'u', 'v' or 'hysteretic', got {self.input_signal!r}"
             )
         if self.input_signal != "v" and self.zone_laws is None:
-            raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
+            raise DataValidationError(
+                "zone_laws", f"input_signal={self.input_signal!r} needs zone laws to build u"
+            )
         if not self.fs > 0:
             raise DataValidationError("fs", f"expected a positive rate [Hz], got {self.fs}")
         set_(self, "offset", float(self.offset))
