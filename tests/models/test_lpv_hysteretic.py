@@ -189,3 +189,15 @@ def test_settings_and_refusals(rig_data) -> None:
     ):
         with pytest.raises(DataValidationError, match="input_signal.*hysteretic"):
             call()
+
+
+def test_long_campaigns_choose_on_windows(rig_data, monkeypatch) -> None:
+    """Above the threshold the candidates are compared on windows; the model uses every sample."""
+    train, _ = rig_data
+    monkeypatch.setattr(_lpv_inputs, "CHOICE_THRESHOLD", 1000)
+    monkeypatch.setattr(_lpv_inputs, "CHOICE_BUDGET", 4000)
+    m = _fit(train[:6], blend=0.5)
+    info = m.provenance["hysteretic_windows"]  # (records shorter than a window: whole records)
+    assert info["windows"] == 6 and info["samples_used"] == sum(e.n for e in train[:6])
+    assert m.provenance["n_samples"] == sum(e.n for e in train[:6])  # the final fit: every sample
+    assert m.stroke in _lpv_inputs.STROKES
