@@ -155,7 +155,9 @@ def _dyke_parts() -> tuple[Experiment, Experiment]:
 
 def choose_eta(train: Experiment) -> tuple[float, int, pd.DataFrame]:
     """Drive-lag rate and model-rate decimation of the LPV model, from the training part only
-    (inner split: first 80 % fits, last 20 % validates)."""
+    (inner split: first 80 % fits, last 20 % validates). The grid fits the LPV model with the
+    paper's static input ``u`` (one fit per grid point; the default hysteretic input would fit six
+    per point to choose its own stroke scale and pre-yield share)."""
     cut = round(0.8 * train.n)
     fit_part, val_part = train.slice(0, cut, name="eta_fit"), train.slice(cut, None, name="eta_val")
     rows = []
@@ -163,7 +165,7 @@ def choose_eta(train: Experiment) -> tuple[float, int, pd.DataFrame]:
         for eta in ETA_GRID:
             r = fit_and_score(
                 "lpv",
-                settings_for("lpv", "dyke", eta, dec),
+                {**settings_for("lpv", "dyke", eta, dec), "input_signal": "u"},
                 fit_part,
                 ExperimentSet([val_part]),
                 "clip",

@@ -25,7 +25,7 @@ def quiroz_models(quiroz_records: list[Any]) -> dict[str, Any]:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        lpv = LPVEstimator(model_fs=200.0).fit(quiroz_records)
+        lpv = LPVEstimator(model_fs=200.0, input_signal="u").fit(quiroz_records)
     return {"lpv": lpv, "sp1": SP1Estimator().fit(quiroz_records)}
 
 
@@ -47,5 +47,5 @@ def dyke_models(dyke_record: Any) -> dict[str, Any]:
     train = dyke_record.slice(0, int(0.7 * dyke_record.n))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        lpv = LPVEstimator(input="voltage", eta=250.0).fit(train)
+        lpv = LPVEstimator(input="voltage", eta=250.0, input_signal="u").fit(train)
     return {"lpv": lpv, "sp1": SP1Estimator(input="voltage", eta=250.0).fit(train)}

@@ -77,7 +77,7 @@ def test_lpv_fitted_on_virtual_rig_round_trip() -> None:
     train = [e for e in ds if e.metadata["experiment"] in (1, 2, 3)][::4]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        m = LPVEstimator(n_m=2, n_rho=2, laws_by="bins").fit(train)
+        m = LPVEstimator(n_m=2, n_rho=2, laws_by="bins", input_signal="u").fit(train)
     e = ds[20]
     F = m.predict(e)
     res = inverse_current(m, e, F, method="exact")

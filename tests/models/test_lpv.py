@@ -90,7 +90,9 @@ def test_identifies_known_lpv_coefficients(refine, solver) -> None:
 
 def test_identifies_through_known_scheduling_input_with_offset() -> None:
     laws = _known_laws()
-    m = LPVEstimator(n_m=2, n_rho=2, zone_laws=laws, refine=True).fit(_train(laws, offset=-92.0))
+    m = LPVEstimator(n_m=2, n_rho=2, zone_laws=laws, refine=True, input_signal="u").fit(
+        _train(laws, offset=-92.0)
+    )
     assert m.offset == pytest.approx(-92.0, abs=1e-5)
     np.testing.assert_allclose(m.alpha, ALPHA, rtol=1e-7, atol=1e-8)
     assert m.zone_laws is laws

@@ -84,7 +84,7 @@ def quiroz_fold(quiroz_unfiltered_dir: Path):
 @pytest.mark.realdata
 def test_enforced_stability_on_a_fold_where_the_unconstrained_fit_is_unstable(quiroz_fold) -> None:
     with pytest.warns(RuntimeWarning, match="not frozen-stable"):
-        free = LPVEstimator(model_fs=200.0, stability="warn").fit(quiroz_fold)
+        free = LPVEstimator(model_fs=200.0, stability="warn", input_signal="u").fit(quiroz_fold)
     assert free.max_pole_modulus(n_grid=101) >= 1.0
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)  # no instability warning by default

@@ -63,6 +63,7 @@ from mrdamper._io.atomic import atomic_write_with
 from mrdamper.control.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import encode_value
+from mrdamper.models.protocols import require_static_input
 
 __all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data"]
 
@@ -89,6 +90,7 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
             "model",
             f"state-space export needs an LPV or LTI model (kinds 'lpv', 'lti'), got kind {kind!r}",
         )
+    require_static_input(model, "the state-space export (it carries the zone laws of u)")
     lo, hi = model.rho_range
     grid = (
         np.linspace(lo, hi, 21) if rho_grid is None else np.asarray(rho_grid, dtype=float).ravel()

@@ -79,7 +79,12 @@ from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
-from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
+from mrdamper.models.protocols import (
+    InvertibleModel,
+    StaticMapForm,
+    require_static_input,
+    scheduled_form,
+)
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -519,6 +524,7 @@ def _lpv(
     n_grid: int,
     tol: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    require_static_input(model, "the LPV inverse")
     if t.size < 2:
         raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
     dt = float(t[1] - t[0])
@@ -600,6 +606,7 @@ def force_authority(model: Any, v_ref: float) -> float:
     if not hi > lo:
         raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
     if scheduled_form(model) is not None:
+        require_static_input(model, "the LPV force authority")
 
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
@@ -749,6 +756,7 @@ def _lpv_reg(
 def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Zone-law arrays of an LPV or LTI model for the kernels: ``(mode, gamma_m, gamma_c,
     mu_high, mu_low)``."""
+    require_static_input(model, "the LPV inverse and C export")
     laws = model.zone_laws
     if model.input_signal == "v" or laws is None:
         return K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)

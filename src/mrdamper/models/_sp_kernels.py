@@ -63,9 +63,7 @@ def sp_force_jacobian(
     with_offset: bool,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Force map and its analytic Jacobian (see :func:`_sp_force_jacobian`)."""
-    return _SP_FORCE_JACOBIAN(
-        *_args(x, v, i, comp, power, theta), float(f0), bool(with_offset)
-    )
+    return _SP_FORCE_JACOBIAN(*_args(x, v, i, comp, power, theta), float(f0), bool(with_offset))
 
 
 def _args(

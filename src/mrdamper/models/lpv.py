@@ -30,11 +30,12 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
+from mrdamper.analysis.hysteretic import hysteretic_input
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _lpv_fit, _scale
+from mrdamper.models import _lpv_fit, _lpv_inputs, _scale
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models.base import (
     Estimator,
@@ -45,7 +46,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
-from mrdamper.models.protocols import ScheduledForm
+from mrdamper.models.protocols import ScheduledForm, require_static_input
 from mrdamper.models.rates import (
     MODEL_FS_REASON,
     model_rate,
@@ -65,7 +66,7 @@ __all__ = [
     "select_order",
 ]
 
-InputSignal = Literal["u", "v"]
+InputSignal = Literal["u", "v", "hysteretic"]
 
 
 # ----------------------------------------------------------------------------- signal pipeline
@@ -78,6 +79,8 @@ def model_signals(
     input_signal: InputSignal,
     zone_laws: ZoneLaws | None,
     reading: Reading,
+    stroke: float | None = None,
+    blend: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The LPV model's input ``u`` and scheduling variable ``rho`` at the model rate, one record.
 
@@ -88,7 +91,9 @@ def model_signals(
        from the record rate to ``fs``;
     2. the velocity [m/s], resampled to ``fs``;
     3. ``u``: the scheduling input of the zone laws at ``(v, rho)`` (``input_signal="u"``,
-       reading ``reading`` of eq. 22) or the velocity itself (``input_signal="v"``).
+       reading ``reading`` of eq. 22), the same with a hysteretic pre-yield state driven by the
+       displacement (``input_signal="hysteretic"``, :mod:`mrdamper.analysis.hysteretic`), or the
+       velocity itself (``input_signal="v"``).
 
     Parameters
     ----------
@@ -100,12 +105,15 @@ def model_signals(
         Model rate [Hz].
     eta : float or None
         Drive-lag rate [1/s]; None: ``rho`` is the electrical input.
-    input_signal : {"u", "v"}
+    input_signal : {"u", "v", "hysteretic"}
         LPV input.
     zone_laws : ZoneLaws or None
-        Laws that build ``u`` (needed for ``input_signal="u"``).
+        Laws that build ``u`` (needed unless ``input_signal="v"``).
     reading : {"continuous", "literal"}
         Reading of eq. (22).
+    stroke, blend : float, optional
+        Stroke scale [m] and pre-yield share [-] of the hysteretic input (needed for
+        ``input_signal="hysteretic"``, ignored otherwise).
 
     Returns
     -------
@@ -120,7 +128,15 @@ def model_signals(
     if input_signal == "v":
         u = v
     elif zone_laws is None:
-        raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
+        raise DataValidationError(
+            "zone_laws", f"input_signal={input_signal!r} needs zone laws to build u"
+        )
+    elif input_signal == "hysteretic":
+        if stroke is None or blend is None:
+            raise DataValidationError(
+                "stroke", "input_signal='hysteretic' needs both stroke [m] and blend [-]"
+            )
+        u = hysteretic_input(zone_laws, v, rho, 1.0 / fs, stroke, blend)
     else:
         u = zone_laws.scheduling_input(v, rho, reading=reading)
     return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(rho, dtype=np.float64)
@@ -144,8 +160,11 @@ class TransferFunctionModel(FittedModel):
         Output force offset ``F0`` [N].
     fs : float
         Sampling rate the discrete model runs at [Hz].
-    input_signal : {"u", "v"}
-        LPV input: the scheduling input of the zone laws, or the raw velocity.
+    input_signal : {"u", "v", "hysteretic"}
+        LPV input: the scheduling input of the zone laws, the raw velocity, or the zone-law input
+        with a hysteretic pre-yield state (:mod:`mrdamper.analysis.hysteretic`).
+    stroke, blend : float or None
+        Stroke scale [m] and pre-yield share [-] of the hysteretic input (None otherwise).
     reading : {"continuous", "literal"}
         Reading of eq. (22) used to build ``u``.
     zone_laws : ZoneLaws or None
@@ -170,9 +189,12 @@ class TransferFunctionModel(FittedModel):
     eta: float | None = None
     rho_range: tuple[float, float] = (0.0, 0.0)
     force_bound: float = 1e9
+    stroke: float | None = None
+    blend: float | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        _lpv_inputs.check_model(self)  # hysteretic input: stroke and blend
         set_ = object.__setattr__
         for name in ("alpha", "beta"):
             arr = np.array(getattr(self, name), dtype=np.float64)
@@ -188,12 +210,14 @@ class TransferFunctionModel(FittedModel):
             )
         if isinstance(self.zone_laws, Mapping):
             set_(self, "zone_laws", ZoneLaws.from_dict(self.zone_laws))
-        if self.input_signal not in ("u", "v"):
+        if self.input_signal not in ("u", "v", "hysteretic"):
             raise DataValidationError(
-                "input_signal", f"expected 'u' or 'v', got {self.input_signal!r}"
+                "input_signal", f"expected 'u', 'v' or 'hysteretic', got {self.input_signal!r}"
             )
-        if self.input_signal == "u" and self.zone_laws is None:
-            raise DataValidationError("zone_laws", "input_signal='u' needs zone laws to build u")
+        if self.input_signal != "v" and self.zone_laws is None:
+            raise DataValidationError(
+                "zone_laws", f"input_signal={self.input_signal!r} needs zone laws to build u"
+            )
         if not self.fs > 0:
             raise DataValidationError("fs", f"expected a positive rate [Hz], got {self.fs}")
         set_(self, "offset", float(self.offset))
@@ -250,6 +274,8 @@ class TransferFunctionModel(FittedModel):
             input_signal=self.input_signal,
             zone_laws=self.zone_laws,
             reading=self.reading,
+            stroke=self.stroke,
+            blend=self.blend,
         )
 
     def predict(self, experiment: Experiment) -> np.ndarray:
@@ -315,7 +341,15 @@ class LPVModel(TransferFunctionModel):
     kind: ClassVar[str] = "lpv"
 
     def inverse_form(self) -> ScheduledForm:
-        """The model as the plain arrays of the control kernels (zone laws included)."""
+        """The model as the plain arrays of the control kernels (zone laws included).
+
+        Raises
+        ------
+        DataValidationError
+            For a hysteretic-input model (``input_signal="hysteretic"``): the kernels rebuild
+            ``u`` from ``(v, rho)`` alone.
+        """
+        require_static_input(self, "the control form (inverse, quarter car, C export)")
         laws = self.zone_laws
         if self.input_signal == "v" or laws is None:
             gm, gc, mu_h, mu_l = np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
@@ -330,7 +364,7 @@ class LPVModel(TransferFunctionModel):
             offset=float(self.offset),
             fs=self.fs,
             eta=self.eta,
-            input_signal=self.input_signal,
+            input_signal=cast('Literal["u", "v"]', self.input_signal),  # hysteretic refused above
             reading=self.reading,
             gamma_m=gm,
             gamma_c=gc,
@@ -372,8 +406,13 @@ class LPVEstimator(Estimator):
     eta : float, optional
         Drive-lag rate [1/s] of a first-order filter on the electrical input (e.g. command
         voltage). None: ``rho`` is the electrical input itself.
-    input_signal : {"u", "v"}
-        LPV input: the zone-law scheduling input (paper) or the raw velocity (ablation).
+    input_signal : {"hysteretic", "u", "v"}
+        LPV input: the zone-law input with a hysteretic pre-yield state (default,
+        :mod:`mrdamper.analysis.hysteretic`), the paper's static zone-law input ``u`` (needed by
+        the inverse and the state-space / C exports), or the raw velocity (ablation).
+    stroke, blend : float, optional
+        Stroke scale [m] and pre-yield share [-] of the hysteretic input; when either is None
+        it is chosen on the training records (lowest mean free-run training ESR over a grid).
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
@@ -419,7 +458,7 @@ class LPVEstimator(Estimator):
     n_rho: int = 2
     input: ElectricalSource = "i"
     eta: float | None = None
-    input_signal: InputSignal = "u"
+    input_signal: InputSignal = "hysteretic"
     reading: Reading = "continuous"
     zone_laws: ZoneLaws | None = None
     laws_by: Literal["auto", "current", "plateaus", "bins"] = "auto"
@@ -433,6 +472,8 @@ class LPVEstimator(Estimator):
     oe_solver: Literal["gauss-newton", "least_squares"] = "gauss-newton"
     range_policy: RangePolicy = "error"
     stability: Literal["enforce", "warn"] = "enforce"
+    stroke: float | None = None
+    blend: float | None = None
     fs: InitVar[float | None] = None
 
     renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
@@ -513,9 +554,15 @@ class LPVEstimator(Estimator):
             Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
             ``stability="enforce"``) no frozen-stable model; the message names the pole.
         """
-        model = cast(
-            TransferFunctionModel, super().fit(data, record_weights=record_weights, **options)
-        )
+        if _lpv_inputs.needs_choice(self):  # hysteretic input: stroke / blend on training data
+            model = cast(
+                TransferFunctionModel,
+                _lpv_inputs.fit_choosing(self, self._as_set(data), record_weights),
+            )
+        else:
+            model = cast(
+                TransferFunctionModel, super().fit(data, record_weights=record_weights, **options)
+            )
         pmax = float(model.provenance["max_frozen_pole"])
         if pmax >= 1.0:
             lo, hi = model.rho_range
@@ -551,6 +598,8 @@ class LPVEstimator(Estimator):
                 input_signal=self.input_signal,
                 zone_laws=laws,
                 reading=self.reading,
+                stroke=self.stroke,
+                blend=self.blend,
             )
             Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
@@ -629,6 +678,7 @@ class LPVEstimator(Estimator):
                 "eta": self.eta,
                 "rho_range": rho_range,
                 "force_bound": bound,
+                **_lpv_inputs.model_settings(self),
             },
             provenance=prov,
         )

@@ -23,8 +23,15 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 
 from mrdamper.data import Experiment
+from mrdamper.errors import DataValidationError
 
-__all__ = ["InvertibleModel", "ScheduledForm", "StaticMapForm", "scheduled_form"]
+__all__ = [
+    "InvertibleModel",
+    "ScheduledForm",
+    "StaticMapForm",
+    "require_static_input",
+    "scheduled_form",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,3 +137,29 @@ def scheduled_form(model: object) -> ScheduledForm | None:
         if isinstance(form, ScheduledForm):
             return form
     return None
+
+
+def require_static_input(model: object, what: str) -> None:
+    """Refuse an LPV model whose input is not a static map of ``(v, rho)`` (one-line error).
+
+    The control kernels rebuild the LPV input ``u`` from ``(v, rho)`` at each sample; the
+    hysteretic input (``input_signal="hysteretic"``) also depends on the displacement history.
+
+    Parameters
+    ----------
+    model : object
+        A fitted model (anything without ``input_signal="hysteretic"`` passes).
+    what : str
+        What needs the static input, for the message (e.g. ``"the LPV inverse"``).
+
+    Raises
+    ------
+    DataValidationError
+        Naming ``input_signal``, when the model's input is hysteretic.
+    """
+    if getattr(model, "input_signal", None) == "hysteretic":
+        raise DataValidationError(
+            "input_signal",
+            f"{what} needs a static LPV input u(v, rho); this model's input is 'hysteretic' (it "
+            "depends on the displacement history): fit the model with input_signal='u' for it",
+        )
