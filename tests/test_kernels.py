@@ -1,4 +1,4 @@
-"""Kernel housekeeping (mrdamper._kernels): canonical argument types and compile-once claims."""
+"""Kernel housekeeping (mrdamper.compiled): canonical argument types and compile-once claims."""
 
 from __future__ import annotations
 
@@ -7,28 +7,28 @@ from pathlib import Path
 import numpy as np
 from numba import typeof
 
-from mrdamper import _kernels
+from mrdamper import compiled
 from mrdamper.models import _narx_kernels, _sp_kernels
 
 
 def test_readonly_is_a_view_and_read_only() -> None:
     a = np.arange(5.0)
-    r = _kernels.readonly(a)
+    r = compiled.readonly(a)
     assert np.shares_memory(a, r) and not r.flags.writeable and a.flags.writeable
-    assert _kernels.readonly(r) is r  # already read-only: passed through
-    c = _kernels.readonly(np.arange(10)[::2], np.float64)  # strided ints: contiguous float copy
+    assert compiled.readonly(r) is r  # already read-only: passed through
+    c = compiled.readonly(np.arange(10)[::2], np.float64)  # strided ints: contiguous float copy
     assert c.dtype == np.float64 and c.flags.c_contiguous and not c.flags.writeable
 
 
 def test_every_listed_kernel_is_a_numba_dispatcher_with_parseable_types() -> None:
     from numba.core.registry import CPUDispatcher
 
-    for kind, items in _kernels.KERNELS.items():
+    for kind, items in compiled.KERNELS.items():
         for it in items:
-            disp = _kernels._dispatcher(it)
+            disp = compiled._dispatcher(it)
             assert isinstance(disp, CPUDispatcher), (kind, it[1])
             n_args = disp.py_func.__code__.co_argcount
-            assert len(_kernels._types(it[2])) == n_args, (kind, it[1])
+            assert len(compiled._types(it[2])) == n_args, (kind, it[1])
             assert it[3] > 0
 
 
@@ -36,8 +36,8 @@ def test_sp_wrappers_pass_the_listed_argument_types() -> None:
     """Writable and read-only records reach the SP kernel with one signature (the listed one)."""
     x = np.linspace(0.0, 1.0, 4)
     comp, power, theta = np.array([0, 1]), np.array([0, 1]), np.array([1.0, 2.0])
-    listed = {it[1]: _kernels._types(it[2]) for it in _kernels.KERNELS["sp1"]}
-    for arr in (x, _kernels.readonly(x)):
+    listed = {it[1]: compiled._types(it[2]) for it in compiled.KERNELS["sp1"]}
+    for arr in (x, compiled.readonly(x)):
         args = _sp_kernels._args(arr, arr, arr, comp, power, theta)
         assert tuple(typeof(a) for a in args) + (typeof(0.5),) == listed["_sp_force"]
 
@@ -49,14 +49,14 @@ def test_narx_wrappers_pass_read_only_term_tables() -> None:
 
 
 def test_claimed_modules_are_left_to_their_claimant(tmp_path: Path) -> None:
-    kinds = list(_kernels.KERNELS)
-    for items in _kernels._todo(kinds):
+    kinds = list(compiled.KERNELS)
+    for items in compiled._todo(kinds):
         (tmp_path / items[0][0]).touch()
-    assert _kernels.compile_claimed(kinds, str(tmp_path)) == 0
-    assert _kernels._todo(["bingham", "no-such-kind"]) == []
+    assert compiled.compile_claimed(kinds, str(tmp_path)) == 0
+    assert compiled._todo(["bingham", "no-such-kind"]) == []
 
 
 def test_compile_ahead_does_nothing_without_work() -> None:
-    _kernels.compile_ahead(["bingham"])  # no compiled kernels: no background process
-    assert _kernels.claim_folder() is None
-    _kernels.finish_ahead()  # no-op
+    compiled.compile_ahead(["bingham"])  # no compiled kernels: no background process
+    assert compiled.claim_folder() is None
+    compiled.finish_ahead()  # no-op

@@ -201,7 +201,7 @@ def demo(
 
     from rich.console import Console
 
-    from mrdamper import _kernels
+    from mrdamper import compiled
     from mrdamper.study import doe_protocol, run_study, write_study
 
     _check_out(out, force)
@@ -224,11 +224,11 @@ def demo(
         highlight=False,
     )
     # on a fresh installation, compile the models' kernels on another core meanwhile
-    _kernels.compile_ahead(kinds or [s.kind for s in doe_protocol().resolved_models()])
+    compiled.compile_ahead(kinds or [s.kind for s in doe_protocol().resolved_models()])
     try:
         data = table_ii(seed=seed, scale=sc)
     except BaseException:
-        _kernels.finish_ahead(cancel=True)
+        compiled.finish_ahead(cancel=True)
         raise
     n = sum(e.n for e in data)
     console.print(
@@ -240,7 +240,7 @@ def demo(
             data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
         )
     finally:
-        _kernels.finish_ahead(cancel=True)  # no-op: the study waited for it
+        compiled.finish_ahead(cancel=True)  # no-op: the study waited for it
     write_study(res, out, force=force)
     print_summary(res, out)
     console.print(

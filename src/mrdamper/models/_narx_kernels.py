@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mrdamper._kernels import readonly
+from mrdamper.compiled import readonly
 
 __all__ = ["fill_candidates", "free_run", "free_run_sensitivity", "gram_select"]
 

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from mrdamper._kernels import readonly
+from mrdamper.compiled import readonly
 
 __all__ = ["COMPONENTS", "N_COMPONENTS", "sp_force", "sp_force_jacobian"]
 

@@ -478,6 +478,16 @@ class Estimator(abc.ABC):
             )
         return cls(**settings)
 
+    def _check_fit_options(self, options: Mapping[str, Any]) -> None:
+        """Refuse a per-fit option the family does not take (one line naming it)."""
+        unknown = [k for k in options if k not in self.fit_options]
+        if unknown:
+            raise DataValidationError(
+                unknown[0],
+                f"{self.kind}: fit takes no option {unknown[0]!r}; its options are "
+                f"{list(self.fit_options)}",
+            )
+
     def fit(self, data: Experiment | Iterable[Experiment], **options: Any) -> FittedModel:
         """Identify the model from one record or a collection of records.
 
@@ -494,13 +504,7 @@ class Estimator(abc.ABC):
             The identified model, an immutable value.
         """
         t0, c0 = time.perf_counter(), time.process_time()
-        unknown = [k for k in options if k not in self.fit_options]
-        if unknown:
-            raise DataValidationError(
-                unknown[0],
-                f"{self.kind}: fit takes no option {unknown[0]!r}; its options are "
-                f"{list(self.fit_options)}",
-            )
+        self._check_fit_options(options)
         self._validate()
         prepared = self._prepare(self._as_set(data))
         result = self._identify(prepared, **options)

@@ -554,6 +554,8 @@ class LPVEstimator(Estimator):
             Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
             ``stability="enforce"``) no frozen-stable model; the message names the pole.
         """
+        self._check_fit_options(options)
+        self._validate()
         if _lpv_inputs.needs_choice(self):  # hysteretic input: stroke / blend on training data
             model = cast(
                 TransferFunctionModel,

@@ -265,12 +265,12 @@ def run_study(
 def _compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
     """Compile the kernels the models need before the first fit, each once on the machine, in
     parallel: every local worker (and a background compilation the command started, see
-    :func:`mrdamper._kernels.compile_ahead`) takes whole kernel modules not cached yet. The fits
+    :func:`mrdamper.compiled.compile_ahead`) takes whole kernel modules not cached yet. The fits
     then load them from numba's cache. Nothing to do with one worker and no background
     compilation, or when every kernel is cached."""
-    from mrdamper import _kernels
+    from mrdamper import compiled
 
-    claim_dir = _kernels.claim_folder()
+    claim_dir = compiled.claim_folder()
     workers = ex.workers if isinstance(ex, ProcessExecutor) else 1
     parallel = workers > 1
     if claim_dir is None and not parallel:
@@ -280,14 +280,14 @@ def _compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
     try:
         if parallel:
             futures = [
-                ex.submit(_kernels.compile_claimed, list(kinds), claim_dir) for _ in range(workers)
+                ex.submit(compiled.compile_claimed, list(kinds), claim_dir) for _ in range(workers)
             ]
             for fut in futures:
                 fut.exception()  # wait; a kernel that failed here compiles at first use
         else:
-            _kernels.compile_claimed(list(kinds), claim_dir)
+            compiled.compile_claimed(list(kinds), claim_dir)
     finally:
-        _kernels.finish_ahead()
+        compiled.finish_ahead()
         if own:
             shutil.rmtree(claim_dir, ignore_errors=True)
 

@@ -1,4 +1,4 @@
-"""Compiled-kernel housekeeping (private): one argument type per kernel, compiled once per machine.
+"""Compiled kernels of the numba modules: one argument type per kernel, compiled once per machine.
 
 numba compiles a kernel for every distinct tuple of argument types it is called with and keeps the
 machine code in its on-disk cache (``njit(cache=True)``, files beside the kernel module). On a fresh
