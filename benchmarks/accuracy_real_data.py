@@ -13,7 +13,8 @@ Protocols (no tuning on test data):
 Every model is fitted with its estimator's defaults plus the data set's electrical input; the LPV
 and LTI models use a model rate of 200 Hz for Quiroz (chosen a priori: the lowest record rate);
 for Dyke the model rate (3004.8 Hz divided by 1, 2 or 5) is chosen with ``eta`` on the training
-part, and P-15's coefficients follow the voltage through the same drive lag ``eta``. ``--set
+part, and every other model with a drive-lag setting (P-15, SP-1..SP-4) follows the voltage
+through the same drive lag ``eta``. ``--set
 KIND.KEY=VALUE`` overrides a setting (ablations). A model that fails to fit or to
 simulate is reported as a row with its error, never dropped.
 
@@ -32,6 +33,7 @@ import os
 import sys
 import time
 import warnings
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -65,8 +67,10 @@ def settings_for(
         s["model_fs"] = QUIROZ_FS if protocol == "quiroz" else DYKE_FS / decimation
         if protocol == "dyke":
             s["eta"] = eta
-    if kind == "p15" and protocol == "dyke":
-        s["eta"] = eta  # the coefficients follow the drive-lagged command voltage, as LPV's rho
+    elif protocol == "dyke" and "eta" in {f.name for f in fields(type(get_estimator(kind)))}:
+        # every other model with a drive-lag setting (P-15, SP-1..SP-4) follows the same
+        # drive-lagged command voltage as LPV's rho: the coil current lags the command alike
+        s["eta"] = eta
     return {**s, **EXTRA.get(kind, {})}
 
 
