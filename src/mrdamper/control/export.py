@@ -72,6 +72,7 @@ import numpy as np
 
 from mrdamper._io import atomic_write_text
 from mrdamper._io.atomic import atomic_write_with
+from mrdamper.control.inverse import lpv_hysteresis
 from mrdamper.control.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import encode_value
@@ -119,6 +120,7 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     poles = np.array([np.sort_complex(m.poles) for m in mats]).reshape(grid.size, n)
     laws = model.zone_laws if model.input_signal in ("u", "hysteretic") else None
     hysteretic = model.input_signal == "hysteretic"
+    blend, stroke = lpv_hysteresis(model)
     elec = "A" if model.input == "i" else "V"
     return {
         "schema": EXPORT_SCHEMA,
@@ -148,8 +150,8 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
         "gamma_c": np.zeros((0, 0)) if laws is None else np.array(laws.gamma_c),
         "mu_high": np.zeros(0) if laws is None else np.array(laws.mu_high),
         "mu_low": np.zeros(0) if laws is None else np.array(laws.mu_low),
-        "blend": float(model.blend) if hysteretic else 0.0,
-        "stroke": float(model.stroke) if hysteretic else float("nan"),
+        "blend": blend,
+        "stroke": stroke if hysteretic else float("nan"),
         "units": {
             "Ts": "s",
             "F0": "N",
