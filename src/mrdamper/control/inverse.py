@@ -41,8 +41,9 @@ LPV model (kind ``"lpv"``), causal and in one pass
     solved. With the hysteretic input (``input_signal="hysteretic"``) ``u[k]`` also needs the Dahl
     state ``z[k]``, which depends on the motion only: it is computed first along the record at
     the model rate (:func:`mrdamper.analysis.hysteretic.dahl_state`, from rest ``z = 0``), exactly
-    as the model's prediction does, so ``u[k]`` is a static map of ``(v[k], z[k], rho[k])``. Only present and past motion is used, as in a real-time loop. The record must be
-    sampled at the model rate ``fs``.
+    as the model's prediction does, so ``u[k]`` is a static map of ``(v[k], z[k], rho[k])``.
+    Only present and past motion is used, as in a real-time loop. The record must be sampled at
+    the model rate ``fs``.
 
     Why a tolerance band and holding: a change of ``rho[k]`` also changes ``u[k]``, which enters
     the force of the next samples; re-solving every sample exactly makes tiny rounding differences
