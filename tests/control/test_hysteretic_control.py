@@ -216,3 +216,16 @@ def test_c_export_matches_python(rig, tmp_path: Path) -> None:
     res = inverse_current(m, e, F, reg=50.0)
     assert _rel(i_c, res.rho) < 1e-9
     assert _rel(F_inv_c, res.F_achieved) < 1e-9
+    # with a drive lag: the lead horizon holds the Dahl state, in C as in Python
+    lagged = dataclasses.replace(m, eta=80.0)
+    _, c = export_c(lagged, tmp_path, name="hys_lag", reg=50.0)
+    lib_path = tmp_path / "libhys_lag.so"
+    cmd = [str(GCC), "-std=c99", "-Wall", "-Werror", "-O2", "-shared", "-fPIC", str(c)]
+    subprocess.run([*cmd, "-o", str(lib_path), "-lm"], check=True, capture_output=True)
+    lib = ctypes.CDLL(str(lib_path))
+    F = lagged.with_range_policy("clip").predict(e)
+    (F_c,) = _run(lib, "hys_lag_run", e.x, e.v, i, n_out=1)
+    assert _rel(F_c, F) < 1e-9
+    rho_c, _ = _run(lib, "hys_lag_inverse_run", e.x, e.v, F, n_out=2)
+    res = inverse_current(lagged, e, F, reg=50.0)
+    assert _rel(rho_c, res.rho) < 1e-9
