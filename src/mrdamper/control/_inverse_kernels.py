@@ -19,9 +19,11 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "dahl_step",
     "horizon_step",
     "lpv_inverse",
     "lpv_inverse_reg",
+    "lpv_inverse_reg_hys",
     "reg_solve_poly",
     "reg_solve_static",
     "sp_force1",
@@ -151,8 +153,25 @@ def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # pragma: no cover - 
 
 
 @njit(cache=True)
-def _u_of(v, r, mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
-    """LPV input ``u`` [m/s] from ``v`` and ``rho`` (zone laws, eqs. 19-22)."""
+def dahl_step(z, v_prev, v, dt, stroke):  # pragma: no cover - numba
+    """One exact step of the Dahl state (:mod:`mrdamper.analysis.hysteretic`): ``z[k]`` from
+    ``z[k-1]`` for the trapezoidal displacement ``(v[k-1] + v[k]) dt / 2`` [m]."""
+    dx = 0.5 * (v_prev + v) * dt
+    if dx > 0.0:
+        return 1.0 + (z - 1.0) * np.exp(-dx / stroke)
+    if dx < 0.0:
+        return -1.0 + (z + 1.0) * np.exp(dx / stroke)
+    return z
+
+
+@njit(cache=True)
+def _u_of(v, r, mode, gm, gc, mu_high, mu_low, z, blend):  # pragma: no cover - numba
+    """LPV input ``u`` [m/s] from ``v`` and ``rho`` (zone laws, eqs. 19-22).
+
+    With ``blend > 0`` (continuous reading only) the hysteretic input of
+    :func:`mrdamper.analysis.hysteretic.hysteretic_input` with the Dahl state ``z`` [-];
+    ``blend = 0`` is the static input, computed exactly as before.
+    """
     if mode == MODE_V:
         return v
     hi = mu_high[0] * r + mu_high[1]
@@ -160,6 +179,11 @@ def _u_of(v, r, mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
     m1 = _poly(gm[0], r)
     m2 = _poly(gm[1], r)
     m3 = _poly(gm[2], r)
+    if blend != 0.0:
+        ratio = (m3 if v >= 0.0 else m1) / m2
+        level = hi if z >= 0.0 else -lo
+        pre = (1.0 - blend) * min(max(v, lo), hi) + blend * level * z
+        return (1.0 - ratio) * pre + ratio * v
     if v < lo:
         if mode == MODE_CONTINUOUS:
             return lo + m1 / m2 * (v - lo)
@@ -173,7 +197,24 @@ def _u_of(v, r, mode, gm, gc, mu_high, mu_low):  # pragma: no cover - numba
 
 @njit(cache=True)
 def lpv_inverse(
-    v, F_desired, alpha, beta, offset, lo, hi, lag, mode, gm, gc, mu_high, mu_low, rho0, n_grid, tol
+    v,
+    F_desired,
+    alpha,
+    beta,
+    offset,
+    lo,
+    hi,
+    lag,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    rho0,
+    n_grid,
+    tol,
+    z,
+    blend,
 ):  # pragma: no cover - numba
     """Causal, one-pass inverse of the LPV input-output model.
 
@@ -201,6 +242,10 @@ def lpv_inverse(
         Grid intervals of the per-sample search.
     tol : float
         Force tolerance [N]: the previous ``rho`` is held while it meets the target within ``tol``.
+    z : float64[:]
+        Dahl state [-] of the hysteretic input at every sample (it follows the motion only).
+    blend : float
+        Share of the hysteretic state in the input (0: the static input; ``z`` is then unused).
 
     Returns
     -------
@@ -241,7 +286,7 @@ def lpv_inverse(
         F[k] = _poly(c, r)
         y[k] = F[k] - offset
         sat[k] = not exact
-        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
+        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low, z[k], blend)
         prev = r
     return rho, F, sat
 
@@ -464,6 +509,8 @@ def horizon_cost(
     gc,
     mu_high,
     mu_low,
+    z,
+    blend,
     ys,
     us,
     c2,
@@ -471,7 +518,8 @@ def horizon_cost(
     """Mean squared force error over ``horizon`` samples with the command ``w`` held.
 
     Sample 0 has the coefficients ``cf`` (fixed by the past) and scheduling value ``r``; then the
-    model runs on: ``rho <- lag rho + (1 - lag) w``, the velocity held at ``v``, the past buffers
+    model runs on: ``rho <- lag rho + (1 - lag) w``, the velocity held at ``v`` and the Dahl state
+    at ``z`` (the hysteretic input with share ``blend``; 0: static input), the past buffers
     ``yb``, ``ub`` (most recent first, ``valid`` entries in use) copied into ``ys``, ``us``. Every
     sample is compared with the same ``target`` (the desired force now: nothing later is known).
     """
@@ -489,7 +537,7 @@ def horizon_cost(
             ys[j] = ys[j - 1]
             us[j] = us[j - 1]
         ys[0] = F - offset
-        us[0] = _u_of(v, rr, mode, gm, gc, mu_high, mu_low)
+        us[0] = _u_of(v, rr, mode, gm, gc, mu_high, mu_low, z, blend)
         if nv < n_m:
             nv += 1
         rr = lag * rr + (1.0 - lag) * w
@@ -527,6 +575,8 @@ def _horizon_j(
     gc,
     mu_high,
     mu_low,
+    z,
+    blend,
     ys,
     us,
     c2,
@@ -553,6 +603,8 @@ def _horizon_j(
             gc,
             mu_high,
             mu_low,
+            z,
+            blend,
             ys,
             us,
             c2,
@@ -585,6 +637,8 @@ def horizon_step(
     gc,
     mu_high,
     mu_low,
+    z,
+    blend,
 ):  # pragma: no cover - numba
     """``rho[k]`` in ``[a, b]`` minimising the horizon cost (:func:`horizon_cost`) of the command it
     implies, ``w = (rho - lag prev) / (1 - lag)``, plus ``lam2 (rho - hold)^2``.
@@ -620,6 +674,8 @@ def horizon_step(
         gc,
         mu_high,
         mu_low,
+        z,
+        blend,
         ys,
         us,
         c2,
@@ -656,6 +712,8 @@ def horizon_step(
             gc,
             mu_high,
             mu_low,
+            z,
+            blend,
             ys,
             us,
             c2,
@@ -688,6 +746,8 @@ def horizon_step(
             gc,
             mu_high,
             mu_low,
+            z,
+            blend,
             ys,
             us,
             c2,
@@ -713,6 +773,8 @@ def horizon_step(
             gc,
             mu_high,
             mu_low,
+            z,
+            blend,
             ys,
             us,
             c2,
@@ -743,6 +805,8 @@ def horizon_step(
         gc,
         mu_high,
         mu_low,
+        z,
+        blend,
         ys,
         us,
         c2,
@@ -784,6 +848,54 @@ def lpv_inverse_reg(
     rate_step,
     horizon,
 ):  # pragma: no cover - numba
+    """:func:`lpv_inverse_reg_hys` with the static input (``blend = 0``)."""
+    return lpv_inverse_reg_hys(
+        v,
+        F_desired,
+        alpha,
+        beta,
+        offset,
+        lo,
+        hi,
+        lag,
+        mode,
+        gm,
+        gc,
+        mu_high,
+        mu_low,
+        rho0,
+        n_grid,
+        lam,
+        rate_step,
+        horizon,
+        np.zeros(v.size),
+        0.0,
+    )
+
+
+@njit(cache=True)
+def lpv_inverse_reg_hys(
+    v,
+    F_desired,
+    alpha,
+    beta,
+    offset,
+    lo,
+    hi,
+    lag,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    rho0,
+    n_grid,
+    lam,
+    rate_step,
+    horizon,
+    z,
+    blend,
+):  # pragma: no cover - numba
     """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
 
     Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
@@ -792,7 +904,8 @@ def lpv_inverse_reg(
     would take with the previous command held (the regularisation then penalises command changes,
     not the lag's own motion). With a drive lag and ``horizon > 1`` (from the third sample on) the
     force term is the mean over ``horizon`` samples with the implied command held
-    (:func:`horizon_step`): a causal lead over the lag. Other arguments as :func:`lpv_inverse`.
+    (:func:`horizon_step`): a causal lead over the lag. Other arguments (the Dahl state ``z`` and
+    share ``blend`` of the hysteretic input included) as :func:`lpv_inverse`.
 
     Returns
     -------
@@ -857,6 +970,8 @@ def lpv_inverse_reg(
                 gc,
                 mu_high,
                 mu_low,
+                z[k],
+                blend,
             )
         else:
             r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
@@ -866,7 +981,7 @@ def lpv_inverse_reg(
         F[k] = _poly(cf, r)
         y[k] = F[k] - offset
         sat[k] = not ok
-        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low)
+        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low, z[k], blend)
         prev = r
     return rho, F, sat
 

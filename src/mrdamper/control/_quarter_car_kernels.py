@@ -30,6 +30,7 @@ from numba import njit
 from mrdamper.control._inverse_kernels import (
     _poly,
     _u_of,
+    dahl_step,
     horizon_step,
     lpv_coefficients,
     past_buffers,
@@ -96,6 +97,8 @@ def simulate(
     n_grid,
     bound,
     horizon,
+    blend,
+    stroke,
 ):  # pragma: no cover - numba
     """Run the quarter car over a road.
 
@@ -120,6 +123,10 @@ def simulate(
     horizon : int
         Lead horizon [samples] of the inverse of an LPV damper with a drive lag (``horizon_step``);
         1: the present sample only.
+    blend, stroke : float
+        Hysteretic input of an LPV damper: share ``lambda`` [-] and stroke scale ``x_y`` [m] of
+        the Dahl state ``z``, integrated in the loop from the damper velocity at every control
+        sample with the model's exact update (from rest, ``z = 0``); ``blend = 0``: static input.
 
     Returns
     -------
@@ -156,10 +163,16 @@ def simulate(
     lam2 = lam * lam
     prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
     w_prev = prev
+    dt_c = n_sub * h
+    z_d = 0.0  # Dahl state of the hysteretic input (from rest)
+    v_prev = 0.0
     for k in range(n_ctrl):
         zs, vs, zu, vu = st[0], st[1], st[2], st[3]
         x_d = zs - zu
         v_d = vs - vu
+        if blend != 0.0 and k >= 1:
+            z_d = dahl_step(z_d, v_prev, v_d, dt_c, stroke)
+        v_prev = v_d
         # --- input for this sample
         a, b = lo, hi
         if lag >= 0.0 and k >= 1:
@@ -208,6 +221,8 @@ def simulate(
                         gc,
                         mu_high,
                         mu_low,
+                        z_d,
+                        blend,
                     )
                 else:
                     r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
@@ -215,7 +230,7 @@ def simulate(
                 w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
             Fk = _poly(cf, r)
             y[k] = Fk - offset
-            u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low)
+            u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low, z_d, blend)
             F[k] = Fk - offset
         else:
             if ctrl == CTRL_PASSIVE:

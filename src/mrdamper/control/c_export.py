@@ -16,7 +16,9 @@ dynamic allocation, no globals that change: all state lives in a caller-owned st
 * ``void <name>_run(...)`` / ``<name>_inverse_run(...)``: the step functions over arrays.
 
 Model kinds with C export: ``lpv`` and ``lti`` (the input-output recursion of eq. 9 with the zone
-laws and the optional drive lag; an LTI model has no inverse: its force does not depend on the
+laws, the optional drive lag and, for the hysteretic input, the Dahl state ``z`` carried in the
+state struct and stepped with the model's exact update from the velocity passed to each call,
+from rest ``z = 0``; an LTI model has no inverse: its force does not depend on the
 present input) and the static maps ``sp1``..``sp4`` and ``bingham``. Spencer (a stiff ODE whose
 integration scheme would also have to be fixed in C), P-15 and NARX are not exported.
 
@@ -43,6 +45,7 @@ from mrdamper.control.inverse import (
     default_reg,
     force_authority,
     horizon_samples,
+    lpv_hysteresis,
     lpv_law_arrays,
     model_input_limits,
     static_map_arrays,
@@ -102,6 +105,9 @@ static const double {P}_GM[3][{P}_N_D] = {gm};
 static const double {P}_GC[3][{P}_N_D] = {gc};
 static const double {P}_MU_HIGH[2] = {mu_high};
 static const double {P}_MU_LOW[2] = {mu_low};
+static const double {P}_BLEND = {blend}; /* share of the Dahl state in u; 0: static input */
+static const double {P}_STROKE = {stroke}; /* stroke scale x_y of the Dahl state [m] */
+static const double {P}_DT = {dt}; /* model sample time [s] */
 
 static double {p}_poly(const double *c, int n, double r)
 {{
@@ -111,7 +117,8 @@ static double {p}_poly(const double *c, int n, double r)
     return acc;
 }}
 
-static double {p}_u_of(double v, double r)
+/* LPV input; with BLEND != 0 the hysteretic input with the Dahl state z */
+static double {p}_u_of(double v, double r, double z)
 {{
     double hi, lo, m1, m2, m3;
     if ({P}_MODE == 0) return v;
@@ -120,6 +127,11 @@ static double {p}_u_of(double v, double r)
     m1 = {p}_poly({P}_GM[0], {P}_N_D, r);
     m2 = {p}_poly({P}_GM[1], {P}_N_D, r);
     m3 = {p}_poly({P}_GM[2], {P}_N_D, r);
+    if ({P}_BLEND != 0.0) {{
+        double ratio = (v >= 0.0 ? m3 : m1) / m2, level = z >= 0.0 ? hi : -lo;
+        double pre = (1.0 - {P}_BLEND) * {p}_dmin({p}_dmax(v, lo), hi) + {P}_BLEND * level * z;
+        return (1.0 - ratio) * pre + ratio * v;
+    }}
     if (v < lo) {{
         if ({P}_MODE == 1) return lo + m1 / m2 * (v - lo);
         return (m1 * v + {p}_poly({P}_GC[0], {P}_N_D, r)) / m2;
@@ -152,9 +164,20 @@ static void {p}_commit({p}_state *s, double F, double v, double r)
         s->u[j] = s->u[j - 1];
     }}
     s->y[0] = F - {P}_OFFSET;
-    s->u[0] = {p}_u_of(v, r);
+    s->u[0] = {p}_u_of(v, r, s->z);
     s->rho = r;
     s->k += 1;
+}}
+
+/* Dahl state at this sample: exact step over the trapezoidal displacement (from rest, z = 0) */
+static void {p}_advance({p}_state *s, double v)
+{{
+    if ({P}_BLEND != 0.0 && s->k > 0) {{
+        double dx = 0.5 * (s->v_prev + v) * {P}_DT;
+        if (dx > 0.0) s->z = 1.0 + (s->z - 1.0) * exp(-dx / {P}_STROKE);
+        else if (dx < 0.0) s->z = -1.0 + (s->z + 1.0) * exp(dx / {P}_STROKE);
+    }}
+    s->v_prev = v;
 }}
 
 void {p}_init({p}_state *s)
@@ -166,6 +189,8 @@ void {p}_init({p}_state *s)
     }}
     s->rho = {P}_LO;
     s->w = {P}_LO;
+    s->z = 0.0;
+    s->v_prev = 0.0;
     s->k = 0;
 }}
 
@@ -177,6 +202,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
     (void)x;
     if ({P}_LAG >= 0.0 && s->k > 0) r = {P}_LAG * s->rho + (1.0 - {P}_LAG) * s->w;
     s->w = w;
+    {p}_advance(s, v);
     {p}_coefficients(s, cf);
     F = {p}_poly(cf, {P}_N_P, r);
     {p}_commit(s, F, v, r);
@@ -202,7 +228,7 @@ static const int {P}_HORIZON = {horizon}; /* lead horizon [samples] of the drive
 static const double {P}_GOLDEN = {golden};
 
 /* mean squared force error over the horizon: this sample at r, then the model run on with the
-   command w held, the velocity v held and the same target */
+   command w held, the velocity v and the Dahl state held and the same target */
 static double {p}_hcost(const {p}_state *s, const double *cf, double r, double w, double v,"""
     r""" double target)
 {{
@@ -222,7 +248,7 @@ static double {p}_hcost(const {p}_state *s, const double *cf, double r, double w
             us[j] = us[j - 1];
         }}
         ys[0] = F - {P}_OFFSET;
-        us[0] = {p}_u_of(v, rr);
+        us[0] = {p}_u_of(v, rr, s->z);
         if (nv < {P}_N_M) nv += 1;
         rr = {P}_LAG * rr + (1.0 - {P}_LAG) * w;
         for (q = 0; q < {P}_N_P; ++q) {{
@@ -286,6 +312,7 @@ _LPV_INVERSE = (
     double cf[{P}_N_P];
     double a = {P}_LO, b = {P}_HI, prev = s->rho, hold, r, F;
     (void)x;
+    {p}_advance(s, v);
     {p}_coefficients(s, cf);
     if ({P}_LAG >= 0.0 && s->k >= 1) {{
         if (s->k == 1) {{
@@ -606,6 +633,7 @@ def c_source(
     }
     if is_lpv:
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
+        blend, stroke = lpv_hysteresis(model)
         lag = -1.0 if model.eta is None else float(np.exp(-model.eta / model.fs))
         fmt.update(
             n_m=model.n_m,
@@ -620,6 +648,9 @@ def c_source(
             gc=_arr2(gc),
             mu_high=_arr1(mu_h),
             mu_low=_arr1(mu_l),
+            blend=_f(blend),
+            stroke=_f(stroke),
+            dt=_f(1.0 / model.fs),
             horizon=horizon_samples(model.eta, 1.0 / model.fs),
             golden=_f(K.GOLDEN),
             n_golden=K.N_GOLDEN,
@@ -631,6 +662,8 @@ def c_source(
             "    double rho; /* scheduling value of the last sample */\n"
             "    double w; "
             "/* forward: input of the last sample; inverse: last command (drive lag) */\n"
+            "    double z; /* Dahl state of the hysteretic input [-] */\n"
+            "    double v_prev; /* velocity of the last sample [m/s] */\n"
             f"    long k; /* samples taken */\n}} {p}_state;\n"
         )
         body = _LPV.format(**fmt)

@@ -28,13 +28,18 @@ name               shape                  meaning
 ``poles_re``,      (G, n_m)               frozen poles (discrete time) on the grid
 ``poles_im``
 ``max_pole_modulus`` (G,)                 largest frozen-pole modulus on the grid (< 1 stable)
-``input_signal``   string                 ``"u"`` (zone-law input) or ``"v"`` (raw velocity)
+``input_signal``   string                 ``"u"`` (zone-law input), ``"hysteretic"`` (zone-law
+                                          input with a Dahl pre-yield state) or ``"v"`` (raw
+                                          velocity)
 ``reading``        string                 reading of eq. 22 (``"continuous"`` or ``"literal"``)
 ``gamma_m``        (3, d+1)               zone slopes ``m_j(rho) = sum_p gamma_m[j-1, p] rho^p``
                                           [N s/m]
 ``gamma_c``        (3, d+1)               zone intercepts ``c_j(rho)`` [N]
 ``mu_high``        (2,)                   ``v_high(rho) = mu_high[0] rho + mu_high[1]`` [m/s]
 ``mu_low``         (2,)                   ``v_low(rho) = mu_low[0] rho + mu_low[1]`` [m/s]
+``blend``          scalar                 share ``lambda`` of the Dahl state in ``u`` [-]
+                                          (0: static input)
+``stroke``         scalar                 stroke scale ``x_y`` of the Dahl state [m] (NaN: none)
 ``units``          struct / object        unit of every signal
 ``provenance``     string (JSON)          identification facts of the model
 ``schema``,        string, scalar         ``"mrdamper.lpv_export"``, version 1
@@ -46,6 +51,13 @@ With ``input_signal = "v"`` the zone-law arrays are empty. The LPV input is buil
 ``v`` and ``rho`` as in :mod:`mrdamper.analysis.scheduling`: ``u = v`` between ``v_low`` and
 ``v_high``; below ``v_low`` (continuous reading) ``u = v_low + m_1/m_2 (v - v_low)``, above
 ``v_high`` ``u = v_high + m_3/m_2 (v - v_high)``; literal reading ``u = (m_j v + c_j)/m_2``.
+With ``input_signal = "hysteretic"`` (continuous reading) a Dahl state ``z_h`` [-] follows the
+motion only, from rest ``z_h[0] = 0``: ``z_h[k] = s + (z_h[k-1] - s) exp(-|dx| / stroke)`` with
+``dx = (v[k-1] + v[k]) Ts / 2``, ``s = sign(dx)``, and
+``u = (1 - r) [(1 - blend) sat(v) + blend y(z_h) z_h] + r v`` with ``sat(v)`` the clip of ``v`` to
+``[v_low, v_high]``, ``r = m_3/m_2`` (``m_1/m_2`` for ``v < 0``), ``y = v_high`` for
+``z_h >= 0`` and ``-v_low`` otherwise (:mod:`mrdamper.analysis.hysteretic`). The transfer
+function from ``u`` to the force, and so every matrix above, is the same for every input.
 The state-space system is ``z[k+1] = A(rho[k]) z[k] + B u[k]``, ``F[k] = C(rho[k]) z[k] + F0``.
 """
 
@@ -60,10 +72,10 @@ import numpy as np
 
 from mrdamper._io import atomic_write_text
 from mrdamper._io.atomic import atomic_write_with
+from mrdamper.control.inverse import lpv_hysteresis
 from mrdamper.control.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import encode_value
-from mrdamper.models.protocols import require_static_input
 
 __all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data"]
 
@@ -90,7 +102,6 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
             "model",
             f"state-space export needs an LPV or LTI model (kinds 'lpv', 'lti'), got kind {kind!r}",
         )
-    require_static_input(model, "the state-space export (it carries the zone laws of u)")
     lo, hi = model.rho_range
     grid = (
         np.linspace(lo, hi, 21) if rho_grid is None else np.asarray(rho_grid, dtype=float).ravel()
@@ -107,7 +118,9 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     C_poly[0, :, :] = model.beta[::-1, :]
     mats = [state_space(model, float(r)) for r in grid]
     poles = np.array([np.sort_complex(m.poles) for m in mats]).reshape(grid.size, n)
-    laws = model.zone_laws if model.input_signal == "u" else None
+    laws = model.zone_laws if model.input_signal in ("u", "hysteretic") else None
+    hysteretic = model.input_signal == "hysteretic"
+    blend, stroke = lpv_hysteresis(model)
     elec = "A" if model.input == "i" else "V"
     return {
         "schema": EXPORT_SCHEMA,
@@ -137,6 +150,8 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
         "gamma_c": np.zeros((0, 0)) if laws is None else np.array(laws.gamma_c),
         "mu_high": np.zeros(0) if laws is None else np.array(laws.mu_high),
         "mu_low": np.zeros(0) if laws is None else np.array(laws.mu_low),
+        "blend": blend,
+        "stroke": stroke if hysteretic else float("nan"),
         "units": {
             "Ts": "s",
             "F0": "N",
@@ -151,6 +166,8 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
             "gamma_c": "N",
             "mu_high": "m/s",
             "mu_low": "m/s",
+            "blend": "-",
+            "stroke": "m",
         },
         "provenance": json.dumps(encode_value(dict(model.provenance)), allow_nan=True, default=str),
     }

@@ -38,8 +38,12 @@ LPV model (kind ``"lpv"``), causal and in one pass
     ``rho`` qualifies it minimises ``|F - F_desired|`` exactly (an end of the interval or a
     stationary point of the polynomial, also bisected) and flags the sample ``saturated``. Then
     ``u[k]`` follows from ``v[k]`` and ``rho[k]`` through the zone laws and the next sample is
-    solved. Only present and past motion is used, as in a real-time loop. The record must be
-    sampled at the model rate ``fs``.
+    solved. With the hysteretic input (``input_signal="hysteretic"``) ``u[k]`` also needs the Dahl
+    state ``z[k]``, which depends on the motion only: it is computed first along the record at
+    the model rate (:func:`mrdamper.analysis.hysteretic.dahl_state`, from rest ``z = 0``), exactly
+    as the model's prediction does, so ``u[k]`` is a static map of ``(v[k], z[k], rho[k])``.
+    Only present and past motion is used, as in a real-time loop. The record must be sampled at
+    the model rate ``fs``.
 
     Why a tolerance band and holding: a change of ``rho[k]`` also changes ``u[k]``, which enters
     the force of the next samples; re-solving every sample exactly makes tiny rounding differences
@@ -79,12 +83,7 @@ from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
-from mrdamper.models.protocols import (
-    InvertibleModel,
-    StaticMapForm,
-    require_static_input,
-    scheduled_form,
-)
+from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -95,6 +94,7 @@ __all__ = [
     "force_authority",
     "horizon_samples",
     "inverse_current",
+    "lpv_hysteresis",
     "lpv_law_arrays",
     "model_input_limits",
     "static_map_arrays",
@@ -524,7 +524,6 @@ def _lpv(
     n_grid: int,
     tol: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    require_static_input(model, "the LPV inverse")
     if t.size < 2:
         raise DataValidationError("t", f"expected at least 2 samples, got {t.size}")
     dt = float(t[1] - t[0])
@@ -544,8 +543,10 @@ def _lpv(
         gm, gc = np.ascontiguousarray(laws.gamma_m), np.ascontiguousarray(laws.gamma_c)
         mu_h, mu_l = np.asarray(laws.mu_high, dtype=float), np.asarray(laws.mu_low, dtype=float)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    blend, z = _dahl_along(model, v, 1.0 / model.fs)  # as the model: dt = 1 / fs
     rho, _, sat = K.lpv_inverse(
-        np.ascontiguousarray(v, dtype=np.float64),
+        v,
         np.ascontiguousarray(Fd),
         np.ascontiguousarray(model.alpha),
         np.ascontiguousarray(model.beta),
@@ -561,6 +562,8 @@ def _lpv(
         lo,
         n_grid,
         tol,
+        z,
+        blend,
     )
     if model.eta is None:
         return rho, rho, sat
@@ -592,8 +595,9 @@ def force_authority(model: Any, v_ref: float) -> float:
 
     ``|F(v_ref, hi) - F(v_ref, lo)| / (hi - lo)`` over the model's ``input_range`` at ``x = 0``;
     for an LPV model the force is the frozen-``rho`` steady state
-    ``F0 + sum_j b_j(rho) / (1 + sum_j a_j(rho)) u(v_ref, rho)``. It sets the scale of the
-    default regularisation weight.
+    ``F0 + sum_j b_j(rho) / (1 + sum_j a_j(rho)) u(v_ref, rho)`` (hysteretic input: with the Dahl
+    state of a steady motion, ``z = sign(v_ref)``). It sets the scale of the default
+    regularisation weight.
 
     Parameters
     ----------
@@ -606,12 +610,16 @@ def force_authority(model: Any, v_ref: float) -> float:
     if not hi > lo:
         raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
     if scheduled_form(model) is not None:
-        require_static_input(model, "the LPV force authority")
+        blend, _ = lpv_hysteresis(model)
+        mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
 
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
             if model.input_signal == "v" or model.zone_laws is None:
                 u = float(v_ref)
+            elif blend != 0.0:  # steady motion: the Dahl state has reached sign(v_ref)
+                z_ss = float(np.sign(v_ref))
+                u = float(K._u_of(float(v_ref), r, mode, gm, gc, mu_h, mu_l, z_ss, blend))
             else:
                 u = float(
                     model.zone_laws.scheduling_input(
@@ -718,7 +726,8 @@ def _lpv_reg(
     dt = 1.0 / model.fs
     mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
-    rho, _, sat = K.lpv_inverse_reg(
+    blend, z = _dahl_along(model, vm, dt)
+    rho, _, sat = K.lpv_inverse_reg_hys(
         vm,
         Fm,
         np.ascontiguousarray(model.alpha),
@@ -737,6 +746,8 @@ def _lpv_reg(
         lam,
         rate * dt,
         n_h,
+        z,
+        blend,
     )
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
@@ -755,8 +766,8 @@ def _lpv_reg(
 
 def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Zone-law arrays of an LPV or LTI model for the kernels: ``(mode, gamma_m, gamma_c,
-    mu_high, mu_low)``."""
-    require_static_input(model, "the LPV inverse and C export")
+    mu_high, mu_low)`` (the hysteretic input uses the continuous reading's laws, see
+    :func:`lpv_hysteresis` for its other settings)."""
     laws = model.zone_laws
     if model.input_signal == "v" or laws is None:
         return K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
@@ -768,6 +779,25 @@ def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray,
         np.asarray(laws.mu_high, dtype=np.float64),
         np.asarray(laws.mu_low, dtype=np.float64),
     )
+
+
+def lpv_hysteresis(model: Any) -> tuple[float, float]:
+    """``(blend, stroke)`` of an LPV or LTI model's hysteretic input [-], [m]; ``(0.0, 0.0)`` for
+    the static inputs ``"u"`` and ``"v"`` (``blend = 0`` is the static input in every kernel)."""
+    if getattr(model, "input_signal", None) != "hysteretic" or model.zone_laws is None:
+        return 0.0, 0.0
+    return float(model.blend), float(model.stroke)
+
+
+def _dahl_along(model: Any, v: np.ndarray, dt: float) -> tuple[float, np.ndarray]:
+    """``(blend, z)``: the Dahl state [-] along the velocity ``v`` [m/s] at the model rate, from
+    rest, as the model's own prediction computes it (zeros for a static input)."""
+    from mrdamper.analysis.hysteretic import dahl_state
+
+    blend, stroke = lpv_hysteresis(model)
+    if blend == 0.0:
+        return 0.0, np.zeros(v.size)
+    return blend, dahl_state(v, dt, stroke)
 
 
 def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:

@@ -42,6 +42,7 @@ from mrdamper.control.inverse import (
     default_reg,
     driver_command,
     horizon_samples,
+    lpv_hysteresis,
     lpv_law_arrays,
     model_input_limits,
     static_map_arrays,
@@ -420,6 +421,8 @@ def _damper_arrays(model: Any) -> dict[str, Any]:
         "gc": np.zeros((3, 1)),
         "mu_high": np.zeros(2),
         "mu_low": np.zeros(2),
+        "blend": 0.0,
+        "stroke": 0.0,
     }
     if isinstance(model, LinearDamper):
         out.update(
@@ -429,7 +432,10 @@ def _damper_arrays(model: Any) -> dict[str, Any]:
     form = scheduled_form(model)
     if form is not None:
         mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
+        blend, stroke = lpv_hysteresis(model)
         out.update(
+            blend=blend,
+            stroke=stroke,
             is_lpv=True,
             alpha=form.alpha,
             beta=form.beta,
@@ -586,6 +592,8 @@ def simulate_quarter_car(
         int(n_grid),
         float(bound) * mr,
         n_h,
+        arrays["blend"],
+        arrays["stroke"],
     )
     if bad >= 0:
         raise SimulationDivergedError(

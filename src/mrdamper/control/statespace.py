@@ -231,7 +231,9 @@ class ControlGrid:
         Scheduling values [A] or [V].
     systems : list of control.StateSpace
         Discrete systems (sampling time ``1 / fs``) from the LPV input ``u`` [m/s] to the force
-        ``C z`` [N] (the offset ``F0`` is not part of the linear system), one per ``rho``.
+        ``C z`` [N] (the offset ``F0`` is not part of the linear system), one per ``rho``. The
+        same for every LPV input; a hysteretic input's ``u`` is rebuilt from the motion with the
+        model's ``stroke`` and ``blend`` (:mod:`mrdamper.analysis.hysteretic`).
     stability : DataFrame
         :func:`frozen_stability` on the same grid, with the DC gain of each system [N s/m] (the
         static slope ``F / u`` at constant ``rho``; NaN where the system has a pole at 1).

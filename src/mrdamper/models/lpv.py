@@ -46,7 +46,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
-from mrdamper.models.protocols import ScheduledForm, require_static_input
+from mrdamper.models.protocols import ScheduledForm
 from mrdamper.models.rates import (
     MODEL_FS_REASON,
     model_rate,
@@ -343,13 +343,10 @@ class LPVModel(TransferFunctionModel):
     def inverse_form(self) -> ScheduledForm:
         """The model as the plain arrays of the control kernels (zone laws included).
 
-        Raises
-        ------
-        DataValidationError
-            For a hysteretic-input model (``input_signal="hysteretic"``): the kernels rebuild
-            ``u`` from ``(v, rho)`` alone.
+        A hysteretic-input model (``input_signal="hysteretic"``) carries its ``blend`` and
+        ``stroke``: the kernels step the Dahl state along the motion and rebuild ``u`` from
+        ``(v, z, rho)``.
         """
-        require_static_input(self, "the control form (inverse, quarter car, C export)")
         laws = self.zone_laws
         if self.input_signal == "v" or laws is None:
             gm, gc, mu_h, mu_l = np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
@@ -364,12 +361,14 @@ class LPVModel(TransferFunctionModel):
             offset=float(self.offset),
             fs=self.fs,
             eta=self.eta,
-            input_signal=cast('Literal["u", "v"]', self.input_signal),  # hysteretic refused above
+            input_signal=self.input_signal,
             reading=self.reading,
             gamma_m=gm,
             gamma_c=gc,
             mu_high=mu_h,
             mu_low=mu_l,
+            blend=float(self.blend) if self.input_signal == "hysteretic" and self.blend else 0.0,
+            stroke=float(self.stroke) if self.input_signal == "hysteretic" and self.stroke else 0.0,
         )
 
 

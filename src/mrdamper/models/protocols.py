@@ -23,13 +23,11 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 
 from mrdamper.data import Experiment
-from mrdamper.errors import DataValidationError
 
 __all__ = [
     "InvertibleModel",
     "ScheduledForm",
     "StaticMapForm",
-    "require_static_input",
     "scheduled_form",
 ]
 
@@ -75,14 +73,23 @@ class ScheduledForm:
         Model rate [Hz].
     eta : float or None
         Drive-lag rate [1/s] of ``rho``; None: ``rho`` is the electrical input.
-    input_signal : {"u", "v"}
-        LPV input: the zone-law scheduling input or the velocity.
+    input_signal : {"u", "v", "hysteretic"}
+        LPV input: the zone-law scheduling input, the velocity, or the zone-law input with a
+        hysteretic pre-yield state (:mod:`mrdamper.analysis.hysteretic`).
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     gamma_m, gamma_c : ndarray, shape (3, degree + 1)
         Zone-law coefficients (slopes and intercepts in ``rho``); zeros for ``input_signal="v"``.
     mu_high, mu_low : ndarray, shape (2,)
         Breakpoint laws; zeros for ``input_signal="v"``.
+    blend : float
+        Share ``lambda`` [-] of the Dahl state in the pre-yield part of the input; 0 for the
+        static inputs ``"u"`` and ``"v"``.
+    stroke : float
+        Stroke scale ``x_y`` [m] of the Dahl state ``z``; 0 for the static inputs. ``z`` depends
+        only on the motion (``z[k] = s + (z[k-1] - s) exp(-|dx| / x_y)``, ``dx`` the trapezoidal
+        displacement step, ``s = sign(dx)``, ``z = 0`` at rest), so at each sample the input is
+        still a static map of ``(v, z, rho)``.
     """
 
     alpha: np.ndarray
@@ -90,12 +97,14 @@ class ScheduledForm:
     offset: float
     fs: float
     eta: float | None
-    input_signal: Literal["u", "v"]
+    input_signal: Literal["u", "v", "hysteretic"]
     reading: Literal["continuous", "literal"]
     gamma_m: np.ndarray
     gamma_c: np.ndarray
     mu_high: np.ndarray
     mu_low: np.ndarray
+    blend: float = 0.0
+    stroke: float = 0.0
 
 
 @runtime_checkable
@@ -137,29 +146,3 @@ def scheduled_form(model: object) -> ScheduledForm | None:
         if isinstance(form, ScheduledForm):
             return form
     return None
-
-
-def require_static_input(model: object, what: str) -> None:
-    """Refuse an LPV model whose input is not a static map of ``(v, rho)`` (one-line error).
-
-    The control kernels rebuild the LPV input ``u`` from ``(v, rho)`` at each sample; the
-    hysteretic input (``input_signal="hysteretic"``) also depends on the displacement history.
-
-    Parameters
-    ----------
-    model : object
-        A fitted model (anything without ``input_signal="hysteretic"`` passes).
-    what : str
-        What needs the static input, for the message (e.g. ``"the LPV inverse"``).
-
-    Raises
-    ------
-    DataValidationError
-        Naming ``input_signal``, when the model's input is hysteretic.
-    """
-    if getattr(model, "input_signal", None) == "hysteretic":
-        raise DataValidationError(
-            "input_signal",
-            f"{what} needs a static LPV input u(v, rho); this model's input is 'hysteretic' (it "
-            "depends on the displacement history): fit the model with input_signal='u' for it",
-        )
