@@ -36,9 +36,9 @@ def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFix
     scenarios = {s for s, _ in tab.index}
     assert scenarios == {"(a) quiroz-freq", "(b) quiroz-cross", "(c) rig", "(d) dyke"}
     assert len(tab) == 7  # 2 + 2 + 2 + 1 test sets
-    assert list(tab.columns[:-1]) == [*available_models(), "lpv-aug", "lpv-hys"]
+    assert list(tab.columns[:-1]) == [*available_models(), "lpv-aug", "lpv-u"]
     # the paper's model and the black-box peer fit and score on every test set
-    for kind in ("lpv", "sp1", "narx", "lpv-aug", "lpv-hys"):
+    for kind in ("lpv", "sp1", "narx", "lpv-aug", "lpv-u"):
         assert np.all(np.isfinite(tab[kind].to_numpy(float))), tab[kind]
     # the best column names the column holding the row minimum
     for _, row in tab.iterrows():
