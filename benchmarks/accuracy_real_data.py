@@ -189,7 +189,8 @@ def dyke(models: list[str]) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
         )
         last = rows[-1]
         print(
-            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  {'error: ' + last['error'][:70] if last['error'] else ''}",
+            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  "
+            f"{'error: ' + last['error'][:70] if last['error'] else ''}",
             file=sys.stderr,
             flush=True,
         )

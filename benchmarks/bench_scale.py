@@ -242,9 +242,9 @@ def main() -> None:
         cache = args.cache or Path(tmp)
         cache = cache / f"seed{args.seed}-rec{record_s:g}s"
         print(
-            f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS="
-            f"{os.environ.get('OPENBLAS_NUM_THREADS', '1')}; {n_records} record(s) of {_label(record_s)} "
-            f"in {cache}",
+            f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, "
+            f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', '1')}; {n_records} "
+            f"record(s) of {_label(record_s)} in {cache}",
             flush=True,
         )
         t0 = time.perf_counter()
@@ -271,9 +271,9 @@ def main() -> None:
                 rows.append(row)
                 if r["status"] == "ok":
                     print(
-                        f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu {r['cpu_s']:.2f} s), "
-                        f"peak {r['rss_gb']:.2f} GB "
-                        f"(before fit {r['rss_before_gb']:.2f} GB)",
+                        f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu "
+                        f"{r['cpu_s']:.2f} s), peak {r['rss_gb']:.2f} GB (before fit "
+                        f"{r['rss_before_gb']:.2f} GB)",
                         flush=True,
                     )
                 else:
@@ -299,7 +299,8 @@ def _accuracy(args: argparse.Namespace) -> None:
             check=True,
         )
         print(
-            "| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train ESR / test ESR |"
+            "| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train "
+            "ESR / test ESR |"
         )
         print("|---|---|---|")
         for kind in args.accuracy:

@@ -323,7 +323,8 @@ def scenario_dyke(quick: bool) -> Scenario:
     else:
         eta, dec, tab = ard.choose_eta(train)
         print(
-            f"\n[(d) dyke] eta / decimation grid (training part only):\n{tab.to_string(index=False)}",
+            "\n[(d) dyke] eta / decimation grid (training part "
+            f"only):\n{tab.to_string(index=False)}",
             file=sys.stderr,
         )
 

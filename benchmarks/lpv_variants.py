@@ -134,7 +134,8 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     )
     tab.columns = [f"{s.split()[0]} {t}" for s, t in tab.columns]
     print(
-        f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; {time.perf_counter() - t0:.0f} s)\n"
+        f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; "
+        f"{time.perf_counter() - t0:.0f} s)\n"
     )
     text = G.to_markdown(tab)
     lines = text.split("\n")

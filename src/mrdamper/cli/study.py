@@ -97,17 +97,19 @@ def print_summary(res: Any, out: Path | None = None) -> None:
         )
     hl = res.headline()
     console.print(
-        f"[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): {hl['text']}",
+        "[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): "
+        f"{hl['text']}",
         highlight=False,
     )
     console.print(
-        "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
-        "model (SP-1).",
+        "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best "
+        "classical model (SP-1).",
         highlight=False,
     )
     if out is not None:
         console.print(
-            f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, {out}/results.csv)",
+            f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, "
+            f"{out}/results.csv)",
             highlight=False,
         )
 
@@ -121,7 +123,8 @@ def study(
         None,
         "--protocol",
         help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from the records "
-        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time split).",
+        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time "
+        "split).",
     ),
     models: str = typer.Option(
         None,
@@ -232,7 +235,8 @@ def demo(
         raise
     n = sum(e.n for e in data)
     console.print(
-        f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in {time.perf_counter() - t0:.1f} s.",
+        f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in "
+        f"{time.perf_counter() - t0:.1f} s.",
         highlight=False,
     )
     try:

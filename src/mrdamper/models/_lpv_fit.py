@@ -110,9 +110,9 @@ def _solve(
     cond_x = float(np.sqrt(cond))
     if not cond_x < REGRESSION_COND_LIMIT:
         raise IdentificationError(
-            f"lpv: regression is rank deficient (condition number of the scaled regressors "
-            f"{cond_x:.3g} > {REGRESSION_COND_LIMIT:.0e}); lower the order n_m or the degree n_rho, or "
-            f"give data with more distinct scheduling levels"
+            "lpv: regression is rank deficient (condition number of the scaled regressors "
+            f"{cond_x:.3g} > {REGRESSION_COND_LIMIT:.0e}); lower the order n_m or the degree "
+            "n_rho, or give data with more distinct scheduling levels"
         )
     if cond_x > 1e7:
         warnings.warn(

@@ -223,9 +223,9 @@ def equation_error(
     cond = float(np.sqrt(ev[-1] / ev[0])) if ev[0] > 0 else math.inf
     if not cond < COND_FAIL:
         raise IdentificationError(
-            f"data: p15 regression is ill-conditioned (condition number {cond:.3g} > {COND_FAIL:g}); "
-            f"the records do not excite all {5 * n_basis} terms (vary velocity amplitude and "
-            f"{source})"
+            f"data: p15 regression is ill-conditioned (condition number {cond:.3g} > "
+            f"{COND_FAIL:g}); the records do not excite all {5 * n_basis} terms (vary velocity "
+            f"amplitude and {source})"
         )
     if cond > COND_WARN:
         warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=3)

@@ -205,8 +205,9 @@ def _check_identifiable(
         norms = np.linalg.norm(V, axis=0)
         if np.any(norms == 0):
             raise IdentificationError(
-                f"{source}: {kind} component {COMPONENTS[m]} has a term in {source}^{int(pw[norms == 0][0])} "
-                f"but the training input is zero everywhere; records with a non-zero input are needed"
+                f"{source}: {kind} component {COMPONENTS[m]} has a term in "
+                f"{source}^{int(pw[norms == 0][0])} but the training input is zero everywhere; "
+                "records with a non-zero input are needed"
             )
         sv = np.linalg.svd(V / norms, compute_uv=False)
         if sv[-1] <= sv[0] / _MAX_INPUT_COND:

@@ -152,8 +152,9 @@ def single_level_note(kind: str, source: str, level: float) -> str:
     """
     unit = "A" if source == "i" else "V"
     return (
-        f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws are "
-        f"constants and its identified range is [{level:g}, {level:g}] {unit}; other levels follow range_policy"
+        f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws "
+        f"are constants and its identified range is [{level:g}, {level:g}] {unit}; other levels "
+        "follow range_policy"
     )
 
 

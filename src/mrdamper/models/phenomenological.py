@@ -287,8 +287,8 @@ class P15Model(FittedModel):
             raise SimulationDivergedError(
                 self.kind,
                 k,
-                f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} "
-                f"(w3 from {w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
+                f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} (w3 from "
+                f"{w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
             )
         v = np.ascontiguousarray(experiment.v, dtype=np.float64)
         F0 = rest_state(self.coefficients(float(i[0])), self.f0, float(v[0]))
@@ -319,8 +319,9 @@ class P15Model(FittedModel):
             raise SimulationDivergedError(
                 self.kind,
                 k,
-                f"force left the bound |F| <= {self.force_bound:.4g} N, became non-finite or an implicit "
-                f"stage had no root (t = {experiment.t[k]:.6g} s, {n_sub} steps per sample)",
+                f"force left the bound |F| <= {self.force_bound:.4g} N, became non-finite or an "
+                f"implicit stage had no root (t = {experiment.t[k]:.6g} s, {n_sub} steps per "
+                "sample)",
             )
         return F
 

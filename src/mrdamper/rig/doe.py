@@ -201,7 +201,8 @@ def _check_scale(scale: float, specs: Sequence[DoeSequence]) -> float:
     if shortest < MIN_DURATION:
         raise DataValidationError(
             "scale",
-            f"{scale:g} makes the shortest record {shortest:g} s; at least {MIN_DURATION:g} s is needed",
+            f"{scale:g} makes the shortest record {shortest:g} s; at least {MIN_DURATION:g} s is "
+            "needed",
         )
     return scale
 

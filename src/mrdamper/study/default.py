@@ -56,8 +56,8 @@ def _input_of(data: Records) -> ElectricalSource:
     if source is not None:
         return source
     raise SchemaError(
-        "protocol: the records do not share one electrical channel (some have only 'i', others only "
-        "'voltage'); pass --protocol FILE naming the input"
+        "protocol: the records do not share one electrical channel (some have only 'i', others "
+        "only 'voltage'); pass --protocol FILE naming the input"
     )
 
 
@@ -92,13 +92,14 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
         proto = doe_protocol()
         return (
             proto,
-            f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design of experiments)",
+            f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design of "
+            "experiments)",
         )
     if all("condition" in e.metadata for e in data):
         proto = quiroz_protocol()
         return proto, (
-            f"protocol {proto.name!r} (records carry 'condition' metadata: leave one amplitude/frequency "
-            "condition out)"
+            f"protocol {proto.name!r} (records carry 'condition' metadata: leave one "
+            "amplitude/frequency condition out)"
         )
     source = _input_of(data)
     stats = [_levels(e, source) for e in data]

@@ -46,9 +46,10 @@ def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
     return Protocol(
         name="doe",
         description=(
-            "Table II design of experiments. F-v analysis on the first replicate of the stepped-current "
-            "experiments 6-8; identification on the first replicate of experiments 1-3; every remaining "
-            "record (replicates 2.. of 1-3 and 6-8, all of the long-road experiments 4-5) is scored."
+            "Table II design of experiments. F-v analysis on the first replicate of the "
+            "stepped-current experiments 6-8; identification on the first replicate of "
+            "experiments 1-3; every remaining record (replicates 2.. of 1-3 and 6-8, all of the "
+            "long-road experiments 4-5) is scored."
         ),
         analysis=Selection(match={"experiment": (6, 7, 8)}, group_by="experiment", take=1),
         train=Selection(match={"experiment": (1, 2, 3)}, group_by="experiment", take=1),

@@ -219,7 +219,8 @@ class Split:
     def __post_init__(self) -> None:
         if self.kind not in ("fixed", "leave-one-group-out", "k-fold", "time"):
             raise SchemaError(
-                f"split.kind: expected 'fixed', 'leave-one-group-out', 'k-fold' or 'time', got {self.kind!r}"
+                "split.kind: expected 'fixed', 'leave-one-group-out', 'k-fold' or 'time', got "
+                f"{self.kind!r}"
             )
         if isinstance(self.k, bool) or not isinstance(self.k, int) or self.k < 2:
             raise SchemaError(f"split.k: expected an integer of at least 2, got {self.k!r}")
@@ -544,7 +545,8 @@ def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
         raise SchemaError(f"schema: expected {PROTOCOL_SCHEMA!r}, got {data.get('schema')!r}")
     if data.get("schema_version", PROTOCOL_SCHEMA_VERSION) != PROTOCOL_SCHEMA_VERSION:
         raise SchemaError(
-            f"schema_version: expected {PROTOCOL_SCHEMA_VERSION}, got {data.get('schema_version')!r}"
+            f"schema_version: expected {PROTOCOL_SCHEMA_VERSION}, got "
+            f"{data.get('schema_version')!r}"
         )
     split = data.get("split") or {}
     if not isinstance(split, Mapping):

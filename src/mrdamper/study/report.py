@@ -147,10 +147,8 @@ def _headline_text(res: StudyResult) -> tuple[str, str]:
     hl = res.headline()
     cls = "headline" if hl.get("available") else "warn"
     text = (
-        "<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and SP-1..SP-4): "
-        + _e(hl["text"])
-        + ". "
-        + _e(PAPER_HEADLINE["text"])
+        "<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and "
+        "SP-1..SP-4): " + _e(hl["text"]) + ". " + _e(PAPER_HEADLINE["text"])
     )
     return cls, text
 
@@ -172,13 +170,14 @@ def _data_note(res: StudyResult) -> str:
         )
         if damper == "spencer":
             note += (
-                " The <code>spencer</code> estimator therefore has the true structure here: it is a "
-                "reference, not a competitor."
+                " The <code>spencer</code> estimator therefore has the true structure here: it is "
+                "a reference, not a competitor."
             )
         return note
     return (
-        "The records are measured data: no model has the damper's true structure. Spencer, Bingham and "
-        "NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, LTI)."
+        "The records are measured data: no model has the damper's true structure. Spencer, "
+        "Bingham and NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, "
+        "LTI)."
     )
 
 
@@ -194,14 +193,16 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, 
             + ".</p>"
         )
     out.append(
-        '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured force) [-] and SSSE '
-        "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is the "
-        f"interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) {_e(ref)}'s "
-        "mean ESR is than the row model's mean, 100 (other - "
+        '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured '
+        "force) [-] and SSSE "
+        "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is "
+        f"the interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) "
+        f"{_e(ref)}'s mean ESR is than the row model's mean, 100 (other - "
         + _e(ref)
         + ") / other, the way the headline and the "
-        "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an error larger than the signal) or that never "
-        "simulated is marked failed; its row stays. Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
+        "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an "
+        "error larger than the signal) or that never simulated is marked failed; its row stays. "
+        "Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
         + _data_note(res)
         + "</p>"
     )
@@ -223,18 +224,20 @@ def _selection_section(res: StudyResult) -> str:
             rec,
             _table(selection_table(sel)),
             (
-                '<p class="small">The table of <code>mrdamper select</code>, computed from this study\'s '
+                '<p class="small">The table of <code>mrdamper select</code>, computed from this '
+                "study's "
                 f"own held-out scores ({n_scores} model &times; record scores over the protocol's "
-                f"{sel.n_folds} {_e(sel.split)} fold(s)), not by fitting again: only scored records that "
-                "trained neither the models nor the analysis of their fold count. ESR in free run [-]; "
-                "a model whose fit or any held-out simulation failed in a fold fails that fold and is not "
-                "recommended. The recommendation is the lowest mean ESR among the models that passed "
-                "every fold, as <code>mrdamper select</code> decides (a runner-up within 5 % is named as "
-                "a tie). <i>Outside range</i>: held-out records whose electrical input leaves the range "
-                "the model was identified on (handled by the protocol's range policy, "
-                f"<code>{_e(res.protocol.range_policy)}</code>). <code>mrdamper select</code> itself "
-                "chooses its own folds (by condition, record or time) and clips out-of-range inputs, so "
-                "its numbers can differ.</p>"
+                f"{sel.n_folds} {_e(sel.split)} fold(s)), not by fitting again: only scored "
+                "records that trained neither the models nor the analysis of their fold count. "
+                "ESR in free run [-]; a model whose fit or any held-out simulation failed in a "
+                "fold fails that fold and is not recommended. The recommendation is the lowest "
+                "mean ESR among the models that passed every fold, as <code>mrdamper "
+                "select</code> decides (a runner-up within 5 % is named as a tie). <i>Outside "
+                "range</i>: held-out records whose electrical input leaves the range the model "
+                "was identified on (handled by the protocol's range policy, "
+                f"<code>{_e(res.protocol.range_policy)}</code>). <code>mrdamper select</code> "
+                "itself chooses its own folds (by condition, record or time) and clips "
+                "out-of-range inputs, so its numbers can differ.</p>"
             ),
         ]
     )
@@ -244,8 +247,8 @@ def _by_group_section(res: StudyResult) -> str:
     keys = grouping_keys(res.results)
     if not keys:
         return (
-            "<p>The scored records carry no condition, experiment or current metadata with two or more "
-            "values, so there is no breakdown; every row is in the table at the end.</p>"
+            "<p>The scored records carry no condition, experiment or current metadata with two or "
+            "more values, so there is no breakdown; every row is in the table at the end.</p>"
         )
     titles = {
         "condition": "Mean ESR [-] per test condition (amplitude and frequency)",
@@ -260,7 +263,8 @@ def _by_group_section(res: StudyResult) -> str:
         )
     if "current" not in keys:
         out.append(
-            '<p class="small">No per-current table: the scored records have no constant current level '
+            '<p class="small">No per-current table: the scored records have no constant current '
+            "level "
             "(the current varies within each record).</p>"
         )
     return "\n".join(out)
@@ -311,8 +315,8 @@ def _analysis_section(res: StudyResult) -> str:
             continue
         body = [
             (
-                f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
-                "with the largest distance of a per-level fit from its law:</p>"
+                f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current "
+                "(eq. 18), with the largest distance of a per-level fit from its law:</p>"
             )
         ]
         for title, df in laws_table(an.laws, unit).items():
@@ -332,7 +336,8 @@ def _analysis_section(res: StudyResult) -> str:
             )
         shown += 1
     out.append(
-        '<p class="small">Every fold\'s laws are also in <code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>'
+        '<p class="small">Every fold\'s laws are also in '
+        "<code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>"
     )
     return "\n".join(out)
 
@@ -365,10 +370,10 @@ def figure_captions(res: StudyResult, failed: dict[str, str] | None = None) -> d
     caps["fig04_lti_hysteresis"] += " " + _record_text(res, "hysteresis")
     over = overlay_models(res, failed) if res.showcase is not None else []
     rule = (
-        f" {_record_text(res, 'showcase')} Top: the measured force with {_e(', '.join(over) or 'no model')} "
-        "(rule: LPV, the best of the paper's classical models and the best other model by mean ESR over the "
-        "study, none of them failed). Below: every model in its own panel on a shared force scale, with its "
-        "ESR on this record."
+        f" {_record_text(res, 'showcase')} Top: the measured force with "
+        f"{_e(', '.join(over) or 'no model')} (rule: LPV, the best of the paper's classical models "
+        "and the best other model by mean ESR over the study, none of them failed). Below: every "
+        "model in its own panel on a shared force scale, with its ESR on this record."
     )
     if failed:
         rule += (
@@ -408,18 +413,19 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
             int.from_bytes(png[16:20], "big") / FIGURE_DPI
         )  # IHDR width [px] at the saved resolution
         out.append(
-            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" style="width:{width_in:.2f}in" '
-            f'alt="Figure {number}: {_e(FIGURES[name][1])}">'
-            f"<figcaption>{label} {caps[name]} (<code>figures/{_e(name)}.png</code>, <code>.svg</code>)</figcaption></figure>"
+            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" '
+            f'style="width:{width_in:.2f}in" alt="Figure {number}: {_e(FIGURES[name][1])}">'
+            f"<figcaption>{label} {caps[name]} (<code>figures/{_e(name)}.png</code>, "
+            "<code>.svg</code>)</figcaption></figure>"
         )
         if name == "fig11_fx_loops":
             tab = energy_table(res.showcase)
             if not tab.empty:
                 out.append(
-                    "<p>Energy dissipated on this record, W = &int; F v dt: the mean over the complete "
-                    "cycles of the measured displacement, or the whole record when it holds less than one "
-                    "(every force integrated over the same cycles with the measured velocity):</p>"
-                    + _table(energy_display(tab, failed), digits=3)
+                    "<p>Energy dissipated on this record, W = &int; F v dt: the mean over the "
+                    "complete cycles of the measured displacement, or the whole record when it "
+                    "holds less than one (every force integrated over the same cycles with the "
+                    "measured velocity):</p>" + _table(energy_display(tab, failed), digits=3)
                 )
     if skipped:
         out.insert(
@@ -468,9 +474,11 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         f"<title>mrdamper study: {_e(res.protocol.name)}</title><style>{_CSS}</style></head><body>",
         f"<h1>MR damper model comparison: {_e(res.protocol.name)}</h1>",
         (
-            f'<p class="small">{_e(info.get("n_records", "?"))} records ({_e(info.get("data_origin", "origin not recorded"))}), '
-            f"{_e(info.get('n_folds', '?'))} fold(s), {len(res.specs)} models; seed {_e(info.get('seed'))}; run on "
-            f"{_e(info.get('executor', '?'))} in {float(info.get('wall_time_s', float('nan'))):.1f} s.</p>"
+            f'<p class="small">{_e(info.get("n_records", "?"))} records '
+            f"({_e(info.get('data_origin', 'origin not recorded'))}), "
+            f"{_e(info.get('n_folds', '?'))} fold(s), {len(res.specs)} models; seed "
+            f"{_e(info.get('seed'))}; run on {_e(info.get('executor', '?'))} in "
+            f"{float(info.get('wall_time_s', float('nan'))):.1f} s.</p>"
         ),
         "<h2>Summary</h2>",
         _summary_section(res, summary, failed),
@@ -488,14 +496,14 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         _analysis_section(res),
         "<h2>All results</h2>",
         (
-            f"<details><summary>{len(res.results)} rows (also in <code>results.csv</code>)</summary>"
-            + _table(all_rows, cls="left")
-            + "</details>"
+            f"<details><summary>{len(res.results)} rows (also in "
+            "<code>results.csv</code>)</summary>" + _table(all_rows, cls="left") + "</details>"
         ),
         (
-            f'<p class="small">Python {_e(info.get("python", ""))} on {_e(info.get("platform", ""))}. Files next to '
-            "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, analysis/, "
-            "figures/.</p>"
+            f'<p class="small">Python {_e(info.get("python", ""))} on '
+            f"{_e(info.get('platform', ''))}. Files next to "
+            "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, "
+            "study.json, models/, analysis/, figures/.</p>"
         ),
         "</body></html>",
     ]
