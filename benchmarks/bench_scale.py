@@ -207,7 +207,10 @@ def main() -> None:
         "--accuracy",
         nargs="+",
         metavar="KIND",
-        help="instead of the scaling table: windows vs every sample on 1 h (train record 1, test record 2)",
+        help=(
+            "instead of the scaling table: windows vs every sample on 1 h (train record 1, test "
+            "record 2)"
+        ),
     )
     ap.add_argument("--child-accuracy", nargs=2, metavar=("KIND", "CACHE"), help=argparse.SUPPRESS)
     ap.add_argument(

@@ -207,7 +207,8 @@ def run_scenario(sc: Scenario, models: list[str], with_val: bool) -> list[dict[s
                 }
             )
         print(
-            f"  {sc.name:14s} {label:8s} fit {fit_s:6.2f} s {('error: ' + err[:80]) if err else ''}",
+            f"  {sc.name:14s} {label:8s} fit {fit_s:6.2f} s "
+            f"{('error: ' + err[:80]) if err else ''}",
             file=sys.stderr,
             flush=True,
         )

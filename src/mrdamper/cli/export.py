@@ -92,7 +92,10 @@ def inverse(
         float | None,
         typer.Option(
             "--horizon",
-            help="Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present sample only).",
+            help=(
+                "Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present "
+                "sample only)."
+            ),
         ),
     ] = None,
     read_kw: dict[str, Any] | None = None,

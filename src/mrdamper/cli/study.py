@@ -122,9 +122,11 @@ def study(
     protocol: str = typer.Option(
         None,
         "--protocol",
-        help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from the records "
-        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time "
-        "split).",
+        help=(
+            "Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from "
+            "the records (see docs/study.md: doe / quiroz presets by metadata, else k-fold by "
+            "record or a time split)."
+        ),
     ),
     models: str = typer.Option(
         None,

@@ -569,7 +569,9 @@ def identify_output_error(
         theta = solve(theta, "free", max_nfev)
     B, f0 = prob.unpack(theta)
     info = {
-        "method": "output error: multiple shooting then free run (scipy.optimize.least_squares, trf)",
+        "method": (
+            "output error: multiple shooting then free run (scipy.optimize.least_squares, trf)"
+        ),
         "jacobian": "discrete forward sensitivities (SDIRK2)"
         if jacobian == "sensitivity"
         else f"finite differences ({jacobian})",

@@ -173,7 +173,9 @@ def _info(plan: list[tuple[int, int, int]], total: int) -> dict[str, Any]:
         "samples_used": int(used),
         "samples_total": int(total),
         "threshold": int(WINDOW_THRESHOLD),
-        "note": "the output-error step ran on evenly spread windows; full_data_check is on every sample",
+        "note": (
+            "the output-error step ran on evenly spread windows; full_data_check is on every sample"
+        ),
     }
 
 

@@ -117,7 +117,10 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
         what_analysis = f"force-velocity analysis on the {len(constant)} constant-{source} records"
     if len(data) == 1:
         split = Split("time", fraction=DEFAULT_TIME_FRACTION)
-        what = f"one record: first {DEFAULT_TIME_FRACTION:.0%} trains, last {1 - DEFAULT_TIME_FRACTION:.0%} scored"
+        what = (
+            f"one record: first {DEFAULT_TIME_FRACTION:.0%} trains, last "
+            f"{1 - DEFAULT_TIME_FRACTION:.0%} scored"
+        )
     else:
         k = min(DEFAULT_K, len(data))
         split = Split("k-fold", k=k)
@@ -133,7 +136,8 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
     )
     return (
         proto,
-        f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to choose)",
+        f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to "
+        "choose)",
     )
 
 

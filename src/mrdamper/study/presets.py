@@ -83,7 +83,9 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
     """
     return Protocol(
         name="quiroz-loco",
-        description="Quiroz (2022) sine records: leave one amplitude/frequency condition out, all currents.",
+        description=(
+            "Quiroz (2022) sine records: leave one amplitude/frequency condition out, all currents."
+        ),
         analysis=Selection(),
         train=Selection(),
         score=Selection(),
@@ -115,7 +117,10 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
     """
     return Protocol(
         name="dyke-70-30",
-        description="Dyke (1996) white-noise record, input = command voltage; first 70 % trains, last 30 % scored.",
+        description=(
+            "Dyke (1996) white-noise record, input = command voltage; first 70 % trains, last 30 "
+            "% scored."
+        ),
         analysis=None,
         train=Selection(),
         score=Selection(),

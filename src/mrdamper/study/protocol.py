@@ -266,9 +266,15 @@ class Split:
         if self.kind == "fixed":
             return "one fold (fixed training and scoring sets)"
         if self.kind == "time":
-            return f"each record cut in time: first {self.fraction:.0%} trains, last {1 - self.fraction:.0%} is scored"
+            return (
+                f"each record cut in time: first {self.fraction:.0%} trains, last "
+                f"{1 - self.fraction:.0%} is scored"
+            )
         if self.kind == "k-fold":
-            return f"{self.k}-fold by record: each record is scored once, by models trained on the other folds"
+            return (
+                f"{self.k}-fold by record: each record is scored once, by models trained on the "
+                "other folds"
+            )
         by = f"metadata {self.key!r}" if self.key else f"name pattern {self.name_regex!r}"
         return f"leave one group out, groups by {by}"
 

@@ -357,7 +357,10 @@ def _record_text(res: StudyResult, which: str) -> str:
     why = (
         "the protocol's choice"
         if (res.protocol.showcase if which == "showcase" else res.protocol.hysteresis_record)
-        else "the scored record with varying current if any, else the highest current level and widest velocity range"
+        else (
+            "the scored record with varying current if any, else the highest current level and "
+            "widest velocity range"
+        )
     )
     return f"Record <code>{_e(sc.record.name)}</code> ({_e(level)}; fold {_e(sc.fold)}; {_e(why)})."
 
