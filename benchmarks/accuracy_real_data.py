@@ -211,7 +211,7 @@ def to_markdown(df: pd.DataFrame, index: bool = True) -> str:
 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
     g = df.groupby("model", sort=False)
-    out = pd.DataFrame(
+    return pd.DataFrame(
         {
             "mean_esr": g["esr"].mean(),
             "mean_ssse_N": g["ssse"].mean(),
@@ -222,7 +222,6 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
             ),
         }
     )
-    return out
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -5,7 +5,8 @@ Usage::
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py              # 6 min, 1 h, 10 h
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --quick      # 12 s, 2 min (seconds)
     python benchmarks/bench_scale.py --lengths 360 3600 --kinds lpv narx --cache /tmp/scale
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --accuracy lpv p15 narx   # windows vs every sample
+    # windows vs every sample:
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --accuracy lpv p15 narx
 
 The records come from the virtual rig (default reference damper, 1 kHz): road profile (ISO 8608
 class C at 20 m/s, 4.5 Hz band) with an APRBS current (0.2 s minimum hold) over the damper's

@@ -153,7 +153,8 @@ def study(
     ),
     read_kw: dict[str, Any] | None = None,
 ) -> None:
-    """Fit and score every model of a protocol on DATA; write tables, models, figures and report.html."""
+    """Fit and score every model of a protocol on DATA; write tables, models, figures and
+    report.html."""
     from mrdamper.study import choose_protocol, run_study, study_records, write_study
 
     if workers is not None and scheduler is not None:
@@ -201,7 +202,8 @@ def demo(
     ),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
 ) -> None:
-    """Generate the paper's Table II experiments on the virtual rig, compare every model, write a report."""
+    """Generate the paper's Table II experiments on the virtual rig, compare every model, write a
+    report."""
     import time
 
     from rich.console import Console

@@ -37,9 +37,11 @@ __all__ = [
 GRAM_COND_LIMIT = 1e8
 #: Condition number of the column-scaled regression matrix above which identification fails.
 REGRESSION_COND_LIMIT = 1e12
-#: Largest frozen-pole modulus the output-error refinement accepts (strictly inside the unit circle).
+#: Largest frozen-pole modulus the output-error refinement accepts (strictly inside the unit
+#: circle).
 STABILITY_LIMIT = 0.999
-#: Points of the scheduling grid (identified range, ends included) on which frozen stability is checked.
+#: Points of the scheduling grid (identified range, ends included) on which frozen stability is
+#: checked.
 STABILITY_GRID = 101
 
 

@@ -439,8 +439,10 @@ def lpv_qr_records(
 
 
 def distinct_levels(rhos: Sequence[np.ndarray], tol: float) -> int:
-    """Number of levels of the scheduling variable separated by more than ``tol``, record by record
-    (one representative per cluster of each record, then the same count over the representatives)."""
+    """Number of levels of the scheduling variable separated by more than ``tol``, record by record.
+
+    One representative per cluster of each record, then the same count over the representatives.
+    """
     reps = []
     for r in rhos:
         s = np.sort(r)

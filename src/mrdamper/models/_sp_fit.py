@@ -181,7 +181,10 @@ def stack(
 
 
 def _even_subset(n: int, size: int | None) -> np.ndarray:
-    """Indices of ``size`` samples evenly spaced over ``0 .. n-1`` (all samples if ``size`` is None)."""
+    """Indices of ``size`` samples evenly spaced over ``0 .. n-1``.
+
+    All samples if ``size`` is None.
+    """
     if size is None or size >= n:
         return np.arange(n)
     return np.unique(np.linspace(0, n - 1, size).astype(np.int64))

@@ -198,7 +198,10 @@ class P15Model(FittedModel):
         return np.stack([Wm[j, 0] + Wm[j, 1] * ii + Wm[j, 2] * ii**2 for j in range(5)])
 
     def monomial(self) -> np.ndarray:
-        """Power-basis coefficients (5 x 3, ``w_j = c0 + c1 i + c2 i^2``), valid on ``input_range``."""
+        """Power-basis coefficients (5 x 3, ``w_j = c0 + c1 i + c2 i^2``).
+
+        Valid on ``input_range``.
+        """
         if self.basis == "power":
             return self.W_matrix
         return to_monomial(self.W_matrix, *self.input_range)
@@ -567,7 +570,10 @@ def _run_refined(model: P15Model, e: Experiment, k: int) -> np.ndarray:
 
 
 def _lagged(e: np.ndarray, dt: float, eta: float | None) -> np.ndarray:
-    """The input through the drive lag ``eta`` [1/s] (unchanged for ``None``), contiguous float64."""
+    """The input through the drive lag ``eta`` [1/s], contiguous float64.
+
+    Unchanged for ``None``.
+    """
     e = np.ascontiguousarray(e, dtype=np.float64)
     return e if eta is None else first_order_lag(e, dt, eta)
 

@@ -92,8 +92,10 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
         proto = doe_protocol()
         return (
             proto,
-            f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design of "
-            "experiments)",
+            (
+                f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design "
+                "of experiments)"
+            ),
         )
     if all("condition" in e.metadata for e in data):
         proto = quiroz_protocol()
@@ -136,8 +138,10 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
     )
     return (
         proto,
-        f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to "
-        "choose)",
+        (
+            f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to "
+            "choose)"
+        ),
     )
 
 

@@ -159,7 +159,9 @@ def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
 
 
 def load_protocol(path: str | Path) -> Protocol:
-    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
+    """Read a protocol file (``.json`` or ``.toml``) or a preset name.
+
+    The presets are ``"doe"``, ``"quiroz"`` and ``"dyke"``.
 
     Parameters
     ----------

@@ -1,4 +1,7 @@
-"""Study protocols: which records train the analysis and the models, which are scored, which models run.
+"""Study protocols.
+
+A protocol says which records train the analysis and the models, which are scored, which models
+run.
 
 A :class:`Protocol` is a frozen value. It can be built in Python, taken from the presets
 (:mod:`mrdamper.study.presets`) or loaded from a small JSON or
@@ -372,8 +375,8 @@ class Protocol:
         Out-of-range policy applied to every fitted model before scoring; extrapolation is
         reported in the ``note`` column.
     settings : mapping
-        Default estimator settings per kind (``{"lpv": {"model_fs": 200.0}}``), applied to every model
-        of that kind unless the model entry sets the same key.
+        Default estimator settings per kind (``{"lpv": {"model_fs": 200.0}}``), applied to every
+        model of that kind unless the model entry sets the same key.
     showcase : str, optional
         Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10, 11); default: the
         most informative scored record (varying current if any, else the highest current level,

@@ -1,12 +1,12 @@
 """``report.html``: one self-contained page (no external files, scripts or fonts) with the protocol,
 the tables and every figure embedded as a base64 PNG, readable offline in any browser.
 
-Layout rules: the page is at most 1100 px wide; every table sits in a box that scrolls
-sideways when the table is wider than the page (the page itself never does); figures are shown
-at the size they are drawn for print (at most 7 in wide) and shrink with a narrower window. Numbers are rounded to
-four significant digits (:func:`~mrdamper.study.report_tables.format_number`). The wording
-depends on the data: records from the virtual rig (whose damper is a known model) or measured
-ones (:func:`~mrdamper.study.runner.data_origin`).
+Layout rules: the page is at most 1100 px wide; every table sits in a box that scrolls sideways when
+the table is wider than the page (the page itself never does); figures are shown at the size they
+are drawn for print (at most 7 in wide) and shrink with a narrower window. Numbers are rounded to
+four significant digits (:func:`~mrdamper.study.report_tables.format_number`). The wording depends
+on the data: records from the virtual rig (whose damper is a known model) or measured ones
+(:func:`~mrdamper.study.runner.data_origin`).
 """
 
 from __future__ import annotations
@@ -39,20 +39,26 @@ from mrdamper.study.tables import PAPER_HEADLINE
 __all__ = ["figure_captions", "render_report"]
 
 _CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;margin:2em auto;
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;\
+margin:2em auto;
 padding:0 1em;color:#222;line-height:1.45}
-h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.8em}
+h1{font-size:1.6em;margin-bottom:.2em}\
+h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.8em}
 h3{font-size:1.05em;margin:1.2em 0 .3em}
 .tablewrap{max-width:100%;overflow-x:auto;margin:.6em 0}
-table{border-collapse:collapse;font-size:.85em}th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right;
+table{border-collapse:collapse;font-size:.85em}\
+th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right;
 vertical-align:top}
-th{background:#f2f2f2;font-weight:600}td{white-space:nowrap}td:first-child,th:first-child{text-align:left}
-.left td,.left th{text-align:left}td.text{text-align:left;white-space:normal;min-width:14em;max-width:40em;overflow-wrap:anywhere}
+th{background:#f2f2f2;font-weight:600}td{white-space:nowrap}\
+td:first-child,th:first-child{text-align:left}
+.left td,.left th{text-align:left}\
+td.text{text-align:left;white-space:normal;min-width:14em;max-width:40em;overflow-wrap:anywhere}
 .headline{background:#f5f9ff;border-left:4px solid #3b73b9;padding:.6em 1em;font-size:1.05em}
 .warn{background:#fff6e5;border-left:4px solid #e0a020;padding:.4em 1em}
 figure{margin:1.4em 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
 figcaption{font-size:.9em;color:#333;max-width:7in}
-code{background:#f4f4f4;padding:0 .25em;overflow-wrap:anywhere}details{margin:.6em 0}.small{font-size:.85em;color:#555}
+code{background:#f4f4f4;padding:0 .25em;overflow-wrap:anywhere}details{margin:.6em 0}\
+.small{font-size:.85em;color:#555}
 pre{white-space:pre-wrap;overflow-wrap:anywhere}
 @media print{body{max-width:none;margin:0}.tablewrap{overflow:visible}table{font-size:7.5pt}
 figure{break-inside:avoid}details{display:block}}

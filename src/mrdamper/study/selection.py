@@ -101,7 +101,10 @@ class SelectionResult:
 def selection_folds(
     data: Experiment | Iterable[Experiment], folds: FoldKind = "auto", n_folds: int = 5
 ) -> tuple[str, list[tuple[str, ExperimentSet, ExperimentSet]]]:
-    """Training / left-out splits of ``data``; returns ``(fold kind, [(label, train, test), ...])``."""
+    """Training / left-out splits of ``data``.
+
+    Returns ``(fold kind, [(label, train, test), ...])``.
+    """
     exps = as_experiment_set(data, name="data")
     if len(exps) == 0:
         raise DataValidationError("DATA", "no records given")
