@@ -46,8 +46,8 @@ def export(
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
 ) -> None:
-    """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws for control
-    design, or (--format c) C99 code of the model and its inverse."""
+    """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws
+    for control design, or (--format c) C99 code of the model and its inverse."""
     from mrdamper._io import check_writable
     from mrdamper.control.export import export_lpv
     from mrdamper.models.registry import load_model

@@ -153,8 +153,10 @@ def study(
     ),
     read_kw: dict[str, Any] | None = None,
 ) -> None:
-    """Fit and score every model of a protocol on DATA; write tables, models, figures and
-    report.html."""
+    """Fit and score every model of a protocol on DATA.
+
+    Writes tables, models, figures and report.html.
+    """
     from mrdamper.study import choose_protocol, run_study, study_records, write_study
 
     if workers is not None and scheduler is not None:
@@ -202,8 +204,10 @@ def demo(
     ),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
 ) -> None:
-    """Generate the paper's Table II experiments on the virtual rig, compare every model, write a
-    report."""
+    """Generate the paper's Table II experiments on the virtual rig and compare every model.
+
+    Writes a report.
+    """
     import time
 
     from rich.console import Console
