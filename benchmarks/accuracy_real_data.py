@@ -193,7 +193,8 @@ def dyke(models: list[str]) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
         )
         last = rows[-1]
         print(
-            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  {'error: ' + last['error'][:70] if last['error'] else ''}",
+            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  "
+            f"{'error: ' + last['error'][:70] if last['error'] else ''}",
             file=sys.stderr,
             flush=True,
         )
@@ -214,7 +215,7 @@ def to_markdown(df: pd.DataFrame, index: bool = True) -> str:
 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
     g = df.groupby("model", sort=False)
-    out = pd.DataFrame(
+    return pd.DataFrame(
         {
             "mean_esr": g["esr"].mean(),
             "mean_ssse_N": g["ssse"].mean(),
@@ -225,7 +226,6 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
             ),
         }
     )
-    return out
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -162,7 +162,8 @@ def main(argv: list[str] | None = None) -> int:
             rows.append((kind, what, 1e9 * tc / n, 1e9 * tp / n, tc / tp))
     print(f"{n} samples, minimum of {repeat} interleaved repeats")
     print(
-        f"{'model':6s} {'part':8s} {'C [ns/sample]':>14s} {'numba [ns/sample]':>18s} {'C / numba':>10s}"
+        f"{'model':6s} {'part':8s} {'C [ns/sample]':>14s} {'numba [ns/sample]':>18s} "
+        f"{'C / numba':>10s}"
     )
     for kind, what, c_ns, p_ns, ratio in rows:
         print(f"{kind:6s} {what:8s} {c_ns:14.1f} {p_ns:18.1f} {ratio:10.2f}")

@@ -54,7 +54,8 @@ class L(event.Listener):
         else:
             r["top"] += dt
             r["top_cpu"] = r.get("top_cpu", 0.0) + dc
-            with open(os.path.join(os.environ["MRD_COMPILE_LOG"], f"{os.getpid()}.json"), "w") as fh:
+            path = os.path.join(os.environ["MRD_COMPILE_LOG"], f"{os.getpid()}.json")
+            with open(path, "w") as fh:
                 json.dump(rec, fh)
 event.register("numba:compile", L())
 os.register_at_fork(after_in_child=rec.clear)

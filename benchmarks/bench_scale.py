@@ -5,7 +5,8 @@ Usage::
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py              # 6 min, 1 h, 10 h
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --quick      # 12 s, 2 min (seconds)
     python benchmarks/bench_scale.py --lengths 360 3600 --kinds lpv narx --cache /tmp/scale
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --accuracy lpv p15 narx   # windows vs every sample
+    # windows vs every sample:
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --accuracy lpv p15 narx
 
 The records come from the virtual rig (default reference damper, 1 kHz): road profile (ISO 8608
 class C at 20 m/s, 4.5 Hz band) with an APRBS current (0.2 s minimum hold) over the damper's
@@ -207,7 +208,10 @@ def main() -> None:
         "--accuracy",
         nargs="+",
         metavar="KIND",
-        help="instead of the scaling table: windows vs every sample on 1 h (train record 1, test record 2)",
+        help=(
+            "instead of the scaling table: windows vs every sample on 1 h (train record 1, test "
+            "record 2)"
+        ),
     )
     ap.add_argument("--child-accuracy", nargs=2, metavar=("KIND", "CACHE"), help=argparse.SUPPRESS)
     ap.add_argument(
@@ -242,9 +246,9 @@ def main() -> None:
         cache = args.cache or Path(tmp)
         cache = cache / f"seed{args.seed}-rec{record_s:g}s"
         print(
-            f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS="
-            f"{os.environ.get('OPENBLAS_NUM_THREADS', '1')}; {n_records} record(s) of {_label(record_s)} "
-            f"in {cache}",
+            f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, "
+            f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', '1')}; {n_records} "
+            f"record(s) of {_label(record_s)} in {cache}",
             flush=True,
         )
         t0 = time.perf_counter()
@@ -271,9 +275,9 @@ def main() -> None:
                 rows.append(row)
                 if r["status"] == "ok":
                     print(
-                        f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu {r['cpu_s']:.2f} s), "
-                        f"peak {r['rss_gb']:.2f} GB "
-                        f"(before fit {r['rss_before_gb']:.2f} GB)",
+                        f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu "
+                        f"{r['cpu_s']:.2f} s), peak {r['rss_gb']:.2f} GB (before fit "
+                        f"{r['rss_before_gb']:.2f} GB)",
                         flush=True,
                     )
                 else:
@@ -299,7 +303,8 @@ def _accuracy(args: argparse.Namespace) -> None:
             check=True,
         )
         print(
-            "| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train ESR / test ESR |"
+            "| model | windows: fit [s] / train ESR / test ESR | every sample: fit [s] / train "
+            "ESR / test ESR |"
         )
         print("|---|---|---|")
         for kind in args.accuracy:

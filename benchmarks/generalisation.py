@@ -18,22 +18,22 @@ Four scenarios, every registered model kind, one table of mean test ESR (eq. 24)
   any other estimator with a drive-lag setting ``eta`` gets the same rate.
 
 Nothing is chosen on test records. Every model uses its estimator defaults plus the data set's
-electrical input; the LPV/LTI model rate is 200 Hz on Quiroz (the lowest record rate) and the
-record rate (1 kHz) on the rig. The extra column ``lpv-val`` is the LPV model with its order
-``n_m`` and model rate chosen on a validation split of the training data only (leave one
-training condition out for (a)-(c); last 20 % of the training part for (d)); on Quiroz the rates
-200, 500 and 1000 Hz are candidates (the latter two up-sample the 200 Hz records); ``lpv-val``
-uses the paper's static input ``u`` (with the default hysteretic input every candidate would fit
-six times). ``lpv-u`` is the LPV model with the paper's static zone-law input
-(``input_signal="u"``, the default before the hysteretic input); the ``lpv`` column has the
-default hysteretic input, its stroke scale and pre-yield share chosen on the training records. Scoring uses
-``range_policy="clip"`` (measured currents and voltages leave the training range by sensor noise
-only). A model that fails to fit or simulate is reported (``failed`` in the table), never dropped.
+electrical input; the LPV/LTI model rate is 200 Hz on Quiroz (the lowest record rate) and the record
+rate (1 kHz) on the rig. The extra column ``lpv-val`` is the LPV model with its order ``n_m`` and
+model rate chosen on a validation split of the training data only (leave one training condition out
+for (a)-(c); last 20 % of the training part for (d)); on Quiroz the rates 200, 500 and 1000 Hz are
+candidates (the latter two up-sample the 200 Hz records); ``lpv-val`` uses the paper's static input
+``u`` (with the default hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
+model with the paper's static zone-law input (``input_signal="u"``, the default before the
+hysteretic input); the ``lpv`` column has the default hysteretic input, its stroke scale and
+pre-yield share chosen on the training records. Scoring uses ``range_policy="clip"`` (measured
+currents and voltages leave the training range by sensor noise only). A model that fails to fit or
+simulate is reported (``failed`` in the table), never dropped.
 
 Run::
 
-    python benchmarks/generalisation.py            # every scenario, full length
-    python benchmarks/generalisation.py --quick    # shorter rig records, fewer grids (a test runs it)
+    python benchmarks/generalisation.py          # every scenario, full length
+    python benchmarks/generalisation.py --quick  # shorter rig records, fewer grids (a test runs it)
 """
 
 from __future__ import annotations
@@ -149,7 +149,8 @@ def fit_augmented(
     sc: Scenario, settings: dict[str, Any], reference: Any, base: Any
 ) -> tuple[Any, float, str]:
     """LPV trained on the measured records plus broadband records simulated by the Spencer model
-    fitted on the same records (``mrdamper.models.augment``); zone laws from the measured records."""
+    fitted on the same records (``mrdamper.models.augment``); zone laws from the measured
+    records."""
     if reference is None or base is None:
         return None, 0.0, "needs the spencer and lpv fits of the same scenario"
     from mrdamper.models.augment import reference_records
@@ -207,7 +208,8 @@ def run_scenario(sc: Scenario, models: list[str], with_val: bool) -> list[dict[s
                 }
             )
         print(
-            f"  {sc.name:14s} {label:8s} fit {fit_s:6.2f} s {('error: ' + err[:80]) if err else ''}",
+            f"  {sc.name:14s} {label:8s} fit {fit_s:6.2f} s "
+            f"{('error: ' + err[:80]) if err else ''}",
             file=sys.stderr,
             flush=True,
         )
@@ -323,7 +325,8 @@ def scenario_dyke(quick: bool) -> Scenario:
     else:
         eta, dec, tab = ard.choose_eta(train)
         print(
-            f"\n[(d) dyke] eta / decimation grid (training part only):\n{tab.to_string(index=False)}",
+            "\n[(d) dyke] eta / decimation grid (training part "
+            f"only):\n{tab.to_string(index=False)}",
             file=sys.stderr,
         )
 
@@ -365,7 +368,14 @@ SCENARIOS: dict[str, Callable[[bool], Scenario]] = {
 def table(rows: list[dict[str, Any]]) -> pd.DataFrame:
     """Mean test ESR, one row per (scenario, test set), one column per model, plus the best."""
     df = pd.DataFrame(rows)
-    tab = df.groupby(["scenario", "test", "model"], sort=False)["esr"].mean().unstack("model")
+    tab = df.pivot_table(
+        index=["scenario", "test"],
+        columns="model",
+        values="esr",
+        aggfunc="mean",
+        sort=False,
+        dropna=False,
+    )
     order = list(dict.fromkeys(df["model"]))
     keys = list(dict.fromkeys(zip(df["scenario"], df["test"])))
     tab = tab.reindex(

@@ -114,7 +114,8 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
             if "eta" in extra and name != "rig":
                 continue  # constant current (Quiroz) or already filtered (Dyke): nothing to filter
             if "model_fs" in extra and not name.startswith("quiroz"):
-                continue  # the rig already runs at 1 kHz; Dyke's rate is chosen on its training part
+                # the rig already runs at 1 kHz; Dyke's rate is chosen on its training part
+                continue
             try:
                 m = fit_variant(sc, extra, reference)
                 err = ""
@@ -127,14 +128,25 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                 )
             print(f"  {sc.name:16s} {label:16s} {err[:80]}", file=sys.stderr, flush=True)
     df = pd.DataFrame(rows)
-    tab = (
-        df.groupby(["variant", "scenario", "test"], sort=False)["esr"]
-        .mean()
-        .unstack(["scenario", "test"])
+    # dropna=False keeps a variant or test set whose ESR is NaN everywhere; the reindex drops the
+    # (scenario, test) pairs that pivot_table adds and restores the order of first appearance
+    tab = df.pivot_table(
+        index="variant",
+        columns=["scenario", "test"],
+        values="esr",
+        aggfunc="mean",
+        sort=False,
+        dropna=False,
+    ).reindex(
+        index=pd.Index(list(dict.fromkeys(df["variant"])), name="variant"),
+        columns=pd.MultiIndex.from_tuples(
+            list(dict.fromkeys(zip(df["scenario"], df["test"]))), names=["scenario", "test"]
+        ),
     )
     tab.columns = [f"{s.split()[0]} {t}" for s, t in tab.columns]
     print(
-        f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; {time.perf_counter() - t0:.0f} s)\n"
+        f"## LPV variants: mean test ESR ({'quick' if args.quick else 'full'}; "
+        f"{time.perf_counter() - t0:.0f} s)\n"
     )
     text = G.to_markdown(tab)
     lines = text.split("\n")

@@ -374,7 +374,7 @@ def test_cli_dependency_is_pinned_to_a_tested_range() -> None:
     )
 
 
-# ----------------------------------------------------------------------------- data loss and unsafe writes
+# ------------------------------------------------------------------ data loss and unsafe writes
 def test_study_out_equal_to_its_data_is_refused_even_with_force(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "D")
     before = sorted(p.name for p in data.iterdir())
@@ -396,9 +396,7 @@ def test_out_that_is_an_ancestor_of_the_working_folder_is_refused(
     line = _one_line_error(*_run(["study", "data", "--out", "../proj", "--force"], capsys)[::2])
     assert "current folder" in line
     assert proj.is_dir() and data.is_dir()
-    assert not [p for p in tmp_path.rglob("*old-*")] and not [
-        p for p in tmp_path.rglob("*partial*")
-    ]
+    assert not list(tmp_path.rglob("*old-*")) and not list(tmp_path.rglob("*partial*"))
 
 
 def test_simulate_cannot_overwrite_its_input_record(tmp_path, capsys) -> None:

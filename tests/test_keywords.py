@@ -3,10 +3,10 @@
 Walks ``mrdamper.__all__``, the ``__all__`` of every subpackage and of every public model module,
 and checks each parameter of each public callable's signature against its numpydoc docstring:
 functions list their parameters under "Parameters"; classes under "Parameters" or "Attributes"
-(frozen dataclasses document their fields as attributes; a subclass documents what it adds
-to its bases, an estimator's old setting names are documented with the new ones). A line ``x, y : float`` documents both
-names, ``**settings`` documents the catch-all. Then every registered estimator refuses an
-unknown setting with one line naming it.
+(frozen dataclasses document their fields as attributes; a subclass documents what it adds to its
+bases, an estimator's old setting names are documented with the new ones). A line ``x, y : float``
+documents both names, ``**settings`` documents the catch-all. Then every registered estimator
+refuses an unknown setting with one line naming it.
 """
 
 from __future__ import annotations

@@ -1,4 +1,7 @@
-"""Tests of the polynomial NARX black-box model (known answers, free run, divergence, I/O, errors)."""
+"""Tests of the polynomial NARX black-box model.
+
+Known answers, free run, divergence, I/O, errors.
+"""
 
 from __future__ import annotations
 
@@ -14,7 +17,8 @@ from mrdamper.models import get_estimator, load_model, model_class
 from mrdamper.models.narx import NARXEstimator, NARXModel, candidate_structure
 
 BASE, CANDIDATES = candidate_structure(2, 1, 3)
-# base rows: 0 F[k-1], 1 F[k-2], 2 x[k], 3 x[k-1], 4 v[k], 5 v[k-1], 6 i[k], 7 i[k-1], 8 tanh_v[k], 9 tanh_v[k-1]
+# base rows: 0 F[k-1], 1 F[k-2], 2 x[k], 3 x[k-1], 4 v[k], 5 v[k-1], 6 i[k], 7 i[k-1],
+# 8 tanh_v[k], 9 tanh_v[k-1]
 TRUTH = NARXModel(
     fs=1000.0,
     base=BASE,

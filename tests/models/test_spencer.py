@@ -185,7 +185,10 @@ def test_sensitivities_match_central_differences() -> None:
 
 # ----------------------------------------------------------------------------- model behaviour
 def test_rest_state_and_energy_dissipation() -> None:
-    """Over whole sine cycles at constant current the damper absorbs energy (integral F v dt > 0)."""
+    """Over whole sine cycles at constant current the damper absorbs energy.
+
+    The integral F v dt is > 0.
+    """
     model = SpencerModel(**{**TRUE, "f0": 0.0, "k1": 0.0}, input="i", input_range=(0, 1))
     fs = 1000.0
     t = np.arange(int(4 * fs)) / fs

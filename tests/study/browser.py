@@ -22,7 +22,9 @@ window.addEventListener("load", () => {
   document.querySelectorAll("details").forEach(d => { d.open = true; });
   const bad = [];
   const doc = document.documentElement;
-  if (doc.scrollWidth > doc.clientWidth + 1) bad.push(`page scrolls sideways: ${doc.scrollWidth} px > ${doc.clientWidth} px`);
+  if (doc.scrollWidth > doc.clientWidth + 1) {
+    bad.push(`page scrolls sideways: ${doc.scrollWidth} px > ${doc.clientWidth} px`);
+  }
   const body = document.body.getBoundingClientRect();
   const scrolls = el => ["auto", "scroll"].includes(getComputedStyle(el).overflowX);
   document.querySelectorAll("table").forEach((t, k) => {
@@ -31,18 +33,22 @@ window.addEventListener("load", () => {
     const r = t.getBoundingClientRect();
     if ((!p || p === document.body) && r.right > body.right + 1) {
       const head = (t.querySelector("th") || t).textContent.slice(0, 40);
-      bad.push(`table ${k} ("${head}") is ${Math.round(r.width)} px wide, page content ${Math.round(body.width)} px`);
+      const w = Math.round(r.width), content = Math.round(body.width);
+      bad.push(`table ${k} ("${head}") is ${w} px wide, page content ${content} px`);
     }
     if (p && p !== document.body && p.getBoundingClientRect().right > body.right + 1) {
       bad.push(`scroll box of table ${k} is wider than the page`);
     }
   });
   document.querySelectorAll("img").forEach((im, k) => {
-    if (im.getBoundingClientRect().right > doc.clientWidth + 1) bad.push(`image ${k} is wider than the window`);
+    if (im.getBoundingClientRect().right > doc.clientWidth + 1) {
+      bad.push(`image ${k} is wider than the window`);
+    }
   });
   const out = document.createElement("pre");
   out.id = "layout-probe";
-  out.textContent = JSON.stringify({tables: document.querySelectorAll("table").length, problems: bad});
+  const tables = document.querySelectorAll("table").length;
+  out.textContent = JSON.stringify({tables: tables, problems: bad});
   document.body.appendChild(out);
 });
 </script>
@@ -55,7 +61,10 @@ def find_browser() -> str | None:
 
 
 def layout_problems(html_file: Path, width: int, browser: str, workdir: Path) -> dict:
-    """Render ``html_file`` in a window ``width`` px wide; return ``{"tables": n, "problems": [...]}``."""
+    """Render ``html_file`` in a window ``width`` px wide.
+
+    Returns ``{"tables": n, "problems": [...]}``.
+    """
     text = html_file.read_text(encoding="utf-8")
     probe = workdir / f"probe-{width}-{html_file.name}"
     probe.write_text(text.replace("</body>", _PROBE + "</body>"), encoding="utf-8")

@@ -81,10 +81,10 @@ def test_protocol_json_round_trip(tmp_path) -> None:
 def test_protocol_toml_file(tmp_path) -> None:
     path = tmp_path / "p.toml"
     path.write_text(
-        'name = "mine"\ninput = "i"\nmodels = ["sp2", {kind = "lti", label = "LTI-3", settings = {order = 3}}]\n'
-        '[analysis]\nmatch = {experiment = [6, 7, 8]}\ngroup_by = "experiment"\ntake = 1\n'
-        '[train]\nmatch = {pattern = ["ICPS", "APRBS"]}\n'
-        '[split]\nkind = "leave-one-group-out"\nkey = "experiment"\n'
+        'name = "mine"\ninput = "i"\nmodels = ["sp2", {kind = "lti", label = "LTI-3", settings = '
+        "{order = 3}}]\n[analysis]\nmatch = {experiment = [6, 7, 8]}\ngroup_by = "
+        '"experiment"\ntake = 1\n[train]\nmatch = {pattern = ["ICPS", "APRBS"]}\n[split]\nkind = '
+        '"leave-one-group-out"\nkey = "experiment"\n'
     )
     p = load_protocol(path)
     assert p.name == "mine" and p.split.key == "experiment"

@@ -1,4 +1,7 @@
-"""Summary statistics and the headline, checked against hand computations and the paper's own numbers."""
+"""Summary statistics and the headline.
+
+Checked against hand computations and the paper's own numbers.
+"""
 
 from __future__ import annotations
 

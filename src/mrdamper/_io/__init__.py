@@ -1,4 +1,7 @@
-"""Private file helpers shared by writers: atomic files and folders that never overwrite silently."""
+"""Private file helpers shared by writers.
+
+Atomic files and folders that never overwrite silently.
+"""
 
 from mrdamper._io.atomic import (
     atomic_write_bytes,

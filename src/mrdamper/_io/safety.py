@@ -107,15 +107,16 @@ def check_output(
                 )
             if any(p.iterdir()) and not force:
                 raise OutputExistsError(
-                    f"{p}: folder exists and is not empty; pass --force (Python: force=True) to replace it "
-                    "or choose another output location"
+                    f"{p}: folder exists and is not empty; pass --force (Python: force=True) to "
+                    "replace it or choose another output location"
                 )
         else:
             if stat.S_ISDIR(mode):
                 raise OutputError(f"{option}: {p} is a folder, expected a file path")
             if not stat.S_ISREG(mode):
                 raise OutputError(
-                    f"{option}: {p} is not a regular file (device, pipe or socket); it is never replaced"
+                    f"{option}: {p} is not a regular file (device, pipe or socket); it is never "
+                    "replaced"
                 )
             if not force:
                 raise OutputExistsError(

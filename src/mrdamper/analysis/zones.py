@@ -97,7 +97,10 @@ class ZoneFit:
         return pd.DataFrame([self.to_dict()])
 
     def plot(self, ax: Any = None, v: Any = None, F: Any = None) -> Any:
-        """Draw the three lines (and the data ``v`` [m/s], ``F`` [N] when given); returns the Axes."""
+        """Draw the three lines (and the data ``v`` [m/s], ``F`` [N] when given).
+
+        Returns the Axes.
+        """
         import matplotlib.pyplot as plt
 
         if ax is None:

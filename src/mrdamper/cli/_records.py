@@ -2,8 +2,8 @@
 
 :func:`reader_options` gives a command every option of the file readers (the ones their error
 messages point to): ``--fs``, ``--resample-fs``, ``--nan-policy``, ``--max-gap``, ``--decimal``,
-``--sep``, ``--column``, ``--units``, ``--struct``, ``--plausible-max``, ``--derive-velocity``. The command receives
-them as one mapping ``read_kw`` to pass to the readers.
+``--sep``, ``--column``, ``--units``, ``--struct``, ``--plausible-max``, ``--derive-velocity``. The
+command receives them as one mapping ``read_kw`` to pass to the readers.
 """
 
 from __future__ import annotations

@@ -46,8 +46,8 @@ def export(
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
 ) -> None:
-    """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws for control design,
-    or (--format c) C99 code of the model and its inverse."""
+    """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws
+    for control design, or (--format c) C99 code of the model and its inverse."""
     from mrdamper._io import check_writable
     from mrdamper.control.export import export_lpv
     from mrdamper.models.registry import load_model
@@ -68,7 +68,8 @@ def export(
     if m.kind not in ("lpv", "lti"):
         raise DataValidationError(
             "MODEL",
-            f"{model_file} holds a {m.kind!r} model; export handles the state-space models 'lpv' and 'lti'",
+            f"{model_file} holds a {m.kind!r} model; export handles the state-space models 'lpv' "
+            "and 'lti'",
         )
     path = export_lpv(m, out, format="json" if fmt == "json" else "mat", force=force)
     typer.echo(f"{m.kind}: wrote {path} ({fmt})")
@@ -91,7 +92,10 @@ def inverse(
         float | None,
         typer.Option(
             "--horizon",
-            help="Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present sample only).",
+            help=(
+                "Lead horizon [s] of an LPV model with a drive lag (default 1/eta; 0: present "
+                "sample only)."
+            ),
         ),
     ] = None,
     read_kw: dict[str, Any] | None = None,
@@ -131,9 +135,9 @@ def inverse(
         chk = check_inverse(m, exp, **kw)  # type: ignore[arg-type]
         unit = "A" if m.input == "i" else "V"
         typer.echo(
-            f"  median |{m.input} error| over |v| > 20 % of peak: {chk.median_input_error:.4g} {unit}; "
-            f"SSSE with measured {m.input}: {chk.ssse_model:.4g} N, with inverse {m.input}: {chk.ssse_inverse:.4g} N "
-            f"(ratio {chk.ssse_ratio:.3g})"
+            f"  median |{m.input} error| over |v| > 20 % of peak: {chk.median_input_error:.4g} "
+            f"{unit}; SSSE with measured {m.input}: {chk.ssse_model:.4g} N, with inverse "
+            f"{m.input}: {chk.ssse_inverse:.4g} N (ratio {chk.ssse_ratio:.3g})"
         )
 
 

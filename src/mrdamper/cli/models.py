@@ -156,7 +156,8 @@ def fit(
         flag = unknown[0].replace("_", "-")
         raise DataValidationError(
             f"--{flag}",
-            f"model {model!r} does not take the setting {unknown[0]!r}; its settings are {accepted}",
+            f"model {model!r} does not take the setting {unknown[0]!r}; its settings are "
+            f"{accepted}",
         )
     from mrdamper.cli._status import working
 

@@ -62,7 +62,10 @@ def doe(
         bool, typer.Option("--no-progress", help="No progress bar (shown only on a terminal).")
     ] = False,
 ) -> None:
-    """Generate the paper's Table II DoE on the virtual rig and write record files + manifest.csv."""
+    """Generate the paper's Table II DoE on the virtual rig.
+
+    Writes the record files + manifest.csv.
+    """
     from mrdamper._io import check_output
     from mrdamper.rig.doe import TABLE_II, table_ii
     from mrdamper.rig.doe_io import RECORD_FORMATS, write_records

@@ -93,7 +93,8 @@ def select(
     )
     tab = res.table.reset_index()
     typer.echo(
-        f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out data\n"
+        f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out "
+        "data\n"
     )
     cols = [
         "model",

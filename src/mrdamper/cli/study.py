@@ -97,17 +97,19 @@ def print_summary(res: Any, out: Path | None = None) -> None:
         )
     hl = res.headline()
     console.print(
-        f"[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): {hl['text']}",
+        "[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): "
+        f"{hl['text']}",
         highlight=False,
     )
     console.print(
-        "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
-        "model (SP-1).",
+        "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best "
+        "classical model (SP-1).",
         highlight=False,
     )
     if out is not None:
         console.print(
-            f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, {out}/results.csv)",
+            f"Report: [bold]{out / 'report.html'}[/] (tables in {out}/summary.csv, "
+            f"{out}/results.csv)",
             highlight=False,
         )
 
@@ -120,8 +122,11 @@ def study(
     protocol: str = typer.Option(
         None,
         "--protocol",
-        help="Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from the records "
-        "(see docs/study.md: doe / quiroz presets by metadata, else k-fold by record or a time split).",
+        help=(
+            "Protocol file (.json or .toml) or a preset: doe, quiroz, dyke. Default: chosen from "
+            "the records (see docs/study.md: doe / quiroz presets by metadata, else k-fold by "
+            "record or a time split)."
+        ),
     ),
     models: str = typer.Option(
         None,
@@ -148,7 +153,10 @@ def study(
     ),
     read_kw: dict[str, Any] | None = None,
 ) -> None:
-    """Fit and score every model of a protocol on DATA; write tables, models, figures and report.html."""
+    """Fit and score every model of a protocol on DATA.
+
+    Writes tables, models, figures and report.html.
+    """
     from mrdamper.study import choose_protocol, run_study, study_records, write_study
 
     if workers is not None and scheduler is not None:
@@ -196,7 +204,10 @@ def demo(
     ),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
 ) -> None:
-    """Generate the paper's Table II experiments on the virtual rig, compare every model, write a report."""
+    """Generate the paper's Table II experiments on the virtual rig and compare every model.
+
+    Writes a report.
+    """
     import time
 
     from rich.console import Console
@@ -232,7 +243,8 @@ def demo(
         raise
     n = sum(e.n for e in data)
     console.print(
-        f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in {time.perf_counter() - t0:.1f} s.",
+        f"Generated {len(data)} records ({n / 1e6:.2f} million samples) in "
+        f"{time.perf_counter() - t0:.1f} s.",
         highlight=False,
     )
     try:

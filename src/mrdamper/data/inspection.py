@@ -86,7 +86,8 @@ def record_problems(exp: Experiment) -> list[str]:
         lo, hi = float(exp.i.min()), float(exp.i.max())
         if lo < CURRENT_RANGE[0] - 1e-9 or hi > CURRENT_RANGE[1] + 1e-9:
             problems.append(
-                f"current spans [{lo:.4g}, {hi:.4g}] A, outside {CURRENT_RANGE[0]:g}..{CURRENT_RANGE[1]:g} A"
+                f"current spans [{lo:.4g}, {hi:.4g}] A, outside "
+                f"{CURRENT_RANGE[0]:g}..{CURRENT_RANGE[1]:g} A"
             )
     return problems
 

@@ -37,9 +37,11 @@ __all__ = [
 GRAM_COND_LIMIT = 1e8
 #: Condition number of the column-scaled regression matrix above which identification fails.
 REGRESSION_COND_LIMIT = 1e12
-#: Largest frozen-pole modulus the output-error refinement accepts (strictly inside the unit circle).
+#: Largest frozen-pole modulus the output-error refinement accepts (strictly inside the unit
+#: circle).
 STABILITY_LIMIT = 0.999
-#: Points of the scheduling grid (identified range, ends included) on which frozen stability is checked.
+#: Points of the scheduling grid (identified range, ends included) on which frozen stability is
+#: checked.
 STABILITY_GRID = 101
 
 
@@ -110,9 +112,9 @@ def _solve(
     cond_x = float(np.sqrt(cond))
     if not cond_x < REGRESSION_COND_LIMIT:
         raise IdentificationError(
-            f"lpv: regression is rank deficient (condition number of the scaled regressors "
-            f"{cond_x:.3g} > {REGRESSION_COND_LIMIT:.0e}); lower the order n_m or the degree n_rho, or "
-            f"give data with more distinct scheduling levels"
+            "lpv: regression is rank deficient (condition number of the scaled regressors "
+            f"{cond_x:.3g} > {REGRESSION_COND_LIMIT:.0e}); lower the order n_m or the degree "
+            "n_rho, or give data with more distinct scheduling levels"
         )
     if cond_x > 1e7:
         warnings.warn(

@@ -5,9 +5,9 @@ Model, for one record, with ``a_j(rho) = sum_p alpha[j-1, p] rho**p`` and
 
     y[k] = -sum_{j=1..n} a_j(rho[k]) y[k-j] + sum_{j=1..n} b_j(rho[k]) u[k-j]
 
-with zero initial conditions (``y[k] = u[k] = 0`` for ``k < 0``) in free run. The regression
-vector of sample ``k`` is ordered ``[-rho^p y[k-j] (j-major, p-minor), rho^p u[k-j], rho^p (offset)]``
-so that ``theta = [alpha.ravel(), beta.ravel(), delta]``.
+with zero initial conditions (``y[k] = u[k] = 0`` for ``k < 0``) in free run. The regression vector
+of sample ``k`` is ordered ``[-rho^p y[k-j] (j-major, p-minor), rho^p u[k-j], rho^p (offset)]`` so
+that ``theta = [alpha.ravel(), beta.ravel(), delta]``.
 """
 
 from __future__ import annotations

@@ -19,13 +19,14 @@ Per record (records are never joined: filtering and differentiation stop at reco
 
 Output error
 ------------
-``method="output-error"``, a parametrisation that is stable by construction. Written as ``m F'' + c F' + g(F) = w1 v + f0`` with ``m = -w3``,
-``c = -w2`` and ``g(F) = F + a F^3 + b F^5`` (``a = -w4``, ``b = -w5``), each of the five
-quadratics ``w1, c, m, a, b`` is written in the Bernstein basis of ``s = (i - lo) / (hi - lo)``
-with coefficients ``exp(theta)``: positive Bernstein coefficients make the quadratic positive on
-the whole identified input range ``[lo, hi]`` (the basis polynomials are non-negative there and
-sum to one). ``docs/models.md`` proves what this buys (a unique, globally asymptotically stable
-equilibrium at every frozen input and velocity, bounded force for bounded velocity).
+``method="output-error"``, a parametrisation that is stable by construction. Written as
+``m F'' + c F' + g(F) = w1 v + f0`` with ``m = -w3``, ``c = -w2`` and ``g(F) = F + a F^3 + b F^5``
+(``a = -w4``, ``b = -w5``), each of the five quadratics ``w1, c, m, a, b`` is written in the
+Bernstein basis of ``s = (i - lo) / (hi - lo)`` with coefficients ``exp(theta)``: positive Bernstein
+coefficients make the quadratic positive on the whole identified input range ``[lo, hi]`` (the basis
+polynomials are non-negative there and sum to one). ``docs/models.md`` proves what this buys (a
+unique, globally asymptotically stable equilibrium at every frozen input and velocity, bounded force
+for bounded velocity).
 
 Two least-squares stages on the simulated force (:func:`scipy.optimize.least_squares`, trust
 region reflective; Jacobian from the exact discrete sensitivities of the compiled SDIRK2 kernel):
@@ -223,9 +224,9 @@ def equation_error(
     cond = float(np.sqrt(ev[-1] / ev[0])) if ev[0] > 0 else math.inf
     if not cond < COND_FAIL:
         raise IdentificationError(
-            f"data: p15 regression is ill-conditioned (condition number {cond:.3g} > {COND_FAIL:g}); "
-            f"the records do not excite all {5 * n_basis} terms (vary velocity amplitude and "
-            f"{source})"
+            f"data: p15 regression is ill-conditioned (condition number {cond:.3g} > "
+            f"{COND_FAIL:g}); the records do not excite all {5 * n_basis} terms (vary velocity "
+            f"amplitude and {source})"
         )
     if cond > COND_WARN:
         warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=3)
@@ -257,7 +258,10 @@ _PENALTY = 10.0
 
 
 def to_monomial(B: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Monomial coefficients ``W`` (5 x 3, in ``i``) of Bernstein coefficients ``B`` on ``[lo, hi]``."""
+    """Monomial coefficients ``W`` (5 x 3, in ``i``) of Bernstein coefficients ``B``.
+
+    The Bernstein basis is on ``[lo, hi]``.
+    """
     R = hi - lo
     to_i = np.array(
         [[1.0, -lo / R, lo**2 / R**2], [0.0, 1.0 / R, -2 * lo / R**2], [0.0, 0.0, 1.0 / R**2]]
@@ -267,7 +271,10 @@ def to_monomial(B: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 
 def bernstein_basis(i: float | np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Bernstein basis ``(1-s)^2, 2s(1-s), s^2`` at ``s = (i - lo) / (hi - lo)`` clipped to [0, 1]."""
+    """Bernstein basis ``(1-s)^2, 2s(1-s), s^2`` at ``s = (i - lo) / (hi - lo)``.
+
+    ``s`` is clipped to [0, 1].
+    """
     s = np.clip((np.asarray(i, dtype=float) - lo) / (hi - lo), 0.0, 1.0)
     return np.stack([(1 - s) ** 2, 2 * s * (1 - s), s * s])
 
@@ -362,7 +369,10 @@ class _Problem:
         return B, f0
 
     def chain(self, theta: np.ndarray) -> np.ndarray:
-        """d (Bernstein coefficients, f0) / d theta (diagonal; 16 entries, the full coefficients)."""
+        """d (Bernstein coefficients, f0) / d theta.
+
+        Diagonal; 16 entries, the full coefficients.
+        """
         B, _ = self.unpack(theta)
         d = np.empty(16 if self.offset else 15)
         d[:15] = B.ravel()
@@ -569,7 +579,9 @@ def identify_output_error(
         theta = solve(theta, "free", max_nfev)
     B, f0 = prob.unpack(theta)
     info = {
-        "method": "output error: multiple shooting then free run (scipy.optimize.least_squares, trf)",
+        "method": (
+            "output error: multiple shooting then free run (scipy.optimize.least_squares, trf)"
+        ),
         "jacobian": "discrete forward sensitivities (SDIRK2)"
         if jacobian == "sensitivity"
         else f"finite differences ({jacobian})",

@@ -173,7 +173,9 @@ def _info(plan: list[tuple[int, int, int]], total: int) -> dict[str, Any]:
         "samples_used": int(used),
         "samples_total": int(total),
         "threshold": int(WINDOW_THRESHOLD),
-        "note": "the output-error step ran on evenly spread windows; full_data_check is on every sample",
+        "note": (
+            "the output-error step ran on evenly spread windows; full_data_check is on every sample"
+        ),
     }
 
 
@@ -437,8 +439,10 @@ def lpv_qr_records(
 
 
 def distinct_levels(rhos: Sequence[np.ndarray], tol: float) -> int:
-    """Number of levels of the scheduling variable separated by more than ``tol``, record by record
-    (one representative per cluster of each record, then the same count over the representatives)."""
+    """Number of levels of the scheduling variable separated by more than ``tol``, record by record.
+
+    One representative per cluster of each record, then the same count over the representatives.
+    """
     reps = []
     for r in rhos:
         s = np.sort(r)

@@ -181,7 +181,10 @@ def stack(
 
 
 def _even_subset(n: int, size: int | None) -> np.ndarray:
-    """Indices of ``size`` samples evenly spaced over ``0 .. n-1`` (all samples if ``size`` is None)."""
+    """Indices of ``size`` samples evenly spaced over ``0 .. n-1``.
+
+    All samples if ``size`` is None.
+    """
     if size is None or size >= n:
         return np.arange(n)
     return np.unique(np.linspace(0, n - 1, size).astype(np.int64))
@@ -205,8 +208,9 @@ def _check_identifiable(
         norms = np.linalg.norm(V, axis=0)
         if np.any(norms == 0):
             raise IdentificationError(
-                f"{source}: {kind} component {COMPONENTS[m]} has a term in {source}^{int(pw[norms == 0][0])} "
-                f"but the training input is zero everywhere; records with a non-zero input are needed"
+                f"{source}: {kind} component {COMPONENTS[m]} has a term in "
+                f"{source}^{int(pw[norms == 0][0])} but the training input is zero everywhere; "
+                "records with a non-zero input are needed"
             )
         sv = np.linalg.svd(V / norms, compute_uv=False)
         if sv[-1] <= sv[0] / _MAX_INPUT_COND:

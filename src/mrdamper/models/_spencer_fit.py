@@ -500,5 +500,5 @@ def _strictly_inside(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarra
     width = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
     pad = np.minimum(1e-6 * np.maximum(np.abs(q), 1.0), 0.01 * width)
     q = np.maximum(q, lo + pad)
-    q = np.minimum(q, hi - pad)
-    return q
+    inside: np.ndarray = np.minimum(q, hi - pad)  # annotated: numpy's stubs return Any here
+    return inside

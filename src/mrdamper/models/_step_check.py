@@ -62,9 +62,9 @@ def step_halving_check(
     passed = bool(dmax <= tolerance)
     if not passed:
         warnings.warn(
-            f"{kind}: halving the integration step changes the free run of training record {worst!r} "
-            f"by {dmax:.3g} (ESR units), above the tolerance {tolerance:g}; the integration step is "
-            f"too coarse for these coefficients",
+            f"{kind}: halving the integration step changes the free run of training record "
+            f"{worst!r} by {dmax:.3g} (ESR units), above the tolerance {tolerance:g}; the "
+            "integration step is too coarse for these coefficients",
             RuntimeWarning,
             stacklevel=3,
         )

@@ -139,7 +139,9 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
 
 
 def single_level_note(kind: str, source: str, level: float) -> str:
-    """One-line note for a model identified at a single electrical level (also emitted as a warning).
+    """One-line note for a model identified at a single electrical level.
+
+    The note is also emitted as a warning.
 
     Parameters
     ----------
@@ -152,8 +154,9 @@ def single_level_note(kind: str, source: str, level: float) -> str:
     """
     unit = "A" if source == "i" else "V"
     return (
-        f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws are "
-        f"constants and its identified range is [{level:g}, {level:g}] {unit}; other levels follow range_policy"
+        f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws "
+        f"are constants and its identified range is [{level:g}, {level:g}] {unit}; other levels "
+        "follow range_policy"
     )
 
 

@@ -12,14 +12,14 @@ the free run far better behaved than powers of the fed-back force).
 
 Identification (:class:`NARXEstimator`):
 
-1. Equation error, term selection: every candidate monomial is evaluated on the measured
-   signals of each record (records stay separate; each record's squared errors are weighted by
-   ``1 / (N var(F))`` so records count equally, as in the mean ESR). Forward orthogonal least squares with the
-   error reduction ratio (OLS-ERR, Billings' forward regression) picks the terms one at a time,
-   each time the candidate whose part orthogonal to the terms already chosen explains the most of
-   the force, until ``n_terms`` terms or until the unexplained fraction falls below ``err_tol``.
-   The selection runs on the column-normalised Gram matrix, so the candidate matrix is never
-   held in memory; near-collinear candidates are skipped.
+1. Equation error, term selection: every candidate monomial is evaluated on the measured signals of
+   each record (records stay separate; each record's squared errors are weighted by
+   ``1 / (N var(F))`` so records count equally, as in the mean ESR). Forward orthogonal least
+   squares with the error reduction ratio (OLS-ERR, Billings' forward regression) picks the terms
+   one at a time, each time the candidate whose part orthogonal to the terms already chosen explains
+   the most of the force, until ``n_terms`` terms or until the unexplained fraction falls below
+   ``err_tol``. The selection runs on the column-normalised Gram matrix, so the candidate matrix is
+   never held in memory; near-collinear candidates are skipped.
 2. Equation error, coefficients: linear least squares on the chosen columns (SVD), with a
    condition-number check (:class:`~mrdamper.errors.IdentificationError` above ``cond_max``).
 3. Optional output-error refinement (``refine=True``): the coefficients of the chosen terms are

@@ -198,7 +198,10 @@ class P15Model(FittedModel):
         return np.stack([Wm[j, 0] + Wm[j, 1] * ii + Wm[j, 2] * ii**2 for j in range(5)])
 
     def monomial(self) -> np.ndarray:
-        """Power-basis coefficients (5 x 3, ``w_j = c0 + c1 i + c2 i^2``), valid on ``input_range``."""
+        """Power-basis coefficients (5 x 3, ``w_j = c0 + c1 i + c2 i^2``).
+
+        Valid on ``input_range``.
+        """
         if self.basis == "power":
             return self.W_matrix
         return to_monomial(self.W_matrix, *self.input_range)
@@ -287,8 +290,8 @@ class P15Model(FittedModel):
             raise SimulationDivergedError(
                 self.kind,
                 k,
-                f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} "
-                f"(w3 from {w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
+                f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} (w3 from "
+                f"{w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
             )
         v = np.ascontiguousarray(experiment.v, dtype=np.float64)
         F0 = rest_state(self.coefficients(float(i[0])), self.f0, float(v[0]))
@@ -319,8 +322,9 @@ class P15Model(FittedModel):
             raise SimulationDivergedError(
                 self.kind,
                 k,
-                f"force left the bound |F| <= {self.force_bound:.4g} N, became non-finite or an implicit "
-                f"stage had no root (t = {experiment.t[k]:.6g} s, {n_sub} steps per sample)",
+                f"force left the bound |F| <= {self.force_bound:.4g} N, became non-finite or an "
+                f"implicit stage had no root (t = {experiment.t[k]:.6g} s, {n_sub} steps per "
+                "sample)",
             )
         return F
 
@@ -566,7 +570,10 @@ def _run_refined(model: P15Model, e: Experiment, k: int) -> np.ndarray:
 
 
 def _lagged(e: np.ndarray, dt: float, eta: float | None) -> np.ndarray:
-    """The input through the drive lag ``eta`` [1/s] (unchanged for ``None``), contiguous float64."""
+    """The input through the drive lag ``eta`` [1/s], contiguous float64.
+
+    Unchanged for ``None``.
+    """
     e = np.ascontiguousarray(e, dtype=np.float64)
     return e if eta is None else first_order_lag(e, dt, eta)
 

@@ -126,7 +126,9 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
 
 
 def to_record_rate(y: np.ndarray, fs_model: float, experiment: Experiment) -> np.ndarray:
-    """Interpolate a model-rate signal ``y`` back onto the record's samples (identity at equal rates).
+    """Interpolate a model-rate signal ``y`` back onto the record's samples.
+
+    The identity at equal rates.
 
     Parameters
     ----------

@@ -174,7 +174,8 @@ class SPModel(FittedModel):
         Returns
         -------
         dict
-            ``A`` [N], ``a`` [s/m], ``b`` [1/m], ``c`` [N s/m], ``d`` [N/m] as arrays shaped like ``i``.
+            ``A`` [N], ``a`` [s/m], ``b`` [1/m], ``c`` [N s/m], ``d`` [N/m] as arrays shaped like
+            ``i``.
         """
         ii = np.asarray(i, dtype=float)
         out = {name: np.zeros_like(ii) for name in COMPONENTS}

@@ -201,7 +201,8 @@ def _check_scale(scale: float, specs: Sequence[DoeSequence]) -> float:
     if shortest < MIN_DURATION:
         raise DataValidationError(
             "scale",
-            f"{scale:g} makes the shortest record {shortest:g} s; at least {MIN_DURATION:g} s is needed",
+            f"{scale:g} makes the shortest record {shortest:g} s; at least {MIN_DURATION:g} s is "
+            "needed",
         )
     return scale
 
@@ -273,7 +274,8 @@ def table_ii(
     damper : FittedModel, optional
         Damper under test (default: the shipped reference damper).
     rig : VirtualRig, optional
-        A fully configured rig instead of ``fs`` and ``damper`` (its own ``fs`` and damper are used).
+        A fully configured rig instead of ``fs`` and ``damper`` (its own ``fs`` and damper are
+        used).
     experiments : sequence of int, optional
         Generate only these sequence numbers (seeds stay those of the full table).
     workers : int

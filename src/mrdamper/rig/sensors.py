@@ -67,7 +67,8 @@ class Sensor:
             k = int(bad[0])
             raise DataValidationError(
                 self.name,
-                f"true value {true[k]:.6g} at sample {k} overloads the sensor range [{lo:g}, {hi:g}]",
+                f"true value {true[k]:.6g} at sample {k} overloads the sensor range [{lo:g}, "
+                f"{hi:g}]",
             )
         y = (
             true + self.noise_std * rng.standard_normal(true.size)

@@ -132,7 +132,8 @@ class ReplicateVariation:
                 )
                 raise DataValidationError(
                     "parameter_std",
-                    f"{name!r} is not a scalar parameter of {damper.kind!r}; expected one of {scalars}",
+                    f"{name!r} is not a scalar parameter of {damper.kind!r}; expected one of "
+                    f"{scalars}",
                 )
             r = float(rng.standard_normal() * self.parameter_std[name])
             rel[name] = r

@@ -131,7 +131,8 @@ class VirtualRig:
         if not self.velocity_cutoff < self.fs / 2:
             raise DataValidationError(
                 "velocity_cutoff",
-                f"{self.velocity_cutoff:g} Hz is not below the Nyquist frequency {self.fs / 2:g} Hz",
+                f"{self.velocity_cutoff:g} Hz is not below the Nyquist frequency {self.fs / 2:g} "
+                "Hz",
             )
         if self.damper is None:
             from mrdamper.rig.reference import reference_damper

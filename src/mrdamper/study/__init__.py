@@ -1,10 +1,14 @@
-"""The comparison study: protocols, the runner (models x records), result tables and the HTML report.
+"""The comparison study.
+
+Protocols, the runner (models x records), result tables and the HTML report.
 
 Examples
 --------
 >>> from mrdamper.study import doe_protocol, run_study, write_study  # doctest: +SKIP
 >>> from mrdamper.rig.doe import table_ii                # doctest: +SKIP
->>> res = run_study(table_ii(seed=0, scale=0.1), doe_protocol(), models=["lpv", "sp1"])  # doctest: +SKIP
+>>> res = run_study(  # doctest: +SKIP
+...     table_ii(seed=0, scale=0.1), doe_protocol(), models=["lpv", "sp1"]
+... )
 >>> res.summary                                          # doctest: +SKIP
 >>> write_study(res, "study-out")                        # doctest: +SKIP
 """

@@ -1,4 +1,6 @@
-"""The force-velocity analysis step of a study (paper III-C): zone fits per level and laws across current.
+"""The force-velocity analysis step of a study (paper III-C).
+
+Zone fits per level and laws across current.
 
 Records with metadata ``current`` (constant-current tests such as the Quiroz sine records) are
 grouped by it; otherwise each record's electrical input is cut into constant plateaus (the

@@ -56,8 +56,8 @@ def _input_of(data: Records) -> ElectricalSource:
     if source is not None:
         return source
     raise SchemaError(
-        "protocol: the records do not share one electrical channel (some have only 'i', others only "
-        "'voltage'); pass --protocol FILE naming the input"
+        "protocol: the records do not share one electrical channel (some have only 'i', others "
+        "only 'voltage'); pass --protocol FILE naming the input"
     )
 
 
@@ -92,13 +92,16 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
         proto = doe_protocol()
         return (
             proto,
-            f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design of experiments)",
+            (
+                f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design "
+                "of experiments)"
+            ),
         )
     if all("condition" in e.metadata for e in data):
         proto = quiroz_protocol()
         return proto, (
-            f"protocol {proto.name!r} (records carry 'condition' metadata: leave one amplitude/frequency "
-            "condition out)"
+            f"protocol {proto.name!r} (records carry 'condition' metadata: leave one "
+            "amplitude/frequency condition out)"
         )
     source = _input_of(data)
     stats = [_levels(e, source) for e in data]
@@ -116,7 +119,10 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
         what_analysis = f"force-velocity analysis on the {len(constant)} constant-{source} records"
     if len(data) == 1:
         split = Split("time", fraction=DEFAULT_TIME_FRACTION)
-        what = f"one record: first {DEFAULT_TIME_FRACTION:.0%} trains, last {1 - DEFAULT_TIME_FRACTION:.0%} scored"
+        what = (
+            f"one record: first {DEFAULT_TIME_FRACTION:.0%} trains, last "
+            f"{1 - DEFAULT_TIME_FRACTION:.0%} scored"
+        )
     else:
         k = min(DEFAULT_K, len(data))
         split = Split("k-fold", k=k)
@@ -132,7 +138,10 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
     )
     return (
         proto,
-        f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to choose)",
+        (
+            f"protocol 'default' ({what}; input {source!r}; {what_analysis}; pass --protocol to "
+            "choose)"
+        ),
     )
 
 

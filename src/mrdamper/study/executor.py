@@ -1,4 +1,6 @@
-"""A small executor abstraction so one study code path runs in-process, on local processes or on Dask.
+"""A small executor abstraction: one study code path for several back ends.
+
+The study runs in-process, on local processes or on Dask.
 
 Three implementations share one interface (:class:`StudyExecutor`):
 

@@ -46,9 +46,10 @@ def doe_protocol(models: Sequence[Any] = ()) -> Protocol:
     return Protocol(
         name="doe",
         description=(
-            "Table II design of experiments. F-v analysis on the first replicate of the stepped-current "
-            "experiments 6-8; identification on the first replicate of experiments 1-3; every remaining "
-            "record (replicates 2.. of 1-3 and 6-8, all of the long-road experiments 4-5) is scored."
+            "Table II design of experiments. F-v analysis on the first replicate of the "
+            "stepped-current experiments 6-8; identification on the first replicate of "
+            "experiments 1-3; every remaining record (replicates 2.. of 1-3 and 6-8, all of the "
+            "long-road experiments 4-5) is scored."
         ),
         analysis=Selection(match={"experiment": (6, 7, 8)}, group_by="experiment", take=1),
         train=Selection(match={"experiment": (1, 2, 3)}, group_by="experiment", take=1),
@@ -82,7 +83,9 @@ def quiroz_protocol(models: Sequence[Any] = ()) -> Protocol:
     """
     return Protocol(
         name="quiroz-loco",
-        description="Quiroz (2022) sine records: leave one amplitude/frequency condition out, all currents.",
+        description=(
+            "Quiroz (2022) sine records: leave one amplitude/frequency condition out, all currents."
+        ),
         analysis=Selection(),
         train=Selection(),
         score=Selection(),
@@ -116,7 +119,10 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
     """
     return Protocol(
         name="dyke-70-30",
-        description="Dyke (1996) white-noise record, input = command voltage; first 70 % trains, last 30 % scored.",
+        description=(
+            "Dyke (1996) white-noise record, input = command voltage; first 70 % trains, last 30 "
+            "% scored."
+        ),
         analysis=None,
         train=Selection(),
         score=Selection(),
@@ -156,7 +162,9 @@ def preset_protocol(name: str, models: Sequence[Any] = ()) -> Protocol:
 
 
 def load_protocol(path: str | Path) -> Protocol:
-    """Read a protocol file (``.json`` or ``.toml``) or a preset name (``"doe"``, ``"quiroz"``, ``"dyke"``).
+    """Read a protocol file (``.json`` or ``.toml``) or a preset name.
+
+    The presets are ``"doe"``, ``"quiroz"`` and ``"dyke"``.
 
     Parameters
     ----------

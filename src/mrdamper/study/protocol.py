@@ -1,4 +1,7 @@
-"""Study protocols: which records train the analysis and the models, which are scored, which models run.
+"""Study protocols.
+
+A protocol says which records train the analysis and the models, which are scored, which models
+run.
 
 A :class:`Protocol` is a frozen value. It can be built in Python, taken from the presets
 (:mod:`mrdamper.study.presets`) or loaded from a small JSON or
@@ -219,7 +222,8 @@ class Split:
     def __post_init__(self) -> None:
         if self.kind not in ("fixed", "leave-one-group-out", "k-fold", "time"):
             raise SchemaError(
-                f"split.kind: expected 'fixed', 'leave-one-group-out', 'k-fold' or 'time', got {self.kind!r}"
+                "split.kind: expected 'fixed', 'leave-one-group-out', 'k-fold' or 'time', got "
+                f"{self.kind!r}"
             )
         if isinstance(self.k, bool) or not isinstance(self.k, int) or self.k < 2:
             raise SchemaError(f"split.k: expected an integer of at least 2, got {self.k!r}")
@@ -265,9 +269,15 @@ class Split:
         if self.kind == "fixed":
             return "one fold (fixed training and scoring sets)"
         if self.kind == "time":
-            return f"each record cut in time: first {self.fraction:.0%} trains, last {1 - self.fraction:.0%} is scored"
+            return (
+                f"each record cut in time: first {self.fraction:.0%} trains, last "
+                f"{1 - self.fraction:.0%} is scored"
+            )
         if self.kind == "k-fold":
-            return f"{self.k}-fold by record: each record is scored once, by models trained on the other folds"
+            return (
+                f"{self.k}-fold by record: each record is scored once, by models trained on the "
+                "other folds"
+            )
         by = f"metadata {self.key!r}" if self.key else f"name pattern {self.name_regex!r}"
         return f"leave one group out, groups by {by}"
 
@@ -365,8 +375,8 @@ class Protocol:
         Out-of-range policy applied to every fitted model before scoring; extrapolation is
         reported in the ``note`` column.
     settings : mapping
-        Default estimator settings per kind (``{"lpv": {"model_fs": 200.0}}``), applied to every model
-        of that kind unless the model entry sets the same key.
+        Default estimator settings per kind (``{"lpv": {"model_fs": 200.0}}``), applied to every
+        model of that kind unless the model entry sets the same key.
     showcase : str, optional
         Glob of the record drawn in the time-domain figures (Figs. 6, 9, 10, 11); default: the
         most informative scored record (varying current if any, else the highest current level,
@@ -544,7 +554,8 @@ def protocol_from_dict(data: Mapping[str, Any]) -> Protocol:
         raise SchemaError(f"schema: expected {PROTOCOL_SCHEMA!r}, got {data.get('schema')!r}")
     if data.get("schema_version", PROTOCOL_SCHEMA_VERSION) != PROTOCOL_SCHEMA_VERSION:
         raise SchemaError(
-            f"schema_version: expected {PROTOCOL_SCHEMA_VERSION}, got {data.get('schema_version')!r}"
+            f"schema_version: expected {PROTOCOL_SCHEMA_VERSION}, got "
+            f"{data.get('schema_version')!r}"
         )
     split = data.get("split") or {}
     if not isinstance(split, Mapping):

@@ -1,12 +1,12 @@
 """``report.html``: one self-contained page (no external files, scripts or fonts) with the protocol,
 the tables and every figure embedded as a base64 PNG, readable offline in any browser.
 
-Layout rules: the page is at most 1100 px wide; every table sits in a box that scrolls
-sideways when the table is wider than the page (the page itself never does); figures are shown
-at the size they are drawn for print (at most 7 in wide) and shrink with a narrower window. Numbers are rounded to
-four significant digits (:func:`~mrdamper.study.report_tables.format_number`). The wording
-depends on the data: records from the virtual rig (whose damper is a known model) or measured
-ones (:func:`~mrdamper.study.runner.data_origin`).
+Layout rules: the page is at most 1100 px wide; every table sits in a box that scrolls sideways when
+the table is wider than the page (the page itself never does); figures are shown at the size they
+are drawn for print (at most 7 in wide) and shrink with a narrower window. Numbers are rounded to
+four significant digits (:func:`~mrdamper.study.report_tables.format_number`). The wording depends
+on the data: records from the virtual rig (whose damper is a known model) or measured ones
+(:func:`~mrdamper.study.runner.data_origin`).
 """
 
 from __future__ import annotations
@@ -39,20 +39,26 @@ from mrdamper.study.tables import PAPER_HEADLINE
 __all__ = ["figure_captions", "render_report"]
 
 _CSS = """
-body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;margin:2em auto;
+body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;\
+margin:2em auto;
 padding:0 1em;color:#222;line-height:1.45}
-h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.8em}
+h1{font-size:1.6em;margin-bottom:.2em}\
+h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.8em}
 h3{font-size:1.05em;margin:1.2em 0 .3em}
 .tablewrap{max-width:100%;overflow-x:auto;margin:.6em 0}
-table{border-collapse:collapse;font-size:.85em}th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right;
+table{border-collapse:collapse;font-size:.85em}\
+th,td{border:1px solid #ccc;padding:.25em .5em;text-align:right;
 vertical-align:top}
-th{background:#f2f2f2;font-weight:600}td{white-space:nowrap}td:first-child,th:first-child{text-align:left}
-.left td,.left th{text-align:left}td.text{text-align:left;white-space:normal;min-width:14em;max-width:40em;overflow-wrap:anywhere}
+th{background:#f2f2f2;font-weight:600}td{white-space:nowrap}\
+td:first-child,th:first-child{text-align:left}
+.left td,.left th{text-align:left}\
+td.text{text-align:left;white-space:normal;min-width:14em;max-width:40em;overflow-wrap:anywhere}
 .headline{background:#f5f9ff;border-left:4px solid #3b73b9;padding:.6em 1em;font-size:1.05em}
 .warn{background:#fff6e5;border-left:4px solid #e0a020;padding:.4em 1em}
 figure{margin:1.4em 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
 figcaption{font-size:.9em;color:#333;max-width:7in}
-code{background:#f4f4f4;padding:0 .25em;overflow-wrap:anywhere}details{margin:.6em 0}.small{font-size:.85em;color:#555}
+code{background:#f4f4f4;padding:0 .25em;overflow-wrap:anywhere}details{margin:.6em 0}\
+.small{font-size:.85em;color:#555}
 pre{white-space:pre-wrap;overflow-wrap:anywhere}
 @media print{body{max-width:none;margin:0}.tablewrap{overflow:visible}table{font-size:7.5pt}
 figure{break-inside:avoid}details{display:block}}
@@ -147,10 +153,8 @@ def _headline_text(res: StudyResult) -> tuple[str, str]:
     hl = res.headline()
     cls = "headline" if hl.get("available") else "warn"
     text = (
-        "<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and SP-1..SP-4): "
-        + _e(hl["text"])
-        + ". "
-        + _e(PAPER_HEADLINE["text"])
+        "<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and "
+        "SP-1..SP-4): " + _e(hl["text"]) + ". " + _e(PAPER_HEADLINE["text"])
     )
     return cls, text
 
@@ -172,13 +176,14 @@ def _data_note(res: StudyResult) -> str:
         )
         if damper == "spencer":
             note += (
-                " The <code>spencer</code> estimator therefore has the true structure here: it is a "
-                "reference, not a competitor."
+                " The <code>spencer</code> estimator therefore has the true structure here: it is "
+                "a reference, not a competitor."
             )
         return note
     return (
-        "The records are measured data: no model has the damper's true structure. Spencer, Bingham and "
-        "NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, LTI)."
+        "The records are measured data: no model has the damper's true structure. Spencer, "
+        "Bingham and NARX are extra reference models beside the paper's (LPV, P-15, SP-1..SP-4, "
+        "LTI)."
     )
 
 
@@ -194,14 +199,16 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, 
             + ".</p>"
         )
     out.append(
-        '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured force) [-] and SSSE '
-        "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is the "
-        f"interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) {_e(ref)}'s "
-        "mean ESR is than the row model's mean, 100 (other - "
+        '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured '
+        "force) [-] and SSSE "
+        "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is "
+        f"the interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) "
+        f"{_e(ref)}'s mean ESR is than the row model's mean, 100 (other - "
         + _e(ref)
         + ") / other, the way the headline and the "
-        "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an error larger than the signal) or that never "
-        "simulated is marked failed; its row stays. Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
+        "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an "
+        "error larger than the signal) or that never simulated is marked failed; its row stays. "
+        "Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
         + _data_note(res)
         + "</p>"
     )
@@ -223,18 +230,20 @@ def _selection_section(res: StudyResult) -> str:
             rec,
             _table(selection_table(sel)),
             (
-                '<p class="small">The table of <code>mrdamper select</code>, computed from this study\'s '
+                '<p class="small">The table of <code>mrdamper select</code>, computed from this '
+                "study's "
                 f"own held-out scores ({n_scores} model &times; record scores over the protocol's "
-                f"{sel.n_folds} {_e(sel.split)} fold(s)), not by fitting again: only scored records that "
-                "trained neither the models nor the analysis of their fold count. ESR in free run [-]; "
-                "a model whose fit or any held-out simulation failed in a fold fails that fold and is not "
-                "recommended. The recommendation is the lowest mean ESR among the models that passed "
-                "every fold, as <code>mrdamper select</code> decides (a runner-up within 5 % is named as "
-                "a tie). <i>Outside range</i>: held-out records whose electrical input leaves the range "
-                "the model was identified on (handled by the protocol's range policy, "
-                f"<code>{_e(res.protocol.range_policy)}</code>). <code>mrdamper select</code> itself "
-                "chooses its own folds (by condition, record or time) and clips out-of-range inputs, so "
-                "its numbers can differ.</p>"
+                f"{sel.n_folds} {_e(sel.split)} fold(s)), not by fitting again: only scored "
+                "records that trained neither the models nor the analysis of their fold count. "
+                "ESR in free run [-]; a model whose fit or any held-out simulation failed in a "
+                "fold fails that fold and is not recommended. The recommendation is the lowest "
+                "mean ESR among the models that passed every fold, as <code>mrdamper "
+                "select</code> decides (a runner-up within 5 % is named as a tie). <i>Outside "
+                "range</i>: held-out records whose electrical input leaves the range the model "
+                "was identified on (handled by the protocol's range policy, "
+                f"<code>{_e(res.protocol.range_policy)}</code>). <code>mrdamper select</code> "
+                "itself chooses its own folds (by condition, record or time) and clips "
+                "out-of-range inputs, so its numbers can differ.</p>"
             ),
         ]
     )
@@ -244,8 +253,8 @@ def _by_group_section(res: StudyResult) -> str:
     keys = grouping_keys(res.results)
     if not keys:
         return (
-            "<p>The scored records carry no condition, experiment or current metadata with two or more "
-            "values, so there is no breakdown; every row is in the table at the end.</p>"
+            "<p>The scored records carry no condition, experiment or current metadata with two or "
+            "more values, so there is no breakdown; every row is in the table at the end.</p>"
         )
     titles = {
         "condition": "Mean ESR [-] per test condition (amplitude and frequency)",
@@ -260,7 +269,8 @@ def _by_group_section(res: StudyResult) -> str:
         )
     if "current" not in keys:
         out.append(
-            '<p class="small">No per-current table: the scored records have no constant current level '
+            '<p class="small">No per-current table: the scored records have no constant current '
+            "level "
             "(the current varies within each record).</p>"
         )
     return "\n".join(out)
@@ -311,8 +321,8 @@ def _analysis_section(res: StudyResult) -> str:
             continue
         body = [
             (
-                f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current (eq. 18), "
-                "with the largest distance of a per-level fit from its law:</p>"
+                f"<p>{len(an.fits)} level(s), grouped by {_e(an.by)}. Fitted laws across current "
+                "(eq. 18), with the largest distance of a per-level fit from its law:</p>"
             )
         ]
         for title, df in laws_table(an.laws, unit).items():
@@ -332,7 +342,8 @@ def _analysis_section(res: StudyResult) -> str:
             )
         shown += 1
     out.append(
-        '<p class="small">Every fold\'s laws are also in <code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>'
+        '<p class="small">Every fold\'s laws are also in '
+        "<code>analysis/&lt;fold&gt;_zone_laws.json</code>.</p>"
     )
     return "\n".join(out)
 
@@ -352,7 +363,10 @@ def _record_text(res: StudyResult, which: str) -> str:
     why = (
         "the protocol's choice"
         if (res.protocol.showcase if which == "showcase" else res.protocol.hysteresis_record)
-        else "the scored record with varying current if any, else the highest current level and widest velocity range"
+        else (
+            "the scored record with varying current if any, else the highest current level and "
+            "widest velocity range"
+        )
     )
     return f"Record <code>{_e(sc.record.name)}</code> ({_e(level)}; fold {_e(sc.fold)}; {_e(why)})."
 
@@ -365,10 +379,10 @@ def figure_captions(res: StudyResult, failed: dict[str, str] | None = None) -> d
     caps["fig04_lti_hysteresis"] += " " + _record_text(res, "hysteresis")
     over = overlay_models(res, failed) if res.showcase is not None else []
     rule = (
-        f" {_record_text(res, 'showcase')} Top: the measured force with {_e(', '.join(over) or 'no model')} "
-        "(rule: LPV, the best of the paper's classical models and the best other model by mean ESR over the "
-        "study, none of them failed). Below: every model in its own panel on a shared force scale, with its "
-        "ESR on this record."
+        f" {_record_text(res, 'showcase')} Top: the measured force with "
+        f"{_e(', '.join(over) or 'no model')} (rule: LPV, the best of the paper's classical models "
+        "and the best other model by mean ESR over the study, none of them failed). Below: every "
+        "model in its own panel on a shared force scale, with its ESR on this record."
     )
     if failed:
         rule += (
@@ -408,18 +422,19 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
             int.from_bytes(png[16:20], "big") / FIGURE_DPI
         )  # IHDR width [px] at the saved resolution
         out.append(
-            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" style="width:{width_in:.2f}in" '
-            f'alt="Figure {number}: {_e(FIGURES[name][1])}">'
-            f"<figcaption>{label} {caps[name]} (<code>figures/{_e(name)}.png</code>, <code>.svg</code>)</figcaption></figure>"
+            f'<figure id="{_e(name)}"><img src="data:image/png;base64,{data}" '
+            f'style="width:{width_in:.2f}in" alt="Figure {number}: {_e(FIGURES[name][1])}">'
+            f"<figcaption>{label} {caps[name]} (<code>figures/{_e(name)}.png</code>, "
+            "<code>.svg</code>)</figcaption></figure>"
         )
         if name == "fig11_fx_loops":
             tab = energy_table(res.showcase)
             if not tab.empty:
                 out.append(
-                    "<p>Energy dissipated on this record, W = &int; F v dt: the mean over the complete "
-                    "cycles of the measured displacement, or the whole record when it holds less than one "
-                    "(every force integrated over the same cycles with the measured velocity):</p>"
-                    + _table(energy_display(tab, failed), digits=3)
+                    "<p>Energy dissipated on this record, W = &int; F v dt: the mean over the "
+                    "complete cycles of the measured displacement, or the whole record when it "
+                    "holds less than one (every force integrated over the same cycles with the "
+                    "measured velocity):</p>" + _table(energy_display(tab, failed), digits=3)
                 )
     if skipped:
         out.insert(
@@ -468,9 +483,11 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         f"<title>mrdamper study: {_e(res.protocol.name)}</title><style>{_CSS}</style></head><body>",
         f"<h1>MR damper model comparison: {_e(res.protocol.name)}</h1>",
         (
-            f'<p class="small">{_e(info.get("n_records", "?"))} records ({_e(info.get("data_origin", "origin not recorded"))}), '
-            f"{_e(info.get('n_folds', '?'))} fold(s), {len(res.specs)} models; seed {_e(info.get('seed'))}; run on "
-            f"{_e(info.get('executor', '?'))} in {float(info.get('wall_time_s', float('nan'))):.1f} s.</p>"
+            f'<p class="small">{_e(info.get("n_records", "?"))} records '
+            f"({_e(info.get('data_origin', 'origin not recorded'))}), "
+            f"{_e(info.get('n_folds', '?'))} fold(s), {len(res.specs)} models; seed "
+            f"{_e(info.get('seed'))}; run on {_e(info.get('executor', '?'))} in "
+            f"{float(info.get('wall_time_s', float('nan'))):.1f} s.</p>"
         ),
         "<h2>Summary</h2>",
         _summary_section(res, summary, failed),
@@ -488,14 +505,14 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         _analysis_section(res),
         "<h2>All results</h2>",
         (
-            f"<details><summary>{len(res.results)} rows (also in <code>results.csv</code>)</summary>"
-            + _table(all_rows, cls="left")
-            + "</details>"
+            f"<details><summary>{len(res.results)} rows (also in "
+            "<code>results.csv</code>)</summary>" + _table(all_rows, cls="left") + "</details>"
         ),
         (
-            f'<p class="small">Python {_e(info.get("python", ""))} on {_e(info.get("platform", ""))}. Files next to '
-            "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, study.json, models/, analysis/, "
-            "figures/.</p>"
+            f'<p class="small">Python {_e(info.get("python", ""))} on '
+            f"{_e(info.get('platform', ''))}. Files next to "
+            "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, "
+            "study.json, models/, analysis/, figures/.</p>"
         ),
         "</body></html>",
     ]

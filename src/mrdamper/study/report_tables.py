@@ -37,7 +37,8 @@ def format_number(v: Any, digits: int = 4) -> str:
 
     Examples
     --------
-    >>> [format_number(x) for x in (1.0000000000000002, 0.024431, 1834.2, 123456.7, 3, float("nan"), 2.5e-6)]
+    >>> xs = (1.0000000000000002, 0.024431, 1834.2, 123456.7, 3, float("nan"), 2.5e-6)
+    >>> [format_number(x) for x in xs]
     ['1', '0.02443', '1834', '123457', '3', '', '2.5e-06']
     """
     if v is None:

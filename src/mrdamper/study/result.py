@@ -113,7 +113,10 @@ class StudyResult:
         return self.results
 
     def overlap(self) -> pd.DataFrame:
-        """Scored records that also trained a model or the analysis in the same fold (empty when none)."""
+        """Scored records that also trained a model or the analysis in the same fold.
+
+        Empty when none.
+        """
         r = self.roles
         sc = r[r["role"] == "score"][["fold", "record"]]
         tr = r[r["role"] != "score"][["fold", "record", "role"]]

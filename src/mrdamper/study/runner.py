@@ -1,10 +1,10 @@
 """Run a comparison study: every model of a protocol fitted on every fold and scored on its records.
 
 Fits and simulations are tasks on an executor (in-process, local processes or Dask; see
-:mod:`mrdamper.study.executor`). A model's simulations start as soon as its fit is done. A model that
-fails to fit, diverges or leaves its range stays in the results as rows with a status and the error.
-Rows are ordered by fold, model and record whatever the completion order, so the same inputs and
-seed give the same table (timing columns aside).
+:mod:`mrdamper.study.executor`). A model's simulations start as soon as its fit is done. A model
+that fails to fit, diverges or leaves its range stays in the results as rows with a status and the
+error. Rows are ordered by fold, model and record whatever the completion order, so the same inputs
+and seed give the same table (timing columns aside).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import shutil
 import tempfile
 import time
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import numpy as np
 import pandas as pd
@@ -71,7 +71,10 @@ def _estimator_fields(est: Estimator) -> set[str]:
 def _settings(
     spec: ModelSpec, protocol: Protocol, seed: int, laws: ZoneLaws | None
 ) -> dict[str, Any]:
-    """Estimator settings of ``spec`` with the protocol's input, the study seed and the fold's laws."""
+    """Estimator settings of ``spec``.
+
+    With the protocol's input, the study seed and the fold's laws.
+    """
     from mrdamper.models import get_estimator
 
     out = protocol.settings_for(spec)
@@ -351,10 +354,9 @@ def _outcome(fut: Any, kind: type[_O]) -> _O:
         if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
             raise KeyboardInterrupt from exc
         why = f"worker error: {type(exc).__name__}: {exc}"
-        failed = (
-            FitOutcome.failed(why) if kind is FitOutcome else SimOutcome.failed("sim-failed", why)
-        )
-        return failed  # type: ignore[return-value]
+        if kind is FitOutcome:
+            return cast(_O, FitOutcome.failed(why))
+        return cast(_O, SimOutcome.failed("sim-failed", why))
     if not isinstance(res, kind):
         raise TypeError(f"task returned {type(res).__name__}, expected {kind.__name__}")
     return res

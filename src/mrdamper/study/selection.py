@@ -101,7 +101,10 @@ class SelectionResult:
 def selection_folds(
     data: Experiment | Iterable[Experiment], folds: FoldKind = "auto", n_folds: int = 5
 ) -> tuple[str, list[tuple[str, ExperimentSet, ExperimentSet]]]:
-    """Training / left-out splits of ``data``; returns ``(fold kind, [(label, train, test), ...])``."""
+    """Training / left-out splits of ``data``.
+
+    Returns ``(fold kind, [(label, train, test), ...])``.
+    """
     exps = as_experiment_set(data, name="data")
     if len(exps) == 0:
         raise DataValidationError("DATA", "no records given")
@@ -119,7 +122,8 @@ def selection_folds(
         if not has_cond:
             raise DataValidationError(
                 "folds",
-                "'condition' needs metadata 'condition' on every record and at least two conditions",
+                "'condition' needs metadata 'condition' on every record and at least two "
+                "conditions",
             )
         return "condition", [
             (str(c), tr, te) for c, tr, te in exps.leave_one_group_out("condition")
@@ -344,8 +348,9 @@ def _recommend(table: pd.DataFrame, split: str, n: int) -> tuple[str | None, str
         return None, f"no model kind fitted and simulated on all {folds}"
     best = str(ok.index[0])
     reason = (
-        f"{best} has the lowest mean free-run ESR on the left-out data, {ok['mean_esr'].iloc[0]:.3g} "
-        f"over {folds} (worst left-out record {ok['worst_esr'].iloc[0]:.3g})"
+        f"{best} has the lowest mean free-run ESR on the left-out data, "
+        f"{ok['mean_esr'].iloc[0]:.3g} over {folds} (worst left-out record "
+        f"{ok['worst_esr'].iloc[0]:.3g})"
     )
     if len(ok) > 1:
         gap = ok["mean_esr"].iloc[1] / ok["mean_esr"].iloc[0] - 1.0

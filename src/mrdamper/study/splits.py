@@ -130,13 +130,13 @@ def make_folds(data: Records, protocol: Protocol) -> list[Fold]:
     for fold in folds:
         if len(fold.train) == 0:
             raise SchemaError(
-                f"train: fold {fold.name!r} has no training record (selection: {protocol.train.describe()}; "
-                f"data: {len(data)} records)"
+                f"train: fold {fold.name!r} has no training record (selection: "
+                f"{protocol.train.describe()}; data: {len(data)} records)"
             )
     if not folds or sum(len(f.score) for f in folds) == 0:
         raise SchemaError(
-            f"score: no record left to score (selection: {protocol.score.describe()}; exclude_trained="
-            f"{protocol.exclude_trained}; data: {len(data)} records)"
+            f"score: no record left to score (selection: {protocol.score.describe()}; "
+            f"exclude_trained={protocol.exclude_trained}; data: {len(data)} records)"
         )
     return folds
 

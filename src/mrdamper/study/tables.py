@@ -53,8 +53,10 @@ PAPER_HEADLINE: dict[str, Any] = {
     "best_classical": "sp1",
     "esr_improvement_pct": 51.0,
     "ssse_improvement_pct": 36.8,
-    "text": "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best classical "
-    "model (SP-1), on its own test rig.",
+    "text": (
+        "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best "
+        "classical model (SP-1), on its own test rig."
+    ),
 }
 
 _SUMMARY_COLUMNS = (
