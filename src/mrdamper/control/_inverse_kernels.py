@@ -8,9 +8,9 @@ the past (``y[k-j]``, ``u[k-j]``, j >= 1) is fixed::
 The kernel picks, in an interval ``[lo_k, hi_k]``: the previous ``rho`` when its force is within
 ``tol`` of ``F_desired[k]``; else the exact solution ``F = F_desired`` nearest the previous
 ``rho``; else the nearest edge of the band ``|F - F_desired| <= tol``. Solutions are found by
-bisecting (to machine precision) the sign changes on a uniform grid. Without any such ``rho`` the minimum of
-``|F - F_desired|`` lies at an end of the interval or at a stationary point of ``F``; those are
-bisected from the sign changes of ``F'`` on the same grid.
+bisecting (to machine precision) the sign changes on a uniform grid. Without any such ``rho`` the
+minimum of ``|F - F_desired|`` lies at an end of the interval or at a stationary point of ``F``;
+those are bisected from the sign changes of ``F'`` on the same grid.
 """
 
 from __future__ import annotations
@@ -107,8 +107,8 @@ def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # pragma: no cover - 
     ``prev`` itself is kept when it meets the band; otherwise the exact solution (root of
     ``poly - target``) nearest ``prev``; when there is none, the nearest edge of the band (a root
     of ``poly - (target -/+ tol)``). Landing on the exact solution rather than on the band edge
-    lets the next samples hold it. Without any such point the minimiser of ``|poly - target|`` is returned (an end of the interval or a stationary
-    point of the polynomial).
+    lets the next samples hold it. Without any such point the minimiser of ``|poly - target|`` is
+    returned (an end of the interval or a stationary point of the polynomial).
 
     Returns
     -------
@@ -296,7 +296,10 @@ def lpv_inverse(
 
 @njit(cache=True)
 def _ipow(x, n):  # pragma: no cover - numba
-    """``x ** n`` for an integer ``n >= 0`` by repeated multiplication (the C export does the same)."""
+    """``x ** n`` for an integer ``n >= 0`` by repeated multiplication.
+
+    The C export does the same.
+    """
     r = 1.0
     for _ in range(n):
         r *= x
@@ -381,7 +384,10 @@ def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragm
 def _bisect_slope(
     is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b
 ):  # pragma: no cover
-    """Zero of the objective's slope in ``[a, b]`` (slope < 0 at ``a``, > 0 at ``b``), to machine precision."""
+    """Zero of the objective's slope in ``[a, b]``, to machine precision.
+
+    The slope is < 0 at ``a`` and > 0 at ``b``.
+    """
     for _ in range(_N_BISECT):
         m = 0.5 * (a + b)
         if m <= a or m >= b:
@@ -403,7 +409,10 @@ def _bisect_slope(
 def _reg_solve(
     is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
 ):  # pragma: no cover
-    """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]`` (see :func:`reg_solve_poly`)."""
+    """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
+
+    See :func:`reg_solve_poly`.
+    """
     best = min(max(prev, a), b)
     if is_poly:
         f = _poly(cf, best)
@@ -477,7 +486,10 @@ def reg_solve_static(
 
 @njit(cache=True)
 def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # pragma: no cover - numba
-    """Coefficients (in ``rho``) of the force at sample ``k`` given the past ``y``, ``u`` (into ``cf``)."""
+    """Coefficients (in ``rho``) of the force at sample ``k`` given the past ``y``, ``u``.
+
+    Written into ``cf``.
+    """
     n_m, n_p = alpha.shape
     for p in range(n_p):
         acc = 0.0
@@ -818,7 +830,10 @@ def horizon_step(
 
 @njit(cache=True)
 def past_buffers(y, u, k, yb, ub):  # pragma: no cover - numba
-    """``yb[j] = y[k-1-j]``, ``ub[j] = u[k-1-j]`` (zero before the start); returns the entries in use."""
+    """``yb[j] = y[k-1-j]``, ``ub[j] = u[k-1-j]`` (zero before the start).
+
+    Returns the entries in use.
+    """
     n_m = yb.size
     for j in range(n_m):
         q = k - 1 - j
@@ -900,10 +915,10 @@ def lpv_inverse_reg_hys(
 
     Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
     the admissible interval (input limits, the reach of the drive lag when ``lag >= 0``, and
-    ``|rho - rho[k-1]| <= rate_step``); ``hold = rho[k-1]``, or with a drive lag the value ``rho[k]``
-    would take with the previous command held (the regularisation then penalises command changes,
-    not the lag's own motion). With a drive lag and ``horizon > 1`` (from the third sample on) the
-    force term is the mean over ``horizon`` samples with the implied command held
+    ``|rho - rho[k-1]| <= rate_step``); ``hold = rho[k-1]``, or with a drive lag the value
+    ``rho[k]`` would take with the previous command held (the regularisation then penalises command
+    changes, not the lag's own motion). With a drive lag and ``horizon > 1`` (from the third sample
+    on) the force term is the mean over ``horizon`` samples with the implied command held
     (:func:`horizon_step`): a causal lead over the lag. Other arguments (the Dahl state ``z`` and
     share ``blend`` of the hysteretic input included) as :func:`lpv_inverse`.
 

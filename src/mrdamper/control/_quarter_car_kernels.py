@@ -134,7 +134,8 @@ def simulate(
         ``(n_ctrl * n_sub, 5)``: ``z_s, v_s, z_u, v_u, a_s`` at the start of every plant step.
     F, Fd, rho : float64[:]
         Per control sample: damper force (preload removed) [N], desired force [N] (NaN for the
-        passive controller) and the scheduling value (the input, or the input through the drive lag).
+        passive controller) and the scheduling value (the input, or the input through the drive
+        lag).
     sat : bool[:]
         Desired force out of reach at that sample.
     bad : int

@@ -268,9 +268,10 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def model_input_limits(model: Any) -> tuple[float, float]:
-    """Default input limits: the identified ``input_range``, for an LPV model (or a static map with a
-    drive lag) intersected with the scheduling range ``rho_range`` it was identified on (beyond it the
-    coefficients are extrapolated).
+    """Default input limits: the identified ``input_range``.
+
+    For an LPV model (or a static map with a drive lag) it is intersected with the scheduling range
+    ``rho_range`` the model was identified on (beyond it the coefficients are extrapolated).
     """
     lo, hi = (float(b) for b in model.input_range)
     rr = getattr(model, "rho_range", None)
@@ -505,7 +506,8 @@ def _lpv_any_rate(
     t_m = t[0] + np.arange(v_m.size) / model.fs
     rho_m, w_m, sat_m = _lpv(model, t_m, v_m, Fd_m, lo, hi, n_grid, tol)
     warnings.warn(
-        f"{model.kind}: record sampled at {fs:g} Hz, model at {model.fs:g} Hz; the inverse is solved at the "
+        f"{model.kind}: record sampled at {fs:g} Hz, model at {model.fs:g} Hz; "
+        "the inverse is solved at the "
         "model rate and its input interpolated back onto the record's samples",
         Note,
         stacklevel=3,
@@ -532,7 +534,8 @@ def _lpv(
         raise DataValidationError(
             "t",
             f"record sampled at {fs:g} Hz but the LPV model runs at {model.fs:g} Hz; resample the "
-            "record to the model rate first (the causal inverse works sample by sample at that rate)",
+            "record to the model rate first "
+            "(the causal inverse works sample by sample at that rate)",
         )
     laws = model.zone_laws
     if model.input_signal == "v" or laws is None:
@@ -636,9 +639,11 @@ def force_authority(model: Any, v_ref: float) -> float:
     ) / (hi - lo)
 
 
-#: Default regularisation weight at 200 Hz as a fraction of :func:`force_authority` (where it was chosen).
+#: Default regularisation weight at 200 Hz as a fraction of :func:`force_authority` (where it was
+#: chosen).
 DEFAULT_REG_FRACTION = 0.5
-#: Smoothing time constant of the default weight [s]: the fraction 0.5 at 200 Hz (see :func:`default_reg`).
+#: Smoothing time constant of the default weight [s]: the fraction 0.5 at 200 Hz (see
+#: :func:`default_reg`).
 DEFAULT_REG_TIME = 0.005 / float(np.log(5.0))
 
 
@@ -715,7 +720,10 @@ def _lpv_reg(
     rate: float,
     n_h: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Regularised LPV inverse at the model rate; records at another rate are resampled in and out."""
+    """Regularised LPV inverse at the model rate.
+
+    Records at another rate are resampled in and out.
+    """
     from mrdamper.models.rates import to_model_rate
 
     if t.size < 2:
@@ -753,7 +761,8 @@ def _lpv_reg(
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
         return rho, w, sat
     warnings.warn(
-        f"{model.kind}: record sampled at {fs_rec:g} Hz, model at {model.fs:g} Hz; the inverse is solved at the "
+        f"{model.kind}: record sampled at {fs_rec:g} Hz, model at {model.fs:g} Hz; "
+        "the inverse is solved at the "
         "model rate and its input interpolated back onto the record's samples",
         Note,
         stacklevel=3,

@@ -38,7 +38,8 @@ class InverseCheck:
     record, model_kind, input : str
         Record name, inverted model kind, electrical input name (``"i"`` or ``"voltage"``).
     median_input_error : float
-        Median ``|input - measured input|`` over the samples with ``|v| > v_fraction max|v|`` [A] or [V].
+        Median ``|input - measured input|`` over the samples with ``|v| > v_fraction max|v|`` [A]
+        or [V].
     ssse_model : float
         SSSE of the forward model with the measured input [N].
     ssse_inverse : float

@@ -508,7 +508,8 @@ class LPVEstimator(Estimator):
             if lacking and len(lacking) < len(exps):
                 raise DataValidationError(
                     "laws_by",
-                    f"'auto' needs metadata 'current' on every record or on none; {len(lacking)} of "
+                    "'auto' needs metadata 'current' on every record or on none; "
+                    f"{len(lacking)} of "
                     f"{len(exps)} records lack it (first: {lacking[0]!r}); set laws_by='bins' or "
                     f"'plateaus', or give the laws (zone_laws=)",
                 )
