@@ -13,6 +13,7 @@ that ``theta = [alpha.ravel(), beta.ravel(), delta]``.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 from scipy.linalg import blas as _blas
 
@@ -30,6 +31,10 @@ __all__ = [
 _BLOCK = 512
 #: Blocks of the regression filled at once by :func:`gram_pass` (memory ``P x 16384`` values).
 _CHUNK = 32
+
+#: Argument types of the kernels (numba types the values passed; these are for mypy).
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 
 def _fill_blocks(
@@ -220,7 +225,9 @@ def simulate_record(
 
 
 @njit(cache=True)
-def _simulate_fused43(u, rho, al, be, bound):  # pragma: no cover - numba
+def _simulate_fused43(
+    u: FloatArray, rho: FloatArray, al: FloatArray, be: FloatArray, bound: float
+) -> tuple[FloatArray, int]:  # pragma: no cover - numba
     """Fused recursion for ``n_m = 4``, ``n_p = 3`` (zero-padded coefficients)."""
     n = u.size
     y = np.empty(n)
@@ -268,7 +275,9 @@ def _simulate_fused43(u, rho, al, be, bound):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _simulate_generic(u, rho, alpha, beta, bound):  # pragma: no cover - numba
+def _simulate_generic(
+    u: FloatArray, rho: FloatArray, alpha: FloatArray, beta: FloatArray, bound: float
+) -> tuple[FloatArray, int]:  # pragma: no cover - numba
     """Free-run output of one record from zero initial conditions, any order.
 
     Works in chunks of ``_BLOCK`` samples: the time-varying coefficients and the input part
@@ -359,7 +368,9 @@ def _simulate_generic(u, rho, alpha, beta, bound):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def simulate_sensitivity(u, rho, alpha, beta, bound):  # pragma: no cover - numba
+def simulate_sensitivity(
+    u: FloatArray, rho: FloatArray, alpha: FloatArray, beta: FloatArray, bound: float
+) -> tuple[FloatArray, FloatArray, int]:  # pragma: no cover - numba
     """Free-run output and its derivatives with respect to ``theta = [alpha, beta]``.
 
     The sensitivities of an LPV input-output model are its regressors (built from the simulated
@@ -420,7 +431,7 @@ def simulate_sensitivity(u, rho, alpha, beta, bound):  # pragma: no cover - numb
 
 
 @njit(cache=True)
-def first_order_lag(w, dt, eta):  # pragma: no cover - numba
+def first_order_lag(w: FloatArray, dt: float, eta: float) -> FloatArray:  # pragma: no cover - numba
     """Exact zero-order-hold discretisation of ``dr/dt = -eta (r - w)``, ``r[0] = w[0]``."""
     n = w.size
     r = np.empty(n)
@@ -433,8 +444,16 @@ def first_order_lag(w, dt, eta):  # pragma: no cover - numba
 
 @njit(cache=True)
 def oe_normal_equations(
-    u, rho, alpha, beta, F, offset, weight, bound, with_offset
-):  # pragma: no cover
+    u: FloatArray,
+    rho: FloatArray,
+    alpha: FloatArray,
+    beta: FloatArray,
+    F: FloatArray,
+    offset: float,
+    weight: float,
+    bound: float,
+    with_offset: bool,
+) -> tuple[float, FloatArray, FloatArray, int]:  # pragma: no cover
     """Weighted free-run cost, gradient and Gauss-Newton matrix of one record.
 
     Residual ``e[k] = y_hat[k] + offset - F[k]``; the sensitivity rows are propagated with only

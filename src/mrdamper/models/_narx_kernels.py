@@ -15,11 +15,16 @@ Layout shared by every kernel (one record at a time; records are never concatena
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.compiled import readonly
 
 __all__ = ["fill_candidates", "free_run", "free_run_sensitivity", "gram_select"]
+
+#: Argument types of the kernels (numba types the values passed; these are for mypy).
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
 
 
 def fill_candidates(
@@ -56,13 +61,15 @@ def _ri(a: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _base_values(S, base, k, out):  # pragma: no cover - numba
+def _base_values(
+    S: FloatArray, base: IntArray, k: int, out: FloatArray
+) -> None:  # pragma: no cover - numba
     for b in range(base.shape[0]):
         out[b] = S[base[b, 0], k - base[b, 1]]
 
 
 @njit(cache=True)
-def _term(bv, slots, t):  # pragma: no cover - numba
+def _term(bv: FloatArray, slots: IntArray, t: int) -> float:  # pragma: no cover - numba
     val = 1.0
     for s in range(slots.shape[1]):
         j = slots[t, s]
@@ -72,7 +79,9 @@ def _term(bv, slots, t):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _fill_candidates(S, base, slots, k0, k1, out):  # pragma: no cover - numba
+def _fill_candidates(
+    S: FloatArray, base: IntArray, slots: IntArray, k0: int, k1: int, out: FloatArray
+) -> None:  # pragma: no cover - numba
     """Rows ``k0 .. k1-1`` of the regression matrix into ``out[: k1 - k0]`` (terms as columns)."""
     bv = np.empty(base.shape[0])
     for q in range(k1 - k0):
@@ -82,7 +91,9 @@ def _fill_candidates(S, base, slots, k0, k1, out):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _free_run(S, base, slots, theta, p, bound):  # pragma: no cover - numba
+def _free_run(
+    S: FloatArray, base: IntArray, slots: IntArray, theta: FloatArray, p: int, bound: float
+) -> int:  # pragma: no cover - numba
     """Simulate ``S[0, p:]`` in place from ``S[0, :p]``; first diverging sample or -1.
 
     A sample diverges when its scaled force is not finite or exceeds ``bound`` in magnitude;
@@ -102,7 +113,9 @@ def _free_run(S, base, slots, theta, p, bound):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _free_run_sensitivity(S, base, slots, theta, p, bound):  # pragma: no cover - numba
+def _free_run_sensitivity(
+    S: FloatArray, base: IntArray, slots: IntArray, theta: FloatArray, p: int, bound: float
+) -> tuple[FloatArray, int]:  # pragma: no cover - numba
     """Free run as :func:`free_run` plus ``J[k, j] = d f[k] / d theta[j]``.
 
     The sensitivity obeys ``J[k] = phi(k) + sum_t theta_t sum_{s: force slot}
@@ -143,7 +156,9 @@ def _free_run_sensitivity(S, base, slots, theta, p, bound):  # pragma: no cover 
 
 
 @njit(cache=True)
-def gram_select(A, n_max, err_tol, colin_tol):  # pragma: no cover - numba
+def gram_select(
+    A: FloatArray, n_max: int, err_tol: float, colin_tol: float
+) -> tuple[IntArray, FloatArray]:  # pragma: no cover - numba
     """Forward orthogonal least squares (OLS-ERR) term selection on an augmented Gram matrix.
 
     Parameters

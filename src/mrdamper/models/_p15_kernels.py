@@ -61,7 +61,8 @@ def _coefs(C: np.ndarray, phi: np.ndarray, w: np.ndarray) -> None:
 @njit(cache=True)
 def _accel(F: float, G: float, vv: float, w: np.ndarray, f0: float) -> float:
     F2 = F * F
-    return (F - f0 - w[0] * vv - w[1] * G - w[3] * F2 * F - w[4] * F2 * F2 * F) / w[2]
+    a: float = (F - f0 - w[0] * vv - w[1] * G - w[3] * F2 * F - w[4] * F2 * F2 * F) / w[2]
+    return a
 
 
 @njit(cache=True)

@@ -13,8 +13,6 @@ analytic Jacobian with respect to ``theta`` (and ``f0``).
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numba import njit
 
@@ -49,7 +47,7 @@ def sp_force(
 ) -> np.ndarray:
     """Evaluate the SP force map sample by sample (see :func:`_sp_force`; arrays are passed
     read-only so the kernel has one signature)."""
-    return _SP_FORCE(*_args(x, v, i, comp, power, theta), float(f0))
+    return _sp_force(*_args(x, v, i, comp, power, theta), float(f0))
 
 
 def sp_force_jacobian(
@@ -63,7 +61,7 @@ def sp_force_jacobian(
     with_offset: bool,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Force map and its analytic Jacobian (see :func:`_sp_force_jacobian`)."""
-    return _SP_FORCE_JACOBIAN(*_args(x, v, i, comp, power, theta), float(f0), bool(with_offset))
+    return _sp_force_jacobian(*_args(x, v, i, comp, power, theta), float(f0), bool(with_offset))
 
 
 def _args(
@@ -73,10 +71,16 @@ def _args(
     comp: np.ndarray,
     power: np.ndarray,
     theta: np.ndarray,
-) -> tuple[np.ndarray, ...]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Read-only float64 views of ``x, v, i, theta`` and int64 views of ``comp, power``."""
     f, n = np.float64, np.int64
-    return tuple(
-        readonly(a, t) for a, t in ((x, f), (v, f), (i, f), (comp, n), (power, n), (theta, f))
+    return (
+        readonly(x, f),
+        readonly(v, f),
+        readonly(i, f),
+        readonly(comp, n),
+        readonly(power, n),
+        readonly(theta, f),
     )
 
 
@@ -164,8 +168,3 @@ def _sp_force_jacobian(
         if with_offset:
             J[s, p] = 1.0
     return F, J
-
-
-# the dispatchers, untyped for the wrappers above (numba's stubs type a call by its first overload)
-_SP_FORCE: Any = _sp_force
-_SP_FORCE_JACOBIAN: Any = _sp_force_jacobian

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 __all__ = [
@@ -66,9 +67,13 @@ C0A, C0B, K0, C1A, C1B, K1, X0, ALA, ALB, GAM, BET, AA, NN, ETA, F0 = range(15)
 Z_LIMIT = 1.0e6
 Y_LIMIT = 1.0e3
 
+#: Argument types of the kernels (numba types the values passed; these are for mypy).
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
 
 @njit(cache=True)
-def _powers(z, n):
+def _powers(z: float, n: float) -> tuple[float, float, float]:
     """Return (|z|**n, |z|**(n-1), log|z|), with the z == 0 values (0, 0, 0)."""
     az = abs(z)
     if az > 0.0:
@@ -81,7 +86,7 @@ def _powers(z, n):
 
 
 @njit(cache=True)
-def _sign(a):
+def _sign(a: float) -> float:
     if a > 0.0:
         return 1.0
     if a < 0.0:
@@ -90,7 +95,9 @@ def _sign(a):
 
 
 @njit(cache=True)
-def _rhs(x, xd, e, y, z, u, p):
+def _rhs(
+    x: float, xd: float, e: float, y: float, z: float, u: float, p: FloatArray
+) -> tuple[float, float, float, float]:
     """State derivative (dy, dz, du) and the damping c0 + c1 at one instant."""
     c0 = p[C0A] + p[C0B] * u
     c1 = p[C1A] + p[C1B] * u
@@ -105,23 +112,34 @@ def _rhs(x, xd, e, y, z, u, p):
 
 
 @njit(cache=True)
-def _force(x, xd, y, z, u, p):
+def _force(x: float, xd: float, y: float, z: float, u: float, p: FloatArray) -> float:
     c0 = p[C0A] + p[C0B] * u
     c1 = p[C1A] + p[C1B] * u
     al = p[ALA] + p[ALB] * u
     yd = (al * z + c0 * xd + p[K0] * (x - y)) / (c0 + c1)
-    return c1 * yd + p[K1] * (x - p[X0]) + p[F0]
+    F: float = c1 * yd + p[K1] * (x - p[X0]) + p[F0]
+    return F
 
 
 @njit(cache=True)
-def _bad_state(y, z, u, x):
+def _bad_state(y: float, z: float, u: float, x: float) -> bool:
     if not (np.isfinite(y) and np.isfinite(z) and np.isfinite(u)):
         return True
     return abs(z) > Z_LIMIT or abs(y - x) > Y_LIMIT
 
 
 @njit(cache=True)
-def simulate(x, v, e, dt, p, nsub, y0, z0, u0):
+def simulate(
+    x: FloatArray,
+    v: FloatArray,
+    e: FloatArray,
+    dt: float,
+    p: FloatArray,
+    nsub: int,
+    y0: float,
+    z0: float,
+    u0: float,
+) -> tuple[FloatArray, int, int]:
     """Free-run force of one record.
 
     Parameters
@@ -184,12 +202,23 @@ def simulate(x, v, e, dt, p, nsub, y0, z0, u0):
 
 
 @njit(cache=True)
-def _rhs_jac(x, xd, e, y, z, u, p, f, Js, Jp):
+def _rhs_jac(
+    x: float,
+    xd: float,
+    e: float,
+    y: float,
+    z: float,
+    u: float,
+    p: FloatArray,
+    f: FloatArray,
+    Js: FloatArray,
+    Jp: FloatArray,
+) -> float:
     """Fill f = ds/dt, Js = df/ds (3x3), Jp = df/dp (3xP); return c0 + c1."""
     c0 = p[C0A] + p[C0B] * u
     c1 = p[C1A] + p[C1B] * u
     al = p[ALA] + p[ALB] * u
-    C = c0 + c1
+    C: float = c0 + c1
     iC = 1.0 / C
     yd = (al * z + c0 * xd + p[K0] * (x - y)) * iC
     w = xd - yd
@@ -242,7 +271,16 @@ def _rhs_jac(x, xd, e, y, z, u, p, f, Js, Jp):
 
 
 @njit(cache=True)
-def _force_jac(x, xd, y, z, u, p, dFs, dFp):
+def _force_jac(
+    x: float,
+    xd: float,
+    y: float,
+    z: float,
+    u: float,
+    p: FloatArray,
+    dFs: FloatArray,
+    dFp: FloatArray,
+) -> float:
     """Return F and fill dF/ds (3) and dF/dp (P)."""
     c0 = p[C0A] + p[C0B] * u
     c1 = p[C1A] + p[C1B] * u
@@ -266,11 +304,20 @@ def _force_jac(x, xd, y, z, u, p, dFs, dFp):
     dFp[K1] = x - p[X0]
     dFp[X0] = -p[K1]
     dFp[F0] = 1.0
-    return c1 * yd + p[K1] * (x - p[X0]) + p[F0]
+    F: float = c1 * yd + p[K1] * (x - p[X0]) + p[F0]
+    return F
 
 
 @njit(cache=True)
-def _stage(s, S, h, k, K, out_s, out_S):
+def _stage(
+    s: FloatArray,
+    S: FloatArray,
+    h: float,
+    k: FloatArray,
+    K: FloatArray,
+    out_s: FloatArray,
+    out_S: FloatArray,
+) -> None:
     """out = (s, S) + h * (k, K)."""
     for i in range(3):
         out_s[i] = s[i] + h * k[i]
@@ -279,7 +326,19 @@ def _stage(s, S, h, k, K, out_s, out_S):
 
 
 @njit(cache=True)
-def _sens_rhs(xx, xd, e, s, S, p, cols, f, Js, Jp, dS):
+def _sens_rhs(
+    xx: float,
+    xd: float,
+    e: float,
+    s: FloatArray,
+    S: FloatArray,
+    p: FloatArray,
+    cols: IntArray,
+    f: FloatArray,
+    Js: FloatArray,
+    Jp: FloatArray,
+    dS: FloatArray,
+) -> float:
     C = _rhs_jac(xx, xd, e, s[0], s[1], s[2], p, f, Js, Jp)
     m = S.shape[1]
     for i in range(3):
@@ -289,7 +348,18 @@ def _sens_rhs(xx, xd, e, s, S, p, cols, f, Js, Jp, dS):
 
 
 @njit(cache=True)
-def simulate_sens(x, v, e, dt, p, nsub, y0, z0, u0, cols):
+def simulate_sens(
+    x: FloatArray,
+    v: FloatArray,
+    e: FloatArray,
+    dt: float,
+    p: FloatArray,
+    nsub: int,
+    y0: float,
+    z0: float,
+    u0: float,
+    cols: IntArray,
+) -> tuple[FloatArray, FloatArray, int, int]:
     """Free-run force of one record and its derivatives with respect to chosen parameters.
 
     Same arguments as :func:`simulate`, plus ``cols`` (int64 array): indices of the parameters to
