@@ -537,14 +537,7 @@ def _lpv(
             "record to the model rate first "
             "(the causal inverse works sample by sample at that rate)",
         )
-    laws = model.zone_laws
-    if model.input_signal == "v" or laws is None:
-        mode, gm, gc = K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1))
-        mu_h, mu_l = np.zeros(2), np.zeros(2)
-    else:
-        mode = K.MODE_CONTINUOUS if model.reading == "continuous" else K.MODE_LITERAL
-        gm, gc = np.ascontiguousarray(laws.gamma_m), np.ascontiguousarray(laws.gamma_c)
-        mu_h, mu_l = np.asarray(laws.mu_high, dtype=float), np.asarray(laws.mu_low, dtype=float)
+    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     v = np.ascontiguousarray(v, dtype=np.float64)
     blend, z = _dahl_along(model, v, 1.0 / model.fs)  # as the model: dt = 1 / fs
@@ -777,17 +770,12 @@ def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray,
     """Zone-law arrays of an LPV or LTI model for the kernels: ``(mode, gamma_m, gamma_c,
     mu_high, mu_low)`` (the hysteretic input uses the continuous reading's laws, see
     :func:`lpv_hysteresis` for its other settings)."""
-    laws = model.zone_laws
-    if model.input_signal == "v" or laws is None:
-        return K.MODE_V, np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
-    mode = K.MODE_CONTINUOUS if model.reading == "continuous" else K.MODE_LITERAL
-    return (
-        mode,
-        np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
-        np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
-        np.asarray(laws.mu_high, dtype=np.float64),
-        np.asarray(laws.mu_low, dtype=np.float64),
-    )
+    gm, gc, mu_h, mu_l = model.law_arrays()
+    if model.input_signal == "v" or model.zone_laws is None:
+        mode = K.MODE_V
+    else:
+        mode = K.MODE_CONTINUOUS if model.reading == "continuous" else K.MODE_LITERAL
+    return mode, gm, gc, mu_h, mu_l
 
 
 def lpv_hysteresis(model: Any) -> tuple[float, float]:

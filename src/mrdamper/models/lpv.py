@@ -278,6 +278,27 @@ class TransferFunctionModel(FittedModel):
             blend=self.blend,
         )
 
+    def law_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Zone-law arrays of ``u`` as the control kernels take them.
+
+        Returns
+        -------
+        gamma_m, gamma_c : ndarray, shape (3, degree + 1)
+            Slope and intercept laws (float64, C-contiguous); zeros of shape (3, 1) when the input
+            is the velocity (``input_signal="v"``) or the model has no laws.
+        mu_high, mu_low : ndarray, shape (2,)
+            Breakpoint laws; zeros in the same case.
+        """
+        laws = self.zone_laws
+        if self.input_signal == "v" or laws is None:
+            return np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
+        return (
+            np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
+            np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
+            np.asarray(laws.mu_high, dtype=np.float64),
+            np.asarray(laws.mu_low, dtype=np.float64),
+        )
+
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N] from the record's velocity and electrical input.
 
@@ -347,14 +368,7 @@ class LPVModel(TransferFunctionModel):
         ``stroke``: the kernels step the Dahl state along the motion and rebuild ``u`` from
         ``(v, z, rho)``.
         """
-        laws = self.zone_laws
-        if self.input_signal == "v" or laws is None:
-            gm, gc, mu_h, mu_l = np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
-        else:
-            gm = np.ascontiguousarray(laws.gamma_m, dtype=np.float64)
-            gc = np.ascontiguousarray(laws.gamma_c, dtype=np.float64)
-            mu_h = np.asarray(laws.mu_high, dtype=np.float64)
-            mu_l = np.asarray(laws.mu_low, dtype=np.float64)
+        gm, gc, mu_h, mu_l = self.law_arrays()
         return ScheduledForm(
             alpha=np.ascontiguousarray(self.alpha),
             beta=np.ascontiguousarray(self.beta),
