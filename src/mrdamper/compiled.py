@@ -38,6 +38,7 @@ import numpy as np
 
 __all__ = [
     "KERNELS",
+    "RIG_MODULES",
     "claim_folder",
     "compile_ahead",
     "compile_claimed",
@@ -67,6 +68,10 @@ _SP_ITEMS: tuple[Item, ...] = (
     (_SP, "_sp_force", "f1r f1r f1r i1r i1r f1r F", 1.1),
     (_SP, "_sp_force_jacobian", "f1r f1r f1r i1r i1r f1r F B", 0.4),
 )
+
+#: Kernel modules that generating records on the virtual rig compiles (its damper is a Spencer
+#: model, simulated by ``_spencer_kernels.simulate``).
+RIG_MODULES: tuple[str, ...] = (_SPENCER,)
 
 #: Kernels (with the argument types of the library's calls) that each model kind's fit and
 #: simulation run; kinds without compiled kernels are absent.
@@ -131,8 +136,9 @@ def is_cached(item: Item) -> bool:
         return False
 
 
-def _todo(kinds: Iterable[str]) -> list[list[Item]]:
-    """Kernels of ``kinds`` not cached yet, by module (largest module first).
+def _todo(kinds: Iterable[str], last: Iterable[str] = ()) -> list[list[Item]]:
+    """Kernels of ``kinds`` not cached yet, by module (largest module first, the modules named in
+    ``last`` after all others).
 
     The kernels of one module are compiled together, in one process: they share helper functions
     and numba's own compiled helpers, which another process would compile again.
@@ -145,7 +151,8 @@ def _todo(kinds: Iterable[str]) -> list[list[Item]]:
     for it in items.values():
         if not is_cached(it):
             modules.setdefault(it[0], []).append(it)
-    return sorted(modules.values(), key=lambda m: -sum(it[3] for it in m))
+    late = set(last)
+    return sorted(modules.values(), key=lambda m: (m[0][0] in late, -sum(it[3] for it in m)))
 
 
 def compile_kernels(items: Sequence[Item]) -> int:
@@ -164,13 +171,14 @@ def compile_kernels(items: Sequence[Item]) -> int:
     return done
 
 
-def compile_claimed(kinds: Sequence[str], claim_dir: str) -> int:
+def compile_claimed(kinds: Sequence[str], claim_dir: str, last: Sequence[str] = ()) -> int:
     """Compile the uncached kernels of ``kinds``, module by module, skipping modules that another
     process has claimed: a module is claimed by creating a file named after it in ``claim_dir``
     (atomic). Every process given the same ``claim_dir`` runs this; each module is compiled once.
-    Returns the number of kernel signatures compiled here."""
+    Modules named in ``last`` come after the others (a kernel another process has cached by then
+    is loaded, not compiled again). Returns the number of kernel signatures handled here."""
     done = 0
-    for items in _todo(kinds):
+    for items in _todo(kinds, last):
         try:
             os.close(os.open(os.path.join(claim_dir, items[0][0]), os.O_CREAT | os.O_EXCL))
         except FileExistsError:
@@ -190,11 +198,13 @@ class _Ahead:
 _AHEAD: _Ahead | None = None
 
 
-def compile_ahead(kinds: Sequence[str]) -> None:
+def compile_ahead(kinds: Sequence[str], last: Sequence[str] = ()) -> None:
     """Start compiling the uncached kernels of ``kinds`` in a background process, now.
 
     For a command that has other work to do first (``mrdamper demo`` generates its records): the
-    compilation runs on another core meanwhile. The study picks it up (:func:`claim_folder`) and
+    compilation runs on another core meanwhile. ``last``: kernel modules the command itself is
+    about to compile (the virtual rig simulates a Spencer model, :data:`RIG_MODULES`); the
+    background process takes them after every other module, when their kernels are likely cached. The study picks it up (:func:`claim_folder`) and
     compiles the modules not yet claimed in its own processes, then waits for this one
     (:func:`finish_ahead`). Nothing starts when every kernel is cached.
     """
@@ -204,7 +214,9 @@ def compile_ahead(kinds: Sequence[str]) -> None:
     claim_dir = tempfile.mkdtemp(prefix="mrdamper-kernels-")
     methods = multiprocessing.get_all_start_methods()
     ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    proc = ctx.Process(target=compile_claimed, args=(list(kinds), claim_dir), daemon=True)
+    proc = ctx.Process(
+        target=compile_claimed, args=(list(kinds), claim_dir, list(last)), daemon=True
+    )
     proc.start()
     _AHEAD = _Ahead(proc, claim_dir)
 

@@ -235,7 +235,9 @@ def demo(
         highlight=False,
     )
     # on a fresh installation, compile the models' kernels on another core meanwhile
-    compiled.compile_ahead(kinds or [s.kind for s in doe_protocol().resolved_models()])
+    compiled.compile_ahead(
+        kinds or [s.kind for s in doe_protocol().resolved_models()], last=compiled.RIG_MODULES
+    )
     try:
         data = table_ii(seed=seed, scale=sc)
     except BaseException:

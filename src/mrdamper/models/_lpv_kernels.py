@@ -457,7 +457,8 @@ def oe_normal_equations(
     """Weighted free-run cost, gradient and Gauss-Newton matrix of one record.
 
     Residual ``e[k] = y_hat[k] + offset - F[k]``; the sensitivity rows are propagated with only
-    the last ``n_m`` kept (the Jacobian is never stored) and accumulated block-wise.
+    the last ``n_m`` kept (the Jacobian is never stored); each row is added to ``J^T J``
+    (upper triangle, mirrored at the end) and ``J^T e`` as it is formed.
 
     Returns
     -------
@@ -479,13 +480,11 @@ def oe_normal_equations(
     cost = 0.0
     y = np.zeros(n)
     hist = np.zeros((n_m, P))  # hist[l] = J row of sample k-1-l
-    a = np.empty(n_m)
-    pw = np.empty(n_p)
-    bt = np.empty((Q, _BLOCK))
-    eb = np.empty(_BLOCK)
-    sw = np.sqrt(weight)
-    fill = 0
-    row = np.empty(P)
+    a = np.zeros(n_m)
+    pw = np.zeros(n_p)
+    row = np.zeros(Q)  # J row of sample k, with the offset's 1 last
+    if with_offset:
+        row[P] = 1.0
     for k in range(n):
         r = rho[k]
         pw[0] = 1.0
@@ -526,17 +525,17 @@ def oe_normal_equations(
             hist[0, c] = row[c]
         e = acc + offset - F[k]
         cost += e * e
-        for c in range(P):
-            bt[c, fill] = row[c] * sw
-        if with_offset:
-            bt[P, fill] = sw
-        eb[fill] = e * sw
-        fill += 1
-        if fill == _BLOCK or k == n - 1:
-            part = np.ascontiguousarray(bt[:, :fill])
-            H += part @ part.T
-            g += part @ eb[:fill]
-            fill = 0
+        # rank-one update of the upper triangle of J^T J and of J^T e
+        for i in range(Q):
+            ri = row[i]
+            g[i] += ri * e
+            for j in range(i, Q):
+                H[i, j] += ri * row[j]
+    for i in range(Q):
+        g[i] *= weight
+        for j in range(i, Q):
+            H[i, j] *= weight
+            H[j, i] = H[i, j]
     return weight * cost, g, H, -1
 
 
