@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from numba import typeof
 
 from mrdamper import compiled
@@ -60,3 +61,13 @@ def test_compile_ahead_does_nothing_without_work() -> None:
     compiled.compile_ahead(["bingham"])  # no compiled kernels: no background process
     assert compiled.claim_folder() is None
     compiled.finish_ahead()  # no-op
+
+
+def test_modules_named_last_come_after_the_others(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(compiled, "is_cached", lambda item: False)  # as on a fresh install
+    kinds = ["spencer", "lpv", "p15", "narx", "sp1"]
+    by_cost = [m[0][0] for m in compiled._todo(kinds)]
+    assert by_cost[0] == "mrdamper.models._spencer_kernels"  # the costliest module first
+    late = [m[0][0] for m in compiled._todo(kinds, last=compiled.RIG_MODULES)]
+    assert late[-1] == "mrdamper.models._spencer_kernels"
+    assert late[:-1] == [m for m in by_cost if m != late[-1]]
