@@ -90,7 +90,6 @@ KERNELS: dict[str, tuple[Item, ...]] = {
     "narx": (
         (_NARX, "_free_run_sensitivity", "f2 i2r i2r f1r I F", 0.7),
         (_NARX, "_free_run", "f2 i2r i2r f1r I F", 0.6),
-        (_NARX, "gram_select", "f2 I F F", 0.6),
         (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.5),
     ),
 }
@@ -204,9 +203,10 @@ def compile_ahead(kinds: Sequence[str], last: Sequence[str] = ()) -> None:
     For a command that has other work to do first (``mrdamper demo`` generates its records): the
     compilation runs on another core meanwhile. ``last``: kernel modules the command itself is
     about to compile (the virtual rig simulates a Spencer model, :data:`RIG_MODULES`); the
-    background process takes them after every other module, when their kernels are likely cached. The study picks it up (:func:`claim_folder`) and
-    compiles the modules not yet claimed in its own processes, then waits for this one
-    (:func:`finish_ahead`). Nothing starts when every kernel is cached.
+    background process takes them after every other module, when their kernels are likely
+    cached. The study picks it up (:func:`claim_folder`) and compiles the modules not yet claimed
+    in its own processes, then waits for this one (:func:`finish_ahead`). Nothing starts when
+    every kernel is cached.
     """
     global _AHEAD
     if _AHEAD is not None or not _todo(kinds):

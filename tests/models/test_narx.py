@@ -256,3 +256,33 @@ def test_old_setting_name_refine_max_nfev_is_accepted_with_a_note() -> None:
     assert est.max_nfev == 7
     with pytest.raises(DataValidationError, match="refine_max_nfev"):
         get_estimator("narx", refine_max_nfev=7, max_nfev=9)
+
+
+def test_term_selection_matches_least_squares_on_the_selected_columns() -> None:
+    """Each error reduction ratio is what adding that column explains, by plain least squares;
+    the first pick is the column best correlated with the output; a collinear copy and a zero
+    column are never picked."""
+    from mrdamper.models._narx_fit import gram_select
+
+    rng = np.random.default_rng(3)
+    X = rng.standard_normal((400, 8))
+    X[:, 6] = 2.0 * X[:, 1]  # collinear with column 1
+    X[:, 7] = 0.0
+    y = 3.0 * X[:, 2] - 1.5 * X[:, 4] + 0.5 * X[:, 1] + 0.05 * rng.standard_normal(400)
+    B = np.column_stack([X, y])
+    A = B.T @ B
+    d = np.sqrt(np.diag(A))
+    d[d == 0] = 1.0
+    A /= d[:, None] * d[None, :]
+    A[7, :] = 0.0
+    order, err = gram_select(A, 6, 1e-12, 1e-8)
+    assert order[0] == 2  # the largest share of y
+    assert not ({1, 6} <= set(order.tolist())) and 7 not in order
+    yy = y @ y
+    explained = 0.0
+    for k in range(order.size):
+        cols = X[:, order[: k + 1]]
+        res = y - cols @ np.linalg.lstsq(cols, y, rcond=None)[0]
+        assert err[k] == pytest.approx(1.0 - res @ res / yy - explained, abs=1e-9)
+        explained += err[k]
+    assert order.dtype == np.int64 and err.dtype == np.float64

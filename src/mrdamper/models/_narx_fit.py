@@ -18,7 +18,13 @@ from mrdamper.errors import IdentificationError
 from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
 
-__all__ = ["free_run_cost", "least_squares_terms", "refine", "select_terms"]
+__all__ = [
+    "free_run_cost",
+    "gram_select",
+    "least_squares_terms",
+    "refine",
+    "select_terms",
+]
 
 #: Rows per block when the candidate Gram matrix is accumulated.
 _BLOCK = 2048
@@ -56,12 +62,62 @@ def select_terms(
     d[d == 0] = 1.0
     A /= d[:, None] * d[None, :]
     A[~np.append(usable, True), :] = 0.0  # constant-zero candidates: never selectable
-    order, err = K.gram_select(A, min(int(n_terms), M), float(err_tol), float(colin_tol))
+    order, err = gram_select(A, min(int(n_terms), M), float(err_tol), float(colin_tol))
     if order.size == 0:
         raise IdentificationError(
             "narx: no candidate term explains the force (all collinear or zero)"
         )
     return np.asarray(order), np.asarray(err)
+
+
+def gram_select(
+    A: np.ndarray, n_max: int, err_tol: float, colin_tol: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Forward orthogonal least squares (OLS-ERR) term selection on an augmented Gram matrix.
+
+    Each step picks the candidate with the largest error reduction ratio and eliminates it from
+    the candidates left (one Gauss-Jordan step on the free rows and columns of ``A``).
+
+    Parameters
+    ----------
+    A : ndarray, shape (M + 1, M + 1)
+        ``[[Phi^T Phi, Phi^T y], [y^T Phi, y^T y]]`` with unit diagonal on the candidate block
+        (columns normalised); overwritten.
+    n_max : int
+        Largest number of terms to select.
+    err_tol : float
+        Stop when the unexplained fraction ``||r||^2 / ||y||^2`` falls below it.
+    colin_tol : float
+        A candidate is skipped when its part orthogonal to the selected terms has squared norm
+        below ``colin_tol`` (relative to its own norm: near-collinear).
+
+    Returns
+    -------
+    order : ndarray of int64
+        Selected candidate indices in selection order.
+    err : ndarray of float64
+        Error reduction ratio of each selected term (fraction of ``||y||^2`` it explains) [-].
+    """
+    M = A.shape[0] - 1
+    yy0 = A[M, M]
+    free = np.ones(M + 1, dtype=bool)  # rows and columns not selected (the output's always)
+    order: list[int] = []
+    err: list[float] = []
+    while len(order) < n_max and not A[M, M] <= err_tol * yy0:
+        diag = np.diag(A)[:M]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = A[:M, M] * A[:M, M] / (diag * yy0)
+        ratio[~(free[:M] & (diag > colin_tol)) | np.isnan(ratio)] = -np.inf
+        best = int(np.argmax(ratio)) if M else 0
+        if not (M and ratio[best] > 0.0):
+            break
+        free[best] = False
+        order.append(best)
+        err.append(float(ratio[best]))
+        col = A[:, best].copy()
+        idx = np.flatnonzero(free)
+        A[np.ix_(idx, idx)] -= np.outer(col[idx] / A[best, best], col[idx])
+    return np.array(order, dtype=np.int64), np.array(err, dtype=np.float64)
 
 
 def least_squares_terms(

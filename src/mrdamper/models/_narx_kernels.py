@@ -20,7 +20,7 @@ from numba import njit
 
 from mrdamper.compiled import readonly
 
-__all__ = ["fill_candidates", "free_run", "free_run_sensitivity", "gram_select"]
+__all__ = ["fill_candidates", "free_run", "free_run_sensitivity"]
 
 #: Argument types of the kernels (numba types the values passed; these are for mypy).
 FloatArray = npt.NDArray[np.float64]
@@ -153,64 +153,3 @@ def _free_run_sensitivity(
             return J, k
         S[0, k] = acc
     return J, -1
-
-
-@njit(cache=True)
-def gram_select(
-    A: FloatArray, n_max: int, err_tol: float, colin_tol: float
-) -> tuple[IntArray, FloatArray]:  # pragma: no cover - numba
-    """Forward orthogonal least squares (OLS-ERR) term selection on an augmented Gram matrix.
-
-    Parameters
-    ----------
-    A : float64[:, :]
-        ``[[Phi^T Phi, Phi^T y], [y^T Phi, y^T y]]`` with unit diagonal on the candidate block
-        (columns normalised); overwritten.
-    n_max : int
-        Largest number of terms to select.
-    err_tol : float
-        Stop when the unexplained fraction ``||r||^2 / ||y||^2`` falls below it.
-    colin_tol : float
-        A candidate is skipped when its part orthogonal to the selected terms has squared norm
-        below ``colin_tol`` (relative to its own norm: near-collinear).
-
-    Returns
-    -------
-    order : int64[:]
-        Selected candidate indices in selection order.
-    err : float64[:]
-        Error reduction ratio of each selected term (fraction of ``||y||^2`` it explains).
-    """
-    M = A.shape[0] - 1
-    yy0 = A[M, M]
-    chosen = np.zeros(M, dtype=np.bool_)
-    order = np.empty(n_max, dtype=np.int64)
-    err = np.empty(n_max)
-    n_sel = 0
-    while n_sel < n_max:
-        if A[M, M] <= err_tol * yy0:
-            break
-        best = -1
-        best_err = 0.0
-        for j in range(M):
-            if chosen[j] or A[j, j] <= colin_tol:
-                continue
-            e = A[j, M] * A[j, M] / (A[j, j] * yy0)
-            if e > best_err:
-                best_err = e
-                best = j
-        if best < 0:
-            break
-        chosen[best] = True
-        order[n_sel] = best
-        err[n_sel] = best_err
-        n_sel += 1
-        piv = A[best, best]
-        col = A[:, best].copy()
-        for r in range(M + 1):
-            if r != best and (r == M or not chosen[r]):
-                f = col[r] / piv
-                for c in range(M + 1):
-                    if c == M or not chosen[c]:
-                        A[r, c] -= f * col[c]
-    return order[:n_sel], err[:n_sel]
