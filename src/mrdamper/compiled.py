@@ -61,12 +61,12 @@ _P15 = "mrdamper.models._p15_kernels"
 Item = tuple[str, str, str, float]
 
 _LPV_ITEMS: tuple[Item, ...] = (
-    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 2.5),
-    (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.7),
+    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 1.2),
+    (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.5),
 )
 _SP_ITEMS: tuple[Item, ...] = (
-    (_SP, "_sp_force", "f1r f1r f1r i1r i1r f1r F", 1.1),
-    (_SP, "_sp_force_jacobian", "f1r f1r f1r i1r i1r f1r F B", 0.4),
+    (_SP, "_sp_force", "f1r f1r f1r i1r i1r f1r F", 0.4),
+    (_SP, "_sp_force_jacobian", "f1r f1r f1r i1r i1r f1r F B", 0.3),
 )
 
 #: Kernel modules that generating records on the virtual rig compiles (its damper is a Spencer
@@ -78,19 +78,19 @@ RIG_MODULES: tuple[str, ...] = (_SPENCER,)
 KERNELS: dict[str, tuple[Item, ...]] = {
     "lpv": _LPV_ITEMS,
     "lti": _LPV_ITEMS,
-    "p15": ((_P15, "p15i_run", "f1r f1r F f2 F I F F I F i1 i1 f1 f1 f2 B B", 3.0),),
+    "p15": ((_P15, "p15i_run", "f1r f1r F f2 F I F F I F i1 i1 f1 f1 f2 B B", 1.9),),
     "sp1": _SP_ITEMS,
     "sp2": _SP_ITEMS,
     "sp3": _SP_ITEMS,
     "sp4": _SP_ITEMS,
     "spencer": (
-        (_SPENCER, "simulate_sens", "f1r f1r f1r F f1 I F F F i1", 3.9),
-        (_SPENCER, "simulate", "f1r f1r f1r F f1 I F F F", 1.3),
+        (_SPENCER, "simulate_sens", "f1r f1r f1r F f1 I F F F i1", 2.3),
+        (_SPENCER, "simulate", "f1r f1r f1r F f1 I F F F", 1.0),
     ),
     "narx": (
-        (_NARX, "_free_run_sensitivity", "f2 i2r i2r f1r I F", 0.7),
-        (_NARX, "_free_run", "f2 i2r i2r f1r I F", 0.6),
-        (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.5),
+        (_NARX, "_free_run_sensitivity", "f2 i2r i2r f1r I F", 0.8),
+        (_NARX, "_free_run", "f2 i2r i2r f1r I F", 0.2),
+        (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.3),
     ),
 }
 
