@@ -63,11 +63,14 @@ def test_compile_ahead_does_nothing_without_work() -> None:
     compiled.finish_ahead()  # no-op
 
 
-def test_modules_named_last_come_after_the_others(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_kernels_named_last_come_after_the_others_of_their_module(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     monkeypatch.setattr(compiled, "is_cached", lambda item: False)  # as on a fresh install
     kinds = ["spencer", "lpv", "p15", "narx", "sp1"]
-    by_cost = [m[0][0] for m in compiled._todo(kinds)]
-    assert by_cost[0] == "mrdamper.models._spencer_kernels"  # the costliest module first
-    late = [m[0][0] for m in compiled._todo(kinds, last=compiled.RIG_MODULES)]
-    assert late[-1] == "mrdamper.models._spencer_kernels"
-    assert late[:-1] == [m for m in by_cost if m != late[-1]]
+    plain = compiled._todo(kinds)
+    late = compiled._todo(kinds, last=compiled.RIG_KERNELS)
+    assert [m[0][0] for m in plain] == [m[0][0] for m in late]  # modules: costliest first
+    assert plain[0][0][0] == "mrdamper.models._spencer_kernels"
+    assert [it[1] for it in late[0]] == ["simulate_sens", "simulate"]  # the rig's kernel last
+    assert [sorted(m) for m in plain] == [sorted(m) for m in late]

@@ -38,7 +38,7 @@ import numpy as np
 
 __all__ = [
     "KERNELS",
-    "RIG_MODULES",
+    "RIG_KERNELS",
     "claim_folder",
     "compile_ahead",
     "compile_claimed",
@@ -69,9 +69,9 @@ _SP_ITEMS: tuple[Item, ...] = (
     (_SP, "_sp_force_jacobian", "f1r f1r f1r i1r i1r f1r F B", 0.3),
 )
 
-#: Kernel modules that generating records on the virtual rig compiles (its damper is a Spencer
-#: model, simulated by ``_spencer_kernels.simulate``).
-RIG_MODULES: tuple[str, ...] = (_SPENCER,)
+#: Model kernels (module, name) that generating records on the virtual rig compiles: its damper is
+#: a Spencer model.
+RIG_KERNELS: tuple[tuple[str, str], ...] = ((_SPENCER, "simulate"),)
 
 #: Kernels (with the argument types of the library's calls) that each model kind's fit and
 #: simulation run; kinds without compiled kernels are absent.
@@ -135,9 +135,9 @@ def is_cached(item: Item) -> bool:
         return False
 
 
-def _todo(kinds: Iterable[str], last: Iterable[str] = ()) -> list[list[Item]]:
-    """Kernels of ``kinds`` not cached yet, by module (largest module first, the modules named in
-    ``last`` after all others).
+def _todo(kinds: Iterable[str], last: Iterable[tuple[str, str]] = ()) -> list[list[Item]]:
+    """Kernels of ``kinds`` not cached yet, by module (largest module first; within a module, the
+    kernels named in ``last`` after the others).
 
     The kernels of one module are compiled together, in one process: they share helper functions
     and numba's own compiled helpers, which another process would compile again.
@@ -151,7 +151,8 @@ def _todo(kinds: Iterable[str], last: Iterable[str] = ()) -> list[list[Item]]:
         if not is_cached(it):
             modules.setdefault(it[0], []).append(it)
     late = set(last)
-    return sorted(modules.values(), key=lambda m: (m[0][0] in late, -sum(it[3] for it in m)))
+    ordered = [sorted(m, key=lambda it: it[:2] in late) for m in modules.values()]
+    return sorted(ordered, key=lambda m: -sum(it[3] for it in m))
 
 
 def compile_kernels(items: Sequence[Item]) -> int:
@@ -170,12 +171,15 @@ def compile_kernels(items: Sequence[Item]) -> int:
     return done
 
 
-def compile_claimed(kinds: Sequence[str], claim_dir: str, last: Sequence[str] = ()) -> int:
+def compile_claimed(
+    kinds: Sequence[str], claim_dir: str, last: Sequence[tuple[str, str]] = ()
+) -> int:
     """Compile the uncached kernels of ``kinds``, module by module, skipping modules that another
     process has claimed: a module is claimed by creating a file named after it in ``claim_dir``
     (atomic). Every process given the same ``claim_dir`` runs this; each module is compiled once.
-    Modules named in ``last`` come after the others (a kernel another process has cached by then
-    is loaded, not compiled again). Returns the number of kernel signatures handled here."""
+    Kernels named in ``last`` (module, name) come after the others of their module (a kernel
+    another process has cached by then is loaded, not compiled again). Returns the number of
+    kernel signatures handled here."""
     done = 0
     for items in _todo(kinds, last):
         try:
@@ -197,16 +201,16 @@ class _Ahead:
 _AHEAD: _Ahead | None = None
 
 
-def compile_ahead(kinds: Sequence[str], last: Sequence[str] = ()) -> None:
+def compile_ahead(kinds: Sequence[str], last: Sequence[tuple[str, str]] = ()) -> None:
     """Start compiling the uncached kernels of ``kinds`` in a background process, now.
 
     For a command that has other work to do first (``mrdamper demo`` generates its records): the
-    compilation runs on another core meanwhile. ``last``: kernel modules the command itself is
-    about to compile (the virtual rig simulates a Spencer model, :data:`RIG_MODULES`); the
-    background process takes them after every other module, when their kernels are likely
-    cached. The study picks it up (:func:`claim_folder`) and compiles the modules not yet claimed
-    in its own processes, then waits for this one (:func:`finish_ahead`). Nothing starts when
-    every kernel is cached.
+    compilation runs on another core meanwhile. ``last``: kernels (module, name) the command itself
+    is about to compile (the virtual rig simulates a Spencer model, :data:`RIG_KERNELS`); the
+    background process takes each after the other kernels of its module, when it is likely cached
+    (and then only loads it). The study picks it up (:func:`claim_folder`) and compiles the
+    modules not yet claimed in its own processes, then waits for this one (:func:`finish_ahead`).
+    Nothing starts when every kernel is cached.
     """
     global _AHEAD
     if _AHEAD is not None or not _todo(kinds):

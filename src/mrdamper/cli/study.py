@@ -236,7 +236,7 @@ def demo(
     )
     # on a fresh installation, compile the models' kernels on another core meanwhile
     compiled.compile_ahead(
-        kinds or [s.kind for s in doe_protocol().resolved_models()], last=compiled.RIG_MODULES
+        kinds or [s.kind for s in doe_protocol().resolved_models()], last=compiled.RIG_KERNELS
     )
     try:
         data = table_ii(seed=seed, scale=sc)
