@@ -664,46 +664,9 @@ def horizon_step(
     ys = np.zeros(n_m)
     us = np.zeros(n_m)
     c2 = np.zeros(n_p)
-    best = min(max(hold, a), b)
-    best_j = _horizon_j(
-        cf,
-        yb,
-        ub,
-        valid,
-        alpha,
-        beta,
-        offset,
-        best,
-        prev,
-        hold,
-        lag,
-        horizon,
-        v,
-        target,
-        lam2,
-        mode,
-        gm,
-        gc,
-        mu_high,
-        mu_low,
-        z,
-        blend,
-        ys,
-        us,
-        c2,
-    )
-    f = _poly(cf, best)
-    fmin = f
-    fmax = f
-    if b <= a:
-        return best, fmin == target
-    h = (b - a) / n_grid
-    for q in range(n_grid + 1):
-        r = b if q == n_grid else a + q * h
-        f = _poly(cf, r)
-        fmin = min(fmin, f)
-        fmax = max(fmax, f)
-        j = _horizon_j(
+
+    def cost(r):  # the horizon cost at rho = r (inlined by numba)
+        return _horizon_j(
             cf,
             yb,
             ub,
@@ -730,6 +693,21 @@ def horizon_step(
             us,
             c2,
         )
+
+    best = min(max(hold, a), b)
+    best_j = cost(best)
+    f = _poly(cf, best)
+    fmin = f
+    fmax = f
+    if b <= a:
+        return best, fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        f = _poly(cf, r)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+        j = cost(r)
         if j < best_j:
             best, best_j = r, j
     lo = max(a, best - h)
@@ -737,92 +715,14 @@ def horizon_step(
     for _ in range(N_GOLDEN):
         c1 = hi - GOLDEN * (hi - lo)
         c3 = lo + GOLDEN * (hi - lo)
-        j1 = _horizon_j(
-            cf,
-            yb,
-            ub,
-            valid,
-            alpha,
-            beta,
-            offset,
-            c1,
-            prev,
-            hold,
-            lag,
-            horizon,
-            v,
-            target,
-            lam2,
-            mode,
-            gm,
-            gc,
-            mu_high,
-            mu_low,
-            z,
-            blend,
-            ys,
-            us,
-            c2,
-        )
-        j3 = _horizon_j(
-            cf,
-            yb,
-            ub,
-            valid,
-            alpha,
-            beta,
-            offset,
-            c3,
-            prev,
-            hold,
-            lag,
-            horizon,
-            v,
-            target,
-            lam2,
-            mode,
-            gm,
-            gc,
-            mu_high,
-            mu_low,
-            z,
-            blend,
-            ys,
-            us,
-            c2,
-        )
+        j1 = cost(c1)
+        j3 = cost(c3)
         if j1 <= j3:
             hi = c3
         else:
             lo = c1
     m = 0.5 * (lo + hi)
-    jm = _horizon_j(
-        cf,
-        yb,
-        ub,
-        valid,
-        alpha,
-        beta,
-        offset,
-        m,
-        prev,
-        hold,
-        lag,
-        horizon,
-        v,
-        target,
-        lam2,
-        mode,
-        gm,
-        gc,
-        mu_high,
-        mu_low,
-        z,
-        blend,
-        ys,
-        us,
-        c2,
-    )
+    jm = cost(m)
     if jm < best_j:
         best = m
     return best, fmin <= target <= fmax
