@@ -327,28 +327,42 @@ def _rebuild_experiment(state: dict[str, Any]) -> Experiment:
     return Experiment(**state)
 
 
+#: Samples per block of the time-base check (bounds its temporary arrays on long records).
+_TIME_BLOCK = 1 << 20
+
+
 def _check_time_base(t: np.ndarray, tol: float) -> None:
-    d = np.diff(t)
-    bad = np.flatnonzero(d <= 0)
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise DataValidationError(
-            "t",
-            f"time must be strictly increasing; sample {k} (t={t[k]:.9g} s) does not exceed "
-            f"sample {k - 1} (t={t[k - 1]:.9g} s)",
-        )
-    dt = float(np.median(d))
-    dev = np.abs(d - dt) / dt
-    bad = np.flatnonzero(dev > tol)
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise DataValidationError(
-            "t",
-            f"time base is not uniform: interval before sample {k} is {d[k - 1]:.6g} s, median "
-            f"interval {dt:.6g} s (relative tolerance {tol:g}); resample with "
-            "Experiment.from_arrays(resample_fs=...) or a reader's resample_fs "
-            "(command line: --resample-fs)",
-        )
+    """Raise unless ``t`` is strictly increasing with every interval within ``tol`` (relative)
+    of the median interval.
+
+    The intervals are formed block by block (:data:`_TIME_BLOCK` samples) except once for the
+    median, so the check of a record of ``n`` samples needs one array of ``n`` intervals at a
+    time, not several.
+    """
+    n = t.size
+    for start in range(0, n - 1, _TIME_BLOCK):
+        d = np.diff(t[start : start + _TIME_BLOCK + 1])
+        bad = np.flatnonzero(d <= 0)
+        if bad.size:
+            k = start + int(bad[0]) + 1
+            raise DataValidationError(
+                "t",
+                f"time must be strictly increasing; sample {k} (t={t[k]:.9g} s) does not exceed "
+                f"sample {k - 1} (t={t[k - 1]:.9g} s)",
+            )
+    dt = float(np.median(np.diff(t), overwrite_input=True))
+    for start in range(0, n - 1, _TIME_BLOCK):
+        d = np.diff(t[start : start + _TIME_BLOCK + 1])
+        bad = np.flatnonzero(np.abs(d - dt) / dt > tol)
+        if bad.size:
+            k = start + int(bad[0]) + 1
+            raise DataValidationError(
+                "t",
+                f"time base is not uniform: interval before sample {k} is {d[k - 1 - start]:.6g} "
+                f"s, median interval {dt:.6g} s (relative tolerance {tol:g}); resample with "
+                "Experiment.from_arrays(resample_fs=...) or a reader's resample_fs "
+                "(command line: --resample-fs)",
+            )
 
 
 def _repair_nan(

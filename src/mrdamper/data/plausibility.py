@@ -88,7 +88,7 @@ def check_plausibility(
     for ch in ("v", "F", "i", "voltage"):
         a = channels.get(ch)
         if a is not None and np.size(a):
-            values[ch] = float(np.nanmax(np.abs(a)))
+            values[ch] = max(abs(float(np.nanmax(a))), abs(float(np.nanmin(a))))  # no |a| copy
     msgs = []
     for key, val in values.items():
         if val > bounds[key]:

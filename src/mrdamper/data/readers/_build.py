@@ -8,16 +8,16 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
 from mrdamper.data.plausibility import check_plausibility
 from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_columns
-from mrdamper.data.units import to_si
+from mrdamper.data.units import si_factor
 from mrdamper.errors import DataValidationError, Note
 
 __all__ = [
@@ -46,15 +46,33 @@ def existing_file(path: str | os.PathLike[str]) -> Path:
     return p
 
 
+def _owned_float64(values: Any) -> bool:
+    """True for a writable 1-D float64 array that owns its memory (not a view of anything)."""
+    return (
+        isinstance(values, np.ndarray)
+        and type(values) is np.ndarray
+        and values.dtype == np.float64
+        and values.ndim == 1
+        and values.base is None
+        and values.flags.writeable
+        and values.flags.c_contiguous
+    )
+
+
 def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
-    """Return ``values`` as float64 or raise naming the column and the first non-numeric entry.
+    """Return ``values`` as a new float64 array or raise naming the column and the first
+    non-numeric entry.
 
     Missing entries (empty CSV fields, ``NaN``) stay NaN and are handled by ``nan_policy``.
-    Booleans, complex numbers and text are refused.
+    Booleans, complex numbers and text are refused. A writable 1-D float64 array that owns its
+    memory (as the Parquet reader builds them) is taken over without a copy: readers hand their
+    columns to :func:`build_experiment` and keep no reference to them.
     """
+    if _owned_float64(values):
+        return cast(np.ndarray, values)
     arr = np.asarray(values)
     if arr.dtype.kind in "iuf":
-        return np.array(arr, dtype=np.float64).ravel()
+        return np.array(arr.ravel(), dtype=np.float64)  # a new array, not a view of one
     if arr.dtype.kind == "b":
         raise DataValidationError(name, f"holds booleans in {source}; expected numbers")
     if arr.dtype.kind == "c":
@@ -73,7 +91,7 @@ def numeric_column(name: str, values: Any, source: str) -> np.ndarray:
             f"({len(bad)} such value(s)); expected numbers (a decimal comma needs decimal=',', "
             "command line --decimal ,)",
         )
-    return num.to_numpy(dtype=np.float64, na_value=np.nan)
+    return np.array(num.to_numpy(dtype=np.float64, na_value=np.nan), dtype=np.float64)
 
 
 def _regenerate_time(t: np.ndarray | None, n: int, fs: Any, source: str) -> tuple[np.ndarray, str]:
@@ -164,18 +182,27 @@ def build_experiment(
     time_tolerance: float = DEFAULT_TIME_TOLERANCE,
     plausible_max: Mapping[str, float] | None = None,
     stored_metadata: Mapping[str, Any] | None = None,
+    headers: Sequence[str] | None = None,
 ) -> Experiment:
     """Build an Experiment from ``{source column: values}``; see
     :func:`~mrdamper.data.readers.read_csv`.
 
+    Each channel is converted once: to float64 (no copy for a float64 array that owns its
+    memory), scaled to SI in place, and kept read-only by the record, so a record of ``n``
+    samples costs its channels and at most one column in transit.
+
     Parameters
     ----------
     raw : mapping
-        Source column name -> values (any array-like, in source units).
+        Source column name -> values (any array-like, in source units). The values are taken
+        over: a writable float64 array that owns its memory is scaled in place and kept.
     path : path-like
         Source file, recorded as ``metadata["source"]``.
     stored_metadata : mapping, optional
         Metadata saved in the file itself (Parquet written by mrdamper); ``metadata`` wins.
+    headers : sequence of str, optional
+        Every column name of the source, when ``raw`` holds only the columns that map to
+        channels (a reader that reads only those); default: the keys of ``raw``.
 
     Other Parameters
     ----------------
@@ -185,13 +212,13 @@ def build_experiment(
         As for :func:`~mrdamper.data.readers.read_csv`.
     """
     src = str(path)
-    headers = [str(h) for h in raw]
+    headers = [str(h) for h in (raw if headers is None else headers)]
     specs: dict[str, ColumnSpec] = resolve_columns(
         headers, columns=columns, units=units, source=src
     )
-    n_rows = {len(np.ravel(np.asarray(v))) for v in raw.values()}
+    n_rows = {np.size(v) for v in raw.values()}
     if len(n_rows) > 1:
-        lengths = {h: len(np.ravel(np.asarray(v))) for h, v in raw.items()}
+        lengths = {h: np.size(v) for h, v in raw.items()}
         raise DataValidationError("columns", f"columns of {src} differ in length: {lengths}")
     n = n_rows.pop() if n_rows else 0
     if n == 0:
@@ -235,8 +262,12 @@ def build_experiment(
 
     arrays: dict[str, np.ndarray] = {}
     for ch, spec in specs.items():
+        factor = si_factor(ch, spec.unit, column=spec.source)
         values = numeric_column(spec.source, raw[spec.source], src)
-        arrays[ch] = to_si(values, spec.unit, channel=ch, column=spec.source)
+        if factor != 1.0:
+            values *= factor
+        values.setflags(write=False)  # the record keeps it as it is (no further copy)
+        arrays[ch] = values
 
     notes: list[str] = []
     if fs is not None:
