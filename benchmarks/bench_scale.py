@@ -7,6 +7,8 @@ Usage::
     python benchmarks/bench_scale.py --lengths 360 3600 --kinds lpv narx --cache /tmp/scale
     # windows vs every sample:
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --accuracy lpv p15 narx
+    # the records read from files, as `mrdamper fit` reads them:
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_scale.py --lengths 36000 --source parquet-file
 
 The records come from the virtual rig (default reference damper, 1 kHz): road profile (ISO 8608
 class C at 20 m/s, 4.5 Hz band) with an APRBS current (0.2 s minimum hold) over the damper's
@@ -31,6 +33,14 @@ the targets: fit <= 30 s and peak <= 1.5 GB at 1 h, 1 h fit <= 12 x the 6 min fi
 10 h. A fit that takes longer than ``--timeout`` is stopped and reported as such. Timings on a
 loaded machine are noisy; the ratios between kinds and lengths of one run are what to compare.
 
+``--source`` says where the fit process takes the records from. ``npy`` (default) maps the
+generated ``.npy`` files read-only; the others go through the reader every command uses
+(``mrdamper.data.read_records``, as ``mrdamper fit KIND PATH``), from files written once into the
+cache: ``parquet-folder`` (one Parquet file per record of at most ``--record`` seconds, 10 h =
+a folder of ten 1 h files), ``parquet-file`` (the whole length in one Parquet file, row groups of
+10^6 rows) and ``csv-folder`` (as ``parquet-folder``, CSV). Reading is timed apart (``read [s]``)
+and counts in the peak memory.
+
 ``--accuracy KIND ...`` checks what the long-campaign windows cost in accuracy: each kind is fitted
 on the first 1 h record twice in one process, with the windows and on every sample (threshold
 raised), and both models are scored in free run on that record and on a second 1 h record.
@@ -49,6 +59,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+SOURCES = ("npy", "parquet-folder", "parquet-file", "csv-folder")
 KINDS = ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
 CHANNELS = ("t", "x", "v", "i", "F")
 FS = 1000.0
@@ -102,12 +113,58 @@ def _load(cache: Path, length_s: float, record_s: float) -> list[Any]:
     return out
 
 
-def _child_fit(kind: str, cache: Path, length_s: float, record_s: float) -> None:
+def _campaign(cache: Path, source: str, length_s: float, record_s: float) -> Path:
+    """Write the records of ``length_s`` seconds as ``source`` files (once); return the path that
+    ``mrdamper fit`` would be given: a folder, or the one file."""
+    import numpy as np
+
+    from mrdamper.data import write_csv, write_parquet
+
+    label = f"{source}-{length_s:g}s"
+    target = cache / label / ("campaign.parquet" if source == "parquet-file" else "records")
+    if (cache / label / "done").is_file():
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    records = _load(cache, length_s, record_s)
+    if source == "parquet-file":
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        writer, t0 = None, 0.0
+        for rec in records:  # one record at a time, continuous time
+            cols = {ch: np.asarray(getattr(rec, ch)) for ch in CHANNELS}
+            cols["t"] = cols["t"] - cols["t"][0] + t0
+            t0 = float(cols["t"][-1]) + 1.0 / FS
+            table = pa.table(cols)
+            if writer is None:
+                writer = pq.ParquetWriter(target, table.schema)
+            writer.write_table(table, row_group_size=1_000_000)
+        assert writer is not None
+        writer.close()
+    else:
+        target.mkdir(exist_ok=True)
+        write = write_parquet if source == "parquet-folder" else write_csv
+        suffix = ".parquet" if source == "parquet-folder" else ".csv"
+        for rec in records:
+            write(rec, target / f"{rec.name}{suffix}", force=True)
+    (cache / label / "done").write_text("")
+    return target
+
+
+def _child_fit(kind: str, cache: Path, length_s: float, record_s: float, source: str) -> None:
     import resource
 
+    from mrdamper.data import read_records
     from mrdamper.models import get_estimator
 
-    records = _load(cache, length_s, record_s)
+    read_s = 0.0
+    if source == "npy":
+        records = _load(cache, length_s, record_s)
+    else:
+        path = _campaign(cache, source, length_s, record_s)
+        t0 = time.perf_counter()
+        records = list(read_records([path]))
+        read_s = time.perf_counter() - t0
     warm = records[0].slice(0, int(WARMUP_S * FS))
     get_estimator(kind).fit(warm)
     del warm
@@ -125,6 +182,7 @@ def _child_fit(kind: str, cache: Path, length_s: float, record_s: float) -> None
                 "cpu_s": cpu_s,
                 "rss_gb": peak,
                 "rss_before_gb": rss_before,
+                "read_s": read_s,
                 "n": sum(r.n for r in records),
                 "check": check,
             },
@@ -202,6 +260,13 @@ def main() -> None:
         "--cache", type=Path, help="folder for the generated records (default: a temporary one)"
     )
     ap.add_argument("--seed", type=int, default=9)
+    ap.add_argument(
+        "--source",
+        choices=SOURCES,
+        default="npy",
+        help="where the fit reads the records: mapped .npy (default) or files read as by "
+        "'mrdamper fit' (a Parquet or CSV folder, one Parquet file)",
+    )
     ap.add_argument("--timeout", type=float, default=900.0, help="stop a fit after this long [s]")
     ap.add_argument("--json", type=Path, help="also write the rows as JSON here")
     ap.add_argument(
@@ -215,15 +280,28 @@ def main() -> None:
     )
     ap.add_argument("--child-accuracy", nargs=2, metavar=("KIND", "CACHE"), help=argparse.SUPPRESS)
     ap.add_argument(
-        "--child", nargs=4, metavar=("KIND", "CACHE", "LENGTH", "RECORD"), help=argparse.SUPPRESS
+        "--child",
+        nargs=5,
+        metavar=("KIND", "CACHE", "LENGTH", "RECORD", "SOURCE"),
+        help=argparse.SUPPRESS,
+    )
+    ap.add_argument(
+        "--write-campaign",
+        nargs=4,
+        metavar=("CACHE", "SOURCE", "LENGTH", "RECORD"),
+        help=argparse.SUPPRESS,
     )
     ap.add_argument(
         "--generate", nargs=4, metavar=("CACHE", "RECORD", "N", "SEED"), help=argparse.SUPPRESS
     )
     args = ap.parse_args()
     if args.child:
-        kind, cache, length, record = args.child
-        _child_fit(kind, Path(cache), float(length), float(record))
+        kind, cache, length, record, source = args.child
+        _child_fit(kind, Path(cache), float(length), float(record), source)
+        return
+    if args.write_campaign:
+        cache, source, length, record = args.write_campaign
+        _campaign(Path(cache), source, float(length), float(record))
         return
     if args.child_accuracy:
         _child_accuracy(args.child_accuracy[0], Path(args.child_accuracy[1]))
@@ -265,19 +343,37 @@ def main() -> None:
             check=True,
         )
         print(f"records ready in {time.perf_counter() - t0:.1f} s", flush=True)
+        if args.source != "npy":
+            t0 = time.perf_counter()
+            for length in lengths:  # written in a process of its own, not counted in the fits
+                subprocess.run(
+                    [
+                        sys.executable,
+                        str(Path(__file__).resolve()),
+                        "--write-campaign",
+                        str(cache),
+                        args.source,
+                        str(length),
+                        str(record_s),
+                    ],
+                    check=True,
+                )
+            print(f"{args.source} files ready in {time.perf_counter() - t0:.1f} s", flush=True)
         rows = []
         for kind in args.kinds:
             for length in lengths:
                 r = _run_child(
-                    ["--child", kind, str(cache), str(length), str(record_s)], args.timeout
+                    ["--child", kind, str(cache), str(length), str(record_s), args.source],
+                    args.timeout,
                 )
-                row = {"kind": kind, "length_s": length, **r}
+                row = {"kind": kind, "length_s": length, "source": args.source, **r}
                 rows.append(row)
                 if r["status"] == "ok":
                     print(
                         f"{kind:8s} {_label(length):>7s}: fit {r['fit_s']:8.2f} s (cpu "
                         f"{r['cpu_s']:.2f} s), peak {r['rss_gb']:.2f} GB (before fit "
-                        f"{r['rss_before_gb']:.2f} GB)",
+                        f"{r['rss_before_gb']:.2f} GB)"
+                        + (f", read {r['read_s']:.1f} s" if args.source != "npy" else ""),
                         flush=True,
                     )
                 else:

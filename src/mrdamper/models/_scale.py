@@ -27,6 +27,7 @@ import numpy as np
 from mrdamper.data import Experiment, ExperimentSet
 
 __all__ = [
+    "SEGMENT_SAMPLES",
     "WINDOW_BUDGET",
     "WINDOW_BUDGET_LPV",
     "WINDOW_BUDGET_P15",
@@ -48,12 +49,16 @@ __all__ = [
     "lpv_qr_records",
     "narx_windows",
     "plan_windows",
+    "split_long",
     "strided",
     "window_arrays",
     "window_records",
     "window_set",
 ]
 
+#: Longest training record identified in one piece [samples] (about 70 minutes at 1 kHz); a
+#: longer one is identified as consecutive segments (:func:`split_long`).
+SEGMENT_SAMPLES = 1 << 22
 #: Total training samples above which the expensive steps run on windows [samples].
 WINDOW_THRESHOLD = 400_000
 #: Samples the windows hold in all [samples].
@@ -66,6 +71,53 @@ WINDOW_BUDGET_LPV = 900_000
 WINDOW_SECONDS_LPV = 60.0
 #: Length of one window [s] (at least 2000 samples whatever the rate).
 WINDOW_SECONDS = 20.0
+
+
+def split_long(
+    exps: ExperimentSet, max_samples: int | None = None
+) -> tuple[ExperimentSet, tuple[int, ...]]:
+    """Cut every record longer than ``max_samples`` (default :data:`SEGMENT_SAMPLES`) into
+    consecutive segments of equal length (views: no copy).
+
+    Every identification step works record by record, and its work arrays (scheduling and input
+    signals, states, free-run outputs, sensitivities) are as long as the record: a 10 h record
+    held in one file would need several times its own size. As segments, the work arrays are
+    bounded by ``max_samples`` whatever the record length. A segment is a record of its own to
+    the fit: its free run starts at rest and the first samples of its regression have no past
+    (``n_m`` samples of ``max_samples``).
+
+    Parameters
+    ----------
+    exps : ExperimentSet
+        Training records.
+    max_samples : int, optional
+        Longest piece [samples].
+
+    Returns
+    -------
+    segments : ExperimentSet
+        ``exps`` itself when no record is longer; otherwise the records with the long ones
+        replaced by their segments, named ``"<name> [k/K]"``.
+    owners : tuple of int
+        For every segment, the index of its record in ``exps``.
+    """
+    cap = SEGMENT_SAMPLES if max_samples is None else int(max_samples)
+    if all(e.n <= cap for e in exps):
+        return exps, tuple(range(len(exps)))
+    out: list[Experiment] = []
+    owners: list[int] = []
+    for k, e in enumerate(exps):
+        parts = -(-e.n // cap)
+        if parts == 1:
+            out.append(e)
+            owners.append(k)
+            continue
+        bounds = np.linspace(0, e.n, parts + 1).round().astype(np.int64)
+        for j in range(parts):
+            seg = e.slice(int(bounds[j]), int(bounds[j + 1]), name=f"{e.name} [{j + 1}/{parts}]")
+            out.append(seg)
+            owners.append(k)
+    return ExperimentSet(out, name=exps.name), tuple(owners)
 
 
 def plan_windows(

@@ -28,8 +28,9 @@ import pandas as pd
 from mrdamper._io import atomic_write_text
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import DataValidationError, OutOfRangeError, SchemaError
+from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
+from mrdamper.models import _scale
 from mrdamper.models.settings import (
     check_bool,
     check_choice,
@@ -451,6 +452,9 @@ class Estimator(abc.ABC):
     model_class: ClassVar[type[FittedModel]]
     #: Names of the per-fit options the family's :meth:`_identify` takes (others are refused).
     fit_options: ClassVar[tuple[str, ...]] = ()
+    #: Per-fit options that hold one value per training record (they follow a long record into
+    #: its segments, :meth:`_training_set`).
+    per_record_options: ClassVar[tuple[str, ...]] = ()
     #: Old setting name -> current name. Old names are still accepted, with a note.
     renamed_settings: ClassVar[Mapping[str, str]] = {}
 
@@ -509,9 +513,12 @@ class Estimator(abc.ABC):
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()
-        prepared = self._prepare(self._as_set(data))
+        records, options, segments = self._training_set(data, options)
+        prepared = self._prepare(records)
         result = self._identify(prepared, **options)
         provenance = dict(result.provenance)
+        if segments:
+            provenance["segments"] = segments
         if prepared.level is not None:
             note = single_level_note(self.kind, prepared.input, prepared.level)
             provenance["note"] = note
@@ -564,13 +571,58 @@ class Estimator(abc.ABC):
             level=single_level(np.array([lo, hi])),
         )
 
+    def _training_set(
+        self, data: Experiment | Iterable[Experiment], options: Mapping[str, Any]
+    ) -> tuple[ExperimentSet, dict[str, Any], dict[str, int]]:
+        """The training records, a record longer than :data:`~mrdamper.models._scale.\
+SEGMENT_SAMPLES` cut into consecutive segments (bounded work arrays; a note says so), with the
+        per-record options (:attr:`per_record_options`) repeated for each segment.
+
+        Returns
+        -------
+        records : ExperimentSet
+            What the fit sees.
+        options : dict
+            ``options`` with per-record values following their records.
+        segments : dict
+            Name of every record that was cut -> number of segments (empty when none was).
+        """
+        exps = self._as_set(data)
+        records, owners = _scale.split_long(exps)
+        out = dict(options)
+        if records is exps:
+            return records, out, {}
+        for key in self.per_record_options:
+            values = out.get(key)
+            if values is not None:
+                values = list(values)
+                if len(values) != len(exps):
+                    raise DataValidationError(
+                        key, f"expected {len(exps)} values (one per record), got {len(values)}"
+                    )
+                out[key] = [values[k] for k in owners]
+        counts: dict[str, int] = {}
+        for k, e in enumerate(exps):
+            parts = owners.count(k)
+            if parts < 2:
+                continue
+            counts[e.name] = parts
+            warnings.warn(
+                f"{self.kind}: record {e.name!r} ({e.n} samples) is identified as {parts} "
+                f"consecutive segments of at most {_scale.SEGMENT_SAMPLES} samples (bounded "
+                "memory); each segment's free run starts at rest",
+                Note,
+                stacklevel=3,
+            )
+        return records, out, counts
+
     @staticmethod
     def _as_set(data: Experiment | Iterable[Experiment]) -> ExperimentSet:
         exps = as_experiment_set(data, name="training")
         if len(exps) == 0:
             raise SchemaError("data: no training records given")
         for e in exps:
-            if not np.any(np.abs(e.v) > 0.0):
+            if not np.any(e.v != 0.0):
                 raise DataValidationError(
                     "v",
                     f"training record {e.name!r} has zero velocity everywhere; a damper model "

@@ -466,6 +466,7 @@ class LPVEstimator(Estimator):
     kind: ClassVar[str] = "lpv"
     model_class: ClassVar[type[FittedModel]] = LPVModel
     fit_options: ClassVar[tuple[str, ...]] = ("record_weights",)
+    per_record_options: ClassVar[tuple[str, ...]] = ("record_weights",)
 
     n_m: int = 3
     n_rho: int = 2
@@ -571,10 +572,15 @@ class LPVEstimator(Estimator):
         self._check_fit_options(options)
         self._validate()
         if _lpv_inputs.needs_choice(self):  # hysteretic input: stroke / blend on training data
+            records, opts, segments = self._training_set(data, {"record_weights": record_weights})
             model = cast(
                 TransferFunctionModel,
-                _lpv_inputs.fit_choosing(self, self._as_set(data), record_weights),
+                _lpv_inputs.fit_choosing(self, records, opts["record_weights"]),
             )
+            if segments:
+                model = dataclasses.replace(
+                    model, provenance={**model.provenance, "segments": segments}
+                )
         else:
             model = cast(
                 TransferFunctionModel, super().fit(data, record_weights=record_weights, **options)
