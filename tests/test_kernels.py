@@ -74,3 +74,53 @@ def test_kernels_named_last_come_after_the_others_of_their_module(
     assert plain[0][0][0] == "mrdamper.models._spencer_kernels"
     assert [it[1] for it in late[0]] == ["simulate_sens", "simulate"]  # the rig's kernel last
     assert [sorted(m) for m in plain] == [sorted(m) for m in late]
+
+
+def test_rig_items_are_the_signatures_the_virtual_rig_compiles() -> None:
+    """RIG_ITEMS must follow the rig: the early compilation is of no use if they drift."""
+    import subprocess
+    import sys
+
+    code = (
+        "from mrdamper.rig.doe import table_ii; from mrdamper import compiled\n"
+        "table_ii(seed=0, scale=0.07)\n"
+        "for it in compiled.RIG_ITEMS:\n"
+        "    disp = compiled._dispatcher(it)\n"
+        "    print(it[1], disp.signatures == [compiled._types(it[2])])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    lines = out.stdout.split("\n")
+    assert [ln for ln in lines if ln] == [f"{it[1]} True" for it in compiled.RIG_ITEMS]
+
+
+def test_start_early_marks_the_rig_ready_and_cleans_up() -> None:
+    compiled.start_early(["bingham"])  # bingham has no kernels: only the rig's are handled
+    try:
+        claim = compiled.claim_folder()
+        assert claim is not None
+        waited = compiled.wait_rig(timeout=300.0)
+        assert waited >= 0.0
+        assert (Path(claim) / compiled.RIG_READY).exists()
+        compiled.start_early(["lpv"])  # one background process at a time
+        assert compiled.claim_folder() == claim
+    finally:
+        compiled.finish_ahead()
+    assert compiled.claim_folder() is None and not Path(claim).exists()
+    assert compiled.wait_rig() == 0.0  # nothing started: returns at once
+
+
+@pytest.mark.parametrize(
+    ("args", "kinds"),
+    [
+        (["demo"], list(compiled.KERNELS)),
+        (["demo", "--quick", "--models", "lpv,sp1"], ["lpv", "sp1"]),
+        (["--debug", "demo", "--models=spencer"], ["spencer"]),
+        (["demo", "--help"], None),
+        (["study", "data", "--out", "x"], None),
+        ([], None),
+    ],
+)
+def test_launcher_starts_early_only_for_a_demo(args: list[str], kinds: list[str] | None) -> None:
+    from mrdamper.cli.launch import demo_kinds
+
+    assert demo_kinds(args) == kinds

@@ -17,14 +17,6 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from mrdamper.data import (
-    Experiment,
-    ExperimentSet,
-    read,
-    read_directory,
-    write_csv,
-    write_parquet,
-)
 from mrdamper.errors import (
     DataValidationError,
     IdentificationError,
@@ -35,32 +27,57 @@ from mrdamper.errors import (
     SimulationDivergedError,
     UnitError,
 )
-from mrdamper.metrics import Scores, esr, fit_percent, nrmse, ssse
-from mrdamper.models import (
-    Estimator,
-    FittedModel,
-    SimulationResult,
-    available_models,
-    get_estimator,
-    known_kinds,
-    load_model,
-)
-from mrdamper.study import Protocol, StudyResult, load_protocol, run_study
 
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.analysis import ZoneFit, ZoneLaws, fit_zone_laws, fit_zones
     from mrdamper.control import state_space, to_control
+    from mrdamper.data import (
+        Experiment,
+        ExperimentSet,
+        read,
+        read_directory,
+        write_csv,
+        write_parquet,
+    )
+    from mrdamper.metrics import Scores, esr, fit_percent, nrmse, ssse
+    from mrdamper.models import (
+        Estimator,
+        FittedModel,
+        SimulationResult,
+        available_models,
+        get_estimator,
+        known_kinds,
+        load_model,
+    )
     from mrdamper.rig import VirtualRig, reference_damper
     from mrdamper.rig.doe import table_ii
+    from mrdamper.study import Protocol, StudyResult, load_protocol, run_study
 
 __version__ = "0.1.0"
 
-#: Lazily imported public names: name -> defining module.
+#: Public name -> module it comes from. Everything but the exceptions is imported on first use,
+#: so ``import mrdamper`` (and the command line's start, which a background compilation may be
+#: waiting for) loads neither pandas nor any model module.
 _LAZY: dict[str, str] = {
-    "ZoneFit": "mrdamper.analysis",
-    "ZoneLaws": "mrdamper.analysis",
-    "fit_zone_laws": "mrdamper.analysis",
-    "fit_zones": "mrdamper.analysis",
+    **dict.fromkeys(
+        ["Experiment", "ExperimentSet", "read", "read_directory", "write_csv", "write_parquet"],
+        "mrdamper.data",
+    ),
+    **dict.fromkeys(["Scores", "esr", "fit_percent", "nrmse", "ssse"], "mrdamper.metrics"),
+    **dict.fromkeys(
+        [
+            "Estimator",
+            "FittedModel",
+            "SimulationResult",
+            "available_models",
+            "get_estimator",
+            "known_kinds",
+            "load_model",
+        ],
+        "mrdamper.models",
+    ),
+    **dict.fromkeys(["Protocol", "StudyResult", "load_protocol", "run_study"], "mrdamper.study"),
+    **dict.fromkeys(["ZoneFit", "ZoneLaws", "fit_zone_laws", "fit_zones"], "mrdamper.analysis"),
     "VirtualRig": "mrdamper.rig",
     "reference_damper": "mrdamper.rig",
     "table_ii": "mrdamper.rig.doe",
@@ -75,6 +92,10 @@ def __getattr__(name: str) -> Any:
         globals()[name] = value
         return value
     raise AttributeError(f"module 'mrdamper' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
 
 
 __all__ = [

@@ -1,5 +1,5 @@
 """Allow ``python -m mrdamper``."""
 
-from mrdamper.cli.main import main
+from mrdamper.cli.launch import main
 
 main()

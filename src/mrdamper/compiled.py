@@ -38,7 +38,9 @@ import numpy as np
 
 __all__ = [
     "KERNELS",
+    "RIG_ITEMS",
     "RIG_KERNELS",
+    "RIG_READY",
     "claim_folder",
     "compile_ahead",
     "compile_claimed",
@@ -46,6 +48,8 @@ __all__ = [
     "finish_ahead",
     "is_cached",
     "readonly",
+    "start_early",
+    "wait_rig",
 ]
 
 _LPV = "mrdamper.models._lpv_kernels"
@@ -72,6 +76,19 @@ _SP_ITEMS: tuple[Item, ...] = (
 #: Model kernels (module, name) that generating records on the virtual rig compiles: its damper is
 #: a Spencer model.
 RIG_KERNELS: tuple[tuple[str, str], ...] = ((_SPENCER, "simulate"),)
+
+#: Every kernel (with the argument types of its calls) that generating records on the virtual rig
+#: runs: signals, current driver, actuator and the reference damper (a Spencer model).
+RIG_ITEMS: tuple[Item, ...] = (
+    (_SPENCER, "simulate", "f1r f1r f1r F f1 I F F F", 1.0),
+    ("mrdamper.rig._rig_kernels", "second_order_track", "f1 f2 f1 F F", 0.4),
+    ("mrdamper.rig._rig_kernels", "first_order_lag", "f1 F F", 0.15),
+    ("mrdamper.signals._signal_kernels", "lfsr_bits", "I i1 I I", 0.25),
+)
+
+#: File the early background compilation creates in its claim folder once the virtual rig's
+#: kernels are cached (:func:`start_early`, :func:`wait_rig`).
+RIG_READY = "rig-kernels-ready"
 
 #: Kernels (with the argument types of the library's calls) that each model kind's fit and
 #: simulation run; kinds without compiled kernels are absent.
@@ -196,6 +213,7 @@ def compile_claimed(
 class _Ahead:
     process: Any
     claim_dir: str
+    rig: bool = False
 
 
 _AHEAD: _Ahead | None = None
@@ -223,6 +241,58 @@ def compile_ahead(kinds: Sequence[str], last: Sequence[tuple[str, str]] = ()) ->
     )
     proc.start()
     _AHEAD = _Ahead(proc, claim_dir)
+
+
+def _rig_then_claimed(kinds: Sequence[str], claim_dir: str) -> None:
+    """Body of the early background process: the virtual rig's kernels first (the command waits
+    for them, :func:`wait_rig`), then the claimed model kernel modules."""
+    try:
+        compile_kernels([it for it in RIG_ITEMS if not is_cached(it)])
+    finally:
+        try:
+            os.close(os.open(os.path.join(claim_dir, RIG_READY), os.O_CREAT | os.O_EXCL))
+        except OSError:
+            pass  # claim folder gone: the command has moved on
+    compile_claimed(kinds, claim_dir)
+
+
+def start_early(kinds: Sequence[str]) -> None:
+    """Start, at once, a background process that compiles the virtual rig's kernels
+    (:data:`RIG_ITEMS`) and then the uncached kernels of ``kinds`` (as :func:`compile_ahead`).
+
+    For ``mrdamper demo``, called before the command line is even parsed: the other core
+    compiles while this process imports its libraries, so the rig's kernels are usually cached
+    when the demo generates its records (it waits for them with :func:`wait_rig` instead of
+    compiling them itself) and the models' kernels are compiled during the generation. The
+    process checks the cache itself (a second run costs it about a second of the other core and
+    compiles nothing), so this call returns without importing numba.
+    """
+    global _AHEAD
+    if _AHEAD is not None:
+        return
+    claim_dir = tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    methods = multiprocessing.get_all_start_methods()
+    ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    proc = ctx.Process(target=_rig_then_claimed, args=(list(kinds), claim_dir), daemon=True)
+    proc.start()
+    _AHEAD = _Ahead(proc, claim_dir, rig=True)
+
+
+def wait_rig(timeout: float = 120.0) -> float:
+    """Wait until the early background process (:func:`start_early`) has the virtual rig's
+    kernels cached, it has stopped, or ``timeout`` [s] has passed; return the time waited [s].
+    Without an early process it returns at once."""
+    import time
+
+    if _AHEAD is None or not _AHEAD.rig:
+        return 0.0
+    ready = os.path.join(_AHEAD.claim_dir, RIG_READY)
+    t0 = time.perf_counter()
+    while not os.path.exists(ready) and _AHEAD.process.is_alive():
+        if time.perf_counter() - t0 > timeout:
+            break
+        time.sleep(0.01)
+    return time.perf_counter() - t0
 
 
 def claim_folder() -> str | None:

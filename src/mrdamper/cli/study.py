@@ -234,11 +234,13 @@ def demo(
         f"(durations x {sc:g}, 1 kHz, seed {seed}), then every model identified and scored.",
         highlight=False,
     )
-    # on a fresh installation, compile the models' kernels on another core meanwhile
+    # on a fresh installation, compile the models' kernels on another core meanwhile (already
+    # started by the launcher, mrdamper.cli.launch, when the demo was run from the command line)
     compiled.compile_ahead(
         kinds or [s.kind for s in doe_protocol().resolved_models()], last=compiled.RIG_KERNELS
     )
     try:
+        compiled.wait_rig()  # started at launch: the rig's kernels, compiled on the other core
         data = table_ii(seed=seed, scale=sc)
     except BaseException:
         compiled.finish_ahead(cancel=True)
