@@ -610,7 +610,7 @@ SEGMENT_SAMPLES` cut into consecutive segments (bounded work arrays; a note says
             warnings.warn(
                 f"{self.kind}: record {e.name!r} ({e.n} samples) is identified as {parts} "
                 f"consecutive segments of at most {_scale.SEGMENT_SAMPLES} samples (bounded "
-                "memory); each segment's free run starts at rest",
+                "memory), each a record of its own to the fit (free runs start at rest)",
                 Note,
                 stacklevel=3,
             )
