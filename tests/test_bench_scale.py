@@ -57,3 +57,53 @@ def test_bench_scale_quick(tmp_path: Path) -> None:
     assert (
         "| bingham |" in proc.stdout and "| lti |" in proc.stdout and "log-log slope" in proc.stdout
     )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("source", ["parquet-file", "csv-folder"])
+def test_bench_scale_reads_files_as_the_cli_does(tmp_path: Path, source: str) -> None:
+    pytest.importorskip("pyarrow")
+    if not BENCH.is_file():
+        pytest.skip(f"{BENCH} not found (tests not run from a source checkout)")
+    out = tmp_path / "rows.json"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(BENCH),
+            "--lengths",
+            "12",
+            "30",
+            "--record",
+            "20",
+            "--kinds",
+            "sp1",
+            "--source",
+            source,
+            "--cache",
+            str(tmp_path / "cache"),
+            "--json",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = json.loads(out.read_text())
+    assert [(r["kind"], r["length_s"], r["source"]) for r in rows] == [
+        ("sp1", 12.0, source),
+        ("sp1", 30.0, source),
+    ]
+    for r in rows:
+        assert r["status"] == "ok", r
+        assert r["n"] == round(r["length_s"] * 1000)  # every sample came through the reader
+        assert r["read_s"] > 0
+    folder = next((tmp_path / "cache").glob(f"*/{source}-30s"))
+    files = sorted(p.name for p in folder.rglob("*") if p.is_file() and p.name != "done")
+    # 30 s of 20 s records: one file for the whole length, or one file per record
+    assert files == (
+        ["campaign.parquet"] if source == "parquet-file" else ["rec00.csv", "rec01.csv"]
+    )
