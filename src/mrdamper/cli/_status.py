@@ -74,13 +74,15 @@ def working(message: str, *, show: bool = True) -> Iterator[Status]:
     import time
 
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+    from rich.table import Column
 
     from mrdamper.progress import listening
 
     t0 = time.perf_counter()
     bar = Progress(
         SpinnerColumn(),
-        TextColumn("{task.description}", markup=False),
+        # a long stage wraps onto a second line instead of being cut off
+        TextColumn("{task.description}", markup=False, table_column=Column(overflow="fold")),
         TextColumn("{task.fields[count]}", markup=False),
         TimeElapsedColumn(),
         console=console,
