@@ -55,6 +55,7 @@ def test_mkdocs_build_strict(tmp_path: Path) -> None:
         "signals",
         "control",
         "errors",
+        "progress",
     ):
         assert f'id="mrdamper.{page}' in (site / "api" / page / "index.html").read_text(
             encoding="utf-8"

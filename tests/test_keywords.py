@@ -32,6 +32,7 @@ SUBPACKAGES = [
     "errors",
     "models",
     "plotting",
+    "progress",
     "rig",
     "signals",
     "study",

@@ -214,5 +214,11 @@ def read_paths(
         If a path does not exist.
     """
     from mrdamper.data.readers import record_files
+    from mrdamper.progress import report
 
-    return [f.read() for f in record_files(paths, pattern, **read_kw)]
+    files = record_files(paths, pattern, **read_kw)
+    out = []
+    for k, f in enumerate(files):
+        report("reading records", k, len(files))  # as mrdamper.data.readers.read_records does
+        out.append(f.read())
+    return out

@@ -1,30 +1,102 @@
-"""A live status line (spinner and elapsed time) for long commands, shown only on a terminal."""
+"""A live status line for long commands, shown only on a terminal.
+
+The line shows the command's message, the stage the library reports through
+:mod:`mrdamper.progress` (with ``k/N`` when the stage counts), a spinner and the elapsed time;
+when the block ends it is replaced by one line ``<message>: done in X s``.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import sys
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
-__all__ = ["working"]
+if TYPE_CHECKING:  # pragma: no cover
+    from rich.console import Console
+
+__all__ = ["Status", "working"]
+
+
+class Status:
+    """Handle of a :func:`working` block: its ``message`` may change while the block runs.
+
+    Attributes
+    ----------
+    message : str
+        What the command does (shown before the stage, and in the final line).
+    """
+
+    def __init__(self, message: str) -> None:
+        self.message = message
+
+
+def _terminal_console() -> Console | None:
+    """A rich console on standard error when it is a terminal, else None (nothing is shown)."""
+    if not sys.stderr.isatty():
+        return None
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def _count(done: int | None, total: int | None) -> str:
+    if done is None:
+        return ""
+    return f"{done}/{total}" if total is not None else str(done)
 
 
 @contextlib.contextmanager
-def working(message: str) -> Iterator[None]:
-    """Show ``message`` with a spinner and the elapsed time on standard error while the block runs.
+def working(message: str, *, show: bool = True) -> Iterator[Status]:
+    """Show ``message``, the reported stage and the elapsed time on standard error during the block.
 
-    Nothing is printed when standard error is not a terminal (pipes, files, tests), so output
-    that is captured stays the same.
+    Nothing is printed when ``show`` is false or standard error is not a terminal (pipes, files,
+    tests), so output that is captured stays the same. The stage comes from the reports of
+    :mod:`mrdamper.progress` made in the block.
+
+    Parameters
+    ----------
+    message : str
+        What the command does; the yielded :class:`Status` may change it.
+    show : bool
+        False for ``--no-progress``.
+
+    Yields
+    ------
+    Status
+        Set its ``message`` when more is known (e.g. the number of records read).
     """
-    if not sys.stderr.isatty():
-        yield
+    status = Status(message)
+    console = _terminal_console() if show else None
+    if console is None:
+        yield status
         return
     import time
 
-    from rich.console import Console
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+    from rich.table import Column
+
+    from mrdamper.progress import listening
 
     t0 = time.perf_counter()
-    console = Console(stderr=True)
-    with console.status(message):
-        yield
-    console.print(f"{message}: done in {time.perf_counter() - t0:.1f} s")
+    bar = Progress(
+        SpinnerColumn(),
+        # a long stage wraps onto a second line instead of being cut off
+        TextColumn("{task.description}", markup=False, table_column=Column(overflow="fold")),
+        TextColumn("{task.fields[count]}", markup=False),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    )
+    task = bar.add_task(message, count="")
+    last = [""]
+
+    def show_stage(stage: str, done: int | None, total: int | None) -> None:
+        bar.update(task, description=f"{status.message}: {stage}", count=_count(done, total))
+        if stage != last[0]:  # a new stage is drawn at once, counts at the refresh rate
+            last[0] = stage
+            bar.refresh()
+
+    with bar, listening(show_stage):
+        yield status
+    console.print(f"{status.message}: done in {time.perf_counter() - t0:.1f} s")

@@ -3,11 +3,14 @@
 * ``fit MODEL DATA... --out model.json`` identifies any registered model kind on the records in
   the given files / folders and saves it as JSON (never overwriting without ``--force``).
   Options given on the command line become estimator settings; a setting the model does not
-  take is an error that lists the settings it does take.
+  take is an error that lists the settings it does take. On a terminal a live line on standard
+  error shows the stage (reading records, then the fit's stages with ``k/N`` where they count)
+  and the elapsed time, then ``...: done in X s``; ``--no-progress`` turns it off.
 * ``simulate model.json DATA --out predicted.csv`` writes ``t``, measured ``F`` and predicted
   ``F_pred`` [s, N, N] of one record, atomically.
 * ``score model.json DATA... [--json]`` prints ESR and SSSE (paper eqs 24 and 23) per record and
   their mean. A record whose simulation diverges is listed as such; the command then exits 1.
+  On a terminal it shows the same live line as ``fit`` (``--no-progress`` turns it off).
 """
 
 from __future__ import annotations
@@ -131,39 +134,47 @@ def fit(
     pattern: Annotated[
         str | None, typer.Option("--pattern", help="File-name regex for folders.")
     ] = None,
+    no_progress: Annotated[
+        bool,
+        typer.Option(
+            "--no-progress",
+            help="No live status line (it is shown on standard error only when that is a "
+            "terminal: the stage of the fit, its k/N and the elapsed time).",
+        ),
+    ] = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Identify MODEL on the records in DATA and save it as JSON."""
     from mrdamper._io import check_writable
+    from mrdamper.cli._status import working
 
     accepted = estimator_settings(model)  # unknown kind: SchemaError naming the known kinds
     check_writable(out, force, inputs=list(data))  # fail before a long fit
-    records = read_records(list(data), pattern, read_kw)
-    given: dict[str, Any] = {
-        "input": input_ or _choose_input(records),
-        "n_m": n_m,
-        "n_rho": n_rho,
-        "refine": refine,
-        "seed": seed,
-        "n_starts": n_starts,
-        "offset": offset,
-    }
-    given = {k: v for k, v in given.items() if v is not None}
-    given.update(parse_settings(settings))
-    renamed = getattr(type(get_estimator(model)), "renamed_settings", {})
-    unknown = [k for k in given if k not in accepted and k not in renamed]
-    if unknown:
-        flag = unknown[0].replace("_", "-")
-        raise DataValidationError(
-            f"--{flag}",
-            f"model {model!r} does not take the setting {unknown[0]!r}; its settings are "
-            f"{accepted}",
+    with working(f"fitting {model}", show=not no_progress) as status:
+        records = read_records(list(data), pattern, read_kw)
+        given: dict[str, Any] = {
+            "input": input_ or _choose_input(records),
+            "n_m": n_m,
+            "n_rho": n_rho,
+            "refine": refine,
+            "seed": seed,
+            "n_starts": n_starts,
+            "offset": offset,
+        }
+        given = {k: v for k, v in given.items() if v is not None}
+        given.update(parse_settings(settings))
+        renamed = getattr(type(get_estimator(model)), "renamed_settings", {})
+        unknown = [k for k in given if k not in accepted and k not in renamed]
+        if unknown:
+            flag = unknown[0].replace("_", "-")
+            raise DataValidationError(
+                f"--{flag}",
+                f"model {model!r} does not take the setting {unknown[0]!r}; its settings are "
+                f"{accepted}",
+            )
+        status.message = (
+            f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"
         )
-    from mrdamper.cli._status import working
-
-    with working(
-        f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"
-    ):
         fitted = get_estimator(model, **given).fit(records)
     path = fitted.save(out, force=force)
     typer.echo(f"{model}: identified on {len(records)} record(s); wrote {path}")
@@ -208,22 +219,34 @@ def score(
     pattern: Annotated[
         str | None, typer.Option("--pattern", help="File-name regex for folders.")
     ] = None,
+    no_progress: Annotated[
+        bool,
+        typer.Option(
+            "--no-progress",
+            help="No live status line (shown on standard error only when that is a terminal).",
+        ),
+    ] = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """ESR and SSSE of the model's free-run prediction for each record, and their mean."""
+    from mrdamper.cli._status import working
+    from mrdamper.progress import report
+
     m = load_model(model_file)
     if range_policy is not None:
         m = m.with_range_policy(_check_policy(range_policy))
-    records = read_records(list(data), pattern, read_kw)
     rows: list[dict[str, Any]] = []
-    for e in records:
-        try:
-            s = m.score(e)
-            rows.append({"record": e.name, "esr": s.esr, "ssse": s.ssse})
-        except SimulationDivergedError as exc:
-            rows.append(
-                {"record": e.name, "esr": None, "ssse": None, "diverged_at_sample": exc.sample}
-            )
+    with working(f"scoring {m.kind}", show=not no_progress):
+        records = read_records(list(data), pattern, read_kw)
+        for k, e in enumerate(records):
+            report("simulating records", k, len(records))
+            try:
+                s = m.score(e)
+                rows.append({"record": e.name, "esr": s.esr, "ssse": s.ssse})
+            except SimulationDivergedError as exc:
+                rows.append(
+                    {"record": e.name, "esr": None, "ssse": None, "diverged_at_sample": exc.sample}
+                )
     ok = [r for r in rows if r["esr"] is not None]
     mean = {
         "esr": sum(r["esr"] for r in ok) / len(ok) if ok else None,

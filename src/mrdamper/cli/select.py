@@ -3,7 +3,9 @@
 Cross-validates every model kind on the records in the given files / folders
 (:func:`mrdamper.study.cross_validate`: folds by condition or record, time blocks for one
 record), prints the table of left-out free-run ESR and recommends one kind with the reason.
-``--csv`` also writes the table (atomically; never overwriting without ``--force``).
+``--csv`` also writes the table (atomically; never overwriting without ``--force``). On a terminal
+a live line on standard error shows which kind and fold is being fitted, the fit's stage and the
+elapsed time (``--no-progress`` turns it off).
 """
 
 from __future__ import annotations
@@ -68,29 +70,38 @@ def select(
     pattern: Annotated[
         str | None, typer.Option("--pattern", help="File-name regex for folders.")
     ] = None,
+    no_progress: Annotated[
+        bool,
+        typer.Option(
+            "--no-progress",
+            help="No live status line (shown on standard error only when that is a terminal).",
+        ),
+    ] = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Cross-validate every model kind on DATA and recommend one."""
     from mrdamper._io import atomic_write_text, check_writable
+    from mrdamper.cli._status import working
     from mrdamper.cli.models import _choose_input, read_records
     from mrdamper.study.selection import cross_validate
 
     if csv is not None:
         check_writable(csv, force=force, inputs=list(data))
-    records = read_records(data, pattern, read_kw)
-    source = input_ or _choose_input(records)
-    if folds not in ("auto", "condition", "record", "time"):
-        raise DataValidationError(
-            "--folds", f"expected auto, condition, record or time, got {folds!r}"
+    with working("cross-validating", show=not no_progress):
+        records = read_records(data, pattern, read_kw)
+        source = input_ or _choose_input(records)
+        if folds not in ("auto", "condition", "record", "time"):
+            raise DataValidationError(
+                "--folds", f"expected auto, condition, record or time, got {folds!r}"
+            )
+        res = cross_validate(
+            records,
+            models=models,
+            folds=folds,  # type: ignore[arg-type]
+            n_folds=n_folds,
+            input=source,  # type: ignore[arg-type]
+            settings=_kind_settings(settings),
         )
-    res = cross_validate(
-        records,
-        models=models,
-        folds=folds,  # type: ignore[arg-type]
-        n_folds=n_folds,
-        input=source,  # type: ignore[arg-type]
-        settings=_kind_settings(settings),
-    )
     tab = res.table.reset_index()
     typer.echo(
         f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out "

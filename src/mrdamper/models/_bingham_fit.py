@@ -13,6 +13,7 @@ import numpy as np
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models import _scale
+from mrdamper.progress import report
 
 __all__ = ["identify"]
 
@@ -49,7 +50,8 @@ def identify(
     """
 
     def blocks() -> Iterator[np.ndarray]:  # weighted rows [X y], folded into a QR factor
-        for exp, el in zip(records, electrical):
+        for k, (exp, el) in enumerate(zip(records, electrical)):
+            report("least squares: record", k, len(records))
             w = 1.0
             if weighting == "record":
                 sd = float(np.std(exp.F))
@@ -75,6 +77,7 @@ def identify(
                 )
 
     Rf = _scale.fold_qr(blocks())  # Q Rf = [X y]: X c - y = Q (Rf[:, :-1] c - Rf[:, -1])
+    report("least squares: record", len(records), len(records))
     n_rows = sum(e.n for e in records)
     X, y = Rf[:, :-1], Rf[:, -1]
     coef, _, rank, sv = np.linalg.lstsq(X, y, rcond=None)

@@ -17,6 +17,7 @@ from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import frozen_poles, largest_frozen_pole, split_theta
+from mrdamper.progress import counted, report
 
 __all__ = [
     "STABILITY_GRID",
@@ -244,8 +245,12 @@ def refine_output_error(
         last[key] = out
         return out
 
+    # scipy's "lm" may evaluate the start once more than max_nfev
+    residuals = counted(
+        lambda p: evaluate(p)[0], "output-error refinement: evaluation", max_nfev + 1
+    )
     sol = optimize.least_squares(
-        lambda p: evaluate(p)[0],
+        residuals,
         x0,
         jac=lambda p: evaluate(p)[1],
         method="lm",
@@ -304,6 +309,9 @@ def _cost_of(
     alpha, beta = split_theta(x, n_m, n_p)
     return free_run_cost(rec, alpha, beta, float(x[2 * n_m * n_p]) if offset else F0, bound)
 
+
+#: Stage reported by :func:`_levenberg_marquardt` with the accepted iterations so far.
+_LM_STAGE = "output-error refinement: iteration"
 
 #: Levenberg-Marquardt constants of :func:`_levenberg_marquardt` (see its docstring).
 LM_DAMPING_START = 1e-4
@@ -376,7 +384,8 @@ def _levenberg_marquardt(
         )
     lam = LM_DAMPING_START
     nfev, status = 1, 0
-    for _ in range(max_iter):
+    report(_LM_STAGE, 0, max_iter)
+    for it in range(max_iter):
         d = np.sqrt(np.maximum(np.diag(H), LM_DIAG_FLOOR))
         Hs = H / np.outer(d, d)
         gs = g / d
@@ -409,6 +418,7 @@ def _levenberg_marquardt(
         if not step_ok:
             status = 2  # no decrease possible: at a (local) minimum within precision
             break
+        report(_LM_STAGE, it + 1, max_iter)
         if rel < tol:
             status = 1
             break
@@ -460,14 +470,20 @@ def identify(
     the least-squares model is not frozen-stable and ``enforce_stability`` holds. ``windows``
     gives the records the refinement runs on (evenly spread windows of long campaigns, with a
     provenance entry, or the records themselves and None).
+
+    Progress (:mod:`mrdamper.progress`): ``"least squares"``, the free runs, and the refinement's
+    iterations (Gauss-Newton) or residual evaluations (``least_squares``) against their budget.
     """
+    report("least squares")
     ls = ls_identify(rec, n_m, n_p, offset)
     theta, F0 = ls.theta, ls.offset
     prov: dict[str, Any] = {"ls_solver": ls.solver, "ls_condition_number": ls.cond}
     grid = np.linspace(*rho_range, STABILITY_GRID)
+    report("free run of the least-squares model")
     ls_cost = free_run_cost(rec, *split_theta(theta, n_m, n_p), F0, bound)
     prov["ls_free_run_cost"] = ls_cost
     if refine:
+        report("stable start of the refinement")
         theta0, shrink = _stable_start(theta, n_m, n_p, grid, rec, F0, bound)
         if shrink != 1.0:
             prov["oe_start_pole_scaling"] = shrink
@@ -484,6 +500,7 @@ def identify(
             solver=solver,
             rho_grid=grid if enforce_stability else None,
         )
+        report("free run of the refined model on all records")
         oe_cost = free_run_cost(rec, *split_theta(th_r, n_m, n_p), f0_r, bound)
         prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
         if win is not None:

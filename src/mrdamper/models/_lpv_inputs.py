@@ -19,6 +19,7 @@ import numpy as np
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
+from mrdamper.progress import report, section
 
 __all__ = [
     "BLENDS",
@@ -144,12 +145,15 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     rows: list[dict[str, Any]] = []
     best: tuple[float, float, float] | None = None
     first_error = ""
+    n_cand = len(strokes) * len(blends)
     for x_y in strokes:
         for lam in blends:
             cand = dataclasses.replace(
                 est, stroke=x_y, blend=lam, max_nfev=min(est.max_nfev, CHOICE_NFEV)
             )
-            with warnings.catch_warnings():
+            k = len(rows) + 1
+            report("hysteretic input: candidate", k - 1, n_cand)
+            with warnings.catch_warnings(), section(f"hysteretic candidate {k} of {n_cand}"):
                 warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
                 try:
                     model = cand.fit(exps, record_weights=record_weights)
@@ -158,6 +162,7 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
                     rows.append({"stroke": x_y, "blend": lam, "train_esr": None, "error": str(exc)})
                     continue
                 try:
+                    report("free-run ESR on the training records")
                     esr = [model.with_range_policy("ignore").score(e).esr for e in exps]
                     score, err = float(np.average(esr, weights=w)), ""
                 except SimulationDivergedError as exc:  # e.g. an unrefined, unstable candidate
@@ -169,6 +174,7 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
         raise IdentificationError(
             f"{est.kind}: no hysteretic-input candidate could be fitted; {first_error}"
         )
+    report("hysteretic input: candidate", n_cand, n_cand)
     final = dataclasses.replace(est, stroke=best[1], blend=best[2])
     model = final.fit(full, record_weights=full_weights)
     prov = {**model.provenance, "hysteretic_choice": rows}

@@ -17,6 +17,7 @@ from scipy import optimize
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
+from mrdamper.progress import counted, report
 
 __all__ = [
     "free_run_cost",
@@ -48,7 +49,8 @@ def select_terms(
     M = cand.shape[0]
     A = np.zeros((M + 1, M + 1))
     blk = np.empty((_BLOCK, M + 1))
-    for S, w in zip(records, weights, strict=True):
+    for r, (S, w) in enumerate(zip(records, weights, strict=True)):
+        report("term selection: record", r, len(records))
         sw = math.sqrt(w)
         for k0 in range(p, S.shape[1], _BLOCK):
             k1 = min(k0 + _BLOCK, S.shape[1])
@@ -57,6 +59,7 @@ def select_terms(
             B[:, M] = S[0, k0:k1]
             B *= sw
             A += B.T @ B
+    report("term selection: record", len(records), len(records))
     d = np.sqrt(np.diag(A)).copy()
     usable = d[:M] > 0
     d[d == 0] = 1.0
@@ -185,7 +188,7 @@ def refine(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         sol = optimize.least_squares(
-            lambda th: evaluate(th)[0],
+            counted(lambda th: evaluate(th)[0], "output-error refinement: evaluation", max_nfev),
             np.array(theta0, dtype=np.float64),
             jac=lambda th: evaluate(th)[1],
             method="trf",

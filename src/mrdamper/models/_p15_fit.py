@@ -59,6 +59,7 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models._p15_kernels import p15i_run
+from mrdamper.progress import counted
 
 __all__ = [
     "BERNSTEIN_TO_POWER",
@@ -518,7 +519,7 @@ def identify_output_error(
     theta = np.concatenate([np.log(start).ravel(), [f00 / f_scale] if offset else []])
     stages: list[dict[str, Any]] = []
 
-    def solve(theta0: np.ndarray, mode: str, nfev: int) -> np.ndarray:
+    def solve(theta0: np.ndarray, mode: str, nfev: int, stage: str) -> np.ndarray:
         seg = (segment, segment_stride)
         cache: dict[bytes, tuple[np.ndarray, np.ndarray | None]] = {}
 
@@ -548,7 +549,8 @@ def identify_output_error(
         c = prob.n_coef
         lb[:c], ub[:c] = theta0[:c] - 40.0, theta0[:c] + 40.0
         sol = least_squares(
-            fun,
+            # the evaluation budget counts the calls of fun when the Jacobian is analytic
+            counted(fun, stage, nfev if jacobian == "sensitivity" else None),
             theta0,
             jac=jac if jacobian == "sensitivity" else jacobian,
             bounds=(lb, ub),
@@ -574,9 +576,9 @@ def identify_output_error(
         return keep
 
     if shoot_nfev > 0:
-        theta = solve(theta, "shooting", shoot_nfev)
+        theta = solve(theta, "shooting", shoot_nfev, "multiple shooting: evaluation")
     if max_nfev > 0:
-        theta = solve(theta, "free", max_nfev)
+        theta = solve(theta, "free", max_nfev, "free-run refinement: evaluation")
     B, f0 = prob.unpack(theta)
     info = {
         "method": (

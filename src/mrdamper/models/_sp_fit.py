@@ -18,6 +18,7 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import IdentificationError
 from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._sp_kernels import COMPONENTS, N_COMPONENTS, sp_force, sp_force_jacobian
+from mrdamper.progress import counted
 
 __all__ = ["identify", "single_level_terms", "stack"]
 
@@ -92,7 +93,7 @@ def identify(
         comp, power, xn[sub], vn[sub], inn[sub], Fn[sub], offset, n_candidates, n_starts, rng
     )
 
-    def solve(theta0: np.ndarray, idx: np.ndarray | slice, nfev: int) -> Any:
+    def solve(theta0: np.ndarray, idx: np.ndarray | slice, nfev: int, stage: str) -> Any:
         xa, va, ia, Fa = (np.ascontiguousarray(a[idx]) for a in (xn, vn, inn, Fn))
 
         def fun(th: np.ndarray) -> np.ndarray:
@@ -104,13 +105,20 @@ def identify(
             return sp_force_jacobian(xa, va, ia, comp, power, th[: comp.size], f0, offset)[1]
 
         return least_squares(
-            fun, theta0, jac=jac, bounds=(lb, ub), method="trf", x_scale="jac", max_nfev=nfev
+            counted(fun, stage, nfev),
+            theta0,
+            jac=jac,
+            bounds=(lb, ub),
+            method="trf",
+            x_scale="jac",
+            max_nfev=nfev,
         )
 
     results = []
-    for theta0 in starts:
+    for k, theta0 in enumerate(starts):
+        stage = f"start {k + 1} of {len(starts)}: least squares: evaluation"
         try:
-            res = solve(np.clip(theta0, lb, ub), sub, max_nfev)
+            res = solve(np.clip(theta0, lb, ub), sub, max_nfev, stage)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             continue
         if np.isfinite(res.cost) and np.all(np.isfinite(res.x)):
@@ -119,7 +127,7 @@ def identify(
         raise IdentificationError(f"{kind}: no start converged to a finite cost")
     best = min(results, key=lambda r: r.cost)
     full = _even_subset(F.size, fit_samples)
-    final = solve(best.x, full, max_nfev)
+    final = solve(best.x, full, max_nfev, "best start on the fit samples: evaluation")
     if not (np.isfinite(final.cost) and np.all(np.isfinite(final.x))):
         final = best
     if final.status == 0:

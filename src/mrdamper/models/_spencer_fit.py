@@ -27,6 +27,7 @@ from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models import _spencer_kernels as _k
 from mrdamper.models._spencer_kernels import PARAM_NAMES as PARAMETER_NAMES
 from mrdamper.models._spencer_kernels import auto_substeps
+from mrdamper.progress import counted, report
 
 __all__ = ["COND_WARNING", "DEFAULT_BOUNDS", "FitSettings", "check_settings", "identify"]
 
@@ -390,7 +391,12 @@ def identify(
             obj.last_failure = ""
             continue
         nfev = est.screen_nfev if est.n_starts > 1 else est.max_nfev
-        res = least_squares(obj.residuals, q0, jac=jac, max_nfev=nfev, **kw)
+        stage = f"start {k + 1} of {len(starts)}: " if len(starts) > 1 else ""
+        # the evaluation budget counts the calls of the residuals when the Jacobian is analytic
+        residuals = counted(
+            obj.residuals, stage + "least squares: evaluation", nfev if callable(jac) else None
+        )
+        res = least_squares(residuals, q0, jac=jac, max_nfev=nfev, **kw)
         runs.append(
             {"start": k, "cost": float(res.cost), "nfev": int(res.nfev), "status": int(res.status)}
         )
@@ -404,7 +410,12 @@ def identify(
     best = min(finite, key=lambda r: r.cost)
     final = best
     if est.n_starts > 1:
-        final = least_squares(obj.residuals, best.x, jac=jac, max_nfev=est.max_nfev, **kw)
+        residuals = counted(
+            obj.residuals,
+            "best start: least squares: evaluation",
+            est.max_nfev if callable(jac) else None,
+        )
+        final = least_squares(residuals, best.x, jac=jac, max_nfev=est.max_nfev, **kw)
         if not final.cost <= best.cost:
             final = best
     if not np.all(np.isfinite(final.x)) or not math.isfinite(final.cost):
@@ -431,6 +442,7 @@ def identify(
             RuntimeWarning,
             stacklevel=4,
         )
+    report("residuals of the fit")
     resid = obj.residuals(final.x)
     rec_esr = {}
     for r in recs:

@@ -39,6 +39,7 @@ from mrdamper.models.settings import (
     literal_choices,
     type_hints,
 )
+from mrdamper.progress import report
 
 __all__ = [
     "SCHEMA_NAME",
@@ -444,6 +445,9 @@ class Estimator(abc.ABC):
     5. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
        and provenance (the single-level note, wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
 
+    Progress (:mod:`mrdamper.progress`) is reported as the stages ``"preparing the training
+    data"``, ``"identifying"`` (the family reports its own stages within it) and ``"done"``.
+
     At a single level the note (:func:`single_level_note`) is also emitted as a ``UserWarning``.
     """
 
@@ -513,8 +517,10 @@ class Estimator(abc.ABC):
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()
+        report("preparing the training data")
         records, options, segments = self._training_set(data, options)
         prepared = self._prepare(records)
+        report("identifying")
         result = self._identify(prepared, **options)
         provenance = dict(result.provenance)
         if segments:
@@ -525,13 +531,15 @@ class Estimator(abc.ABC):
             warnings.warn(note, UserWarning, stacklevel=2)
         provenance["elapsed_s"] = time.perf_counter() - t0
         provenance["cpu_s"] = time.process_time() - c0
-        return self.model_class(
+        model = self.model_class(
             **result.parameters,
             input=prepared.input,
             input_range=prepared.input_range,
             range_policy=getattr(self, "range_policy", "error"),
             provenance=provenance,
         )
+        report("done")
+        return model
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """The family's identification step on the prepared training data (to implement)."""

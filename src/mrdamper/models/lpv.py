@@ -55,6 +55,7 @@ from mrdamper.models.rates import (
     to_record_rate,
 )
 from mrdamper.models.registry import register
+from mrdamper.progress import report
 
 __all__ = [
     "LPVEstimator",
@@ -608,9 +609,11 @@ class LPVEstimator(Estimator):
             for r, e in zip(data.electrical, exps)
         ]
         prov: dict[str, Any] = {}
+        report("zone laws")
         laws = self._laws(exps, rhos, prov, single=data.single)
         F, U, R, w = [], [], [], []
-        for e, el in zip(exps, data.electrical):
+        for k, (e, el) in enumerate(zip(exps, data.electrical)):
+            report("LPV input signals", k, len(exps))
             e.require_samples(self.n_m + 2, "LPV identification")
             u, rho = model_signals(
                 e,

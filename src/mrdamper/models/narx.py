@@ -66,6 +66,7 @@ from mrdamper.models.rates import (
     to_record_rate,
 )
 from mrdamper.models.registry import register
+from mrdamper.progress import report
 
 __all__ = ["NARXEstimator", "NARXModel", "candidate_structure"]
 
@@ -503,9 +504,11 @@ class NARXEstimator(Estimator):
             records, weights, base, cand, p, self.n_terms, self.err_tol, self.colin_tol
         )
         terms = cand[order]
+        report("least squares of the selected terms")
         theta, cond = least_squares_terms(records, weights, base, terms, p, self.cond_max)
         model = dataclasses.replace(probe, terms=terms, theta=theta)
         bound = model.force_bound / model.scales[0]
+        report("free run of the least-squares model")
         cost_ls = free_run_cost(base, terms, theta, bound, records, weights, p)
         cost, nfev, refined = cost_ls, 0, False
         if self.refine:
@@ -513,6 +516,7 @@ class NARXEstimator(Estimator):
                 base, terms, theta, bound, list(fit_recs), fit_w, p, self.max_nfev
             )
             if windows is not None:  # full-data check of the refined coefficients
+                report("full-data check")
                 cost_r = free_run_cost(base, terms, theta_r, bound, records, weights, p)
             if cost_r < cost_ls:
                 model = dataclasses.replace(model, theta=theta_r)

@@ -101,6 +101,7 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.registry import register
+from mrdamper.progress import report
 
 __all__ = ["P15Estimator", "P15Model"]
 
@@ -438,6 +439,7 @@ class P15Estimator(Estimator):
                 np.concatenate([e.electrical(self.input) for e in exps]), lo, hi, self.input
             )
         form = self.form if self.method == "equation-error" else "monotone"
+        report("equation-error start")
         B, f0, ee_info = equation_error(
             list(exps),
             self.input,
@@ -490,7 +492,9 @@ class P15Estimator(Estimator):
             eta=self.eta,
             basis=basis,
         )
+        report("free run of the training records")
         divergence, esr = _simulate_training(model, raw)
+        report("step-size check")
         model, step = self._checked_step(model, [e for e in raw if e.name not in divergence])
         w3_grid = model.coefficients(np.linspace(lo, hi, 201))[2]
         provenance: dict[str, Any] = {
@@ -508,6 +512,7 @@ class P15Estimator(Estimator):
         }
         if windows is not None:
             provenance["windows"] = windows
+            report("full-data check")
             provenance["full_data_check"] = _scale.full_data_esr(model, raw_all)
         if self.stable_only and divergence:
             first = next(iter(divergence.items()))

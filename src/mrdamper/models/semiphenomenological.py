@@ -89,6 +89,7 @@ from mrdamper.models.base import (
 )
 from mrdamper.models.protocols import StaticMapForm
 from mrdamper.models.registry import register
+from mrdamper.progress import report
 
 __all__ = [
     "SP1Estimator",
@@ -322,6 +323,7 @@ class _SPEstimator(Estimator):
         """
         cls = cast(type[SPModel], self.model_class)
         comp_all, power_all = cls.layout_arrays()
+        report("stacking the samples")
         x, v, i, F = stack(
             data.records, self.input, self.eta, _scale.WINDOW_THRESHOLD
         )  # long campaigns: an even subset

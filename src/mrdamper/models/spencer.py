@@ -56,6 +56,7 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.registry import register
+from mrdamper.progress import report
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -418,6 +419,7 @@ class SpencerEstimator(Estimator):
         params["substeps"] = max(0, int(self.substeps))
         model = SpencerModel(**params, input=self.input, input_range=data.input_range)
         # stiff model: halving the RK4 step must not change the free run (else warn, see provenance)
+        report("step-size check")
         provenance["step_check"] = step_halving_check(
             "spencer",
             exps,
@@ -426,6 +428,7 @@ class SpencerEstimator(Estimator):
         )
         if windows is not None:
             provenance["windows"] = windows
+            report("full-data check")
             provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
         return Identified(parameters=params, provenance=provenance)
 

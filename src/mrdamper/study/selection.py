@@ -30,6 +30,7 @@ import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.errors import DataValidationError, OutOfRangeError
+from mrdamper.progress import report, section
 
 __all__ = [
     "SCORE_COLUMNS",
@@ -191,6 +192,11 @@ def cross_validate(
     Returns
     -------
     SelectionResult
+
+    Notes
+    -----
+    Reports the stage ``"cross-validation: fits"`` (fits done of the kinds times the folds) to
+    :mod:`mrdamper.progress`; each fit's own stages come prefixed with the kind and fold.
     """
     from mrdamper.models.registry import available_models, get_estimator
 
@@ -207,11 +213,15 @@ def cross_validate(
         )
     rows: list[dict[str, Any]] = []
     fit_times: dict[str, list[float]] = {k: [] for k in kinds}
+    n_fits, done = len(kinds) * len(parts), 0
     for kind in kinds:
         for label, train, test in parts:
+            report("cross-validation: fits", done, n_fits)
+            done += 1
+            fold = f"{kind}, fold {label} ({done} of {n_fits})"
             t0 = time.perf_counter()
             try:
-                with warnings.catch_warnings():
+                with warnings.catch_warnings(), section(fold):
                     warnings.simplefilter("ignore")
                     model = get_estimator(kind, **{"input": input, **extra.get(kind, {})}).fit(
                         train
@@ -230,6 +240,7 @@ def cross_validate(
                 ]
                 continue
             fit_times[kind].append(time.perf_counter() - t0)
+            report(f"{fold}: scoring the left-out data")
             for e in test:
                 clipped = _outside(model, e)
                 try:
@@ -257,6 +268,7 @@ def cross_validate(
                             "error": f"simulate: {type(exc).__name__}: {exc}",
                         }
                     )
+    report("cross-validation: fits", n_fits, n_fits)
     scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
     return selection_from_scores(scores, kinds, fit_times, split, len(parts), notes)
 

@@ -33,6 +33,7 @@ from mrdamper.data.readers.directory import (
 )
 from mrdamper.data.readers.manifest import is_doe_folder, manifest_rows
 from mrdamper.errors import DataValidationError
+from mrdamper.progress import report
 
 __all__ = [
     "ANY_RECORD_FILE",
@@ -200,9 +201,18 @@ def read_records(
     -------
     ExperimentSet
         Named after the one path given (folder name or file stem), else ``"records"``.
+
+    Notes
+    -----
+    Reports the stage ``"reading records"`` to :mod:`mrdamper.progress` before each file, with
+    the number of files read so far and the number of files.
     """
     files = record_files(paths, pattern, **read_kw)
-    return ExperimentSet([f.read() for f in files], name=_set_name(paths))
+    records = []
+    for k, f in enumerate(files):
+        report("reading records", k, len(files))
+        records.append(f.read())
+    return ExperimentSet(records, name=_set_name(paths))
 
 
 @dataclass(frozen=True)

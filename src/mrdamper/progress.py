@@ -1,0 +1,135 @@
+"""Progress of long computations (reading records, fitting), for whoever listens.
+
+Library code reports where it is with :func:`report`: a stage (a short text such as
+``"output-error refinement: iteration"``) and, when it counts, how many steps of how many are done.
+Nothing is shown by the library itself: a caller that wants to display progress (the command line
+does, on a terminal) installs a listener for a block with :func:`listening`. With no listener
+installed, :func:`report` costs one :class:`~contextvars.ContextVar` lookup, and reporting never
+changes a result.
+
+The listener lives in a :class:`~contextvars.ContextVar`, so it follows the code that installed it
+(threads and asynchronous tasks started elsewhere do not report into it; worker processes never
+do).
+
+Examples
+--------
+>>> from mrdamper import progress
+>>> events = []
+>>> with progress.listening(lambda stage, done, total: events.append((stage, done, total))):
+...     for k in range(2):
+...         progress.report("step", k + 1, 2)
+>>> events
+[('step', 1, 2), ('step', 2, 2)]
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
+from typing import Any, TypeVar
+
+__all__ = ["Listener", "counted", "listening", "report", "section"]
+
+#: A listener: called with the stage, the steps done (or None) and the steps in all (or None).
+Listener = Callable[[str, int | None, int | None], None]
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+_LISTENER: ContextVar[Listener | None] = ContextVar("mrdamper_progress_listener", default=None)
+
+
+def report(stage: str, done: int | None = None, total: int | None = None) -> None:
+    """Tell the current listener, if any, that the computation is at ``stage``.
+
+    Parameters
+    ----------
+    stage : str
+        What is being done, e.g. ``"reading records"``.
+    done : int, optional
+        Steps of the stage completed so far (never above ``total``).
+    total : int, optional
+        Steps of the stage in all, or at most, when known.
+    """
+    listener = _LISTENER.get()
+    if listener is not None:
+        listener(stage, done, total)
+
+
+@contextlib.contextmanager
+def listening(callback: Listener) -> Iterator[None]:
+    """Send the reports of the block to ``callback`` (the listener before it is restored after).
+
+    Parameters
+    ----------
+    callback : callable
+        Called as ``callback(stage, done, total)`` for every :func:`report` of the block. It
+        should be quick; an exception it raises propagates into the reporting code.
+    """
+    token = _LISTENER.set(callback)
+    try:
+        yield
+    finally:
+        _LISTENER.reset(token)
+
+
+@contextlib.contextmanager
+def section(label: str) -> Iterator[None]:
+    """Prefix the stages reported in the block with ``label`` (e.g. one candidate of a search).
+
+    Sections nest: a stage ``s`` reported inside ``section("a")`` and ``section("b")`` reaches
+    the listener as ``"a: b: s"``. Without a listener this does nothing.
+
+    Parameters
+    ----------
+    label : str
+        Text put before every stage of the block.
+    """
+    outer = _LISTENER.get()
+    if outer is None:
+        yield
+        return
+
+    def prefixed(stage: str, done: int | None, total: int | None) -> None:
+        outer(f"{label}: {stage}", done, total)
+
+    token = _LISTENER.set(prefixed)
+    try:
+        yield
+    finally:
+        _LISTENER.reset(token)
+
+
+def counted(fun: _F, stage: str, total: int | None = None) -> _F:
+    """``fun`` wrapped so that each call reports ``stage`` with the number of calls so far.
+
+    For counting the residual evaluations of an optimiser: pass the wrapper instead of ``fun``.
+    The wrapper returns exactly what ``fun`` returns. Without a listener when this is called,
+    ``fun`` itself is returned (nothing is counted).
+
+    Parameters
+    ----------
+    fun : callable
+        The function to count.
+    stage : str
+        Stage reported at each call.
+    total : int, optional
+        Most calls expected (e.g. an optimiser's evaluation budget), when known.
+
+    Returns
+    -------
+    callable
+        The wrapper, or ``fun``.
+    """
+    listener = _LISTENER.get()
+    if listener is None:
+        return fun
+    calls = 0
+
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        nonlocal calls
+        calls += 1
+        listener(stage, calls, total)
+        return fun(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
