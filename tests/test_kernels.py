@@ -94,7 +94,7 @@ def test_rig_items_are_the_signatures_the_virtual_rig_compiles() -> None:
 
 
 def test_start_early_marks_the_rig_ready_and_cleans_up() -> None:
-    compiled.start_early(["bingham"])  # bingham has no kernels: only the rig's are handled
+    compiled.start_early(["bingham"])  # bingham has no kernels: only the rig's damper kernel
     try:
         claim = compiled.claim_folder()
         assert claim is not None

@@ -86,8 +86,8 @@ RIG_ITEMS: tuple[Item, ...] = (
     ("mrdamper.signals._signal_kernels", "lfsr_bits", "I i1 I I", 0.25),
 )
 
-#: File the early background compilation creates in its claim folder once the virtual rig's
-#: kernels are cached (:func:`start_early`, :func:`wait_rig`).
+#: File the early background compilation creates in its claim folder once the model kernel the
+#: virtual rig runs is cached (:func:`start_early`, :func:`wait_rig`).
 RIG_READY = "rig-kernels-ready"
 
 #: Kernels (with the argument types of the library's calls) that each model kind's fit and
@@ -246,8 +246,8 @@ def compile_ahead(kinds: Sequence[str], last: Sequence[tuple[str, str]] = ()) ->
 def _rig_then_claimed(kinds: Sequence[str], claim_dir: str) -> None:
     """Body of the early background process: the virtual rig's kernels first (the command waits
     for them, :func:`wait_rig`), then the claimed model kernel modules."""
-    try:
-        compile_kernels([it for it in RIG_ITEMS if not is_cached(it)])
+    try:  # the model kernels the rig runs; the rig's own kernels are left to the command
+        compile_kernels([it for it in RIG_ITEMS if it[:2] in RIG_KERNELS and not is_cached(it)])
     finally:
         try:
             os.close(os.open(os.path.join(claim_dir, RIG_READY), os.O_CREAT | os.O_EXCL))
@@ -257,13 +257,14 @@ def _rig_then_claimed(kinds: Sequence[str], claim_dir: str) -> None:
 
 
 def start_early(kinds: Sequence[str]) -> None:
-    """Start, at once, a background process that compiles the virtual rig's kernels
-    (:data:`RIG_ITEMS`) and then the uncached kernels of ``kinds`` (as :func:`compile_ahead`).
+    """Start, at once, a background process that compiles the model kernel the virtual rig runs
+    (:data:`RIG_KERNELS`) and then the uncached kernels of ``kinds`` (as :func:`compile_ahead`).
 
     For ``mrdamper demo``, called before the command line is even parsed: the other core
-    compiles while this process imports its libraries, so the rig's kernels are usually cached
-    when the demo generates its records (it waits for them with :func:`wait_rig` instead of
-    compiling them itself) and the models' kernels are compiled during the generation. The
+    compiles while this process imports its libraries, so the rig's damper kernel is usually
+    cached when the demo generates its records (:func:`wait_rig` compiles the rig's own kernels
+    meanwhile, then waits for it instead of compiling it again) and the models' kernels are
+    compiled during the generation. The
     process checks the cache itself (a second run costs it about a second of the other core and
     compiles nothing), so this call returns without importing numba.
     """
@@ -279,13 +280,25 @@ def start_early(kinds: Sequence[str]) -> None:
 
 
 def wait_rig(timeout: float = 120.0) -> float:
-    """Wait until the early background process (:func:`start_early`) has the virtual rig's
-    kernels cached, it has stopped, or ``timeout`` [s] has passed; return the time waited [s].
-    Without an early process it returns at once."""
+    """Make the virtual rig's kernels ready in this process, sharing the work with the early
+    background process (:func:`start_early`).
+
+    This process compiles (or loads) the rig's own kernels (signals, driver, actuator) while the
+    background process compiles the model kernel the rig runs (:data:`RIG_KERNELS`, the
+    reference damper's simulation); it then waits until that one is cached, the background
+    process has stopped, or ``timeout`` [s] has passed. Without an early process it returns at
+    once (each kernel is then compiled at its first call).
+
+    Returns
+    -------
+    float
+        Time spent waiting for the background process [s].
+    """
     import time
 
     if _AHEAD is None or not _AHEAD.rig:
         return 0.0
+    compile_kernels([it for it in RIG_ITEMS if it[:2] not in RIG_KERNELS])
     ready = os.path.join(_AHEAD.claim_dir, RIG_READY)
     t0 = time.perf_counter()
     while not os.path.exists(ready) and _AHEAD.process.is_alive():

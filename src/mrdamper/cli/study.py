@@ -240,7 +240,7 @@ def demo(
         kinds or [s.kind for s in doe_protocol().resolved_models()], last=compiled.RIG_KERNELS
     )
     try:
-        compiled.wait_rig()  # started at launch: the rig's kernels, compiled on the other core
+        compiled.wait_rig()  # started at launch: the rig's damper kernel, on the other core
         data = table_ii(seed=seed, scale=sc)
     except BaseException:
         compiled.finish_ahead(cancel=True)
