@@ -230,3 +230,27 @@ def test_quiroz_zone_slopes_follow_paper(quiroz_unfiltered_dir) -> None:
     assert np.all(m[:, 1] > m[:, 0]) and np.all(m[:, 1] > m[:, 2])
     assert np.all(np.diff(m[:, 1]) > 0)
     assert np.all(np.diff(laws.level_v_high) > 0)
+
+
+@pytest.mark.parametrize("reading", ["continuous", "literal"])
+def test_long_inputs_are_built_in_blocks_with_the_same_values(
+    reading: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Above ``BLOCK`` samples the zone-law inputs are formed block by block (bounded
+    temporaries on long records); every sample gets the same value as in one piece."""
+    from mrdamper.analysis import hysteretic
+    from mrdamper.analysis import laws as laws_module
+
+    laws = fit_zone_laws(_laws_data([0.0, 0.25, 0.5, 0.75, 1.0]))
+    rng = np.random.default_rng(4)
+    n = 5000
+    v = np.cumsum(rng.normal(0.0, 0.01, n))
+    rho = rng.uniform(0.0, 1.0, n)
+    whole_u = laws.scheduling_input(v, rho, reading=reading)
+    whole_h = hysteretic.hysteretic_input(laws, v, rho, 1e-3, 2e-4, 0.5)
+    monkeypatch.setattr(laws_module, "BLOCK", 777)
+    monkeypatch.setattr(hysteretic, "BLOCK", 777)
+    np.testing.assert_array_equal(laws.scheduling_input(v, rho, reading=reading), whole_u)
+    np.testing.assert_array_equal(
+        hysteretic.hysteretic_input(laws, v, rho, 1e-3, 2e-4, 0.5), whole_h
+    )

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numba import njit
 
+from mrdamper.analysis.laws import BLOCK
 from mrdamper.errors import DataValidationError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -129,13 +130,24 @@ def hysteretic_input(
         raise DataValidationError("blend", f"expected a share in [0, 1], got {blend!r}")
     v = np.ascontiguousarray(v, dtype=np.float64)
     rho = np.broadcast_to(np.asarray(rho, dtype=float), v.shape)
+    z = dahl_state(v, dt, stroke)
+    if v.ndim != 1 or v.size <= BLOCK:
+        return _blend(laws, v, rho, z, blend)
+    out = np.empty(v.size)
+    for a in range(0, v.size, BLOCK):  # elementwise: the same values, bounded temporaries
+        sl = slice(a, a + BLOCK)
+        out[sl] = _blend(laws, v[sl], rho[sl], z[sl], blend)
+    return out
+
+
+def _blend(laws: ZoneLaws, v: np.ndarray, rho: np.ndarray, z: np.ndarray, blend: float) -> Any:
+    """``u`` from velocity, level and Dahl state, sample by sample (module docstring)."""
     m = laws.m(rho)
     if np.any(m[..., 1] == 0.0):
         raise DataValidationError(
             "m2", "central slope is zero; the input u = sigma v + psi is undefined"
         )
     hi, lo = laws.v_high(rho), laws.v_low(rho)
-    z = dahl_state(v, dt, stroke)
     r = np.where(v >= 0.0, m[..., 2], m[..., 0]) / m[..., 1]
     level = np.where(z >= 0.0, hi, -lo)
     pre = (1.0 - blend) * np.clip(v, lo, hi) + blend * level * z

@@ -30,6 +30,11 @@ class ZoneLawWarning(UserWarning):
     """Zone data break an assumption of the paper (e.g. ``m2`` is not the steepest slope)."""
 
 
+#: Samples per block of the elementwise zone-law evaluations on long records: the per-sample
+#: slopes, intercepts and limits of a block are formed at a time, not of the whole record.
+BLOCK = 1 << 18
+
+
 def _polyval(coef: np.ndarray, rho: np.ndarray) -> np.ndarray:
     """Evaluate rows of ``coef`` (column p = coefficient of rho**p) at ``rho``; shape (n, rows)."""
     out = np.zeros(rho.shape + (coef.shape[0],))
@@ -128,9 +133,17 @@ class ZoneLaws:
         """
         v = np.asarray(v, dtype=float)
         rho = np.broadcast_to(np.asarray(rho, dtype=float), v.shape)
-        return scheduling_input_arrays(
-            v, self.m(rho), self.c(rho), self.v_low(rho), self.v_high(rho), reading
-        )
+        if v.ndim != 1 or v.size <= BLOCK:
+            return scheduling_input_arrays(
+                v, self.m(rho), self.c(rho), self.v_low(rho), self.v_high(rho), reading
+            )
+        out = np.empty(v.size)
+        for a in range(0, v.size, BLOCK):  # elementwise: the same values, bounded temporaries
+            vb, rb = v[a : a + BLOCK], rho[a : a + BLOCK]
+            out[a : a + BLOCK] = scheduling_input_arrays(
+                vb, self.m(rb), self.c(rb), self.v_low(rb), self.v_high(rb), reading
+            )
+        return out
 
     def problems(self, n_grid: int = 101) -> list[str]:
         """Violations of the paper's assumptions over ``rho_range`` (empty when none).
