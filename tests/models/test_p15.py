@@ -261,7 +261,13 @@ def test_divergence_is_detected_with_the_sample() -> None:
     assert info.value.model == "p15"
 
 
-def test_w3_crossing_zero_is_reported() -> None:
+@pytest.mark.parametrize("block", [None, 64])
+def test_w3_crossing_zero_is_reported(block: int | None, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The check runs block by block on long records (``BLOCK``) and names the same sample."""
+    if block is not None:
+        from mrdamper.models import phenomenological
+
+        monkeypatch.setattr(phenomenological, "BLOCK", block)
     W = W_TRUE.copy()
     W[2] = [-1.0e-4, 2.0e-4, 0.0]  # w3 = 0 at i = 0.5 A
     singular = P15Model(W=tuple(W.ravel()), input_range=(0.0, 1.0), max_step=2e-5)
@@ -270,6 +276,7 @@ def test_w3_crossing_zero_is_reported() -> None:
     with pytest.raises(SimulationDivergedError, match="w3") as info:
         singular.predict(e)
     assert info.value.sample == 500
+    assert "from -0.0001 at sample 0 to 0" in str(info.value)
 
 
 def test_json_round_trip_is_bit_identical(tmp_path: Path) -> None:

@@ -74,6 +74,7 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from mrdamper.analysis.laws import BLOCK
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
@@ -279,21 +280,29 @@ class P15Model(FittedModel):
         """
         return self.simulate_steps(experiment, self.substeps(experiment.dt))
 
+    def _check_w3(self, i: np.ndarray) -> None:
+        """Raise if ``w3(i)`` vanishes or changes sign along ``i`` (block by block of
+        :data:`~mrdamper.analysis.laws.BLOCK` samples: bounded temporaries on long records)."""
+        w30 = float(self.coefficients(i[:1])[2][0])
+        for a in range(0, i.size, BLOCK):
+            w3 = self.coefficients(i[a : a + BLOCK])[2]
+            bad = np.flatnonzero((w3 == 0) | (np.sign(w3) != np.sign(w30)))
+            if bad.size:
+                k = a + int(bad[0])
+                raise SimulationDivergedError(
+                    self.kind,
+                    k,
+                    f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} (w3 "
+                    f"from {w30:.3g} at sample 0 to {w3[bad[0]]:.3g}); the force ODE is singular "
+                    "there",
+                )
+
     def simulate_steps(self, experiment: Experiment, n_sub: int) -> np.ndarray:
         """Free-run force [N] with ``n_sub`` integration steps per sample (see :meth:`predict`)."""
         i = _lagged(
             np.asarray(self.electrical_input(experiment), dtype=np.float64), experiment.dt, self.eta
         )
-        w3 = self.coefficients(i)[2]
-        bad_w3 = np.flatnonzero((w3 == 0) | (np.sign(w3) != np.sign(w3[0])))
-        if bad_w3.size:
-            k = int(bad_w3[0])
-            raise SimulationDivergedError(
-                self.kind,
-                k,
-                f"w3({self.input}) changes sign or vanishes at {self.input}={i[k]:.6g} (w3 from "
-                f"{w3[0]:.3g} at sample 0 to {w3[k]:.3g}); the force ODE is singular there",
-            )
+        self._check_w3(i)
         v = np.ascontiguousarray(experiment.v, dtype=np.float64)
         F0 = rest_state(self.coefficients(float(i[0])), self.f0, float(v[0]))
         one = np.zeros(1, dtype=np.int64)
