@@ -248,8 +248,7 @@ def test_long_inputs_are_built_in_blocks_with_the_same_values(
     rho = rng.uniform(0.0, 1.0, n)
     whole_u = laws.scheduling_input(v, rho, reading=reading)
     whole_h = hysteretic.hysteretic_input(laws, v, rho, 1e-3, 2e-4, 0.5)
-    monkeypatch.setattr(laws_module, "BLOCK", 777)
-    monkeypatch.setattr(hysteretic, "BLOCK", 777)
+    monkeypatch.setattr(laws_module, "BLOCK", 777)  # in_blocks serves both inputs
     np.testing.assert_array_equal(laws.scheduling_input(v, rho, reading=reading), whole_u)
     np.testing.assert_array_equal(
         hysteretic.hysteretic_input(laws, v, rho, 1e-3, 2e-4, 0.5), whole_h

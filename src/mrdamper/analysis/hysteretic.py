@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numba import njit
 
-from mrdamper.analysis.laws import BLOCK
+from mrdamper.analysis.laws import in_blocks
 from mrdamper.errors import DataValidationError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -131,13 +131,7 @@ def hysteretic_input(
     v = np.ascontiguousarray(v, dtype=np.float64)
     rho = np.broadcast_to(np.asarray(rho, dtype=float), v.shape)
     z = dahl_state(v, dt, stroke)
-    if v.ndim != 1 or v.size <= BLOCK:
-        return _blend(laws, v, rho, z, blend)
-    out = np.empty(v.size)
-    for a in range(0, v.size, BLOCK):  # elementwise: the same values, bounded temporaries
-        sl = slice(a, a + BLOCK)
-        out[sl] = _blend(laws, v[sl], rho[sl], z[sl], blend)
-    return out
+    return in_blocks(lambda vb, rb, zb: _blend(laws, vb, rb, zb, blend), v, rho, z)
 
 
 def _blend(laws: ZoneLaws, v: np.ndarray, rho: np.ndarray, z: np.ndarray, blend: float) -> Any:

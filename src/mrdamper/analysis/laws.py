@@ -10,7 +10,7 @@ records, or from bins of a continuously varying scheduling signal.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -23,7 +23,15 @@ from mrdamper.analysis.zones import ZoneFit, fit_zones
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError
 
-__all__ = ["ZoneLawWarning", "ZoneLaws", "fit_zone_laws", "zone_fits_binned", "zone_fits_by_level"]
+__all__ = [
+    "BLOCK",
+    "ZoneLawWarning",
+    "ZoneLaws",
+    "fit_zone_laws",
+    "in_blocks",
+    "zone_fits_binned",
+    "zone_fits_by_level",
+]
 
 
 class ZoneLawWarning(UserWarning):
@@ -33,6 +41,32 @@ class ZoneLawWarning(UserWarning):
 #: Samples per block of the elementwise zone-law evaluations on long records: the per-sample
 #: slopes, intercepts and limits of a block are formed at a time, not of the whole record.
 BLOCK = 1 << 18
+
+
+def in_blocks(f: Callable[..., np.ndarray], *arrays: np.ndarray) -> np.ndarray:
+    """``f(*arrays)`` for an elementwise ``f`` of 1-D arrays of one length, evaluated on
+    :data:`BLOCK` samples at a time above that length: the same values, with temporaries
+    bounded by the block instead of the record.
+
+    Parameters
+    ----------
+    f : callable
+        Elementwise function of the arrays, returning one float64 array of their length.
+    *arrays : ndarray
+        Its arguments, 1-D and of one length (e.g. velocity [m/s] and level [A]).
+
+    Returns
+    -------
+    ndarray
+        ``f(*arrays)``.
+    """
+    n = arrays[0].size
+    if arrays[0].ndim != 1 or n <= BLOCK:
+        return f(*arrays)
+    out = np.empty(n)
+    for a in range(0, n, BLOCK):
+        out[a : a + BLOCK] = f(*(x[a : a + BLOCK] for x in arrays))
+    return out
 
 
 def _polyval(coef: np.ndarray, rho: np.ndarray) -> np.ndarray:
@@ -133,17 +167,13 @@ class ZoneLaws:
         """
         v = np.asarray(v, dtype=float)
         rho = np.broadcast_to(np.asarray(rho, dtype=float), v.shape)
-        if v.ndim != 1 or v.size <= BLOCK:
-            return scheduling_input_arrays(
-                v, self.m(rho), self.c(rho), self.v_low(rho), self.v_high(rho), reading
-            )
-        out = np.empty(v.size)
-        for a in range(0, v.size, BLOCK):  # elementwise: the same values, bounded temporaries
-            vb, rb = v[a : a + BLOCK], rho[a : a + BLOCK]
-            out[a : a + BLOCK] = scheduling_input_arrays(
+        return in_blocks(
+            lambda vb, rb: scheduling_input_arrays(
                 vb, self.m(rb), self.c(rb), self.v_low(rb), self.v_high(rb), reading
-            )
-        return out
+            ),
+            v,
+            rho,
+        )
 
     def problems(self, n_grid: int = 101) -> list[str]:
         """Violations of the paper's assumptions over ``rho_range`` (empty when none).

@@ -213,12 +213,6 @@ def read_paths(
     FileNotFoundError
         If a path does not exist.
     """
-    from mrdamper.data.readers import record_files
-    from mrdamper.progress import report
+    from mrdamper.data.readers.records import read_files, record_files
 
-    files = record_files(paths, pattern, **read_kw)
-    out = []
-    for k, f in enumerate(files):
-        report("reading records", k, len(files))  # as mrdamper.data.readers.read_records does
-        out.append(f.read())
-    return out
+    return read_files(record_files(paths, pattern, **read_kw))

@@ -10,12 +10,23 @@ from __future__ import annotations
 import contextlib
 import sys
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Annotated
+
+import typer
 
 if TYPE_CHECKING:  # pragma: no cover
     from rich.console import Console
 
-__all__ = ["Status", "working"]
+__all__ = ["NoProgress", "Status", "working"]
+
+#: The ``--no-progress`` option of the commands that show :func:`working`'s line.
+NoProgress = Annotated[
+    bool,
+    typer.Option(
+        "--no-progress",
+        help="No live status line (shown on standard error only when that is a terminal).",
+    ),
+]
 
 
 class Status:

@@ -24,6 +24,7 @@ from typing import Annotated, Any, cast
 import typer
 
 from mrdamper.cli._records import read_paths, reader_options
+from mrdamper.cli._status import NoProgress
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.base import RangePolicy
@@ -219,13 +220,7 @@ def score(
     pattern: Annotated[
         str | None, typer.Option("--pattern", help="File-name regex for folders.")
     ] = None,
-    no_progress: Annotated[
-        bool,
-        typer.Option(
-            "--no-progress",
-            help="No live status line (shown on standard error only when that is a terminal).",
-        ),
-    ] = False,
+    no_progress: NoProgress = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """ESR and SSSE of the model's free-run prediction for each record, and their mean."""

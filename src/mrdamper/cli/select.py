@@ -16,6 +16,7 @@ from typing import Annotated, Any
 import typer
 
 from mrdamper.cli._records import reader_options
+from mrdamper.cli._status import NoProgress
 from mrdamper.errors import DataValidationError
 
 __all__ = ["register", "select"]
@@ -70,13 +71,7 @@ def select(
     pattern: Annotated[
         str | None, typer.Option("--pattern", help="File-name regex for folders.")
     ] = None,
-    no_progress: Annotated[
-        bool,
-        typer.Option(
-            "--no-progress",
-            help="No live status line (shown on standard error only when that is a terminal).",
-        ),
-    ] = False,
+    no_progress: NoProgress = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Cross-validate every model kind on DATA and recommend one."""

@@ -40,6 +40,7 @@ __all__ = [
     "RecordFile",
     "RecordSource",
     "SourceSet",
+    "read_files",
     "read_records",
     "record_files",
     "record_sources",
@@ -207,12 +208,27 @@ def read_records(
     Reports the stage ``"reading records"`` to :mod:`mrdamper.progress` before each file, with
     the number of files read so far and the number of files.
     """
-    files = record_files(paths, pattern, **read_kw)
+    return ExperimentSet(read_files(record_files(paths, pattern, **read_kw)), name=_set_name(paths))
+
+
+def read_files(files: Sequence[RecordFile]) -> list[Experiment]:
+    """Read ``files`` in order, reporting the stage ``"reading records"`` to
+    :mod:`mrdamper.progress` before each (files read so far, of all).
+
+    Parameters
+    ----------
+    files : sequence of RecordFile
+        As :func:`record_files` gives them.
+
+    Returns
+    -------
+    list of Experiment
+    """
     records = []
     for k, f in enumerate(files):
         report("reading records", k, len(files))
         records.append(f.read())
-    return ExperimentSet(records, name=_set_name(paths))
+    return records
 
 
 @dataclass(frozen=True)
