@@ -17,25 +17,14 @@ import pytest
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_scale.py"
 
 
-@pytest.mark.slow
-def test_bench_scale_quick(tmp_path: Path) -> None:
+def _run(tmp_path: Path, *args: str) -> tuple[subprocess.CompletedProcess[str], list[dict]]:
+    """Run the benchmark with ``args`` (cache and JSON output in ``tmp_path``); its rows."""
     if not BENCH.is_file():
         pytest.skip(f"{BENCH} not found (tests not run from a source checkout)")
     out = tmp_path / "rows.json"
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
     proc = subprocess.run(
-        [
-            sys.executable,
-            str(BENCH),
-            "--quick",
-            "--kinds",
-            "bingham",
-            "lti",
-            "--cache",
-            str(tmp_path / "cache"),
-            "--json",
-            str(out),
-        ],
+        [sys.executable, str(BENCH), *args, "--cache", str(tmp_path / "cache"), "--json", str(out)],
         capture_output=True,
         text=True,
         env=env,
@@ -43,7 +32,12 @@ def test_bench_scale_quick(tmp_path: Path) -> None:
         check=False,
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    rows = json.loads(out.read_text())
+    return proc, json.loads(out.read_text())
+
+
+@pytest.mark.slow
+def test_bench_scale_quick(tmp_path: Path) -> None:
+    proc, rows = _run(tmp_path, "--quick", "--kinds", "bingham", "lti")
     assert [(r["kind"], r["length_s"]) for r in rows] == [
         ("bingham", 12.0),
         ("bingham", 120.0),
@@ -63,36 +57,9 @@ def test_bench_scale_quick(tmp_path: Path) -> None:
 @pytest.mark.parametrize("source", ["parquet-file", "csv-folder"])
 def test_bench_scale_reads_files_as_the_cli_does(tmp_path: Path, source: str) -> None:
     pytest.importorskip("pyarrow")
-    if not BENCH.is_file():
-        pytest.skip(f"{BENCH} not found (tests not run from a source checkout)")
-    out = tmp_path / "rows.json"
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
-    proc = subprocess.run(
-        [
-            sys.executable,
-            str(BENCH),
-            "--lengths",
-            "12",
-            "30",
-            "--record",
-            "20",
-            "--kinds",
-            "sp1",
-            "--source",
-            source,
-            "--cache",
-            str(tmp_path / "cache"),
-            "--json",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=600,
-        check=False,
+    _, rows = _run(
+        tmp_path, "--lengths", "12", "30", "--record", "20", "--kinds", "sp1", "--source", source
     )
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    rows = json.loads(out.read_text())
     assert [(r["kind"], r["length_s"], r["source"]) for r in rows] == [
         ("sp1", 12.0, source),
         ("sp1", 30.0, source),

@@ -13,11 +13,10 @@ import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from mrdamper import Experiment, get_estimator, progress, write_csv
-from mrdamper.rig import reference_damper
+from tests.models.test_single_level import _sine  # three short sines through the rig damper
 
 KINDS = ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
 FAST = {"spencer": {"n_starts": 2, "screen_nfev": 5, "max_nfev": 20}}
@@ -37,20 +36,6 @@ FAMILY = {
 }
 
 Event = tuple[str, "int | None", "int | None"]
-
-
-def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:
-    t = np.arange(round(4.0 / freq * fs)) / fs
-    x = amp * np.sin(2 * np.pi * freq * t)
-    v = amp * 2 * np.pi * freq * np.cos(2 * np.pi * freq * t)
-    e = Experiment(
-        t=t, x=x, v=v, F=np.zeros_like(t), i=np.full(t.size, level), name=name,
-        metadata={"current": level},
-    )  # fmt: skip
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        F = reference_damper().predict(e)
-    return e.replace(F=F + np.random.default_rng(len(name)).normal(0.0, 5.0, t.size))
 
 
 @pytest.fixture(scope="module")
