@@ -234,13 +234,16 @@ def compile_ahead(kinds: Sequence[str], last: Sequence[tuple[str, str]] = ()) ->
     if _AHEAD is not None or not _todo(kinds):
         return
     claim_dir = tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    _AHEAD = _Ahead(_background(compile_claimed, list(kinds), claim_dir, list(last)), claim_dir)
+
+
+def _background(target: Any, *args: Any) -> Any:
+    """Start ``target(*args)`` in a daemon process (forked where the platform can) and return it."""
     methods = multiprocessing.get_all_start_methods()
     ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    proc = ctx.Process(
-        target=compile_claimed, args=(list(kinds), claim_dir, list(last)), daemon=True
-    )
+    proc = ctx.Process(target=target, args=args, daemon=True)
     proc.start()
-    _AHEAD = _Ahead(proc, claim_dir)
+    return proc
 
 
 def _rig_then_claimed(kinds: Sequence[str], claim_dir: str) -> None:
@@ -272,11 +275,7 @@ def start_early(kinds: Sequence[str]) -> None:
     if _AHEAD is not None:
         return
     claim_dir = tempfile.mkdtemp(prefix="mrdamper-kernels-")
-    methods = multiprocessing.get_all_start_methods()
-    ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    proc = ctx.Process(target=_rig_then_claimed, args=(list(kinds), claim_dir), daemon=True)
-    proc.start()
-    _AHEAD = _Ahead(proc, claim_dir, rig=True)
+    _AHEAD = _Ahead(_background(_rig_then_claimed, list(kinds), claim_dir), claim_dir, rig=True)
 
 
 def wait_rig(timeout: float = 120.0) -> float:
