@@ -19,6 +19,7 @@ Status codes returned by the kernels: 0 ok, 1 the state became non-finite or lef
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -32,9 +33,12 @@ __all__ = [
     "STATUS_DIVERGED",
     "STATUS_OK",
     "SUBSTEP_RATE_PRODUCT",
+    "SpencerForm",
     "auto_substeps",
     "simulate",
     "simulate_sens",
+    "step_advance",
+    "step_force",
 ]
 
 #: Parameter order of the vector ``p`` used by every kernel.
@@ -166,39 +170,99 @@ def simulate(
     """
     n = x.size
     F = np.zeros(n)
-    y, z, u = y0, z0, u0
-    hf = 1.0 / nsub
-    h = dt * hf
+    s = np.array([y0, z0, u0])
     for k in range(n):
-        F[k] = _force(x[k], v[k], y, z, u, p)
+        F[k] = _force(x[k], v[k], s[0], s[1], s[2], p)
         if k == n - 1:
             break
-        dx = x[k + 1] - x[k]
-        dv = v[k + 1] - v[k]
-        de = e[k + 1] - e[k]
-        for j in range(nsub):
-            t0 = j * hf
-            tm = t0 + 0.5 * hf
-            t1 = t0 + hf
-            xa, va, ea = x[k] + t0 * dx, v[k] + t0 * dv, e[k] + t0 * de
-            xm, vm, em = x[k] + tm * dx, v[k] + tm * dv, e[k] + tm * de
-            xb, vb, eb = x[k] + t1 * dx, v[k] + t1 * dv, e[k] + t1 * de
-            a1, b1, g1, C = _rhs(xa, va, ea, y, z, u, p)
-            if not C > 0.0:
-                return F, STATUS_BAD_DAMPING, k
-            a2, b2, g2, _ = _rhs(
-                xm, vm, em, y + 0.5 * h * a1, z + 0.5 * h * b1, u + 0.5 * h * g1, p
-            )
-            a3, b3, g3, _ = _rhs(
-                xm, vm, em, y + 0.5 * h * a2, z + 0.5 * h * b2, u + 0.5 * h * g2, p
-            )
-            a4, b4, g4, _ = _rhs(xb, vb, eb, y + h * a3, z + h * b3, u + h * g3, p)
-            y += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            z += h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-            u += h / 6.0 * (g1 + 2.0 * g2 + 2.0 * g3 + g4)
-        if _bad_state(y, z, u, x[k + 1]):
-            return F, STATUS_DIVERGED, k + 1
+        status = _interval(s, x[k], v[k], e[k], x[k + 1], v[k + 1], e[k + 1], dt, p, nsub)
+        if status != STATUS_OK:
+            return F, status, (k if status == STATUS_BAD_DAMPING else k + 1)
     return F, STATUS_OK, -1
+
+
+@njit(cache=True)
+def _interval(
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+    p: FloatArray,
+    nsub: int,
+) -> int:
+    """Integrate the state ``s = (y, z, u)`` in place over one interval of ``dt`` [s].
+
+    The inputs are linear between the interval's ends; ``nsub`` classical RK4 sub-steps. Returns
+    a status code (the state is left where the failure was found).
+    """
+    y, z, u = s[0], s[1], s[2]
+    hf = 1.0 / nsub
+    h = dt * hf
+    dx = x1 - x0
+    dv = v1 - v0
+    de = e1 - e0
+    for j in range(nsub):
+        t0 = j * hf
+        tm = t0 + 0.5 * hf
+        t1 = t0 + hf
+        xa, va, ea = x0 + t0 * dx, v0 + t0 * dv, e0 + t0 * de
+        xm, vm, em = x0 + tm * dx, v0 + tm * dv, e0 + tm * de
+        xb, vb, eb = x0 + t1 * dx, v0 + t1 * dv, e0 + t1 * de
+        a1, b1, g1, C = _rhs(xa, va, ea, y, z, u, p)
+        if not C > 0.0:
+            return STATUS_BAD_DAMPING
+        a2, b2, g2, _ = _rhs(xm, vm, em, y + 0.5 * h * a1, z + 0.5 * h * b1, u + 0.5 * h * g1, p)
+        a3, b3, g3, _ = _rhs(xm, vm, em, y + 0.5 * h * a2, z + 0.5 * h * b2, u + 0.5 * h * g2, p)
+        a4, b4, g4, _ = _rhs(xb, vb, eb, y + h * a3, z + h * b3, u + h * g3, p)
+        y += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+        z += h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+        u += h / 6.0 * (g1 + 2.0 * g2 + 2.0 * g3 + g4)
+    s[0], s[1], s[2] = y, z, u
+    if _bad_state(y, z, u, x1):
+        return STATUS_DIVERGED
+    return STATUS_OK
+
+
+class SpencerForm(NamedTuple):
+    """The Spencer model as the per-sample step reads it.
+
+    Attributes
+    ----------
+    p : ndarray
+        Parameters in :data:`PARAM_NAMES` order (SI).
+    max_h : float
+        Largest RK4 sub-step [s]; an interval of ``dt`` takes ``ceil(dt / max_h)`` sub-steps.
+    """
+
+    p: FloatArray
+    max_h: float
+
+
+@njit(cache=True)
+def step_force(form: SpencerForm, s: FloatArray, x: float, v: float, e: float) -> float:
+    """Force [N] at the state ``s = (y, z, u)`` and the present motion (see :mod:`..step`)."""
+    return _force(x, v, s[0], s[1], s[2], form.p)
+
+
+@njit(cache=True)
+def step_advance(
+    form: SpencerForm,
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+) -> int:
+    """Advance ``s`` over one interval of ``dt`` [s] (RK4, inputs linear in between)."""
+    nsub = max(1, math.ceil(dt / form.max_h * (1.0 - 1e-12)))
+    return _interval(s, x0, v0, e0, x1, v1, e1, dt, form.p, nsub)
 
 
 @njit(cache=True)

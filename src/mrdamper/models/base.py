@@ -39,6 +39,7 @@ from mrdamper.models.settings import (
     literal_choices,
     type_hints,
 )
+from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = [
@@ -305,6 +306,18 @@ class FittedModel(abc.ABC):
             field_name=self.input,
             model=self.kind,
         )
+
+    def step(self, **options: Any) -> Step:
+        """The model as a per-sample step (:mod:`mrdamper.models.step`).
+
+        Families that have one override this; the default refuses in one line.
+
+        Raises
+        ------
+        DataValidationError
+            The family has no per-sample step.
+        """
+        raise DataValidationError("model", f"kind {self.kind!r} has no per-sample step")
 
     def with_range_policy(self, policy: RangePolicy) -> FittedModel:
         """Copy of the model with another out-of-range policy."""

@@ -56,6 +56,7 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.registry import register
+from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = [
@@ -69,6 +70,9 @@ __all__ = [
     "auto_substeps",
     "spencer1997",
 ]
+
+#: Largest damper velocity [m/s] the per-sample step resolves by default.
+STEP_VMAX = 1.5
 
 #: Parameter names in kernel order.
 PARAMETER_NAMES: tuple[str, ...] = _k.PARAM_NAMES
@@ -253,6 +257,32 @@ class SpencerModel(FittedModel):
         )
         _raise_on_status(status, sample, nsub, experiment.name)
         return np.asarray(F)
+
+    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+        """The model as a per-sample step (:mod:`mrdamper.models.step`).
+
+        The state is ``(y, z, u)``, at rest ``(x[0], 0, e[0])``; ``advance`` integrates an
+        interval with classical RK4 sub-steps no longer than ``max_h``, chosen like
+        :meth:`substeps_for` for an interval of ``dt`` [s] and velocities up to ``vmax`` [m/s]
+        over the identified input range (or ``dt / substeps`` when ``substeps`` is set).
+
+        Parameters
+        ----------
+        dt : float
+            Reference interval [s] for the sub-step choice (default 1 ms).
+        vmax : float
+            Largest damper velocity [m/s] the step must resolve (default 1.5 m/s, beyond the
+            velocities of a car suspension).
+        """
+        nsub = self.substeps or auto_substeps(
+            self.parameter_vector(), dt, vmax, self.input_range[0], self.input_range[1]
+        )
+        form = _k.SpencerForm(np.ascontiguousarray(self.parameter_vector()), dt / nsub)
+
+        def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
+            return np.array([x0, 0.0, e0])
+
+        return Step(self.kind, form, _k.step_force, _k.step_advance, initial_state)
 
 
 def _raise_on_status(status: int, sample: int, nsub: int, name: str) -> None:

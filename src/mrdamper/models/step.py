@@ -1,0 +1,148 @@
+"""The per-sample step of a fitted model: the one definition every tool runs.
+
+A fitted model has two faces: an open-loop predictor (:meth:`FittedModel.predict`, often a fused
+compiled kernel over a whole record) and a per-sample step, the model written as a discrete-time
+system::
+
+    F[k]       = force(form, s[k], x[k], v[k], e[k])
+    s[k + 1]   = advance(form, s[k], x[k], v[k], e[k], x[k+1], v[k+1], e[k+1], dt)
+
+with ``s`` the model's state (a float64 vector updated in place by ``advance``), ``x`` the damper
+displacement [m], ``v`` its velocity [m/s] and ``e`` the electrical input (coil current [A] or
+drive command [V]). ``force`` does not change the state. ``advance`` may use the motion at both
+ends of the interval (continuous-time families integrate over it with the inputs linear in between,
+as their ``predict`` does); in a closed loop, where the next motion is not known yet, the caller
+passes the motion at the end of its own integration step. Discrete-time families (LPV, LTI,
+NARX) read only the present sample and must be stepped at their own sample time ``dt``
+(:attr:`Step.dt`).
+
+The form is a family's typed container (a :class:`typing.NamedTuple` of floats and float64 /
+int64 arrays) holding everything the two compiled functions need; it is built from the model by
+:meth:`FittedModel.step`. The simulation loop (:func:`run`), the inverse, the quarter car and the
+exports call ``force`` and ``advance`` and never re-implement them; a family's fused ``predict``
+kernel is an optimisation tested sample by sample against :func:`run`.
+
+``advance`` returns a status code: :data:`STATUS_OK`, :data:`STATUS_DIVERGED` (a state became
+non-finite or left its bound) or :data:`STATUS_INVALID` (parameters invalid for the input seen,
+e.g. a non-positive damping).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from numba import njit
+
+__all__ = [
+    "STATUS_DIVERGED",
+    "STATUS_INVALID",
+    "STATUS_OK",
+    "Step",
+    "run",
+    "run_step",
+]
+
+STATUS_OK = 0
+STATUS_DIVERGED = 1
+STATUS_INVALID = 2
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Step:
+    """A fitted model as a per-sample step (see the module docstring).
+
+    Attributes
+    ----------
+    kind : str
+        Model kind.
+    form : tuple
+        The family's form: a NamedTuple of floats and arrays, the only argument besides the state
+        and the signals that ``force`` and ``advance`` take.
+    force : compiled function
+        ``force(form, state, x, v, e) -> F`` [N]; does not change ``state``.
+    advance : compiled function
+        ``advance(form, state, x0, v0, e0, x1, v1, e1, dt) -> status``; updates ``state`` in place
+        from the start of an interval of ``dt`` [s] to its end.
+    initial_state : callable
+        ``initial_state(x0, v0, e0) -> state``: the state at rest at the first sample (a new
+        float64 array each call).
+    dt : float or None
+        The step's own sample time [s] for discrete-time families (they must be advanced with it),
+        None where any interval is allowed (static maps, continuous-time families).
+    feedthrough : bool
+        True when the force depends on the present electrical input ``e[k]`` (static maps,
+        continuous-time families, LPV through ``rho[k]``); False when it is fixed by the past
+        (the LTI model): such a model cannot be inverted sample by sample.
+    """
+
+    kind: str
+    form: Any
+    force: Callable[..., float]
+    advance: Callable[..., int]
+    initial_state: Callable[[float, float, float], FloatArray]
+    dt: float | None = None
+    feedthrough: bool = True
+
+
+@njit(cache=False)
+def run(force, advance, form, state, x, v, e, dt):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Free run of a step over sampled signals (compiled once per family and process).
+
+    Returns
+    -------
+    F : float64[:]
+        Force [N] at every sample (valid before ``sample`` when ``status != 0``).
+    status : int
+        0 ok, else the status ``advance`` returned.
+    sample : int
+        First failing sample (-1 when ok).
+    """
+    n = x.size
+    F = np.zeros(n)
+    for k in range(n):
+        F[k] = force(form, state, x[k], v[k], e[k])
+        if k == n - 1:
+            break
+        status = advance(form, state, x[k], v[k], e[k], x[k + 1], v[k + 1], e[k + 1], dt)
+        if status != 0:
+            return F, status, k + 1
+    return F, 0, -1
+
+
+def run_step(
+    step: Step, x: FloatArray, v: FloatArray, e: FloatArray, dt: float
+) -> tuple[FloatArray, int, int]:
+    """Free run of ``step`` from rest over sampled displacement, velocity and electrical input.
+
+    Parameters
+    ----------
+    step : Step
+        The model's per-sample step.
+    x, v, e : ndarray
+        Displacement [m], velocity [m/s] and electrical input [A] or [V], one value a sample.
+    dt : float
+        Sampling interval [s]; must equal ``step.dt`` for a discrete-time family.
+
+    Returns
+    -------
+    F : ndarray
+        Force [N] at every sample.
+    status, sample : int
+        Status code (``STATUS_*``) and first failing sample (-1 when ok).
+    """
+    if step.dt is not None and not np.isclose(dt, step.dt, rtol=1e-9, atol=0.0):
+        raise ValueError(
+            f"dt: the {step.kind} step runs at its own sample time {step.dt!r} s, got {dt!r} s"
+        )
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    e = np.ascontiguousarray(e, dtype=np.float64)
+    state = step.initial_state(float(x[0]), float(v[0]), float(e[0]))
+    F, status, sample = run(step.force, step.advance, step.form, state, x, v, e, float(dt))
+    return np.asarray(F), int(status), int(sample)
