@@ -10,14 +10,15 @@ from numba import typeof
 
 from mrdamper import compiled
 from mrdamper.models import _narx_kernels, _sp_kernels
+from mrdamper.models._arrays import readonly
 
 
 def test_readonly_is_a_view_and_read_only() -> None:
     a = np.arange(5.0)
-    r = compiled.readonly(a)
+    r = readonly(a)
     assert np.shares_memory(a, r) and not r.flags.writeable and a.flags.writeable
-    assert compiled.readonly(r) is r  # already read-only: passed through
-    c = compiled.readonly(np.arange(10)[::2], np.float64)  # strided ints: contiguous float copy
+    assert readonly(r) is r  # already read-only: passed through
+    c = readonly(np.arange(10)[::2], np.float64)  # strided ints: contiguous float copy
     assert c.dtype == np.float64 and c.flags.c_contiguous and not c.flags.writeable
 
 
@@ -38,7 +39,7 @@ def test_sp_wrappers_pass_the_listed_argument_types() -> None:
     x = np.linspace(0.0, 1.0, 4)
     comp, power, theta = np.array([0, 1]), np.array([0, 1]), np.array([1.0, 2.0])
     listed = {it[1]: compiled._types(it[2]) for it in compiled.KERNELS["sp1"]}
-    for arr in (x, compiled.readonly(x)):
+    for arr in (x, readonly(x)):
         args = _sp_kernels._args(arr, arr, arr, comp, power, theta)
         assert tuple(typeof(a) for a in args) + (typeof(0.5),) == listed["_sp_force"]
 

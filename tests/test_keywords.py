@@ -21,7 +21,8 @@ import pytest
 
 import mrdamper
 from mrdamper.errors import DataValidationError
-from mrdamper.models import get_estimator, known_kinds, model_class
+from mrdamper.kinds import KINDS
+from mrdamper.models import get_estimator, model_class
 
 SUBPACKAGES = [
     "analysis",
@@ -135,7 +136,7 @@ def test_every_keyword_is_documented(name: str, obj: Any) -> None:
     assert not missing, f"{name}: parameters not in the docstring: {missing}"
 
 
-@pytest.mark.parametrize("kind", known_kinds())
+@pytest.mark.parametrize("kind", [row.kind for row in KINDS])
 def test_estimator_settings_are_documented(kind: str) -> None:
     est = type(get_estimator(kind))
     documented = documented_names(inspect.getdoc(est) or "")
@@ -152,7 +153,7 @@ def test_estimator_settings_are_documented(kind: str) -> None:
     assert not missing, f"{kind} model: fields not in the docstring: {missing}"
 
 
-@pytest.mark.parametrize("kind", known_kinds())
+@pytest.mark.parametrize("kind", [row.kind for row in KINDS])
 def test_unknown_setting_is_refused_naming_it(kind: str) -> None:
     with pytest.raises(DataValidationError, match="colour") as info:
         get_estimator(kind, colour="red")

@@ -1,9 +1,13 @@
 """The package is layered: no import circles, no private module or name used across packages.
 
 Every module of ``src/mrdamper`` is parsed with :mod:`ast` (imports inside functions and under
-``TYPE_CHECKING`` included, since a circle hidden in a function is still a circle). Two rules:
+``TYPE_CHECKING`` included, since a circle hidden in a function is still a circle). Lazy imports
+count too: in a module that calls ``importlib.import_module``, every string constant naming a
+module of the package is an import of it, and the kind table's module names
+(:mod:`mrdamper.kinds`) are imports of the registry and of :mod:`mrdamper.compiled`. The rules:
 
-* the graph "module A imports module B" has no cycle;
+* the graph "module A imports module B" has no cycle, and neither has the graph of packages;
+* packages import only packages of a lower layer (:data:`LAYERS`);
 * a module never imports a private module (a path part with a leading underscore) or a private
   name of another package. ``mrdamper._io`` is shared by design; within one subpackage (for
   example ``models.lpv`` -> ``models._lpv_kernels``) private imports are the point of privacy.
@@ -23,6 +27,9 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 PKG = SRC / "mrdamper"
 #: Private modules every package may use.
 SHARED_PRIVATE = ("mrdamper._io",)
+#: Modules whose job is to import the kernel modules of other packages by name (to compile them
+#: ahead); they may name private modules.
+KERNEL_IMPORTERS = ("mrdamper.compiled",)
 
 
 def _module_name(path: Path) -> str:
@@ -65,6 +72,39 @@ def _imports(name: str, path: Path, known: set[str]) -> Iterator[tuple[str, str 
                     yield mod, alias.name, node.lineno
 
 
+def _dynamic_imports(path: Path, known: set[str]) -> Iterator[tuple[str, None, int]]:
+    """Modules named by string constants in a module that calls ``importlib.import_module``."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    uses = any(
+        isinstance(n, ast.Call)
+        and (
+            (isinstance(n.func, ast.Attribute) and n.func.attr == "import_module")
+            or (isinstance(n.func, ast.Name) and n.func.id == "import_module")
+        )
+        for n in ast.walk(tree)
+    )
+    if not uses:
+        return
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in known:
+            yield node.value, None, node.lineno
+
+
+def _table_imports(name: str, known: set[str]) -> Iterator[tuple[str, None, int]]:
+    """Imports that the kind table declares as data: the registry imports every kind's module,
+    :mod:`mrdamper.compiled` every kernel module."""
+    from mrdamper import kinds
+
+    if name == "mrdamper.models.registry":
+        targets = {row.module for row in kinds.KINDS}
+    elif name == "mrdamper.compiled":
+        targets = {item[0] for row in kinds.KINDS for item in row.kernels}
+    else:
+        return
+    for target in sorted(targets & known):
+        yield target, None, 0
+
+
 def _package(module: str, known_pkgs: set[str]) -> str:
     """The subpackage a module belongs to (``mrdamper.study.runner`` -> ``mrdamper.study``)."""
     parts = module.split(".")
@@ -82,7 +122,12 @@ def _graph() -> tuple[dict[str, set[str]], list[str]]:
     edges: dict[str, set[str]] = {m: set() for m in mods}
     private: dict[str, None] = {}  # ordered, one entry per offending import
     for name, path in mods.items():
-        for target, imported, line in _imports(name, path, known):
+        found = [
+            *_imports(name, path, known),
+            *_dynamic_imports(path, known),
+            *_table_imports(name, known),
+        ]
+        for target, imported, line in found:
             if target not in known:
                 continue
             if target != name:
@@ -91,6 +136,8 @@ def _graph() -> tuple[dict[str, set[str]], list[str]]:
                 continue
             where = f"{path.relative_to(SRC)}:{line}"
             if _is_private(target) and not target.startswith(SHARED_PRIVATE):
+                if name in KERNEL_IMPORTERS:
+                    continue
                 private[f"{name} -> {target} (private module, {where})"] = None
             elif (
                 imported is not None and imported.startswith("_") and not imported.startswith("__")
@@ -139,6 +186,82 @@ def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
 def _cycle_edges(comp: list[str], edges: dict[str, set[str]]) -> list[str]:
     members = set(comp)
     return [f"{a} -> {b}" for a in comp for b in sorted(edges[a] & members)]
+
+
+#: Layer of every package and top-level module (higher layers import lower ones only). Ground:
+#: the kind table (plain data), errors, progress reporting; output safety, metrics; data and
+#: signals; analysis and figures; the model families; what runs models (the virtual rig,
+#: control); the compile-ahead of every kernel (models' and rig's); the comparison study; the
+#: curated public namespace; the command line.
+LAYERS: dict[str, int] = {
+    "mrdamper.kinds": 0,
+    "mrdamper.errors": 0,
+    "mrdamper.progress": 0,
+    "mrdamper._io": 1,
+    "mrdamper.metrics": 1,
+    "mrdamper.data": 2,
+    "mrdamper.signals": 2,
+    "mrdamper.analysis": 3,
+    "mrdamper.plotting": 3,
+    "mrdamper.models": 4,
+    "mrdamper.rig": 5,
+    "mrdamper.control": 5,
+    "mrdamper.compiled": 6,
+    "mrdamper.study": 7,
+    "mrdamper": 8,
+    "mrdamper.cli": 9,
+    "mrdamper.__main__": 10,
+}
+
+
+def _package_edges() -> dict[str, set[str]]:
+    edges = _graph()[0]
+    mods = _modules()
+    pkgs = {m for m, p in mods.items() if p.name == "__init__.py"}
+    out: dict[str, set[str]] = {}
+    for a, targets in edges.items():
+        pa = _package(a, pkgs)
+        out.setdefault(pa, set())
+        for b in targets:
+            pb = _package(b, pkgs)
+            if pb != pa:
+                out[pa].add(pb)
+                out.setdefault(pb, set())
+    return out
+
+
+def test_every_package_has_a_layer() -> None:
+    missing = sorted(set(_package_edges()) - set(LAYERS))
+    assert not missing, f"packages without a layer in LAYERS: {missing}"
+
+
+def test_packages_import_only_lower_layers() -> None:
+    edges = _package_edges()
+    bad = [
+        f"{a} (layer {LAYERS[a]}) -> {b} (layer {LAYERS[b]})"
+        for a in sorted(edges)
+        for b in sorted(edges[a])
+        if a in LAYERS and b in LAYERS and LAYERS[b] >= LAYERS[a]
+    ]
+    assert not bad, "imports against the layer order:\n" + "\n".join(bad)
+
+
+def test_no_package_cycles() -> None:
+    edges = _package_edges()
+    comps = _cycles(edges)
+    text = "\n\n".join("\n".join(_cycle_edges(c, edges)) for c in comps)
+    assert not comps, f"{len(comps)} circle(s) between packages:\n{text}"
+
+
+def test_dynamic_imports_are_seen(tmp_path: Path) -> None:
+    mod = tmp_path / "lazy.py"
+    mod.write_text(
+        "import importlib\n"
+        'M = {"a": "mrdamper.models.lpv", "b": "not a module"}\n'
+        'importlib.import_module(M["a"])\n'
+    )
+    found = list(_dynamic_imports(mod, {"mrdamper.models.lpv"}))
+    assert [f[0] for f in found] == ["mrdamper.models.lpv"]
 
 
 def test_modules_found() -> None:

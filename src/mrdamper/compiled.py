@@ -8,7 +8,8 @@ kernel it calls. Two things keep that cost down:
 * **One signature per kernel.** A read-only array (a record's channel, a memory-mapped file, a
   frozen model's coefficients) and a writable one are different argument types to numba, so the
   same kernel called with both is compiled twice. The wrappers of the kernel modules pass input
-  arrays through :func:`readonly` (a read-only view, never a copy), so each compiles once.
+  arrays through ``models._arrays.readonly`` (a read-only view, never a copy), so each compiles
+  once.
 * **Compile ahead, in parallel, once per machine.** :data:`KERNELS` lists, per model kind, the
   kernels its identification and simulation call and their argument types. A study with several
   local worker processes first has every worker compile the kernels its model kinds need that are
@@ -34,7 +35,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
+from mrdamper.kinds import KINDS, Item
 
 __all__ = [
     "KERNELS",
@@ -47,31 +48,11 @@ __all__ = [
     "compile_kernels",
     "finish_ahead",
     "is_cached",
-    "readonly",
     "start_early",
     "wait_rig",
 ]
 
-_LPV = "mrdamper.models._lpv_kernels"
 _SPENCER = "mrdamper.models._spencer_kernels"
-_SP = "mrdamper.models._sp_kernels"
-_NARX = "mrdamper.models._narx_kernels"
-_P15 = "mrdamper.models._p15_kernels"
-
-#: One kernel signature: module, kernel (numba dispatcher) name, argument types, compile cost [s].
-#: Argument codes: ``F`` float64, ``I`` int64, ``B`` bool; arrays ``f`` (float64) or ``i``
-#: (int64), then the number of dimensions, then ``r`` for read-only and ``A`` for any layout
-#: (default: C-contiguous, writable).
-Item = tuple[str, str, str, float]
-
-_LPV_ITEMS: tuple[Item, ...] = (
-    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 1.2),
-    (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.5),
-)
-_SP_ITEMS: tuple[Item, ...] = (
-    (_SP, "_sp_force", "f1r f1r f1r i1r i1r f1r F", 0.4),
-    (_SP, "_sp_force_jacobian", "f1r f1r f1r i1r i1r f1r F B", 0.3),
-)
 
 #: Model kernels (module, name) that generating records on the virtual rig compiles: its damper is
 #: a Spencer model.
@@ -91,35 +72,9 @@ RIG_ITEMS: tuple[Item, ...] = (
 RIG_READY = "rig-kernels-ready"
 
 #: Kernels (with the argument types of the library's calls) that each model kind's fit and
-#: simulation run; kinds without compiled kernels are absent.
-KERNELS: dict[str, tuple[Item, ...]] = {
-    "lpv": _LPV_ITEMS,
-    "lti": _LPV_ITEMS,
-    "p15": ((_P15, "p15i_run", "f1r f1r F f2 F I F F I F i1 i1 f1 f1 f2 B B", 1.9),),
-    "sp1": _SP_ITEMS,
-    "sp2": _SP_ITEMS,
-    "sp3": _SP_ITEMS,
-    "sp4": _SP_ITEMS,
-    "spencer": (
-        (_SPENCER, "simulate_sens", "f1r f1r f1r F f1 I F F F i1", 2.3),
-        (_SPENCER, "simulate", "f1r f1r f1r F f1 I F F F", 1.0),
-    ),
-    "narx": (
-        (_NARX, "_free_run_sensitivity", "f2 i2r i2r f1r I F", 0.8),
-        (_NARX, "_free_run", "f2 i2r i2r f1r I F", 0.2),
-        (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.3),
-    ),
-}
-
-
-def readonly(a: Any, dtype: Any = np.float64) -> np.ndarray:
-    """``a`` as a C-contiguous array of ``dtype`` that is read-only (a view: no copy when ``a``
-    already has that type and layout), so that kernels see one argument type."""
-    out = np.ascontiguousarray(a, dtype=dtype)
-    if out.flags.writeable:
-        out = out.view()
-        out.flags.writeable = False
-    return out
+#: simulation run, from the kind table (:mod:`mrdamper.kinds`); kinds without compiled kernels are
+#: absent.
+KERNELS: dict[str, tuple[Item, ...]] = {row.kind: row.kernels for row in KINDS if row.kernels}
 
 
 def _types(code: str) -> tuple[Any, ...]:

@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from mrdamper.compiled import readonly
+from mrdamper.models._arrays import readonly
 
 __all__ = ["fill_candidates", "free_run", "free_run_sensitivity"]
 

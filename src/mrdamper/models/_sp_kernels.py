@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mrdamper.compiled import readonly
+from mrdamper.models._arrays import readonly
 
 __all__ = ["COMPONENTS", "N_COMPONENTS", "sp_force", "sp_force_jacobian"]
 

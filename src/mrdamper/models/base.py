@@ -307,10 +307,18 @@ class FittedModel(abc.ABC):
             model=self.kind,
         )
 
-    def step(self, **options: Any) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         Families that have one override this; the default refuses in one line.
+
+        Parameters
+        ----------
+        dt : float
+            Interval [s] the step will mostly be advanced by (continuous-time families choose
+            their integration sub-step for it; discrete-time families run at their own rate).
+        vmax : float
+            Largest damper velocity [m/s] the step must resolve.
 
         Raises
         ------

@@ -30,7 +30,6 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.protocols import StaticMapForm
-from mrdamper.models.registry import register
 
 __all__ = ["BinghamEstimator", "BinghamModel"]
 
@@ -215,6 +214,3 @@ class BinghamEstimator(Estimator):
             },
             provenance=provenance,
         )
-
-
-register(BinghamEstimator, BinghamModel)

@@ -54,7 +54,6 @@ from mrdamper.models.rates import (
     to_model_rate,
     to_record_rate,
 )
-from mrdamper.models.registry import register
 from mrdamper.progress import report
 
 __all__ = [
@@ -745,10 +744,6 @@ class LTIEstimator(LPVEstimator):
         super()._validate()
         if self.n_rho != 0:
             raise DataValidationError("n_rho", f"an LTI model has n_rho = 0, got {self.n_rho}")
-
-
-register(LPVEstimator, LPVModel)
-register(LTIEstimator, LTIModel)
 
 
 # ----------------------------------------------------------------------------- order selection

@@ -65,7 +65,6 @@ from mrdamper.models.rates import (
     to_model_rate,
     to_record_rate,
 )
-from mrdamper.models.registry import register
 from mrdamper.progress import report
 
 __all__ = ["NARXEstimator", "NARXModel", "candidate_structure"]
@@ -551,6 +550,3 @@ class NARXEstimator(Estimator):
                 "free_run_cost": float(cost),
             }
         return Identified(parameters=model.parameters, provenance=prov)
-
-
-register(NARXEstimator, NARXModel)

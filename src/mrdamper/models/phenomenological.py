@@ -101,7 +101,6 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
-from mrdamper.models.registry import register
 from mrdamper.progress import report
 
 __all__ = ["P15Estimator", "P15Model"]
@@ -605,6 +604,3 @@ def _simulate_training(
         except SimulationDivergedError as exc:
             divergence[e.name] = {"sample": int(exc.sample), "message": str(exc)}
     return divergence, esr
-
-
-register(P15Estimator, P15Model)

@@ -1,8 +1,8 @@
 """Name-to-class registry of model families, loaded lazily (no import-time side effects).
 
-Each model module registers its estimator and fitted-model classes with :func:`register`. The
-map below says which module defines which kind, so ``get_estimator("lpv")`` imports only
-``mrdamper.models.lpv``.
+The kind table (:mod:`mrdamper.kinds`) says which module defines which kind and the names of its
+classes, so ``get_estimator("lpv")`` imports only ``mrdamper.models.lpv``; family modules do not
+import the registry. A family defined elsewhere joins with :func:`register`.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from mrdamper import kinds
 from mrdamper.errors import SchemaError
 from mrdamper.models.base import Estimator, FittedModel, _check_schema
 
@@ -25,26 +26,22 @@ __all__ = [
     "register",
 ]
 
-#: kind -> module that defines it. Order is the default display order.
-_MODULES: dict[str, str] = {
-    "lpv": "mrdamper.models.lpv",
-    "lti": "mrdamper.models.lpv",
-    "p15": "mrdamper.models.phenomenological",
-    "sp1": "mrdamper.models.semiphenomenological",
-    "sp2": "mrdamper.models.semiphenomenological",
-    "sp3": "mrdamper.models.semiphenomenological",
-    "sp4": "mrdamper.models.semiphenomenological",
-    "spencer": "mrdamper.models.spencer",
-    "bingham": "mrdamper.models.bingham",
-    "narx": "mrdamper.models.narx",
-}
-
 _ESTIMATORS: dict[str, type[Estimator]] = {}
 _FITTED: dict[str, type[FittedModel]] = {}
 
 
-def register(estimator: type[Estimator], fitted: type[FittedModel]) -> None:
-    """Register an estimator / fitted-model pair under ``fitted.kind``.
+def register(
+    estimator: type[Estimator],
+    fitted: type[FittedModel],
+    *,
+    summary: str = "",
+    color: str = "0.4",
+    default: bool = False,
+) -> None:
+    """Add a model family defined outside this package under ``fitted.kind``.
+
+    The kind gets a row in the kind table (:mod:`mrdamper.kinds`), so it appears in
+    :func:`known_kinds`, the study, ``select`` and the command line like the built-in kinds.
 
     Parameters
     ----------
@@ -52,10 +49,27 @@ def register(estimator: type[Estimator], fitted: type[FittedModel]) -> None:
         Estimator class (its ``kind`` must equal the model's).
     fitted : type of FittedModel
         Fitted-model class.
+    summary : str
+        One line for help texts and reports.
+    color : str
+        Matplotlib colour of the kind in figures.
+    default : bool
+        Run by the study when no model list is given.
     """
     kind = fitted.kind
     if estimator.kind != kind:
         raise ValueError(f"kind: estimator says {estimator.kind!r}, model says {kind!r}")
+    kinds.add(
+        kinds.KindSpec(
+            kind,
+            fitted.__module__,
+            estimator.__qualname__,
+            fitted.__qualname__,
+            summary or (fitted.__doc__ or kind).strip().splitlines()[0],
+            color,
+            default=default,
+        )
+    )
     _ESTIMATORS[kind] = estimator
     _FITTED[kind] = fitted
 
@@ -63,22 +77,24 @@ def register(estimator: type[Estimator], fitted: type[FittedModel]) -> None:
 def _load(kind: str) -> None:
     if kind in _FITTED:
         return
-    if kind not in _MODULES:
-        raise SchemaError(f"model: unknown kind {kind!r}; expected one of {sorted(_MODULES)}")
-    importlib.import_module(_MODULES[kind])
-    if kind not in _FITTED:
-        raise SchemaError(f"model: module {_MODULES[kind]} did not register {kind!r}")
+    row = kinds.spec(kind)
+    if row is None:
+        raise SchemaError(f"model: unknown kind {kind!r}; expected one of {known_kinds()}")
+    module = importlib.import_module(row.module)
+    _ESTIMATORS[kind] = getattr(module, row.estimator)
+    _FITTED[kind] = getattr(module, row.model)
 
 
 def known_kinds() -> list[str]:
-    """Every model kind this version defines, in default display order (nothing imported)."""
-    return list(_MODULES)
+    """Every model kind this version defines (and those added with :func:`register`), in
+    display order (nothing imported)."""
+    return [row.kind for row in kinds.rows()]
 
 
 def available_models() -> list[str]:
-    """Kinds whose modules import on this installation, in default display order."""
+    """Kinds whose modules import on this installation, in display order."""
     out = []
-    for kind in _MODULES:
+    for kind in known_kinds():
         try:
             _load(kind)
         except (ImportError, SchemaError):

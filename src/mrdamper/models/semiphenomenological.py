@@ -88,7 +88,6 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.protocols import StaticMapForm
-from mrdamper.models.registry import register
 from mrdamper.progress import report
 
 __all__ = [
@@ -416,12 +415,3 @@ class SP4Estimator(_SPEstimator):
 
     kind: ClassVar[str] = "sp4"
     model_class: ClassVar[type[FittedModel]] = SP4Model
-
-
-for _est, _mod in (
-    (SP1Estimator, SP1Model),
-    (SP2Estimator, SP2Model),
-    (SP3Estimator, SP3Model),
-    (SP4Estimator, SP4Model),
-):
-    register(_est, _mod)

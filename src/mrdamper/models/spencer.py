@@ -55,7 +55,6 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
-from mrdamper.models.registry import register
 from mrdamper.models.step import Step
 from mrdamper.progress import report
 
@@ -461,6 +460,3 @@ class SpencerEstimator(Estimator):
             report("full-data check")
             provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
         return Identified(parameters=params, provenance=provenance)
-
-
-register(SpencerEstimator, SpencerModel)

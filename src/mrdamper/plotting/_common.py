@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper import kinds
 from mrdamper.errors import DataValidationError
 
 __all__ = [
@@ -33,25 +34,18 @@ PRINT_STYLE: dict[str, Any] = {
     "lines.linewidth": 1.0,
 }
 
-#: Fixed colour per registry kind so a model looks the same in every figure.
-_KIND_COLORS = {
-    "measured": "0.15",
-    "lpv": "tab:red",
-    "lti": "tab:gray",
-    "p15": "tab:blue",
-    "sp1": "tab:green",
-    "sp2": "tab:olive",
-    "sp3": "tab:cyan",
-    "sp4": "tab:purple",
-    "spencer": "tab:orange",
-    "bingham": "tab:brown",
-}
+#: Colour of the measured force in every figure.
+MEASURED_COLOR = "0.15"
 _FALLBACK = ("tab:pink", "gold", "navy", "teal", "maroon", "lime")
 
 
 def model_color(label: str, k: int = 0) -> str:
     """Colour of a model label (its kind's colour, else a fallback by position ``k``)."""
-    return _KIND_COLORS.get(label.lower(), _FALLBACK[k % len(_FALLBACK)])
+    name = label.lower()
+    if name == "measured":
+        return MEASURED_COLOR
+    row = kinds.spec(name)
+    return row.color if row is not None else _FALLBACK[k % len(_FALLBACK)]
 
 
 def legend_outside(ax: Any, **kwargs: Any) -> Any:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Literal, overload
 
+from mrdamper import kinds
 from mrdamper.data import ExperimentSet, SourceSet
 from mrdamper.data.experiment_set import metadata_equal
 from mrdamper.errors import SchemaError
@@ -38,19 +39,9 @@ __all__ = [
 PROTOCOL_SCHEMA = "mrdamper.protocol"
 PROTOCOL_SCHEMA_VERSION = 1
 
-#: Models run by default, in display order; kinds that are not installed are left out.
-DEFAULT_MODELS: tuple[str, ...] = (
-    "lpv",
-    "p15",
-    "sp1",
-    "sp2",
-    "sp3",
-    "sp4",
-    "lti",
-    "spencer",
-    "bingham",
-    "narx",
-)
+#: Models run by default, in display order (the kind table's defaults, :mod:`mrdamper.kinds`);
+#: kinds that are not installed are left out.
+DEFAULT_MODELS: tuple[str, ...] = kinds.default_kinds()
 
 SplitKind = Literal["fixed", "leave-one-group-out", "k-fold", "time"]
 RangePolicyName = Literal["error", "warn", "clip", "ignore"]
@@ -446,7 +437,7 @@ class Protocol:
         from mrdamper.models import available_models
 
         have = set(available_models())
-        return tuple(ModelSpec(k) for k in DEFAULT_MODELS if k in have)
+        return tuple(ModelSpec(k) for k in kinds.default_kinds() if k in have)
 
     def with_models(self, models: Sequence[ModelSpec | str | Mapping[str, Any]]) -> Protocol:
         """Copy with another model list."""

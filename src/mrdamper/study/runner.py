@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from mrdamper import kinds
 from mrdamper.analysis import ZoneLaws
 from mrdamper.data import Experiment, ExperimentSet, SourceSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
@@ -56,10 +57,13 @@ META_COLUMNS: tuple[str, ...] = (
 _LAW_SETTINGS = ("laws", "zone_laws")
 _O = TypeVar("_O", FitOutcome, SimOutcome)
 
-#: Typical identification cost rank per kind (most expensive first). Fits are submitted in this
-#: order so the longest task starts first and the others fill the remaining workers; results do
-#: not depend on it.
-_COST_RANK: dict[str, int] = {"spencer": 0, "lpv": 1, "p15": 2, "sp1": 3, "sp4": 4, "lti": 5}
+
+def _cost_rank(kind: str) -> int:
+    """Identification cost rank of ``kind`` (the kind table's; most expensive first). Fits are
+    submitted in this order so the longest task starts first and the others fill the remaining
+    workers; results do not depend on it."""
+    row = kinds.spec(kind)
+    return row.cost_rank if row is not None else 9
 
 
 def _estimator_fields(est: Estimator) -> set[str]:
@@ -318,7 +322,7 @@ def _execute(
     trains = [[handle(e) for e in fold.train] for fold in folds]
     order = sorted(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
-        key=lambda k: (_COST_RANK.get(specs[k[1]].kind, len(_COST_RANK)), k),
+        key=lambda k: (_cost_rank(specs[k[1]].kind), k),
     )
     _compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
