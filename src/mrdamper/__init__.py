@@ -53,7 +53,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.rig.doe import table_ii
     from mrdamper.study import Protocol, StudyResult, load_protocol, run_study
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 #: Public name -> module it comes from. Everything but the exceptions is imported on first use,
 #: so ``import mrdamper`` (and the command line's start, which a background compilation may be
