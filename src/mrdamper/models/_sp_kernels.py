@@ -304,7 +304,8 @@ class StaticStepForm(NamedTuple):
 def step_force(form: StaticStepForm, s: FloatArray, x: float, v: float, e: float) -> float:
     """Force [N] of the map at the present motion; the input is ``e``, or the lag state ``s[0]``."""
     r = s[0] if form.eta >= 0.0 else e
-    return sp_force1(x, v, r, form.comp, form.power, form.theta, form.f0)  # type: ignore[no-any-return]
+    F: float = sp_force1(x, v, r, form.comp, form.power, form.theta, form.f0)
+    return F
 
 
 @njit(cache=True)
