@@ -24,7 +24,7 @@ inputs, oldest first), all zero at rest except ``rho = e[0]``.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -32,9 +32,6 @@ from numba import njit
 
 from mrdamper.analysis.hysteretic import dahl_step
 from mrdamper.models.step import STATUS_DIVERGED, STATUS_OK, Step
-
-if TYPE_CHECKING:  # pragma: no cover
-    from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = [
     "MODE_CONTINUOUS",
@@ -215,29 +212,9 @@ def step_advance(form, s, x0, v0, e0, x1, v1, e1, dt):  # type: ignore[no-untype
     return STATUS_OK
 
 
-def make_step(model: TransferFunctionModel) -> Step:
-    """The per-sample step of an LPV or LTI model (see :meth:`TransferFunctionModel.step`)."""
-    gm, gc, mu_h, mu_l = model.law_arrays()
-    if model.input_signal == "v" or model.zone_laws is None:
-        mode = MODE_V
-    else:
-        mode = MODE_CONTINUOUS if model.reading == "continuous" else MODE_LITERAL
-    hysteretic = model.input_signal == "hysteretic"
-    form = LPVForm(
-        alpha=np.ascontiguousarray(model.alpha, dtype=np.float64),
-        beta=np.ascontiguousarray(model.beta, dtype=np.float64),
-        offset=float(model.offset),
-        bound=float(model.force_bound),
-        eta=-1.0 if model.eta is None else float(model.eta),
-        mode=mode,
-        gamma_m=gm,
-        gamma_c=gc,
-        mu_high=mu_h,
-        mu_low=mu_l,
-        blend=float(model.blend) if hysteretic and model.blend else 0.0,
-        stroke=float(model.stroke) if hysteretic and model.stroke else 0.0,
-    )
-    size = N_HEAD + 2 * model.n_m
+def make_step(kind: str, form: LPVForm, fs: float, feedthrough: bool) -> Step:
+    """The per-sample step of an LPV or LTI model of ``form`` at the model rate ``fs`` [Hz]."""
+    size = N_HEAD + 2 * form.alpha.shape[0]
 
     def initial_state(x0: float, v0: float, e0: float) -> FloatArray:
         s = np.zeros(size)
@@ -245,11 +222,11 @@ def make_step(model: TransferFunctionModel) -> Step:
         return s
 
     return Step(
-        model.kind,
+        kind,
         form,
         step_force,
         step_advance,
         initial_state,
-        dt=1.0 / model.fs,
-        feedthrough=model.kind == "lpv" and model.eta is None,
+        dt=1.0 / fs,
+        feedthrough=feedthrough,
     )

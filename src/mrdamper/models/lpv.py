@@ -331,7 +331,30 @@ class TransferFunctionModel(FittedModel):
         polynomial in the present input); with a lag, or for the LTI model, the present input
         acts only from the next sample on.
         """
-        return _lpv_step.make_step(self)
+        gm, gc, mu_h, mu_l = self.law_arrays()
+        if self.input_signal == "v" or self.zone_laws is None:
+            mode = _lpv_step.MODE_V
+        elif self.reading == "continuous":
+            mode = _lpv_step.MODE_CONTINUOUS
+        else:
+            mode = _lpv_step.MODE_LITERAL
+        hys = self.input_signal == "hysteretic"
+        form = _lpv_step.LPVForm(
+            np.ascontiguousarray(self.alpha),
+            np.ascontiguousarray(self.beta),
+            float(self.offset),
+            float(self.force_bound),
+            -1.0 if self.eta is None else float(self.eta),
+            mode,
+            gm,
+            gc,
+            mu_h,
+            mu_l,
+            float(self.blend) if hys and self.blend else 0.0,
+            float(self.stroke) if hys and self.stroke else 0.0,
+        )
+        feedthrough = self.kind == "lpv" and self.eta is None
+        return _lpv_step.make_step(self.kind, form, self.fs, feedthrough)
 
     # --- stability -----------------------------------------------------------------------
     def frozen_poles(self, rho: Any = None, n_grid: int = 51) -> np.ndarray:
