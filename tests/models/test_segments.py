@@ -11,12 +11,12 @@ import warnings
 import numpy as np
 import pytest
 
-from mrdamper import Experiment, get_estimator
+from mrdamper import Experiment, get_estimator, known_kinds
 from mrdamper.errors import Note
 from mrdamper.models import _scale
 from mrdamper.rig import reference_damper
 
-KINDS = ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
+KINDS = known_kinds()
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 20}}
 FS = 500.0
 CAP = 1500

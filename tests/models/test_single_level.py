@@ -9,12 +9,12 @@ import warnings
 import numpy as np
 import pytest
 
-from mrdamper import Experiment, OutOfRangeError, get_estimator
+from mrdamper import Experiment, OutOfRangeError, get_estimator, known_kinds
 from mrdamper.rig import reference_damper
 
 LEVEL = 0.5
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 30}}
-KINDS = ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx"]
+KINDS = known_kinds()
 
 
 def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:

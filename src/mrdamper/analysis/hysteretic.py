@@ -38,7 +38,20 @@ from mrdamper.errors import DataValidationError
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.analysis.laws import ZoneLaws
 
-__all__ = ["dahl_state", "hysteretic_input"]
+__all__ = ["dahl_state", "dahl_step", "hysteretic_input"]
+
+
+@njit(cache=True)
+def dahl_step(z, v_prev, v, dt, stroke):  # pragma: no cover - numba
+    """One exact step of the Dahl state: ``z[k]`` [-] from ``z[k-1]`` for the trapezoidal
+    displacement ``(v[k-1] + v[k]) dt / 2`` [m] (module docstring); the one definition, used by
+    :func:`dahl_state` and by the per-sample step of the LPV model."""
+    dx = 0.5 * (v_prev + v) * dt
+    if dx > 0.0:
+        return 1.0 + (z - 1.0) * np.exp(-dx / stroke)
+    if dx < 0.0:
+        return -1.0 + (z + 1.0) * np.exp(dx / stroke)
+    return z
 
 
 @njit(cache=True)
@@ -49,11 +62,7 @@ def _dahl(v, dt, stroke, z0):  # pragma: no cover - numba
     if n > 0:
         z[0] = zk
     for k in range(1, n):
-        dx = 0.5 * (v[k - 1] + v[k]) * dt
-        if dx > 0.0:
-            zk = 1.0 + (zk - 1.0) * np.exp(-dx / stroke)
-        elif dx < 0.0:
-            zk = -1.0 + (zk + 1.0) * np.exp(dx / stroke)
+        zk = dahl_step(zk, v[k - 1], v[k], dt, stroke)
         z[k] = zk
     return z
 

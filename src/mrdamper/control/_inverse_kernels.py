@@ -11,12 +11,21 @@ The kernel picks, in an interval ``[lo_k, hi_k]``: the previous ``rho`` when its
 bisecting (to machine precision) the sign changes on a uniform grid. Without any such ``rho`` the
 minimum of ``|F - F_desired|`` lies at an end of the interval or at a stationary point of ``F``;
 those are bisected from the sign changes of ``F'`` on the same grid.
+
+The model itself (the LPV output step, its polynomial, the zone-law input, the Dahl step and the
+static map) is not written here: it comes from :mod:`mrdamper.models.kernels`, one definition
+each, shared with the models' per-sample steps; this module only solves for the input.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from mrdamper.models.kernels import dahl_step, lpv_coefficients, sp_dforce1, sp_force1
+from mrdamper.models.kernels import dpoly as _dpoly
+from mrdamper.models.kernels import poly as _poly
+from mrdamper.models.kernels import zone_input as _u_of
 
 __all__ = [
     "dahl_step",
@@ -30,29 +39,10 @@ __all__ = [
     "static_inverse_reg",
 ]
 
-#: LPV input modes: u = v, continuous reading of eq. 22, literal reading.
-MODE_V, MODE_CONTINUOUS, MODE_LITERAL = 0, 1, 2
-
 _N_BISECT = 200
 #: Golden-section ratio and iterations of the drive-lag horizon solver (the C export uses the same).
 GOLDEN = 0.5 * (5.0**0.5 - 1.0)
 N_GOLDEN = 50
-
-
-@njit(cache=True)
-def _poly(c, r):  # pragma: no cover - numba
-    acc = 0.0
-    for p in range(c.size - 1, -1, -1):
-        acc = acc * r + c[p]
-    return acc
-
-
-@njit(cache=True)
-def _dpoly(c, r):  # pragma: no cover - numba
-    acc = 0.0
-    for p in range(c.size - 1, 0, -1):
-        acc = acc * r + p * c[p]
-    return acc
 
 
 @njit(cache=True)
@@ -153,49 +143,6 @@ def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # pragma: no cover - 
 
 
 @njit(cache=True)
-def dahl_step(z, v_prev, v, dt, stroke):  # pragma: no cover - numba
-    """One exact step of the Dahl state (:mod:`mrdamper.analysis.hysteretic`): ``z[k]`` from
-    ``z[k-1]`` for the trapezoidal displacement ``(v[k-1] + v[k]) dt / 2`` [m]."""
-    dx = 0.5 * (v_prev + v) * dt
-    if dx > 0.0:
-        return 1.0 + (z - 1.0) * np.exp(-dx / stroke)
-    if dx < 0.0:
-        return -1.0 + (z + 1.0) * np.exp(dx / stroke)
-    return z
-
-
-@njit(cache=True)
-def _u_of(v, r, mode, gm, gc, mu_high, mu_low, z, blend):  # pragma: no cover - numba
-    """LPV input ``u`` [m/s] from ``v`` and ``rho`` (zone laws, eqs. 19-22).
-
-    With ``blend > 0`` (continuous reading only) the hysteretic input of
-    :func:`mrdamper.analysis.hysteretic.hysteretic_input` with the Dahl state ``z`` [-];
-    ``blend = 0`` is the static input, computed exactly as before.
-    """
-    if mode == MODE_V:
-        return v
-    hi = mu_high[0] * r + mu_high[1]
-    lo = mu_low[0] * r + mu_low[1]
-    m1 = _poly(gm[0], r)
-    m2 = _poly(gm[1], r)
-    m3 = _poly(gm[2], r)
-    if blend != 0.0:
-        ratio = (m3 if v >= 0.0 else m1) / m2
-        level = hi if z >= 0.0 else -lo
-        pre = (1.0 - blend) * min(max(v, lo), hi) + blend * level * z
-        return (1.0 - ratio) * pre + ratio * v
-    if v < lo:
-        if mode == MODE_CONTINUOUS:
-            return lo + m1 / m2 * (v - lo)
-        return (m1 * v + _poly(gc[0], r)) / m2
-    if v > hi:
-        if mode == MODE_CONTINUOUS:
-            return hi + m3 / m2 * (v - hi)
-        return (m3 * v + _poly(gc[2], r)) / m2
-    return v
-
-
-@njit(cache=True)
 def lpv_inverse(
     v,
     F_desired,
@@ -255,7 +202,7 @@ def lpv_inverse(
         True where no admissible ``rho`` reaches ``F_desired`` exactly.
     """
     n = v.size
-    n_m, n_p = alpha.shape
+    n_p = alpha.shape[1]
     y = np.zeros(n)
     u = np.zeros(n)
     rho = np.zeros(n)
@@ -264,14 +211,7 @@ def lpv_inverse(
     c = np.zeros(n_p)
     prev = rho0
     for k in range(n):
-        for p in range(n_p):
-            acc = 0.0
-            for j in range(n_m):
-                q = k - 1 - j
-                if q >= 0:
-                    acc += beta[j, p] * u[q] - alpha[j, p] * y[q]
-            c[p] = acc
-        c[0] += offset
+        lpv_coefficients(c, y, u, k, alpha, beta, offset)
         a, b = lo, hi
         if lag >= 0.0 and k >= 1:
             if k == 1:
@@ -292,79 +232,6 @@ def lpv_inverse(
 
 
 # ----------------------------------------------------------------------------- regularised inverse
-
-
-@njit(cache=True)
-def _ipow(x, n):  # pragma: no cover - numba
-    """``x ** n`` for an integer ``n >= 0`` by repeated multiplication.
-
-    The C export does the same.
-    """
-    r = 1.0
-    for _ in range(n):
-        r *= x
-    return r
-
-
-@njit(cache=True)
-def sp_force1(x, v, i, comp, power, theta, f0):  # pragma: no cover - numba
-    """One sample of the static map ``A(i) tanh(a(i) v + b(i) x) + c(i) v + d(i) x + f0`` [N].
-
-    ``comp``/``power``/``theta`` as in :mod:`mrdamper.models._sp_kernels`: component ``comp[k]``
-    (0 = A, 1 = a, 2 = b, 3 = c, 4 = d) gains ``theta[k] * i**power[k]``.
-    """
-    A = 0.0
-    a = 0.0
-    b = 0.0
-    c = 0.0
-    d = 0.0
-    for k in range(theta.size):
-        term = theta[k] * _ipow(i, power[k])
-        m = comp[k]
-        if m == 0:
-            A += term
-        elif m == 1:
-            a += term
-        elif m == 2:
-            b += term
-        elif m == 3:
-            c += term
-        else:
-            d += term
-    return A * np.tanh(a * v + b * x) + c * v + d * x + f0
-
-
-@njit(cache=True)
-def sp_dforce1(x, v, i, comp, power, theta):  # pragma: no cover - numba
-    """``dF/di`` of :func:`sp_force1` at one sample [N per input unit]."""
-    A = 0.0
-    a = 0.0
-    b = 0.0
-    dA = 0.0
-    da = 0.0
-    db = 0.0
-    dc = 0.0
-    dd = 0.0
-    for k in range(theta.size):
-        pw = power[k]
-        term = theta[k] * _ipow(i, pw)
-        dterm = pw * theta[k] * _ipow(i, pw - 1) if pw > 0 else 0.0
-        m = comp[k]
-        if m == 0:
-            A += term
-            dA += dterm
-        elif m == 1:
-            a += term
-            da += dterm
-        elif m == 2:
-            b += term
-            db += dterm
-        elif m == 3:
-            dc += dterm
-        else:
-            dd += dterm
-    th = np.tanh(a * v + b * x)
-    return dA * th + A * (1.0 - th * th) * (da * v + db * x) + dc * v + dd * x
 
 
 @njit(cache=True)
@@ -482,23 +349,6 @@ def reg_solve_static(
 ):  # pragma: no cover
     """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""
     return _reg_solve(False, theta, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid)
-
-
-@njit(cache=True)
-def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # pragma: no cover - numba
-    """Coefficients (in ``rho``) of the force at sample ``k`` given the past ``y``, ``u``.
-
-    Written into ``cf``.
-    """
-    n_m, n_p = alpha.shape
-    for p in range(n_p):
-        acc = 0.0
-        for j in range(n_m):
-            q = k - 1 - j
-            if q >= 0:
-                acc += beta[j, p] * u[q] - alpha[j, p] * y[q]
-        cf[p] = acc
-    cf[0] += offset
 
 
 @njit(cache=True)

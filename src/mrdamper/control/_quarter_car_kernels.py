@@ -28,16 +28,14 @@ import numpy as np
 from numba import njit
 
 from mrdamper.control._inverse_kernels import (
-    _poly,
-    _u_of,
-    dahl_step,
     horizon_step,
-    lpv_coefficients,
     past_buffers,
     reg_solve_poly,
     reg_solve_static,
-    sp_force1,
 )
+from mrdamper.models.kernels import dahl_step, lpv_coefficients, sp_force1
+from mrdamper.models.kernels import poly as _poly
+from mrdamper.models.kernels import zone_input as _u_of
 
 __all__ = ["simulate"]
 

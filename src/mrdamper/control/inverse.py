@@ -83,6 +83,7 @@ from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
+from mrdamper.models.kernels import MODE_CONTINUOUS, MODE_LITERAL, MODE_V, sp_force1, zone_input
 from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
 
 __all__ = [
@@ -567,7 +568,7 @@ def _lpv(
 
 
 def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """A static map as the arrays of :func:`~mrdamper.control._inverse_kernels.sp_force1`.
+    """A static map as the arrays of :func:`~mrdamper.models.kernels.sp_force1`.
 
     SP-1..SP-4 map directly; a Bingham model is ``fc(i) sign(v) + c0(i) v + f0`` with the sign
     written as ``tanh(v / v_eps)`` (``tanh(1e300 v)``, i.e. the exact sign, when ``v_eps = 0``).
@@ -615,7 +616,7 @@ def force_authority(model: Any, v_ref: float) -> float:
                 u = float(v_ref)
             elif blend != 0.0:  # steady motion: the Dahl state has reached sign(v_ref)
                 z_ss = float(np.sign(v_ref))
-                u = float(K._u_of(float(v_ref), r, mode, gm, gc, mu_h, mu_l, z_ss, blend))
+                u = float(zone_input(float(v_ref), r, mode, gm, gc, mu_h, mu_l, z_ss, blend))
             else:
                 u = float(
                     model.zone_laws.scheduling_input(
@@ -627,8 +628,8 @@ def force_authority(model: Any, v_ref: float) -> float:
         return abs(steady(hi) - steady(lo)) / (hi - lo)
     comp, power, theta, f0 = static_map_arrays(model)
     return abs(
-        K.sp_force1(0.0, float(v_ref), hi, comp, power, theta, f0)
-        - K.sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)
+        sp_force1(0.0, float(v_ref), hi, comp, power, theta, f0)
+        - sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)
     ) / (hi - lo)
 
 
@@ -772,9 +773,9 @@ def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray,
     :func:`lpv_hysteresis` for its other settings)."""
     gm, gc, mu_h, mu_l = model.law_arrays()
     if model.input_signal == "v" or model.zone_laws is None:
-        mode = K.MODE_V
+        mode = MODE_V
     else:
-        mode = K.MODE_CONTINUOUS if model.reading == "continuous" else K.MODE_LITERAL
+        mode = MODE_CONTINUOUS if model.reading == "continuous" else MODE_LITERAL
     return mode, gm, gc, mu_h, mu_l
 
 

@@ -17,6 +17,8 @@ import numpy.typing as npt
 from numba import njit
 from scipy.linalg import blas as _blas
 
+from mrdamper.models._lpv_step import lag_step
+
 __all__ = [
     "build_regressors",
     "first_order_lag",
@@ -438,7 +440,7 @@ def first_order_lag(w: FloatArray, dt: float, eta: float) -> FloatArray:  # prag
     e = np.exp(-eta * dt)
     r[0] = w[0]
     for k in range(1, n):
-        r[k] = e * r[k - 1] + (1.0 - e) * w[k - 1]
+        r[k] = lag_step(r[k - 1], w[k - 1], e)
     return r
 
 

@@ -14,13 +14,23 @@ Layout shared by every kernel (one record at a time; records are never concatena
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models._arrays import readonly
+from mrdamper.models.step import STATUS_DIVERGED, STATUS_OK
 
-__all__ = ["fill_candidates", "free_run", "free_run_sensitivity"]
+__all__ = [
+    "NARXForm",
+    "fill_candidates",
+    "free_run",
+    "free_run_sensitivity",
+    "step_advance",
+    "step_force",
+]
 
 #: Argument types of the kernels (numba types the values passed; these are for mypy).
 FloatArray = npt.NDArray[np.float64]
@@ -79,6 +89,16 @@ def _term(bv: FloatArray, slots: IntArray, t: int) -> float:  # pragma: no cover
 
 
 @njit(cache=True)
+def _output(bv: FloatArray, slots: IntArray, theta: FloatArray) -> float:  # pragma: no cover
+    """The scaled force of one sample from its base-variable values: ``sum_t theta[t] * term_t``
+    (the one definition, run by the free run and by the per-sample step)."""
+    acc = 0.0
+    for t in range(slots.shape[0]):
+        acc += theta[t] * _term(bv, slots, t)
+    return acc
+
+
+@njit(cache=True)
 def _fill_candidates(
     S: FloatArray, base: IntArray, slots: IntArray, k0: int, k1: int, out: FloatArray
 ) -> None:  # pragma: no cover - numba
@@ -103,9 +123,7 @@ def _free_run(
     n = S.shape[1]
     for k in range(p, n):
         _base_values(S, base, k, bv)
-        acc = 0.0
-        for t in range(slots.shape[0]):
-            acc += theta[t] * _term(bv, slots, t)
+        acc = _output(bv, slots, theta)
         if not np.isfinite(acc) or abs(acc) > bound:
             return k
         S[0, k] = acc
@@ -153,3 +171,102 @@ def _free_run_sensitivity(
             return J, k
         S[0, k] = acc
     return J, -1
+
+
+# ----------------------------------------------------------------------------- per-sample step
+class NARXForm(NamedTuple):
+    """The NARX model as its per-sample step reads it (layout of the module docstring).
+
+    The step's state is ``[k, S[r, k - l] for r in rows, l = 1 .. p]``: the samples seen so far
+    (capped at ``p``) and the last ``p`` scaled values of every signal row, row-major.
+
+    Attributes
+    ----------
+    base, slots, theta : ndarray
+        Base variables, monomials and coefficients (scaled units).
+    scales : ndarray, shape (5,)
+        Scale of each signal row (F [N], x [m], v [m/s], e, tanh_v [-]).
+    v0 : float
+        Velocity of the ``tanh(v / v0)`` feature [m/s].
+    bound : float
+        Largest accepted scaled ``|f|``.
+    p : int
+        Initial-condition samples (the largest lag).
+    f_initial : float
+        Force [N] of the first ``p`` samples (the free run's initial conditions).
+    """
+
+    base: IntArray
+    slots: IntArray
+    theta: FloatArray
+    scales: FloatArray
+    v0: float
+    bound: float
+    p: int
+    f_initial: float
+
+
+@njit(cache=True)
+def _present(form: NARXForm, r: int, x: float, v: float, e: float) -> float:  # pragma: no cover
+    """Scaled value of signal row ``r`` (not the force) at the present sample."""
+    if r == 1:
+        val = x
+    elif r == 2:
+        val = v
+    elif r == 3:
+        val = e
+    else:
+        val = np.tanh(v / form.v0)
+    out: float = val / form.scales[r]
+    return out
+
+
+@njit(cache=True)
+def _scaled_force(
+    form: NARXForm, s: FloatArray, x: float, v: float, e: float
+) -> float:  # pragma: no cover - numba
+    """Scaled force at the present sample: the initial condition for the first ``p`` samples."""
+    p = form.p
+    if s[0] < p:
+        out: float = form.f_initial / form.scales[0]
+        return out
+    bv = np.empty(form.base.shape[0])
+    for b in range(form.base.shape[0]):
+        r, lag = form.base[b, 0], form.base[b, 1]
+        bv[b] = _present(form, r, x, v, e) if lag == 0 else s[1 + r * p + lag - 1]
+    return _output(bv, form.slots, form.theta)
+
+
+@njit(cache=True)
+def step_force(
+    form: NARXForm, s: FloatArray, x: float, v: float, e: float
+) -> float:  # pragma: no cover - numba
+    """Force [N] at the present sample (see :mod:`mrdamper.models.step`)."""
+    out: float = _scaled_force(form, s, x, v, e) * form.scales[0]
+    return out
+
+
+@njit(cache=True)
+def step_advance(
+    form: NARXForm,
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+) -> int:  # pragma: no cover - numba
+    """Push the present sample into the history (``dt`` is the model's sample time)."""
+    f = _scaled_force(form, s, x0, v0, e0)
+    if not np.isfinite(f) or abs(f) > form.bound:
+        return STATUS_DIVERGED
+    p = form.p
+    for r in range(form.scales.size):
+        a = 1 + r * p
+        for lag in range(p - 1, 0, -1):
+            s[a + lag] = s[a + lag - 1]
+        s[a] = f if r == 0 else _present(form, r, x0, v0, e0)
+    s[0] = min(s[0] + 1.0, float(p))
+    return STATUS_OK

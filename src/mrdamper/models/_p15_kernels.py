@@ -30,13 +30,19 @@ positive quadratics).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-__all__ = ["GAMMA", "p15i_run"]
+from mrdamper.models._lpv_step import lag_step
+from mrdamper.models.step import STATUS_DIVERGED, STATUS_OK
+
+__all__ = ["GAMMA", "MAX_SUBSTEPS", "P15Form", "p15i_run", "step_advance", "step_force", "substeps"]
 
 GAMMA = 1.0 - 1.0 / math.sqrt(2.0)
+#: Upper limit of integration steps per sampling interval.
+MAX_SUBSTEPS = 2000
 
 
 @njit(cache=True)
@@ -139,6 +145,57 @@ def _dacc(
 
 
 @njit(cache=True)
+def _substep(
+    yF: float,
+    yG: float,
+    va: float,
+    vb: float,
+    ia: float,
+    ib: float,
+    s: int,
+    n_sub: int,
+    h: float,
+    C: np.ndarray,
+    f0: float,
+    basis: int,
+    lo: float,
+    hi: float,
+    phi1: np.ndarray,
+    phi2: np.ndarray,
+    w1: np.ndarray,
+    w2: np.ndarray,
+) -> tuple[float, float, float, float, float, float, float, bool]:
+    """Integration step ``s`` of ``n_sub`` (length ``h``) of a sampling interval from the state
+    ``(yF, yG)``; ``v``, ``i`` linear from ``(va, ia)`` to ``(vb, ib)`` over the interval.
+
+    Returns the first stage ``(F1, G1, a1, v1)``, the new state ``(F2, G2)`` with its velocity
+    ``v2``, and whether both implicit stages found their root; fills the stages' basis values
+    ``phi1``, ``phi2`` and coefficients ``w1``, ``w2``. The one step both the free run
+    (:func:`p15i_run`, which adds the sensitivities) and the per-sample step take.
+    """
+    g = GAMMA
+    hg = h * g
+    ta = (s + g) / n_sub
+    tb = (s + 1.0) / n_sub
+    v1 = va + (vb - va) * ta
+    v2 = va + (vb - va) * tb
+    _basis(ia + (ib - ia) * ta, basis, lo, hi, phi1)
+    _basis(ia + (ib - ia) * tb, basis, lo, hi, phi2)
+    _coefs(C, phi1, w1)
+    _coefs(C, phi2, w2)
+    # stage 1
+    G1, ok1 = _stage(yF, yG, hg, v1, w1, f0, yG)
+    F1 = yF + hg * G1
+    a1 = _accel(F1, G1, v1, w1, f0)
+    # stage 2
+    A2 = yF + h * (1.0 - g) * G1
+    B2 = yG + h * (1.0 - g) * a1
+    G2, ok2 = _stage(A2, B2, hg, v2, w2, f0, G1)
+    F2 = A2 + hg * G2
+    return F1, G1, a1, v1, F2, G2, v2, ok1 and ok2
+
+
+@njit(cache=True)
 def p15i_run(
     v: np.ndarray,
     i: np.ndarray,
@@ -230,25 +287,10 @@ def p15i_run(
             ia, ib = i[k], i[k + 1]
             ok = True
             for s in range(n_sub):
-                ta = (s + g) / n_sub
-                tb = (s + 1.0) / n_sub
-                v1 = va + (vb - va) * ta
-                v2 = va + (vb - va) * tb
-                _basis(ia + (ib - ia) * ta, basis, lo, hi, phi1)
-                _basis(ia + (ib - ia) * tb, basis, lo, hi, phi2)
-                _coefs(C, phi1, w1)
-                _coefs(C, phi2, w2)
-                # stage 1
-                G1, ok1 = _stage(yF, yG, hg, v1, w1, f0, yG)
-                F1 = yF + hg * G1
-                a1 = _accel(F1, G1, v1, w1, f0)
-                # stage 2
-                A2 = yF + h * (1.0 - g) * G1
-                B2 = yG + h * (1.0 - g) * a1
-                G2, ok2 = _stage(A2, B2, hg, v2, w2, f0, G1)
-                F2 = A2 + hg * G2
-                if not (ok1 and ok2):
-                    ok = False
+                F1, G1, a1, v1, F2, G2, v2, ok = _substep(
+                    yF, yG, va, vb, ia, ib, s, n_sub, h, C, f0, basis, lo, hi, phi1, phi2, w1, w2
+                )
+                if not ok:
                     break
                 if with_sens:
                     a2 = _accel(F2, G2, v2, w2, f0)
@@ -283,3 +325,107 @@ def p15i_run(
                 bad[q] = k + 1
                 break
     return F, J, bad
+
+
+# ----------------------------------------------------------------------------- per-sample step
+class P15Form(NamedTuple):
+    """The P-15 model as its per-sample step reads it.
+
+    Attributes
+    ----------
+    C : ndarray, shape (5, 3)
+        Coefficients of ``w_1 .. w_5`` in the basis ``basis``.
+    f0 : float
+        Force offset [N].
+    basis : int
+        0 monomials, 1 Bernstein polynomials on ``[lo, hi]``.
+    lo, hi : float
+        Range of the Bernstein basis (unused for monomials).
+    max_step : float
+        Largest integration step [s] (``inf``: one step a sampling interval).
+    bound : float
+        Largest accepted ``|F|`` [N].
+    eta : float
+        Drive-lag rate [1/s]; negative: no lag.
+    """
+
+    C: np.ndarray
+    f0: float
+    basis: int
+    lo: float
+    hi: float
+    max_step: float
+    bound: float
+    eta: float
+
+
+@njit(cache=True)
+def substeps(dt: float, max_step: float) -> int:
+    """Integration steps over an interval of ``dt`` [s]: ``ceil(dt / max_step)``, at least 1 and
+    at most :data:`MAX_SUBSTEPS` (one step for an infinite ``max_step``)."""
+    if not math.isfinite(max_step):
+        return 1
+    return int(min(MAX_SUBSTEPS, max(1, math.ceil(dt / max_step - 1e-12))))
+
+
+@njit(cache=True)
+def step_force(form: P15Form, s: np.ndarray, x: float, v: float, e: float) -> float:
+    """Force [N]: the state's first entry (the force is a state of the P-15 ODE)."""
+    F: float = s[0]
+    return F
+
+
+@njit(cache=True)
+def step_advance(
+    form: P15Form,
+    s: np.ndarray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+) -> int:
+    """Integrate ``s = (F, G, rho)`` over one interval of ``dt`` [s] (:func:`_substep`, with
+    ``ceil(dt / max_step)`` steps; ``v`` and the model's input linear in between)."""
+    if form.eta >= 0.0:
+        ia = s[2]
+        ib = lag_step(ia, e0, math.exp(-form.eta * dt))
+    else:
+        ia, ib = e0, e1
+    n_sub = substeps(dt, form.max_step)
+    h = dt / n_sub
+    phi1 = np.empty(3)
+    phi2 = np.empty(3)
+    w1 = np.empty(5)
+    w2 = np.empty(5)
+    yF, yG = s[0], s[1]
+    ok = True
+    for q in range(n_sub):
+        _, _, _, _, yF, yG, _, ok = _substep(
+            yF,
+            yG,
+            v0,
+            v1,
+            ia,
+            ib,
+            q,
+            n_sub,
+            h,
+            form.C,
+            form.f0,
+            form.basis,
+            form.lo,
+            form.hi,
+            phi1,
+            phi2,
+            w1,
+            w2,
+        )
+        if not ok:
+            break
+    s[0], s[1], s[2] = yF, yG, ib
+    if not ok or not (np.isfinite(yF) and np.isfinite(yG)) or abs(yF) > form.bound:
+        return STATUS_DIVERGED
+    return STATUS_OK

@@ -307,10 +307,11 @@ class FittedModel(abc.ABC):
             model=self.kind,
         )
 
-    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
+    def step(self, *args: Any, **options: Any) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
-        Families that have one override this; the default refuses in one line.
+        Families override this with their own keyword options (any signature: the base takes
+        anything); the default refuses in one line.
 
         Parameters
         ----------

@@ -20,6 +20,7 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.models._bingham_fit import identify
+from mrdamper.models._sp_kernels import make_static_step
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -30,6 +31,7 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.protocols import StaticMapForm
+from mrdamper.models.step import Step
 
 __all__ = ["BinghamEstimator", "BinghamModel"]
 
@@ -138,6 +140,11 @@ class BinghamModel(FittedModel):
             np.asarray([*self.fc, slope, *self.c0], dtype=np.float64),
             float(self.f0),
         )
+
+    def step(self) -> Step:
+        """The model as a per-sample step (:mod:`mrdamper.models.step`): the static map of
+        :meth:`inverse_form`, stateless but for the input it holds; no range policy."""
+        return make_static_step(self.kind, self.inverse_form())
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Force [N] from the record's velocity and electrical input.

@@ -35,7 +35,7 @@ from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _lpv_fit, _lpv_inputs, _scale
+from mrdamper.models import _lpv_fit, _lpv_inputs, _lpv_step, _scale
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models.base import (
     Estimator,
@@ -54,6 +54,7 @@ from mrdamper.models.rates import (
     to_model_rate,
     to_record_rate,
 )
+from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = [
@@ -318,6 +319,41 @@ class TransferFunctionModel(FittedModel):
                 f"max |z| = {self.max_pole_modulus():.4f} over rho in {self.rho_range}",
             )
         return to_record_rate(y + self.offset, self.fs, experiment)
+
+    def step(self) -> Step:
+        """The model as a per-sample step at its own rate ``fs`` (:mod:`mrdamper.models.step`).
+
+        The state holds the lagged input ``rho`` (with ``eta``), the Dahl state of the hysteretic
+        input and the past ``n_m`` outputs and inputs (:mod:`mrdamper.models._lpv_step`); from rest
+        they are zero and ``rho = e[0]``. The input is used as given (no range policy).
+        ``feedthrough`` is True for an LPV model without drive lag (the force at a sample is a
+        polynomial in the present input); with a lag, or for the LTI model, the present input
+        acts only from the next sample on.
+        """
+        gm, gc, mu_h, mu_l = self.law_arrays()
+        if self.input_signal == "v" or self.zone_laws is None:
+            mode = _lpv_step.MODE_V
+        elif self.reading == "continuous":
+            mode = _lpv_step.MODE_CONTINUOUS
+        else:
+            mode = _lpv_step.MODE_LITERAL
+        hys = self.input_signal == "hysteretic"
+        form = _lpv_step.LPVForm(
+            np.ascontiguousarray(self.alpha),
+            np.ascontiguousarray(self.beta),
+            float(self.offset),
+            float(self.force_bound),
+            -1.0 if self.eta is None else float(self.eta),
+            mode,
+            gm,
+            gc,
+            mu_h,
+            mu_l,
+            float(self.blend) if hys and self.blend else 0.0,
+            float(self.stroke) if hys and self.stroke else 0.0,
+        )
+        feedthrough = self.kind == "lpv" and self.eta is None
+        return _lpv_step.make_step(self.kind, form, self.fs, feedthrough)
 
     # --- stability -----------------------------------------------------------------------
     def frozen_poles(self, rho: Any = None, n_grid: int = 51) -> np.ndarray:

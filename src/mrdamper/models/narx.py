@@ -65,6 +65,7 @@ from mrdamper.models.rates import (
     to_model_rate,
     to_record_rate,
 )
+from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = ["NARXEstimator", "NARXModel", "candidate_structure"]
@@ -321,6 +322,47 @@ class NARXModel(FittedModel):
                 f"{experiment.name!r} (model rate {self.fs:g} Hz)",
             )
         return self._back(S[0], experiment)
+
+    def step(self, *, f_initial: float = 0.0) -> Step:
+        """The model as a per-sample step at its own rate ``fs`` (:mod:`mrdamper.models.step`).
+
+        The state holds the last :attr:`max_lag` scaled samples of every signal; the first
+        ``max_lag`` forces are the initial conditions, ``f_initial`` [N] (the free run of
+        :meth:`predict` takes the measured ones instead). The input is used as given (no range
+        policy).
+
+        Parameters
+        ----------
+        f_initial : float
+            Force [N] of the first ``max_lag`` samples (default 0: from rest).
+        """
+        check_number("f_initial", f_initial, low=-math.inf, what="a finite force [N]")
+        p = self.max_lag
+        form = K.NARXForm(
+            np.ascontiguousarray(self.base),
+            np.ascontiguousarray(self.terms),
+            np.ascontiguousarray(self.theta),
+            np.ascontiguousarray(self.scales),
+            self.v0,
+            self.force_bound / float(self.scales[0]),
+            p,
+            float(f_initial),
+        )
+        size = 1 + len(SIGNALS) * p
+
+        def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
+            return np.zeros(size)
+
+        feed = bool(np.any((self.base[:, 0] == 3) & (self.base[:, 1] == 0)))
+        return Step(
+            self.kind,
+            form,
+            K.step_force,
+            K.step_advance,
+            initial_state,
+            dt=1.0 / self.fs,
+            feedthrough=feed,
+        )
 
     def one_step_predict(self, experiment: Experiment) -> np.ndarray:
         """One-step-ahead force [N]: past forces are the measured ones (equation error view)."""

@@ -78,6 +78,7 @@ from mrdamper.analysis.laws import BLOCK
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
+from mrdamper.models import _p15_kernels as _k
 from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._p15_fit import (
@@ -101,12 +102,10 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = ["P15Estimator", "P15Model"]
-
-#: Upper limit of integration steps per sampling interval.
-MAX_SUBSTEPS = 2000
 
 
 @dataclass(frozen=True)
@@ -263,9 +262,7 @@ class P15Model(FittedModel):
 
     def substeps(self, dt: float) -> int:
         """Integration steps per sampling interval ``dt`` [s] (at most :data:`MAX_SUBSTEPS`)."""
-        if not math.isfinite(self.max_step):
-            return 1
-        return int(min(MAX_SUBSTEPS, max(1, math.ceil(dt / self.max_step - 1e-12))))
+        return int(_k.substeps(float(dt), self.max_step))
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N], from the model's rest state at the first sample.
@@ -278,6 +275,38 @@ class P15Model(FittedModel):
             the first such sample.
         """
         return self.simulate_steps(experiment, self.substeps(experiment.dt))
+
+    def step(self) -> Step:
+        """The model as a per-sample step (:mod:`mrdamper.models.step`).
+
+        The state is ``(F, G, rho)``: force [N], its rate [N/s] and the model's input (through
+        the drive lag with ``eta``), at rest ``(F_rest(e[0], v[0]), 0, e[0])``. ``advance``
+        integrates an interval of ``dt`` with ``ceil(dt / max_step)`` steps of the L-stable
+        scheme :meth:`predict` takes (the step the estimator checked by halving it), the inputs
+        linear in between; it reports divergence like :meth:`predict` but does not check the
+        sign of ``w3`` along the input, and applies no range policy. The force is a state: it
+        does not depend on the present input (``feedthrough`` False).
+        """
+        bern = self.basis == "bernstein"
+        lo, hi = self.input_range if bern else (0.0, 1.0)
+        form = _k.P15Form(
+            np.ascontiguousarray(self.W_matrix),
+            self.f0,
+            int(bern),
+            float(lo),
+            float(hi),
+            self.max_step,
+            self.force_bound,
+            -1.0 if self.eta is None else float(self.eta),
+        )
+
+        def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
+            F0 = rest_state(self.coefficients(float(e0)), self.f0, float(v0))
+            return np.array([F0, 0.0, e0])
+
+        return Step(
+            self.kind, form, _k.step_force, _k.step_advance, initial_state, feedthrough=False
+        )
 
     def _check_w3(self, i: np.ndarray) -> None:
         """Raise if ``w3(i)`` vanishes or changes sign along ``i`` (block by block of

@@ -11,7 +11,8 @@ in one of two plain-array forms that the control kernels step through:
   polynomial in the present ``rho[k]`` (LPV; the LTI model is not invertible, its force does not
   depend on the present input).
 
-Spencer, P-15 and NARX have no such form yet.
+Spencer, P-15 and NARX have no such form yet; every kind has a per-sample step
+(:meth:`~mrdamper.models.base.FittedModel.step`, :mod:`mrdamper.models.step`).
 """
 
 from __future__ import annotations

@@ -77,7 +77,7 @@ from mrdamper.errors import DataValidationError
 from mrdamper.models import _scale
 from mrdamper.models._lpv_kernels import first_order_lag
 from mrdamper.models._sp_fit import identify, single_level_terms, stack
-from mrdamper.models._sp_kernels import COMPONENTS, sp_force
+from mrdamper.models._sp_kernels import COMPONENTS, make_static_step, sp_force
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -88,6 +88,7 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.protocols import StaticMapForm
+from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = [
@@ -200,6 +201,12 @@ class SPModel(FittedModel):
         :class:`~mrdamper.models.protocols.InvertibleModel`)."""
         comp, power = self.layout_arrays()
         return StaticMapForm(comp, power, np.asarray(self.S, dtype=np.float64), self.f0, self.eta)
+
+    def step(self) -> Step:
+        """The map as a per-sample step (:mod:`mrdamper.models.step`): the state is the drive
+        lag's output (with ``eta``) or the input itself; the input is used as given (no range
+        policy)."""
+        return make_static_step(self.kind, self.inverse_form())
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N]: direct evaluation on the record's x, v and electrical input

@@ -263,7 +263,8 @@ class SpencerModel(FittedModel):
         The state is ``(y, z, u)``, at rest ``(x[0], 0, e[0])``; ``advance`` integrates an
         interval with classical RK4 sub-steps no longer than ``max_h``, chosen like
         :meth:`substeps_for` for an interval of ``dt`` [s] and velocities up to ``vmax`` [m/s]
-        over the identified input range (or ``dt / substeps`` when ``substeps`` is set).
+        over the identified input range (or ``dt / substeps`` when ``substeps`` is set). The
+        force reads the filtered input ``u``, a state: ``feedthrough`` is False.
 
         Parameters
         ----------
@@ -281,7 +282,9 @@ class SpencerModel(FittedModel):
         def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
             return np.array([x0, 0.0, e0])
 
-        return Step(self.kind, form, _k.step_force, _k.step_advance, initial_state)
+        return Step(
+            self.kind, form, _k.step_force, _k.step_advance, initial_state, feedthrough=False
+        )
 
 
 def _raise_on_status(status: int, sample: int, nsub: int, name: str) -> None:

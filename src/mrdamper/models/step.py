@@ -18,9 +18,27 @@ NARX) read only the present sample and must be stepped at their own sample time 
 
 The form is a family's typed container (a :class:`typing.NamedTuple` of floats and float64 /
 int64 arrays) holding everything the two compiled functions need; it is built from the model by
-:meth:`FittedModel.step`. The simulation loop (:func:`run`), the inverse, the quarter car and the
-exports call ``force`` and ``advance`` and never re-implement them; a family's fused ``predict``
-kernel is an optimisation tested sample by sample against :func:`run`.
+:meth:`FittedModel.step`. Every kind has one (forms and steps beside the family's kernels):
+
+=============  ==================  ================================================  ==========
+kind           form                state                                             ``dt``
+=============  ==================  ================================================  ==========
+spencer        ``SpencerForm``     ``(y, z, u)``, RK4 sub-steps <= ``max_h``         any
+p15            ``P15Form``         ``(F, F', rho)``, SDIRK steps <= ``max_step``     any
+sp1..sp4       ``StaticStepForm``  ``(rho,)``: the map's input (drive lag)           any
+bingham        ``StaticStepForm``  ``(rho,)``                                        any
+lpv, lti       ``LPVForm``         ``rho``, Dahl ``z``, past outputs and inputs      ``1/fs``
+narx           ``NARXForm``        samples seen, last ``max_lag`` scaled samples     ``1/fs``
+=============  ==================  ================================================  ==========
+
+The simulation loop (:func:`run`) calls ``force`` and ``advance`` and never re-implements them;
+the per-sample pieces the inverse and the quarter car of :mod:`mrdamper.control` need (the LPV
+output step, the zone-law input, the Dahl step, the static map) are the same compiled functions,
+public in :mod:`mrdamper.models.kernels`. A family's fused ``predict`` kernel is an optimisation
+that shares the inner per-sample functions with the step (Spencer, P-15, SP, NARX) or, where it
+is restructured for speed (the LPV recursions), is tested sample by sample against :func:`run`
+(``tests/models/test_conformance.py``: equal to 1e-9 of the force scale for every kind).
+The step uses the electrical input as given: the model's range policy is not applied.
 
 ``advance`` returns a status code: :data:`STATUS_OK`, :data:`STATUS_DIVERGED` (a state became
 non-finite or left its bound) or :data:`STATUS_INVALID` (parameters invalid for the input seen,
@@ -76,9 +94,11 @@ class Step:
         The step's own sample time [s] for discrete-time families (they must be advanced with it),
         None where any interval is allowed (static maps, continuous-time families).
     feedthrough : bool
-        True when the force depends on the present electrical input ``e[k]`` (static maps,
-        continuous-time families, LPV through ``rho[k]``); False when it is fixed by the past
-        (the LTI model): such a model cannot be inverted sample by sample.
+        True when ``force`` reads the present electrical input ``e[k]`` (static maps and the LPV
+        model without drive lag, NARX with a present-input term); False when the force at a
+        sample is fixed by the state (Spencer and P-15, whose input acts through their state;
+        the LTI model; any family with a drive lag): such a step cannot be inverted at the
+        present sample.
     """
 
     kind: str

@@ -1,0 +1,46 @@
+"""The families' per-sample compiled functions, public for the tools that step a model.
+
+Each function is defined once, in its family's kernel module, and used there by the family's
+per-sample step (:mod:`mrdamper.models.step`) and its free-run kernels; the inverse, the quarter
+car and the exports of :mod:`mrdamper.control` import them from here instead of keeping copies.
+
+* LPV / LTI (:mod:`mrdamper.models._lpv_step`): :func:`lpv_coefficients` (the output step as a
+  polynomial in the present scheduling value), :func:`poly`, :func:`dpoly`, :func:`zone_input`
+  (the zone-law input, static or hysteretic; modes :data:`MODE_V`, :data:`MODE_CONTINUOUS`,
+  :data:`MODE_LITERAL`), :func:`lag_step` (one sample of the drive lag);
+* hysteretic input (:mod:`mrdamper.analysis.hysteretic`): :func:`dahl_step`;
+* static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models._sp_kernels`): :func:`sp_force1`
+  (one sample of the map) and :func:`sp_dforce1` (its derivative in the input).
+
+Caveat of numba's disk cache: a cached kernel that calls one of these functions is not recompiled
+when the function changes; delete the caller's ``__pycache__/*.nb*`` files after editing here.
+"""
+
+from __future__ import annotations
+
+from mrdamper.analysis.hysteretic import dahl_step
+from mrdamper.models._lpv_step import (
+    MODE_CONTINUOUS,
+    MODE_LITERAL,
+    MODE_V,
+    dpoly,
+    lag_step,
+    lpv_coefficients,
+    poly,
+    zone_input,
+)
+from mrdamper.models._sp_kernels import sp_dforce1, sp_force1
+
+__all__ = [
+    "MODE_CONTINUOUS",
+    "MODE_LITERAL",
+    "MODE_V",
+    "dahl_step",
+    "dpoly",
+    "lag_step",
+    "lpv_coefficients",
+    "poly",
+    "sp_dforce1",
+    "sp_force1",
+    "zone_input",
+]
