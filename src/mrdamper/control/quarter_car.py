@@ -464,6 +464,7 @@ def simulate_quarter_car(
     i_range: tuple[float, float] | None = None,
     n_grid: int = 16,
     bound: float = 10.0,
+    substeps: int = 1,
 ) -> QuarterCarResult:
     """Drive the quarter car over ``road`` with ``model`` as its damper under ``controller``.
 
@@ -492,10 +493,14 @@ def simulate_quarter_car(
         Search grid of the inverse step.
     bound : float
         Divergence bound on every state [m, m/s].
+    substeps : int
+        Plant steps per road sample (the road is interpolated linearly in between; the control
+        sample is unchanged); 1: the plant step is the road's sampling interval.
 
     Returns
     -------
     QuarterCarResult
+        Signals at the plant rate ``road.fs * substeps``.
 
     Raises
     ------
@@ -534,14 +539,18 @@ def simulate_quarter_car(
         n_sub = 1
         if getattr(model, "eta", None) is not None:  # static map with a drive lag, at the road rate
             arrays["lag"] = float(np.exp(-model.eta / road.fs))
-    h = 1.0 / road.fs
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise DataValidationError("substeps", f"expected an int >= 1, got {substeps!r}")
+    dt_c = 1.0 / road.fs * n_sub  # control sample [s]
+    n_sub *= int(substeps)
+    h = 1.0 / (road.fs * substeps)
     if isinstance(model, LinearDamper) or ctrl.kind in ("soft", "hard"):
         lam = 0.0
     elif reg is None:
-        lam = default_reg(model, _pos("v_ref", v_ref, "m/s"), h * n_sub) if hi > lo else 0.0
+        lam = default_reg(model, _pos("v_ref", v_ref, "m/s"), dt_c) if hi > lo else 0.0
     else:
         lam = _pos("reg", reg, "N per input unit", allow_zero=True)
-    step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * h * n_sub
+    step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * dt_c
     code = {
         "soft": QK.CTRL_PASSIVE,
         "hard": QK.CTRL_PASSIVE,
@@ -556,6 +565,9 @@ def simulate_quarter_car(
     car_arr = np.array([car.m_s, car.m_u, car.k_s, car.k_t, car.c_t], dtype=np.float64)
     gains = np.array([ctrl.c_sky / mr**2, ctrl.c_ground / mr**2, ctrl.alpha, i_const])
     zr = np.ascontiguousarray(road.z, dtype=np.float64)
+    if substeps > 1:  # the road is linear between its samples
+        zr = np.interp(np.arange((zr.size - 1) * substeps + 1) / substeps, np.arange(zr.size), zr)
+    z_in = zr
     n_ctrl = (zr.size - 1) // n_sub
     if n_ctrl < 2:
         raise DataValidationError("road", f"too short: {zr.size} samples")
@@ -604,7 +616,7 @@ def simulate_quarter_car(
     if arrays["is_lpv"] and model.eta is not None:
         cmd = driver_command(rho, model.eta, 1.0 / model.fs, (lo, hi))
     elif getattr(model, "eta", None) is not None:
-        cmd = driver_command(rho, model.eta, h, (lo, hi))
+        cmd = driver_command(rho, model.eta, dt_c, (lo, hi))
     else:
         cmd = rho
     n = n_ctrl * n_sub
@@ -613,9 +625,9 @@ def simulate_quarter_car(
         road=road.name,
         controller=ctrl.kind,
         model_kind=getattr(model, "kind", "damper"),
-        fs=road.fs,
+        fs=1.0 / h,
         t=np.arange(n) * h,
-        z_r=road.z[:n].copy(),
+        z_r=z_in[:n].copy(),
         z_s=X[:, 0] / mr,
         v_s=X[:, 1] / mr,
         z_u=X[:, 2] / mr,
