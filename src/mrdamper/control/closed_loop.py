@@ -168,8 +168,8 @@ def check_pair(model: Any, plant: Any) -> None:
         units = {"i": "coil current [A]", "voltage": "command voltage [V]"}
         raise DataValidationError(
             "plant",
-            f"the {getattr(plant, 'kind', '?')} plant is driven by {units.get(pi, pi)}, the "
-            f"{getattr(model, 'kind', '?')} model by {units.get(mi, mi)}: not the same input",
+            f"the {getattr(plant, 'kind', '?')} plant is driven by {units.get(str(pi), pi)}, the "
+            f"{getattr(model, 'kind', '?')} model by {units.get(str(mi), mi)}: not the same input",
         )
 
 
