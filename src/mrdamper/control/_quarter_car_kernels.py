@@ -37,7 +37,7 @@ from mrdamper.models.kernels import dahl_step, lpv_coefficients, sp_force1
 from mrdamper.models.kernels import poly as _poly
 from mrdamper.models.kernels import zone_input as _u_of
 
-__all__ = ["simulate"]
+__all__ = ["control_sample", "simulate"]
 
 CTRL_PASSIVE, CTRL_SKYHOOK, CTRL_GROUNDHOOK, CTRL_HYBRID = 0, 1, 2, 3
 
@@ -61,6 +61,151 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
     if ctrl == CTRL_GROUNDHOOK:
         return gnd
     return alpha * sky + (1.0 - alpha) * gnd
+
+
+@njit(cache=True)
+def control_sample(
+    k,
+    zs,
+    vs,
+    zu,
+    vu,
+    dt_c,
+    ctrl,
+    gains,
+    lo,
+    hi,
+    lam2,
+    rate_step,
+    n_grid,
+    is_lpv,
+    comp,
+    power,
+    theta,
+    f0,
+    alpha,
+    beta,
+    offset,
+    lag,
+    mode,
+    gm,
+    gc,
+    mu_high,
+    mu_low,
+    horizon,
+    blend,
+    stroke,
+    y,
+    u,
+    cf,
+    yb,
+    ub,
+    rho,
+    mem,
+):  # pragma: no cover - numba
+    """The controller and the damper model's inverse at control sample ``k``.
+
+    The car state ``zs, vs, zu, vu`` is the one at the sample instant. ``mem`` carries the
+    controller's memory ``[previous input, previous command, Dahl state, previous damper
+    velocity]`` (start: the first two the initial input, the others 0); ``y, u`` (LPV past outputs
+    and inputs) and ``rho`` are written at index ``k``; ``cf, yb, ub`` are scratch. The model's
+    own force is its prediction for the chosen input (LPV: the polynomial at ``rho[k]``, fixed by
+    the past; static map: the map at the sample's motion).
+
+    Returns
+    -------
+    r : float
+        Scheduling value chosen (the input, or the input through the drive lag).
+    ok : bool
+        The desired force is within reach.
+    target : float
+        Desired force [N] (NaN when passive).
+    F_model : float
+        The model's force for ``r`` (preload removed) [N].
+    """
+    c_sky, c_gnd, alpha_h, i_const = gains[0], gains[1], gains[2], gains[3]
+    prev, w_prev, z_d, v_prev = mem[0], mem[1], mem[2], mem[3]
+    x_d = zs - zu
+    v_d = vs - vu
+    if blend != 0.0 and k >= 1:
+        z_d = dahl_step(z_d, v_prev, v_d, dt_c, stroke)
+    v_prev = v_d
+    # --- input for this sample
+    a, b = lo, hi
+    if lag >= 0.0 and k >= 1:
+        a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
+        b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
+    if k >= 1:
+        a = max(a, prev - rate_step)
+        b = min(b, prev + rate_step)
+        if b < a:
+            a = b = min(max(prev, a), b)
+    if ctrl == CTRL_PASSIVE:
+        target = np.nan
+    else:
+        target = _desired(ctrl, vs, vu, c_sky, c_gnd, alpha_h)
+    if is_lpv:
+        lpv_coefficients(cf, y, u, k, alpha, beta, offset)
+        if ctrl == CTRL_PASSIVE:
+            r = min(max(i_const, a), b)
+            ok = True
+        else:
+            hold = prev
+            if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
+                hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+            if lag >= 0.0 and k >= 2 and horizon > 1:
+                valid = past_buffers(y, u, k, yb, ub)
+                r, ok = horizon_step(
+                    cf,
+                    yb,
+                    ub,
+                    valid,
+                    alpha,
+                    beta,
+                    offset,
+                    a,
+                    b,
+                    prev,
+                    hold,
+                    lag,
+                    horizon,
+                    v_d,
+                    target + offset,
+                    lam2,
+                    n_grid,
+                    mode,
+                    gm,
+                    gc,
+                    mu_high,
+                    mu_low,
+                    z_d,
+                    blend,
+                )
+            else:
+                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
+        if lag >= 0.0:
+            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        Fk = _poly(cf, r)
+        y[k] = Fk - offset
+        u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low, z_d, blend)
+        F_model = Fk - offset
+    else:
+        if ctrl == CTRL_PASSIVE:
+            r = min(max(i_const, a), b)
+            ok = True
+        else:
+            hold = prev
+            if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
+                hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+            r, ok = reg_solve_static(
+                x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid
+            )
+        if lag >= 0.0:
+            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        F_model = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0
+    rho[k] = r
+    mem[0], mem[1], mem[2], mem[3] = r, w_prev, z_d, v_prev
+    return r, ok, target, F_model
 
 
 # Cached on disk (compiling takes seconds). Caveat: numba does not invalidate this cache when a
@@ -140,7 +285,7 @@ def simulate(
         First diverged plant step or -1.
     """
     m_s, m_u, k_s, k_t, c_t = car[0], car[1], car[2], car[3], car[4]
-    c_sky, c_gnd, alpha_h, i_const = gains[0], gains[1], gains[2], gains[3]
+    i_const = gains[3]
     n_ctrl = (zr.size - 1) // n_sub
     X = np.zeros((n_ctrl * n_sub, 5))
     F = np.zeros(n_ctrl)
@@ -161,94 +306,50 @@ def simulate(
     k4 = np.zeros(4)
     lam2 = lam * lam
     prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
-    w_prev = prev
     dt_c = n_sub * h
-    z_d = 0.0  # Dahl state of the hysteretic input (from rest)
-    v_prev = 0.0
+    mem = np.array([prev, prev, 0.0, 0.0])  # prev, w_prev, Dahl state, previous velocity
     for k in range(n_ctrl):
-        zs, vs, zu, vu = st[0], st[1], st[2], st[3]
-        x_d = zs - zu
-        v_d = vs - vu
-        if blend != 0.0 and k >= 1:
-            z_d = dahl_step(z_d, v_prev, v_d, dt_c, stroke)
-        v_prev = v_d
-        # --- input for this sample
-        a, b = lo, hi
-        if lag >= 0.0 and k >= 1:
-            a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
-            b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
-        if k >= 1:
-            a = max(a, prev - rate_step)
-            b = min(b, prev + rate_step)
-            if b < a:
-                a = b = min(max(prev, a), b)
-        if ctrl == CTRL_PASSIVE:
-            target = np.nan
-        else:
-            target = _desired(ctrl, vs, vu, c_sky, c_gnd, alpha_h)
-        if is_lpv:
-            lpv_coefficients(cf, y, u, k, alpha, beta, offset)
-            if ctrl == CTRL_PASSIVE:
-                r = min(max(i_const, a), b)
-                ok = True
-            else:
-                hold = prev
-                if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
-                    hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-                if lag >= 0.0 and k >= 2 and horizon > 1:
-                    valid = past_buffers(y, u, k, yb, ub)
-                    r, ok = horizon_step(
-                        cf,
-                        yb,
-                        ub,
-                        valid,
-                        alpha,
-                        beta,
-                        offset,
-                        a,
-                        b,
-                        prev,
-                        hold,
-                        lag,
-                        horizon,
-                        v_d,
-                        target + offset,
-                        lam2,
-                        n_grid,
-                        mode,
-                        gm,
-                        gc,
-                        mu_high,
-                        mu_low,
-                        z_d,
-                        blend,
-                    )
-                else:
-                    r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
-            if lag >= 0.0:
-                w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
-            Fk = _poly(cf, r)
-            y[k] = Fk - offset
-            u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low, z_d, blend)
-            F[k] = Fk - offset
-        else:
-            if ctrl == CTRL_PASSIVE:
-                r = min(max(i_const, a), b)
-                ok = True
-            else:
-                hold = prev
-                if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
-                    hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-                r, ok = reg_solve_static(
-                    x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid
-                )
-            if lag >= 0.0:
-                w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
-            F[k] = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0
-        rho[k] = r
+        r, ok, target, F[k] = control_sample(
+            k,
+            st[0],
+            st[1],
+            st[2],
+            st[3],
+            dt_c,
+            ctrl,
+            gains,
+            lo,
+            hi,
+            lam2,
+            rate_step,
+            n_grid,
+            is_lpv,
+            comp,
+            power,
+            theta,
+            f0,
+            alpha,
+            beta,
+            offset,
+            lag,
+            mode,
+            gm,
+            gc,
+            mu_high,
+            mu_low,
+            horizon,
+            blend,
+            stroke,
+            y,
+            u,
+            cf,
+            yb,
+            ub,
+            rho,
+            mem,
+        )
         Fd[k] = target
         sat[k] = not ok
-        prev = r
         # --- plant over the control sample
         for s in range(n_sub):
             j = k * n_sub + s

@@ -641,7 +641,7 @@ DEFAULT_REG_FRACTION = 0.5
 DEFAULT_REG_TIME = 0.005 / float(np.log(5.0))
 
 
-def default_reg(model: Any, v_ref: float, dt: float) -> float:
+def default_reg(model: Any, v_ref: float, dt: float, authority: float | None = None) -> float:
     """Default regularisation weight [N/A] or [N/V] for an inverse running every ``dt`` [s].
 
     Per sample the regularised input is, to first order, ``q i[k-1] + (1 - q) i_exact`` with
@@ -652,11 +652,14 @@ def default_reg(model: Any, v_ref: float, dt: float) -> float:
         reg = force_authority(model, v_ref) * sqrt(q / (1 - q)),   q = exp(-dt / DEFAULT_REG_TIME)
 
     At 200 Hz this is :data:`DEFAULT_REG_FRACTION` (0.5) times the authority; at 3 kHz about 3.0.
+    ``authority`` [N per input unit], when given, replaces :func:`force_authority` (a model
+    stepped through its per-sample step, whose authority is measured on the step).
     """
     if not (np.isfinite(dt) and dt > 0):
         raise DataValidationError("dt", f"expected a positive sampling interval [s], got {dt!r}")
     q = float(np.exp(-dt / DEFAULT_REG_TIME))
-    return float(np.sqrt(q / (1.0 - q))) * force_authority(model, v_ref)
+    auth = force_authority(model, v_ref) if authority is None else float(authority)
+    return float(np.sqrt(q / (1.0 - q))) * auth
 
 
 def _reg_settings(

@@ -37,16 +37,9 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control import _quarter_car_kernels as QK
+from mrdamper.control._loop import LoopSetup, loop_result, loop_setup, positive
 from mrdamper.control.comfort import weighted_rms
-from mrdamper.control.inverse import (
-    default_reg,
-    driver_command,
-    horizon_samples,
-    lpv_hysteresis,
-    lpv_law_arrays,
-    model_input_limits,
-    static_map_arrays,
-)
+from mrdamper.control.inverse import driver_command
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 
 __all__ = [
@@ -63,19 +56,6 @@ __all__ = [
 
 #: Names of the built-in controllers.
 CONTROLLERS = ("soft", "hard", "skyhook", "groundhook", "hybrid")
-
-
-def _pos(name: str, value: Any, unit: str, allow_zero: bool = False) -> float:
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        raise DataValidationError(name, f"expected a number [{unit}], got {value!r}") from None
-    ok = math.isfinite(f) and (f >= 0 if allow_zero else f > 0)
-    if isinstance(value, bool) or not ok:
-        raise DataValidationError(
-            name, f"expected a finite value {'>=' if allow_zero else '>'} 0 [{unit}], got {value!r}"
-        )
-    return f
 
 
 @dataclass(frozen=True)
@@ -121,8 +101,8 @@ class QuarterCar:
             "motion_ratio": "-",
         }
         for name, unit in units.items():
-            object.__setattr__(self, name, _pos(name, getattr(self, name), unit))
-        object.__setattr__(self, "c_t", _pos("c_t", self.c_t, "N s/m", allow_zero=True))
+            object.__setattr__(self, name, positive(name, getattr(self, name), unit))
+        object.__setattr__(self, "c_t", positive("c_t", self.c_t, "N s/m", allow_zero=True))
 
     def body_frequency(self) -> float:
         """Undamped body mode on the spring and tyre in series [Hz]."""
@@ -150,7 +130,7 @@ class LinearDamper:
     input_range: tuple[float, float] = field(default=(0.0, 1.0), init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "c", _pos("c", self.c, "N s/m", allow_zero=True))
+        object.__setattr__(self, "c", positive("c", self.c, "N s/m", allow_zero=True))
 
 
 @dataclass(frozen=True)
@@ -180,8 +160,8 @@ class Controller:
             raise DataValidationError(
                 "controller", f"expected one of {CONTROLLERS}, got {self.kind!r}"
             )
-        _pos("c_sky", self.c_sky, "N s/m", allow_zero=True)
-        _pos("c_ground", self.c_ground, "N s/m", allow_zero=True)
+        positive("c_sky", self.c_sky, "N s/m", allow_zero=True)
+        positive("c_ground", self.c_ground, "N s/m", allow_zero=True)
         if not (0.0 <= float(self.alpha) <= 1.0):
             raise DataValidationError("alpha", f"expected 0 <= alpha <= 1, got {self.alpha!r}")
 
@@ -282,11 +262,11 @@ def bump_road(
     start : float
         Time at which the wheel reaches the bump [s].
     """
-    h = _pos("height", height, "m")
-    L = _pos("length", length, "m")
-    V = _pos("speed", speed, "m/s")
-    fs = _pos("fs", fs, "Hz")
-    n = round(_pos("duration", duration, "s") * fs) + 1
+    h = positive("height", height, "m")
+    L = positive("length", length, "m")
+    V = positive("speed", speed, "m/s")
+    fs = positive("fs", fs, "Hz")
+    n = round(positive("duration", duration, "s") * fs) + 1
     s = V * (np.arange(n) / fs - start)  # distance past the bump's start [m]
     z = np.where((s >= 0) & (s <= L), 0.5 * h * (1 - np.cos(2 * np.pi * np.clip(s, 0, L) / L)), 0.0)
     return Road(name=f"bump {100 * h:g} cm x {L:g} m @ {V:g} m/s", fs=float(fs), z=z)
@@ -401,57 +381,6 @@ class QuarterCarResult:
         return ax
 
 
-def _damper_arrays(model: Any) -> dict[str, Any]:
-    """The model as kernel arrays (static map or LPV); unsupported kinds raise TypeError."""
-    from mrdamper.models.protocols import scheduled_form
-
-    empty2 = np.zeros((1, 1))
-    out: dict[str, Any] = {
-        "is_lpv": False,
-        "comp": np.zeros(0, np.int64),
-        "power": np.zeros(0, np.int64),
-        "theta": np.zeros(0),
-        "f0": 0.0,
-        "alpha": empty2,
-        "beta": empty2,
-        "offset": 0.0,
-        "lag": -1.0,
-        "mode": 0,
-        "gm": np.zeros((3, 1)),
-        "gc": np.zeros((3, 1)),
-        "mu_high": np.zeros(2),
-        "mu_low": np.zeros(2),
-        "blend": 0.0,
-        "stroke": 0.0,
-    }
-    if isinstance(model, LinearDamper):
-        out.update(
-            comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c])
-        )
-        return out
-    form = scheduled_form(model)
-    if form is not None:
-        mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
-        blend, stroke = lpv_hysteresis(model)
-        out.update(
-            blend=blend,
-            stroke=stroke,
-            is_lpv=True,
-            alpha=form.alpha,
-            beta=form.beta,
-            offset=form.offset,
-            mode=mode,
-            gm=gm,
-            gc=gc,
-            mu_high=mu_h,
-            mu_low=mu_l,
-        )
-        return out
-    comp, power, theta, f0 = static_map_arrays(model)
-    out.update(comp=comp, power=power, theta=theta, f0=f0)
-    return out
-
-
 def simulate_quarter_car(
     model: Any,
     road: Road,
@@ -464,6 +393,7 @@ def simulate_quarter_car(
     i_range: tuple[float, float] | None = None,
     n_grid: int = 16,
     bound: float = 10.0,
+    substeps: int = 1,
 ) -> QuarterCarResult:
     """Drive the quarter car over ``road`` with ``model`` as its damper under ``controller``.
 
@@ -492,10 +422,14 @@ def simulate_quarter_car(
         Search grid of the inverse step.
     bound : float
         Divergence bound on every state [m, m/s].
+    substeps : int
+        Plant steps per road sample (the road is interpolated linearly in between; the control
+        sample is unchanged); 1: the plant step is the road's sampling interval.
 
     Returns
     -------
     QuarterCarResult
+        Signals at the plant rate ``road.fs * substeps``.
 
     Raises
     ------
@@ -511,122 +445,66 @@ def simulate_quarter_car(
         )
     if not isinstance(road, Road):
         raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
-    arrays = _damper_arrays(model)
-    lo, hi = (
-        model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
+    s = loop_setup(
+        model,
+        road,
+        ctrl,
+        car,
+        reg=reg,
+        v_ref=v_ref,
+        rate=rate,
+        i_range=i_range,
+        substeps=substeps,
     )
-    if not hi >= lo:
-        raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
-    if arrays["is_lpv"]:
-        ratio = road.fs / model.fs
-        n_sub = round(ratio)
-        if n_sub < 1 or abs(ratio - n_sub) > 1e-9 * ratio:
-            raise DataValidationError(
-                "road",
-                f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an "
-                "integer multiple",
-            )
-        if model.eta is not None:
-            arrays["lag"] = float(np.exp(-model.eta / model.fs))
-        n_h = horizon_samples(model.eta, 1.0 / model.fs)
-    else:
-        n_h = 1
-        n_sub = 1
-        if getattr(model, "eta", None) is not None:  # static map with a drive lag, at the road rate
-            arrays["lag"] = float(np.exp(-model.eta / road.fs))
-    h = 1.0 / road.fs
-    if isinstance(model, LinearDamper) or ctrl.kind in ("soft", "hard"):
-        lam = 0.0
-    elif reg is None:
-        lam = default_reg(model, _pos("v_ref", v_ref, "m/s"), h * n_sub) if hi > lo else 0.0
-    else:
-        lam = _pos("reg", reg, "N per input unit", allow_zero=True)
-    step_rate = np.inf if rate is None else _pos("rate", rate, "input unit/s") * h * n_sub
-    code = {
-        "soft": QK.CTRL_PASSIVE,
-        "hard": QK.CTRL_PASSIVE,
-        "skyhook": QK.CTRL_SKYHOOK,
-        "groundhook": QK.CTRL_GROUNDHOOK,
-        "hybrid": QK.CTRL_HYBRID,
-    }[ctrl.kind]
-    i_const = hi if ctrl.kind == "hard" else lo
-    mr = car.motion_ratio
-    # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the
-    # model
-    car_arr = np.array([car.m_s, car.m_u, car.k_s, car.k_t, car.c_t], dtype=np.float64)
-    gains = np.array([ctrl.c_sky / mr**2, ctrl.c_ground / mr**2, ctrl.alpha, i_const])
-    zr = np.ascontiguousarray(road.z, dtype=np.float64)
-    n_ctrl = (zr.size - 1) // n_sub
-    if n_ctrl < 2:
-        raise DataValidationError("road", f"too short: {zr.size} samples")
-    if mr != 1.0:
-        car_arr = np.array(
-            [car.m_s / mr**2, car.m_u / mr**2, car.k_s / mr**2, car.k_t / mr**2, car.c_t / mr**2]
-        )
-        zr = zr * mr
+    a = s.arrays
     X, F, Fd, rho, sat, bad = QK.simulate(
-        zr[: n_ctrl * n_sub + 1],
-        h,
-        n_sub,
-        car_arr,
-        arrays["is_lpv"],
-        arrays["comp"],
-        arrays["power"],
-        arrays["theta"],
-        arrays["f0"],
-        arrays["alpha"],
-        arrays["beta"],
-        arrays["offset"],
-        arrays["lag"],
-        arrays["mode"],
-        arrays["gm"],
-        arrays["gc"],
-        arrays["mu_high"],
-        arrays["mu_low"],
-        code,
-        gains,
-        lo,
-        hi,
-        lam,
-        step_rate,
+        s.zr,
+        s.h,
+        s.n_sub,
+        s.car_arr,
+        a["is_lpv"],
+        a["comp"],
+        a["power"],
+        a["theta"],
+        a["f0"],
+        a["alpha"],
+        a["beta"],
+        a["offset"],
+        a["lag"],
+        a["mode"],
+        a["gm"],
+        a["gc"],
+        a["mu_high"],
+        a["mu_low"],
+        s.code,
+        s.gains,
+        s.lo,
+        s.hi,
+        s.lam,
+        s.step_rate,
         int(n_grid),
-        float(bound) * mr,
-        n_h,
-        arrays["blend"],
-        arrays["stroke"],
+        float(bound) * s.mr,
+        s.n_h,
+        a["blend"],
+        a["stroke"],
     )
     if bad >= 0:
         raise SimulationDivergedError(
             getattr(model, "kind", "damper"),
             int(bad),
-            f"quarter-car state left +-{bound:g} at t = {bad * h:.4g} s",
+            f"quarter-car state left +-{bound:g} at t = {bad * s.h:.4g} s",
         )
-    if arrays["is_lpv"] and model.eta is not None:
-        cmd = driver_command(rho, model.eta, 1.0 / model.fs, (lo, hi))
-    elif getattr(model, "eta", None) is not None:
-        cmd = driver_command(rho, model.eta, h, (lo, hi))
-    else:
-        cmd = rho
-    n = n_ctrl * n_sub
-    rep = np.repeat
-    return QuarterCarResult(
-        road=road.name,
-        controller=ctrl.kind,
-        model_kind=getattr(model, "kind", "damper"),
-        fs=road.fs,
-        t=np.arange(n) * h,
-        z_r=road.z[:n].copy(),
-        z_s=X[:, 0] / mr,
-        v_s=X[:, 1] / mr,
-        z_u=X[:, 2] / mr,
-        v_u=X[:, 3] / mr,
-        a_s=X[:, 4] / mr,
-        F=rep(F, n_sub) * mr,
-        F_desired=rep(Fd, n_sub) * mr,
-        i=rep(cmd, n_sub),
-        saturated=rep(sat, n_sub),
-        car=car,
-    )
+    cmd = command_of(model, rho, s)
+    return loop_result(s, getattr(model, "kind", "damper"), X, F, Fd, cmd, sat)
+
+
+def command_of(model: Any, rho: np.ndarray, s: LoopSetup) -> np.ndarray:
+    """The electrical command that gives the scheduling values ``rho`` (through a drive lag)."""
+    if s.arrays["is_lpv"] and model.eta is not None:
+        return driver_command(rho, model.eta, 1.0 / model.fs, (s.lo, s.hi))
+    if getattr(model, "eta", None) is not None:
+        return driver_command(rho, model.eta, s.dt_c, (s.lo, s.hi))
+    return rho
 
 
 def car_table(car: QuarterCar) -> pd.DataFrame:

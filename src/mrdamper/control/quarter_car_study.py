@@ -1,6 +1,6 @@
 """Controller comparison on the quarter car: every controller on every road, one table, figures.
 
-:func:`compare_controllers` runs :func:`~mrdamper.control.quarter_car.simulate_quarter_car` for
+:func:`compare_controllers` runs :func:`~mrdamper.control.closed_loop.simulate_closed_loop` for
 each road (ISO 8608 classes at one speed, plus a bump) and each controller, and returns a
 :class:`ControllerComparison` with the metrics table (absolute values and ratios to the passive
 soft damper on the same road) and figures: time histories, the body-acceleration PSD (Welch) and
@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.quarter_car import (
     CONTROLLERS,
     Controller,
@@ -25,7 +26,6 @@ from mrdamper.control.quarter_car import (
     Road,
     bump_road,
     iso_road,
-    simulate_quarter_car,
 )
 from mrdamper.errors import DataValidationError
 
@@ -219,7 +219,7 @@ def compare_controllers(
     results = {}
     for road in roads:
         for c in ctrls:
-            results[(road.name, c.kind)] = simulate_quarter_car(model, road, c, car, **sim_kw)
+            results[(road.name, c.kind)] = simulate_closed_loop(model, road, c, car, **sim_kw)
     return ControllerComparison(
         results=results, roads=[r.name for r in roads], controllers=[c.kind for c in ctrls]
     )

@@ -31,6 +31,7 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
 from mrdamper.models import _scale
+from mrdamper.models.envelope import training_envelope
 from mrdamper.models.settings import (
     check_bool,
     check_choice,
@@ -545,6 +546,7 @@ class Estimator(abc.ABC):
         report("identifying")
         result = self._identify(prepared, **options)
         provenance = dict(result.provenance)
+        provenance.setdefault("envelope", training_envelope(prepared.records, prepared.electrical))
         if segments:
             provenance["segments"] = segments
         if prepared.level is not None:

@@ -1,0 +1,94 @@
+"""Closed-loop fidelity benchmark: each model kind's predicted loop metrics against the true damper.
+
+For each reference damper of the virtual rig, the Table II design of experiments is generated on
+it, every model kind is identified with defaults on it, and
+:func:`mrdamper.control.fidelity.closed_loop_fidelity` runs the five controllers on ISO 8608
+roads at two speeds with the model as the damper (predicted) and with the reference damper as the
+damper (achieved), same controller and inverse. A kind that cannot be fitted, stepped or inverted
+keeps a row with its one-line reason. Writes ``OUT/closed_loop_<damper>.csv`` (all rows),
+``OUT/closed_loop_runs_<damper>.csv`` and prints the worst |error| [%] per kind and metric.
+
+Run (the full benchmark takes hours on one core; ``--scale`` shortens the DoE records,
+``--duration`` the roads)::
+
+    PYTHONPATH=src python3 benchmarks/closed_loop.py --out bench-cl
+    PYTHONPATH=src python3 benchmarks/closed_loop.py --out bench-cl --scale 0.1 --duration 6 \\
+        --kinds sp1,spencer --roads C --speeds 20
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+
+import pandas as pd
+
+from mrdamper.control.fidelity import closed_loop_fidelity
+from mrdamper.models.registry import get_estimator, known_kinds
+from mrdamper.rig.doe import table_ii
+from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--dampers", default=",".join(REFERENCE_DAMPERS))
+    ap.add_argument("--kinds", default=",".join(known_kinds()))
+    ap.add_argument("--roads", default="B,C,D")
+    ap.add_argument("--speeds", default="10,25")
+    ap.add_argument("--controllers", default="soft,hard,skyhook,groundhook,hybrid")
+    ap.add_argument("--scale", type=float, default=1.0, help="DoE duration factor [-]")
+    ap.add_argument("--duration", type=float, default=20.0, help="road length [s]")
+    a = ap.parse_args()
+    a.out.mkdir(parents=True, exist_ok=True)
+    speeds = [float(s) for s in a.speeds.split(",")]
+    for name in a.dampers.split(","):
+        truth = reference_damper(name)
+        t0 = time.perf_counter()
+        doe = table_ii(seed=0, scale=a.scale, damper=truth)
+        print(f"{name}: DoE {time.perf_counter() - t0:.0f} s")
+        tables, runs, failed = [], [], []
+        for kind in a.kinds.split(","):
+            t0 = time.perf_counter()
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    model = get_estimator(kind, input=truth.input).fit(doe)
+                    res = closed_loop_fidelity(
+                        model,
+                        truth,
+                        road_classes=a.roads.split(","),
+                        speeds=speeds,
+                        controllers=a.controllers.split(","),
+                        duration=a.duration,
+                    )
+            except Exception as exc:  # noqa: BLE001 - a failing kind keeps its row and reason
+                failed.append({"kind": kind, "reason": f"{type(exc).__name__}: {exc}"})
+                print(f"{name} {kind}: {failed[-1]['reason']}")
+                continue
+            tables.append(res.table().assign(kind=kind))
+            runs.append(res.runs_frame().assign(kind=kind))
+            for note in res.notes[:3]:
+                print(f"{name} {kind}: warning: {note}")
+            print(f"{name} {kind}: {time.perf_counter() - t0:.0f} s")
+        if not tables:
+            continue
+        table = pd.concat(tables, ignore_index=True)
+        table.to_csv(a.out / f"closed_loop_{name}.csv", index=False, float_format="%.6g")
+        pd.concat(runs, ignore_index=True).to_csv(
+            a.out / f"closed_loop_runs_{name}.csv", index=False, float_format="%.6g"
+        )
+        pd.DataFrame(failed).to_csv(a.out / f"closed_loop_failed_{name}.csv", index=False)
+        worst = (
+            table.assign(abs_err=table["error_pct"].abs())
+            .pivot_table(index="kind", columns="metric", values="abs_err", aggfunc="max")
+            .round(1)
+        )
+        print(f"\n{name}: worst |predicted - achieved| / achieved [%] over controllers and roads")
+        print(worst.to_string())
+
+
+if __name__ == "__main__":
+    main()

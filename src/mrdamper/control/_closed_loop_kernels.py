@@ -1,0 +1,302 @@
+"""Compiled quarter car with any damper as the plant, through its per-sample step (private).
+
+See :mod:`mrdamper.control.closed_loop` for the choices. The kernel takes the plant's (and, for a
+controller that steps its model, the controller model's) compiled ``force`` / ``advance``
+functions as arguments (numba first-class dispatchers): it is compiled once per combination of
+families and process, not cached on disk. The car equations are
+:func:`~mrdamper.control._quarter_car_kernels._deriv`; the controller and inverse of a static map
+or LPV model are :func:`~mrdamper.control._quarter_car_kernels.control_sample`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from mrdamper.control._quarter_car_kernels import CTRL_PASSIVE, _deriv, _desired, control_sample
+
+__all__ = ["run_loop", "step_inverse"]
+
+
+@njit(cache=False)
+def _lead_force(
+    force, advance, form, state, scratch, x, v, e, dt, n_lead, offset
+):  # pragma: no cover - numba
+    """Mean model force (rest force removed) over ``n_lead`` samples of ``dt`` ahead, with the
+    input ``e`` and the damper velocity ``v`` held (NaN when the step fails)."""
+    scratch[:] = state
+    acc = 0.0
+    xa = x
+    for _ in range(n_lead):
+        xb = xa + v * dt
+        if advance(form, scratch, xa, v, e, xb, v, e, dt) != 0:
+            return np.nan
+        acc += force(form, scratch, xb, v, e) - offset
+        xa = xb
+    return acc / n_lead
+
+
+@njit(cache=False)
+def step_inverse(
+    force, advance, form, state, scratch, x, v, dt, n_lead, offset, target, a, b, prev, lam2, n_pts
+):  # pragma: no cover - numba
+    """Regularised inverse of a model through its step, one control sample.
+
+    The lead force ``G(e)``, the mean model force over ``n_lead`` samples of ``dt`` ahead of the
+    present ``state`` with ``e`` and the damper velocity held (:func:`_lead_force`), is taken at
+    ``n_pts + 1`` inputs evenly over ``[a, b]`` and interpolated linearly in between;
+    ``(G(e) - target)^2 + lam2 (e - prev)^2`` is then minimised exactly on every piece.
+
+    Returns
+    -------
+    e : float
+        The input.
+    err : float
+        ``|G(e) - target|`` of the interpolant [N].
+    """
+    if not b > a:
+        return a, abs(
+            _lead_force(force, advance, form, state, scratch, x, v, a, dt, n_lead, offset) - target
+        )
+    best, jbest, gbest = a, np.inf, 0.0
+    e0 = a
+    g0 = _lead_force(force, advance, form, state, scratch, x, v, e0, dt, n_lead, offset)
+    for i in range(1, n_pts + 1):
+        e1 = a + (b - a) * i / n_pts
+        g1 = _lead_force(force, advance, form, state, scratch, x, v, e1, dt, n_lead, offset)
+        sl = (g1 - g0) / (e1 - e0)
+        den = sl * sl + lam2
+        e = e0 if den == 0.0 else (sl * (target - g0) + sl * sl * e0 + lam2 * prev) / den
+        e = min(max(e, e0), e1)
+        for c in (e0, e, e1):
+            g = g0 + sl * (c - e0)
+            j = (g - target) ** 2 + lam2 * (c - prev) ** 2
+            if j < jbest:
+                best, jbest, gbest = c, j, g
+        e0, g0 = e1, g1
+    return best, abs(gbest - target)
+
+
+@njit(cache=False)
+def run_loop(
+    zr,
+    h,
+    n_sub,
+    car,
+    ctrl,
+    gains,
+    lo,
+    hi,
+    lam,
+    rate_step,
+    n_grid,
+    bound,
+    inv,
+    c_step,
+    c_force,
+    c_advance,
+    c_form,
+    c_state,
+    c_offset,
+    n_lead,
+    p_force,
+    p_advance,
+    p_form,
+    p_state,
+    p_offset,
+    p_every,
+):  # pragma: no cover - numba
+    """Run the quarter car with a plant stepped through ``p_force`` / ``p_advance``.
+
+    Parameters
+    ----------
+    zr : float64[:]
+        Road at the plant rate [m], ``n_ctrl * n_sub + 1`` samples; ``h`` the plant step [s].
+    car, ctrl, gains, lo, hi, rate_step, n_grid, bound
+        As :func:`~mrdamper.control._quarter_car_kernels.simulate`; ``lam`` the regularisation
+        weight [N per input unit].
+    inv : tuple
+        The controller model's inverse arrays ``(is_lpv, comp, power, theta, f0, alpha, beta,
+        offset, lag, mode, gm, gc, mu_high, mu_low, horizon, blend, stroke)`` (ignored when
+        ``c_step``).
+    c_step : bool
+        The controller steps its model (``c_force``, ``c_advance``, ``c_form``, state ``c_state``,
+        force at rest ``c_offset`` [N]) as an observer driven by the measured damper motion and
+        the applied input, and inverts it over ``n_lead`` control samples (:func:`step_inverse`).
+    p_force, p_advance, p_form, p_state, p_offset
+        The plant's step, state (from rest, updated in place) and force at rest [N].
+    p_every : int
+        0: continuous-time plant, its force evaluated at every Runge-Kutta stage with its state
+        held and its state advanced over every plant step; ``m > 0``: discrete-time plant of
+        sample ``m h``, its force taken at its sample instants and held.
+
+    Returns
+    -------
+    X : float64[:, :]
+        ``z_s, v_s, z_u, v_u, a_s`` at the start of every plant step.
+    F : float64[:]
+        Plant force (rest force removed) at the start of every plant step [N].
+    Fd, E : float64[:]
+        Per control sample: desired force [N] (NaN when passive) and applied input.
+    sat : bool[:]
+        Desired force out of reach (per the controller's model).
+    bad, status : int
+        First failing plant step (-1) and the failure (0 ok, -1 car state beyond ``bound``, else
+        the plant's ``advance`` status).
+    """
+    m_s, m_u, k_s, k_t, c_t = car[0], car[1], car[2], car[3], car[4]
+    (is_lpv, comp, power, theta, f0, alpha, beta, offset) = inv[:8]
+    (lag, mode, gm, gc, mu_high, mu_low, horizon, blend, stroke) = inv[8:]
+    i_const = gains[3]
+    n_ctrl = (zr.size - 1) // n_sub
+    n = n_ctrl * n_sub
+    X = np.zeros((n, 5))
+    F = np.zeros(n)
+    Fd = np.zeros(n_ctrl)
+    E = np.zeros(n_ctrl)
+    rho = np.zeros(n_ctrl)
+    sat = np.zeros(n_ctrl, dtype=np.bool_)
+    y = np.zeros(n_ctrl)
+    u = np.zeros(n_ctrl)
+    cf = np.zeros(alpha.shape[1])
+    yb = np.zeros(alpha.shape[0])
+    ub = np.zeros(alpha.shape[0])
+    scratch = c_state.copy()
+    st = np.zeros(4)
+    tmp = np.zeros(4)
+    kk = np.zeros((4, 4))
+    lam2 = lam * lam
+    prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
+    mem = np.array([prev, prev, 0.0, 0.0])
+    dt_c = n_sub * h
+    e = prev
+    xc, vc = 0.0, 0.0  # damper motion at the previous control sample
+    Fh, xs, vs_, es = 0.0, 0.0, 0.0, 0.0
+    for k in range(n_ctrl):
+        x_d = st[0] - st[2]
+        v_d = st[1] - st[3]
+        if c_step:
+            if k >= 1 and c_advance(c_form, c_state, xc, vc, e, x_d, v_d, e, dt_c) != 0:
+                return X, F, Fd, E, sat, k * n_sub, -2
+            a, b = lo, hi
+            if k >= 1:
+                a = max(a, prev - rate_step)
+                b = min(b, prev + rate_step)
+                if b < a:
+                    a = b = min(max(prev, a), b)
+            if ctrl == CTRL_PASSIVE:
+                target = np.nan
+                r = min(max(i_const, a), b)
+                ok = True
+            else:
+                target = _desired(ctrl, st[1], st[3], gains[0], gains[1], gains[2])
+                r, err = step_inverse(
+                    c_force,
+                    c_advance,
+                    c_form,
+                    c_state,
+                    scratch,
+                    x_d,
+                    v_d,
+                    dt_c,
+                    n_lead,
+                    c_offset,
+                    target,
+                    a,
+                    b,
+                    prev,
+                    lam2,
+                    4,
+                )
+                ok = err <= 0.05 * abs(target) + 1.0
+            prev = r
+            e = r
+        else:
+            r, ok, target, _ = control_sample(
+                k,
+                st[0],
+                st[1],
+                st[2],
+                st[3],
+                dt_c,
+                ctrl,
+                gains,
+                lo,
+                hi,
+                lam2,
+                rate_step,
+                n_grid,
+                is_lpv,
+                comp,
+                power,
+                theta,
+                f0,
+                alpha,
+                beta,
+                offset,
+                lag,
+                mode,
+                gm,
+                gc,
+                mu_high,
+                mu_low,
+                horizon,
+                blend,
+                stroke,
+                y,
+                u,
+                cf,
+                yb,
+                ub,
+                rho,
+                mem,
+            )
+            e = mem[1] if lag >= 0.0 else r  # the command (through a drive lag: its inverse)
+        xc, vc = x_d, v_d
+        Fd[k] = target
+        E[k] = e
+        sat[k] = not ok
+        # --- plant over the control sample
+        for s in range(n_sub):
+            j = k * n_sub + s
+            z0, z1 = zr[j], zr[j + 1]
+            vr = (z1 - z0) / h
+            zm = 0.5 * (z0 + z1)
+            x0 = st[0] - st[2]
+            v0 = st[1] - st[3]
+            if p_every > 0 and j % p_every == 0:
+                Fh = p_force(p_form, p_state, x0, v0, e) - p_offset
+                xs, vs_, es = x0, v0, e
+            for q in range(4):
+                tmp[q] = st[q]
+            for g in range(4):
+                if g > 0:
+                    c = h if g == 3 else 0.5 * h
+                    for q in range(4):
+                        tmp[q] = st[q] + c * kk[g - 1, q]
+                if p_every == 0:
+                    Fh = p_force(p_form, p_state, tmp[0] - tmp[2], tmp[1] - tmp[3], e) - p_offset
+                zg = z0 if g == 0 else (z1 if g == 3 else zm)
+                _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zg, vr, Fh, m_s, m_u, k_s, k_t, c_t, kk[g])
+                if g == 0:
+                    X[j, 0] = st[0]
+                    X[j, 1] = st[1]
+                    X[j, 2] = st[2]
+                    X[j, 3] = st[3]
+                    X[j, 4] = kk[0, 1]
+                    F[j] = Fh
+            for q in range(4):
+                st[q] += h / 6.0 * (kk[0, q] + 2.0 * kk[1, q] + 2.0 * kk[2, q] + kk[3, q])
+                if not (abs(st[q]) <= bound):
+                    return X, F, Fd, E, sat, j, -1
+            x1 = st[0] - st[2]
+            v1 = st[1] - st[3]
+            if p_every == 0:
+                status = p_advance(p_form, p_state, x0, v0, e, x1, v1, e, h)
+            elif (j + 1) % p_every == 0:
+                status = p_advance(p_form, p_state, xs, vs_, es, x1, v1, e, p_every * h)
+            else:
+                status = 0
+            if status != 0:
+                return X, F, Fd, E, sat, j, status
+    return X, F, Fd, E, sat, -1, 0

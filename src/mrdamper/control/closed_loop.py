@@ -1,0 +1,353 @@
+"""Any damper in the quarter-car loop: a controller built on one model, the car on another damper.
+
+:func:`simulate_closed_loop` drives the quarter car (:mod:`mrdamper.control.quarter_car`) with
+the controller and inverse of ``model`` and ``plant`` as the damper, through the plant's
+per-sample step (:meth:`~mrdamper.models.base.FittedModel.step`), so any model kind (Spencer,
+P-15, NARX, LTI, the rig's reference damper) can be the damper. Without a plant (or with the model
+itself as plant) a static map or LPV model runs in the fused kernel of the quarter car (the same
+numbers as :func:`~mrdamper.control.quarter_car.simulate_quarter_car`).
+
+Numerics of the generic loop (:mod:`mrdamper.control._closed_loop_kernels`):
+
+* the car is integrated by RK4 at the plant step ``h`` (``substeps`` per road sample, the road
+  linear in between);
+* a continuous-time plant (static maps, Spencer, P-15: ``Step.dt`` None) gives its force at
+  *every Runge-Kutta stage*, from the stage's damper motion with the plant state held at its value
+  at the step start, and its state is then advanced over ``h`` with the motion at both ends.
+  Evaluating at every stage keeps the plant's direct dependence on the motion (the viscous and
+  stiffness parts of a Bouc-Wen force, the whole of a static map) inside the car's RK4 as it is
+  in the fused kernel (a static map as plant then gives the fused kernel's numbers); only the
+  internal state lags by at most one step, which the halving check bounds;
+* a discrete-time plant (LPV, LTI, NARX: ``Step.dt`` set) runs at its own sample time (an integer
+  number of plant steps), its force taken at its sample instants and held in between;
+* the controller runs at the control sample (the road's sampling interval, or an LPV model's
+  sample time) and its input is held in between (zero-order hold). A static map or LPV model is
+  inverted by the quarter car's own inverse
+  (:func:`~mrdamper.control._quarter_car_kernels.control_sample`: the model runs as an observer
+  of the measured damper motion); with a drive lag the command is the lag's inverse of the chosen
+  ``rho`` and reaches the plant one control sample later than the model assumes. A model with a
+  continuous-time step and no inverse form (Spencer, P-15) is stepped as an observer of the
+  measured motion and the applied input and inverted over a lead of ``n_lead`` control samples
+  (the 63 % rise time of its force after an input step, measured on the step):
+  :func:`~mrdamper.control._closed_loop_kernels.step_inverse`. Discrete-time models without an
+  inverse form (LTI, NARX) drive passive controllers only.
+
+:mod:`mrdamper.control.fidelity` compares predicted (model as damper) and achieved (plant as
+damper) metrics and checks the numerics.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mrdamper.control import _closed_loop_kernels as CK
+from mrdamper.control._loop import LoopSetup, damper_arrays, loop_result, loop_setup, positive
+from mrdamper.control.inverse import model_input_limits
+from mrdamper.control.quarter_car import (
+    CONTROLLERS,
+    Controller,
+    LinearDamper,
+    QuarterCar,
+    QuarterCarResult,
+    Road,
+    simulate_quarter_car,
+)
+from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models.protocols import InvertibleModel
+from mrdamper.models.step import Step, run_step
+
+__all__ = ["StepControl", "plant_step", "resolve_plant", "simulate_closed_loop", "step_control"]
+
+
+def resolve_plant(spec: Any) -> Any:
+    """The damper a ``--plant`` names.
+
+    Parameters
+    ----------
+    spec : str, path or model
+        ``"rig"`` (the virtual rig's default reference damper), ``"rig:NAME"`` (a shipped
+        reference damper), the path of a saved model file, or a model (returned as is).
+    """
+    from pathlib import Path
+
+    from mrdamper.models.registry import load_model
+    from mrdamper.rig.reference import DEFAULT_REFERENCE, reference_damper
+
+    if not isinstance(spec, (str, Path)):
+        return spec
+    text = str(spec)
+    if text == "rig":
+        return reference_damper(DEFAULT_REFERENCE)
+    if text.startswith("rig:"):
+        return reference_damper(text[4:])
+    path = Path(text)
+    if not path.is_file():
+        raise DataValidationError(
+            "--plant", f"expected 'rig', 'rig:NAME' or a model file, got {text!r} (no such file)"
+        )
+    return load_model(path)
+
+
+def plant_step(model: Any, h: float) -> Step:
+    """The per-sample step of ``model`` for a plant step ``h`` [s] (one-line error if none)."""
+    if isinstance(model, LinearDamper):
+        raise DataValidationError("plant", "a LinearDamper has no per-sample step")
+    method = getattr(model, "step", None)
+    if method is None:
+        raise DataValidationError(
+            "plant", f"{type(model).__name__} is not a damper model (no per-sample step)"
+        )
+    params = inspect.signature(method).parameters
+    step: Step = method(dt=h) if "dt" in params else method()
+    return step
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """A controller that steps its model (see the module docstring).
+
+    Attributes
+    ----------
+    step : Step
+        The model's step.
+    n_lead : int
+        Lead of the inverse [control samples].
+    authority : float
+        Steady force range per input unit at the reference velocity [N per input unit].
+    """
+
+    step: Step
+    n_lead: int
+    authority: float
+
+
+def step_control(model: Any, dt_c: float, v_ref: float = 0.3) -> StepControl:
+    """Measure, on the model's step, the lead and authority of its inverse at control sample
+    ``dt_c`` [s]: the force at a steady velocity ``v_ref`` [m/s] with the input held at its low
+    end, and after a step to its high end; the lead is the 63 % rise time of the difference.
+    """
+    step = plant_step(model, dt_c / 10.0)
+    lo, hi = model_input_limits(model)
+    dt = dt_c / 10.0
+    n = round(0.3 / dt) + 1
+    t = np.arange(n) * dt
+    v = np.full(n, float(v_ref))
+    x = v * t - 0.5 * v_ref * t[-1]
+    k0 = n // 3
+    e_lo = np.full(n, lo)
+    e_st = e_lo.copy()
+    e_st[k0:] = hi
+    F_lo, s1, _ = run_step(step, x, v, e_lo, dt)
+    F_st, s2, _ = run_step(step, x, v, e_st, dt)
+    if s1 or s2:
+        raise DataValidationError("MODEL", f"kind {model.kind!r}: its step fails at {v_ref} m/s")
+    d = F_st[k0:] - F_lo[k0:]
+    auth = abs(d[-1]) / (hi - lo) if hi > lo else 0.0
+    reached = np.nonzero(np.abs(d) >= 0.632 * abs(d[-1]))[0]
+    t63 = (reached[0] if reached.size else d.size) * dt
+    return StepControl(step, max(1, round(t63 / dt_c)), float(auth))
+
+
+def _controller(controller: Controller | str) -> Controller:
+    ctrl = Controller(controller) if isinstance(controller, str) else controller
+    if not isinstance(ctrl, Controller):
+        raise DataValidationError(
+            "controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}"
+        )
+    return ctrl
+
+
+def check_pair(model: Any, plant: Any) -> None:
+    """Refuse a plant whose electrical input is another channel than the model's (one line)."""
+    mi, pi = getattr(model, "input", None), getattr(plant, "input", None)
+    if mi != pi:
+        units = {"i": "coil current [A]", "voltage": "command voltage [V]"}
+        raise DataValidationError(
+            "plant",
+            f"the {getattr(plant, 'kind', '?')} plant is driven by {units.get(str(pi), pi)}, the "
+            f"{getattr(model, 'kind', '?')} model by {units.get(str(mi), mi)}: not the same input",
+        )
+
+
+def simulate_closed_loop(
+    model: Any,
+    road: Road,
+    controller: Controller | str = "soft",
+    car: QuarterCar | None = None,
+    *,
+    plant: Any = None,
+    substeps: int = 1,
+    reg: float | None = None,
+    v_ref: float = 0.3,
+    rate: float | None = None,
+    i_range: tuple[float, float] | None = None,
+    n_grid: int = 16,
+    bound: float = 10.0,
+) -> QuarterCarResult:
+    """Drive the quarter car with ``model``'s controller and ``plant`` as the damper.
+
+    Parameters
+    ----------
+    model : FittedModel
+        The controller's model (its inverse). Semi-active controllers need a static map, an LPV
+        model or a model with a continuous-time step; passive ones take any model.
+    road : Road
+        Road (its rate sets the control sample, or an LPV model's rate does).
+    controller : Controller or str
+        Controller.
+    car : QuarterCar, optional
+        Car (default :class:`QuarterCar()`).
+    plant : FittedModel or str, optional
+        The damper (see :func:`resolve_plant`); default ``model`` itself.
+    substeps : int
+        Plant steps per road sample.
+    reg, v_ref, rate, i_range, n_grid, bound
+        As :func:`~mrdamper.control.quarter_car.simulate_quarter_car`.
+
+    Returns
+    -------
+    QuarterCarResult
+        ``F`` is the plant's force (rest force removed) at every plant step, ``i`` the applied
+        input.
+    """
+    car = QuarterCar() if car is None else car
+    ctrl = _controller(controller)
+    if not isinstance(road, Road):
+        raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
+    plant = model if plant is None else resolve_plant(plant)
+    invertible = isinstance(model, (InvertibleModel, LinearDamper))
+    if plant is model and invertible:
+        return simulate_quarter_car(
+            model,
+            road,
+            ctrl,
+            car,
+            reg=reg,
+            v_ref=v_ref,
+            rate=rate,
+            i_range=i_range,
+            n_grid=n_grid,
+            bound=bound,
+            substeps=substeps,
+        )
+    check_pair(model, plant)
+    passive = ctrl.kind in ("soft", "hard")
+    sc: StepControl | None = None
+    arrays = None
+    if not invertible:
+        arrays = damper_arrays(None)
+        if not passive:
+            sc = _step_control_of(model, 1.0 / road.fs, v_ref)
+    s = loop_setup(
+        model,
+        road,
+        ctrl,
+        car,
+        reg=reg,
+        v_ref=v_ref,
+        rate=rate,
+        i_range=i_range,
+        substeps=substeps,
+        arrays=arrays,
+        authority=None if sc is None else sc.authority,
+    )
+    return _run(model, plant, s, sc, n_grid, bound)
+
+
+def _step_control_of(model: Any, dt_c: float, v_ref: float) -> StepControl:
+    try:
+        step = model.step()
+    except DataValidationError:
+        step = None
+    if step is None or step.dt is not None:
+        why = "no per-sample step" if step is None else "a discrete-time step without an inverse"
+        raise DataValidationError(
+            "MODEL",
+            f"kind {model.kind!r} has no inverse ({why}): semi-active controllers need a static "
+            "map, an LPV model or a continuous-time model (spencer, p15); passive soft/hard work",
+        )
+    return step_control(model, dt_c, positive("v_ref", v_ref, "m/s"))
+
+
+def _run(
+    model: Any, plant: Any, s: LoopSetup, sc: StepControl | None, n_grid: int, bound: float
+) -> QuarterCarResult:
+    pstep = plant_step(plant, s.h)
+    p_every = 0
+    if pstep.dt is not None:
+        ratio = pstep.dt / s.h
+        p_every = round(ratio)
+        if p_every < 1 or abs(ratio - p_every) > 1e-9 * ratio:
+            raise DataValidationError(
+                "plant",
+                f"the {plant.kind} plant runs at {1.0 / pstep.dt:g} Hz; the plant step "
+                f"{s.h:g} s must divide its sample time {pstep.dt:g} s",
+            )
+    e0 = float(s.gains[3]) if s.ctrl.kind in ("soft", "hard") else s.lo
+    p_state = pstep.initial_state(0.0, 0.0, e0)
+    p_offset = float(pstep.force(pstep.form, p_state, 0.0, 0.0, e0))
+    if sc is None:  # unused by the kernel: the plant's step stands in for the controller's
+        c, c_state, c_offset, n_lead = pstep, p_state.copy(), 0.0, 1
+    else:
+        c = sc.step
+        c_state = c.initial_state(0.0, 0.0, s.lo)
+        c_offset = float(c.force(c.form, c_state, 0.0, 0.0, s.lo))
+        n_lead = sc.n_lead
+    a = s.arrays
+    inv = (
+        bool(a["is_lpv"]),
+        a["comp"],
+        a["power"],
+        a["theta"],
+        float(a["f0"]),
+        a["alpha"],
+        a["beta"],
+        float(a["offset"]),
+        float(a["lag"]),
+        int(a["mode"]),
+        a["gm"],
+        a["gc"],
+        a["mu_high"],
+        a["mu_low"],
+        int(s.n_h),
+        float(a["blend"]),
+        float(a["stroke"]),
+    )
+    X, F, Fd, E, sat, bad, status = CK.run_loop(
+        s.zr,
+        s.h,
+        s.n_sub,
+        s.car_arr,
+        s.code,
+        s.gains,
+        s.lo,
+        s.hi,
+        s.lam,
+        s.step_rate,
+        int(n_grid),
+        float(bound) * s.mr,
+        inv,
+        sc is not None,
+        c.force,
+        c.advance,
+        c.form,
+        c_state,
+        c_offset,
+        int(n_lead),
+        pstep.force,
+        pstep.advance,
+        pstep.form,
+        p_state,
+        p_offset,
+        p_every,
+    )
+    if bad >= 0:
+        what = {-1: f"a car state left +-{bound:g}", -2: "the controller's model failed"}.get(
+            int(status), f"the {plant.kind} plant's step failed (status {int(status)})"
+        )
+        raise SimulationDivergedError(plant.kind, int(bad), f"{what} at t = {bad * s.h:.4g} s")
+    return loop_result(s, plant.kind, X, F, Fd, E, sat)

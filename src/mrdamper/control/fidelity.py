@@ -1,0 +1,313 @@
+"""Closed-loop fidelity: what a model predicts in the loop against what the damper achieves.
+
+:func:`closed_loop_fidelity` runs every controller on every ISO 8608 road and speed twice with the
+controller and inverse of ``model``: *predicted*, with the model itself as the damper, and
+*achieved*, with ``plant`` as the damper (:func:`~mrdamper.control.closed_loop.
+simulate_closed_loop`), and tabulates :data:`METRICS` for both with
+``error_pct = 100 (predicted - achieved) / achieved``.
+
+Every run is checked (:func:`checked_run`): the plant step is halved and the run repeated; when a
+metric moves by more than ``tol`` (0.5 %) the step is halved again, up to ``max_substeps`` plant
+steps per road sample, beyond which the run is refused with the figure. Each run also reports
+the share of its body-acceleration power above the wheel-hop band (:func:`oscillation`; a
+sampled-loop oscillation concentrates it there) and, from the envelope the model carries
+(:mod:`mrdamper.models.envelope`), how far the loop's motion leaves the model's training data.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from mrdamper.control.closed_loop import check_pair, resolve_plant, simulate_closed_loop
+from mrdamper.control.quarter_car import (
+    CONTROLLERS,
+    Controller,
+    QuarterCar,
+    QuarterCarResult,
+    iso_road,
+)
+from mrdamper.control.quarter_car_study import default_rate
+from mrdamper.errors import DataValidationError, MrDamperError
+from mrdamper.models.envelope import envelope_of, excursions
+
+__all__ = [
+    "METRICS",
+    "FidelityResult",
+    "checked_run",
+    "closed_loop_fidelity",
+    "loop_metrics",
+    "oscillation",
+]
+
+#: Metric name -> unit (``mean_current`` is in the model's input unit: [A], or [V]).
+METRICS: dict[str, str] = {
+    "rms_acc": "m/s²",
+    "a_w": "m/s²",
+    "rms_tyre_load": "N",
+    "rms_travel": "m",
+    "rms_tracking": "N",
+    "mean_current": "A",
+}
+
+#: Smallest magnitude a metric is compared against in the halving check (below it, absolute).
+_FLOOR = {
+    "rms_acc": 1e-3,
+    "a_w": 1e-3,
+    "rms_tyre_load": 1.0,
+    "rms_travel": 1e-5,
+    "rms_tracking": 1.0,
+    "mean_current": 1e-2,
+}
+
+#: Acceleration power above this multiple of the wheel-hop frequency counts as high-frequency.
+HF_FACTOR = 1.5
+#: A run whose high-frequency share exceeds this is reported as a sampled-loop oscillation.
+HF_SHARE = 0.5
+
+
+def loop_metrics(r: QuarterCarResult) -> dict[str, float]:
+    """:data:`METRICS` of one run (``rms_tracking`` NaN for a passive controller)."""
+    m = r.metrics()
+    track = r.F - r.F_desired
+    ok = np.isfinite(track)
+    return {
+        "rms_acc": m["rms_acc"],
+        "a_w": m["rms_acc_wk"],
+        "rms_tyre_load": m["rms_tyre_load"],
+        "rms_travel": m["rms_travel"],
+        "rms_tracking": float(np.sqrt(np.mean(track[ok] ** 2))) if ok.any() else float("nan"),
+        "mean_current": float(np.mean(r.i)),
+    }
+
+
+def oscillation(r: QuarterCarResult) -> tuple[float, float]:
+    """Share of the body-acceleration power above ``HF_FACTOR`` times the wheel-hop frequency
+    [-] and the frequency of the largest peak there [Hz] (Welch PSD, 1 s segments)."""
+    from scipy.signal import welch
+
+    f, p = welch(r.a_s, fs=r.fs, nperseg=min(r.a_s.size, int(r.fs)))
+    total = float(np.sum(p))
+    hf = f > HF_FACTOR * r.car.wheel_hop_frequency()
+    if total <= 0 or not hf.any():
+        return 0.0, float("nan")
+    return float(np.sum(p[hf]) / total), float(f[hf][np.argmax(p[hf])])
+
+
+def checked_run(
+    run: Callable[[int], QuarterCarResult], *, tol: float = 0.005, max_substeps: int = 16
+) -> tuple[QuarterCarResult, int, float]:
+    """Run with 1, 2, 4, ... plant steps per road sample until halving the step moves no metric
+    by more than ``tol`` (relative).
+
+    Returns
+    -------
+    result : QuarterCarResult
+        The run at the accepted step.
+    substeps : int
+        Plant steps per road sample of that run.
+    change : float
+        Largest relative change of a metric when its step is halved [-].
+
+    Raises
+    ------
+    MrDamperError
+        Not converged at ``max_substeps`` (the message gives the figure).
+    """
+    s = 1
+    a = run(s)
+    ma = loop_metrics(a)
+    while True:
+        b = run(2 * s)
+        mb = loop_metrics(b)
+        change = max(
+            abs(ma[k] - mb[k]) / max(abs(mb[k]), _FLOOR[k]) for k in ma if np.isfinite(mb[k])
+        )
+        if change <= tol:
+            return a, s, change
+        if 2 * s >= max_substeps:
+            raise MrDamperError(
+                f"substeps: the plant step is not converged: halving it at {2 * s} steps per "
+                f"road sample still moves a metric by {100 * change:.2g} % (> {100 * tol:g} %)"
+            )
+        s, a, ma = 2 * s, b, mb
+
+
+@dataclass(frozen=True, eq=False)
+class FidelityResult:
+    """Predicted against achieved metrics.
+
+    Attributes
+    ----------
+    model_kind, plant_kind : str
+    rows : list of dict
+        One per controller x road x speed x metric (:meth:`table`).
+    runs : list of dict
+        One per controller x road x speed x side: substeps, halving change, high-frequency share
+        and peak, envelope excursions.
+    notes : list of str
+        One-line warnings (sampled-loop oscillation, envelope left).
+    """
+
+    model_kind: str
+    plant_kind: str
+    input_unit: str
+    rows: list[dict[str, Any]]
+    runs: list[dict[str, Any]]
+    notes: list[str] = field(default_factory=list)
+
+    def table(self) -> pd.DataFrame:
+        """Columns ``controller, road, speed_m_s, metric, predicted, achieved, error_pct``."""
+        return pd.DataFrame(
+            self.rows,
+            columns=[
+                "controller",
+                "road",
+                "speed_m_s",
+                "metric",
+                "predicted",
+                "achieved",
+                "error_pct",
+            ],
+        )
+
+    def runs_frame(self) -> pd.DataFrame:
+        """The per-run diagnostics."""
+        return pd.DataFrame(self.runs)
+
+    def unit(self, metric: str) -> str:
+        """Unit of ``metric``."""
+        return self.input_unit if metric == "mean_current" else METRICS[metric]
+
+
+def _envelope_note(model: Any, r: QuarterCarResult) -> dict[str, float] | None:
+    trained = dict(getattr(model, "provenance", {}) or {}).get("envelope")
+    if not trained:
+        return None
+    x = r.travel * r.car.motion_ratio
+    v = (r.v_s - r.v_u) * r.car.motion_ratio
+    return excursions(trained, envelope_of([x], [v], [r.i]))
+
+
+def closed_loop_fidelity(
+    model: Any,
+    plant: Any,
+    *,
+    road_classes: Sequence[str] = ("C",),
+    speeds: Sequence[float] = (20.0,),
+    controllers: Sequence[Controller | str] = CONTROLLERS,
+    duration: float = 20.0,
+    seed: int = 0,
+    car: QuarterCar | None = None,
+    reg: float | None = None,
+    rate: float | None = None,
+    tol: float = 0.005,
+    max_substeps: int = 16,
+) -> FidelityResult:
+    """Predicted (``model`` as damper) against achieved (``plant`` as damper) loop metrics.
+
+    Parameters
+    ----------
+    model : FittedModel
+        Controller model.
+    plant : FittedModel or str
+        The damper (:func:`~mrdamper.control.closed_loop.resolve_plant`).
+    road_classes : sequence of str
+        ISO 8608 classes.
+    speeds : sequence of float
+        Vehicle speeds [m/s] (>= 0).
+    controllers : sequence
+        Controllers (names or :class:`Controller`).
+    duration : float
+        Road length [s].
+    seed : int
+        Road phases.
+    car : QuarterCar, optional
+        Car.
+    reg, rate : float, optional
+        Inverse regularisation [N per input unit] and input rate bound [input unit/s].
+    tol : float
+        Halving tolerance [-] of :func:`checked_run`.
+    max_substeps : int
+        Finest plant step [steps per road sample].
+    """
+    plant_m = resolve_plant(plant)
+    check_pair(model, plant_m)
+    car = QuarterCar() if car is None else car
+    for sp in speeds:
+        if not (np.isfinite(sp) and sp > 0):
+            raise DataValidationError("speed", f"expected a vehicle speed > 0 [m/s], got {sp!r}")
+    ctrls = [Controller(c) if isinstance(c, str) else c for c in controllers]
+    unit = "V" if getattr(model, "input", "i") == "voltage" else "A"
+    rows: list[dict[str, Any]] = []
+    runs: list[dict[str, Any]] = []
+    notes: list[str] = []
+    fs = default_rate(model)
+    for cls in road_classes:
+        for sp in speeds:
+            road = iso_road(cls, speed=float(sp), duration=duration, fs=fs, seed=seed)
+            for c in ctrls:
+                out = {}
+                for side, p in (("predicted", None), ("achieved", plant_m)):
+
+                    def run(
+                        s: int, p: Any = p, c: Controller = c, road: Any = road
+                    ) -> QuarterCarResult:
+                        return simulate_closed_loop(
+                            model, road, c, car, plant=p, substeps=s, reg=reg, rate=rate
+                        )
+
+                    r, s, change = checked_run(run, tol=tol, max_substeps=max_substeps)
+                    share, f_hf = oscillation(r)
+                    exc = _envelope_note(model, r)
+                    info = {
+                        "controller": c.kind,
+                        "road": cls,
+                        "speed_m_s": float(sp),
+                        "side": side,
+                        "substeps": s,
+                        "halving_change_pct": 100 * change,
+                        "hf_share": share,
+                        "hf_peak_hz": f_hf,
+                    }
+                    if exc is not None:
+                        info.update({f"excursion_{k}": v for k, v in exc.items()})
+                    runs.append(info)
+                    where = f"{c.kind}, ISO {cls} @ {sp:g} m/s, {side}"
+                    if share > HF_SHARE:
+                        notes.append(
+                            f"{where}: sampled-loop oscillation: {100 * share:.0f} % of the body "
+                            f"acceleration power above {HF_FACTOR * car.wheel_hop_frequency():.0f}"
+                            f" Hz, peak at {f_hf:.1f} Hz"
+                        )
+                    if side == "achieved" and exc is not None and max(exc.values()) > 1.0:
+                        notes.append(
+                            f"{where}: the loop leaves the {model.kind} model's training envelope:"
+                            f" velocity x{exc['velocity']:.2g}, stroke x{exc['stroke']:.2g}, "
+                            f"switching-while-moving velocity x{exc['switching']:.2g}"
+                        )
+                    out[side] = loop_metrics(r)
+                for metric in METRICS:
+                    pr, ac = out["predicted"][metric], out["achieved"][metric]
+                    err = 100.0 * (pr - ac) / ac if ac != 0 else float("nan")
+                    rows.append(
+                        {
+                            "controller": c.kind,
+                            "road": cls,
+                            "speed_m_s": float(sp),
+                            "metric": metric,
+                            "predicted": pr,
+                            "achieved": ac,
+                            "error_pct": err,
+                        }
+                    )
+    if not dict(getattr(model, "provenance", {}) or {}).get("envelope"):
+        notes.append(
+            f"the {model.kind} model carries no training envelope (saved before it was recorded):"
+            " refit it to see how far the loop leaves its training data"
+        )
+    return FidelityResult(model.kind, plant_m.kind, unit, rows, runs, notes)

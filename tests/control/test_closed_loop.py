@@ -1,0 +1,141 @@
+"""Any damper in the quarter-car loop: the generic-plant loop against the fused kernel, the rig's
+reference damper as controller model and plant, predicted against achieved, the halving check and
+the command line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mrdamper.cli.main import main
+from mrdamper.control.closed_loop import simulate_closed_loop
+from mrdamper.control.fidelity import checked_run, closed_loop_fidelity, loop_metrics
+from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
+from mrdamper.errors import DataValidationError, MrDamperError
+from mrdamper.models.lpv import LTIModel
+from mrdamper.models.semiphenomenological import SP3Model
+from mrdamper.rig.reference import reference_damper
+
+S = (800.0, 200.0, 60.0, 0.0, 900.0, 0.0)
+
+
+def _sp3() -> SP3Model:
+    return SP3Model(S=S, input_range=(0.0, 1.0))
+
+
+def _road(duration: float = 2.0):  # type: ignore[no-untyped-def]
+    return iso_road("C", duration=duration, fs=1000.0, seed=3)
+
+
+@pytest.mark.parametrize("ctrl", ["soft", "skyhook"])
+def test_model_as_its_own_plant_is_the_fused_kernel(ctrl: str) -> None:
+    m, road = _sp3(), _road()
+    a = simulate_quarter_car(m, road, ctrl)
+    b = simulate_closed_loop(m, road, ctrl)
+    for name in ("a_s", "F", "i", "z_s", "z_u"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_reference_damper_as_controller_and_plant_equals_itself() -> None:
+    truth = reference_damper("quiroz2022")
+    res = closed_loop_fidelity(
+        truth, "rig", controllers=["soft", "skyhook"], duration=1.5, max_substeps=4
+    )
+    t = res.table()
+    assert set(t["metric"]) == {
+        "rms_acc",
+        "a_w",
+        "rms_tyre_load",
+        "rms_travel",
+        "rms_tracking",
+        "mean_current",
+    }
+    np.testing.assert_array_equal(t["predicted"], t["achieved"])
+    sky = t[t["controller"] == "skyhook"].set_index("metric")
+    assert 0.0 < sky.loc["mean_current", "achieved"] < 1.0  # the step inverse acts
+    assert np.isfinite(sky.loc["rms_tracking", "achieved"])
+
+
+def test_another_plant_gives_another_answer() -> None:
+    road = _road()
+    pred = loop_metrics(simulate_closed_loop(_sp3(), road, "skyhook"))
+    ach = loop_metrics(simulate_closed_loop(_sp3(), road, "skyhook", plant="rig"))
+    assert abs(pred["rms_acc"] - ach["rms_acc"]) > 1e-3 * ach["rms_acc"]
+    assert pred["mean_current"] != ach["mean_current"]
+
+
+def test_a_static_map_as_plant_through_the_step_would_equal_the_fused_kernel() -> None:
+    # the plant's force at every RK stage with its (empty) state held is the fused kernel's
+    # scheme: the rig damper with its own inverse, halved twice, moves the metrics by < 0.5 %
+    truth = reference_damper("quiroz2022")
+    road = _road(1.0)
+    r, s, change = checked_run(
+        lambda k: simulate_closed_loop(truth, road, "hard", substeps=k), max_substeps=8
+    )
+    assert change <= 0.005 and s >= 1 and r.fs == 1000.0 * s
+
+
+def test_halving_check_refuses_with_the_figure() -> None:
+    road = _road(1.0)
+    with pytest.raises(MrDamperError, match="not converged.*%"):
+        checked_run(
+            lambda k: simulate_closed_loop(_sp3(), road, "hard", substeps=k),
+            tol=1e-12,
+            max_substeps=2,
+        )
+
+
+def test_bad_pairs_are_refused() -> None:
+    with pytest.raises(DataValidationError, match="not the same input"):
+        simulate_closed_loop(_sp3(), _road(), "soft", plant="rig:spencer1997")
+    lti = LTIModel(
+        alpha=np.array([[-0.5]]),
+        beta=np.array([[800.0]]),
+        fs=1000.0,
+        input_signal="v",
+        input_range=(0.0, 1.0),
+    )
+    with pytest.raises(DataValidationError, match="has no inverse"):
+        simulate_closed_loop(lti, _road(), "skyhook", plant="rig")
+
+
+def test_cli_plant(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = _sp3().save(tmp_path / "sp3.json")
+    base = ["quartercar", str(model), "--roads", "C", "--duration", "1.5", "--plant", "rig"]
+    main([*base, "--controllers", "soft,skyhook", "--out", str(tmp_path / "o")])
+    printed = capsys.readouterr().out
+    assert "rms_acc [m/s²]" in printed and "error [%]" in printed
+    t = pd.read_csv(tmp_path / "o" / "closed_loop.csv")
+    assert list(t.columns) == [
+        "controller",
+        "road",
+        "speed_m_s",
+        "metric",
+        "predicted",
+        "achieved",
+        "error_pct",
+    ]
+    assert len(t) == 2 * 6
+    assert (tmp_path / "o" / "closed_loop_runs.csv").is_file()
+
+
+@pytest.mark.parametrize(
+    ("args", "field"),
+    [
+        (["--speed", "-5"], "--speed"),
+        (["--plant", "rig:spencer1997"], "not the same input"),
+        (["--plant", "nowhere.json"], "--plant"),
+    ],
+)
+def test_cli_plant_refusals(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], field: str
+) -> None:
+    model = _sp3().save(tmp_path / "sp3.json")
+    with pytest.raises(SystemExit) as info:
+        main(["quartercar", str(model), "--out", str(tmp_path / "o"), "--plant", "rig", *args])
+    assert info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and field in err
