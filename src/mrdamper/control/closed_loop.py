@@ -38,7 +38,6 @@ damper) metrics and checks the numerics.
 
 from __future__ import annotations
 
-import inspect
 from dataclasses import dataclass
 from typing import Any
 
@@ -101,8 +100,7 @@ def plant_step(model: Any, h: float) -> Step:
         raise DataValidationError(
             "plant", f"{type(model).__name__} is not a damper model (no per-sample step)"
         )
-    params = inspect.signature(method).parameters
-    step: Step = method(dt=h) if "dt" in params else method()
+    step: Step = method(dt=h)
     return step
 
 

@@ -308,11 +308,11 @@ class FittedModel(abc.ABC):
             model=self.kind,
         )
 
-    def step(self, *args: Any, **options: Any) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
-        Families override this with their own keyword options (any signature: the base takes
-        anything); the default refuses in one line.
+        Every family takes ``dt`` and ``vmax`` (and may add keyword options of its own); the
+        default refuses in one line.
 
         Parameters
         ----------

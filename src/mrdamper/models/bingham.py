@@ -141,9 +141,16 @@ class BinghamModel(FittedModel):
             float(self.f0),
         )
 
-    def step(self) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`): the static map of
-        :meth:`inverse_form`, stateless but for the input it holds; no range policy."""
+        :meth:`inverse_form`, stateless but for the input it holds; no range policy.
+
+        Parameters
+        ----------
+        dt, vmax : float
+            Interval [s] and largest velocity [m/s] the step will see; unused by this family
+            (the common signature of :meth:`~mrdamper.models.FittedModel.step`).
+        """
         return make_static_step(self.kind, self.inverse_form())
 
     def predict(self, experiment: Experiment) -> np.ndarray:

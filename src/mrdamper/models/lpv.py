@@ -320,7 +320,7 @@ class TransferFunctionModel(FittedModel):
             )
         return to_record_rate(y + self.offset, self.fs, experiment)
 
-    def step(self) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The model as a per-sample step at its own rate ``fs`` (:mod:`mrdamper.models.step`).
 
         The state holds the lagged input ``rho`` (with ``eta``), the Dahl state of the hysteretic
@@ -329,6 +329,12 @@ class TransferFunctionModel(FittedModel):
         ``feedthrough`` is True for an LPV model without drive lag (the force at a sample is a
         polynomial in the present input); with a lag, or for the LTI model, the present input
         acts only from the next sample on.
+
+        Parameters
+        ----------
+        dt, vmax : float
+            Interval [s] and largest velocity [m/s] the step will see; unused by this family
+            (the common signature of :meth:`~mrdamper.models.FittedModel.step`).
         """
         gm, gc, mu_h, mu_l = self.law_arrays()
         if self.input_signal == "v" or self.zone_laws is None:

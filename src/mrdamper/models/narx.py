@@ -323,7 +323,7 @@ class NARXModel(FittedModel):
             )
         return self._back(S[0], experiment)
 
-    def step(self, *, f_initial: float = 0.0) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5, f_initial: float = 0.0) -> Step:
         """The model as a per-sample step at its own rate ``fs`` (:mod:`mrdamper.models.step`).
 
         The state holds the last :attr:`max_lag` scaled samples of every signal; the first
@@ -333,6 +333,9 @@ class NARXModel(FittedModel):
 
         Parameters
         ----------
+        dt, vmax : float
+            Interval [s] and largest velocity [m/s] the step will see; unused by this family
+            (the common signature of :meth:`~mrdamper.models.FittedModel.step`).
         f_initial : float
             Force [N] of the first ``max_lag`` samples (default 0: from rest).
         """

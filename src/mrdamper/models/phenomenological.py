@@ -276,7 +276,7 @@ class P15Model(FittedModel):
         """
         return self.simulate_steps(experiment, self.substeps(experiment.dt))
 
-    def step(self) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         The state is ``(F, G, rho)``: force [N], its rate [N/s] and the model's input (through
@@ -286,6 +286,12 @@ class P15Model(FittedModel):
         linear in between; it reports divergence like :meth:`predict` but does not check the
         sign of ``w3`` along the input, and applies no range policy. The force is a state: it
         does not depend on the present input (``feedthrough`` False).
+
+        Parameters
+        ----------
+        dt, vmax : float
+            Interval [s] and largest velocity [m/s] the step will see; unused by this family
+            (the common signature of :meth:`~mrdamper.models.FittedModel.step`).
         """
         bern = self.basis == "bernstein"
         lo, hi = self.input_range if bern else (0.0, 1.0)

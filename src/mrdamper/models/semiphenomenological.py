@@ -202,10 +202,17 @@ class SPModel(FittedModel):
         comp, power = self.layout_arrays()
         return StaticMapForm(comp, power, np.asarray(self.S, dtype=np.float64), self.f0, self.eta)
 
-    def step(self) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The map as a per-sample step (:mod:`mrdamper.models.step`): the state is the drive
         lag's output (with ``eta``) or the input itself; the input is used as given (no range
-        policy)."""
+        policy).
+
+        Parameters
+        ----------
+        dt, vmax : float
+            Interval [s] and largest velocity [m/s] the step will see; unused by this family
+            (the common signature of :meth:`~mrdamper.models.FittedModel.step`).
+        """
         return make_static_step(self.kind, self.inverse_form())
 
     def predict(self, experiment: Experiment) -> np.ndarray:
