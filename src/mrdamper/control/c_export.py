@@ -41,7 +41,7 @@ from mrdamper.control.c_render import RENDERERS, Context, Rendered
 from mrdamper.control.c_render._common import INVERSE_RUN, RUN
 from mrdamper.errors import DataValidationError
 
-__all__ = ["C_KINDS", "c_source", "export_c", "render"]
+__all__ = ["C_KINDS", "assemble", "c_source", "export_c", "render"]
 
 #: Model kinds :func:`export_c` handles.
 C_KINDS = tuple(RENDERERS)
@@ -110,7 +110,13 @@ def c_source(
         for a static map, the interval of the inverse's rate bound (only used with ``rate``) and
         of the default ``reg``; an LPV model runs at its own rate.
     """
-    r = render(model, name, reg=reg, v_ref=v_ref, rate=rate, n_grid=n_grid, dt=dt)
+    return assemble(
+        model, name, render(model, name, reg=reg, v_ref=v_ref, rate=rate, n_grid=n_grid, dt=dt)
+    )
+
+
+def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
+    """Header and source text of a rendering ``r`` of ``model`` with the prefix ``name``."""
     p = name
     unit = "A" if model.input == "i" else "V"
     guard = f"{name.upper()}_H"
