@@ -179,12 +179,13 @@ def main(argv: list[str] | None = None) -> int:
         "sp1": (SP1Model(S=S1, input_range=(0.0, 1.0)), None),
     }
     print(f"{n} samples (fmpy {n_fmpy}), minimum of {repeat} repeats; times in us per sample")
-    print(f"{'model':8} {'FMU (fmpy)':>11} {'FMU (C)':>9} {'C step':>9} {'Py step':>9} {'predict':>9}")
+    heads = ("FMU (fmpy)", "FMU (C)", "C step", "Py step", "predict")
+    print(f"{'model':8} " + " ".join(f"{h:>9}" for h in heads))
+    short = rec.slice(0, n_fmpy)
     with tempfile.TemporaryDirectory() as tmp:
         for kind, (model, like_step) in models.items():
             folder = Path(tmp) / kind
             fmu = export_fmu(model, folder / f"{kind}.fmu", name=kind, dt=DT)
-            short = rec.slice(0, n_fmpy)
             _fmpy_loop(fmu, short)  # load once
             t_fmpy = best_time(lambda f=fmu: _fmpy_loop(f, short), max(1, repeat - 2)) / n_fmpy
             t_c, t_fmu_c = _c_driver(fmu, kind, rec, repeat, folder)
