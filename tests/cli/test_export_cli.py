@@ -4,6 +4,8 @@ errors."""
 from __future__ import annotations
 
 import json
+import shutil
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -177,3 +179,34 @@ def test_inverse_horizon_option(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert not (tmp_path / "o.csv").exists()
     main(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "0.01"])
     assert "(regularised)" in capsys.readouterr().out  # no drive lag: the horizon does not apply
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found")
+def test_export_fmu(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from mrdamper.data import read_csv
+    from mrdamper.models.semiphenomenological import SP3Estimator
+
+    fitted = SP3Estimator().fit(read_csv(_record(tmp_path / "rec.csv", SP3)))
+    model = fitted.save(tmp_path / "sp3.json")
+    out = tmp_path / "damper.fmu"
+    main(["export", str(model), "--out", str(out)])  # format from the suffix, dt from the fit
+    assert "FMI 2.0 co-simulation" in capsys.readouterr().out
+    with zipfile.ZipFile(out) as z:
+        assert "binaries/linux64/damper.so" in z.namelist()
+        assert 'stepSize="0.001"' in z.read("modelDescription.xml").decode()
+    main(["export", str(model), "--out", str(tmp_path / "inv.fmu"), "--inverse"])
+    assert _exit_code(["export", str(model), "--out", str(out)]) == 2  # exists
+    assert "exists" in capsys.readouterr().err
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"schema": "something.else", "kind": "sp3"}))
+    assert _exit_code(["export", str(bad), "--out", str(tmp_path / "b.fmu")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "schema" in err
+    from mrdamper.models.phenomenological import P15Model
+
+    p15 = P15Model(input_range=(0.0, 1.0)).save(tmp_path / "p15.json")
+    assert _exit_code(["export", str(p15), "--out", str(tmp_path / "p.fmu")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "has no C step" in err
+    assert sorted(p.name for p in tmp_path.glob("*.fmu")) == ["damper.fmu", "inv.fmu"]
+    assert not list(tmp_path.glob(".*part"))

@@ -4,6 +4,8 @@ and the Python inverse on real records (skipped without gcc or without the share
 from __future__ import annotations
 
 import ctypes
+import dataclasses
+import math
 import shutil
 import subprocess
 from pathlib import Path
@@ -144,11 +146,70 @@ def test_c_bingham_and_lti(tmp_path: Path) -> None:
     )  # no inverse: the LTI force does not depend on the input
 
 
+def _sub_sample_record(n: int, dt: float, input: str) -> Any:
+    """Synthetic record: a 3 Hz, 10 mm sine and a slowly varying input inside [0, 2]."""
+    from mrdamper.data import Experiment
+
+    t = np.arange(n) * dt
+    x, v = 0.01 * np.sin(2 * np.pi * 3 * t), 0.01 * 2 * np.pi * 3 * np.cos(2 * np.pi * 3 * t)
+    e = np.clip(1.0 + 0.9 * np.sin(2 * np.pi * 0.7 * t), 0.0, 2.0)
+    return Experiment(t=t, x=x, v=v, F=0 * t, **{input: e})
+
+
+def spencer_predicting_like_its_step(model: Any, dt: float) -> Any:
+    """The model with the sub-step count its step takes at ``dt``, so that ``predict`` runs the
+    same RK4 steps as the step (the automatic count of ``predict`` follows the record)."""
+    form = model.step(dt=dt).form
+    return dataclasses.replace(model, substeps=math.ceil(dt / form.max_h * (1.0 - 1e-12)))
+
+
+@needs_gcc
+def test_c_spencer_step_matches_run_step_and_predict(tmp_path: Path) -> None:
+    from mrdamper.models.spencer import spencer1997
+    from mrdamper.models.step import run_step
+
+    model, dt = spencer1997(), 1e-3
+    rec = _sub_sample_record(3000, dt, "voltage")
+    lib = _build(model, tmp_path, "sp", dt=dt)
+    F_c = _forward(lib, "sp", rec.x, rec.v, rec.voltage)
+    F_step, status, _ = run_step(model.step(dt=dt), rec.x, rec.v, rec.voltage, dt)
+    assert status == 0
+    assert _rel(F_c, F_step) < 1e-9
+    assert _rel(F_c, spencer_predicting_like_its_step(model, dt).predict(rec)) < 1e-9
+    assert not hasattr(lib, "sp_inverse_run")
+
+
+@needs_gcc
+def test_c_spencer_on_a_quiroz_record(tmp_path: Path, quiroz_records: list[Any]) -> None:
+    """A published Spencer model in current units, driven by a measured record (2 kHz)."""
+    from mrdamper.models.spencer import spencer1997
+
+    rec = next(e for e in quiroz_records if e.name == "sine_25mm_0.5Hz_0.5A")
+    model = dataclasses.replace(spencer1997(), input="i", input_range=(0.0, 2.25))
+    lib = _build(model, tmp_path, "qsp", dt=rec.dt)
+    F_c = _forward(lib, "qsp", rec.x, rec.v, rec.i)
+    assert _rel(F_c, spencer_predicting_like_its_step(model, rec.dt).predict(rec)) < 1e-9
+
+
+@needs_gcc
+def test_c_spencer_divergence_returns_nan(tmp_path: Path) -> None:
+    from mrdamper.models.spencer import spencer1997
+
+    bad = dataclasses.replace(spencer1997(), c0a=-1e5)  # non-positive damping
+    lib = _build(bad, tmp_path, "bad", dt=1e-3)
+    rec = _sub_sample_record(10, 1e-3, "voltage")
+    F = _forward(lib, "bad", rec.x, rec.v, rec.voltage)
+    assert np.isfinite(F[0]) and np.isnan(F[1:]).all()
+
+
 def test_refusals(tmp_path: Path) -> None:
-    from mrdamper.rig import reference_damper
+    from mrdamper.models.phenomenological import P15Model
+    from mrdamper.models.spencer import spencer1997
 
     with pytest.raises(DataValidationError, match="C export handles kinds"):
-        c_source(reference_damper())
+        c_source(P15Model(input_range=(0.0, 1.0)))
+    with pytest.raises(DataValidationError, match="dt: the spencer C step"):
+        c_source(spencer1997())
     bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
     with pytest.raises(DataValidationError, match="C identifier"):
         c_source(bing, "1bad-name")

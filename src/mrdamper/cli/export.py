@@ -4,6 +4,8 @@
   matrices (see :mod:`mrdamper.control.export`); other model kinds are refused with one line.
 * ``export MODEL.json --format c --out DIR`` writes C99 code of the model and its inverse
   (:mod:`mrdamper.control.c_export`).
+* ``export MODEL.json --format fmu --out damper.fmu [--inverse] [--dt S]`` writes an FMI 2.0
+  co-simulation FMU of the model or of its inverse (:mod:`mrdamper.control.fmu`).
 * ``inverse MODEL.json DATA --out FILE`` answers "which current would have produced this
   force": the record's measured force ``F`` is the desired force, its motion the motion. Writes
   ``t, F_desired, <input>, F_achieved, saturated`` [s, N, A|V, N, 0/1] as CSV, atomically.
@@ -28,15 +30,26 @@ def export(
     ],
     out: Annotated[
         Path,
-        typer.Option("--out", "-o", help="Output file (.mat or .json), or folder for --format c."),
+        typer.Option(
+            "--out", "-o", help="Output file (.mat, .json or .fmu), or folder for --format c."
+        ),
     ],
     fmt: Annotated[
         str | None,
-        typer.Option("--format", help="mat | json | c (default: from the --out suffix, else mat)."),
+        typer.Option(
+            "--format", help="mat | json | c | fmu (default: from the --out suffix, else mat)."
+        ),
     ] = None,
     name: Annotated[
-        str, typer.Option("--name", help="C identifier prefix and file stem (--format c).")
-    ] = "mrd_damper",
+        str | None,
+        typer.Option(
+            "--name",
+            help=(
+                "C identifier prefix and file stem (--format c, default mrd_damper; --format fmu:"
+                " the model identifier, default the --out stem)."
+            ),
+        ),
+    ] = None,
     reg: Annotated[
         float | None,
         typer.Option(
@@ -44,23 +57,52 @@ def export(
             help="Inverse regularisation weight [N/A] (--format c; default from the model).",
         ),
     ] = None,
+    dt: Annotated[
+        float | None,
+        typer.Option(
+            "--dt",
+            help=(
+                "Sample time [s] of a Spencer model's C step and of a Spencer or static-map FMU "
+                "(default: the training records' sampling interval)."
+            ),
+        ),
+    ] = None,
+    inverse: Annotated[
+        bool, typer.Option("--inverse", help="FMU of the model's inverse (--format fmu).")
+    ] = False,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
 ) -> None:
     """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws
-    for control design, or (--format c) C99 code of the model and its inverse."""
+    for control design, (--format c) C99 code of the model and its inverse, or (--format fmu) an
+    FMI 2.0 co-simulation FMU of the model or its inverse."""
     from mrdamper._io import check_writable
     from mrdamper.control.export import export_lpv
     from mrdamper.models.registry import load_model
 
     if fmt is None:
-        fmt = "json" if out.suffix.lower() == ".json" else "mat"
-    if fmt not in ("mat", "json", "c"):
-        raise DataValidationError("--format", f"expected 'mat', 'json' or 'c', got {fmt!r}")
+        fmt = {".json": "json", ".fmu": "fmu"}.get(out.suffix.lower(), "mat")
+    if fmt not in ("mat", "json", "c", "fmu"):
+        raise DataValidationError("--format", f"expected 'mat', 'json', 'c' or 'fmu', got {fmt!r}")
+    if inverse and fmt != "fmu":
+        raise DataValidationError("--inverse", "only with --format fmu (the C export has both)")
+    if fmt == "fmu":
+        from mrdamper.control.fmu import export_fmu
+
+        check_writable(out, force, inputs=[model_file])
+        m = load_model(model_file)
+        ident = name or (out.stem if out.stem.isidentifier() else "mrd_damper")
+        path = export_fmu(m, out, name=ident, inverse=inverse, dt=dt, reg=reg, force=force)
+        typer.echo(
+            f"{m.kind}: wrote {path} (FMI 2.0 co-simulation{', inverse' if inverse else ''})"
+        )
+        return
     if fmt == "c":
         from mrdamper.control.c_export import export_c
+        from mrdamper.control.fmu import training_dt
 
         m = load_model(model_file)
-        h, c = export_c(m, out, name=name, reg=reg, force=force)
+        c_dt = dt if dt is not None or m.kind != "spencer" else training_dt(m)
+        h, c = export_c(m, out, name=name or "mrd_damper", reg=reg, dt=c_dt, force=force)
         typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
         return
     check_writable(out, force, inputs=[model_file])

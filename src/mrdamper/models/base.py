@@ -466,7 +466,8 @@ class Estimator(abc.ABC):
        single level (:class:`TrainingData`);
     4. call :meth:`_identify`;
     5. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
-       and provenance (the single-level note, wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
+       and provenance (the single-level note, the training records' sampling intervals
+       ``record_dt`` [s], wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
 
     Progress (:mod:`mrdamper.progress`) is reported as the stages ``"preparing the training
     data"``, ``"identifying"`` (the family reports its own stages within it) and ``"done"``.
@@ -553,6 +554,8 @@ class Estimator(abc.ABC):
             note = single_level_note(self.kind, prepared.input, prepared.level)
             provenance["note"] = note
             warnings.warn(note, UserWarning, stacklevel=2)
+        # the records' sampling intervals [s] (the default step of the model's exports)
+        provenance["record_dt"] = sorted({float(e.dt) for e in prepared.records})
         provenance["elapsed_s"] = time.perf_counter() - t0
         provenance["cpu_s"] = time.process_time() - c0
         model = self.model_class(

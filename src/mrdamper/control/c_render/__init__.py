@@ -1,0 +1,36 @@
+"""Each model family's C rendering, looked up by kind (the family-to-renderer table).
+
+A renderer takes the fitted model and the export's :class:`Context` and returns a
+:class:`Rendered`: the state struct, the constants and functions up to ``<name>_step`` (and
+``<name>_inverse_step`` where the family has an inverse), header notes and the sample time the C
+step must be called at. :func:`mrdamper.control.c_export.c_source` assembles the files and the
+FMU export (:mod:`mrdamper.control.fmu`) wraps the same code. Another kind is added by writing its
+renderer and adding it to :data:`RENDERERS`.
+
+Every rendering has the same C interface: ``<name>_init(<name>_state *)`` and
+``double <name>_step(<name>_state *, double x, double v, double input)``, one call per sample.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from mrdamper.control.c_render._common import Context, Rendered
+from mrdamper.control.c_render.lpv import render_lpv
+from mrdamper.control.c_render.spencer import render_spencer, render_spencer_form
+from mrdamper.control.c_render.static import render_static
+
+__all__ = ["RENDERERS", "Context", "Rendered", "render_spencer_form"]
+
+#: Model kind -> renderer ``(model, Context) -> Rendered``.
+RENDERERS: dict[str, Callable[[Any, Context], Rendered]] = {
+    "lpv": render_lpv,
+    "lti": render_lpv,
+    "sp1": render_static,
+    "sp2": render_static,
+    "sp3": render_static,
+    "sp4": render_static,
+    "bingham": render_static,
+    "spencer": render_spencer,
+}
