@@ -50,6 +50,7 @@ MODEL_MODULES = [
     "spencer",
     "bingham",
     "narx",
+    "tanh",
 ]
 SECTIONS = ("Parameters", "Attributes", "Other Parameters")
 _HEADER = re.compile(r"^(\s*)([A-Z][A-Za-z ]+)\n\1-{3,}\s*$", re.MULTILINE)

@@ -109,4 +109,5 @@ def test_known_kinds_lists_every_family() -> None:
         "spencer",
         "bingham",
         "narx",
+        "tanh",
     ]

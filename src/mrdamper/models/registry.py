@@ -37,6 +37,7 @@ _MODULES: dict[str, str] = {
     "spencer": "mrdamper.models.spencer",
     "bingham": "mrdamper.models.bingham",
     "narx": "mrdamper.models.narx",
+    "tanh": "mrdamper.models.tanh",
 }
 
 _ESTIMATORS: dict[str, type[Estimator]] = {}

@@ -258,7 +258,7 @@ class SpencerModel(FittedModel):
         _raise_on_status(status, sample, nsub, experiment.name)
         return np.asarray(F)
 
-    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:  # type: ignore[override]
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         The state is ``(y, z, u)``, at rest ``(x[0], 0, e[0])``; ``advance`` integrates an
