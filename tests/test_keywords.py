@@ -51,6 +51,7 @@ MODEL_MODULES = [
     "bingham",
     "narx",
     "tanh",
+    "boucwen",
 ]
 SECTIONS = ("Parameters", "Attributes", "Other Parameters")
 _HEADER = re.compile(r"^(\s*)([A-Z][A-Za-z ]+)\n\1-{3,}\s*$", re.MULTILINE)

@@ -57,8 +57,9 @@ def check_known_answer(
     rel: float = 2e-2,
     **settings: Any,
 ) -> Any:
-    """Fit records simulated by the true model; the parameters in ``compare`` come back."""
-    model = truth(kind, params)
+    """Fit records simulated by the true model (with the drive lag ``eta`` of the settings, if
+    any); the parameters in ``compare`` come back."""
+    model = truth(kind, params, eta=settings.get("eta") or 0.0)
     train = simulated(model, (11, 12))
     est = get_estimator(kind, ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=200, **settings)
     fit = est.fit(train)

@@ -110,4 +110,5 @@ def test_known_kinds_lists_every_family() -> None:
         "bingham",
         "narx",
         "tanh",
+        "boucwen",
     ]

@@ -13,8 +13,25 @@ from mrdamper import Experiment, OutOfRangeError, get_estimator
 from mrdamper.rig import reference_damper
 
 LEVEL = 0.5
-FAST = {"spencer": {"n_starts": 1, "max_nfev": 30}, "tanh": {"n_starts": 1, "max_nfev": 30}}
-KINDS = ["lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4", "spencer", "bingham", "narx", "tanh"]
+FAST = {
+    "spencer": {"n_starts": 1, "max_nfev": 30},
+    "tanh": {"n_starts": 1, "max_nfev": 30},
+    "boucwen": {"n_starts": 1, "max_nfev": 30},
+}
+KINDS = [
+    "lpv",
+    "lti",
+    "p15",
+    "sp1",
+    "sp2",
+    "sp3",
+    "sp4",
+    "spencer",
+    "bingham",
+    "narx",
+    "tanh",
+    "boucwen",
+]
 
 
 def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:

@@ -70,9 +70,10 @@ def unit_floors(units: Mapping[str, str]) -> Callable[[Scales], dict[str, float]
     """Scaling floors from the physical kind of every unknown.
 
     ``units`` maps an unknown to ``"damp"`` [N s/m], ``"stiff"`` [N/m], ``"force"`` [N],
-    ``"1/v"`` [s/m], ``"1/x"`` [1/m] or ``"one"`` [-], with ``"/e"`` appended for a coefficient
-    of the electrical input. The floor is 1 % of the typical force over the typical velocity /
-    displacement for the first three, the inverse typical velocity / displacement, or 1.
+    ``"1/v"`` [s/m], ``"1/x"`` [1/m], ``"x"`` [m] or ``"one"`` [-], with ``"/e"`` appended for
+    a coefficient of the electrical input. The floor is 1 % of the typical force (over the
+    typical velocity or displacement), the inverse typical velocity or displacement, 1 % of the
+    typical displacement, or 1.
     """
 
     def floors(s: Scales) -> dict[str, float]:
@@ -82,6 +83,7 @@ def unit_floors(units: Mapping[str, str]) -> Callable[[Scales], dict[str, float]
             "force": 1e-2 * s.force,
             "1/v": 1.0 / s.v,
             "1/x": 1.0 / s.x,
+            "x": 1e-2 * s.x,
             "one": 1.0,
         }
         out = {}

@@ -38,6 +38,7 @@ _MODULES: dict[str, str] = {
     "bingham": "mrdamper.models.bingham",
     "narx": "mrdamper.models.narx",
     "tanh": "mrdamper.models.tanh",
+    "boucwen": "mrdamper.models.boucwen",
 }
 
 _ESTIMATORS: dict[str, type[Estimator]] = {}
