@@ -52,6 +52,7 @@ MODEL_MODULES = [
     "narx",
     "tanh",
     "boucwen",
+    "dahl",
 ]
 SECTIONS = ("Parameters", "Attributes", "Other Parameters")
 _HEADER = re.compile(r"^(\s*)([A-Z][A-Za-z ]+)\n\1-{3,}\s*$", re.MULTILINE)

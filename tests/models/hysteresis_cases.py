@@ -101,7 +101,7 @@ def check_round_trip(kind: str, params: dict[str, float], tmp_path: Path) -> Non
         model_class(kind).from_dict(data)
 
 
-def check_single_level(kind: str, params: dict[str, float], zero: tuple[str, ...]) -> None:
+def check_single_level(kind: str, params: dict[str, float], zero: tuple[str, ...]) -> Any:
     """One current level: the input-dependent terms are constants (fixed at 0), with a note."""
     model = truth(kind, params)
     exps = []
@@ -119,6 +119,7 @@ def check_single_level(kind: str, params: dict[str, float], zero: tuple[str, ...
     for name in zero:
         assert getattr(fit, name) == 0.0, name
     assert fit.provenance["mean_record_esr"] < 1e-2
+    return fit
 
 
 def check_bad_values(kind: str, params: dict[str, float], field: str, value: float) -> None:

@@ -111,4 +111,5 @@ def test_known_kinds_lists_every_family() -> None:
         "narx",
         "tanh",
         "boucwen",
+        "dahl",
     ]

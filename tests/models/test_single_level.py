@@ -17,6 +17,7 @@ FAST = {
     "spencer": {"n_starts": 1, "max_nfev": 30},
     "tanh": {"n_starts": 1, "max_nfev": 30},
     "boucwen": {"n_starts": 1, "max_nfev": 30},
+    "dahl": {"n_starts": 1, "max_nfev": 30},
 }
 KINDS = [
     "lpv",
@@ -31,6 +32,7 @@ KINDS = [
     "narx",
     "tanh",
     "boucwen",
+    "dahl",
 ]
 
 

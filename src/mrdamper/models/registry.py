@@ -39,6 +39,7 @@ _MODULES: dict[str, str] = {
     "narx": "mrdamper.models.narx",
     "tanh": "mrdamper.models.tanh",
     "boucwen": "mrdamper.models.boucwen",
+    "dahl": "mrdamper.models.dahl",
 }
 
 _ESTIMATORS: dict[str, type[Estimator]] = {}
