@@ -53,6 +53,7 @@ MODEL_MODULES = [
     "tanh",
     "boucwen",
     "dahl",
+    "lugre",
 ]
 SECTIONS = ("Parameters", "Attributes", "Other Parameters")
 _HEADER = re.compile(r"^(\s*)([A-Z][A-Za-z ]+)\n\1-{3,}\s*$", re.MULTILINE)

@@ -112,4 +112,5 @@ def test_known_kinds_lists_every_family() -> None:
         "tanh",
         "boucwen",
         "dahl",
+        "lugre",
     ]

@@ -18,6 +18,7 @@ FAST = {
     "tanh": {"n_starts": 1, "max_nfev": 30},
     "boucwen": {"n_starts": 1, "max_nfev": 30},
     "dahl": {"n_starts": 1, "max_nfev": 30},
+    "lugre": {"n_starts": 1, "max_nfev": 30},
 }
 KINDS = [
     "lpv",
@@ -33,6 +34,7 @@ KINDS = [
     "tanh",
     "boucwen",
     "dahl",
+    "lugre",
 ]
 
 

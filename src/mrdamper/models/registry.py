@@ -40,6 +40,7 @@ _MODULES: dict[str, str] = {
     "tanh": "mrdamper.models.tanh",
     "boucwen": "mrdamper.models.boucwen",
     "dahl": "mrdamper.models.dahl",
+    "lugre": "mrdamper.models.lugre",
 }
 
 _ESTIMATORS: dict[str, type[Estimator]] = {}
