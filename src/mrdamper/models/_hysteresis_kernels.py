@@ -4,7 +4,7 @@ al. 2006), classic Bouc-Wen, modified Dahl (Zhou et al. 2006) and LuGre (Jiméne
 
 The four families share one state layout ``s = (z, u)`` and one integrator, so the integrator,
 the free run and the per-sample step are written once here and the family only chooses the
-equations (the ``family`` code, a compile-time branch). ``z`` is the family's evolutionary
+equations (a branch on the ``family`` code). ``z`` is the family's evolutionary
 (bristle, Dahl, Bouc-Wen) variable, unused by the static ``tanh`` family; ``u`` is the electrical
 input after the optional first-order drive lag ``du/dt = -eta (u - e)``. With ``eta = 0`` there
 is no lag: the laws read the record's input ``e`` itself (linear within an interval) and ``u``
@@ -263,7 +263,7 @@ def step_advance(
 #: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-] (RK4 is
 #: stable up to about 2.8 for real eigenvalues; the step-halving check of every fit measures the
 #: remaining error).
-SUBSTEP_RATE_PRODUCT = 1.0
+SUBSTEP_RATE_PRODUCT = 2.0
 #: Upper limit of automatic sub-steps per sampling interval.
 MAX_AUTO_SUBSTEPS = 2000
 

@@ -45,6 +45,10 @@ _KIND_COLORS = {
     "sp4": "tab:purple",
     "spencer": "tab:orange",
     "bingham": "tab:brown",
+    "tanh": "darkgoldenrod",
+    "boucwen": "slateblue",
+    "dahl": "darkcyan",
+    "lugre": "crimson",
 }
 _FALLBACK = ("tab:pink", "gold", "navy", "teal", "maroon", "lime")
 
