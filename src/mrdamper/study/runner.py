@@ -59,7 +59,15 @@ _O = TypeVar("_O", FitOutcome, SimOutcome)
 #: Typical identification cost rank per kind (most expensive first). Fits are submitted in this
 #: order so the longest task starts first and the others fill the remaining workers; results do
 #: not depend on it.
-_COST_RANK: dict[str, int] = {"spencer": 0, "lpv": 1, "p15": 2, "sp1": 3, "sp4": 4, "lti": 5}
+_COST_RANK: dict[str, int] = {
+    "spencer": 0,
+    "boucwen": 0,
+    "lpv": 1,
+    "p15": 2,
+    "sp1": 3,
+    "sp4": 4,
+    "lti": 5,
+}
 
 
 def _estimator_fields(est: Estimator) -> set[str]:
