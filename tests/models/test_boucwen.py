@@ -42,3 +42,11 @@ def test_single_level_fits_constants() -> None:
 
 def test_bad_values_name_the_field() -> None:
     cases.check_bad_values("boucwen", TRUE, "n", 0.5)
+
+
+def test_kernel_matches_a_tight_reference() -> None:
+    cases.check_kernel_against_reference("boucwen", TRUE)
+    cases.check_kernel_against_reference("boucwen", TRUE, eta=60.0)
+    # as stiff as the fit on the Quiroz records (n = 1, gamma = beta, z_max 29 um)
+    stiff = {"alpha_a": 3.6e6, "alpha_b": 2.5e7, "gamma": 17392.0, "beta": 17392.0, "n": 1.0}
+    cases.check_kernel_against_reference("boucwen", {**TRUE, **stiff})

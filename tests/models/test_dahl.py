@@ -47,3 +47,9 @@ def test_single_level_fits_constants() -> None:
 
 def test_bad_values_name_the_field() -> None:
     cases.check_bad_values("dahl", TRUE, "sigma", -1.0)
+
+
+def test_kernel_matches_a_tight_reference() -> None:
+    cases.check_kernel_against_reference("dahl", TRUE)
+    cases.check_kernel_against_reference("dahl", TRUE, eta=60.0)
+    cases.check_kernel_against_reference("dahl", {**TRUE, "sigma": 1e5})  # sharp yield

@@ -40,3 +40,8 @@ def test_single_level_fits_constants() -> None:
 
 def test_bad_values_name_the_field() -> None:
     cases.check_bad_values("lugre", TRUE, "a0", -1.0)
+
+
+def test_kernel_matches_a_tight_reference() -> None:
+    cases.check_kernel_against_reference("lugre", TRUE)
+    cases.check_kernel_against_reference("lugre", TRUE, eta=60.0)
