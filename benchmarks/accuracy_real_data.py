@@ -1,4 +1,4 @@
-"""Free-run accuracy of every registered model kind on the two shared real data sets.
+"""Free-run accuracy of every registered model kind on the three shared real data sets.
 
 Protocols (no tuning on test data):
 
@@ -8,7 +8,11 @@ Protocols (no tuning on test data):
 * Dyke (``ranran_50.csv``, random displacement, switching command voltage): first 70 % of the
   record trains, last 30 % tests. The scheduling variable of the LPV/LTI models is the
   first-order filtered command voltage; its rate ``eta`` is chosen on the training part only
-  (first 80 % of it fits, last 20 % validates).
+  (first 80 % of it fits, last 20 % validates). ``--dyke-eta ETA`` skips that choice and uses
+  ``ETA`` at the full rate (the choice the grid makes, 250 1/s, is in ``docs/results.md``).
+* Labcontrol (``labcontrol2021_utfpr``, constant-voltage sine records at 100 Hz on a third
+  damper): fit on ``train/`` (23 records, four voltage levels), score every record of ``test/``
+  (15 records); the LPV/LTI model rate is the record rate.
 
 Every model is fitted with its estimator's defaults plus the data set's electrical input; the LPV
 and LTI models use a model rate of 200 Hz for Quiroz (chosen a priori: the lowest record rate);
@@ -23,6 +27,7 @@ Run::
     python benchmarks/accuracy_real_data.py                 # both protocols, every model
     python benchmarks/accuracy_real_data.py --models lpv lti sp1 --protocol quiroz
     python benchmarks/accuracy_real_data.py --models p15 --set p15.method=equation-error
+    python benchmarks/accuracy_real_data.py --models tanh dahl --protocol all --dyke-eta 250
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ REPO = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO.parent / "shared" / "data"))
 QUIROZ_FS = 200.0
 DYKE_FS = 3004.8
+LABCONTROL_FS = 100.0
 DECIMATION_GRID = (1, 2, 5)
 ETA_GRID = (50.0, 100.0, 150.0, 250.0, 400.0)
 
@@ -61,10 +67,11 @@ def settings_for(
 ) -> dict[str, Any]:
     """Estimator settings per kind and protocol (defaults plus the data set's input)."""
     s: dict[str, Any] = {}
-    if protocol == "dyke":
+    if protocol in ("dyke", "labcontrol"):
         s["input"] = "voltage"
     if kind in ("lpv", "lti"):
-        s["model_fs"] = QUIROZ_FS if protocol == "quiroz" else DYKE_FS / decimation
+        rates = {"quiroz": QUIROZ_FS, "labcontrol": LABCONTROL_FS}
+        s["model_fs"] = rates.get(protocol, DYKE_FS / decimation)
         if protocol == "dyke":
             s["eta"] = eta
     elif protocol == "dyke" and "eta" in {f.name for f in fields(type(get_estimator(kind)))}:
@@ -182,9 +189,15 @@ def choose_eta(train: Experiment) -> tuple[float, int, pd.DataFrame]:
     return float(tab.loc[k, "eta"]), int(tab.loc[k, "decimation"]), tab
 
 
-def dyke(models: list[str]) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
+def dyke(
+    models: list[str], eta: float | None = None
+) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
+    """Dyke 70/30; ``eta`` given: no choice on the training part (full model rate)."""
     train, test = _dyke_parts()
-    eta, dec, eta_tab = choose_eta(train)
+    if eta is None:
+        eta, dec, eta_tab = choose_eta(train)
+    else:
+        dec, eta_tab = 1, pd.DataFrame([{"eta": eta, "note": "given (--dyke-eta)"}])
     rows = []
     for kind in models:
         # the command voltage of the test part exceeds the training range by < 0.1 %: clip it
@@ -199,6 +212,25 @@ def dyke(models: list[str]) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
             flush=True,
         )
     return pd.DataFrame(rows), eta, dec, eta_tab
+
+
+def labcontrol(models: list[str]) -> pd.DataFrame:
+    """Fit on the Labcontrol ``train/`` records, score every ``test/`` record."""
+    root = DATA / "labcontrol2021_utfpr"
+    pattern = r"ensaio(?P<test>[^_]+)_(?P<series>.+)_(?P<voltage>[\d.]+)V\.csv"
+    train = read_directory(root / "train", pattern=pattern)
+    test = read_directory(root / "test", pattern=pattern)
+    rows = []
+    for kind in models:
+        rows += fit_and_score(kind, settings_for(kind, "labcontrol"), train, test, "clip")
+        last = rows[-1]
+        print(
+            f"  labcontrol {kind:8s} fit {last['fit_s']:6.2f} s  "
+            f"{'error: ' + last['error'][:70] if last['error'] else ''}",
+            file=sys.stderr,
+            flush=True,
+        )
+    return pd.DataFrame(rows)
 
 
 def to_markdown(df: pd.DataFrame, index: bool = True) -> str:
@@ -222,7 +254,9 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
             "records": g["esr"].count(),
             "failed": g["error"].apply(lambda s: int((s != "").sum())),
             "fit_s_total": g.apply(
-                lambda d: d.drop_duplicates("fold" if "fold" in d else "model")["fit_s"].sum()
+                lambda d: (
+                    d.drop_duplicates("fold")["fit_s"].sum() if "fold" in d else d["fit_s"].iloc[0]
+                )
             ),
         }
     )
@@ -233,7 +267,15 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument(
         "--models", nargs="*", default=None, help="model kinds (default: every available)"
     )
-    ap.add_argument("--protocol", choices=("quiroz", "dyke", "both"), default="both")
+    ap.add_argument(
+        "--protocol",
+        choices=("quiroz", "dyke", "labcontrol", "both", "all"),
+        default="both",
+        help="both: quiroz and dyke; all: the three data sets",
+    )
+    ap.add_argument(
+        "--dyke-eta", type=float, default=None, help="Dyke drive-lag rate [1/s] (skip its choice)"
+    )
     ap.add_argument(
         "--csv", type=Path, default=None, help="also write the per-record rows to this CSV"
     )
@@ -260,7 +302,7 @@ def main(argv: list[str] | None = None) -> None:
     pd.set_option("display.width", 200)
     print(f"models: {models}\n")
     frames = []
-    if args.protocol in ("quiroz", "both"):
+    if args.protocol in ("quiroz", "both", "all"):
         q = quiroz(models)
         frames.append(q.assign(protocol="quiroz"))
         print("## Quiroz leave-one-condition-out: mean test ESR per fold")
@@ -271,8 +313,8 @@ def main(argv: list[str] | None = None) -> None:
         )
         print("\n## Quiroz summary (mean over all test records)")
         print(summarise(q).pipe(to_markdown))
-    if args.protocol in ("dyke", "both"):
-        d, eta, dec, eta_tab = dyke(models)
+    if args.protocol in ("dyke", "both", "all"):
+        d, eta, dec, eta_tab = dyke(models, args.dyke_eta)
         frames.append(d.assign(protocol="dyke"))
         print(
             f"\n## Dyke 70/30: LPV/LTI settings chosen on the training part: eta = {eta:g} 1/s, "
@@ -281,6 +323,18 @@ def main(argv: list[str] | None = None) -> None:
         print(to_markdown(eta_tab, index=False))
         print("\n## Dyke test (last 30 %)")
         print(d.set_index("model")[["esr", "ssse", "fit_s", "error"]].pipe(to_markdown))
+    if args.protocol in ("labcontrol", "all"):
+        lab = labcontrol(models)
+        frames.append(lab.assign(protocol="labcontrol"))
+        print("\n## Labcontrol train/ -> test/: mean test ESR per voltage level")
+        level = lab["record"].str.extract(r"_([0-9.]+)V$", expand=False).fillna("(fit)")
+        print(
+            lab.assign(level=level)
+            .pivot_table(index="level", columns="model", values="esr", aggfunc="mean", sort=False)
+            .pipe(to_markdown)
+        )
+        print("\n## Labcontrol summary (mean over all test records)")
+        print(summarise(lab).pipe(to_markdown))
     if args.csv is not None:
         from mrdamper._io import atomic_write_text
 

@@ -51,6 +51,10 @@ MODEL_MODULES = [
     "spencer",
     "bingham",
     "narx",
+    "tanh",
+    "boucwen",
+    "dahl",
+    "lugre",
 ]
 SECTIONS = ("Parameters", "Attributes", "Other Parameters")
 _HEADER = re.compile(r"^(\s*)([A-Z][A-Za-z ]+)\n\1-{3,}\s*$", re.MULTILINE)

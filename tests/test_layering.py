@@ -190,11 +190,12 @@ def _cycle_edges(comp: list[str], edges: dict[str, set[str]]) -> list[str]:
 
 #: Layer of every package and top-level module (higher layers import lower ones only). Ground:
 #: the kind table (plain data), errors, progress reporting; output safety, metrics; data and
-#: signals; analysis and figures; the model families; what runs models (the virtual rig,
-#: control); the compile-ahead of every kernel (models' and rig's); the comparison study; the
-#: curated public namespace; the command line.
+#: signals; analysis and figures; the model families; the virtual rig; what runs models in
+#: loops and exports (control); the compile-ahead of every kernel (models' and rig's); the
+#: comparison study; the curated public namespace; the command line.
 LAYERS: dict[str, int] = {
     "mrdamper.kinds": 0,
+    "mrdamper.version": 0,
     "mrdamper.errors": 0,
     "mrdamper.progress": 0,
     "mrdamper._io": 1,
@@ -205,7 +206,7 @@ LAYERS: dict[str, int] = {
     "mrdamper.plotting": 3,
     "mrdamper.models": 4,
     "mrdamper.rig": 5,
-    "mrdamper.control": 5,
+    "mrdamper.control": 6,
     "mrdamper.compiled": 6,
     "mrdamper.study": 7,
     "mrdamper": 8,

@@ -53,7 +53,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.rig.doe import table_ii
     from mrdamper.study import Protocol, StudyResult, load_protocol, run_study
 
-__version__ = "0.2.0"
+from mrdamper.version import __version__
 
 #: Public name -> module it comes from. Everything but the exceptions is imported on first use,
 #: so ``import mrdamper`` (and the command line's start, which a background compilation may be

@@ -185,6 +185,43 @@ KINDS: tuple[KindSpec, ...] = (
             (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.3),
         ),
     ),
+    KindSpec(
+        "tanh",
+        "mrdamper.models.tanh",
+        "TanhEstimator",
+        "TanhModel",
+        "hyperbolic-tangent model (Kwok et al. 2006)",
+        "darkgoldenrod",
+        default=False,
+    ),
+    KindSpec(
+        "boucwen",
+        "mrdamper.models.boucwen",
+        "BoucWenEstimator",
+        "BoucWenModel",
+        "classic Bouc-Wen model (current-dependent alpha and c0)",
+        "slateblue",
+        default=False,
+        cost_rank=0,
+    ),
+    KindSpec(
+        "dahl",
+        "mrdamper.models.dahl",
+        "DahlEstimator",
+        "DahlModel",
+        "modified Dahl model (Zhou et al.)",
+        "darkcyan",
+        default=False,
+    ),
+    KindSpec(
+        "lugre",
+        "mrdamper.models.lugre",
+        "LuGreEstimator",
+        "LuGreModel",
+        "LuGre model of an MR damper (Jimenez and Alvarez-Icaza 2005)",
+        "crimson",
+        default=False,
+    ),
 )
 
 _ADDED: dict[str, KindSpec] = {}

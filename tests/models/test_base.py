@@ -110,5 +110,9 @@ def test_known_kinds_lists_every_family() -> None:
         "spencer",
         "bingham",
         "narx",
+        "tanh",
+        "boucwen",
+        "dahl",
+        "lugre",
     ]
     assert known_kinds()[: len(KINDS)] == [row.kind for row in KINDS]

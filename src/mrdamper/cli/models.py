@@ -97,7 +97,11 @@ def _check_policy(policy: str) -> RangePolicy:
 # ----------------------------------------------------------------------------- commands
 def fit(
     model: Annotated[
-        str, typer.Argument(help="Model kind: lpv, lti, p15, sp1, sp2, sp3, sp4, spencer, bingham.")
+        str,
+        typer.Argument(
+            help="Model kind: lpv, lti, p15, sp1, sp2, sp3, sp4, spencer, bingham, narx, tanh, "
+            "boucwen, dahl, lugre.",
+        ),
     ],
     data: Annotated[list[Path], typer.Argument(help="Training data files or folders.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output model file (JSON).")],

@@ -10,13 +10,13 @@ car scaled by the motion ratio and the road at the plant rate. :func:`loop_resul
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mrdamper.control import _quarter_car_kernels as QK
+from mrdamper.control.car import Controller, QuarterCar, QuarterCarResult, Road, positive
 from mrdamper.control.inverse import (
     default_reg,
     horizon_samples,
@@ -26,9 +26,6 @@ from mrdamper.control.inverse import (
     static_map_arrays,
 )
 from mrdamper.errors import DataValidationError
-
-if TYPE_CHECKING:
-    from mrdamper.control.quarter_car import Controller, QuarterCar, QuarterCarResult, Road
 
 __all__ = ["CONTROL_CODES", "LoopSetup", "damper_arrays", "loop_result", "loop_setup", "positive"]
 
@@ -40,20 +37,6 @@ CONTROL_CODES = {
     "groundhook": QK.CTRL_GROUNDHOOK,
     "hybrid": QK.CTRL_HYBRID,
 }
-
-
-def positive(name: str, value: Any, unit: str, allow_zero: bool = False) -> float:
-    """``value`` as a finite float > 0 (or >= 0), else a one-line error naming ``name``."""
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        raise DataValidationError(name, f"expected a number [{unit}], got {value!r}") from None
-    ok = math.isfinite(f) and (f >= 0 if allow_zero else f > 0)
-    if isinstance(value, bool) or not ok:
-        raise DataValidationError(
-            name, f"expected a finite value {'>=' if allow_zero else '>'} 0 [{unit}], got {value!r}"
-        )
-    return f
 
 
 def damper_arrays(model: Any) -> dict[str, Any]:
@@ -250,8 +233,6 @@ def loop_result(
 ) -> QuarterCarResult:
     """The run as a :class:`QuarterCarResult`; ``F`` per plant step or per control sample (then
     held), ``Fd``, ``cmd`` and ``sat`` per control sample."""
-    from mrdamper.control.quarter_car import QuarterCarResult
-
     n = s.n_ctrl * s.n_sub
     rep = np.repeat
     mr = s.mr

@@ -44,7 +44,8 @@ from typing import Any
 import numpy as np
 
 from mrdamper.control import _closed_loop_kernels as CK
-from mrdamper.control._loop import LoopSetup, damper_arrays, loop_result, loop_setup, positive
+from mrdamper.control._loop import LoopSetup, damper_arrays, loop_result, loop_setup
+from mrdamper.control.car import positive
 from mrdamper.control.inverse import model_input_limits
 from mrdamper.control.quarter_car import (
     CONTROLLERS,

@@ -44,11 +44,11 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-from mrdamper import __version__
 from mrdamper._io import atomic_write_with, check_writable
 from mrdamper.control._fmi2_c import FMI2_TYPES, WRAPPER
 from mrdamper.control.c_export import C_KINDS, assemble, render
 from mrdamper.errors import DataValidationError, MrDamperError
+from mrdamper.version import __version__
 
 __all__ = ["FMU_KINDS", "GCC_FLAGS", "export_fmu", "fmu_sources", "run_fmu", "training_dt"]
 

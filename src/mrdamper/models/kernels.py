@@ -10,7 +10,9 @@ car and the exports of :mod:`mrdamper.control` import them from here instead of 
   :data:`MODE_LITERAL`), :func:`lag_step` (one sample of the drive lag);
 * hysteretic input (:mod:`mrdamper.analysis.hysteretic`): :func:`dahl_step`;
 * static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models._sp_kernels`): :func:`sp_force1`
-  (one sample of the map) and :func:`sp_dforce1` (its derivative in the input).
+  (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
+* Spencer (:mod:`mrdamper.models._spencer_kernels`): its form :class:`SpencerForm`, parameter
+  order and divergence bounds, for the C rendering of its step.
 
 Caveat of numba's disk cache: a cached kernel that calls one of these functions is not recompiled
 when the function changes; delete the caller's ``__pycache__/*.nb*`` files after editing here.
@@ -30,11 +32,19 @@ from mrdamper.models._lpv_step import (
     zone_input,
 )
 from mrdamper.models._sp_kernels import sp_dforce1, sp_force1
+from mrdamper.models._spencer_kernels import PARAM_NAMES as SPENCER_PARAM_NAMES
+from mrdamper.models._spencer_kernels import Y_LIMIT as SPENCER_Y_LIMIT
+from mrdamper.models._spencer_kernels import Z_LIMIT as SPENCER_Z_LIMIT
+from mrdamper.models._spencer_kernels import SpencerForm
 
 __all__ = [
     "MODE_CONTINUOUS",
     "MODE_LITERAL",
     "MODE_V",
+    "SPENCER_PARAM_NAMES",
+    "SPENCER_Y_LIMIT",
+    "SPENCER_Z_LIMIT",
+    "SpencerForm",
     "dahl_step",
     "dpoly",
     "lag_step",

@@ -17,7 +17,7 @@ from typing import Any
 
 from mrdamper.control.c_render._common import Context, Rendered, lit
 from mrdamper.errors import DataValidationError
-from mrdamper.models import _spencer_kernels as SK
+from mrdamper.models import kernels as SK
 
 __all__ = ["render_spencer", "render_spencer_form"]
 
@@ -151,7 +151,7 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
     p, P = ctx.p, ctx.P
     consts = "".join(
         _PARAMS.format(P=P, name=n.upper(), value=lit(v), doc=n)
-        for n, v in zip(SK.PARAM_NAMES, form.p)
+        for n, v in zip(SK.SPENCER_PARAM_NAMES, form.p)
     )
     body = (
         consts
@@ -161,8 +161,8 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
             P=P,
             max_h=lit(form.max_h),
             dt=lit(dt),
-            z_limit=lit(SK.Z_LIMIT),
-            y_limit=lit(SK.Y_LIMIT),
+            z_limit=lit(SK.SPENCER_Z_LIMIT),
+            y_limit=lit(SK.SPENCER_Y_LIMIT),
         )
     )
     state = (

@@ -1,0 +1,303 @@
+"""Compiled kernels of the one-state hysteresis families (private): hyperbolic tangent (Kwok et
+al. 2006), classic Bouc-Wen, modified Dahl (Zhou et al. 2006) and LuGre (Jiménez and
+Álvarez-Icaza 2005).
+
+The four families share one state layout ``s = (z, u)`` and one integrator, so the integrator,
+the free run and the per-sample step are written once here and the family only chooses the
+equations (a branch on the ``family`` code). ``z`` is the family's evolutionary
+(bristle, Dahl, Bouc-Wen) variable, unused by the static ``tanh`` family; ``u`` is the electrical
+input after the optional first-order drive lag ``du/dt = -eta (u - e)``. With ``eta = 0`` there
+is no lag: the laws read the record's input ``e`` itself (linear within an interval) and ``u``
+follows it.
+
+Every parameter vector ``p`` starts with ``(eta, f0)``; the family's own parameters follow in the
+order of :data:`PARAM_NAMES`. The input-dependent laws are linear in ``u`` (``a + b u``).
+Records are sampled; within an interval the inputs are linear and it is integrated with ``nsub``
+classical Runge-Kutta (RK4) sub-steps (:func:`auto_substeps` chooses them).
+
+Status codes: 0 ok, 1 the state became non-finite or left its bound.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+from numba import njit
+
+__all__ = [
+    "BOUCWEN",
+    "DAHL",
+    "FAMILIES",
+    "LUGRE",
+    "MAX_AUTO_SUBSTEPS",
+    "PARAM_NAMES",
+    "STATUS_DIVERGED",
+    "STATUS_OK",
+    "SUBSTEP_RATE_PRODUCT",
+    "TANH",
+    "HysteresisForm",
+    "auto_substeps",
+    "simulate",
+    "step_advance",
+    "step_force",
+]
+
+FloatArray = npt.NDArray[np.float64]
+
+TANH, BOUCWEN, DAHL, LUGRE = 0, 1, 2, 3
+#: family name -> code of the compiled branch.
+FAMILIES: dict[str, int] = {"tanh": TANH, "boucwen": BOUCWEN, "dahl": DAHL, "lugre": LUGRE}
+
+#: Parameter order of ``p`` per family (SI; see the family modules for the units).
+PARAM_NAMES: dict[str, tuple[str, ...]] = {
+    "tanh": ("eta", "f0", "ca", "cb", "k", "alpha_a", "alpha_b", "beta", "delta"),
+    "boucwen": (
+        "eta",
+        "f0",
+        "c0a",
+        "c0b",
+        "k0",
+        "alpha_a",
+        "alpha_b",
+        "gamma",
+        "beta",
+        "A",
+        "n",
+    ),
+    "dahl": ("eta", "f0", "c0a", "c0b", "k0", "Fda", "Fdb", "sigma"),
+    "lugre": ("eta", "f0", "sigma_a", "sigma_0", "sigma_1", "sigma_2", "sigma_b", "a0"),
+}
+
+STATUS_OK = 0
+STATUS_DIVERGED = 1
+#: |z| beyond this bound counts as divergence (every family keeps z far below it).
+Z_LIMIT = 1.0e6
+
+ETA, F0 = 0, 1
+
+
+@njit(cache=True)
+def _sign(a: float) -> float:
+    if a > 0.0:
+        return 1.0
+    if a < 0.0:
+        return -1.0
+    return 0.0
+
+
+@njit(cache=True)
+def _zdot(fam: int, p: FloatArray, v: float, z: float) -> float:
+    """dz/dt of the family's evolutionary variable at velocity ``v`` [m/s]."""
+    if fam == BOUCWEN:
+        gamma, beta, A, n = p[7], p[8], p[9], p[10]
+        az = abs(z)
+        zn = az * az if n == 2.0 else (az**n if az > 0.0 else 0.0)
+        return -gamma * abs(v) * _sign(z) * zn - beta * v * zn + A * v  # type: ignore[no-any-return]
+    if fam == DAHL:
+        return p[7] * (v - abs(v) * z)  # type: ignore[no-any-return]
+    if fam == LUGRE:
+        return v - p[3] * p[7] * abs(v) * z  # type: ignore[no-any-return]
+    return 0.0
+
+
+@njit(cache=True)
+def _force(fam: int, p: FloatArray, x: float, v: float, z: float, u: float) -> float:
+    """Force [N] at displacement ``x`` [m], velocity ``v`` [m/s], state ``z`` and input ``u``."""
+    if fam == TANH:
+        c = p[2] + p[3] * u
+        al = p[5] + p[6] * u
+        return c * v + p[4] * x + al * math.tanh(p[7] * v + p[8] * _sign(x)) + p[F0]  # type: ignore[no-any-return]
+    if fam == LUGRE:
+        zd = _zdot(fam, p, v, z)
+        return (  # type: ignore[no-any-return]
+            (p[2] + p[3] * u) * z + p[4] * zd + (p[5] + p[6] * u) * v + p[F0]
+        )
+    # Bouc-Wen and Dahl: c0(u) v + k0 x + a(u) z + f0
+    return (p[2] + p[3] * u) * v + p[4] * x + (p[5] + p[6] * u) * z + p[F0]  # type: ignore[no-any-return]
+
+
+@njit(cache=True)
+def _interval(
+    fam: int,
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+    p: FloatArray,
+    nsub: int,
+) -> int:
+    """Integrate ``s = (z, u)`` in place over one interval of ``dt`` [s] (inputs linear in
+    between, ``nsub`` RK4 sub-steps); returns a status code."""
+    z, u = s[0], s[1]
+    eta = p[ETA]
+    hf = 1.0 / nsub
+    h = dt * hf
+    dv = v1 - v0
+    de = e1 - e0
+    if fam != TANH:
+        for j in range(nsub):
+            t0 = j * hf
+            va = v0 + t0 * dv
+            vm = va + 0.5 * hf * dv
+            vb = va + hf * dv
+            k1 = _zdot(fam, p, va, z)
+            k2 = _zdot(fam, p, vm, z + 0.5 * h * k1)
+            k3 = _zdot(fam, p, vm, z + 0.5 * h * k2)
+            k4 = _zdot(fam, p, vb, z + h * k3)
+            z += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    if eta > 0.0:
+        # the lag does not depend on z: its own RK4 sub-steps on the linear input
+        for j in range(nsub):
+            t0 = j * hf
+            ea = e0 + t0 * de
+            em = ea + 0.5 * hf * de
+            eb = ea + hf * de
+            g1 = -eta * (u - ea)
+            g2 = -eta * (u + 0.5 * h * g1 - em)
+            g3 = -eta * (u + 0.5 * h * g2 - em)
+            g4 = -eta * (u + h * g3 - eb)
+            u += h / 6.0 * (g1 + 2.0 * g2 + 2.0 * g3 + g4)
+    else:
+        u = e1
+    s[0], s[1] = z, u
+    if not (np.isfinite(z) and np.isfinite(u)) or abs(z) > Z_LIMIT:
+        return STATUS_DIVERGED
+    return STATUS_OK
+
+
+@njit(cache=True)
+def simulate(
+    fam: int,
+    x: FloatArray,
+    v: FloatArray,
+    e: FloatArray,
+    dt: float,
+    p: FloatArray,
+    nsub: int,
+) -> tuple[FloatArray, int, int]:
+    """Free-run force of one record from rest (``z = 0``, ``u = e[0]``).
+
+    Parameters
+    ----------
+    fam : int
+        Family code (:data:`FAMILIES`).
+    x, v, e : ndarray
+        Displacement [m], velocity [m/s], electrical input [A] or [V], one value a sample.
+    dt : float
+        Sampling interval [s].
+    p : ndarray
+        Parameters in the family's :data:`PARAM_NAMES` order (SI).
+    nsub : int
+        RK4 sub-steps per sampling interval.
+
+    Returns
+    -------
+    F : ndarray
+        Force [N] (valid before the failing sample when status != 0).
+    status, sample : int
+        Status code and first failing sample (-1 when ok).
+    """
+    n = x.size
+    F = np.zeros(n)
+    s = np.array([0.0, e[0]])
+    for k in range(n):
+        F[k] = _force(fam, p, x[k], v[k], s[0], s[1])
+        if k == n - 1:
+            break
+        status = _interval(fam, s, x[k], v[k], e[k], x[k + 1], v[k + 1], e[k + 1], dt, p, nsub)
+        if status != STATUS_OK:
+            return F, status, k + 1
+    return F, STATUS_OK, -1
+
+
+class HysteresisForm(NamedTuple):
+    """One of the four families as the per-sample step reads it.
+
+    Attributes
+    ----------
+    family : int
+        Family code (:data:`FAMILIES`).
+    p : ndarray
+        Parameters in the family's :data:`PARAM_NAMES` order (SI).
+    max_h : float
+        Largest RK4 sub-step [s]; an interval of ``dt`` takes ``ceil(dt / max_h)`` sub-steps.
+    """
+
+    family: int
+    p: FloatArray
+    max_h: float
+
+
+@njit(cache=True)
+def step_force(form: HysteresisForm, s: FloatArray, x: float, v: float, e: float) -> float:
+    """Force [N] at the state ``s = (z, u)`` and the present motion (see :mod:`..step`)."""
+    u = s[1] if form.p[ETA] > 0.0 else e
+    return _force(form.family, form.p, x, v, s[0], u)
+
+
+@njit(cache=True)
+def step_advance(
+    form: HysteresisForm,
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+) -> int:
+    """Advance ``s`` over one interval of ``dt`` [s] (RK4, inputs linear in between)."""
+    nsub = max(1, math.ceil(dt / form.max_h * (1.0 - 1e-12)))
+    return _interval(form.family, s, x0, v0, e0, x1, v1, e1, dt, form.p, nsub)
+
+
+# ----------------------------------------------------------------------------- step size
+#: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-] (RK4 is
+#: stable up to about 2.8 for real eigenvalues; the step-halving check of every fit measures the
+#: remaining error).
+SUBSTEP_RATE_PRODUCT = 2.0
+#: Upper limit of automatic sub-steps per sampling interval.
+MAX_AUTO_SUBSTEPS = 2000
+
+
+def fastest_rate(family: str, p: np.ndarray, vmax: float) -> float:
+    """Upper estimate of the fastest rate of the state equations [1/s] at speeds up to ``vmax``.
+
+    Parameters
+    ----------
+    family : str
+        Family name.
+    p : ndarray
+        Parameters in the family's :data:`PARAM_NAMES` order.
+    vmax : float
+        Largest absolute velocity [m/s].
+    """
+    rate = abs(float(p[ETA]))
+    if family == "dahl":
+        rate += abs(float(p[7])) * vmax
+    elif family == "lugre":
+        rate += abs(float(p[3] * p[7])) * vmax
+    elif family == "boucwen":
+        gamma, beta, A, n = (float(a) for a in p[7:11])
+        shape = beta + gamma
+        zmax = (abs(A) / shape) ** (1.0 / n) if shape > 0.0 and A != 0.0 else 1.0
+        rate += n * (abs(beta) + abs(gamma)) * zmax ** (n - 1.0) * vmax
+    return rate
+
+
+def auto_substeps(family: str, p: np.ndarray, dt: float, vmax: float) -> int:
+    """RK4 sub-steps per sampling interval of ``dt`` [s]: the product of the sub-step and
+    :func:`fastest_rate` stays at most :data:`SUBSTEP_RATE_PRODUCT` (at most
+    :data:`MAX_AUTO_SUBSTEPS`)."""
+    rate = fastest_rate(family, p, vmax)
+    if not math.isfinite(rate):
+        return MAX_AUTO_SUBSTEPS
+    return int(min(MAX_AUTO_SUBSTEPS, max(1, math.ceil(dt * rate / SUBSTEP_RATE_PRODUCT))))

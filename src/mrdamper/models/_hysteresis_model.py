@@ -1,0 +1,271 @@
+"""Fitted-model and estimator base of the one-state hysteresis families (private).
+
+``tanh``, ``boucwen``, ``dahl`` and ``lugre`` are each a small module declaring its parameters
+(the fields of a :class:`HysteresisModel` subclass) and its identification spec
+(:class:`~._oe_fit.FitSpec`); everything else is here, written once: parameter checks, the free
+run, the per-sample step, the estimator settings, the output-error fit and its step-halving
+check.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+
+from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
+from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models import _hysteresis_kernels as _k
+from mrdamper.models import _scale
+from mrdamper.models._oe_fit import FitSettings, FitSpec, check_mappings, identify
+from mrdamper.models._step_check import step_halving_check
+from mrdamper.models.base import (
+    Estimator,
+    FittedModel,
+    Identified,
+    RangePolicy,
+    TrainingData,
+    check_int,
+    check_number,
+)
+from mrdamper.models.step import Step
+from mrdamper.progress import report
+
+__all__ = ["STEP_VMAX", "HysteresisEstimator", "HysteresisModel"]
+
+#: Largest damper velocity [m/s] the per-sample step resolves by default.
+STEP_VMAX = 1.5
+
+
+@dataclass(frozen=True, kw_only=True)
+class HysteresisModel(FittedModel):
+    """Base of the four families' fitted models (see the family modules).
+
+    Attributes
+    ----------
+    eta : float
+        Rate of the first-order drive lag from the electrical input to ``u`` [1/s]; 0: no lag.
+    f0 : float
+        Force offset [N].
+    substeps : int
+        RK4 sub-steps per sampling interval; 0 chooses them from the parameters and the record.
+    """
+
+    family: ClassVar[str] = "abstract"
+
+    eta: float = 0.0
+    f0: float = 0.0
+    substeps: int = 0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for name in _k.PARAM_NAMES[self.family]:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(
+                value, (int, float, np.integer, np.floating)
+            ):
+                raise DataValidationError(name, f"expected a real number, got {value!r}")
+            if not math.isfinite(float(value)):
+                raise DataValidationError(name, f"expected a finite number, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        if self.eta < 0.0:
+            raise DataValidationError(
+                "eta", f"expected a drive-lag rate >= 0 [1/s] (0: no lag), got {self.eta!r}"
+            )
+        if (
+            isinstance(self.substeps, bool)
+            or not isinstance(self.substeps, (int, np.integer))
+            or self.substeps < 0
+        ):
+            raise DataValidationError(
+                "substeps",
+                f"expected a non-negative integer (0 = automatic), got {self.substeps!r}",
+            )
+        object.__setattr__(self, "substeps", int(self.substeps))
+        if self.input not in ("i", "voltage"):
+            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
+        self._check()
+
+    def _check(self) -> None:
+        """Family-specific parameter checks (one-line errors naming the field)."""
+
+    def parameter_vector(self) -> np.ndarray:
+        """Parameters as a float64 array in the kernel order (SI)."""
+        return np.array([getattr(self, n) for n in _k.PARAM_NAMES[self.family]], dtype=np.float64)
+
+    def substeps_for(self, experiment: Experiment) -> int:
+        """RK4 sub-steps per sampling interval used for ``experiment`` (``substeps``, or the
+        automatic choice of :func:`~._hysteresis_kernels.auto_substeps` for its interval and
+        largest |velocity|)."""
+        if self.substeps > 0:
+            return self.substeps
+        vmax = float(np.max(np.abs(experiment.v)))
+        return _k.auto_substeps(self.family, self.parameter_vector(), experiment.dt, vmax)
+
+    def predict(self, experiment: Experiment) -> np.ndarray:
+        """Free-run force [N] of one record from its x, v and electrical input, from rest.
+
+        Raises
+        ------
+        DataValidationError
+            If the record lacks the model's electrical input channel.
+        OutOfRangeError
+            If the electrical input leaves ``input_range`` and ``range_policy == "error"``.
+        SimulationDivergedError
+            If the state becomes non-finite or leaves its bound (names the first failing sample).
+        """
+        if not isinstance(experiment, Experiment):
+            raise DataValidationError(
+                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
+            )
+        e = np.ascontiguousarray(self.electrical_input(experiment), dtype=np.float64)
+        nsub = self.substeps_for(experiment)
+        F, status, sample = _k.simulate(
+            _k.FAMILIES[self.family],
+            np.ascontiguousarray(experiment.x, dtype=np.float64),
+            np.ascontiguousarray(experiment.v, dtype=np.float64),
+            e,
+            experiment.dt,
+            self.parameter_vector(),
+            nsub,
+        )
+        if status != _k.STATUS_OK:
+            raise SimulationDivergedError(
+                self.kind,
+                sample,
+                f"record {experiment.name!r}: state became non-finite or unbounded with {nsub} "
+                "RK4 sub-steps per sample (set 'substeps' higher, or check the parameters)",
+            )
+        return np.asarray(F)
+
+    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+        """The model as a per-sample step (:mod:`mrdamper.models.step`).
+
+        The state is ``(z, u)``, at rest ``(0, e[0])``. ``advance`` integrates an interval with
+        the RK4 sub-steps of :meth:`predict` (the same compiled interval), no longer than
+        ``max_h``: the automatic choice for an interval of ``dt`` [s] and velocities up to
+        ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is set).
+
+        Parameters
+        ----------
+        dt : float
+            Reference interval [s] for the sub-step choice (default 1 ms).
+        vmax : float
+            Largest damper velocity [m/s] the step must resolve (default 1.5 m/s).
+        """
+        p = np.ascontiguousarray(self.parameter_vector())
+        nsub = self.substeps or _k.auto_substeps(self.family, p, dt, vmax)
+        form = _k.HysteresisForm(_k.FAMILIES[self.family], p, dt / nsub)
+
+        def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
+            return np.array([0.0, e0])
+
+        return Step(self.kind, form, _k.step_force, _k.step_advance, initial_state)
+
+
+@dataclass
+class HysteresisEstimator(Estimator):
+    """Output-error estimator of the four families (settings only; see :mod:`._oe_fit`).
+
+    Parameters
+    ----------
+    input : {"i", "voltage"}
+        Electrical input channel the model reads.
+    start, fixed : mapping, optional
+        Start values / fixed values of some identified parameters (names of the family's
+        ``IDENTIFIED`` tuple, SI). An explicit ``fixed`` replaces the family's default fixed set.
+    bounds : mapping, optional
+        ``name -> (low, high)`` overriding the family's default bounds.
+    n_starts : int
+        Starts: the data-driven guess plus ``n_starts - 1`` seeded variants; each runs
+        ``screen_nfev`` evaluations and the best continues to convergence.
+    seed : int
+        Seed of the random starts.
+    weighting : {"record", "none"}
+        ``"record"``: every record counts as much (cost = half the mean per-record ESR).
+    max_nfev, screen_nfev : int
+        Evaluation limits of the final run and of each screening run.
+    ftol, xtol, gtol : float
+        Tolerances of :func:`scipy.optimize.least_squares`.
+    substeps : int
+        RK4 sub-steps per sample (0 = automatic); kept by the fitted model.
+    eta : float or None
+        Drive-lag rate [1/s] from the electrical input to the laws (held, not identified);
+        None: no lag.
+    range_policy : {"error", "warn", "clip", "ignore"}
+        Range policy of the fitted model.
+    step_tolerance : float
+        Largest change of a training record's free run when the RK4 step is halved (ESR units)
+        before the fit warns (``provenance["step_check"]``).
+    """
+
+    kind: ClassVar[str] = "abstract"
+    spec: ClassVar[FitSpec]
+
+    input: ElectricalSource = "i"
+    start: Mapping[str, float] | None = None
+    fixed: Mapping[str, float] | None = None
+    bounds: Mapping[str, tuple[float, float]] | None = None
+    n_starts: int = 3
+    seed: int = 0
+    weighting: Literal["record", "none"] = "record"
+    max_nfev: int = 60
+    screen_nfev: int = 8
+    ftol: float = 1e-4
+    xtol: float = 1e-8
+    gtol: float = 1e-8
+    substeps: int = 0
+    eta: float | None = None
+    range_policy: RangePolicy = "error"
+    step_tolerance: float = 1e-4
+
+    def _validate(self) -> None:
+        super()._validate()
+        for name in ("n_starts", "max_nfev", "screen_nfev"):
+            check_int(name, getattr(self, name), 1)
+        check_int("substeps", self.substeps, 0)
+        for name in ("ftol", "xtol", "gtol"):
+            check_number(name, getattr(self, name), what="a positive finite tolerance")
+        check_number(
+            "step_tolerance", self.step_tolerance, what="a positive finite number (ESR units)"
+        )
+        if self.eta is not None:
+            check_number("eta", self.eta, what="a positive drive-lag rate [1/s] or None")
+        check_mappings(self.spec, self._fit_settings())
+
+    def _fit_settings(self) -> FitSettings:
+        names = [f.name for f in dataclasses.fields(FitSettings)]
+        return FitSettings(**{n: getattr(self, n) for n in names})
+
+    def _identify(self, data: TrainingData, **options: Any) -> Identified:
+        """Output-error fit (:func:`._oe_fit.identify`), then the step-halving check.
+
+        Raises
+        ------
+        IdentificationError
+            Every start diverged, or the optimiser returned a non-finite result.
+        """
+        exps, windows = _scale.window_set(data.records, budget=_scale.WINDOW_BUDGET_SPENCER)
+        params, provenance = identify(
+            self.spec, self._fit_settings(), exps, single=data.single, kind=self.kind
+        )
+        parameters: dict[str, Any] = {**params, "substeps": int(self.substeps)}
+        model = self.model_class(**parameters, input=self.input, input_range=data.input_range)
+        assert isinstance(model, HysteresisModel)
+        report("step-size check")
+        provenance["step_check"] = step_halving_check(
+            self.kind,
+            exps,
+            lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
+            self.step_tolerance,
+        )
+        if windows is not None:
+            provenance["windows"] = windows
+            report("full-data check")
+            provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
+        return Identified(parameters=parameters, provenance=provenance)
