@@ -14,33 +14,39 @@ The table is also printed.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
+from mrdamper._io import FileKind, csv_kind, png_kind
 from mrdamper.errors import DataValidationError
 
-__all__ = ["register"]
+__all__ = ["QUARTERCAR_CSV", "register"]
+
+#: The kinds of file ``quartercar`` writes (``--force`` replaces only such files).
+QUARTERCAR_CSV = csv_kind(
+    "table written by 'mrdamper quartercar' (road, controller, ...)", ("road", "controller")
+)
+_PNG = png_kind()
 
 
 def _slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
 
 
-def _save_png(fig: Any, path: Path, force: bool) -> Path:
+def _png_writer(fig: Any) -> Callable[[Path], object]:
+    """Writer of ``fig`` as PNG into a given path (the figure is closed once written)."""
     import matplotlib.pyplot as plt
 
-    from mrdamper._io.atomic import atomic_write_with
+    def write(path: Path) -> None:
+        try:
+            fig.savefig(path, format="png", dpi=100, metadata={"Software": None})
+        finally:
+            plt.close(fig)
 
-    try:
-        return atomic_write_with(
-            path,
-            lambda tmp: fig.savefig(tmp, format="png", dpi=100, metadata={"Software": None}),
-            force=force,
-        )
-    finally:
-        plt.close(fig)
+    return write
 
 
 def quartercar(
@@ -89,15 +95,14 @@ def quartercar(
     ] = False,
 ) -> None:
     """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
-    from mrdamper._io import atomic_write_text, check_writable
+    from mrdamper._io import check_output, check_writable, write_files
     from mrdamper.cli.models import parse_settings
     from mrdamper.control.quarter_car import Controller, QuarterCar
     from mrdamper.control.quarter_car_study import compare_controllers
     from mrdamper.models.registry import load_model
 
-    if out.exists() and not out.is_dir():
-        raise DataValidationError("--out", f"{out} exists and is not a folder")
-    table_path = check_writable(out / "quartercar.csv", force, inputs=[model_file])
+    check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
+    check_writable(out / "quartercar.csv", force, inputs=[model_file], kind=QUARTERCAR_CSV)
     car_kw = parse_settings(car)
     fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
     unknown = sorted(set(car_kw) - set(fields))
@@ -131,20 +136,25 @@ def quartercar(
     except TypeError as exc:
         raise DataValidationError("MODEL", str(exc)) from exc
     table = cmp.table()
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(table_path, table.to_csv(index=False, float_format="%.6g"), force=force)
-    written = [table_path]
+    text = table.to_csv(index=False, float_format="%.6g")
+    files: dict[str, tuple[FileKind, Callable[[Path], object]]] = {
+        "quartercar.csv": (QUARTERCAR_CSV, lambda p: p.write_text(text, encoding="utf-8"))
+    }
     iso = [r for r in cmp.roads if r.startswith("ISO")]
     mid = 0.5 * duration
     for road in iso[:1]:  # a 2 s window in the middle of the road
         fig = cmp.plot_time(road, t_range=(max(0.0, mid - 1.0), mid + 1.0))
-        written.append(_save_png(fig, out / f"time_{_slug(road)}.png", force))
+        files[f"time_{_slug(road)}.png"] = (_PNG, _png_writer(fig))
     for road in [r for r in cmp.roads if r.startswith("bump")]:
-        written.append(_save_png(cmp.plot_time(road), out / f"time_{_slug(road)}.png", force))
+        files[f"time_{_slug(road)}.png"] = (_PNG, _png_writer(cmp.plot_time(road)))
     if iso:
-        written.append(
-            _save_png(cmp.plot_spectra(iso[0]), out / f"spectra_{_slug(iso[0])}.png", force)
-        )
+        files[f"spectra_{_slug(iso[0])}.png"] = (_PNG, _png_writer(cmp.plot_spectra(iso[0])))
+    try:
+        write_files(out, files, force=force)
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close("all")
     cols = [
         "road",
         "controller",
@@ -157,7 +167,7 @@ def quartercar(
         "mean_input",
     ]
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    typer.echo(f"{m.kind}: wrote {', '.join(p.name for p in written)} in {out}")
+    typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
 
 
 def register(app: typer.Typer) -> None:

@@ -16,10 +16,16 @@ from typing import Annotated, Any
 
 import typer
 
+from mrdamper._io import csv_kind
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
-__all__ = ["register"]
+__all__ = ["INVERSE_CSV", "register"]
+
+#: The kind of file ``inverse`` writes (``--force`` replaces only such a file).
+INVERSE_CSV = csv_kind(
+    "table written by 'mrdamper inverse' (t, F_desired, ...)", ("t", "F_desired")
+)
 
 
 def export(
@@ -48,8 +54,8 @@ def export(
 ) -> None:
     """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws
     for control design, or (--format c) C99 code of the model and its inverse."""
-    from mrdamper._io import check_writable
-    from mrdamper.control.export import export_lpv
+    from mrdamper._io import check_output, check_writable
+    from mrdamper.control.export import EXPORT_FILE, export_lpv
     from mrdamper.models.registry import load_model
 
     if fmt is None:
@@ -59,11 +65,12 @@ def export(
     if fmt == "c":
         from mrdamper.control.c_export import export_c
 
+        check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
         m = load_model(model_file)
         h, c = export_c(m, out, name=name, reg=reg, force=force)
         typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
         return
-    check_writable(out, force, inputs=[model_file])
+    check_writable(out, force, inputs=[model_file], kind=EXPORT_FILE)
     m = load_model(model_file)
     if m.kind not in ("lpv", "lti"):
         raise DataValidationError(
@@ -110,7 +117,7 @@ def inverse(
     from mrdamper.control.inverse import inverse_current
     from mrdamper.models.registry import load_model
 
-    check_writable(out, force, inputs=[model_file, data])
+    check_writable(out, force, inputs=[model_file, data], kind=INVERSE_CSV)
     m = load_model(model_file)
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
@@ -122,7 +129,9 @@ def inverse(
         raise DataValidationError("MODEL", str(exc)) from exc
     frame = res.to_frame()[["t", "F_desired", res.input, "F_achieved", "saturated"]].copy()
     frame["saturated"] = frame["saturated"].astype(int)
-    path = atomic_write_text(out, frame.to_csv(index=False, float_format="%.10g"), force=force)
+    path = atomic_write_text(
+        out, frame.to_csv(index=False, float_format="%.10g"), force=force, kind=INVERSE_CSV
+    )
     err = res.error
     rms = float((err**2).mean() ** 0.5)
     typer.echo(

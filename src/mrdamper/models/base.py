@@ -25,7 +25,7 @@ from typing import Any, ClassVar, Literal, cast
 import numpy as np
 import pandas as pd
 
-from mrdamper._io import atomic_write_text
+from mrdamper._io import atomic_write_text, json_kind
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
@@ -42,6 +42,7 @@ from mrdamper.models.settings import (
 from mrdamper.progress import report
 
 __all__ = [
+    "MODEL_FILE",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
     "TIMING_PROVENANCE",
@@ -64,6 +65,8 @@ __all__ = [
 
 SCHEMA_NAME = "mrdamper.model"
 SCHEMA_VERSION = 1
+#: The kind of file :meth:`FittedModel.save` writes (``force`` replaces only such a file).
+MODEL_FILE = json_kind("mrdamper model file (JSON)", SCHEMA_NAME)
 
 #: Provenance entries that are wall-clock or CPU times [s]. They stay on the in-memory model but
 #: are never written to a model file, so that the same fit gives the same bytes.
@@ -371,9 +374,10 @@ class FittedModel(abc.ABC):
         )
 
     def save(self, path: str | Path, *, force: bool = False) -> Path:
-        """Write the model as JSON, atomically; refuse to overwrite unless ``force``."""
+        """Write the model as JSON, atomically; refuse to overwrite unless ``force``, and even
+        then unless the existing file is a model file (:data:`MODEL_FILE`)."""
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
-        return atomic_write_text(path, text + "\n", force=force)
+        return atomic_write_text(path, text + "\n", force=force, kind=MODEL_FILE)
 
 
 @dataclass(frozen=True, eq=False)
