@@ -25,6 +25,7 @@ from typing import Any, overload
 
 from mrdamper.data.experiment import Experiment
 from mrdamper.data.experiment_set import ExperimentSet
+from mrdamper.data.readers._build import missing
 from mrdamper.data.readers.directory import (
     DEFAULT_PATTERN,
     directory_files,
@@ -154,7 +155,7 @@ def record_files(
     for item in items:
         p = Path(item)
         if not p.exists():
-            raise FileNotFoundError(f"{p}: no such file or folder")
+            raise missing(p, "file or folder")
         if not p.is_dir():
             out.append(RecordFile(str(p), read_kw=read_kw))
             continue
