@@ -76,13 +76,17 @@ def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
+def _is_bool(v: Any) -> bool:
+    return isinstance(v, bool)
+
+
 def _decode_array(value: Mapping[str, Any], field: str) -> np.ndarray:
     flat, dtype, shape = value["__ndarray__"], value.get("dtype", "float64"), value.get("shape")
     if not isinstance(flat, list):
         raise SchemaError(f"{field}: expected a list of array values, got {type(flat).__name__}")
     if dtype not in _DTYPES:
         raise SchemaError(f"{field}: expected a dtype among {sorted(_DTYPES)}, got {dtype!r}")
-    ok = (lambda v: isinstance(v, bool)) if dtype == "bool" else _is_number
+    ok = _is_bool if dtype == "bool" else _is_number
     bad = next((k for k, v in enumerate(flat) if not ok(v)), None)
     if bad is not None:
         raise SchemaError(
