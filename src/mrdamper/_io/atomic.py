@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mrdamper._io.kinds import FileKind
 from mrdamper._io.safety import check_output
-from mrdamper._io.stale import remove_stale, temp_prefix
+from mrdamper._io.stale import missing_parents, remove_created, remove_stale, temp_prefix
 from mrdamper.errors import OutputExistsError
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_with", "check_writable"]
@@ -43,10 +43,8 @@ def atomic_write_with(
     the folders created for it). With ``force`` an existing file is replaced only if it is of
     ``kind`` (when given; see :func:`~mrdamper._io.safety.check_output`).
     """
-    from mrdamper._io.folder import remove_created
-
     p = check_writable(path, force, kind=kind)
-    created = [q for q in Path(os.path.abspath(p)).parents if not os.path.lexists(q)]
+    created = missing_parents(p)
     p.parent.mkdir(parents=True, exist_ok=True)
     remove_stale(p, ("",))
     tmp_path = _new_temp_file(p)

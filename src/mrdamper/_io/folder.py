@@ -38,13 +38,12 @@ from pathlib import Path
 
 from mrdamper._io.kinds import FileKind
 from mrdamper._io.safety import MARK_NAME, FolderMode, mark_entries
-from mrdamper._io.stale import remove_stale, temp_prefix
+from mrdamper._io.stale import missing_parents, remove_created, remove_stale, temp_prefix
 from mrdamper.errors import OutputExistsError
 
 __all__ = [
     "FolderMode",
     "ordinary_folder_mode",
-    "remove_created",
     "write_files",
     "write_folder",
     "write_mark",
@@ -100,16 +99,23 @@ def _merge(src: Path, dst: Path, force: bool) -> None:
 
 def write_mark(folder: Path, entries: set[str]) -> Path:
     """Write the mark file of an output folder listing ``entries`` (its top-level names)."""
-    from mrdamper import __version__
-
     data = {
         "written_by": "mrdamper",
-        "version": __version__,
+        "version": _version(),
         "entries": sorted(entries - {MARK_NAME}),
     }
     path = folder / MARK_NAME
     path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     return path
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("mrdamper")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        return "unknown"
 
 
 def _mark(tmp: Path, out: Path, mode: FolderMode) -> None:
@@ -187,7 +193,7 @@ def write_folder(
     if mode not in ("replace", "merge", "add"):
         raise ValueError(f"mode: expected 'replace', 'merge' or 'add', got {mode!r}")
     target = Path(os.path.abspath(out))  # "." and ".." have no name to swap with
-    created = _missing_parents(target)
+    created = missing_parents(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_stale(target)
     tmp = Path(tempfile.mkdtemp(prefix=temp_prefix(target, "partial-"), dir=target.parent))
@@ -247,17 +253,3 @@ def write_files(
             atomic_write_with(tmp / name, writer)
 
     return write_folder(folder, build, force=force, mode="add")
-
-
-def _missing_parents(target: Path) -> list[Path]:
-    """The ancestors of ``target`` that do not exist yet, innermost first."""
-    return [p for p in target.parents if not os.path.lexists(p)]
-
-
-def remove_created(folders: list[Path]) -> None:
-    """Remove the folders a failed write created (innermost first), if they are still empty."""
-    for p in folders:
-        try:
-            p.rmdir()
-        except OSError:
-            return

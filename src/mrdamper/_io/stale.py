@@ -15,7 +15,7 @@ import os
 import shutil
 from pathlib import Path
 
-__all__ = ["owner_alive", "remove_stale", "temp_prefix"]
+__all__ = ["missing_parents", "owner_alive", "remove_created", "remove_stale", "temp_prefix"]
 
 
 def temp_prefix(target: Path, tag: str) -> str:
@@ -86,3 +86,18 @@ def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", ""))
             removed.append(path)
             break
     return removed
+
+
+def missing_parents(target: Path) -> list[Path]:
+    """The ancestors of ``target`` that do not exist yet, innermost first (the folders a write
+    of ``target`` creates)."""
+    return [p for p in Path(os.path.abspath(target)).parents if not os.path.lexists(p)]
+
+
+def remove_created(folders: list[Path]) -> None:
+    """Remove the folders a failed write created (innermost first), if they are still empty."""
+    for p in folders:
+        try:
+            p.rmdir()
+        except OSError:
+            return
