@@ -20,14 +20,16 @@ def check_writable(
     force: bool,
     inputs: Iterable[str | os.PathLike[str]] = (),
     kind: FileKind | None = None,
+    option: str = "--out",
 ) -> Path:
-    """Return ``path`` as a Path after :func:`~mrdamper._io.safety.check_output` (file output).
+    """Return ``path`` as a Path after :func:`~mrdamper._io.safety.check_output` (file output;
+    ``option`` names it in messages).
 
     Raises :class:`OutputExistsError` if it exists and not ``force``, and
     :class:`~mrdamper.errors.OutputError` if it is one of ``inputs``, not a regular file, not of
     ``kind`` (when given), or its folder cannot be written.
     """
-    return check_output(path, force=force, inputs=inputs, kind=kind)
+    return check_output(path, force=force, inputs=inputs, kind=kind, option=option)
 
 
 def atomic_write_with(

@@ -87,7 +87,7 @@ def select(
     from mrdamper.study.selection import cross_validate
 
     if csv is not None:
-        check_writable(csv, force=force, inputs=list(data), kind=SELECTION_CSV)
+        check_writable(csv, force=force, inputs=list(data), kind=SELECTION_CSV, option="--csv")
     with working("cross-validating", show=not no_progress):
         records = read_records(data, pattern, read_kw)
         source = input_ or _choose_input(records)
