@@ -564,7 +564,7 @@ def test_scoring_a_three_sample_record_is_an_error(tmp_path, capsys) -> None:
     short = tmp_path / "short.csv"
     pd.read_csv(data / "rec_b.csv").head(3).to_csv(short, index=False)
     line = _one_line_error(*_run(["score", str(model), str(short)], capsys)[::2])
-    assert "F: record has 3 sample(s)" in line
+    assert "short.csv: record has 3 sample(s)" in line
 
 
 @pytest.mark.parametrize("kind", ["sp1", "sp2", "sp3", "sp4"])

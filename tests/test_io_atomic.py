@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from mrdamper import OutputExistsError
-from mrdamper._io import atomic_write_text, atomic_write_with
+from mrdamper._io import MARK_NAME, atomic_write_text, atomic_write_with
 
 
 def test_refuses_overwrite_and_forces(tmp_path) -> None:
@@ -54,9 +56,11 @@ def test_folder_replace_and_merge(tmp_path) -> None:
     with pytest.raises(OutputExistsError):
         write_folder(out, _build({"a.txt": "2"}))
     write_folder(out, _build({"a.txt": "2"}), force=True, mode="merge")
-    assert {p.name: p.read_text() for p in out.iterdir()} == {"a.txt": "2", "b.txt": "1"}
+    files = {p.name: p.read_text() for p in out.iterdir() if p.name != MARK_NAME}
+    assert files == {"a.txt": "2", "b.txt": "1"}
+    assert json.loads((out / MARK_NAME).read_text())["entries"] == ["a.txt", "b.txt"]
     write_folder(out, _build({"c.txt": "3"}), force=True, mode="replace")
-    assert [p.name for p in out.iterdir()] == ["c.txt"]
+    assert sorted(p.name for p in out.iterdir()) == [MARK_NAME, "c.txt"]
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary left
 
 

@@ -81,6 +81,12 @@ def test_refuses_to_overwrite_without_force(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "already exists" in err and "--force" in err
     assert model.read_text() == "keep me"
+    # --force replaces only a file of the kind the command writes
+    assert _exit_code(["fit", "sp2", str(data_dir), "--out", str(model), "--force"]) == 2
+    assert "not a mrdamper model file" in capsys.readouterr().err
+    assert model.read_text() == "keep me"
+    model.unlink()
+    main(["fit", "sp1", str(data_dir), "--out", str(model)])
     main(["fit", "sp2", str(data_dir), "--out", str(model), "--force"])
     assert load_model(model).kind == "sp2"
 
@@ -88,7 +94,11 @@ def test_refuses_to_overwrite_without_force(
     pred.write_text("old")
     assert _exit_code(["simulate", str(model), str(data_dir / "rec0.csv"), "--out", str(pred)]) == 2
     assert pred.read_text() == "old"
-    main(["simulate", str(model), str(data_dir / "rec0.csv"), "--out", str(pred), "--force"])
+    sim = ["simulate", str(model), str(data_dir / "rec0.csv"), "--out", str(pred), "--force"]
+    assert _exit_code(sim) == 2 and pred.read_text() == "old"
+    pred.unlink()
+    main(sim[:-1])
+    main(sim)
     assert pd.read_csv(pred).shape == (3000, 3)
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mrdamper._io import MARK_NAME
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.rig import VirtualRig
 from mrdamper.rig.doe import TABLE_II, constant_current_sweep, make_record, table_ii
@@ -138,7 +139,7 @@ def test_write_records_byte_identical_and_no_overwrite(doe, tmp_path: Path) -> N
     write_records(sub, a)
     write_records(sub, b)
     files = sorted(p.name for p in a.iterdir())
-    assert files == sorted([f"{e.name}.csv" for e in sub] + ["manifest.csv"])
+    assert files == sorted([f"{e.name}.csv" for e in sub] + ["manifest.csv", MARK_NAME])
     for name in files:
         assert (a / name).read_bytes() == (b / name).read_bytes()
     lines = (a / "manifest.csv").read_text().splitlines()
@@ -171,7 +172,7 @@ def test_write_doe_writes_every_record_and_refuses_to_overwrite(damper, tmp_path
     manifest = write_doe(out, seed=4, scale=0.07, damper=damper)
     table = pd.read_csv(manifest)
     assert len(table) == 61 and sorted(p.name for p in out.iterdir()) == sorted(
-        [*table["file"], "manifest.csv"]
+        [*table["file"], "manifest.csv", MARK_NAME]
     )
     assert table["seed"].tolist() == record_seeds(4, 61)
     # a written record equals the record rebuilt from its manifest seed (full float precision)

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mrdamper.errors import OutputExistsError, SchemaError
+from mrdamper.errors import OutputError, OutputExistsError, SchemaError
 from mrdamper.models import load_model
 from mrdamper.study import ModelSpec, doe_protocol, run_study, write_study
 from mrdamper.study.tables import TIMING_COLUMNS
@@ -137,13 +137,18 @@ def test_write_outputs_and_report(result, tmp_path) -> None:
 
 def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> None:
     out = tmp_path / "o"
-    out.mkdir()
-    (out / "keep.txt").write_text("x")
+    write_study(result, out, figures=False)
+    (out / "results.csv").write_text("stale")
     with pytest.raises(OutputExistsError, match="not empty; pass --force"):
         write_study(result, out, figures=False)
-    assert (out / "keep.txt").exists()
     write_study(result, out, force=True, figures=False)
-    assert not (out / "keep.txt").exists() and (out / "report.html").exists()
+    assert (out / "results.csv").read_text() != "stale" and (out / "report.html").exists()
+    mine = tmp_path / "mine"  # a folder mrdamper did not write is never replaced
+    mine.mkdir()
+    (mine / "keep.txt").write_text("x")
+    with pytest.raises(OutputError, match="mrdamper did not write"):
+        write_study(result, mine, force=True, figures=False)
+    assert (mine / "keep.txt").read_text() == "x"
     empty = tmp_path / "empty"
     empty.mkdir()
     write_study(result, empty, figures=False)

@@ -7,33 +7,48 @@ import secrets
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
+from mrdamper._io.kinds import FileKind
 from mrdamper._io.safety import check_output
+from mrdamper._io.stale import missing_parents, remove_created, remove_stale, temp_prefix
 from mrdamper.errors import OutputExistsError
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_with", "check_writable"]
 
 
 def check_writable(
-    path: str | os.PathLike[str], force: bool, inputs: Iterable[str | os.PathLike[str]] = ()
+    path: str | os.PathLike[str],
+    force: bool,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+    kind: FileKind | None = None,
+    option: str = "--out",
 ) -> Path:
-    """Return ``path`` as a Path after :func:`~mrdamper._io.safety.check_output` (file output).
+    """Return ``path`` as a Path after :func:`~mrdamper._io.safety.check_output` (file output;
+    ``option`` names it in messages).
 
     Raises :class:`OutputExistsError` if it exists and not ``force``, and
-    :class:`~mrdamper.errors.OutputError` if it is one of ``inputs``, not a regular file, or its
-    folder cannot be written.
+    :class:`~mrdamper.errors.OutputError` if it is one of ``inputs``, not a regular file, not of
+    ``kind`` (when given), or its folder cannot be written.
     """
-    return check_output(path, force=force, inputs=inputs)
+    return check_output(path, force=force, inputs=inputs, kind=kind, option=option)
 
 
 def atomic_write_with(
-    path: str | os.PathLike[str], writer: Callable[[Path], object], *, force: bool = False
+    path: str | os.PathLike[str],
+    writer: Callable[[Path], object],
+    *,
+    force: bool = False,
+    kind: FileKind | None = None,
 ) -> Path:
     """Call ``writer(tmp_path)`` then atomically move ``tmp_path`` to ``path``.
 
-    A failure or interruption leaves no partial file at ``path`` (and removes the temporary).
+    A failure or interruption leaves no partial file at ``path`` (and removes the temporary, and
+    the folders created for it). With ``force`` an existing file is replaced only if it is of
+    ``kind`` (when given; see :func:`~mrdamper._io.safety.check_output`).
     """
-    p = check_writable(path, force)
+    p = check_writable(path, force, kind=kind)
+    created = missing_parents(p)
     p.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale(p, ("",))
     tmp_path = _new_temp_file(p)
     try:
         writer(tmp_path)
@@ -43,24 +58,27 @@ def atomic_write_with(
     except OSError as exc:
         tmp_path.unlink(missing_ok=True)
         if isinstance(exc, OutputExistsError) or exc.errno is None:
+            remove_created(created)
             raise
+        remove_created(created)
         raise OSError(
             exc.errno, exc.strerror, str(p)
         ) from exc  # name the output, not the temporary
     except BaseException:
         tmp_path.unlink(missing_ok=True)
+        remove_created(created)
         raise
     return p
 
 
 def _new_temp_file(target: Path) -> Path:
-    """Create an empty, unused ``.<name>.<random>.part`` file beside ``target``.
+    """Create an empty, unused ``.<name>.<pid>-<random>.part`` file beside ``target``.
 
     It is created like a plain ``open`` would create it (mode 0666 filtered by the umask, by the
     operating system), so the finished file has ordinary permissions without reading the umask.
     """
     for _ in range(100):
-        tmp = target.parent / f".{target.name}.{secrets.token_hex(6)}.part"
+        tmp = target.parent / f"{temp_prefix(target, '')}{secrets.token_hex(6)}.part"
         try:
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except FileExistsError:
@@ -70,11 +88,25 @@ def _new_temp_file(target: Path) -> Path:
     raise FileExistsError(f"{target.parent}: no free temporary name")  # pragma: no cover
 
 
-def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, force: bool = False) -> Path:
-    """Write ``data`` to ``path`` atomically; refuse to overwrite unless ``force``."""
-    return atomic_write_with(path, lambda tmp: tmp.write_bytes(data), force=force)
+def atomic_write_bytes(
+    path: str | os.PathLike[str],
+    data: bytes,
+    *,
+    force: bool = False,
+    kind: FileKind | None = None,
+) -> Path:
+    """Write ``data`` to ``path`` atomically; refuse to overwrite unless ``force`` (and, when
+    given, unless the existing file is of ``kind``)."""
+    return atomic_write_with(path, lambda tmp: tmp.write_bytes(data), force=force, kind=kind)
 
 
-def atomic_write_text(path: str | os.PathLike[str], text: str, *, force: bool = False) -> Path:
-    """Write UTF-8 ``text`` to ``path`` atomically; refuse to overwrite unless ``force``."""
-    return atomic_write_bytes(path, text.encode("utf-8"), force=force)
+def atomic_write_text(
+    path: str | os.PathLike[str],
+    text: str,
+    *,
+    force: bool = False,
+    kind: FileKind | None = None,
+) -> Path:
+    """Write UTF-8 ``text`` to ``path`` atomically; refuse to overwrite unless ``force`` (and,
+    when given, unless the existing file is of ``kind``)."""
+    return atomic_write_bytes(path, text.encode("utf-8"), force=force, kind=kind)

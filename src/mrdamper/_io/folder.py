@@ -6,12 +6,20 @@ file system, hidden name, mode 0700 while it is incomplete). When ``build`` retu
 gets the permissions of an ordinary new folder and is renamed into place; a failure or an
 interruption removes it and leaves the target as it was.
 
-An existing non-empty target needs ``force``, and then ``mode`` says what happens to it:
+An existing non-empty target needs ``force`` (and, checked by :func:`mrdamper._io.check_output`,
+mrdamper's mark), and then ``mode`` says what happens to it:
 
 * ``"replace"``: the old folder is moved aside and removed once the new one is in place (a study:
   stale files of an earlier run must not look like part of this one);
 * ``"merge"``: the new files are moved into the existing folder, replacing files of the same
-  name and keeping the others (a DoE written into a folder of records).
+  name and keeping the others (a DoE written again into its folder);
+* ``"add"``: as ``"merge"``, into a folder that may hold anything else (quarter-car figures, C
+  code): the caller checked each file it writes, and a folder mrdamper did not write gets no mark.
+
+Every folder written gets the mark file :data:`~mrdamper._io.safety.MARK_NAME` (JSON: written by
+mrdamper, the version, the entries it wrote), which later lets ``force`` replace it and nothing
+else. The private folder is named ``.NAME.partial-<pid>-<random>``; a run that was killed leaves
+it behind, and the next write of the same target removes it (:mod:`mrdamper._io.stale`).
 
 Permissions are obtained portably, without reading the process umask: the mode an ordinary new
 folder gets is read from a probe folder created with :func:`os.mkdir` inside the private folder.
@@ -19,21 +27,27 @@ folder gets is read from a probe folder created with :func:`os.mkdir` inside the
 
 from __future__ import annotations
 
+import json
 import os
 import secrets
 import shutil
 import stat
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Literal
 
+from mrdamper._io.kinds import FileKind
+from mrdamper._io.safety import MARK_NAME, FolderMode, mark_entries
+from mrdamper._io.stale import missing_parents, remove_created, remove_stale, temp_prefix
 from mrdamper.errors import OutputExistsError
 
-__all__ = ["FolderMode", "ordinary_folder_mode", "write_folder"]
-
-#: What ``force`` does to an existing non-empty target folder.
-FolderMode = Literal["replace", "merge"]
+__all__ = [
+    "FolderMode",
+    "ordinary_folder_mode",
+    "write_files",
+    "write_folder",
+    "write_mark",
+]
 
 
 def ordinary_folder_mode(parent: Path) -> int:
@@ -68,15 +82,52 @@ def _new_entry(parent: Path, prefix: str, create: Callable[[Path], object]) -> P
     raise FileExistsError(f"{parent}: no free temporary name")  # pragma: no cover
 
 
-def _merge(src: Path, dst: Path) -> None:
+def _merge(src: Path, dst: Path, force: bool) -> None:
     """Move every entry of ``src`` into the existing folder ``dst`` (files of the same name are
-    replaced; folders present in both are merged)."""
+    replaced when ``force``; folders present in both are merged)."""
     for entry in sorted(src.iterdir()):
         target = dst / entry.name
         if entry.is_dir() and not entry.is_symlink() and target.is_dir():
-            _merge(entry, target)
+            _merge(entry, target, force)
+        elif os.path.lexists(target) and not force and entry.name != MARK_NAME:
+            raise OutputExistsError(
+                f"{target}: appeared while writing; pass force=True to write it"
+            )
         else:
             os.replace(entry, target)
+
+
+def write_mark(folder: Path, entries: set[str]) -> Path:
+    """Write the mark file of an output folder listing ``entries`` (its top-level names)."""
+    data = {
+        "written_by": "mrdamper",
+        "version": _version(),
+        "entries": sorted(entries - {MARK_NAME}),
+    }
+    path = folder / MARK_NAME
+    path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    return path
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("mrdamper")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        return "unknown"
+
+
+def _mark(tmp: Path, out: Path, mode: FolderMode) -> None:
+    """Mark the built folder ``tmp``: the entries it holds, plus (merge / add) those of a marked
+    ``out``; no mark when adding to a folder mrdamper did not write."""
+    new = {e.name for e in tmp.iterdir()}
+    if mode == "replace" or not out.is_dir() or not any(out.iterdir()):
+        write_mark(tmp, new)
+        return
+    old = mark_entries(out)
+    if old is not None:
+        write_mark(tmp, old | new)
 
 
 def _swap(tmp: Path, out: Path, force: bool, mode: FolderMode) -> None:
@@ -87,12 +138,15 @@ def _swap(tmp: Path, out: Path, force: bool, mode: FolderMode) -> None:
         out.rmdir()
         os.replace(tmp, out)
         return
+    if mode == "add":
+        _merge(tmp, out, force)
+        return
     if not force:  # re-check: the folder may have been filled while this one was built
         raise OutputExistsError(f"{out}: folder filled while writing; pass force=True to write it")
     if mode == "merge":
-        _merge(tmp, out)
+        _merge(tmp, out, force)
         return
-    trash = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+    trash = Path(tempfile.mkdtemp(prefix=temp_prefix(out, "old-"), dir=out.parent))
     os.replace(out, trash / out.name)
     os.replace(tmp, out)
     shutil.rmtree(trash, ignore_errors=True)
@@ -117,10 +171,11 @@ def write_folder(
     build : callable
         ``build(tmp)`` writes every output file into the folder ``tmp``.
     force : bool
-        Allow an existing non-empty target.
-    mode : {"replace", "merge"}
+        Allow an existing non-empty target (``"add"``: replacing files of the same name).
+    mode : {"replace", "merge", "add"}
         With ``force``: replace the old folder, or move the new files into it (same-name files
-        replaced, others kept).
+        replaced, others kept); ``"add"``: move them into a folder whose other contents may be
+        anything.
 
     Returns
     -------
@@ -135,19 +190,66 @@ def write_folder(
         Writing failed; the error names ``out``, not the temporary folder, and nothing of the
         partial output is left.
     """
-    if mode not in ("replace", "merge"):
-        raise ValueError(f"mode: expected 'replace' or 'merge', got {mode!r}")
+    if mode not in ("replace", "merge", "add"):
+        raise ValueError(f"mode: expected 'replace', 'merge' or 'add', got {mode!r}")
     target = Path(os.path.abspath(out))  # "." and ".." have no name to swap with
+    created = missing_parents(target)
     target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.partial-", dir=target.parent))
+    remove_stale(target)
+    tmp = Path(tempfile.mkdtemp(prefix=temp_prefix(target, "partial-"), dir=target.parent))
+    done = False
     try:
         build(tmp)
+        _mark(tmp, target, mode)
         tmp.chmod(ordinary_folder_mode(tmp))
         _swap(tmp, target, force, mode)
+        done = True
     except OSError as exc:
         if isinstance(exc, FileExistsError) or exc.errno is None:
             raise
         raise OSError(exc.errno, exc.strerror, str(target)) from exc  # name the output folder
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+        if not done:
+            remove_created(created)
     return Path(out)
+
+
+def write_files(
+    out: str | os.PathLike[str],
+    files: Mapping[str, tuple[FileKind | None, Callable[[Path], object]]],
+    *,
+    force: bool = False,
+) -> Path:
+    """Write named files into the folder ``out``, all or none; its other contents are kept.
+
+    Each file is checked first (absent, or with ``force`` of its kind, see
+    :func:`mrdamper._io.check_output`); then every file is written into a private folder beside
+    ``out`` and moved in together (:func:`write_folder`, ``mode="add"``), so a failure leaves
+    none of them, and no folder it created.
+
+    Parameters
+    ----------
+    out : path-like
+        Target folder (created if missing; checked by the caller with ``mode="add"``).
+    files : mapping
+        File name -> (kind of file, or None for any; ``writer(path)`` that writes it).
+    force : bool
+        Replace existing files of the same names (of their kind).
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
+    from mrdamper._io.atomic import atomic_write_with, check_writable
+
+    folder = Path(out)
+    for name, (kind, _) in files.items():
+        check_writable(folder / name, force, kind=kind)
+
+    def build(tmp: Path) -> None:
+        for name, (_, writer) in files.items():
+            atomic_write_with(tmp / name, writer)
+
+    return write_folder(folder, build, force=force, mode="add")

@@ -1,57 +1,161 @@
-"""Where an output may go: never onto an input, the working folder or its ancestors, or a device.
+"""Where an output may go, and what ``--force`` may replace: the one place this is decided.
 
-Every writer (model files, CSV, study folders, DoE folders) calls :func:`check_output` before any
-computing, so a bad ``--out`` fails at once with one line and nothing is lost:
+Every writer (model files, CSV, study folders, DoE folders, figures, C code) calls
+:func:`check_output` before any computing, so a bad ``--out`` fails at once with one line naming
+it and nothing is lost:
 
-* the target must not be, or contain, one of the inputs (``inputs``), nor be the current working
-  folder or one of its ancestors — with or without ``force``;
+* never, with or without ``force``: onto an input or a folder holding one, the current working
+  folder or one of its ancestors, the home folder, or the root of a repository (a folder holding
+  ``.git``);
 * an existing target must be a regular file (file outputs) or a folder (folder outputs); device
   nodes, pipes and sockets are refused even with ``force``;
-* an existing non-empty target needs ``force``;
+* an existing file needs ``force``, and is then replaced only when it is of the kind the command
+  writes (:class:`~mrdamper._io.kinds.FileKind`: a model file, a table with the command's
+  columns, ...);
+* an existing non-empty folder needs ``force``, and is then replaced (or merged into) only when
+  mrdamper wrote it: it carries the mark file :data:`MARK_NAME` (written by
+  :func:`mrdamper._io.write_folder`) and holds nothing the mark does not list;
 * the nearest existing ancestor folder must accept a new file (checked by creating and removing
   an empty temporary file, which also detects read-only file systems).
+
+Paths that cannot be resolved (a symbolic link loop, a dangling link) are one-line errors.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any, Literal
 
+from mrdamper._io.kinds import FileKind
 from mrdamper.errors import OutputError, OutputExistsError
 
-__all__ = ["check_output", "protected_paths"]
+__all__ = [
+    "MARK_NAME",
+    "FolderMode",
+    "check_output",
+    "mark_entries",
+    "protected_paths",
+    "resolved",
+]
+
+#: Name of the mark file every output folder mrdamper writes carries (JSON: who wrote it and the
+#: entries it wrote).
+MARK_NAME = ".mrdamper-output"
+
+#: What ``force`` does to an existing non-empty target folder: ``"replace"`` it, ``"merge"`` the
+#: new files into it, or ``"add"`` named files to a folder whose other contents are kept (and
+#: may be anything: only the files written are checked).
+FolderMode = Literal["replace", "merge", "add"]
 
 
-def _resolved(p: str | os.PathLike[str]) -> Path:
-    return Path(os.path.abspath(Path(p).expanduser())).resolve(strict=False)
+def resolved(p: str | os.PathLike[str], option: str = "path") -> Path:
+    """Absolute, resolved form of ``p`` (``~`` expanded); one-line error for a link loop.
+
+    Raises
+    ------
+    OutputError
+        ``p`` is, or goes through, a symbolic link loop.
+    """
+    try:
+        return Path(os.path.abspath(Path(p).expanduser())).resolve(strict=False)
+    except (RuntimeError, OSError):  # Python < 3.13: RuntimeError("Symlink loop from ...")
+        raise OutputError(
+            f"{option}: {p} is a symbolic link loop (or goes through one); choose another path"
+        ) from None
 
 
 def protected_paths(inputs: Iterable[str | os.PathLike[str]] = ()) -> list[Path]:
-    """Resolved paths an output must never replace: the inputs and the current working folder."""
-    out = [_resolved(p) for p in inputs if str(p)]
-    out.append(_resolved(Path.cwd()))
+    """Resolved paths an output must never replace: the inputs, the current working folder and
+    the home folder."""
+    out = [resolved(p, "input") for p in inputs if str(p)]
+    out.append(resolved(Path.cwd()))
+    out.append(_home())
     return out
+
+
+def _home() -> Path:
+    try:
+        return resolved(Path.home())
+    except (RuntimeError, KeyError, OutputError):  # no home folder known
+        return Path("/")
 
 
 def _overlap(target: Path, inputs: list[Path], cwd: Path) -> str | None:
     if target == cwd or target in cwd.parents:
         return "is the current folder or one of its ancestors"
+    if target == _home():
+        return "is the home folder"
     for inp in inputs:
         if target == inp:
             return f"is an input ({inp})"
         if target in inp.parents:
             return f"contains an input ({inp})"
+    if os.path.lexists(target / ".git"):
+        return "is the root of a repository (it holds .git)"
     return None
 
 
 def _nearest_existing(p: Path) -> Path:
     cur = p
-    while not cur.exists() and cur != cur.parent:
+    while not os.path.lexists(cur) and cur != cur.parent:
         cur = cur.parent
     return cur
+
+
+def mark_entries(folder: Path) -> set[str] | None:
+    """Entries listed by the mark of ``folder``, or None when it has no valid mark."""
+    try:
+        data: Any = json.loads((folder / MARK_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not (isinstance(data, dict) and data.get("written_by") == "mrdamper"):
+        return None
+    entries = data.get("entries")
+    if not (isinstance(entries, list) and all(isinstance(e, str) for e in entries)):
+        return None
+    return set(entries)
+
+
+def _check_replaceable_folder(p: Path, option: str) -> None:
+    """Raise unless the non-empty folder ``p`` was written by mrdamper (mark, nothing else)."""
+    listed = mark_entries(p)
+    if listed is None:
+        raise OutputError(
+            f"{option}: {p} is a non-empty folder mrdamper did not write (it has no {MARK_NAME} "
+            "mark); it is never replaced, even with --force; choose another output location"
+        )
+    foreign = sorted(e.name for e in p.iterdir() if e.name != MARK_NAME and e.name not in listed)
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+        raise OutputError(
+            f"{option}: {p} holds files mrdamper did not write ({shown}); it is never replaced, "
+            "even with --force; choose another output location"
+        )
+
+
+def _check_existing_file(
+    p: Path, mode: int, force: bool, kind: FileKind | None, option: str
+) -> None:
+    if stat.S_ISDIR(mode):
+        raise OutputError(f"{option}: {p} is a folder, expected a file path")
+    if not stat.S_ISREG(mode):
+        raise OutputError(
+            f"{option}: {p} is not a regular file (device, pipe or socket); it is never replaced"
+        )
+    if not force:
+        raise OutputExistsError(
+            f"{p}: already exists; pass --force (Python: force=True) to overwrite"
+        )
+    if kind is not None and not kind.matches(p):
+        raise OutputError(
+            f"{option}: {p} is not a {kind.what}; it is never replaced, even with --force; "
+            "choose another output location"
+        )
 
 
 def check_output(
@@ -61,6 +165,8 @@ def check_output(
     inputs: Iterable[str | os.PathLike[str]] = (),
     folder: bool = False,
     option: str = "--out",
+    kind: FileKind | None = None,
+    mode: FolderMode = "replace",
 ) -> Path:
     """Check that ``path`` may be written; return it as a Path.
 
@@ -69,59 +175,58 @@ def check_output(
     path : path-like
         Output file, or folder when ``folder``.
     force : bool
-        Allow replacing an existing regular file / non-empty folder.
+        Allow replacing an existing file of ``kind`` / a non-empty folder mrdamper wrote.
     inputs : iterable of path-like
         Files and folders read by the same command; the output may not be or contain any of them.
     folder : bool
         The output is a folder (else a file).
     option : str
         Name of the option in messages.
+    kind : FileKind, optional
+        File outputs: the kind of file the command writes; with ``force`` an existing file is
+        replaced only if it is of this kind (None: any regular file).
+    mode : {"replace", "merge", "add"}
+        Folder outputs: ``"add"`` keeps the folder's other contents (only the files written are
+        checked, by the caller), so a non-empty folder is accepted without ``force`` or a mark.
 
     Raises
     ------
     OutputError
-        The target is an input, contains one, is the working folder or an ancestor, is not a
-        regular file / folder, or its location cannot be written.
+        The target is an input, contains one, is the working folder or an ancestor, the home
+        folder or a repository root, is not a regular file / folder, is an existing file not of
+        ``kind`` or a folder mrdamper did not write, is a link loop, or its location cannot be
+        written.
     OutputExistsError
-        The target exists (non-empty folder) and ``force`` is false.
+        The target exists (file, or non-empty folder outside ``"add"``) and ``force`` is false.
     """
     p = Path(path)
     if not str(path):
         raise OutputError(f"{option}: expected a path, got an empty string")
-    target = _resolved(p)
-    cwd = _resolved(Path.cwd())
-    why = _overlap(target, [_resolved(i) for i in inputs if str(i)], cwd)
+    target = resolved(p, option)
+    cwd = resolved(Path.cwd())
+    why = _overlap(target, [resolved(i, "input") for i in inputs if str(i)], cwd)
     if why is not None:
         raise OutputError(f"{option}: {p} {why}; choose another output location")
     if os.path.lexists(p):
         try:
-            mode = os.stat(p).st_mode
+            st_mode = os.stat(p).st_mode
         except OSError:  # broken symbolic link: writing would go through it
             raise OutputError(
                 f"{option}: {p} is a broken symbolic link; choose another output location"
             ) from None
-        if folder:
-            if not stat.S_ISDIR(mode):
-                raise OutputError(
-                    f"{option}: {p} exists and is not a folder; choose another output location"
-                )
-            if any(p.iterdir()) and not force:
+        if not folder:
+            _check_existing_file(p, st_mode, force, kind, option)
+        elif not stat.S_ISDIR(st_mode):
+            raise OutputError(
+                f"{option}: {p} exists and is not a folder; choose another output location"
+            )
+        elif mode != "add" and any(p.iterdir()):
+            if not force:
                 raise OutputExistsError(
                     f"{p}: folder exists and is not empty; pass --force (Python: force=True) to "
                     "replace it or choose another output location"
                 )
-        else:
-            if stat.S_ISDIR(mode):
-                raise OutputError(f"{option}: {p} is a folder, expected a file path")
-            if not stat.S_ISREG(mode):
-                raise OutputError(
-                    f"{option}: {p} is not a regular file (device, pipe or socket); it is never "
-                    "replaced"
-                )
-            if not force:
-                raise OutputExistsError(
-                    f"{p}: already exists; pass --force (Python: force=True) to overwrite"
-                )
+            _check_replaceable_folder(p, option)
     base = _nearest_existing(target.parent)
     if not base.is_dir():
         raise OutputError(f"{option}: {base} is not a folder, so {p} cannot be created")

@@ -21,33 +21,49 @@ high-frequency share, training-envelope excursions); warnings are printed one a 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
+from mrdamper._io import FileKind, csv_kind, png_kind
 from mrdamper.errors import DataValidationError
 
-__all__ = ["register"]
+__all__ = ["QUARTERCAR_CSV", "register"]
+
+#: The kinds of file ``quartercar`` writes (``--force`` replaces only such files).
+QUARTERCAR_CSV = csv_kind(
+    "table written by 'mrdamper quartercar' (road, controller, ...)", ("road", "controller")
+)
+_PNG = png_kind()
+#: The tables of ``quartercar --plant`` (predicted against achieved, and one row per run).
+_FIDELITY_FILES: dict[str, FileKind] = {
+    "closed_loop.csv": csv_kind(
+        "table written by 'mrdamper quartercar --plant' (controller, road, ...)",
+        ("controller", "road"),
+    ),
+    "closed_loop_runs.csv": csv_kind(
+        "runs written by 'mrdamper quartercar --plant'", ("controller", "road")
+    ),
+}
 
 
 def _slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
 
 
-def _save_png(fig: Any, path: Path, force: bool) -> Path:
+def _png_writer(fig: Any) -> Callable[[Path], object]:
+    """Writer of ``fig`` as PNG into a given path (the figure is closed once written)."""
     import matplotlib.pyplot as plt
 
-    from mrdamper._io.atomic import atomic_write_with
+    def write(path: Path) -> None:
+        try:
+            fig.savefig(path, format="png", dpi=100, metadata={"Software": None})
+        finally:
+            plt.close(fig)
 
-    try:
-        return atomic_write_with(
-            path,
-            lambda tmp: fig.savefig(tmp, format="png", dpi=100, metadata={"Software": None}),
-            force=force,
-        )
-    finally:
-        plt.close(fig)
+    return write
 
 
 def quartercar(
@@ -104,7 +120,7 @@ def quartercar(
     ] = None,
 ) -> None:
     """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
-    from mrdamper._io import atomic_write_text, check_writable
+    from mrdamper._io import check_output, check_writable, write_files
     from mrdamper.cli.models import parse_settings
     from mrdamper.control.quarter_car import Controller, QuarterCar
     from mrdamper.control.quarter_car_study import compare_controllers
@@ -117,7 +133,8 @@ def quartercar(
     if plant is not None:
         _fidelity(model_file, plant, out, roads, controllers, speed, duration, seed, force)
         return
-    table_path = check_writable(out / "quartercar.csv", force, inputs=[model_file])
+    check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
+    check_writable(out / "quartercar.csv", force, inputs=[model_file], kind=QUARTERCAR_CSV)
     car_kw = parse_settings(car)
     fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
     unknown = sorted(set(car_kw) - set(fields))
@@ -151,20 +168,25 @@ def quartercar(
     except TypeError as exc:
         raise DataValidationError("MODEL", str(exc)) from exc
     table = cmp.table()
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(table_path, table.to_csv(index=False, float_format="%.6g"), force=force)
-    written = [table_path]
+    text = table.to_csv(index=False, float_format="%.6g")
+    files: dict[str, tuple[FileKind, Callable[[Path], object]]] = {
+        "quartercar.csv": (QUARTERCAR_CSV, lambda p: p.write_text(text, encoding="utf-8"))
+    }
     iso = [r for r in cmp.roads if r.startswith("ISO")]
     mid = 0.5 * duration
     for road in iso[:1]:  # a 2 s window in the middle of the road
         fig = cmp.plot_time(road, t_range=(max(0.0, mid - 1.0), mid + 1.0))
-        written.append(_save_png(fig, out / f"time_{_slug(road)}.png", force))
+        files[f"time_{_slug(road)}.png"] = (_PNG, _png_writer(fig))
     for road in [r for r in cmp.roads if r.startswith("bump")]:
-        written.append(_save_png(cmp.plot_time(road), out / f"time_{_slug(road)}.png", force))
+        files[f"time_{_slug(road)}.png"] = (_PNG, _png_writer(cmp.plot_time(road)))
     if iso:
-        written.append(
-            _save_png(cmp.plot_spectra(iso[0]), out / f"spectra_{_slug(iso[0])}.png", force)
-        )
+        files[f"spectra_{_slug(iso[0])}.png"] = (_PNG, _png_writer(cmp.plot_spectra(iso[0])))
+    try:
+        write_files(out, files, force=force)
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close("all")
     cols = [
         "road",
         "controller",
@@ -177,7 +199,7 @@ def quartercar(
         "mean_input",
     ]
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    typer.echo(f"{m.kind}: wrote {', '.join(p.name for p in written)} in {out}")
+    typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
 
 
 def _fidelity(
@@ -191,16 +213,15 @@ def _fidelity(
     seed: int,
     force: bool,
 ) -> None:
-    from mrdamper._io import atomic_write_text, check_writable
+    from mrdamper._io import check_output, check_writable, write_files
     from mrdamper.control.closed_loop import resolve_plant
     from mrdamper.control.fidelity import closed_loop_fidelity
     from mrdamper.models.registry import load_model
 
     inputs = [model_file] + ([Path(plant)] if Path(plant).is_file() else [])
-    paths = [
-        check_writable(out / name, force, inputs=inputs)
-        for name in ("closed_loop.csv", "closed_loop_runs.csv")
-    ]
+    check_output(out, force=force, folder=True, mode="add", inputs=inputs)
+    for name, kind in _FIDELITY_FILES.items():
+        check_writable(out / name, force, inputs=inputs, kind=kind)
     m = load_model(model_file)
     res = closed_loop_fidelity(
         m,
@@ -212,10 +233,17 @@ def _fidelity(
         seed=seed,
     )
     table = res.table()
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(paths[0], table.to_csv(index=False, float_format="%.6g"), force=force)
-    atomic_write_text(
-        paths[1], res.runs_frame().to_csv(index=False, float_format="%.6g"), force=force
+    texts = {
+        "closed_loop.csv": table.to_csv(index=False, float_format="%.6g"),
+        "closed_loop_runs.csv": res.runs_frame().to_csv(index=False, float_format="%.6g"),
+    }
+    def writer(text: str) -> Callable[[Path], object]:
+        return lambda p: p.write_text(text, encoding="utf-8")
+
+    write_files(
+        out,
+        {name: (kind, writer(texts[name])) for name, kind in _FIDELITY_FILES.items()},
+        force=force,
     )
     shown = table.assign(metric=[f"{k} [{res.unit(k)}]" for k in table["metric"]]).rename(
         columns={"speed_m_s": "speed [m/s]", "error_pct": "error [%]"}
@@ -224,8 +252,7 @@ def _fidelity(
     for note in res.notes:
         typer.echo(f"warning: {note}")
     typer.echo(
-        f"{m.kind} controller, {res.plant_kind} plant: wrote "
-        f"{', '.join(p.name for p in paths)} in {out}"
+        f"{m.kind} controller, {res.plant_kind} plant: wrote {', '.join(_FIDELITY_FILES)} in {out}"
     )
 
 

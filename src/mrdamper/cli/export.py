@@ -18,10 +18,16 @@ from typing import Annotated, Any
 
 import typer
 
+from mrdamper._io import csv_kind
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
-__all__ = ["register"]
+__all__ = ["INVERSE_CSV", "register"]
+
+#: The kind of file ``inverse`` writes (``--force`` replaces only such a file).
+INVERSE_CSV = csv_kind(
+    "table written by 'mrdamper inverse' (t, F_desired, ...)", ("t", "F_desired")
+)
 
 
 def export(
@@ -75,8 +81,8 @@ def export(
     """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws
     for control design, (--format c) C99 code of the model and its inverse, or (--format fmu) an
     FMI 2.0 co-simulation FMU of the model or its inverse."""
-    from mrdamper._io import check_writable
-    from mrdamper.control.export import export_lpv
+    from mrdamper._io import check_output, check_writable
+    from mrdamper.control.export import EXPORT_FILE, export_lpv
     from mrdamper.models.registry import load_model
 
     if fmt is None:
@@ -86,9 +92,9 @@ def export(
     if inverse and fmt != "fmu":
         raise DataValidationError("--inverse", "only with --format fmu (the C export has both)")
     if fmt == "fmu":
-        from mrdamper.control.fmu import export_fmu
+        from mrdamper.control.fmu import FMU_FILE, export_fmu
 
-        check_writable(out, force, inputs=[model_file])
+        check_writable(out, force, inputs=[model_file], kind=FMU_FILE)
         m = load_model(model_file)
         ident = name or (out.stem if out.stem.isidentifier() else "mrd_damper")
         path = export_fmu(m, out, name=ident, inverse=inverse, dt=dt, reg=reg, force=force)
@@ -100,12 +106,13 @@ def export(
         from mrdamper.control.c_export import export_c
         from mrdamper.control.fmu import training_dt
 
+        check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
         m = load_model(model_file)
         c_dt = dt if dt is not None or m.kind != "spencer" else training_dt(m)
         h, c = export_c(m, out, name=name or "mrd_damper", reg=reg, dt=c_dt, force=force)
         typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
         return
-    check_writable(out, force, inputs=[model_file])
+    check_writable(out, force, inputs=[model_file], kind=EXPORT_FILE)
     m = load_model(model_file)
     if m.kind not in ("lpv", "lti"):
         raise DataValidationError(
@@ -152,7 +159,7 @@ def inverse(
     from mrdamper.control.inverse import inverse_current
     from mrdamper.models.registry import load_model
 
-    check_writable(out, force, inputs=[model_file, data])
+    check_writable(out, force, inputs=[model_file, data], kind=INVERSE_CSV)
     m = load_model(model_file)
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
@@ -164,7 +171,9 @@ def inverse(
         raise DataValidationError("MODEL", str(exc)) from exc
     frame = res.to_frame()[["t", "F_desired", res.input, "F_achieved", "saturated"]].copy()
     frame["saturated"] = frame["saturated"].astype(int)
-    path = atomic_write_text(out, frame.to_csv(index=False, float_format="%.10g"), force=force)
+    path = atomic_write_text(
+        out, frame.to_csv(index=False, float_format="%.10g"), force=force, kind=INVERSE_CSV
+    )
     err = res.error
     rms = float((err**2).mean() ** 0.5)
     typer.echo(

@@ -5,10 +5,13 @@ Each command module exposes ``register(app)``. Exits, for every command:
 * usage errors (missing argument, unknown option or command, a value of the wrong type): one
   line on standard error, status 2;
 * errors raised on purpose by the library (:class:`~mrdamper.errors.MrDamperError`, missing
-  files): one line, status 2; other operating-system errors while reading or writing (disk full,
-  read-only folder): one line, status 1;
+  files, permission denied, a symbolic link loop): one line, status 2; other operating-system
+  errors while reading or writing (disk full, an input error of the device): one line,
+  status 1;
 * Ctrl-C: one line ``interrupted``, status 130 (also when a compiled kernel turned the
   interrupt into another exception);
+* SIGTERM (``kill``, a batch system ending the job): handled like Ctrl-C (temporary files and
+  partial folders removed, worker processes stopped), one line ``terminated``, status 143;
 * warnings print as one ``warning: ...`` line, notes (:class:`~mrdamper.errors.Note`) as
   ``note: ...``.
 
@@ -17,7 +20,9 @@ Each command module exposes ``register(app)``. Exits, for every command:
 
 from __future__ import annotations
 
+import errno
 import importlib
+import signal
 import sys
 import warnings
 from collections.abc import Sequence
@@ -44,6 +49,14 @@ COMMAND_MODULES: tuple[str, ...] = (
 USAGE_EXIT = 2
 #: Exit status after Ctrl-C (128 + SIGINT).
 INTERRUPT_EXIT = 130
+#: Exit status after SIGTERM (128 + SIGTERM).
+TERMINATE_EXIT = 143
+#: Exit status of a failure while running (an operating-system error such as a full disk).
+FAILURE_EXIT = 1
+#: Operating-system errors that mean a bad path was given (exit 2), not a failure while running.
+_PATH_ERRNOS = frozenset({errno.ELOOP, errno.ENAMETOOLONG, errno.EACCES, errno.EPERM})
+
+_terminated: list[int] = []
 
 app = typer.Typer(
     name="mrdamper",
@@ -117,6 +130,30 @@ def _help_text(exc: BaseException) -> str | None:
     return ctx.get_help() if ctx is not None else None
 
 
+def _on_sigterm(signum: int, _frame: Any) -> None:
+    """SIGTERM: unwind like Ctrl-C (every ``finally`` and cleanup runs), remembered for the
+    exit status."""
+    _terminated.append(signum)
+    raise KeyboardInterrupt
+
+
+def _interrupted() -> None:
+    """Print the one line of an interruption and exit with its status (130, or 143)."""
+    if _terminated:
+        typer.echo("terminated", err=True)
+        sys.exit(TERMINATE_EXIT)
+    typer.echo("interrupted", err=True)
+    sys.exit(INTERRUPT_EXIT)
+
+
+def _handle_sigterm() -> Any:
+    """Install :func:`_on_sigterm` (main thread only); return the previous handler."""
+    try:
+        return signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread: leave signals alone
+        return None
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     """Entry point of the ``mrdamper`` console script."""
     args = list(sys.argv[1:] if argv is None else argv)
@@ -124,29 +161,28 @@ def main(argv: Sequence[str] | None = None) -> None:
     saved_show = warnings.showwarning
     if not debug:
         warnings.showwarning = _show_warning
+    _terminated.clear()
+    saved_term = _handle_sigterm()
     try:
         rc = app(args=args, prog_name="mrdamper", standalone_mode=False)
         if rc == INTERRUPT_EXIT:  # Typer turns KeyboardInterrupt into this exit status
-            typer.echo("interrupted", err=True)
+            _interrupted()
         if isinstance(rc, int) and rc:
             sys.exit(rc)
     except SystemExit:
         raise
     except KeyboardInterrupt:
-        typer.echo("interrupted", err=True)
-        sys.exit(INTERRUPT_EXIT)
+        _interrupted()
     except (MrDamperError, FileNotFoundError, NotADirectoryError, PermissionError) as exc:
         if interrupt_in_chain(exc):
-            typer.echo("interrupted", err=True)
-            sys.exit(INTERRUPT_EXIT)
+            _interrupted()
         if debug:
             raise
         typer.echo(f"error: {_one_line(str(exc))}", err=True)
         sys.exit(USAGE_EXIT)
     except Exception as exc:
         if interrupt_in_chain(exc):
-            typer.echo("interrupted", err=True)
-            sys.exit(INTERRUPT_EXIT)
+            _interrupted()
         help_text = _help_text(exc)
         if help_text is not None:
             typer.echo(help_text)
@@ -162,10 +198,12 @@ def main(argv: Sequence[str] | None = None) -> None:
         if isinstance(exc, OSError) and not debug:
             where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
             typer.echo(f"error: {where}{exc.strerror or _one_line(str(exc))}", err=True)
-            sys.exit(1)
+            sys.exit(USAGE_EXIT if exc.errno in _PATH_ERRNOS else FAILURE_EXIT)
         raise
     finally:
         warnings.showwarning = saved_show
+        if saved_term is not None:
+            signal.signal(signal.SIGTERM, saved_term)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -23,16 +23,21 @@ from typing import Annotated, Any, cast
 
 import typer
 
+from mrdamper._io import csv_kind
 from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
-from mrdamper.models.base import RangePolicy
+from mrdamper.models.base import MODEL_FILE, RangePolicy
 from mrdamper.models.registry import get_estimator, load_model
 
 __all__ = ["estimator_settings", "parse_settings", "read_records", "register"]
 
 _RANGE_POLICIES: tuple[str, ...] = typing.get_args(RangePolicy)
+#: The kind of file ``simulate`` writes (``--force`` replaces only such a file).
+SIMULATION_CSV = csv_kind(
+    "table written by 'mrdamper simulate' (t, F, F_pred)", ("t", "F", "F_pred")
+)
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -154,7 +159,7 @@ def fit(
     from mrdamper.cli._status import working
 
     accepted = estimator_settings(model)  # unknown kind: SchemaError naming the known kinds
-    check_writable(out, force, inputs=list(data))  # fail before a long fit
+    check_writable(out, force, inputs=list(data), kind=MODEL_FILE)  # fail before a long fit
     with working(f"fitting {model}", show=not no_progress) as status:
         records = read_records(list(data), pattern, read_kw)
         given: dict[str, Any] = {
@@ -199,7 +204,7 @@ def simulate(
     """Free-run simulation of one record; writes t [s], measured F [N] and predicted F_pred [N]."""
     from mrdamper._io import atomic_write_text, check_writable
 
-    check_writable(out, force, inputs=[model_file, data])
+    check_writable(out, force, inputs=[model_file, data], kind=SIMULATION_CSV)
     m = load_model(model_file)
     if range_policy is not None:
         m = m.with_range_policy(_check_policy(range_policy))
@@ -208,7 +213,9 @@ def simulate(
     [exp] = read_records([data], read_kw=read_kw)
     res = m.simulate(exp)
     frame = res.to_frame()[["t", "F", "F_pred"]]
-    path = atomic_write_text(out, frame.to_csv(index=False, float_format="%.10g"), force=force)
+    path = atomic_write_text(
+        out, frame.to_csv(index=False, float_format="%.10g"), force=force, kind=SIMULATION_CSV
+    )
     s = res.scores
     typer.echo(f"{exp.name}: ESR {s.esr:.4g}, SSSE {s.ssse:.4g} N; wrote {path}")
 

@@ -15,11 +15,17 @@ from typing import Annotated, Any
 
 import typer
 
+from mrdamper._io import csv_kind
 from mrdamper.cli._records import reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.errors import DataValidationError
 
-__all__ = ["register", "select"]
+__all__ = ["SELECTION_CSV", "register", "select"]
+
+#: The kind of file ``select --csv`` writes (``--force`` replaces only such a file).
+SELECTION_CSV = csv_kind(
+    "table written by 'mrdamper select' (model, mean_esr, ...)", ("model", "mean_esr")
+)
 
 
 def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
@@ -81,7 +87,7 @@ def select(
     from mrdamper.study.selection import cross_validate
 
     if csv is not None:
-        check_writable(csv, force=force, inputs=list(data))
+        check_writable(csv, force=force, inputs=list(data), kind=SELECTION_CSV, option="--csv")
     with working("cross-validating", show=not no_progress):
         records = read_records(data, pattern, read_kw)
         source = input_ or _choose_input(records)
@@ -119,7 +125,7 @@ def select(
         typer.echo(f"note: {note}")
     typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")
     if csv is not None:
-        atomic_write_text(csv, tab.to_csv(index=False), force=force)
+        atomic_write_text(csv, tab.to_csv(index=False), force=force, kind=SELECTION_CSV)
         typer.echo(f"wrote {csv}")
 
 

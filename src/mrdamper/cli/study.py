@@ -161,6 +161,10 @@ def study(
 
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
+    if scheduler is not None:
+        from mrdamper.study.executor import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     _check_out(out, force, [data])
     _headless()
     kinds = _models(models)

@@ -36,7 +36,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from mrdamper._io import atomic_write_text, check_writable
+from mrdamper._io import c_code_kind, check_output, write_files
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
 from mrdamper.control.c_render._common import INVERSE_RUN, RUN
 from mrdamper.errors import DataValidationError
@@ -191,8 +191,14 @@ def export_c(
     d = Path(out_dir)
     if d.exists() and not d.is_dir():
         raise DataValidationError("out_dir", f"{d} exists and is not a folder")
-    h_path, c_path = check_writable(d / f"{name}.h", force), check_writable(d / f"{name}.c", force)
-    d.mkdir(parents=True, exist_ok=True)
-    return atomic_write_text(h_path, header, force=force), atomic_write_text(
-        c_path, src, force=force
+    check_output(d, force=force, folder=True, mode="add")
+    kind = c_code_kind()
+    write_files(
+        d,
+        {
+            f"{name}.h": (kind, lambda p: p.write_text(header, encoding="utf-8")),
+            f"{name}.c": (kind, lambda p: p.write_text(src, encoding="utf-8")),
+        },
+        force=force,
     )
+    return d / f"{name}.h", d / f"{name}.c"

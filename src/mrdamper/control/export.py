@@ -70,7 +70,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from mrdamper._io import atomic_write_text
+from mrdamper._io import FileKind, atomic_write_text, json_kind, mat_kind
 from mrdamper._io.atomic import atomic_write_with
 from mrdamper.control.inverse import lpv_hysteresis
 from mrdamper.control.statespace import state_space
@@ -82,6 +82,14 @@ __all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data"]
 #: Schema name written into every export file.
 EXPORT_SCHEMA = "mrdamper.lpv_export"
 _VERSION = 1
+_EXPORT_JSON = json_kind("JSON export", EXPORT_SCHEMA)
+_EXPORT_MAT = mat_kind("MAT export", EXPORT_SCHEMA)
+#: The kind of file :func:`export_lpv` writes, in either format (``force`` replaces only such a
+#: file).
+EXPORT_FILE = FileKind(
+    "state-space export of mrdamper (.mat or .json)",
+    lambda p: _EXPORT_JSON.matches(p) or _EXPORT_MAT.matches(p),
+)
 
 
 def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
@@ -223,11 +231,11 @@ def export_lpv(
         )
     if format == "json":
         text = json.dumps(encode_value(data), indent=1, allow_nan=False)
-        return atomic_write_text(path, text + "\n", force=force)
+        return atomic_write_text(path, text + "\n", force=force, kind=EXPORT_FILE)
     from scipy.io import savemat
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as fh:
             savemat(fh, data, oned_as="column")
 
-    return atomic_write_with(path, write, force=force)
+    return atomic_write_with(path, write, force=force, kind=EXPORT_FILE)

@@ -44,13 +44,35 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-from mrdamper._io import atomic_write_with, check_writable
+from mrdamper._io import FileKind, atomic_write_with, check_writable
 from mrdamper.control._fmi2_c import FMI2_TYPES, WRAPPER
 from mrdamper.control.c_export import C_KINDS, assemble, render
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.version import __version__
 
-__all__ = ["FMU_KINDS", "GCC_FLAGS", "export_fmu", "fmu_sources", "run_fmu", "training_dt"]
+__all__ = [
+    "FMU_FILE",
+    "FMU_KINDS",
+    "GCC_FLAGS",
+    "export_fmu",
+    "fmu_sources",
+    "run_fmu",
+    "training_dt",
+]
+
+
+def _is_mrdamper_fmu(path: Path) -> bool:
+    """True for an FMU (zip) whose model description names mrdamper as its generation tool."""
+    try:
+        with zipfile.ZipFile(path) as z:
+            head = z.read("modelDescription.xml")[:4096].decode("utf-8", errors="replace")
+    except (OSError, KeyError, zipfile.BadZipFile):
+        return False
+    return 'generationTool="mrdamper ' in head
+
+
+#: The kind of file the FMU export writes (``--force`` replaces only such files).
+FMU_FILE = FileKind("FMU exported by mrdamper", _is_mrdamper_fmu)
 
 #: Model kinds with an FMU (every kind with a C step).
 FMU_KINDS = C_KINDS
@@ -312,7 +334,7 @@ def export_fmu(
     MrDamperError
         gcc is not found or fails, or the platform is not 64-bit Linux.
     """
-    path = check_writable(out, force)
+    path = check_writable(out, force, kind=FMU_FILE)
     files, _ = fmu_sources(model, name, inverse=inverse, dt=dt, reg=reg)
     if not sys.platform.startswith("linux") or struct.calcsize("P") != 8:
         raise MrDamperError(

@@ -14,8 +14,8 @@ from __future__ import annotations
 import abc
 import dataclasses
 import json
-import math
 import time
+import typing
 import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -25,12 +25,20 @@ from typing import Any, ClassVar, Literal, cast
 import numpy as np
 import pandas as pd
 
-from mrdamper._io import atomic_write_text
+from mrdamper._io import atomic_write_text, json_kind
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
 from mrdamper.models import _scale
+from mrdamper.models._schema import (
+    SCHEMA_NAME,
+    SCHEMA_VERSION,
+    check_header,
+    check_model_dict,
+    decode_value,
+    encode_value,
+)
 from mrdamper.models.envelope import training_envelope
 from mrdamper.models.settings import (
     check_bool,
@@ -44,6 +52,7 @@ from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = [
+    "MODEL_FILE",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
     "TIMING_PROVENANCE",
@@ -64,8 +73,8 @@ __all__ = [
     "single_level_note",
 ]
 
-SCHEMA_NAME = "mrdamper.model"
-SCHEMA_VERSION = 1
+#: The kind of file :meth:`FittedModel.save` writes (``force`` replaces only such a file).
+MODEL_FILE = json_kind("mrdamper model file (JSON)", SCHEMA_NAME)
 
 #: Provenance entries that are wall-clock or CPU times [s]. They stay on the in-memory model but
 #: are never written to a model file, so that the same fit gives the same bytes.
@@ -162,55 +171,6 @@ def single_level_note(kind: str, source: str, level: float) -> str:
         f"are constants and its identified range is [{level:g}, {level:g}] {unit}; other levels "
         "follow range_policy"
     )
-
-
-# ----------------------------------------------------------------------------- JSON encoding
-def encode_value(value: Any) -> Any:
-    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly).
-
-    Parameters
-    ----------
-    value : object
-        Number, array, sequence or mapping of them.
-    """
-    if isinstance(value, np.ndarray):
-        return {
-            "__ndarray__": value.ravel().tolist(),
-            "dtype": str(value.dtype),
-            "shape": list(value.shape),
-        }
-    if isinstance(value, (np.floating, float)):
-        f = float(value)
-        if not math.isfinite(f):
-            return {"__float__": repr(f)}
-        return f
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (list, tuple)):
-        return [encode_value(v) for v in value]
-    if isinstance(value, Mapping):
-        return {str(k): encode_value(v) for k, v in value.items()}
-    return value
-
-
-def decode_value(value: Any) -> Any:
-    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed).
-
-    Parameters
-    ----------
-    value : object
-        JSON data written by :func:`encode_value`.
-    """
-    if isinstance(value, dict):
-        if "__ndarray__" in value:
-            arr = np.array(value["__ndarray__"], dtype=value.get("dtype", "float64"))
-            return arr.reshape(value["shape"])
-        if "__float__" in value:
-            return float(value["__float__"])
-        return {k: decode_value(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [decode_value(v) for v in value]
-    return value
 
 
 # ----------------------------------------------------------------------------- results
@@ -370,33 +330,38 @@ class FittedModel(abc.ABC):
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> FittedModel:
         """Rebuild a model saved by :meth:`to_dict` (checks schema, version and kind)."""
-        _check_schema(data)
+        check_header(data)
         if data["kind"] != cls.kind:
             raise SchemaError(f"kind: file holds {data['kind']!r}, expected {cls.kind!r}")
-        params = decode_value(data["parameters"])
-        if not isinstance(params, dict):
-            raise SchemaError(f"parameters: expected an object, got {type(params).__name__}")
-        for key, value in params.items():
-            if _has_nan(value):
-                raise SchemaError(
-                    f"parameters.{key}: holds NaN; the model file is damaged or was edited"
-                )
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = set(params) - names
-        if unknown:
-            raise SchemaError(f"parameters: unknown field(s) {sorted(unknown)} for {cls.kind!r}")
-        return cls(
-            input=data["input"],
-            input_range=tuple(data["input_range"]),
-            range_policy=data.get("range_policy", "error"),
-            provenance=decode_value(data.get("provenance", {})),
-            **params,
-        )
+        params = decode_value(data["parameters"], "parameters")
+        check_model_dict(cls, params)
+        policy = data.get("range_policy", "error")
+        if policy not in typing.get_args(RangePolicy):
+            raise SchemaError(
+                f"range_policy: expected one of {list(typing.get_args(RangePolicy))}, got "
+                f"{policy!r}"
+            )
+        try:
+            return cls(
+                input=data["input"],
+                input_range=tuple(data["input_range"]),
+                range_policy=policy,
+                provenance=decode_value(data.get("provenance", {}), "provenance"),
+                **params,
+            )
+        except (TypeError, ValueError, KeyError, IndexError) as exc:
+            if isinstance(exc, SchemaError):
+                raise
+            raise SchemaError(
+                f"parameters: do not make a {cls.kind!r} model ({exc}); the model file is "
+                "damaged or was edited"
+            ) from None
 
     def save(self, path: str | Path, *, force: bool = False) -> Path:
-        """Write the model as JSON, atomically; refuse to overwrite unless ``force``."""
+        """Write the model as JSON, atomically; refuse to overwrite unless ``force``, and even
+        then unless the existing file is a model file (:data:`MODEL_FILE`)."""
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
-        return atomic_write_text(path, text + "\n", force=force)
+        return atomic_write_text(path, text + "\n", force=force, kind=MODEL_FILE)
 
 
 @dataclass(frozen=True, eq=False)
@@ -665,27 +630,3 @@ SEGMENT_SAMPLES` cut into consecutive segments (bounded work arrays; a note says
                     "derive_velocity / --derive-velocity)",
                 )
         return exps
-
-
-def _has_nan(value: Any) -> bool:
-    """True if a decoded parameter (number, array, nested list / dict) contains a NaN."""
-    if isinstance(value, np.ndarray):
-        return value.dtype.kind in "fc" and bool(np.isnan(value).any())
-    if isinstance(value, float):
-        return math.isnan(value)
-    if isinstance(value, (list, tuple)):
-        return any(_has_nan(v) for v in value)
-    if isinstance(value, Mapping):
-        return any(_has_nan(v) for v in value.values())
-    return False
-
-
-def _check_schema(data: Mapping[str, Any]) -> None:
-    if data.get("schema") != SCHEMA_NAME:
-        raise SchemaError(f"schema: expected {SCHEMA_NAME!r}, got {data.get('schema')!r}")
-    ver = data.get("schema_version")
-    if ver != SCHEMA_VERSION:
-        raise SchemaError(f"schema_version: expected {SCHEMA_VERSION}, got {ver!r}")
-    for key in ("kind", "input", "input_range", "parameters"):
-        if key not in data:
-            raise SchemaError(f"{key}: missing from model file")

@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
 from pathlib import Path
 from typing import Any
 
 from mrdamper import kinds
 from mrdamper.errors import SchemaError
-from mrdamper.models.base import Estimator, FittedModel, _check_schema
+from mrdamper.models._schema import check_header
+from mrdamper.models.base import Estimator, FittedModel
 
 __all__ = [
     "available_models",
@@ -144,7 +146,7 @@ def model_from_dict(data: dict[str, Any]) -> FittedModel:
     data : dict
         The dict written by :meth:`FittedModel.to_dict`.
     """
-    _check_schema(data)
+    check_header(data)
     return model_class(data["kind"]).from_dict(data)
 
 
@@ -157,10 +159,17 @@ def load_model(path: str | Path) -> FittedModel:
         Model file (JSON).
     """
     p = Path(path)
+    if os.path.lexists(p) and not p.exists():
+        raise FileNotFoundError(f"{p}: a broken symbolic link or a symbolic link loop")
+    if p.is_dir():
+        raise SchemaError(f"{p}: is a folder; expected a model file written by 'mrdamper fit'")
     try:
         data = json.loads(p.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise FileNotFoundError(f"{p}: model file not found") from None
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SchemaError(f"{p}: not valid JSON ({exc})") from None
-    return model_from_dict(data)
+    try:
+        return model_from_dict(data)
+    except SchemaError as exc:
+        raise SchemaError(f"{p}: {exc}") from None

@@ -342,18 +342,28 @@ def _make_parallel(
     """Records in worker processes; each is fully determined by its seed, so order and bytes are
     those of the serial run. Long records go first so the workers finish together."""
     import multiprocessing
+    import os
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     order = sorted(range(len(jobs)), key=lambda k: -jobs[k][0].duration)
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("fork" if "fork" in methods else None)
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    from mrdamper._io.processes import init_worker, stop_pool
+
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=ctx, initializer=init_worker, initargs=(os.getpid(),)
+    )
+    try:
         futures = {pool.submit(_payload, jobs[k], rig, scale): k for k in order}
         records: dict[int, Experiment] = {}
         for f in as_completed(futures):
             records[futures[f]] = Experiment(**f.result())
             if progress is not None:
                 progress(records[futures[f]])
+    except BaseException:
+        stop_pool(pool)  # interrupted or failed: no worker keeps running
+        raise
+    pool.shutdown(wait=True)
     return [records[k] for k in range(len(jobs))]
 
 

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper._io.processes import init_worker, stop_pool
 from mrdamper.data import Experiment, RecordSource
 from mrdamper.errors import DataValidationError
 
@@ -43,10 +44,44 @@ __all__ = [
     "RecordHandle",
     "SerialExecutor",
     "StudyExecutor",
+    "check_scheduler_address",
     "default_workers",
     "make_executor",
     "resolve_record",
 ]
+
+
+#: Schemes of a Dask scheduler address that need ``host:port``.
+_NET_SCHEMES: tuple[str, ...] = ("tcp", "tls", "ws", "wss", "ucx")
+
+
+def check_scheduler_address(address: str) -> str:
+    """Check the form of a Dask scheduler address before connecting; return it.
+
+    Accepted: ``SCHEME://HOST:PORT`` with a scheme of :data:`_NET_SCHEMES` (or ``HOST:PORT``,
+    taken as TCP) and a port in 1..65535, or ``inproc://...``.
+
+    Raises
+    ------
+    DataValidationError
+        Not of that form (the message shows the expected form).
+    """
+    expected = f"expected an address such as tcp://HOST:8786, got {address!r}"
+    if not isinstance(address, str) or not address.strip():
+        raise DataValidationError("--scheduler", expected)
+    scheme, sep, rest = address.partition("://")
+    if not sep:
+        scheme, rest = "tcp", address
+    if scheme == "inproc":
+        return address
+    if scheme not in _NET_SCHEMES:
+        raise DataValidationError(
+            "--scheduler", f"unknown scheme {scheme!r} (one of {list(_NET_SCHEMES)}); {expected}"
+        )
+    host, colon, port = rest.rstrip("/").rpartition(":")
+    if not colon or not host.strip("[]") or not port.isdigit() or not 0 < int(port) < 65536:
+        raise DataValidationError("--scheduler", expected)
+    return address
 
 
 def default_workers() -> int:
@@ -172,7 +207,9 @@ class ProcessExecutor(StudyExecutor):
             raise DataValidationError("workers", f"expected a positive integer, got {workers!r}")
         methods = multiprocessing.get_all_start_methods()
         ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-        self._pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        self._pool = cf.ProcessPoolExecutor(
+            max_workers=workers, mp_context=ctx, initializer=init_worker, initargs=(os.getpid(),)
+        )
         # start the workers now, before any progress-display thread exists in this process
         list(self._pool.map(_ping, range(workers)))
         self._dir = Path(tempfile.mkdtemp(prefix="mrdamper-study-"))
@@ -202,11 +239,7 @@ class ProcessExecutor(StudyExecutor):
         if cancel:
             # interrupted: drop queued tasks and stop running ones instead of waiting for them
             # (ProcessPoolExecutor has no public way to stop a running task)
-            procs = list(getattr(self._pool, "_processes", {}).values())
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            for p in procs:
-                if p.is_alive():
-                    p.terminate()
+            stop_pool(self._pool)
         else:
             self._pool.shutdown(wait=True)
         shutil.rmtree(self._dir, ignore_errors=True)
@@ -238,7 +271,7 @@ class DaskExecutor(StudyExecutor):
             self._client = scheduler
             self._own = False
         elif isinstance(scheduler, str) and scheduler:
-            self._client = client_type(scheduler)
+            self._client = client_type(check_scheduler_address(scheduler))
             self._own = True
         else:
             raise DataValidationError(

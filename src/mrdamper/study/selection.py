@@ -30,6 +30,7 @@ import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.errors import DataValidationError, OutOfRangeError
+from mrdamper.metrics import MIN_SCORED_SAMPLES
 from mrdamper.progress import report, section
 
 __all__ = [
@@ -146,6 +147,13 @@ def selection_folds(
     if len(exps) != 1:
         raise DataValidationError("folds", f"'time' splits one record; got {len(exps)} records")
     e = exps[0]
+    if e.n // n_folds < MIN_SCORED_SAMPLES:
+        raise DataValidationError(
+            "n_folds",
+            f"{n_folds} time blocks of record {e.name!r} ({e.n} samples) would hold "
+            f"{e.n // n_folds} sample(s) each; scoring a block needs at least "
+            f"{MIN_SCORED_SAMPLES}: use at most {max(e.n // MIN_SCORED_SAMPLES, 2)} folds",
+        )
     edges = np.linspace(0, e.n, n_folds + 1).round().astype(int)
     out = []
     for j in range(n_folds):

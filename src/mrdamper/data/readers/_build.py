@@ -38,11 +38,19 @@ JITTER_LIMIT = 0.1
 ReadOptions = dict[str, Any]
 
 
+def missing(p: Path, what: str = "file") -> FileNotFoundError:
+    """The error for a path with nothing readable behind it (``what``: "file", "file or
+    folder"): it says when the path is a broken symbolic link or a link loop."""
+    if os.path.lexists(p):
+        return FileNotFoundError(f"{p}: a broken symbolic link or a symbolic link loop")
+    return FileNotFoundError(f"{p}: no such {what}")
+
+
 def existing_file(path: str | os.PathLike[str]) -> Path:
     """Return ``path`` as a Path; raise :class:`FileNotFoundError` if nothing is there."""
     p = Path(path)
     if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file")
+        raise missing(p)
     return p
 
 

@@ -11,7 +11,7 @@ import pandas as pd
 
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
 from mrdamper.data.readers._build import build_experiment, existing_file
-from mrdamper.errors import DataValidationError
+from mrdamper.errors import DataValidationError, interrupt_in_chain
 
 __all__ = ["read_csv", "sniff_delimiter"]
 
@@ -166,6 +166,8 @@ def read_csv(
             "file", f"{p} is empty; expected a header row and data rows"
         ) from None
     except pd.errors.ParserError as exc:
+        if interrupt_in_chain(exc):  # Ctrl-C while parsing: not a fault of the file
+            raise KeyboardInterrupt from exc
         raise DataValidationError(
             "file", f"{p} could not be parsed with sep={delim!r}: {exc}"
         ) from None

@@ -11,6 +11,7 @@ from typing import Any
 
 from mrdamper.data.experiment import Experiment
 from mrdamper.data.experiment_set import ExperimentSet
+from mrdamper.data.readers._build import missing
 from mrdamper.data.readers.csv_reader import read_csv
 from mrdamper.data.readers.mat_reader import read_mat
 from mrdamper.data.readers.parquet_reader import read_parquet
@@ -309,7 +310,7 @@ def read(path: str | os.PathLike[str], **kwargs: Any) -> Experiment | Experiment
     """
     p = Path(path)
     if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file or folder")
+        raise missing(p, "file or folder")
     if p.is_dir():
         return read_directory(p, **kwargs)
     return read_file(p, **kwargs)

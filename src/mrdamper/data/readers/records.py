@@ -25,6 +25,7 @@ from typing import Any, overload
 
 from mrdamper.data.experiment import Experiment
 from mrdamper.data.experiment_set import ExperimentSet
+from mrdamper.data.readers._build import missing
 from mrdamper.data.readers.directory import (
     DEFAULT_PATTERN,
     directory_files,
@@ -32,7 +33,8 @@ from mrdamper.data.readers.directory import (
     read_file,
 )
 from mrdamper.data.readers.manifest import is_doe_folder, manifest_rows
-from mrdamper.errors import DataValidationError
+from mrdamper.errors import DataValidationError, interrupt_in_chain
+from mrdamper.metrics import MIN_SCORED_SAMPLES
 from mrdamper.progress import report
 
 __all__ = [
@@ -96,19 +98,45 @@ class RecordFile:
         Raises
         ------
         DataValidationError
-            The file's sample count differs from ``samples``; errors of the reader as they are.
+            The file's sample count differs from ``samples``, or is below
+            :data:`~mrdamper.metrics.MIN_SCORED_SAMPLES` (such a record can be neither fitted nor
+            scored); errors of the reader, naming the file when they did not.
         """
         kw = dict(self.read_kw)
         if self.name is not None:
             kw["name"] = self.name
         if self.metadata:
             kw["metadata"] = dict(self.metadata)
-        e = read_file(self.path, **kw)
+        try:
+            e = read_file(self.path, **kw)
+        except DataValidationError as exc:
+            if interrupt_in_chain(exc):  # Ctrl-C inside a parser: the file is not to blame
+                raise KeyboardInterrupt from exc
+            raise _naming_file(exc, self.path) from None
         if self.samples is not None and e.n != self.samples:
             raise DataValidationError(
                 "samples", f"{self.path}: {e.n} samples, manifest says {self.samples}"
             )
+        if e.n < MIN_SCORED_SAMPLES:
+            raise DataValidationError(
+                "samples",
+                f"{self.path}: record has {e.n} sample(s); fitting and scoring need at least "
+                f"{MIN_SCORED_SAMPLES}",
+            )
         return e
+
+
+def _naming_file(exc: DataValidationError, path: str) -> DataValidationError:
+    """``exc`` itself when its message names the file ``path``, else the same error (same class
+    and field) with the file named."""
+    text = str(exc)
+    if path in text or Path(path).name in text:
+        return exc
+    field = exc.field
+    rest = text[len(field) + 2 :] if text.startswith(f"{field}: ") else text
+    new = DataValidationError.__new__(type(exc))
+    DataValidationError.__init__(new, field, f"{rest} (in {path})")
+    return new
 
 
 def _check_pattern(pattern: str) -> None:
@@ -154,7 +182,7 @@ def record_files(
     for item in items:
         p = Path(item)
         if not p.exists():
-            raise FileNotFoundError(f"{p}: no such file or folder")
+            raise missing(p, "file or folder")
         if not p.is_dir():
             out.append(RecordFile(str(p), read_kw=read_kw))
             continue
