@@ -40,7 +40,7 @@ from mrdamper.models import get_estimator
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "accuracy_real_data.py"
 FOLD = "10mm_2Hz"
 #: Dyke drive-lag rate [1/s] of the pinned values (the benchmark's former choice on the training
-#: part; the estimators' default ``eta="auto"`` now identifies the lag, ``tests/models/test_lag.py``).
+#: part; the default ``eta="auto"`` now identifies the lag, ``tests/models/test_lag.py``).
 DYKE_ETA = 250.0
 #: Kinds with a drive-lag setting.
 LAGGED = {"lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4"}
