@@ -6,20 +6,18 @@ Protocols (no tuning on test data):
   condition out (train on five conditions, all currents; test on the sixth). Mean test ESR and
   SSSE per model, per fold and overall.
 * Dyke (``ranran_50.csv``, random displacement, switching command voltage): first 70 % of the
-  record trains, last 30 % tests. The scheduling variable of the LPV/LTI models is the
-  first-order filtered command voltage; its rate ``eta`` is chosen on the training part only
-  (first 80 % of it fits, last 20 % validates). ``--dyke-eta ETA`` skips that choice and uses
-  ``ETA`` at the full rate (the choice the grid makes, 250 1/s, is in ``docs/results.md``).
+  record trains, last 30 % tests. Every model with a drive-lag setting (LPV, LTI, P-15,
+  SP-1..SP-4) identifies the lag of the drive on the training part only (its default
+  ``eta="auto"``: first 80 % fits, last 20 % validates, ``mrdamper.models.lag``); the chosen rate
+  is printed.
 * Labcontrol (``labcontrol2021_utfpr``, constant-voltage sine records at 100 Hz on a third
   damper): fit on ``train/`` (23 records, four voltage levels), score every record of ``test/``
   (15 records); the LPV/LTI model rate is the record rate.
 
 Every model is fitted with its estimator's defaults plus the data set's electrical input; the LPV
-and LTI models use a model rate of 200 Hz for Quiroz (chosen a priori: the lowest record rate);
-for Dyke the model rate (3004.8 Hz divided by 1, 2 or 5) is chosen with ``eta`` on the training
-part, and every other model with a drive-lag setting (P-15, SP-1..SP-4) follows the voltage
-through the same drive lag ``eta``. ``--set
-KIND.KEY=VALUE`` overrides a setting (ablations). A model that fails to fit or to
+and LTI models use a model rate of 200 Hz for Quiroz (chosen a priori: the lowest record rate)
+and the record rate on Dyke (their default). ``--set KIND.KEY=VALUE`` overrides a setting
+(ablations, e.g. ``--set lpv.eta=250.0`` for a fixed lag). A model that fails to fit or to
 simulate is reported as a row with its error, never dropped.
 
 Run::
@@ -27,7 +25,7 @@ Run::
     python benchmarks/accuracy_real_data.py                 # both protocols, every model
     python benchmarks/accuracy_real_data.py --models lpv lti sp1 --protocol quiroz
     python benchmarks/accuracy_real_data.py --models p15 --set p15.method=equation-error
-    python benchmarks/accuracy_real_data.py --models tanh dahl --protocol all --dyke-eta 250
+    python benchmarks/accuracy_real_data.py --models tanh dahl --protocol all --set tanh.eta=250.0
 """
 
 from __future__ import annotations
@@ -38,7 +36,6 @@ import os
 import sys
 import time
 import warnings
-from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -53,31 +50,19 @@ REPO = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO.parent / "shared" / "data"))
 QUIROZ_FS = 200.0
 DYKE_FS = 3004.8
-LABCONTROL_FS = 100.0
-DECIMATION_GRID = (1, 2, 5)
-ETA_GRID = (50.0, 100.0, 150.0, 250.0, 400.0)
 
 
 #: Extra estimator settings per kind from ``--set KIND.KEY=VALUE`` (override the ones below).
 EXTRA: dict[str, dict[str, Any]] = {}
 
 
-def settings_for(
-    kind: str, protocol: str, eta: float | None = None, decimation: int = 1
-) -> dict[str, Any]:
+def settings_for(kind: str, protocol: str) -> dict[str, Any]:
     """Estimator settings per kind and protocol (defaults plus the data set's input)."""
     s: dict[str, Any] = {}
     if protocol in ("dyke", "labcontrol"):
         s["input"] = "voltage"
-    if kind in ("lpv", "lti"):
-        rates = {"quiroz": QUIROZ_FS, "labcontrol": LABCONTROL_FS}
-        s["model_fs"] = rates.get(protocol, DYKE_FS / decimation)
-        if protocol == "dyke":
-            s["eta"] = eta
-    elif protocol == "dyke" and "eta" in {f.name for f in fields(type(get_estimator(kind)))}:
-        # every other model with a drive-lag setting (P-15, SP-1..SP-4) follows the same
-        # drive-lagged command voltage as LPV's rho: the coil current lags the command alike
-        s["eta"] = eta
+    if kind in ("lpv", "lti") and protocol == "quiroz":
+        s["model_fs"] = QUIROZ_FS
     return {**s, **EXTRA.get(kind, {})}
 
 
@@ -107,10 +92,13 @@ def fit_and_score(
                 "esr": np.nan,
                 "ssse": np.nan,
                 "fit_s": time.perf_counter() - t0,
+                "eta": "-",
                 "error": f"{type(exc).__name__}: {exc}",
             }
         ]
     fit_s = time.perf_counter() - t0
+    lag = getattr(model, "eta", None)
+    eta = "-" if lag is None else f"{lag:g}"
     rows = []
     for e in test:
         try:
@@ -124,6 +112,7 @@ def fit_and_score(
                     "esr": sc.esr,
                     "ssse": sc.ssse,
                     "fit_s": fit_s,
+                    "eta": eta,
                     "error": "",
                 }
             )
@@ -135,6 +124,7 @@ def fit_and_score(
                     "esr": np.nan,
                     "ssse": np.nan,
                     "fit_s": fit_s,
+                    "eta": eta,
                     "error": f"{type(exc).__name__}: {exc}",
                 }
             )
@@ -164,54 +154,22 @@ def _dyke_parts() -> tuple[Experiment, Experiment]:
     return e.slice(0, cut, name="dyke_train"), e.slice(cut, None, name="dyke_test")
 
 
-def choose_eta(train: Experiment) -> tuple[float, int, pd.DataFrame]:
-    """Drive-lag rate and model-rate decimation of the LPV model, from the training part only
-    (inner split: first 80 % fits, last 20 % validates). The grid fits the LPV model with the
-    paper's static input ``u`` (one fit per grid point; the default hysteretic input would fit six
-    per point to choose its own stroke scale and pre-yield share)."""
-    cut = round(0.8 * train.n)
-    fit_part, val_part = train.slice(0, cut, name="eta_fit"), train.slice(cut, None, name="eta_val")
-    rows = []
-    for dec in DECIMATION_GRID:
-        for eta in ETA_GRID:
-            r = fit_and_score(
-                "lpv",
-                {**settings_for("lpv", "dyke", eta, dec), "input_signal": "u"},
-                fit_part,
-                ExperimentSet([val_part]),
-                "clip",
-            )[0]
-            rows.append({"decimation": dec, "eta": eta, "val_esr": r["esr"], "error": r["error"]})
-    tab = pd.DataFrame(rows)
-    if not tab["val_esr"].notna().any():
-        return 100.0, 1, tab
-    k = tab["val_esr"].idxmin()
-    return float(tab.loc[k, "eta"]), int(tab.loc[k, "decimation"]), tab
-
-
-def dyke(
-    models: list[str], eta: float | None = None
-) -> tuple[pd.DataFrame, float, int, pd.DataFrame]:
-    """Dyke 70/30; ``eta`` given: no choice on the training part (full model rate)."""
+def dyke(models: list[str]) -> pd.DataFrame:
     train, test = _dyke_parts()
-    if eta is None:
-        eta, dec, eta_tab = choose_eta(train)
-    else:
-        dec, eta_tab = 1, pd.DataFrame([{"eta": eta, "note": "given (--dyke-eta)"}])
     rows = []
     for kind in models:
         # the command voltage of the test part exceeds the training range by < 0.1 %: clip it
         rows += fit_and_score(
-            kind, settings_for(kind, "dyke", eta, dec), train, ExperimentSet([test]), "clip"
+            kind, settings_for(kind, "dyke"), train, ExperimentSet([test]), "clip"
         )
         last = rows[-1]
         print(
-            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  "
+            f"  dyke {kind:8s} fit {last['fit_s']:6.2f} s  eta {last['eta']}  "
             f"{'error: ' + last['error'][:70] if last['error'] else ''}",
             file=sys.stderr,
             flush=True,
         )
-    return pd.DataFrame(rows), eta, dec, eta_tab
+    return pd.DataFrame(rows)
 
 
 def labcontrol(models: list[str]) -> pd.DataFrame:
@@ -274,9 +232,6 @@ def main(argv: list[str] | None = None) -> None:
         help="both: quiroz and dyke; all: the three data sets",
     )
     ap.add_argument(
-        "--dyke-eta", type=float, default=None, help="Dyke drive-lag rate [1/s] (skip its choice)"
-    )
-    ap.add_argument(
         "--csv", type=Path, default=None, help="also write the per-record rows to this CSV"
     )
     ap.add_argument(
@@ -314,15 +269,10 @@ def main(argv: list[str] | None = None) -> None:
         print("\n## Quiroz summary (mean over all test records)")
         print(summarise(q).pipe(to_markdown))
     if args.protocol in ("dyke", "both", "all"):
-        d, eta, dec, eta_tab = dyke(models, args.dyke_eta)
+        d = dyke(models)
         frames.append(d.assign(protocol="dyke"))
-        print(
-            f"\n## Dyke 70/30: LPV/LTI settings chosen on the training part: eta = {eta:g} 1/s, "
-            f"model rate {DYKE_FS / dec:g} Hz (decimation {dec})"
-        )
-        print(to_markdown(eta_tab, index=False))
-        print("\n## Dyke test (last 30 %)")
-        print(d.set_index("model")[["esr", "ssse", "fit_s", "error"]].pipe(to_markdown))
+        print("\n## Dyke test (last 30 %; eta: the drive lag identified on the training part)")
+        print(d.set_index("model")[["esr", "ssse", "eta", "fit_s", "error"]].pipe(to_markdown))
     if args.protocol in ("labcontrol", "all"):
         lab = labcontrol(models)
         frames.append(lab.assign(protocol="labcontrol"))

@@ -13,9 +13,10 @@ Four scenarios, every registered model kind, one table of mean test ESR (eq. 24)
   currents, test on a 1-15 Hz linear
   chirp (constant velocity amplitude 0.1 m/s) at 0, 0.5 and 1 A and on an ISO 8608 road profile
   (class C, up to 10 Hz) with an APRBS current.
-* **(d) Dyke 70/30** (``ranran_50.csv``): first 70 % trains, last 30 % tests; drive-lag rate and
-  model rate of the LPV/LTI models chosen on the training part (as in ``accuracy_real_data.py``);
-  any other estimator with a drive-lag setting ``eta`` gets the same rate.
+* **(d) Dyke 70/30** (``ranran_50.csv``): first 70 % trains, last 30 % tests; every estimator
+  with a drive-lag setting ``eta`` identifies its lag on the training part (its default).
+* **(e) Labcontrol** (``labcontrol2021_utfpr``, a third damper on a shaking table, four constant
+  voltages, 100 Hz): train on ``train/``, test on ``test/``.
 
 Nothing is chosen on test records. Every model uses its estimator defaults plus the data set's
 electrical input; the LPV/LTI model rate is 200 Hz on Quiroz (the lowest record rate) and the record
@@ -39,7 +40,6 @@ Run::
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import sys
 import time
@@ -74,6 +74,8 @@ RIG_CONDITIONS = (
     (0.002, 5.0),
 )
 CURRENTS = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: Labcontrol file names ``ensaio{test}_{series}_{voltage}V.csv`` (voltage in the column).
+LABCONTROL_PATTERN = r"ensaio.*V\.csv"
 
 
 @dataclass
@@ -313,30 +315,14 @@ def scenario_rig(quick: bool) -> Scenario:
 
 
 def scenario_dyke(quick: bool) -> Scenario:
-    """(d) Dyke 70/30 with eta and model rate chosen on the training part."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    import accuracy_real_data as ard
-
+    """(d) Dyke 70/30, every model with its defaults (the drive lag identified on the training
+    part by every model with an ``eta`` setting, ``mrdamper.models.lag``)."""
     e = read_csv(DATA / "dyke1996_nees" / "ranran_50.csv", fs=DYKE_FS)
     cut = round(0.7 * e.n)
     train, test = e.slice(0, cut, name="dyke_train"), e.slice(cut, None, name="dyke_test")
-    if quick:  # a priori values, no grid: eta 100 1/s, model rate 601 Hz
-        eta, dec = 100.0, 5
-    else:
-        eta, dec, tab = ard.choose_eta(train)
-        print(
-            "\n[(d) dyke] eta / decimation grid (training part "
-            f"only):\n{tab.to_string(index=False)}",
-            file=sys.stderr,
-        )
 
     def settings(kind: str) -> dict[str, Any]:
-        s: dict[str, Any] = {"input": "voltage"}
-        if kind in ("lpv", "lti"):
-            s.update(model_fs=DYKE_FS / dec, eta=eta)
-        elif "eta" in {f.name for f in dataclasses.fields(type(get_estimator(kind)))}:
-            s["eta"] = eta  # another model with a drive-lag setting gets the same lag
-        return s
+        return {"input": "voltage"}
 
     c2 = round(0.8 * train.n)
     folds = [
@@ -356,11 +342,35 @@ def scenario_dyke(quick: bool) -> Scenario:
     )
 
 
+def scenario_labcontrol(quick: bool) -> Scenario:
+    """(e) Labcontrol shaking table (a third damper): train on ``train/``, test on ``test/``."""
+    root = DATA / "labcontrol2021_utfpr"
+    train = read_directory(root / "train", LABCONTROL_PATTERN)
+    test = read_directory(root / "test", LABCONTROL_PATTERN)
+    folds = [
+        (
+            ExperimentSet([e for k, e in enumerate(train) if k % 3 != j]),
+            ExperimentSet([e for k, e in enumerate(train) if k % 3 == j]),
+        )
+        for j in range(3)
+    ]
+    grid = [] if quick else [{"n_m": n} for n in (2, 3, 4)]
+    return Scenario(
+        "(e) labcontrol",
+        train,
+        {"test/, 4 voltages": test},
+        lambda kind: {"input": "voltage"},
+        folds,
+        grid,
+    )
+
+
 SCENARIOS: dict[str, Callable[[bool], Scenario]] = {
     "quiroz-freq": scenario_quiroz_frequency,
     "quiroz-cross": scenario_quiroz_cross,
     "rig": scenario_rig,
     "dyke": scenario_dyke,
+    "labcontrol": scenario_labcontrol,
 }
 
 

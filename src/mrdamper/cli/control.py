@@ -237,6 +237,7 @@ def _fidelity(
         "closed_loop.csv": table.to_csv(index=False, float_format="%.6g"),
         "closed_loop_runs.csv": res.runs_frame().to_csv(index=False, float_format="%.6g"),
     }
+
     def writer(text: str) -> Callable[[Path], object]:
         return lambda p: p.write_text(text, encoding="utf-8")
 

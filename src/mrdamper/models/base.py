@@ -30,7 +30,7 @@ from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
-from mrdamper.models import _scale
+from mrdamper.models import _scale, lag
 from mrdamper.models._schema import (
     SCHEMA_NAME,
     SCHEMA_VERSION,
@@ -78,7 +78,9 @@ MODEL_FILE = json_kind("mrdamper model file (JSON)", SCHEMA_NAME)
 
 #: Provenance entries that are wall-clock or CPU times [s]. They stay on the in-memory model but
 #: are never written to a model file, so that the same fit gives the same bytes.
-TIMING_PROVENANCE: frozenset[str] = frozenset({"elapsed_s", "cpu_s", "fit_seconds", "fit_time_s"})
+TIMING_PROVENANCE: frozenset[str] = frozenset(
+    {"elapsed_s", "cpu_s", "fit_seconds", "fit_time_s", "lag_selection_s"}
+)
 
 RangePolicy = Literal["error", "warn", "clip", "ignore"]
 
@@ -424,7 +426,9 @@ class Estimator(abc.ABC):
     not express. :meth:`fit` does everything else, the same way for every family:
 
     1. validate the settings (:meth:`_validate`: every ``Literal`` field against its choices,
-       every ``bool`` field is a bool, then the family's own checks);
+       every ``bool`` field is a bool, then the family's own checks); a family whose drive-lag
+       setting ``eta`` is ``"auto"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag`
+       instead, which identifies the lag on an inner split and then runs steps 2-5 with it;
     2. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
        without motion);
     3. read the electrical input of every record, its identified range and whether it takes a
@@ -506,6 +510,8 @@ class Estimator(abc.ABC):
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()
+        if getattr(self, "eta", None) == lag.AUTO:
+            return lag.fit_with_lag(self, data, options)  # the drive lag, identified
         report("preparing the training data")
         records, options, segments = self._training_set(data, options)
         prepared = self._prepare(records)

@@ -46,6 +46,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.protocols import ScheduledForm
 from mrdamper.models.rates import (
     MODEL_FS_REASON,
@@ -458,9 +459,11 @@ class LPVEstimator(Estimator):
         Polynomial degree of the coefficients in ``rho``.
     input : {"i", "voltage"}
         Electrical input used as scheduling variable.
-    eta : float, optional
-        Drive-lag rate [1/s] of a first-order filter on the electrical input (e.g. command
-        voltage). None: ``rho`` is the electrical input itself.
+    eta : float, "auto" or None
+        Drive-lag rate [1/s] of a first-order lag ``d rho/dt = -eta (rho - input)`` on the
+        electrical input. ``"auto"`` (default): identified on the training records when the
+        input is a varying command voltage, none otherwise (:mod:`mrdamper.models.lag`); None: no
+        lag.
     input_signal : {"hysteretic", "u", "v"}
         LPV input: the zone-law input with a hysteretic pre-yield state (default,
         :mod:`mrdamper.analysis.hysteretic`), the paper's static zone-law input ``u`` (needed by
@@ -513,7 +516,7 @@ class LPVEstimator(Estimator):
     n_m: int = 3
     n_rho: int = 2
     input: ElectricalSource = "i"
-    eta: float | None = None
+    eta: float | Literal["auto"] | None = "auto"
     input_signal: InputSignal = "hysteretic"
     reading: Reading = "continuous"
     zone_laws: ZoneLaws | None = None
@@ -545,7 +548,7 @@ class LPVEstimator(Estimator):
         check_int("n_m", self.n_m, 1)
         for name in ("n_rho", "laws_degree", "n_bins", "max_nfev"):
             check_int(name, getattr(self, name), 0)
-        check_number("eta", self.eta, allow_none=True, what="a positive drive-lag rate [1/s]")
+        check_lag(self.eta)
         check_number("model_fs", self.model_fs, allow_none=True, what="a positive model rate [Hz]")
 
     def _laws(
@@ -645,8 +648,9 @@ class LPVEstimator(Estimator):
         record_weights = options.get("record_weights")
         user_w = _record_weights(record_weights, len(exps))
         fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
+        eta = resolved(self.eta)
         rhos = [
-            K.first_order_lag(r, e.dt, self.eta) if self.eta is not None else r
+            K.first_order_lag(r, e.dt, eta) if eta is not None else r
             for r, e in zip(data.electrical, exps)
         ]
         prov: dict[str, Any] = {}
@@ -660,7 +664,7 @@ class LPVEstimator(Estimator):
                 e,
                 el,
                 fs=fs,
-                eta=self.eta,
+                eta=eta,
                 input_signal=self.input_signal,
                 zone_laws=laws,
                 reading=self.reading,
@@ -741,7 +745,7 @@ class LPVEstimator(Estimator):
                 "input_signal": self.input_signal,
                 "reading": self.reading,
                 "zone_laws": laws,
-                "eta": self.eta,
+                "eta": eta,
                 "rho_range": rho_range,
                 "force_bound": bound,
                 **_lpv_inputs.model_settings(self),

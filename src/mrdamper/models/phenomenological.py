@@ -102,6 +102,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.step import Step
 from mrdamper.progress import report
 
@@ -420,8 +421,11 @@ class P15Estimator(Estimator):
         again; a warning names the model and the discrepancy if it still fails.
     step_refinements : int
         How many times the fit may halve the model's step to meet ``step_tolerance``.
-    eta : float or None
-        Drive-lag rate [1/s] of the electrical input (see :class:`P15Model`); ``None``: none.
+    eta : float, "auto" or None
+        Drive-lag rate [1/s] of a first-order lag ``d rho/dt = -eta (rho - input)`` on the
+        electrical input. ``"auto"`` (default): identified on the training records when the
+        input is a varying command voltage, none otherwise (:mod:`mrdamper.models.lag`); None: no
+        lag.
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
     """
@@ -442,7 +446,7 @@ class P15Estimator(Estimator):
     jacobian: Literal["sensitivity", "2-point", "3-point"] = "sensitivity"
     step_tolerance: float = 1e-4
     step_refinements: int = 3
-    eta: float | None = None
+    eta: float | Literal["auto"] | None = "auto"
     range_policy: RangePolicy = "error"
 
     kind: ClassVar[str] = "p15"
@@ -467,12 +471,13 @@ class P15Estimator(Estimator):
         raw, windows = _scale.window_set(raw_all, budget=_scale.WINDOW_BUDGET_P15)  # long campaigns
         # the range of the raw input also holds every lagged input (a convex combination of it)
         lo, hi = data.input_range
+        eta = resolved(self.eta)
         exps = (
             raw
-            if self.eta is None
+            if eta is None
             else ExperimentSet(
                 [
-                    e.replace(**{self.input: _lagged(e.electrical(self.input), e.dt, self.eta)})
+                    e.replace(**{self.input: _lagged(e.electrical(self.input), e.dt, eta)})
                     for e in raw
                 ]
             )
@@ -532,7 +537,7 @@ class P15Estimator(Estimator):
             input_range=(lo, hi),
             force_bound=bound,
             max_step=self.max_step,
-            eta=self.eta,
+            eta=eta,
             basis=basis,
         )
         report("free run of the training records")
@@ -592,9 +597,7 @@ class P15Estimator(Estimator):
 
     def _validate(self) -> None:
         super()._validate()
-        check_number(
-            "eta", self.eta, allow_none=True, what="a positive drive-lag rate [1/s] or None"
-        )
+        check_lag(self.eta)
         check_int("step_refinements", self.step_refinements, 0, 10)
         if self.cutoff != "auto":
             check_number(

@@ -67,7 +67,7 @@ True
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Any, ClassVar, cast
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
@@ -85,8 +85,8 @@ from mrdamper.models.base import (
     RangePolicy,
     TrainingData,
     check_int,
-    check_number,
 )
+from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.protocols import StaticMapForm
 from mrdamper.models.step import Step
 from mrdamper.progress import report
@@ -304,9 +304,11 @@ class _SPEstimator(Estimator):
         Samples (evenly spaced over the training data) used for screening and multi-start.
     fit_samples : int or None
         Samples (evenly spaced) used by the final polish; ``None`` uses every sample.
-    eta : float or None
+    eta : float, "auto" or None
         Drive-lag rate [1/s]: the map is fitted to the electrical input passed through the lag
-        (per record, see the module docstring); ``None`` (default): no lag.
+        (per record, see the module docstring). ``"auto"`` (default): identified on the training
+        records when the input is a varying command voltage, none otherwise
+        (:mod:`mrdamper.models.lag`); None: no lag.
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
     """
@@ -319,7 +321,7 @@ class _SPEstimator(Estimator):
     max_nfev: int = 200
     screen_samples: int = 4000
     fit_samples: int | None = 20000
-    eta: float | None = None
+    eta: float | Literal["auto"] | None = "auto"
 
     range_policy: RangePolicy = "error"
 
@@ -337,8 +339,9 @@ class _SPEstimator(Estimator):
         cls = cast(type[SPModel], self.model_class)
         comp_all, power_all = cls.layout_arrays()
         report("stacking the samples")
+        eta = resolved(self.eta)
         x, v, i, F = stack(
-            data.records, self.input, self.eta, _scale.WINDOW_THRESHOLD
+            data.records, self.input, eta, _scale.WINDOW_THRESHOLD
         )  # long campaigns: an even subset
         # one level: every component's polynomial in the input reduces to its constant term
         keep = (
@@ -374,8 +377,8 @@ class _SPEstimator(Estimator):
             parameters={
                 "S": tuple(S),
                 "f0": f0,
-                "eta": self.eta,
-                "rho_range": None if self.eta is None else (float(np.min(i)), float(np.max(i))),
+                "eta": eta,
+                "rho_range": None if eta is None else (float(np.min(i)), float(np.max(i))),
             },
             provenance=provenance,
         )
@@ -391,12 +394,7 @@ class _SPEstimator(Estimator):
             check_int(name, getattr(self, name), low)
         check_int("fit_samples", self.fit_samples, 100, allow_none=True)
         check_int("seed", self.seed, None)
-        check_number(
-            "eta",
-            self.eta,
-            allow_none=True,
-            what="a positive drive-lag rate [1/s] or None",
-        )
+        check_lag(self.eta)
 
 
 @dataclass

@@ -99,11 +99,10 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
     """Dyke (1996) random-excitation record: first 70 % of each record trains, last 30 % is scored.
 
     The electrical input is the command voltage; the force-velocity analysis is skipped (the
-    voltage switches on a 10 ms grid, there are no constant-current records). LPV and LTI use the
-    drive-lag rate ``eta = 250 1/s`` and the full 3004.8 Hz rate, chosen on the training part only
-    (``docs/results.md``); every other model with a drive-lag setting (P-15, SP-1..SP-4) follows
-    the same drive-lagged voltage, so that the comparison is fair (the coil current lags the
-    command voltage for every model alike). The test
+    voltage switches on a 10 ms grid, there are no constant-current records). Every model with a
+    drive-lag setting (LPV, LTI, P-15, SP-1..SP-4) identifies its drive lag on the training part
+    (its default ``eta="auto"``, :mod:`mrdamper.models.lag`); LPV and LTI run at the record rate
+    3004.8 Hz (their default). The test
     part's voltage exceeds the training range by < 0.1 %, so models are scored with
     ``range_policy="clip"``.
 
@@ -130,12 +129,6 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
         input="voltage",
         models=tuple(models),
         range_policy="clip",
-        settings={
-            "lpv": {"eta": 250.0, "model_fs": 3004.8},
-            "lti": {"eta": 250.0, "model_fs": 3004.8},
-            "p15": {"eta": 250.0},
-            **{kind: {"eta": 250.0} for kind in ("sp1", "sp2", "sp3", "sp4")},
-        },
     )
 
 

@@ -1,0 +1,209 @@
+"""The drive lag identified on the training records: one step shared by every family with ``eta``.
+
+When the electrical input is a command to a drive (``input="voltage"``), the coil current follows
+the command through the drive's dynamics, modelled as a first-order lag
+``d rho/dt = -eta (rho - voltage)``. The families with an ``eta`` setting (LPV, LTI, P-15,
+SP-1..SP-4) take ``eta="auto"`` by default, and :meth:`mrdamper.models.Estimator.fit` then calls
+:func:`fit_with_lag`:
+
+* input ``"i"`` (the current is measured), or a voltage that is constant within every record (a
+  lag of a constant is the constant): no lag (``eta=None``), the fit is the plain fit;
+* otherwise every training record is cut in time, the first :data:`INNER_FRACTION` fits and the
+  rest validates; the family is fitted on the fit parts with candidates of :data:`ETA_GRID` and
+  scored in free run on the validation parts (mean ESR, eq. 24, with ``range_policy="clip"``): the
+  search starts at 200 1/s and its two neighbours, walks along the grid while the validation
+  error falls, then tries the geometric midpoints on either side of the best grid point (5-8
+  fits on the inner split); the candidate with the lowest validation ESR is fitted on the whole
+  training records.
+
+The choice, every candidate's validation ESR and the time it took are in the model's provenance
+(``drive_lag``). The Spencer family identifies its own filter rate with its other parameters
+(output error), so it does not use this step. A fixed number (or None) skips it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
+from mrdamper.errors import DataValidationError
+from mrdamper.progress import report
+
+if TYPE_CHECKING:
+    from mrdamper.models.base import Estimator, FittedModel
+
+__all__ = [
+    "AUTO",
+    "ETA_GRID",
+    "INNER_FRACTION",
+    "check_lag",
+    "fit_with_lag",
+    "lag_applies",
+    "resolved",
+]
+
+#: The setting that asks for the drive lag to be identified.
+AUTO = "auto"
+#: Candidate drive-lag rates [1/s] (factor 2 apart, time constants 0.6-40 ms).
+ETA_GRID: tuple[float, ...] = (25.0, 50.0, 100.0, 200.0, 400.0, 800.0, 1600.0)
+#: Index in :data:`ETA_GRID` where the search starts.
+START = 3
+#: Share of each training record (in time) that fits the candidates; the rest validates [-].
+INNER_FRACTION = 0.8
+
+
+def check_lag(value: Any) -> None:
+    """Refuse an ``eta`` setting other than ``"auto"``, None or a positive finite rate [1/s].
+
+    Parameters
+    ----------
+    value : object
+        The setting given.
+    """
+    if value is None or (isinstance(value, str) and value == AUTO):
+        return
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not (ok and math.isfinite(float(value)) and float(value) > 0):
+        raise DataValidationError(
+            "eta", f"expected 'auto', None or a positive drive-lag rate [1/s], got {value!r}"
+        )
+
+
+def resolved(eta: float | str | None) -> float | None:
+    """The drive-lag rate a family's identification step uses [1/s] (None: no lag).
+
+    :meth:`~mrdamper.models.Estimator.fit` resolves ``"auto"`` before the family's step runs, so
+    the step never sees it.
+
+    Parameters
+    ----------
+    eta : float, "auto" or None
+        The setting.
+    """
+    if isinstance(eta, str):
+        raise TypeError(f"eta: {eta!r} reached the identification step unresolved")
+    return None if eta is None else float(eta)
+
+
+def lag_applies(records: Iterable[Experiment], source: ElectricalSource) -> bool:
+    """True when the input is a voltage command that varies within at least one record.
+
+    Parameters
+    ----------
+    records : iterable of Experiment
+        Training records.
+    source : {"i", "voltage"}
+        Electrical input channel of the estimator.
+    """
+    from mrdamper.models.base import single_level
+
+    if source != "voltage":
+        return False
+    return any(single_level(np.asarray(e.electrical(source))) is None for e in records)
+
+
+def _split(records: ExperimentSet) -> tuple[list[Experiment], list[Experiment]]:
+    fit, val = [], []
+    for e in records:
+        cut = round(INNER_FRACTION * e.n)
+        fit.append(e.slice(0, cut, name=f"{e.name}:lag-fit"))
+        val.append(e.slice(cut, None, name=f"{e.name}:lag-val"))
+    return fit, val
+
+
+def _validation_esr(
+    est: Estimator,
+    eta: float,
+    parts: tuple[list[Experiment], list[Experiment]],
+    options: Mapping[str, Any],
+    weights: Sequence[float] | None,
+) -> float:
+    """Mean validation ESR of the family fitted with ``eta`` on the fit parts (inf on failure)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = dataclasses.replace(est, eta=eta).fit(parts[0], **options)  # type: ignore[type-var]
+            model = model.with_range_policy("clip")
+            esr = [model.score(e).esr for e in parts[1]]
+    except (ValueError, RuntimeError, ArithmeticError):
+        return math.inf
+    value = float(np.average(esr, weights=weights))
+    return value if math.isfinite(value) else math.inf
+
+
+def fit_with_lag(
+    est: Estimator, data: Experiment | Iterable[Experiment], options: Mapping[str, Any]
+) -> FittedModel:
+    """Fit ``est`` (whose ``eta`` is ``"auto"``) with its drive lag identified (module docstring).
+
+    Parameters
+    ----------
+    est : Estimator
+        A family with an ``eta`` setting, set to ``"auto"``.
+    data : Experiment or iterable of Experiment
+        Training records.
+    options : mapping
+        Per-fit options of the family (passed to every fit; ``record_weights`` also weights the
+        validation ESR).
+
+    Returns
+    -------
+    FittedModel
+        The model fitted on every training record with the chosen lag.
+    """
+    records = as_experiment_set(data, name="training")
+    source: ElectricalSource = getattr(est, "input", "i")
+    if not lag_applies(records, source):
+        return dataclasses.replace(est, eta=None).fit(records, **options)  # type: ignore[type-var]
+    t0 = time.perf_counter()
+    parts = _split(records)
+    weights = options.get("record_weights")
+    scores: dict[float, float] = {}
+
+    def trial(eta: float) -> None:
+        report("identifying the drive lag: candidate", len(scores) + 1, len(ETA_GRID) + 2)
+        scores[eta] = _validation_esr(est, eta, parts, options, weights)
+
+    k = START
+    for eta in (ETA_GRID[k], ETA_GRID[k - 1], ETA_GRID[k + 1]):
+        trial(eta)
+    # walk down the grid while the validation error falls (it is one-dimensional and, on the
+    # records measured, unimodal in log eta), then try the geometric midpoints around the best
+    step = -1 if scores[ETA_GRID[k - 1]] < scores[ETA_GRID[k + 1]] else 1
+    while scores[ETA_GRID[k + step]] < scores[ETA_GRID[k]]:
+        k += step
+        if not 0 <= k + step < len(ETA_GRID):
+            break
+        trial(ETA_GRID[k + step])
+    best = ETA_GRID[k]
+    for j in (k - 1, k + 1):
+        if 0 <= j < len(ETA_GRID):
+            trial(float(round(math.sqrt(best * ETA_GRID[j]), 1)))
+    chosen = min(scores, key=lambda c: scores[c])
+    if not math.isfinite(scores[chosen]):
+        raise DataValidationError(
+            "eta", f"{est.kind}: no drive-lag candidate could be fitted on the inner split"
+        )
+    selection_s = time.perf_counter() - t0
+    model = dataclasses.replace(est, eta=chosen).fit(records, **options)  # type: ignore[type-var]
+    prov = dict(model.provenance)
+    prov["drive_lag"] = {
+        "eta": chosen,
+        "how": (
+            f"chosen on an inner split of the training records (first {INNER_FRACTION:.0%} of "
+            "each fits, the rest validates; mean free-run ESR)"
+        ),
+        "candidates": [float(c) for c in scores],
+        "validation_esr": [float(v) for v in scores.values()],
+    }
+    prov["lag_selection_s"] = selection_s
+    prov["elapsed_s"] = float(prov.get("elapsed_s", 0.0)) + selection_s
+    return dataclasses.replace(model, provenance=prov)
