@@ -38,7 +38,7 @@ from typing import Any
 
 from mrdamper._io import atomic_write_text, check_writable
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
-from mrdamper.control.c_render._common import INVERSE_RUN, RUN
+from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE
 from mrdamper.errors import DataValidationError
 
 __all__ = ["C_KINDS", "assemble", "c_source", "export_c", "render"]
@@ -125,6 +125,17 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
         f"double {p}_step({p}_state *s, double x, double v, double input);",
         f"void {p}_run(long n, const double *x, const double *v, const double *input, double *F);",
     ]
+    step_protos = [
+        f"#define {name.upper()}_STEP_N {r.step_n} /* length of the step state */",
+        f"void {p}_step_init(double *s, double x0, double v0, double e0);",
+        f"double {p}_step_force(const double *s, double x, double v, double e);",
+        (
+            f"int {p}_step_advance(double *s, double x0, double v0, double e0, double x1, "
+            "double v1, double e1, double dt);"
+        ),
+        f"long {p}_step_size(void);",
+    ]
+    protos += step_protos
     if r.has_inverse:
         protos += [
             (
@@ -150,7 +161,7 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
         + f"\n\n#endif /* {guard} */\n"
     )
     src = f'/* {name}.c: see {name}.h. */\n#include <math.h>\n#include "{name}.h"\n'
-    src += r.body + RUN.format(p=p)
+    src += r.body + RUN.format(p=p) + STEP_SIZE.format(p=p, P=name.upper())
     if r.has_inverse:
         src += INVERSE_RUN.format(p=p)
     return header, src
