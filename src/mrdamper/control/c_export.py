@@ -38,13 +38,16 @@ from typing import Any
 
 from mrdamper._io import atomic_write_text, check_writable
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
+from mrdamper.control.c_render._common import quarter_car_defaults
 from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE
 from mrdamper.errors import DataValidationError
 
-__all__ = ["C_KINDS", "assemble", "c_source", "export_c", "render"]
+__all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]
 
 #: Model kinds :func:`export_c` handles.
 C_KINDS = tuple(RENDERERS)
+#: Kinds whose C step needs the sample time ``dt`` given at export (no rate of their own).
+NEEDS_DT = ("spencer", "p15")
 
 
 def render(
@@ -54,7 +57,7 @@ def render(
     reg: float | None = None,
     v_ref: float = 0.3,
     rate: float | None = None,
-    n_grid: int = 32,
+    n_grid: int | None = None,
     dt: float | None = None,
 ) -> Rendered:
     """The family's C rendering of ``model`` (see :func:`c_source` for the parameters).
@@ -69,6 +72,8 @@ def render(
         raise DataValidationError("model", f"C export handles kinds {list(C_KINDS)}, got {kind!r}")
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise DataValidationError("name", f"expected a C identifier, got {name!r}")
+    if n_grid is None:
+        n_grid = quarter_car_defaults()[1]
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     ctx = Context(name, reg=reg, v_ref=v_ref, rate=rate, n_grid=n_grid, dt=dt)
@@ -82,7 +87,7 @@ def c_source(
     reg: float | None = None,
     v_ref: float = 0.3,
     rate: float | None = None,
-    n_grid: int = 32,
+    n_grid: int | None = None,
     dt: float | None = None,
 ) -> tuple[str, str]:
     """Header and source text of the C export (see the module docstring).
@@ -96,17 +101,18 @@ def c_source(
     reg : float, optional
         Regularisation weight of the inverse [N per input unit]; default
         ``default_reg(model, v_ref, dt)`` at the LPV model's sample time or, for a static map, at
-        ``dt`` (without ``dt``: ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``, the 200 Hz
-        value); fixed into the code.
+        ``dt`` (without ``dt``: the quarter car's control sample, 1 ms), the quarter car's
+        default; fixed into the code.
     v_ref : float
         Velocity setting the default ``reg`` [m/s].
     rate : float, optional
         Input rate bound of the inverse [input unit/s]; needs the sample time (``dt`` or an LPV
         model's rate).
-    n_grid : int
-        Search grid of the inverse.
+    n_grid : int, optional
+        Search grid of the inverse (default the quarter car's, 16).
     dt : float, optional
-        Sample time [s]: required for a Spencer model (the fixed interval its C step integrates);
+        Sample time [s]: required for a Spencer or P-15 model (the interval ``<name>_step``
+        integrates);
         for a static map, the interval of the inverse's rate bound (only used with ``rate``) and
         of the default ``reg``; an LPV model runs at its own rate.
     """

@@ -38,11 +38,24 @@ __all__ = [
     "clip_note",
     "fmt_base",
     "inverse_settings",
+    "quarter_car_defaults",
     "lit",
     "require_dt",
     "solver",
     "step_state",
 ]
+
+
+def quarter_car_defaults() -> tuple[float, int]:
+    """The quarter car's control sample [s] (the period of its roads' default rate) and inverse
+    search grid: the C export's defaults, so that the exported controller is the evaluated one."""
+    import inspect
+
+    from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
+
+    fs = inspect.signature(iso_road).parameters["fs"].default
+    n_grid = inspect.signature(simulate_quarter_car).parameters["n_grid"].default
+    return 1.0 / float(fs), int(n_grid)
 
 
 @dataclass(frozen=True)
@@ -60,7 +73,7 @@ class Context:
     rate : float or None
         Input rate bound of the inverse [input unit/s].
     n_grid : int
-        Search grid of the inverse.
+        Search grid of the inverse (default the quarter car's).
     dt : float or None
         Sample time [s] given with the export (the fixed step of a continuous-time family, the
         inverse rate bound's interval of a static map).
@@ -70,7 +83,7 @@ class Context:
     reg: float | None = None
     v_ref: float = 0.3
     rate: float | None = None
-    n_grid: int = 32
+    n_grid: int = field(default_factory=lambda: quarter_car_defaults()[1])
     dt: float | None = None
 
     @property

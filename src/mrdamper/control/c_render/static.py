@@ -15,6 +15,7 @@ from mrdamper.control.c_render._common import (
     fmt_base,
     inverse_settings,
     lit,
+    quarter_car_defaults,
     solver,
 )
 from mrdamper.errors import DataValidationError
@@ -130,7 +131,7 @@ static double {p}_dforce(double x, double v, double i)
 
 def render_static(model: Any, ctx: Context) -> Rendered:
     """C of a static map and its inverse (any sample rate; ``ctx.dt`` sets the rate bound's and
-    the default regularisation's interval)."""
+    the default regularisation's interval, by default the quarter car's control sample)."""
     if getattr(model, "eta", None) is not None:
         raise DataValidationError(
             "model",
@@ -142,10 +143,8 @@ def render_static(model: Any, ctx: Context) -> Rendered:
         raise DataValidationError(
             "dt", "a rate bound on a static map's inverse needs the sample time dt [s]"
         )
-    step_dt = 1.0 if ctx.dt is None else float(ctx.dt)
-    lam, rate_step = inverse_settings(
-        model, ctx.reg, ctx.v_ref, ctx.rate, step_dt, ctx.dt is not None
-    )
+    step_dt = quarter_car_defaults()[0] if ctx.dt is None else float(ctx.dt)
+    lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, step_dt)
     fmt = fmt_base(model, ctx, lam, rate_step)
     form = model.step().form
     fmt.update(
