@@ -318,6 +318,10 @@ def test_exported_inverse_with_its_defaults_is_the_quarter_cars(
     k = np.arange(0, res.t.size, every)
     lib = _build(model, tmp_path, f"inv_{kind}")  # every default
     i_c, _ = _inverse(
-        lib, f"inv_{kind}", res.z_s[k] - res.z_u[k], res.v_s[k] - res.v_u[k], res.F_desired[k] + preload
+        lib,
+        f"inv_{kind}",
+        res.z_s[k] - res.z_u[k],
+        res.v_s[k] - res.v_u[k],
+        res.F_desired[k] + preload,
     )
     assert _rel(i_c, res.i[k]) < 1e-9

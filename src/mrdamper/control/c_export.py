@@ -38,8 +38,7 @@ from typing import Any
 
 from mrdamper._io import atomic_write_text, check_writable
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
-from mrdamper.control.c_render._common import quarter_car_defaults
-from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE
+from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE, quarter_car_defaults
 from mrdamper.errors import DataValidationError
 
 __all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]

@@ -45,8 +45,8 @@ import numpy as np
 
 from mrdamper.control import _closed_loop_kernels as CK
 from mrdamper.control._loop import LoopSetup, damper_arrays, loop_result, loop_setup, positive
-from mrdamper.control.inverse import model_input_limits
 from mrdamper.control.fmu_plant import is_fmu
+from mrdamper.control.inverse import model_input_limits
 from mrdamper.control.quarter_car import (
     CONTROLLERS,
     Controller,

@@ -38,8 +38,8 @@ __all__ = [
     "clip_note",
     "fmt_base",
     "inverse_settings",
-    "quarter_car_defaults",
     "lit",
+    "quarter_car_defaults",
     "require_dt",
     "solver",
     "step_state",
@@ -278,7 +278,7 @@ void {p}_inverse_run(long n, const double *x, const double *v, const double *F_d
 #: ``<name>_init`` / ``<name>_step`` over a model's step functions: the first call sets the rest
 #: state, every later call advances it over the interval from the previous call's inputs (one
 #: sample time ``{P}_DT``), then returns the force; after a failed advance the status is kept and
-#: the step returns NaN from then on (what :func:`mrdamper.models.step.run` does, one sample a call).
+#: the step returns NaN from then on (:func:`mrdamper.models.step.run`, one sample a call).
 STEP_WRAPPER = r"""
 void {p}_init({p}_state *s)
 {{

@@ -60,7 +60,8 @@ static void {p}_coefs(double ii, double *w)
         phi[1] = 2.0 * s * (1.0 - s);
         phi[2] = s * s;
     }}
-    for (j = 0; j < 5; ++j) w[j] = {P}_C[j][0] * phi[0] + {P}_C[j][1] * phi[1] + {P}_C[j][2] * phi[2];
+    for (j = 0; j < 5; ++j)
+        w[j] = {P}_C[j][0] * phi[0] + {P}_C[j][1] * phi[1] + {P}_C[j][2] * phi[2];
 }}
 
 static double {p}_accel(double F, double G, double vv, const double *w)

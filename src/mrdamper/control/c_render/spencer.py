@@ -15,7 +15,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from mrdamper.control.c_render._common import STEP_WRAPPER, Context, Rendered, lit, require_dt, step_state
+from mrdamper.control.c_render._common import (
+    STEP_WRAPPER,
+    Context,
+    Rendered,
+    lit,
+    require_dt,
+    step_state,
+)
 from mrdamper.models import _spencer_kernels as SK
 
 __all__ = ["render_spencer", "render_spencer_form"]
