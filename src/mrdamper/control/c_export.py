@@ -21,7 +21,12 @@ the zone laws, the optional drive lag and, for the hysteretic input, the Dahl st
 in the state struct; an LTI model has no inverse: its force does not depend on the present
 input), the static maps ``sp1``..``sp4`` and ``bingham``, and ``spencer`` (its per-sample step,
 :meth:`~mrdamper.models.spencer.SpencerModel.step`, at the fixed sample time ``dt`` given with
-the export; no inverse). P-15 and NARX are not exported.
+the export; no inverse), ``p15`` (its step at ``dt``; no inverse) and ``narx`` (at its own rate;
+no inverse). Every rendering also defines the family's per-sample step as
+``<name>_step_init`` / ``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of
+``<name>_step_size()`` entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
+:class:`mrdamper.control.fmu_plant.FMUPlant` runs from the quarter car. The defaults of the
+inverse are the quarter car's (grid, reference velocity, regularisation at its control sample).
 
 All constants are written as C99 hexadecimal floating literals, so the C code uses exactly the
 model's ``float64`` values. The arithmetic follows the compiled Python kernels operation by
