@@ -1,16 +1,16 @@
 """Time per sample of the FMU against the C export and Python's step and ``predict``, one run.
 
 For the Spencer et al. (1997) model (``spencer1997``, fixed step 1 ms: 107 RK4 sub-steps per
-sample at the step's default velocity bound) and an SP-1 map (the coefficients of
-``bench_c_export.py``), on a random-velocity record, per sample:
+sample at the step's default velocity bound), an SP-1 map (the coefficients of
+``bench_c_export.py``) and a small NARX model (two terms, 1 kHz), on a random-velocity record, per
+sample:
 
 * ``FMU (fmpy)``: the FMU driven by fmpy's ``FMU2Slave`` from Python, ``setReal`` / ``getReal`` /
   ``doStep`` at every sample (what a Python co-simulation pays);
 * ``FMU (C calls)``: the same FMU functions called from a small C driver linked with the FMU's
   sources (the wrapper's own cost, as a tool importing the FMU would call it);
 * ``C step``: the C export's ``<name>_run`` (``<name>_step`` in a loop) from the same driver;
-* ``Python step``: :func:`mrdamper.models.step.run_step` (the numba loop over the step), Spencer
-  only (the SP-1 family has no Python step yet);
+* ``Python step``: :func:`mrdamper.models.step.run_step` (the numba loop over the step);
 * ``predict``: the model's ``predict`` (the fused record kernel; Spencer with the step's sub-step
   count, so all columns compute the same values).
 
@@ -40,6 +40,7 @@ from bench_c_export import S1
 
 from mrdamper.control.fmu import export_fmu
 from mrdamper.data import Experiment
+from mrdamper.models.narx import NARXModel
 from mrdamper.models.semiphenomenological import SP1Model
 from mrdamper.models.spencer import spencer1997
 from mrdamper.models.step import run_step
@@ -177,6 +178,18 @@ def main(argv: list[str] | None = None) -> int:
     models = {
         "spencer": (spencer, dataclasses.replace(spencer, substeps=nsub)),
         "sp1": (SP1Model(S=S1, input_range=(0.0, 1.0)), None),
+        "narx": (
+            NARXModel(
+                fs=1.0 / DT,
+                base=[[0, 1], [2, 0]],
+                terms=[[0], [1]],
+                theta=[0.5, 1.0],
+                scales=[1000.0, 1.0, 0.1, 1.0, 1.0],
+                v0=0.01,
+                input_range=(0.0, 1.0),
+            ),
+            None,
+        ),
     }
     print(f"{n} samples (fmpy {n_fmpy}), minimum of {repeat} repeats; times in us per sample")
     heads = ("FMU (fmpy)", "FMU (C)", "C step", "Py step", "predict")
@@ -189,11 +202,9 @@ def main(argv: list[str] | None = None) -> int:
             _fmpy_loop(fmu, short)  # load once
             t_fmpy = best_time(lambda f=fmu: _fmpy_loop(f, short), max(1, repeat - 2)) / n_fmpy
             t_c, t_fmu_c = _c_driver(fmu, kind, rec, repeat, folder)
-            if kind == "spencer":
-                run_step(step, rec.x[:10], rec.v[:10], rec.i[:10], DT)  # compile
-                t_step = best_time(lambda: run_step(step, rec.x, rec.v, rec.i, DT), repeat) / n
-            else:
-                t_step = math.nan
+            st = model.step(dt=DT)
+            run_step(st, rec.x[:10], rec.v[:10], rec.i[:10], DT)  # compile
+            t_step = best_time(lambda s=st: run_step(s, rec.x, rec.v, rec.i, DT), repeat) / n
             predictor = like_step or model
             predictor.predict(rec)
             t_pred = best_time(lambda p=predictor: p.predict(rec), repeat) / n

@@ -49,3 +49,38 @@ def dyke_models(dyke_record: Any) -> dict[str, Any]:
         warnings.simplefilter("ignore", RuntimeWarning)
         lpv = LPVEstimator(input="voltage", eta=250.0, input_signal="u").fit(train)
     return {"lpv": lpv, "sp1": SP1Estimator(input="voltage", eta=250.0).fit(train)}
+
+
+class _LazyFits(dict):  # type: ignore[type-arg]
+    """Each kind fitted on first use with the conformance suite's short settings and records."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._training: list[Any] | None = None
+
+    def __missing__(self, kind: str) -> Any:
+        from tests.models.test_conformance import LEVELS, _fit, _record
+
+        if self._training is None:
+            self._training = [
+                _record(a, f, (lev,), f"{name}{lev}", c)
+                for lev in LEVELS
+                for a, f, name, c in ((0.01, 1.0, "slow", 2.0), (0.004, 4.0, "fast", 4.0))
+            ]
+        model = _fit(kind, self._training)
+        self[kind] = model
+        return model
+
+
+@pytest.fixture(scope="session")
+def kind_models() -> dict[str, Any]:
+    """Every kind fitted lazily on synthetic records (see :class:`_LazyFits`)."""
+    return _LazyFits()
+
+
+@pytest.fixture(scope="session")
+def kind_probe() -> Any:
+    """A short record (500 Hz, 1.5 s) with a stepped current inside the training range."""
+    from tests.models.test_conformance import _record
+
+    return _record(0.008, 2.0, (0.3, 0.7, 0.4, 0.6), "probe", 3.0)

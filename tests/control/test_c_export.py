@@ -15,11 +15,12 @@ import numpy as np
 import pytest
 
 from mrdamper.control import inverse_current
-from mrdamper.control.c_export import c_source, export_c
+from mrdamper.control.c_export import C_KINDS, c_source, export_c
 from mrdamper.control.inverse import default_reg
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.lpv import LTIModel
+from mrdamper.models.protocols import InvertibleModel
 
 GCC = shutil.which("gcc")
 needs_gcc = pytest.mark.skipif(GCC is None, reason="gcc not found")
@@ -94,7 +95,7 @@ def test_c_matches_python_on_a_quiroz_record(
     rec = next(
         e for e in quiroz_records if e.name == "sine_25mm_0.5Hz_0.5A"
     )  # 200 Hz: the LPV model rate
-    lib = _build(model, tmp_path, f"q_{kind}", reg=800.0)
+    lib = _build(model, tmp_path, f"q_{kind}", reg=800.0, n_grid=32)
     assert _rel(_forward(lib, f"q_{kind}", rec.x, rec.v, rec.i), model.predict(rec)) < 1e-9
     i_c, F_c = _inverse(lib, f"q_{kind}", rec.x, rec.v, rec.F)
     res = inverse_current(model, rec, rec.F, reg=800.0)
@@ -108,7 +109,7 @@ def test_c_with_drive_lag_on_dyke(
 ) -> None:
     model = dyke_models["lpv"]  # voltage input through the drive lag eta = 250 1/s
     rec = dyke_record.slice(0, 6000)
-    lib = _build(model, tmp_path, "d_lpv")
+    lib = _build(model, tmp_path, "d_lpv", n_grid=32)
     F_py = model.with_range_policy("clip").predict(rec)
     assert _rel(_forward(lib, "d_lpv", rec.x, rec.v, rec.voltage), F_py) < 1e-9
     rho_c, _ = _inverse(lib, "d_lpv", rec.x, rec.v, rec.F)
@@ -206,10 +207,13 @@ def test_refusals(tmp_path: Path) -> None:
     from mrdamper.models.phenomenological import P15Model
     from mrdamper.models.spencer import spencer1997
 
+    toy = dataclasses.make_dataclass("Toy", [("kind", str)])("toy")
     with pytest.raises(DataValidationError, match="C export handles kinds"):
-        c_source(P15Model(input_range=(0.0, 1.0)))
+        c_source(toy)
     with pytest.raises(DataValidationError, match="dt: the spencer C step"):
         c_source(spencer1997())
+    with pytest.raises(DataValidationError, match="dt: the p15 C step"):
+        c_source(P15Model(input_range=(0.0, 1.0)))
     bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
     with pytest.raises(DataValidationError, match="C identifier"):
         c_source(bing, "1bad-name")
@@ -227,3 +231,97 @@ def test_refusals(tmp_path: Path) -> None:
     with pytest.raises(OutputExistsError):
         export_c(bing, tmp_path, name="b")
     export_c(bing, tmp_path, name="b", force=True)
+
+
+# ------------------------------------------------------------------ every kind, from its step
+def _step_lib(model: Any, folder: Path, name: str, dt: float) -> ctypes.CDLL:
+    lib = _build(model, folder, name, dt=dt)
+    d, vp = ctypes.c_double, ctypes.c_void_p
+    getattr(lib, f"{name}_step_init").argtypes = [vp, d, d, d]
+    getattr(lib, f"{name}_step_force").argtypes = [vp, d, d, d]
+    getattr(lib, f"{name}_step_force").restype = d
+    getattr(lib, f"{name}_step_advance").argtypes = [vp, d, d, d, d, d, d, d]
+    return lib
+
+
+@needs_gcc
+@pytest.mark.parametrize("kind", C_KINDS)
+def test_c_step_of_every_kind_matches_run_step(
+    tmp_path: Path, kind: str, kind_models: dict[str, Any], kind_probe: Any
+) -> None:
+    """``<name>_run`` (one call of ``<name>_step`` a sample) and the step functions
+    (``<name>_step_init`` / ``_step_force`` / ``_step_advance`` on the Python step's state
+    layout) against :func:`run_step`, sample by sample, to 1e-9 of the force scale."""
+    from mrdamper.models.step import run_step
+
+    model, rec = kind_models[kind], kind_probe
+    e = np.ascontiguousarray(model.electrical_input(rec))
+    step = model.step(dt=rec.dt)
+    F_py, status, _ = run_step(step, rec.x, rec.v, e, rec.dt)
+    assert status == 0
+    lib = _step_lib(model, tmp_path, f"k_{kind}", rec.dt)
+    assert _rel(_forward(lib, f"k_{kind}", rec.x, rec.v, e), F_py) < 1e-9
+    s_py = step.initial_state(rec.x[0], rec.v[0], e[0])
+    s_c = np.zeros(getattr(lib, f"k_{kind}_step_size")())
+    assert s_c.size == s_py.size
+    getattr(lib, f"k_{kind}_step_init")(s_c.ctypes.data, rec.x[0], rec.v[0], e[0])
+    F_c = np.zeros(rec.n)
+    for k in range(rec.n):
+        F_c[k] = getattr(lib, f"k_{kind}_step_force")(s_c.ctypes.data, rec.x[k], rec.v[k], e[k])
+        if k + 1 < rec.n:
+            args = (rec.x[k], rec.v[k], e[k], rec.x[k + 1], rec.v[k + 1], e[k + 1], rec.dt)
+            assert getattr(lib, f"k_{kind}_step_advance")(s_c.ctypes.data, *args) == 0
+            assert step.advance(step.form, s_py, *args) == 0
+    assert _rel(F_c, F_py) < 1e-9
+    np.testing.assert_allclose(s_c, s_py, rtol=1e-9, atol=1e-9 * float(np.max(np.abs(s_py))))
+    assert hasattr(lib, f"k_{kind}_inverse_run") == isinstance(model, InvertibleModel)
+
+
+def test_lpv_and_static_renderings_read_their_step_forms(kind_models: dict[str, Any]) -> None:
+    """The step forms hold the arrays the model's law and map methods give (so the C constants,
+    now read from the forms, are those the renderers formerly rebuilt from the model)."""
+    from mrdamper.control.inverse import lpv_hysteresis, lpv_law_arrays, static_map_arrays
+
+    lpv = kind_models["lpv"]
+    form = lpv.step().form
+    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(lpv)
+    assert form.mode == mode and (form.blend, form.stroke) == lpv_hysteresis(lpv)
+    for a, b in ((form.gamma_m, gm), (form.gamma_c, gc), (form.mu_high, mu_h), (form.mu_low, mu_l)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(form.alpha, lpv.alpha)
+    for kind in ("sp1", "bingham"):
+        comp, power, theta, f0 = static_map_arrays(kind_models[kind])
+        sform = kind_models[kind].step().form
+        np.testing.assert_array_equal(sform.theta, theta)
+        np.testing.assert_array_equal(sform.comp, comp)
+        np.testing.assert_array_equal(sform.power, power)
+        assert sform.f0 == f0
+
+
+@needs_gcc
+@pytest.mark.parametrize("kind", ["sp1", "lpv"])
+def test_exported_inverse_with_its_defaults_is_the_quarter_cars(
+    tmp_path: Path, kind: str, kind_models: dict[str, Any]
+) -> None:
+    """The C inverse exported with its defaults, fed the quarter car's damper motion and desired
+    force at every control sample (skyhook, ISO class C), returns exactly the input the quarter
+    car applied: substituted into the loop it gives the same trajectory, hence the same metrics.
+    (A replay: the compiled loop has no hook for an external controller.)"""
+    from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
+
+    model = kind_models[kind]
+    res = simulate_quarter_car(model, iso_road("C", duration=2.0), "skyhook")
+    assert res.i.max() > res.i.min()  # the controller moves the input
+    form = model.step().form
+    preload = form.offset if kind == "lpv" else form.f0
+    every = round(res.fs / model.fs) if kind == "lpv" else 1
+    k = np.arange(0, res.t.size, every)
+    lib = _build(model, tmp_path, f"inv_{kind}")  # every default
+    i_c, _ = _inverse(
+        lib,
+        f"inv_{kind}",
+        res.z_s[k] - res.z_u[k],
+        res.v_s[k] - res.v_u[k],
+        res.F_desired[k] + preload,
+    )
+    assert _rel(i_c, res.i[k]) < 1e-9

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mrdamper.control.fmu import export_fmu, fmu_sources, run_fmu
+from mrdamper.control.fmu import FMU_KINDS, export_fmu, fmu_sources, run_fmu
 from mrdamper.errors import DataValidationError, MrDamperError, OutputExistsError
 from mrdamper.models.spencer import spencer1997
 from mrdamper.models.step import run_step
@@ -78,7 +78,7 @@ def test_fmu_on_quiroz_records(
     sp1 = quiroz_models["sp1"]
     inv = _validated(sp1, tmp_path / "inv.fmu", name="inv", dt=rec.dt, inverse=True, reg=800.0)
     out = run_fmu(inv, rec.x, rec.v, rec.F)
-    res = inverse_current(sp1, rec, rec.F, reg=800.0)
+    res = inverse_current(sp1, rec, rec.F, reg=800.0, n_grid=16)  # the export's default grid
     assert _rel(out[:, 0], res.rho) < 1e-9
     assert _rel(out[:, 1], res.F_achieved) < 1e-9
 
@@ -133,7 +133,10 @@ def test_fmu_refusals_write_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     from mrdamper.models.phenomenological import P15Model
 
     out = tmp_path / "d.fmu"
-    with pytest.raises(DataValidationError, match="kind 'p15' has no C step"):
+    toy = dataclasses.make_dataclass("Toy", [("kind", str)])("toy")
+    with pytest.raises(DataValidationError, match="kind 'toy' has no C step"):
+        export_fmu(toy, out)
+    with pytest.raises(DataValidationError, match="does not record one training sample time"):
         export_fmu(P15Model(input_range=(0.0, 1.0)), out)
     with pytest.raises(DataValidationError, match="inverse: the C export of a spencer"):
         export_fmu(spencer1997(), out, dt=1e-3, inverse=True)
@@ -170,3 +173,59 @@ def test_fmu_refuses_another_communication_step(tmp_path: Path) -> None:
     with pytest.raises(FMICallException):
         slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=2e-3)
     slave.freeInstance()
+
+
+@pytest.mark.parametrize("kind", FMU_KINDS)
+def test_fmu_of_every_kind_validates_and_matches_run_step(
+    tmp_path: Path, kind: str, kind_models: dict[str, Any], kind_probe: Any
+) -> None:
+    """fmpy's validation, and the FMU driven by fmpy (FMI 2.0 calls) on a short record against
+    the model's step (:func:`run_step`) to 1e-9 of the force scale."""
+    model, rec = kind_models[kind], kind_probe.slice(0, 300)
+    e = model.electrical_input(rec)
+    fmu = _validated(model, tmp_path / f"{kind}.fmu", name=f"f_{kind}", dt=rec.dt)
+    F_py, status, _ = run_step(model.step(dt=rec.dt), rec.x, rec.v, e, rec.dt)
+    assert status == 0
+    assert _rel(run_fmu(fmu, rec.x, rec.v, e)[:, 0], F_py) < 1e-9
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["spencer", "narx"])
+def test_quarter_car_with_the_fmu_as_plant(
+    tmp_path: Path, kind: str, kind_models: dict[str, Any]
+) -> None:
+    """The quarter car (an SP-1 skyhook controller, ISO class C) with the FMU as the damper
+    (``plant=damper.fmu``: the FMU's binary stepped from the compiled loop) gives the metrics of
+    the same loop with the model itself as the damper, to 1e-9 (a continuous-time and a
+    discrete-time plant; each family's loop compiles once, some 20 s)."""
+    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.control.quarter_car import iso_road
+
+    plant = kind_models[kind]
+    fmu = export_fmu(plant, tmp_path / "d.fmu", name="d", dt=1e-3 if kind == "spencer" else None)
+    road = iso_road("C", duration=1.0)
+    ctrl = kind_models["sp1"]
+    a = simulate_closed_loop(ctrl, road, "skyhook", plant=plant).metrics()
+    b = simulate_closed_loop(ctrl, road, "skyhook", plant=str(fmu)).metrics()
+    assert a.keys() == b.keys()
+    for key, value in a.items():
+        if isinstance(value, float) and value != 0.0:
+            assert abs(b[key] - value) <= 1e-9 * abs(value), key
+
+
+def test_fmu_plant_refusals(tmp_path: Path, kind_models: dict[str, Any]) -> None:
+    from mrdamper.control.closed_loop import resolve_plant
+    from mrdamper.control.fmu_plant import FMUPlant
+
+    sp1 = kind_models["sp1"]
+    inv = export_fmu(sp1, tmp_path / "inv.fmu", name="inv", dt=1e-3, inverse=True)
+    with pytest.raises(DataValidationError, match="the FMU of an inverse"):
+        resolve_plant(str(inv))
+    with pytest.raises(DataValidationError, match="no such FMU"):
+        FMUPlant(tmp_path / "none.fmu")
+    bad = tmp_path / "bad.fmu"
+    bad.write_text("not a zip")
+    with pytest.raises(DataValidationError, match="not a readable FMU"):
+        FMUPlant(bad)
+    plant = resolve_plant(str(export_fmu(sp1, tmp_path / "d.fmu", name="d", dt=1e-3)))
+    assert plant.kind == "sp1" and plant.input == sp1.input and plant.step().dt is None

@@ -114,8 +114,9 @@ def quartercar(
         str | None,
         typer.Option(
             "--plant",
-            help="The damper in the car: a model file, 'rig' or 'rig:NAME' (reference damper); "
-            "writes predicted (MODEL) against achieved (PLANT) metrics.",
+            help="The damper in the car: a model file, a damper FMU (.fmu, exported by mrdamper), "
+            "'rig' or 'rig:NAME' (reference damper); writes predicted (MODEL) against achieved "
+            "(PLANT) metrics.",
         ),
     ] = None,
 ) -> None:

@@ -68,8 +68,8 @@ def export(
         typer.Option(
             "--dt",
             help=(
-                "Sample time [s] of a Spencer model's C step and of a Spencer or static-map FMU "
-                "(default: the training records' sampling interval)."
+                "Sample time [s] of a Spencer or P-15 model's C step and of their or a static "
+                "map's FMU (default: the training records' sampling interval)."
             ),
         ),
     ] = None,
@@ -103,12 +103,12 @@ def export(
         )
         return
     if fmt == "c":
-        from mrdamper.control.c_export import export_c
+        from mrdamper.control.c_export import NEEDS_DT, export_c
         from mrdamper.control.fmu import training_dt
 
         check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
         m = load_model(model_file)
-        c_dt = dt if dt is not None or m.kind != "spencer" else training_dt(m)
+        c_dt = dt if dt is not None or m.kind not in NEEDS_DT else training_dt(m)
         h, c = export_c(m, out, name=name or "mrd_damper", reg=reg, dt=c_dt, force=force)
         typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
         return

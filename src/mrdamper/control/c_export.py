@@ -21,7 +21,12 @@ the zone laws, the optional drive lag and, for the hysteretic input, the Dahl st
 in the state struct; an LTI model has no inverse: its force does not depend on the present
 input), the static maps ``sp1``..``sp4`` and ``bingham``, and ``spencer`` (its per-sample step,
 :meth:`~mrdamper.models.spencer.SpencerModel.step`, at the fixed sample time ``dt`` given with
-the export; no inverse). P-15 and NARX are not exported.
+the export; no inverse), ``p15`` (its step at ``dt``; no inverse) and ``narx`` (at its own rate;
+no inverse). Every rendering also defines the family's per-sample step as
+``<name>_step_init`` / ``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of
+``<name>_step_size()`` entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
+:class:`mrdamper.control.fmu_plant.FMUPlant` runs from the quarter car. The defaults of the
+inverse are the quarter car's (grid, reference velocity, regularisation at its control sample).
 
 All constants are written as C99 hexadecimal floating literals, so the C code uses exactly the
 model's ``float64`` values. The arithmetic follows the compiled Python kernels operation by
@@ -38,13 +43,15 @@ from typing import Any
 
 from mrdamper._io import c_code_kind, check_output, write_files
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
-from mrdamper.control.c_render._common import INVERSE_RUN, RUN
+from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE, quarter_car_defaults
 from mrdamper.errors import DataValidationError
 
-__all__ = ["C_KINDS", "assemble", "c_source", "export_c", "render"]
+__all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]
 
 #: Model kinds :func:`export_c` handles.
 C_KINDS = tuple(RENDERERS)
+#: Kinds whose C step needs the sample time ``dt`` given at export (no rate of their own).
+NEEDS_DT = ("spencer", "p15")
 
 
 def render(
@@ -54,7 +61,7 @@ def render(
     reg: float | None = None,
     v_ref: float = 0.3,
     rate: float | None = None,
-    n_grid: int = 32,
+    n_grid: int | None = None,
     dt: float | None = None,
 ) -> Rendered:
     """The family's C rendering of ``model`` (see :func:`c_source` for the parameters).
@@ -69,6 +76,8 @@ def render(
         raise DataValidationError("model", f"C export handles kinds {list(C_KINDS)}, got {kind!r}")
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise DataValidationError("name", f"expected a C identifier, got {name!r}")
+    if n_grid is None:
+        n_grid = quarter_car_defaults()[1]
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     ctx = Context(name, reg=reg, v_ref=v_ref, rate=rate, n_grid=n_grid, dt=dt)
@@ -82,7 +91,7 @@ def c_source(
     reg: float | None = None,
     v_ref: float = 0.3,
     rate: float | None = None,
-    n_grid: int = 32,
+    n_grid: int | None = None,
     dt: float | None = None,
 ) -> tuple[str, str]:
     """Header and source text of the C export (see the module docstring).
@@ -96,17 +105,18 @@ def c_source(
     reg : float, optional
         Regularisation weight of the inverse [N per input unit]; default
         ``default_reg(model, v_ref, dt)`` at the LPV model's sample time or, for a static map, at
-        ``dt`` (without ``dt``: ``DEFAULT_REG_FRACTION * force_authority(model, v_ref)``, the 200 Hz
-        value); fixed into the code.
+        ``dt`` (without ``dt``: the quarter car's control sample, 1 ms), the quarter car's
+        default; fixed into the code.
     v_ref : float
         Velocity setting the default ``reg`` [m/s].
     rate : float, optional
         Input rate bound of the inverse [input unit/s]; needs the sample time (``dt`` or an LPV
         model's rate).
-    n_grid : int
-        Search grid of the inverse.
+    n_grid : int, optional
+        Search grid of the inverse (default the quarter car's, 16).
     dt : float, optional
-        Sample time [s]: required for a Spencer model (the fixed interval its C step integrates);
+        Sample time [s]: required for a Spencer or P-15 model (the interval ``<name>_step``
+        integrates);
         for a static map, the interval of the inverse's rate bound (only used with ``rate``) and
         of the default ``reg``; an LPV model runs at its own rate.
     """
@@ -125,6 +135,17 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
         f"double {p}_step({p}_state *s, double x, double v, double input);",
         f"void {p}_run(long n, const double *x, const double *v, const double *input, double *F);",
     ]
+    step_protos = [
+        f"#define {name.upper()}_STEP_N {r.step_n} /* length of the step state */",
+        f"void {p}_step_init(double *s, double x0, double v0, double e0);",
+        f"double {p}_step_force(const double *s, double x, double v, double e);",
+        (
+            f"int {p}_step_advance(double *s, double x0, double v0, double e0, double x1, "
+            "double v1, double e1, double dt);"
+        ),
+        f"long {p}_step_size(void);",
+    ]
+    protos += step_protos
     if r.has_inverse:
         protos += [
             (
@@ -150,7 +171,7 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
         + f"\n\n#endif /* {guard} */\n"
     )
     src = f'/* {name}.c: see {name}.h. */\n#include <math.h>\n#include "{name}.h"\n'
-    src += r.body + RUN.format(p=p)
+    src += r.body + RUN.format(p=p) + STEP_SIZE.format(p=p, P=name.upper())
     if r.has_inverse:
         src += INVERSE_RUN.format(p=p)
     return header, src

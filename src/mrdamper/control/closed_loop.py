@@ -46,6 +46,7 @@ import numpy as np
 from mrdamper.control import _closed_loop_kernels as CK
 from mrdamper.control._loop import LoopSetup, damper_arrays, loop_result, loop_setup
 from mrdamper.control.car import positive
+from mrdamper.control.fmu_plant import is_fmu
 from mrdamper.control.inverse import model_input_limits
 from mrdamper.control.quarter_car import (
     CONTROLLERS,
@@ -70,7 +71,9 @@ def resolve_plant(spec: Any) -> Any:
     ----------
     spec : str, path or model
         ``"rig"`` (the virtual rig's default reference damper), ``"rig:NAME"`` (a shipped
-        reference damper), the path of a saved model file, or a model (returned as is).
+        reference damper), the path of a saved model file, the path of a damper FMU written by
+        :func:`~mrdamper.control.fmu.export_fmu` (its binary's step:
+        :class:`~mrdamper.control.fmu_plant.FMUPlant`), or a model (returned as is).
     """
     from pathlib import Path
 
@@ -84,10 +87,15 @@ def resolve_plant(spec: Any) -> Any:
         return reference_damper(DEFAULT_REFERENCE)
     if text.startswith("rig:"):
         return reference_damper(text[4:])
+    if is_fmu(text):
+        from mrdamper.control.fmu_plant import FMUPlant
+
+        return FMUPlant(text)
     path = Path(text)
     if not path.is_file():
         raise DataValidationError(
-            "--plant", f"expected 'rig', 'rig:NAME' or a model file, got {text!r} (no such file)"
+            "--plant",
+            f"expected 'rig', 'rig:NAME', a model file or an FMU, got {text!r} (no such file)",
         )
     return load_model(path)
 

@@ -114,7 +114,13 @@ def _variables(model: Any, inverse: bool) -> list[dict[str, str]]:
 
 
 def _model_description(
-    model: Any, name: str, guid: str, dt: float, inverse: bool, sources: list[str]
+    model: Any,
+    name: str,
+    guid: str,
+    dt: float,
+    inverse: bool,
+    sources: list[str],
+    own_rate: bool = False,
 ) -> str:
     unit = "A" if model.input == "i" else "V"
     lo, hi = (float(b) for b in model.input_range)
@@ -176,6 +182,7 @@ def _model_description(
             "inputMin": repr(lo),
             "inputMax": repr(hi),
             "sampleTime": repr(dt),
+            "ownSampleTime": "true" if own_rate else "false",
         },
     )
     mv = ET.SubElement(root, "ModelVariables")
@@ -279,7 +286,9 @@ def fmu_sources(
         "compute": compute,
     }
     files = {
-        "modelDescription.xml": _model_description(model, name, guid, step, inverse, sources),
+        "modelDescription.xml": _model_description(
+            model, name, guid, step, inverse, sources, r.step_dt
+        ),
         f"sources/{name}.h": header,
         f"sources/{name}.c": src,
         f"sources/{name}_fmi2.h": FMI2_TYPES.format(**fmt),

@@ -40,6 +40,7 @@ from mrdamper.models._schema import (
     encode_value,
 )
 from mrdamper.models.envelope import training_envelope
+from mrdamper.models.levels import single_level
 from mrdamper.models.settings import (
     check_bool,
     check_choice,
@@ -133,24 +134,6 @@ def check_input_range(
     if policy == "ignore":
         return values
     raise OutOfRangeError(f"range_policy: expected error/warn/clip/ignore, got {policy!r}")
-
-
-def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
-    """The one level of a constant electrical input, or None when it takes more than one value.
-
-    ``values`` is constant when its spread is at most ``rel_tol * max(1, max |values|)``.
-
-    Parameters
-    ----------
-    values : ndarray
-        Electrical input [A] or [V] (or its extremes).
-    rel_tol : float
-        Relative spread below which the input is one level [-].
-    """
-    lo, hi = float(np.min(values)), float(np.max(values))
-    if hi - lo <= rel_tol * max(1.0, abs(lo), abs(hi)):
-        return 0.5 * (lo + hi)
-    return None
 
 
 def single_level_note(kind: str, source: str, level: float) -> str:
@@ -511,7 +494,8 @@ class Estimator(abc.ABC):
         self._check_fit_options(options)
         self._validate()
         if getattr(self, "eta", None) == lag.AUTO:
-            return lag.fit_with_lag(self, data, options)  # the drive lag, identified
+            fitted: FittedModel = lag.fit_with_lag(self, data, options)  # the lag, identified
+            return fitted
         report("preparing the training data")
         records, options, segments = self._training_set(data, options)
         prepared = self._prepare(records)

@@ -12,7 +12,9 @@ car and the exports of :mod:`mrdamper.control` import them from here instead of 
 * static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models._sp_kernels`): :func:`sp_force1`
   (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
 * Spencer (:mod:`mrdamper.models._spencer_kernels`): its form :class:`SpencerForm`, parameter
-  order and divergence bounds, for the C rendering of its step.
+  order and divergence bounds, for the C rendering of its step;
+* the forms and constants the C renderers of P-15 (:class:`P15Form`, :data:`P15_GAMMA`,
+  :data:`P15_MAX_SUBSTEPS`), NARX (:class:`NARXForm`) and LPV (:data:`LPV_N_HEAD`) read.
 
 Caveat of numba's disk cache: a cached kernel that calls one of these functions is not recompiled
 when the function changes; delete the caller's ``__pycache__/*.nb*`` files after editing here.
@@ -31,6 +33,11 @@ from mrdamper.models._lpv_step import (
     poly,
     zone_input,
 )
+from mrdamper.models._lpv_step import N_HEAD as LPV_N_HEAD
+from mrdamper.models._narx_kernels import NARXForm
+from mrdamper.models._p15_kernels import GAMMA as P15_GAMMA
+from mrdamper.models._p15_kernels import MAX_SUBSTEPS as P15_MAX_SUBSTEPS
+from mrdamper.models._p15_kernels import P15Form
 from mrdamper.models._sp_kernels import sp_dforce1, sp_force1
 from mrdamper.models._spencer_kernels import PARAM_NAMES as SPENCER_PARAM_NAMES
 from mrdamper.models._spencer_kernels import Y_LIMIT as SPENCER_Y_LIMIT
@@ -38,12 +45,17 @@ from mrdamper.models._spencer_kernels import Z_LIMIT as SPENCER_Z_LIMIT
 from mrdamper.models._spencer_kernels import SpencerForm
 
 __all__ = [
+    "LPV_N_HEAD",
     "MODE_CONTINUOUS",
     "MODE_LITERAL",
     "MODE_V",
+    "P15_GAMMA",
+    "P15_MAX_SUBSTEPS",
     "SPENCER_PARAM_NAMES",
     "SPENCER_Y_LIMIT",
     "SPENCER_Z_LIMIT",
+    "NARXForm",
+    "P15Form",
     "SpencerForm",
     "dahl_step",
     "dpoly",

@@ -28,17 +28,15 @@ import math
 import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
+from mrdamper.models.levels import single_level
 from mrdamper.progress import report
-
-if TYPE_CHECKING:
-    from mrdamper.models.base import Estimator, FittedModel
 
 __all__ = [
     "AUTO",
@@ -103,8 +101,6 @@ def lag_applies(records: Iterable[Experiment], source: ElectricalSource) -> bool
     source : {"i", "voltage"}
         Electrical input channel of the estimator.
     """
-    from mrdamper.models.base import single_level
-
     if source != "voltage":
         return False
     return any(single_level(np.asarray(e.electrical(source))) is None for e in records)
@@ -120,7 +116,7 @@ def _split(records: ExperimentSet) -> tuple[list[Experiment], list[Experiment]]:
 
 
 def _validation_esr(
-    est: Estimator,
+    est: Any,
     eta: float,
     parts: tuple[list[Experiment], list[Experiment]],
     options: Mapping[str, Any],
@@ -130,7 +126,7 @@ def _validation_esr(
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            model = dataclasses.replace(est, eta=eta).fit(parts[0], **options)  # type: ignore[type-var]
+            model = dataclasses.replace(est, eta=eta).fit(parts[0], **options)
             model = model.with_range_policy("clip")
             esr = [model.score(e).esr for e in parts[1]]
     except (ValueError, RuntimeError, ArithmeticError):
@@ -140,13 +136,13 @@ def _validation_esr(
 
 
 def fit_with_lag(
-    est: Estimator, data: Experiment | Iterable[Experiment], options: Mapping[str, Any]
-) -> FittedModel:
+    est: Any, data: Experiment | Iterable[Experiment], options: Mapping[str, Any]
+) -> Any:
     """Fit ``est`` (whose ``eta`` is ``"auto"``) with its drive lag identified (module docstring).
 
     Parameters
     ----------
-    est : Estimator
+    est : mrdamper.models.Estimator
         A family with an ``eta`` setting, set to ``"auto"``.
     data : Experiment or iterable of Experiment
         Training records.
@@ -156,13 +152,13 @@ def fit_with_lag(
 
     Returns
     -------
-    FittedModel
+    mrdamper.models.FittedModel
         The model fitted on every training record with the chosen lag.
     """
     records = as_experiment_set(data, name="training")
     source: ElectricalSource = getattr(est, "input", "i")
     if not lag_applies(records, source):
-        return dataclasses.replace(est, eta=None).fit(records, **options)  # type: ignore[type-var]
+        return dataclasses.replace(est, eta=None).fit(records, **options)
     t0 = time.perf_counter()
     parts = _split(records)
     weights = options.get("record_weights")
@@ -193,7 +189,7 @@ def fit_with_lag(
             "eta", f"{est.kind}: no drive-lag candidate could be fitted on the inner split"
         )
     selection_s = time.perf_counter() - t0
-    model = dataclasses.replace(est, eta=chosen).fit(records, **options)  # type: ignore[type-var]
+    model = dataclasses.replace(est, eta=chosen).fit(records, **options)
     prov = dict(model.provenance)
     prov["drive_lag"] = {
         "eta": chosen,

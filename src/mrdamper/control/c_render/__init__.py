@@ -18,6 +18,8 @@ from typing import Any
 
 from mrdamper.control.c_render._common import Context, Rendered
 from mrdamper.control.c_render.lpv import render_lpv
+from mrdamper.control.c_render.narx import render_narx
+from mrdamper.control.c_render.p15 import render_p15
 from mrdamper.control.c_render.spencer import render_spencer, render_spencer_form
 from mrdamper.control.c_render.static import render_static
 
@@ -33,4 +35,6 @@ RENDERERS: dict[str, Callable[[Any, Context], Rendered]] = {
     "sp4": render_static,
     "bingham": render_static,
     "spencer": render_spencer,
+    "p15": render_p15,
+    "narx": render_narx,
 }

@@ -29,6 +29,8 @@ __all__ = [
     "INV_CONST",
     "RUN",
     "SOLVE",
+    "STEP_SIZE",
+    "STEP_WRAPPER",
     "Context",
     "Rendered",
     "arr1",
@@ -37,8 +39,23 @@ __all__ = [
     "fmt_base",
     "inverse_settings",
     "lit",
+    "quarter_car_defaults",
+    "require_dt",
     "solver",
+    "step_state",
 ]
+
+
+def quarter_car_defaults() -> tuple[float, int]:
+    """The quarter car's control sample [s] (the period of its roads' default rate) and inverse
+    search grid: the C export's defaults, so that the exported controller is the evaluated one."""
+    import inspect
+
+    from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
+
+    fs = inspect.signature(iso_road).parameters["fs"].default
+    n_grid = inspect.signature(simulate_quarter_car).parameters["n_grid"].default
+    return 1.0 / float(fs), int(n_grid)
 
 
 @dataclass(frozen=True)
@@ -56,7 +73,7 @@ class Context:
     rate : float or None
         Input rate bound of the inverse [input unit/s].
     n_grid : int
-        Search grid of the inverse.
+        Search grid of the inverse (default the quarter car's).
     dt : float or None
         Sample time [s] given with the export (the fixed step of a continuous-time family, the
         inverse rate bound's interval of a static map).
@@ -66,7 +83,7 @@ class Context:
     reg: float | None = None
     v_ref: float = 0.3
     rate: float | None = None
-    n_grid: int = 32
+    n_grid: int = field(default_factory=lambda: quarter_car_defaults()[1])
     dt: float | None = None
 
     @property
@@ -95,6 +112,12 @@ class Rendered:
         Lines of the header comment (units, input range, sample rate, inverse settings).
     sample_time : float or None
         The sample time [s] the C step must be called at, None where any is allowed.
+    step_n : int
+        Length of the step's state vector: the body defines the model's per-sample step as
+        ``<name>_step_init``, ``<name>_step_force`` and ``<name>_step_advance`` over a
+        ``double[step_n]`` state laid out as the Python step's (:mod:`mrdamper.models.step`).
+    step_dt : bool
+        Whether the step runs at its own sample time (``Step.dt`` set: LPV, LTI, NARX).
     """
 
     state: str
@@ -102,6 +125,8 @@ class Rendered:
     has_inverse: bool
     notes: list[str] = field(default_factory=list)
     sample_time: float | None = None
+    step_n: int = 0
+    step_dt: bool = False
 
 
 def fmt_base(
@@ -232,6 +257,10 @@ void {p}_run(long n, const double *x, const double *v, const double *input, doub
 }}
 """
 
+STEP_SIZE = r"""
+long {p}_step_size(void) {{ return {P}_STEP_N; }}
+"""
+
 INVERSE_RUN = (
     r"""
 void {p}_inverse_run(long n, const double *x, const double *v, const double *F_desired,"""
@@ -244,6 +273,64 @@ void {p}_inverse_run(long n, const double *x, const double *v, const double *F_d
 }}
 """
 )
+
+
+#: ``<name>_init`` / ``<name>_step`` over a model's step functions: the first call sets the rest
+#: state, every later call advances it over the interval from the previous call's inputs (one
+#: sample time ``{P}_DT``), then returns the force; after a failed advance the status is kept and
+#: the step returns NaN from then on (:func:`mrdamper.models.step.run`, one sample a call).
+STEP_WRAPPER = r"""
+void {p}_init({p}_state *s)
+{{
+    int j;
+    for (j = 0; j < {n}; ++j) s->s[j] = 0.0;
+    s->x = 0.0;
+    s->v = 0.0;
+    s->e = 0.0;
+    s->k = 0;
+    s->status = 0;
+}}
+
+double {p}_step({p}_state *s, double x, double v, double input)
+{{
+    if (s->status != 0) return NAN;
+    if (s->k == 0) {{
+        {p}_step_init(s->s, x, v, input);
+    }} else {{
+        s->status = {p}_step_advance(s->s, s->x, s->v, s->e, x, v, input, {P}_DT);
+        if (s->status != 0) return NAN;
+    }}
+    s->x = x;
+    s->v = v;
+    s->e = input;
+    s->k += 1;
+    return {p}_step_force(s->s, x, v, input);
+}}
+"""
+
+
+def require_dt(model: Any, ctx: Context) -> float:
+    """The export's sample time ``ctx.dt`` [s], required by a family without its own rate."""
+    if ctx.dt is None:
+        raise DataValidationError(
+            "dt",
+            f"the {model.kind} C step integrates fixed intervals: give its sample time dt [s]",
+        )
+    if not (ctx.dt > 0 and ctx.dt < math.inf):
+        raise DataValidationError("dt", f"expected a positive sample time [s], got {ctx.dt!r}")
+    return float(ctx.dt)
+
+
+def step_state(p: str, n: int, what: str) -> str:
+    """The ``<p>_state`` struct of :data:`STEP_WRAPPER` for a step state of ``n`` entries."""
+    return (
+        "typedef struct {\n"
+        f"    double s[{n}]; /* step state: {what} */\n"
+        "    double x, v, e; /* inputs of the last sample */\n"
+        "    long k; /* samples taken */\n"
+        "    int status; /* 0 ok, else the failed advance's status (the step returns NaN) */\n"
+        f"}} {p}_state;\n"
+    )
 
 
 def solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str) -> str:

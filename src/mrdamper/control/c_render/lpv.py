@@ -26,7 +26,8 @@ from mrdamper.control.c_render._common import (
     lit,
     solver,
 )
-from mrdamper.control.inverse import horizon_samples, lpv_hysteresis, lpv_law_arrays
+from mrdamper.control.inverse import horizon_samples
+from mrdamper.models.kernels import LPV_N_HEAD as N_HEAD
 
 __all__ = ["render_lpv"]
 
@@ -149,6 +150,75 @@ double {p}_step({p}_state *s, double x, double v, double input)
     F = {p}_poly(cf, {P}_N_P, r);
     {p}_commit(s, F, v, r);
     return F;
+}}
+"""
+)
+
+LPV_STEP = (
+    r"""
+static const double {P}_BOUND = {bound}; /* largest |y| [N] of the step (divergence) */
+static const double {P}_ETA = {eta}; /* drive-lag rate [1/s]; negative: no lag */
+
+/* The model's per-sample step (mrdamper.models._lpv_step) on the state
+   s = (rho, z, y[k-N_M] .. y[k-1], u[k-N_M] .. u[k-1]), oldest first; the input as given. */
+static double {p}_sforce(const double *s, double e, double *r)
+{{
+    double cf[{P}_N_P];
+    int q, j;
+    for (q = 0; q < {P}_N_P; ++q) {{
+        double acc = 0.0;
+        for (j = 0; j < {P}_N_M; ++j)"""
+    r""" acc += {P}_BETA[j][q] * s[1 + 2 * {P}_N_M - j] - {P}_ALPHA[j][q] * s[1 + {P}_N_M - j];
+        cf[q] = acc;
+    }}
+    cf[0] += {P}_OFFSET;
+    *r = {P}_ETA >= 0.0 ? s[0] : e;
+    return {p}_poly(cf, {P}_N_P, *r);
+}}
+
+void {p}_step_init(double *s, double x0, double v0, double e0)
+{{
+    int j;
+    (void)x0;
+    (void)v0;
+    for (j = 0; j < {P}_STEP_N; ++j) s[j] = 0.0;
+    s[0] = e0;
+}}
+
+double {p}_step_force(const double *s, double x, double v, double e)
+{{
+    double r;
+    (void)x;
+    (void)v;
+    return {p}_sforce(s, e, &r);
+}}
+
+int {p}_step_advance(double *s, double x0, double v0, double e0, double x1, double v1,"""
+    r""" double e1, double dt)
+{{
+    double r, F = {p}_sforce(s, e0, &r), y = F - {P}_OFFSET, u;
+    int j;
+    (void)x0;
+    (void)x1;
+    (void)e1;
+    if (!(fabs(y) <= {P}_BOUND)) return 1;
+    u = {p}_u_of(v0, r, s[1]);
+    for (j = 0; j < {P}_N_M - 1; ++j) {{
+        s[2 + j] = s[3 + j];
+        s[2 + {P}_N_M + j] = s[3 + {P}_N_M + j];
+    }}
+    s[1 + {P}_N_M] = y;
+    s[1 + 2 * {P}_N_M] = u;
+    if ({P}_ETA >= 0.0) {{
+        double E = exp(-{P}_ETA * dt);
+        s[0] = E * r + (1.0 - E) * e0;
+    }}
+    if ({P}_BLEND != 0.0) {{
+        double dx = 0.5 * (v0 + v1) * dt;
+        if (dx > 0.0) s[1] = 1.0 + (s[1] - 1.0) * exp(-dx / {P}_STROKE);
+        else if (dx < 0.0) s[1] = -1.0 + (s[1] + 1.0) * exp(dx / {P}_STROKE);
+    }}
+    return 0;
 }}
 """
 )
@@ -298,38 +368,41 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
 
     p, P = ctx.p, ctx.P
     dt = 1.0 / model.fs
+    form = model.step().form
     has_inverse = isinstance(model, InvertibleModel)
     lam, rate_step = (
         inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt) if has_inverse else (0.0, np.inf)
     )
     fmt = fmt_base(model, ctx, lam, rate_step)
-    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
-    blend, stroke = lpv_hysteresis(model)
-    lag = -1.0 if model.eta is None else float(np.exp(-model.eta / model.fs))
+    n_m = form.alpha.shape[0]
+    lag = -1.0 if form.eta < 0.0 else float(np.exp(-form.eta / model.fs))
     fmt.update(
-        n_m=model.n_m,
-        n_p=model.n_rho + 1,
-        n_d=gm.shape[1],
-        alpha=arr2(model.alpha),
-        beta=arr2(model.beta),
-        offset=lit(model.offset),
+        n_m=n_m,
+        n_p=form.alpha.shape[1],
+        n_d=form.gamma_m.shape[1],
+        step_n=N_HEAD + 2 * n_m,
+        alpha=arr2(form.alpha),
+        beta=arr2(form.beta),
+        offset=lit(form.offset),
+        bound=lit(form.bound),
+        eta=lit(form.eta),
         lag=lit(lag),
-        mode=mode,
-        gm=arr2(gm),
-        gc=arr2(gc),
-        mu_high=arr1(mu_h),
-        mu_low=arr1(mu_l),
-        blend=lit(blend),
-        stroke=lit(stroke),
+        mode=form.mode,
+        gm=arr2(form.gamma_m),
+        gc=arr2(form.gamma_c),
+        mu_high=arr1(form.mu_high),
+        mu_low=arr1(form.mu_low),
+        blend=lit(form.blend),
+        stroke=lit(form.stroke),
         dt=lit(dt),
         horizon=horizon_samples(model.eta, dt),
         golden=lit(K.GOLDEN),
         n_golden=K.N_GOLDEN,
     )
     state = (
-        f"typedef struct {{\n    double y[{model.n_m}]; "
+        f"typedef struct {{\n    double y[{n_m}]; "
         "/* past outputs y[k-1-j] (force minus offset) [N] */\n"
-        f"    double u[{model.n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
+        f"    double u[{n_m}]; /* past LPV inputs u[k-1-j] [m/s] */\n"
         "    double rho; /* scheduling value of the last sample */\n"
         "    double w; "
         "/* forward: input of the last sample; inverse: last command (drive lag) */\n"
@@ -337,9 +410,14 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
         "    double v_prev; /* velocity of the last sample [m/s] */\n"
         f"    long k; /* samples taken */\n}} {p}_state;\n"
     )
-    body = COMMON.format(**fmt) + LPV.format(**fmt)
+    body = COMMON.format(**fmt) + LPV.format(**fmt) + LPV_STEP.format(**fmt)
     if has_inverse:
-        body = COMMON.format(**fmt) + INV_CONST.format(**fmt) + LPV.format(**fmt)
+        body = (
+            COMMON.format(**fmt)
+            + INV_CONST.format(**fmt)
+            + LPV.format(**fmt)
+            + LPV_STEP.format(**fmt)
+        )
         body += LPV_DPOLY.format(**fmt)
         body += solver(
             fmt,
@@ -356,4 +434,6 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
         [clip_note(model), f"Sample rate: {model.fs!r} Hz (one call per model sample)."]
         + ([f"Inverse: regularisation weight {lam!r}, grid {ctx.n_grid}."] if has_inverse else []),
         sample_time=dt,
+        step_n=N_HEAD + 2 * n_m,
+        step_dt=True,
     )

@@ -15,8 +15,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from mrdamper.control.c_render._common import Context, Rendered, lit
-from mrdamper.errors import DataValidationError
+from mrdamper.control.c_render._common import (
+    STEP_WRAPPER,
+    Context,
+    Rendered,
+    lit,
+    require_dt,
+    step_state,
+)
 from mrdamper.models import kernels as SK
 
 __all__ = ["render_spencer", "render_spencer_form"]
@@ -56,11 +62,13 @@ static double {p}_rhs(double x, double xd, double e, double y, double z, double 
     return C;
 }}
 
-static double {p}_force(double x, double xd, const double *s)
+/* step_force: the force at the state s = (y, z, u) and the present motion */
+double {p}_step_force(const double *s, double x, double xd, double e)
 {{
     double c0 = {P}_C0A + {P}_C0B * s[2], c1 = {P}_C1A + {P}_C1B * s[2];
     double al = {P}_ALPHA_A + {P}_ALPHA_B * s[2];
     double yd = (al * s[1] + c0 * xd + {P}_K0 * (x - s[0])) / (c0 + c1);
+    (void)e;
     return c1 * yd + {P}_K1 * (x - {P}_X0) + {P}_F0;
 }}
 
@@ -95,42 +103,21 @@ static int {p}_interval(double *s, double x0, double v0, double e0, double x1, d
 }}
 
 /* step_advance: sub-steps from the interval and the largest sub-step */
-static int {p}_advance(double *s, double x0, double v0, double e0, double x1, double v1,
-                       double e1, double dt)
+int {p}_step_advance(double *s, double x0, double v0, double e0, double x1, double v1,
+                     double e1, double dt)
 {{
     double m = ceil(dt / {P}_MAX_H * (1.0 - 1e-12));
     long nsub = m > 1.0 ? (long)m : 1;
     return {p}_interval(s, x0, v0, e0, x1, v1, e1, dt, nsub);
 }}
 
-void {p}_init({p}_state *s)
+/* the rest state at the first sample: (y, z, u) = (x, 0, e) */
+void {p}_step_init(double *s, double x0, double v0, double e0)
 {{
-    s->s[0] = 0.0;
-    s->s[1] = 0.0;
-    s->s[2] = 0.0;
-    s->x = 0.0;
-    s->v = 0.0;
-    s->e = 0.0;
-    s->k = 0;
-    s->status = 0;
-}}
-
-double {p}_step({p}_state *s, double x, double v, double input)
-{{
-    if (s->status != 0) return NAN;
-    if (s->k == 0) {{
-        s->s[0] = x;
-        s->s[1] = 0.0;
-        s->s[2] = input;
-    }} else {{
-        s->status = {p}_advance(s->s, s->x, s->v, s->e, x, v, input, {P}_DT);
-        if (s->status != 0) return NAN;
-    }}
-    s->x = x;
-    s->v = v;
-    s->e = input;
-    s->k += 1;
-    return {p}_force(x, v, s->s);
+    (void)v0;
+    s[0] = x0;
+    s[1] = 0.0;
+    s[2] = e0;
 }}
 """
 
@@ -164,15 +151,9 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
             z_limit=lit(SK.SPENCER_Z_LIMIT),
             y_limit=lit(SK.SPENCER_Y_LIMIT),
         )
+        + STEP_WRAPPER.format(p=p, P=P, n=3)
     )
-    state = (
-        "typedef struct {\n"
-        "    double s[3]; /* state: internal displacement y [m], z, filtered input u */\n"
-        "    double x, v, e; /* inputs of the last sample */\n"
-        "    long k; /* samples taken */\n"
-        "    int status; /* 0 ok, 1 diverged, 2 non-positive damping (the step returns NaN) */\n"
-        f"}} {p}_state;\n"
-    )
+    state = step_state(p, 3, "internal displacement y [m], z, filtered input u")
     return Rendered(
         state,
         body,
@@ -183,16 +164,11 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
             f"RK4 sub-steps of at most {form.max_h!r} s.",
         ],
         sample_time=dt,
+        step_n=3,
     )
 
 
 def render_spencer(model: Any, ctx: Context) -> Rendered:
     """C of ``model.step(dt=ctx.dt)`` (the sample time is required)."""
-    if ctx.dt is None:
-        raise DataValidationError(
-            "dt", "the spencer C step integrates fixed intervals: give its sample time dt [s]"
-        )
-    if not (ctx.dt > 0 and ctx.dt < float("inf")):
-        raise DataValidationError("dt", f"expected a positive sample time [s], got {ctx.dt!r}")
-    step = model.step(dt=float(ctx.dt))
-    return render_spencer_form(step.form, float(ctx.dt), ctx)
+    dt = require_dt(model, ctx)
+    return render_spencer_form(model.step(dt=dt).form, dt, ctx)

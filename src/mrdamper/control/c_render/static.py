@@ -15,9 +15,9 @@ from mrdamper.control.c_render._common import (
     fmt_base,
     inverse_settings,
     lit,
+    quarter_car_defaults,
     solver,
 )
-from mrdamper.control.inverse import static_map_arrays
 from mrdamper.errors import DataValidationError
 
 __all__ = ["render_static"]
@@ -77,6 +77,35 @@ double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, doub
 }}
 """
 
+#: The map's per-sample step (:mod:`mrdamper.models._sp_kernels`): the state is the map's input.
+STATIC_STEP = r"""
+void {p}_step_init(double *s, double x0, double v0, double e0)
+{{
+    (void)x0;
+    (void)v0;
+    s[0] = e0;
+}}
+
+double {p}_step_force(const double *s, double x, double v, double e)
+{{
+    (void)s;
+    return {p}_force(x, v, e);
+}}
+
+int {p}_step_advance(double *s, double x0, double v0, double e0, double x1, double v1,
+                     double e1, double dt)
+{{
+    (void)x0;
+    (void)v0;
+    (void)e0;
+    (void)x1;
+    (void)v1;
+    (void)dt;
+    s[0] = e1;
+    return 0;
+}}
+"""
+
 STATIC_DFORCE = r"""
 static double {p}_dforce(double x, double v, double i)
 {{
@@ -102,7 +131,7 @@ static double {p}_dforce(double x, double v, double i)
 
 def render_static(model: Any, ctx: Context) -> Rendered:
     """C of a static map and its inverse (any sample rate; ``ctx.dt`` sets the rate bound's and
-    the default regularisation's interval)."""
+    the default regularisation's interval, by default the quarter car's control sample)."""
     if getattr(model, "eta", None) is not None:
         raise DataValidationError(
             "model",
@@ -114,18 +143,16 @@ def render_static(model: Any, ctx: Context) -> Rendered:
         raise DataValidationError(
             "dt", "a rate bound on a static map's inverse needs the sample time dt [s]"
         )
-    step_dt = 1.0 if ctx.dt is None else float(ctx.dt)
-    lam, rate_step = inverse_settings(
-        model, ctx.reg, ctx.v_ref, ctx.rate, step_dt, ctx.dt is not None
-    )
+    step_dt = quarter_car_defaults()[0] if ctx.dt is None else float(ctx.dt)
+    lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, step_dt)
     fmt = fmt_base(model, ctx, lam, rate_step)
-    comp, power, theta, f0 = static_map_arrays(model)
+    form = model.step().form
     fmt.update(
-        n_theta=theta.size,
-        comp="{" + ", ".join(str(int(c)) for c in comp) + "}",
-        power="{" + ", ".join(str(int(q)) for q in power) + "}",
-        theta=arr1(theta),
-        f0=lit(f0),
+        n_theta=form.theta.size,
+        comp="{" + ", ".join(str(int(c)) for c in form.comp) + "}",
+        power="{" + ", ".join(str(int(q)) for q in form.power) + "}",
+        theta=arr1(form.theta),
+        f0=lit(form.f0),
     )
     state = (
         f"typedef struct {{\n    double prev; /* input of the last inverse sample */\n"
@@ -136,6 +163,7 @@ def render_static(model: Any, ctx: Context) -> Rendered:
         COMMON.format(**fmt)
         + INV_CONST.format(**fmt)
         + head.format(**fmt)
+        + STATIC_STEP.format(**fmt)
         + STATIC_DFORCE.format(**fmt)
     )
     body += solver(
@@ -151,4 +179,5 @@ def render_static(model: Any, ctx: Context) -> Rendered:
             "Sample rate: any (static map).",
             f"Inverse: regularisation weight {lam!r}, grid {ctx.n_grid}.",
         ],
+        step_n=1,
     )
