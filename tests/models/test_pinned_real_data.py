@@ -118,7 +118,8 @@ def dyke_parts(dyke_csv: Path, bench: ModuleType) -> tuple[Any, Any]:
 def test_every_default_kind_is_pinned() -> None:
     from mrdamper.kinds import KINDS
 
-    assert sorted(QUIROZ) == sorted(row.kind for row in KINDS) == sorted(DYKE)
+    # the study's default kinds (the kind table's defaults); the others have known-answer tests
+    assert sorted(QUIROZ) == sorted(row.kind for row in KINDS if row.default) == sorted(DYKE)
 
 
 @pytest.mark.realdata
