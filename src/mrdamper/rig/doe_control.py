@@ -137,7 +137,8 @@ def _within_load_cell(x: np.ndarray, rig: VirtualRig, e: np.ndarray) -> np.ndarr
         v = np.gradient(x) * rig.fs
         t = np.arange(x.size) / rig.fs
         channels: dict[str, Any] = {"t": t, "x": x, "v": v, "F": np.zeros_like(x)}
-        probe = Experiment(**channels, **{str(rig.model.input): e})
+        channels[str(rig.model.input)] = e
+        probe = Experiment(**channels)
         peak = float(np.max(np.abs(rig.model.predict(probe))))
         if peak <= limit:
             break
