@@ -4,19 +4,24 @@ the command line."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from numba import njit
 
 from mrdamper.cli.main import main
 from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.fidelity import checked_run, closed_loop_fidelity, loop_metrics
 from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
 from mrdamper.errors import DataValidationError, MrDamperError
+from mrdamper.models import _sp_kernels as SK
 from mrdamper.models.lpv import LTIModel
 from mrdamper.models.semiphenomenological import SP3Model
+from mrdamper.models.step import Step
+from mrdamper.models.step_dispatch import pack
 from mrdamper.rig.reference import reference_damper
 
 S = (800.0, 200.0, 60.0, 0.0, 900.0, 0.0)
@@ -36,6 +41,37 @@ def test_model_as_its_own_plant_is_the_fused_kernel(ctrl: str) -> None:
     a = simulate_quarter_car(m, road, ctrl)
     b = simulate_closed_loop(m, road, ctrl)
     for name in ("a_s", "F", "i", "z_s", "z_u"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+@njit(cache=False)
+def _wrapped_force(form, s, x, v, e):  # type: ignore[no-untyped-def]
+    return SK.step_force(form, s, x, v, e)
+
+
+@njit(cache=False)
+def _wrapped_advance(form, s, x0, v0, e0, x1, v1, e1, dt):  # type: ignore[no-untyped-def]
+    return SK.step_advance(form, s, x0, v0, e0, x1, v1, e1, dt)
+
+
+class _RuntimeFamily:
+    """A damper whose step functions are not a built-in family's (as a family added at run time)."""
+
+    kind, input = "wrapped", "i"
+
+    def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
+        return dataclasses.replace(
+            _sp3().step(dt=dt), kind=self.kind, force=_wrapped_force, advance=_wrapped_advance
+        )
+
+
+def test_a_family_added_at_run_time_takes_the_function_path() -> None:
+    # its step is not packed: the loop compiled with its functions gives the cached loop's numbers
+    road = _road(1.0)
+    assert pack(_RuntimeFamily().step()) is None and pack(_sp3().step()) is not None
+    a = simulate_closed_loop(_sp3(), road, "skyhook", plant=_sp3())
+    b = simulate_closed_loop(_sp3(), road, "skyhook", plant=_RuntimeFamily())
+    for name in ("a_s", "F", "i"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
 
 

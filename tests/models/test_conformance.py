@@ -195,3 +195,28 @@ def test_single_level_fit_works_or_refuses_in_one_line(kind: str) -> None:
         return
     assert model.input_range == (0.5, 0.5)
     assert np.all(np.isfinite(model.predict(records[0])))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_step_packs_for_the_cached_dispatch(
+    kind: str, fitted: dict[str, FittedModel], training: list[Experiment], probe: Experiment
+) -> None:
+    # every built-in family reaches the disk-cached kernels (models.step_dispatch): its packed
+    # form, run through the dispatch, gives the force of its own step
+    from mrdamper.models.step_dispatch import family_advance, family_force, pack
+
+    model = _model(kind, fitted, training)
+    step = _step(model, probe)
+    pk = pack(step)
+    assert pk is not None, kind
+    e = model.electrical_input(probe)
+    own = step.initial_state(float(probe.x[0]), float(probe.v[0]), float(e[0]))
+    packed = own.copy()
+    dt = probe.dt
+    for k in range(40):
+        a = step.force(step.form, own, probe.x[k], probe.v[k], e[k])
+        b = family_force(pk, packed, probe.x[k], probe.v[k], e[k])
+        assert a == b, (kind, k)
+        args = (probe.x[k], probe.v[k], e[k], probe.x[k + 1], probe.v[k + 1], e[k + 1], dt)
+        assert step.advance(step.form, own, *args) == family_advance(pk, packed, *args)
+    np.testing.assert_array_equal(own, packed)

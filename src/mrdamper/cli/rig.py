@@ -1,9 +1,10 @@
 """``mrdamper rig``: the virtual test rig from the command line.
 
 ``mrdamper rig doe --out DIR [--seed N] [--scale S] [--fs HZ] [--damper NAME|FILE] [--workers W]
-[--format csv|parquet] [--no-progress] [--force]``
-generates the paper's Table II design of experiments and writes one file per record (CSV or
-Parquet) plus ``manifest.csv``; on a terminal it shows a progress bar, and it says how much it
+[--format csv|parquet] [--extension none|control] [--no-progress] [--force]``
+generates the paper's Table II design of experiments (with ``--extension control`` also the
+control-oriented extension, :mod:`mrdamper.rig.doe_control`) and writes one file per record (CSV
+or Parquet) plus ``manifest.csv``; on a terminal it shows a progress bar, and it says how much it
 wrote.
 """
 
@@ -61,6 +62,14 @@ def doe(
     no_progress: Annotated[
         bool, typer.Option("--no-progress", help="No progress bar (shown only on a terminal).")
     ] = False,
+    extension: Annotated[
+        str,
+        typer.Option(
+            "--extension",
+            help="none (Table II only) or control: add the control-oriented extension "
+            "(quarter-car damper motions with a fast APRBS current; root seed SEED + 1).",
+        ),
+    ] = "none",
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig.
 
@@ -70,6 +79,8 @@ def doe(
     from mrdamper.rig.doe import TABLE_II, table_ii
     from mrdamper.rig.doe_io import RECORD_FORMATS, write_records
 
+    if extension not in ("none", "control"):
+        raise DataValidationError("--extension", f"expected none or control, got {extension!r}")
     if format not in RECORD_FORMATS:
         raise DataValidationError(
             "--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}"
@@ -77,7 +88,11 @@ def doe(
     check_output(
         out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else []
     )
-    n_rec = sum(s.replicates for s in TABLE_II)
+    from mrdamper.data import ExperimentSet
+    from mrdamper.rig.doe_control import CONTROL_EXTENSION, control_extension
+
+    n_ext = len(CONTROL_EXTENSION) if extension == "control" else 0
+    n_rec = sum(s.replicates for s in TABLE_II) + n_ext
     written: list[int] = []
     with _bar(not no_progress) as bar:
         gen = bar.add_task("generating", total=n_rec)
@@ -90,6 +105,11 @@ def doe(
             workers=workers,
             progress=lambda _rec: bar.advance(gen),
         )
+        if n_ext:
+            ext = control_extension(seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper))
+            for _ in range(n_ext):
+                bar.advance(gen)
+            records = ExperimentSet([*records, *ext], name=records.name + "+control")
         t1 = time.perf_counter()
         wri = bar.add_task(f"writing {format}", total=len(records))
 

@@ -1,27 +1,47 @@
 """Compiled quarter car with any damper as the plant, through its per-sample step (private).
 
-See :mod:`mrdamper.control.closed_loop` for the choices. The kernel takes the plant's (and, for a
-controller that steps its model, the controller model's) compiled ``force`` / ``advance``
-functions as arguments (numba first-class dispatchers): it is compiled once per combination of
-families and process, not cached on disk. The car equations are
-:func:`~mrdamper.control._quarter_car_kernels._deriv`; the controller and inverse of a static map
-or LPV model are :func:`~mrdamper.control._quarter_car_kernels.control_sample`.
+See :mod:`mrdamper.control.closed_loop` for the choices. The loop is written once, in Python
+(:func:`_loop`, :func:`_step_inverse`, :func:`_lead_force`), calling the plant's and the
+controller model's step functions through the module names ``P_FORCE``, ``P_ADVANCE``,
+``C_FORCE``, ``C_ADVANCE``; :func:`compile_loop` compiles it with those names bound to given
+compiled functions (numba freezes globals at compile time, and calls them directly):
+
+* :data:`run_loop_packed` binds them to the built-in families' dispatch
+  (:func:`~mrdamper.models.step_dispatch.family_force`, ``family_advance``) and takes the
+  families' packed forms: its signature holds arrays and tuples only, so it is compiled once and
+  cached on disk;
+* :func:`run_loop` binds a family added at run time: compiled once per combination of step
+  functions and process, not cached (a kernel specialised on functions cannot be).
+
+The car equations are :func:`~mrdamper.control._quarter_car_kernels._deriv`; the controller and
+inverse of a static map or LPV model are
+:func:`~mrdamper.control._quarter_car_kernels.control_sample`.
 """
 
 from __future__ import annotations
+
+import types
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 from mrdamper.control._quarter_car_kernels import CTRL_PASSIVE, _deriv, _desired, control_sample
+from mrdamper.models.step_dispatch import family_advance, family_force
 
-__all__ = ["run_loop", "step_inverse"]
+__all__ = ["compile_loop", "run_loop", "run_loop_packed"]
+
+# Bound by compile_loop in each compiled variant (placeholders for the Python source).
+C_FORCE: Any = None
+C_ADVANCE: Any = None
+P_FORCE: Any = None
+P_ADVANCE: Any = None
+LEAD_FORCE: Any = None
+STEP_INVERSE: Any = None
 
 
-@njit(cache=False)
-def _lead_force(
-    force, advance, form, state, scratch, x, v, e, dt, n_lead, offset
-):  # pragma: no cover - numba
+def _lead_force(form, state, scratch, x, v, e, dt, n_lead, offset):  # pragma: no cover - numba
     """Mean model force (rest force removed) over ``n_lead`` samples of ``dt`` ahead, with the
     input ``e`` and the damper velocity ``v`` held (NaN when the step fails)."""
     scratch[:] = state
@@ -29,16 +49,15 @@ def _lead_force(
     xa = x
     for _ in range(n_lead):
         xb = xa + v * dt
-        if advance(form, scratch, xa, v, e, xb, v, e, dt) != 0:
+        if C_ADVANCE(form, scratch, xa, v, e, xb, v, e, dt) != 0:
             return np.nan
-        acc += force(form, scratch, xb, v, e) - offset
+        acc += C_FORCE(form, scratch, xb, v, e) - offset
         xa = xb
     return acc / n_lead
 
 
-@njit(cache=False)
-def step_inverse(
-    force, advance, form, state, scratch, x, v, dt, n_lead, offset, target, a, b, prev, lam2, n_pts
+def _step_inverse(
+    form, state, scratch, x, v, dt, n_lead, offset, target, a, b, prev, lam2, n_pts
 ):  # pragma: no cover - numba
     """Regularised inverse of a model through its step, one control sample.
 
@@ -55,15 +74,13 @@ def step_inverse(
         ``|G(e) - target|`` of the interpolant [N].
     """
     if not b > a:
-        return a, abs(
-            _lead_force(force, advance, form, state, scratch, x, v, a, dt, n_lead, offset) - target
-        )
+        return a, abs(LEAD_FORCE(form, state, scratch, x, v, a, dt, n_lead, offset) - target)
     best, jbest, gbest = a, np.inf, 0.0
     e0 = a
-    g0 = _lead_force(force, advance, form, state, scratch, x, v, e0, dt, n_lead, offset)
+    g0 = LEAD_FORCE(form, state, scratch, x, v, e0, dt, n_lead, offset)
     for i in range(1, n_pts + 1):
         e1 = a + (b - a) * i / n_pts
-        g1 = _lead_force(force, advance, form, state, scratch, x, v, e1, dt, n_lead, offset)
+        g1 = LEAD_FORCE(form, state, scratch, x, v, e1, dt, n_lead, offset)
         sl = (g1 - g0) / (e1 - e0)
         den = sl * sl + lam2
         e = e0 if den == 0.0 else (sl * (target - g0) + sl * sl * e0 + lam2 * prev) / den
@@ -77,8 +94,7 @@ def step_inverse(
     return best, abs(gbest - target)
 
 
-@njit(cache=False)
-def run_loop(
+def _loop(
     zr,
     h,
     n_sub,
@@ -93,20 +109,16 @@ def run_loop(
     bound,
     inv,
     c_step,
-    c_force,
-    c_advance,
     c_form,
     c_state,
     c_offset,
     n_lead,
-    p_force,
-    p_advance,
     p_form,
     p_state,
     p_offset,
     p_every,
 ):  # pragma: no cover - numba
-    """Run the quarter car with a plant stepped through ``p_force`` / ``p_advance``.
+    """Run the quarter car with a plant stepped through ``P_FORCE`` / ``P_ADVANCE``.
 
     Parameters
     ----------
@@ -120,11 +132,13 @@ def run_loop(
         offset, lag, mode, gm, gc, mu_high, mu_low, horizon, blend, stroke)`` (ignored when
         ``c_step``).
     c_step : bool
-        The controller steps its model (``c_force``, ``c_advance``, ``c_form``, state ``c_state``,
-        force at rest ``c_offset`` [N]) as an observer driven by the measured damper motion and
-        the applied input, and inverts it over ``n_lead`` control samples (:func:`step_inverse`).
-    p_force, p_advance, p_form, p_state, p_offset
-        The plant's step, state (from rest, updated in place) and force at rest [N].
+        The controller steps its model (``C_FORCE``, ``C_ADVANCE`` on ``c_form``, state
+        ``c_state``, force at rest ``c_offset`` [N]) as an observer driven by the measured damper
+        motion and the applied input, and inverts it over ``n_lead`` control samples
+        (:func:`_step_inverse`).
+    p_form, p_state, p_offset
+        The plant's form (for ``P_FORCE`` / ``P_ADVANCE``), state (from rest, updated in place)
+        and force at rest [N].
     p_every : int
         0: continuous-time plant, its force evaluated at every Runge-Kutta stage with its state
         held and its state advanced over every plant step; ``m > 0``: discrete-time plant of
@@ -176,7 +190,7 @@ def run_loop(
         x_d = st[0] - st[2]
         v_d = st[1] - st[3]
         if c_step:
-            if k >= 1 and c_advance(c_form, c_state, xc, vc, e, x_d, v_d, e, dt_c) != 0:
+            if k >= 1 and C_ADVANCE(c_form, c_state, xc, vc, e, x_d, v_d, e, dt_c) != 0:
                 return X, F, Fd, E, sat, k * n_sub, -2
             a, b = lo, hi
             if k >= 1:
@@ -190,9 +204,7 @@ def run_loop(
                 ok = True
             else:
                 target = _desired(ctrl, st[1], st[3], gains[0], gains[1], gains[2])
-                r, err = step_inverse(
-                    c_force,
-                    c_advance,
+                r, err = STEP_INVERSE(
                     c_form,
                     c_state,
                     scratch,
@@ -265,7 +277,7 @@ def run_loop(
             x0 = st[0] - st[2]
             v0 = st[1] - st[3]
             if p_every > 0 and j % p_every == 0:
-                Fh = p_force(p_form, p_state, x0, v0, e) - p_offset
+                Fh = P_FORCE(p_form, p_state, x0, v0, e) - p_offset
                 xs, vs_, es = x0, v0, e
             for q in range(4):
                 tmp[q] = st[q]
@@ -275,7 +287,7 @@ def run_loop(
                     for q in range(4):
                         tmp[q] = st[q] + c * kk[g - 1, q]
                 if p_every == 0:
-                    Fh = p_force(p_form, p_state, tmp[0] - tmp[2], tmp[1] - tmp[3], e) - p_offset
+                    Fh = P_FORCE(p_form, p_state, tmp[0] - tmp[2], tmp[1] - tmp[3], e) - p_offset
                 zg = z0 if g == 0 else (z1 if g == 3 else zm)
                 _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zg, vr, Fh, m_s, m_u, k_s, k_t, c_t, kk[g])
                 if g == 0:
@@ -292,11 +304,58 @@ def run_loop(
             x1 = st[0] - st[2]
             v1 = st[1] - st[3]
             if p_every == 0:
-                status = p_advance(p_form, p_state, x0, v0, e, x1, v1, e, h)
+                status = P_ADVANCE(p_form, p_state, x0, v0, e, x1, v1, e, h)
             elif (j + 1) % p_every == 0:
-                status = p_advance(p_form, p_state, xs, vs_, es, x1, v1, e, p_every * h)
+                status = P_ADVANCE(p_form, p_state, xs, vs_, es, x1, v1, e, p_every * h)
             else:
                 status = 0
             if status != 0:
                 return X, F, Fd, E, sat, j, status
     return X, F, Fd, E, sat, -1, 0
+
+
+def compile_loop(
+    c_force: Callable[..., float],
+    c_advance: Callable[..., int],
+    p_force: Callable[..., float],
+    p_advance: Callable[..., int],
+    *,
+    cache: bool,
+) -> Any:
+    """:func:`_loop` compiled with the controller model's and the plant's step functions bound
+    (see the module docstring); ``cache`` caches it on disk (only for functions that are the same
+    in every process)."""
+    names = dict(globals())
+    names.update(C_FORCE=c_force, C_ADVANCE=c_advance, P_FORCE=p_force, P_ADVANCE=p_advance)
+
+    def bind(fn: Any, cached: bool) -> Any:
+        copy = types.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__)
+        copy.__doc__ = fn.__doc__
+        return njit(cache=cached)(copy)
+
+    names["LEAD_FORCE"] = bind(_lead_force, False)
+    names["STEP_INVERSE"] = bind(_step_inverse, False)
+    return bind(_loop, cache)
+
+
+#: The loop for the built-in families, given packed forms
+#: (:func:`mrdamper.models.step_dispatch.pack`); compiled once, cached on disk.
+run_loop_packed = compile_loop(
+    family_force, family_advance, family_force, family_advance, cache=True
+)
+
+_RUNTIME: dict[tuple[Any, ...], Any] = {}
+
+
+def run_loop(
+    c_force: Callable[..., float],
+    c_advance: Callable[..., int],
+    p_force: Callable[..., float],
+    p_advance: Callable[..., int],
+) -> Any:
+    """The loop for step functions of a family added at run time (compiled on its first run in
+    this process, kept for the next)."""
+    key = (c_force, c_advance, p_force, p_advance)
+    if key not in _RUNTIME:
+        _RUNTIME[key] = compile_loop(c_force, c_advance, p_force, p_advance, cache=False)
+    return _RUNTIME[key]

@@ -29,7 +29,7 @@ Numerics of the generic loop (:mod:`mrdamper.control._closed_loop_kernels`):
   continuous-time step and no inverse form (Spencer, P-15) is stepped as an observer of the
   measured motion and the applied input and inverted over a lead of ``n_lead`` control samples
   (the 63 % rise time of its force after an input step, measured on the step):
-  :func:`~mrdamper.control._closed_loop_kernels.step_inverse`. Discrete-time models without an
+  :func:`~mrdamper.control._closed_loop_kernels._step_inverse`. Discrete-time models without an
   inverse form (LTI, NARX) drive passive controllers only.
 
 :mod:`mrdamper.control.fidelity` compares predicted (model as damper) and achieved (plant as
@@ -60,6 +60,7 @@ from mrdamper.control.quarter_car import (
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.protocols import InvertibleModel
 from mrdamper.models.step import Step, run_step
+from mrdamper.models.step_dispatch import pack
 
 __all__ = ["StepControl", "plant_step", "resolve_plant", "simulate_closed_loop", "step_control"]
 
@@ -324,7 +325,7 @@ def _run(
         float(a["blend"]),
         float(a["stroke"]),
     )
-    X, F, Fd, E, sat, bad, status = CK.run_loop(
+    head = (
         s.zr,
         s.h,
         s.n_sub,
@@ -339,19 +340,18 @@ def _run(
         float(bound) * s.mr,
         inv,
         sc is not None,
-        c.force,
-        c.advance,
-        c.form,
-        c_state,
-        c_offset,
-        int(n_lead),
-        pstep.force,
-        pstep.advance,
-        pstep.form,
-        p_state,
-        p_offset,
-        p_every,
     )
+    p_packed, c_packed = pack(pstep), pack(c)
+    if p_packed is not None and c_packed is not None:  # built-in families: the cached kernel
+        out = CK.run_loop_packed(
+            *head, c_packed, c_state, c_offset, int(n_lead), p_packed, p_state, p_offset, p_every
+        )
+    else:  # a family added at run time: its functions as arguments (compiled in this process)
+        loop = CK.run_loop(c.force, c.advance, pstep.force, pstep.advance)
+        out = loop(
+            *head, c.form, c_state, c_offset, int(n_lead), pstep.form, p_state, p_offset, p_every
+        )
+    X, F, Fd, E, sat, bad, status = out
     if bad >= 0:
         what = {-1: f"a car state left +-{bound:g}", -2: "the controller's model failed"}.get(
             int(status), f"the {plant.kind} plant's step failed (status {int(status)})"
