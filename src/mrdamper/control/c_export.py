@@ -40,6 +40,7 @@ import numpy as np
 
 from mrdamper._io import atomic_write_text, check_writable
 from mrdamper.control import _inverse_kernels as K
+from mrdamper.control.export import warn_if_unstable
 from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
     default_reg,
@@ -603,6 +604,7 @@ def c_source(
             f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
             "implemented; export the map without the lag or an LPV model with its drive lag",
         )
+    warn_if_unstable(model, stacklevel=3)
     p, P = name, name.upper()
     lo, hi = model_input_limits(model)
     has_inverse = isinstance(model, InvertibleModel)

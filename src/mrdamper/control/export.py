@@ -77,7 +77,7 @@ from mrdamper.control.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import encode_value
 
-__all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data"]
+__all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data", "warn_if_unstable"]
 
 #: Schema name written into every export file.
 EXPORT_SCHEMA = "mrdamper.lpv_export"
@@ -173,6 +173,30 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     }
 
 
+def warn_if_unstable(model: Any, stacklevel: int = 2) -> None:
+    """Warn (one line) when ``model`` is not frozen-stable over its scheduling range.
+
+    Every export (``.mat``, ``.json``, C) says so the same way; models without frozen poles
+    (static maps) are never warned about.
+
+    Parameters
+    ----------
+    model : FittedModel
+        The model being exported.
+    stacklevel : int
+        Passed to :func:`warnings.warn`.
+    """
+    pmax = model.max_pole_modulus() if hasattr(model, "max_pole_modulus") else 0.0
+    if pmax >= 1.0:
+        warnings.warn(
+            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen "
+            f"pole modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control "
+            "design",
+            RuntimeWarning,
+            stacklevel=stacklevel,
+        )
+
+
 def export_lpv(
     model: Any,
     path: str | Path,
@@ -212,15 +236,7 @@ def export_lpv(
     if format not in ("mat", "json"):
         raise DataValidationError("format", f"expected 'mat' or 'json', got {format!r}")
     data = lpv_export_data(model, rho_grid=rho_grid)
-    pmax = model.max_pole_modulus() if hasattr(model, "max_pole_modulus") else 0.0
-    if pmax >= 1.0:
-        warnings.warn(
-            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen "
-            f"pole modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control "
-            "design",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+    warn_if_unstable(model, stacklevel=3)
     if format == "json":
         text = json.dumps(encode_value(data), indent=1, allow_nan=False)
         return atomic_write_text(path, text + "\n", force=force)

@@ -312,6 +312,7 @@ def _execute(
             handles[id(e)] = ex.share(e)
         return handles[id(e)]
 
+    ex.prepare([e for fold in folds for part in (fold.train, fold.score) for e in part])
     n_sims = sum(len(f.score) for f in folds) * len(specs)
     fits: dict[Any, tuple[int, int]] = {}  # future -> (fold, model)
     sims: dict[Any, tuple[int, int, int]] = {}  # future -> (fold, model, scored record)
