@@ -10,7 +10,7 @@ Each command module exposes ``register(app)``. Exits, for every command:
 * Ctrl-C: one line ``interrupted``, status 130 (also when a compiled kernel turned the
   interrupt into another exception);
 * warnings print as one ``warning: ...`` line, notes (:class:`~mrdamper.errors.Note`) as
-  ``note: ...``.
+  ``note: ...``; each text once per command, however often it is raised.
 
 ``--debug`` shows tracebacks instead of the one-line messages.
 """
@@ -25,9 +25,10 @@ from typing import Any
 
 import typer
 
+from mrdamper.cli._help import readable_help
 from mrdamper.errors import MrDamperError, Note, interrupt_in_chain
 
-__all__ = ["app", "main"]
+__all__ = ["SHOWN", "app", "main"]
 
 #: Command modules, each with ``register(app: typer.Typer) -> None``.
 COMMAND_MODULES: tuple[str, ...] = (
@@ -91,9 +92,18 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+#: Text of every warning and note printed by this process: each is printed once, however often
+#: it is raised (a record read by several steps gives its reading note once).
+SHOWN: set[str] = set()
+
+
 def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:
     label = "note" if issubclass(category, Note) else "warning"
-    typer.echo(f"{label}: {_one_line(str(message))}", err=True)
+    text = _one_line(str(message))
+    if text in SHOWN:
+        return
+    SHOWN.add(text)
+    typer.echo(f"{label}: {text}", err=True)
 
 
 def _usage_error(exc: BaseException) -> str | None:
@@ -122,10 +132,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     saved_show = warnings.showwarning
+    SHOWN.clear()
     if not debug:
         warnings.showwarning = _show_warning
     try:
-        rc = app(args=args, prog_name="mrdamper", standalone_mode=False)
+        command = readable_help(typer.main.get_command(app), app.rich_markup_mode)
+        rc = command.main(args=args, prog_name="mrdamper", standalone_mode=False)
         if rc == INTERRUPT_EXIT:  # Typer turns KeyboardInterrupt into this exit status
             typer.echo("interrupted", err=True)
         if isinstance(rc, int) and rc:
