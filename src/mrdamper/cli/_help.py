@@ -61,13 +61,22 @@ def readable_help(command: Any, markup: str | None) -> Any:
     def esc(text: str | None) -> str | None:
         return escape(text) if (text and markup == "rich") else text
 
-    command.help = esc(command.help)
-    for param in command.params:
+    def readable(param: Any) -> Any:
+        if param is None or getattr(param, "_readable", False):
+            return param
         if hasattr(param, "help"):
             param.help = esc(param.help)
         shown = _label(param)
         if shown is not None:
             param.display_type_rich = shown
+        param._readable = True
+        return param
+
+    command.help = esc(command.help)
+    for param in command.params:
+        readable(param)
+    help_option = command.get_help_option  # --help is made when the help is asked for
+    command.get_help_option = lambda ctx: readable(help_option(ctx))
     for sub in getattr(command, "commands", {}).values():
         readable_help(sub, markup)
     return command
