@@ -604,7 +604,7 @@ def c_source(
             f"C export of a static {kind} map with a drive lag (eta = {model.eta:g} 1/s) is not "
             "implemented; export the map without the lag or an LPV model with its drive lag",
         )
-    warn_if_unstable(model, stacklevel=3)
+    warn_if_unstable(model)
     p, P = name, name.upper()
     lo, hi = model_input_limits(model)
     has_inverse = isinstance(model, InvertibleModel)

@@ -28,7 +28,6 @@ import multiprocessing
 import os
 import shutil
 import tempfile
-import warnings
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment, RecordSource
 from mrdamper.errors import DataValidationError, Note
 
@@ -273,12 +273,11 @@ class DaskExecutor(StudyExecutor):
             self._ship = True
             worker, bad = next(iter(blind.items())) if blind else ("", paths)
             where = f"worker {worker}" if worker else "no worker is connected and"
-            warnings.warn(
+            warn_user(
                 f"{where} cannot read {len(bad)} of the {len(paths)} record files (e.g. "
                 f"{bad[0]}): the records are read here and sent to the workers; to let the "
                 "workers read them, give them the same files at the same absolute paths",
                 Note,
-                stacklevel=2,
             )
 
     def share(self, e: Experiment | RecordSource) -> Any:
