@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -73,10 +74,10 @@ def provenance(protocol: Protocol, specs: tuple[ModelSpec, ...], seed: int) -> d
         ``mrdamper_version``, ``git_commit`` (None outside a git checkout) and ``settings``:
         protocol name, electrical input, split, range policy, seed and each model's settings.
     """
-    from mrdamper import __version__
-
+    # the package itself is always loaded before this module (importing it would be a circle)
+    version = str(getattr(sys.modules["mrdamper"], "__version__", "unknown"))
     return {
-        "mrdamper_version": __version__,
+        "mrdamper_version": version,
         "git_commit": git_commit(),
         "settings": {
             "protocol": protocol.name,
