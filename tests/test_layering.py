@@ -9,8 +9,9 @@ module of the package is an import of it, and the kind table's module names
 * the graph "module A imports module B" has no cycle, and neither has the graph of packages;
 * packages import only packages of a lower layer (:data:`LAYERS`);
 * a module never imports a private module (a path part with a leading underscore) or a private
-  name of another package. ``mrdamper._io`` is shared by design; within one subpackage (for
-  example ``models.lpv`` -> ``models._lpv_kernels``) private imports are the point of privacy.
+  name of another package. ``mrdamper._io`` and ``mrdamper._warn`` are shared by design; within
+  one subpackage (for example ``models.lpv`` -> ``models._lpv_kernels``) private imports are the
+  point of privacy.
 
 A failure prints every offending edge.
 """
@@ -26,7 +27,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src"
 PKG = SRC / "mrdamper"
 #: Private modules every package may use.
-SHARED_PRIVATE = ("mrdamper._io",)
+SHARED_PRIVATE = ("mrdamper._io", "mrdamper._warn")
 #: Modules whose job is to import the kernel modules of other packages by name (to compile them
 #: ahead); they may name private modules.
 KERNEL_IMPORTERS = ("mrdamper.compiled",)
@@ -199,6 +200,7 @@ LAYERS: dict[str, int] = {
     "mrdamper.errors": 0,
     "mrdamper.progress": 0,
     "mrdamper._io": 1,
+    "mrdamper._warn": 1,
     "mrdamper.metrics": 1,
     "mrdamper.data": 2,
     "mrdamper.signals": 2,

@@ -2,13 +2,18 @@
 
 How the blocks run:
 
-* one test per page; the page's blocks run in order, in one fresh temporary folder that has
+* one test per page; the page's blocks run in order, then all of them once more in the same
+  folder (every documented block must run twice in a row: a second run finds the first one's
+  outputs), in one fresh temporary folder that has
   ``../shared`` (a link to the shared folder holding ``data/``) beside it and a link
   ``benchmarks/`` to the repository's benchmarks, so commands are written as a user at the
   repository root would write them (``../shared/data/...``);
 * ``bash`` blocks run with ``bash -e`` (the first failing command fails the block); ``python``
   blocks run as a script with this interpreter. Both see this checkout's ``src`` first on
   ``PYTHONPATH``, matplotlib's ``Agg`` backend and single-threaded BLAS;
+* a ``text`` block preceded, on the line just before its fence, by ``<!-- doc-test: output -->``
+  is the output of the block before it: each of its lines must appear in what that block prints
+  (spaces collapsed), so the numbers a page shows are the ones that come out;
 * a block preceded, on the line just before its fence, by ``<!-- doc-test: skip "reason" -->`` is
   not run (the reason is reported); such blocks are the ones that take minutes, and the page
   then shows their quick form in a block that does run;
@@ -20,6 +25,7 @@ Pages that use ``../shared`` skip, with the reason, when the shared data are abs
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import subprocess
@@ -35,6 +41,7 @@ from tests.conftest import REPO_ROOT, SHARED_DATA
 #: Longest time one block may run [s] (the convention asks for seconds to about a minute).
 BLOCK_TIMEOUT_S = 600
 _FENCE = re.compile(r"^\s*```\s*([A-Za-z0-9_+-]*)\s*$")
+_OUTPUT = re.compile(r"^\s*<!--\s*doc-test:\s*output\s*-->\s*$")
 _SKIP = re.compile(r'^\s*<!--\s*doc-test:\s*skip\s+"([^"]+)"\s*-->\s*$')
 _PIP = re.compile(r"^\s*(?:python3?\s+-m\s+)?pip3?\s+install\b[^&]*?(?:&&\s*(?P<rest>.*))?$")
 
@@ -48,6 +55,8 @@ class Block:
     lang: str
     code: str
     skip: str | None
+    #: The output the page shows for this block (a marked ``text`` block after it), or None.
+    expected: str | None = None
 
 
 def doc_pages() -> list[Path]:
@@ -74,6 +83,8 @@ def blocks_of(page: Path) -> list[Block]:
             body.append(lines[k])
             k += 1
         k += 1  # closing fence
+        if lang == "text" and out and start > 0 and _OUTPUT.match(lines[start - 1]):
+            out[-1] = dataclasses.replace(out[-1], expected="\n".join(body))
         if lang in ("bash", "python"):
             prev = _SKIP.match(lines[start - 1]) if start > 0 else None
             code = textwrap.dedent("\n".join(body)) + "\n"  # blocks indented inside list items
@@ -135,7 +146,7 @@ def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
     (tmp_path / "shared").symlink_to(SHARED_DATA.parent, target_is_directory=True)
     (work / "benchmarks").symlink_to(REPO_ROOT / "benchmarks", target_is_directory=True)
     env = _env()
-    for b in runnable:
+    for b, run in [(b, run) for run in (1, 2) for b in runnable]:
         code = as_run(b)
         cmd = ["bash", "-e", "-c", code] if b.lang == "bash" else [sys.executable, "-c", code]
         try:
@@ -149,10 +160,39 @@ def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
                 check=False,
             )
         except subprocess.TimeoutExpired:
-            pytest.fail(f"{b.page}:{b.line} ({b.lang}) ran longer than {BLOCK_TIMEOUT_S} s")
+            pytest.fail(
+                f"{b.page}:{b.line} ({b.lang}, run {run}) ran longer than {BLOCK_TIMEOUT_S} s"
+            )
         if proc.returncode != 0:
             tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-15:])
             pytest.fail(
-                f"{b.page}:{b.line} ({b.lang}) exited {proc.returncode}:\n{code}\n"
+                f"{b.page}:{b.line} ({b.lang}, run {run} of 2) exited {proc.returncode}:\n"
+                f"{code}\n"
                 f"--- output ---\n{tail}"
             )
+        if b.expected is not None:
+            _check_output(b, proc.stdout, run)
+
+
+def _squeeze(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _check_output(b: Block, stdout: str, run: int) -> None:
+    """Every line of the output a page shows for ``b`` appears in what ``b`` printed."""
+    got = _squeeze(stdout)
+    missing = [ln for ln in (b.expected or "").splitlines() if _squeeze(ln) not in got]
+    if missing:
+        pytest.fail(
+            f"{b.page}:{b.line} ({b.lang}, run {run} of 2): the page shows output that does not "
+            f"come out: {missing[:3]}\n--- printed ---\n{stdout[-2000:]}"
+        )
+
+
+def test_shown_output_must_come_out() -> None:
+    b = Block("x.md", 1, "python", "print('ESR 0.0170')\n", None, expected="ESR   0.0170")
+    _check_output(b, "ESR 0.0170\n", 1)  # spaces collapsed
+    with pytest.raises(pytest.fail.Exception, match="does not come out"):
+        _check_output(b, "ESR 0.0206\n", 1)
+    page = REPO_ROOT / "docs" / "tutorial.md"
+    assert any(blk.expected for blk in blocks_of(page))

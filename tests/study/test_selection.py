@@ -78,11 +78,25 @@ def test_recommends_the_true_family(records) -> None:
     assert len(res.scores) == len(KINDS) * len(records)
 
 
-def test_failing_kind_is_a_row_not_a_recommendation(records) -> None:
-    res = cross_validate(records, models=["bingham", "sp2"], settings={"sp2": {"n_starts": 0}})
+def test_failing_kind_is_a_row_not_a_recommendation(records, monkeypatch) -> None:
+    from mrdamper.errors import IdentificationError
+    from mrdamper.models.semiphenomenological import SP2Estimator
+
+    def fails(self, *_a, **_k):
+        raise IdentificationError("no start converged")
+
+    monkeypatch.setattr(SP2Estimator, "_identify", fails)
+    res = cross_validate(records, models=["bingham", "sp2"])
     assert res.recommended == "bingham"
     assert res.table.loc["sp2", "folds_failed"] == 2 and np.isnan(res.table.loc["sp2", "mean_esr"])
-    assert "n_starts" in res.table.loc["sp2", "error"]
+    assert "no start converged" in res.table.loc["sp2", "error"]
+
+
+def test_a_setting_that_cannot_work_is_refused_before_any_fold(records) -> None:
+    from mrdamper.errors import DataValidationError
+
+    with pytest.raises(DataValidationError, match=r"^sp2\.n_starts: expected an integer >= 1"):
+        cross_validate(records, models=["bingham", "sp2"], settings={"sp2": {"n_starts": 0}})
 
 
 def test_cli_select_prints_table_and_recommendation(records, tmp_path: Path, capsys) -> None:

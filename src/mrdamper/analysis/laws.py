@@ -9,7 +9,6 @@ records, or from bins of a continuously varying scheduling signal.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -17,6 +16,7 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
+from mrdamper._warn import warn_user
 from mrdamper.analysis.levels import GroupBy, pool_by_level
 from mrdamper.analysis.scheduling import Reading, scheduling_input_arrays
 from mrdamper.analysis.zones import ZoneFit, fit_zones
@@ -431,12 +431,11 @@ def fit_zone_laws(
         )
     for f in fits:
         if not f.central_is_steepest:
-            warnings.warn(
+            warn_user(
                 f"zone fit at level {f.level:g}: central slope m2={f.m[1]:.4g} N s/m is not the "
                 f"biggest (m1={f.m[0]:.4g}, m3={f.m[2]:.4g}); the normalisation of eq. (20) "
                 "assumes it is",
                 ZoneLawWarning,
-                stacklevel=2,
             )
     lv = np.array([f.level for f in fits], dtype=float)
     M = np.array([f.m for f in fits])
@@ -472,5 +471,5 @@ def fit_zone_laws(
         msg = "zone laws break the paper's assumptions: " + "; ".join(bad)
         if strict:
             raise IdentificationError(msg + " (pass strict=False to continue with a warning)")
-        warnings.warn(msg, ZoneLawWarning, stacklevel=2)
+        warn_user(msg, ZoneLawWarning)
     return laws

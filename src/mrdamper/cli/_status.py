@@ -17,7 +17,7 @@ import typer
 if TYPE_CHECKING:  # pragma: no cover
     from rich.console import Console
 
-__all__ = ["NoProgress", "Status", "working"]
+__all__ = ["SHOWN", "NoProgress", "Status", "working"]
 
 #: The ``--no-progress`` option of the commands that show :func:`working`'s line.
 NoProgress = Annotated[
@@ -111,3 +111,8 @@ def working(message: str, *, show: bool = True) -> Iterator[Status]:
     with bar, listening(show_stage):
         yield status
     console.print(f"{status.message}: done in {time.perf_counter() - t0:.1f} s")
+
+
+#: Text of every warning and note printed by this process: each is printed once, however often
+#: it is raised (a record read by several steps gives its reading note once).
+SHOWN: set[str] = set()

@@ -35,6 +35,14 @@ def _fmt_range(r: list[float], digits: int = 4) -> str:
     return f"{r[0]:.{digits}g} .. {r[1]:.{digits}g}"
 
 
+def _unless_shown(problem: str) -> str:
+    """``problem``, or a pointer to the note above when its text was printed as one already."""
+    from mrdamper.cli._status import SHOWN
+
+    what, _, text = problem.partition(": ")
+    return f"{what}: see the note above" if text and " ".join(text.split()) in SHOWN else problem
+
+
 def _print_table(rows: list[dict[str, Any]], title: str) -> None:
     from rich.console import Console
     from rich.markup import escape
@@ -68,7 +76,7 @@ def _print_table(rows: list[dict[str, Any]], title: str) -> None:
             _fmt_range(r["v_m_s"], 3),
             _fmt_range(r["F_n"]),
             levels,
-            "; ".join(r["problems"]) or "-",
+            "; ".join(_unless_shown(p) for p in r["problems"]) or "-",
         )
         table.add_row(*(escape(c) for c in cells))
     Console(width=200).print(table)

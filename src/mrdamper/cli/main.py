@@ -13,7 +13,7 @@ Each command module exposes ``register(app)``. Exits, for every command:
 * SIGTERM (``kill``, a batch system ending the job): handled like Ctrl-C (temporary files and
   partial folders removed, worker processes stopped), one line ``terminated``, status 143;
 * warnings print as one ``warning: ...`` line, notes (:class:`~mrdamper.errors.Note`) as
-  ``note: ...``.
+  ``note: ...``; each text once per command, however often it is raised.
 
 ``--debug`` shows tracebacks instead of the one-line messages.
 """
@@ -30,6 +30,8 @@ from typing import Any
 
 import typer
 
+from mrdamper.cli._help import readable_help
+from mrdamper.cli._status import SHOWN
 from mrdamper.errors import MrDamperError, Note, interrupt_in_chain
 
 __all__ = ["app", "main"]
@@ -106,7 +108,11 @@ def _one_line(text: str) -> str:
 
 def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:
     label = "note" if issubclass(category, Note) else "warning"
-    typer.echo(f"{label}: {_one_line(str(message))}", err=True)
+    text = _one_line(str(message))
+    if text in SHOWN:
+        return
+    SHOWN.add(text)
+    typer.echo(f"{label}: {text}", err=True)
 
 
 def _usage_error(exc: BaseException) -> str | None:
@@ -159,12 +165,14 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     saved_show = warnings.showwarning
+    SHOWN.clear()
     if not debug:
         warnings.showwarning = _show_warning
     _terminated.clear()
     saved_term = _handle_sigterm()
     try:
-        rc = app(args=args, prog_name="mrdamper", standalone_mode=False)
+        command = readable_help(typer.main.get_command(app), app.rich_markup_mode)
+        rc = command.main(args=args, prog_name="mrdamper", standalone_mode=False)
         if rc == INTERRUPT_EXIT:  # Typer turns KeyboardInterrupt into this exit status
             _interrupted()
         if isinstance(rc, int) and rc:

@@ -29,7 +29,7 @@ from mrdamper.cli._status import NoProgress
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.base import MODEL_FILE, RangePolicy
-from mrdamper.models.registry import get_estimator, load_model
+from mrdamper.models.registry import get_estimator, known_kinds, load_model
 
 __all__ = ["estimator_settings", "parse_settings", "read_records", "register"]
 
@@ -101,13 +101,7 @@ def _check_policy(policy: str) -> RangePolicy:
 
 # ----------------------------------------------------------------------------- commands
 def fit(
-    model: Annotated[
-        str,
-        typer.Argument(
-            help="Model kind: lpv, lti, p15, sp1, sp2, sp3, sp4, spencer, bingham, narx, tanh, "
-            "boucwen, dahl, lugre.",
-        ),
-    ],
+    model: Annotated[str, typer.Argument(help=f"Model kind: {', '.join(known_kinds())}.")],
     data: Annotated[list[Path], typer.Argument(help="Training data files or folders.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output model file (JSON).")],
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,

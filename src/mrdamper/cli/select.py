@@ -31,6 +31,7 @@ SELECTION_CSV = csv_kind(
 def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
     """``KIND.KEY=VALUE`` items -> ``{kind: {key: value}}`` (values read as JSON)."""
     from mrdamper.cli.models import parse_settings
+    from mrdamper.models import known_kinds
 
     out: dict[str, dict[str, Any]] = {}
     for item in items or []:
@@ -38,6 +39,11 @@ def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
         if not dot or "=" not in rest or not kind:
             raise DataValidationError(
                 "--set", f"expected KIND.KEY=VALUE (e.g. lpv.n_m=2), got {item!r}"
+            )
+        if kind.strip() not in known_kinds():
+            raise DataValidationError(
+                "--set",
+                f"unknown model kind {kind.strip()!r} in {item!r}; expected one of {known_kinds()}",
             )
         out.setdefault(kind.strip(), {}).update(parse_settings([rest]))
     return out
@@ -124,6 +130,12 @@ def select(
     for note in res.notes:
         typer.echo(f"note: {note}")
     typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")
+    if not (tab["folds_ok"] > 0).any():
+        typer.echo(
+            "error: every fit failed in every fold (see the errors above); nothing written",
+            err=True,
+        )
+        raise typer.Exit(1)
     if csv is not None:
         atomic_write_text(csv, tab.to_csv(index=False), force=force, kind=SELECTION_CSV)
         typer.echo(f"wrote {csv}")

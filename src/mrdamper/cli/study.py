@@ -16,7 +16,15 @@ import typer
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError, SchemaError
 
-__all__ = ["DEMO_OUT", "QUICK_SCALE", "demo", "print_summary", "register", "study"]
+__all__ = [
+    "DEMO_OUT",
+    "QUICK_SCALE",
+    "demo",
+    "print_summary",
+    "register",
+    "study",
+    "write_or_fail",
+]
 
 #: Duration scale of the Table II records in ``demo --quick`` (30 s -> 3 s, 600 s -> 60 s).
 QUICK_SCALE = 0.1
@@ -51,6 +59,24 @@ def _models(models: str | None) -> list[str] | None:
     if unknown:
         raise SchemaError(f"models: unknown kind(s) {unknown}; expected some of {known_kinds()}")
     return kinds
+
+
+def write_or_fail(res: Any, out: Path, force: bool) -> None:
+    """Write the study to ``out`` and print its summary; when every fit failed, print the
+    failures and one ``error:`` line instead, write nothing and exit with status 1."""
+    from mrdamper.study import write_study
+
+    ok = res.fits["status"] == "ok"
+    if not ok.any():
+        print_summary(res)
+        typer.echo(
+            f"error: every fit failed ({len(ok)} of {len(ok)}: see the lines above); nothing "
+            f"written to {out}",
+            err=True,
+        )
+        raise typer.Exit(1)
+    write_study(res, out, force=force)
+    print_summary(res, out)
 
 
 def print_summary(res: Any, out: Path | None = None) -> None:
@@ -157,7 +183,7 @@ def study(
 
     Writes tables, models, figures and report.html.
     """
-    from mrdamper.study import choose_protocol, run_study, study_records, write_study
+    from mrdamper.study import choose_protocol, run_study, study_records
 
     if workers is not None and scheduler is not None:
         raise DataValidationError("workers", "give either --workers or --scheduler, not both")
@@ -180,8 +206,7 @@ def study(
         seed=seed,
         progress=not no_progress,
     )
-    write_study(res, out, force=force)
-    print_summary(res, out)
+    write_or_fail(res, out, force)
 
 
 def demo(
@@ -217,7 +242,7 @@ def demo(
     from rich.console import Console
 
     from mrdamper import compiled
-    from mrdamper.study import doe_protocol, run_study, write_study
+    from mrdamper.study import doe_protocol, run_study
 
     _check_out(out, force)
     _headless()
@@ -261,8 +286,7 @@ def demo(
         )
     finally:
         compiled.finish_ahead(cancel=True)  # no-op: the study waited for it
-    write_study(res, out, force=force)
-    print_summary(res, out)
+    write_or_fail(res, out, force)
     console.print(
         f"Done in {time.perf_counter() - t0:.0f} s. Open {out / 'report.html'} in a browser.",
         highlight=False,

@@ -44,6 +44,7 @@ from typing import Any
 from mrdamper._io import c_code_kind, check_output, write_files
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
 from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE, quarter_car_defaults
+from mrdamper.control.export import warn_if_unstable
 from mrdamper.errors import DataValidationError
 
 __all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]
@@ -120,6 +121,7 @@ def c_source(
         for a static map, the interval of the inverse's rate bound (only used with ``rate``) and
         of the default ``reg``; an LPV model runs at its own rate.
     """
+    warn_if_unstable(model)
     return assemble(
         model, name, render(model, name, reg=reg, v_ref=v_ref, rate=rate, n_grid=n_grid, dt=dt)
     )

@@ -64,7 +64,6 @@ The state-space system is ``z[k+1] = A(rho[k]) z[k] + B u[k]``, ``F[k] = C(rho[k
 from __future__ import annotations
 
 import json
-import warnings
 from pathlib import Path
 from typing import Any, Literal
 
@@ -72,12 +71,13 @@ import numpy as np
 
 from mrdamper._io import FileKind, atomic_write_text, json_kind, mat_kind
 from mrdamper._io.atomic import atomic_write_with
+from mrdamper._warn import warn_user
 from mrdamper.control.inverse import lpv_hysteresis
 from mrdamper.control.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import encode_value
 
-__all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data"]
+__all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data", "warn_if_unstable"]
 
 #: Schema name written into every export file.
 EXPORT_SCHEMA = "mrdamper.lpv_export"
@@ -181,6 +181,27 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     }
 
 
+def warn_if_unstable(model: Any) -> None:
+    """Warn (one line) when ``model`` is not frozen-stable over its scheduling range.
+
+    Every export (``.mat``, ``.json``, C) says so the same way; models without frozen poles
+    (static maps) are never warned about.
+
+    Parameters
+    ----------
+    model : FittedModel
+        The model being exported.
+    """
+    pmax = model.max_pole_modulus() if hasattr(model, "max_pole_modulus") else 0.0
+    if pmax >= 1.0:
+        warn_user(
+            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen "
+            f"pole modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control "
+            "design",
+            RuntimeWarning,
+        )
+
+
 def export_lpv(
     model: Any,
     path: str | Path,
@@ -220,15 +241,7 @@ def export_lpv(
     if format not in ("mat", "json"):
         raise DataValidationError("format", f"expected 'mat' or 'json', got {format!r}")
     data = lpv_export_data(model, rho_grid=rho_grid)
-    pmax = model.max_pole_modulus() if hasattr(model, "max_pole_modulus") else 0.0
-    if pmax >= 1.0:
-        warnings.warn(
-            f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen "
-            f"pole modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control "
-            "design",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+    warn_if_unstable(model)
     if format == "json":
         text = json.dumps(encode_value(data), indent=1, allow_nan=False)
         return atomic_write_text(path, text + "\n", force=force, kind=EXPORT_FILE)

@@ -71,7 +71,6 @@ gives): the input returned is then the one giving the closest force.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -79,6 +78,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper._warn import warn_user
 from mrdamper.control import _inverse_kernels as K
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
@@ -506,12 +506,11 @@ def _lpv_any_rate(
         )
     t_m = t[0] + np.arange(v_m.size) / model.fs
     rho_m, w_m, sat_m = _lpv(model, t_m, v_m, Fd_m, lo, hi, n_grid, tol)
-    warnings.warn(
+    warn_user(
         f"{model.kind}: record sampled at {fs:g} Hz, model at {model.fs:g} Hz; "
         "the inverse is solved at the "
         "model rate and its input interpolated back onto the record's samples",
         Note,
-        stacklevel=3,
     )
     nearest = np.clip(np.rint((t - t[0]) * model.fs).astype(np.int64), 0, v_m.size - 1)
     return np.interp(t, t_m, rho_m), np.interp(t, t_m, w_m), sat_m[nearest]
@@ -757,12 +756,11 @@ def _lpv_reg(
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
         return rho, w, sat
-    warnings.warn(
+    warn_user(
         f"{model.kind}: record sampled at {fs_rec:g} Hz, model at {model.fs:g} Hz; "
         "the inverse is solved at the "
         "model rate and its input interpolated back onto the record's samples",
         Note,
-        stacklevel=3,
     )
     tm = np.arange(rho.size) * dt
     tr = t - t[0]

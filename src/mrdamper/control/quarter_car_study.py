@@ -147,6 +147,28 @@ class ControllerComparison:
         return fig
 
 
+def _check_authority(model: Any) -> None:
+    """Refuse a model identified at one electrical level: its force does not depend on the
+    input, so every controller would give the same numbers (no control authority)."""
+    from mrdamper.models.base import single_level
+
+    bounds = getattr(model, "input_range", None)
+    if bounds is None:  # a LinearDamper or another model without an identified input range
+        return
+    level = single_level(np.asarray(bounds, dtype=float))
+    if level is None:
+        return
+    source = getattr(model, "input", "i")
+    unit = "A" if source == "i" else "V"
+    raise DataValidationError(
+        "model",
+        f"the {getattr(model, 'kind', 'damper')} model was identified at one {source} level "
+        f"(input range [{bounds[0]:g}, {bounds[1]:g}] {unit}): its force does not depend on "
+        f"{source}, so every controller gives the same numbers; identify it on records at two "
+        "or more levels to compare controllers",
+    )
+
+
 def compare_controllers(
     model: Any,
     *,
@@ -189,6 +211,7 @@ def compare_controllers(
         Passed to :func:`~mrdamper.control.quarter_car.simulate_quarter_car` (``reg``, ``rate``,
         ...).
     """
+    _check_authority(model)
     fs = default_rate(model) if fs is None else float(fs)
     ctrls = [Controller(c) if isinstance(c, str) else c for c in controllers]
     if not ctrls:

@@ -19,13 +19,13 @@ voltage    largest ``|voltage|``                        100 V
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
+from mrdamper._warn import warn_user
 from mrdamper.errors import DataValidationError, PlausibilityWarning
 
 __all__ = ["PLAUSIBLE_MAX", "check_plausibility", "plausibility_bounds"]
@@ -100,5 +100,5 @@ def check_plausibility(
                 f"--plausible-max {key}=...)"
             )
     for m in msgs:
-        warnings.warn(m, PlausibilityWarning, stacklevel=3)
+        warn_user(m, PlausibilityWarning)
     return msgs

@@ -4,7 +4,6 @@ keeps its own initial conditions)."""
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -13,6 +12,7 @@ import numpy as np
 import scipy.linalg
 from scipy import optimize
 
+from mrdamper._warn import warn_user
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _lpv_kernels as K
 from mrdamper.models import _scale
@@ -118,11 +118,10 @@ def _solve(
             "n_rho, or give data with more distinct scheduling levels"
         )
     if cond_x > 1e7:
-        warnings.warn(
+        warn_user(
             f"lpv: ill-conditioned regression (scaled condition number {cond_x:.3g}); the "
             f"coefficients are poorly determined",
             RuntimeWarning,
-            stacklevel=3,
         )
     if cond <= GRAM_COND_LIMIT:
         c, low = scipy.linalg.cho_factor(Gs, check_finite=False)

@@ -46,7 +46,6 @@ most ``max_samples`` samples (every k-th); the simulation always runs on every s
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -55,6 +54,7 @@ import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 from scipy.signal import butter, sosfiltfilt
 
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
@@ -230,7 +230,7 @@ def equation_error(
             f"amplitude and {source})"
         )
     if cond > COND_WARN:
-        warnings.warn(f"p15: regression condition number {cond:.3g}", RuntimeWarning, stacklevel=3)
+        warn_user(f"p15: regression condition number {cond:.3g}", RuntimeWarning)
     lb, ub = _form_bounds(form, n_basis, X.shape[1])
     if form == "free":
         theta = np.linalg.solve(gram, np.einsum("ij,i->j", Xs, ys))

@@ -6,13 +6,13 @@ docstring for the method: scaling, linear starts, multi-start, bounds, identifia
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
 
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import IdentificationError
@@ -131,10 +131,9 @@ def identify(
     if not (np.isfinite(final.cost) and np.all(np.isfinite(final.x))):
         final = best
     if final.status == 0:
-        warnings.warn(
+        warn_user(
             f"{kind}: least squares stopped at max_nfev={max_nfev} before converging",
             RuntimeWarning,
-            stacklevel=4,
         )
     S_kept, f0 = _to_physical(final.x, comp, power, offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
     rms = float(np.sqrt(2.0 * final.cost / final.fun.size) * Fs)

@@ -13,7 +13,6 @@
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -21,6 +20,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from mrdamper._warn import warn_user
 from mrdamper.data import ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
@@ -430,17 +430,15 @@ def identify(
     at_bounds = [free_names[j] for j in np.flatnonzero(final.active_mask)]
     converged = bool(final.status > 0)
     if ill:
-        warnings.warn(
+        warn_user(
             f"spencer: identification is ill-conditioned (cond(J^T J) = {cond:.3g} in scaled "
             "unknowns); some parameters are not determined by these records",
             RuntimeWarning,
-            stacklevel=4,
         )
     if not converged:
-        warnings.warn(
+        warn_user(
             f"spencer: optimiser stopped before convergence ({final.message}); raise max_nfev",
             RuntimeWarning,
-            stacklevel=4,
         )
     report("residuals of the fit")
     resid = obj.residuals(final.x)

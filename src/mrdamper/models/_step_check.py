@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.errors import SimulationDivergedError
 
@@ -61,12 +62,11 @@ def step_halving_check(
     dmax = disc[worst] if disc else 0.0
     passed = bool(dmax <= tolerance)
     if not passed:
-        warnings.warn(
+        warn_user(
             f"{kind}: halving the integration step changes the free run of training record "
             f"{worst!r} by {dmax:.3g} (ESR units), above the tolerance {tolerance:g}; the "
             "integration step is too coarse for these coefficients",
             RuntimeWarning,
-            stacklevel=3,
         )
     return {
         "tolerance": float(tolerance),

@@ -53,6 +53,7 @@ from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = [
+    "MIN_PEAK_VELOCITY",
     "MODEL_FILE",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
@@ -84,6 +85,10 @@ TIMING_PROVENANCE: frozenset[str] = frozenset(
 )
 
 RangePolicy = Literal["error", "warn", "clip", "ignore"]
+
+#: Smallest peak velocity of a training record [m/s]: below it the record has no motion (a rig at
+#: rest records velocity noise only) and the fit is refused.
+MIN_PEAK_VELOCITY = 1e-6
 
 
 def check_input_range(
@@ -612,11 +617,13 @@ SEGMENT_SAMPLES` cut into consecutive segments (bounded work arrays; a note says
         if len(exps) == 0:
             raise SchemaError("data: no training records given")
         for e in exps:
-            if not np.any(e.v != 0.0):
+            peak = float(np.max(np.abs(e.v))) if e.n else 0.0
+            if not peak >= MIN_PEAK_VELOCITY:
                 raise DataValidationError(
                     "v",
-                    f"training record {e.name!r} has zero velocity everywhere; a damper model "
-                    "needs motion (check the velocity column, or derive it from x with "
+                    f"training record {e.name!r} has no motion (max |v| = {peak:.3g} m/s, below "
+                    f"{MIN_PEAK_VELOCITY:g} m/s: zero velocity or noise); a damper model needs "
+                    "motion (check the velocity column and its unit, or derive it from x with "
                     "derive_velocity / --derive-velocity)",
                 )
         return exps

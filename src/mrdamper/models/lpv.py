@@ -29,6 +29,7 @@ from typing import Any, ClassVar, Literal, cast
 import numpy as np
 import pandas as pd
 
+from mrdamper._warn import warn_user
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.hysteretic import hysteretic_input
 from mrdamper.analysis.scheduling import Reading
@@ -633,12 +634,11 @@ class LPVEstimator(Estimator):
         pmax = float(model.provenance["max_frozen_pole"])
         if pmax >= 1.0:
             lo, hi = model.rho_range
-            warnings.warn(
+            warn_user(
                 f"{self.kind}: identified model is not frozen-stable over rho in "
                 f"[{lo:.4g}, {hi:.4g}] (max frozen pole modulus {pmax:.4f} at rho = "
                 f"{model.provenance['max_frozen_pole_rho']:.4g})",
                 RuntimeWarning,
-                stacklevel=2,
             )
         return model
 

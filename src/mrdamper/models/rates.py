@@ -6,12 +6,12 @@ other rates are resampled on the way in and the predicted force is interpolated 
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 
 import numpy as np
 import scipy.signal as sps
 
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, Note
 
@@ -41,11 +41,10 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
         raise DataValidationError("model_fs", "no training record to take the model rate from")
     if len(distinct) > 1:
         listed = ", ".join(f"{r:g}" for r in distinct)
-        warnings.warn(
+        warn_user(
             f"{kind}: training records are sampled at {listed} Hz; model rate model_fs = "
             f"{distinct[0]:g} Hz (the lowest; the others are resampled; set model_fs to choose)",
             Note,
-            stacklevel=3,
         )
     return distinct[0]
 
@@ -81,10 +80,9 @@ def rename_setting(
             f"name of {new}",
         )
     why = f" ({reason})" if reason else ""
-    warnings.warn(
+    warn_user(
         f"{kind}: setting {old!r} is now called {new!r}{why}; using {new}={old_value!r}",
         Note,
-        stacklevel=4,
     )
     return old_value
 
@@ -112,11 +110,10 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     if abs(fs_in - fs_out) <= 1e-9 * fs_out:
         return np.asarray(x, dtype=np.float64)
     if fs_out > fs_in:
-        warnings.warn(
+        warn_user(
             f"model rate {fs_out:g} Hz is above the record rate {fs_in:g} Hz: the record is "
             f"up-sampled by linear interpolation",
             RuntimeWarning,
-            stacklevel=3,
         )
     q = fs_in / fs_out
     if abs(q - round(q)) < 1e-9 and round(q) >= 2:

@@ -14,13 +14,16 @@ Records in memory travel as plain arrays and a metadata dict (``Experiment`` hol
 mapping that does not pickle) and are rebuilt, validated, in the worker. Records given as
 :class:`~mrdamper.data.RecordSource` travel as their source (a path, reader options and a header)
 and are read by the worker that needs them, with every executor: the study's process never holds
-them all. (On a Dask cluster the workers must then see the same files.)
+them all. On a Dask cluster the sources travel with absolute paths, and the executor checks once
+(:meth:`DaskExecutor.prepare`) that every worker can read every file; when one cannot, the records
+are read by the study's process and scattered instead, with a note.
 """
 
 from __future__ import annotations
 
 import abc
 import concurrent.futures as cf
+import dataclasses
 import multiprocessing
 import os
 import shutil
@@ -33,8 +36,9 @@ from typing import Any
 import numpy as np
 
 from mrdamper._io.processes import init_worker, stop_pool
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment, RecordSource
-from mrdamper.errors import DataValidationError
+from mrdamper.errors import DataValidationError, Note
 
 __all__ = [
     "DaskExecutor",
@@ -48,6 +52,7 @@ __all__ = [
     "default_workers",
     "make_executor",
     "resolve_record",
+    "unreadable",
 ]
 
 
@@ -148,6 +153,15 @@ class StudyExecutor(abc.ABC):
 
     #: Human description shown in the report (e.g. ``"2 local processes"``).
     description: str = ""
+
+    def prepare(self, records: Iterable[Experiment | RecordSource]) -> None:
+        """Called once with every record of the study before the first :meth:`share`.
+
+        Parameters
+        ----------
+        records : iterable of Experiment or RecordSource
+            The records the tasks will receive.
+        """
 
     def share(self, e: Experiment | RecordSource) -> Any:
         """Make a record available to tasks; returns the handle to pass as a task argument.
@@ -278,10 +292,32 @@ class DaskExecutor(StudyExecutor):
                 "scheduler", f"expected an address string or a Client, got {scheduler!r}"
             )
         self.description = f"Dask scheduler {self._client.scheduler.address}"
+        self._ship = False
+
+    def prepare(self, records: Iterable[Experiment | RecordSource]) -> None:
+        """Check once that every worker can read the record files; if one cannot, the records
+        are read here and sent to the workers instead (with a note saying so)."""
+        paths = sorted({_absolute(e).file.path for e in records if isinstance(e, RecordSource)})
+        if not paths:
+            return
+        answers: dict[str, list[str]] = self._client.run(unreadable, paths)
+        blind = {w: bad for w, bad in answers.items() if bad}
+        if not answers or blind:
+            self._ship = True
+            worker, bad = next(iter(blind.items())) if blind else ("", paths)
+            where = f"worker {worker}" if worker else "no worker is connected and"
+            warn_user(
+                f"{where} cannot read {len(bad)} of the {len(paths)} record files (e.g. "
+                f"{bad[0]}): the records are read here and sent to the workers; to let the "
+                "workers read them, give them the same files at the same absolute paths",
+                Note,
+            )
 
     def share(self, e: Experiment | RecordSource) -> Any:
         if isinstance(e, RecordSource):
-            return e
+            if not self._ship:
+                return _absolute(e)  # the workers resolve no path against their own folder
+            e = e.load()
         return self._client.scatter(pack(e), hash=False)
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Any:
@@ -294,6 +330,36 @@ class DaskExecutor(StudyExecutor):
     def close(self, cancel: bool = False) -> None:
         if self._own:
             self._client.close()
+
+
+def _absolute(e: RecordSource) -> RecordSource:
+    """``e`` with an absolute file path (relative to this process's working folder)."""
+    path = os.path.abspath(e.file.path)
+    if path == e.file.path:
+        return e
+    return dataclasses.replace(e, file=dataclasses.replace(e.file, path=path))
+
+
+def unreadable(paths: list[str]) -> list[str]:
+    """The ``paths`` this process cannot open for reading (run on each Dask worker).
+
+    Parameters
+    ----------
+    paths : list of str
+        Absolute file paths.
+
+    Returns
+    -------
+    list of str
+    """
+    bad = []
+    for p in paths:
+        try:
+            with open(p, "rb") as fh:
+                fh.read(1)
+        except OSError:
+            bad.append(p)
+    return bad
 
 
 def make_executor(workers: int | None = None, scheduler: Any = None) -> StudyExecutor:

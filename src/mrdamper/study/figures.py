@@ -36,6 +36,7 @@ __all__ = [
     "make_figures",
     "overlay_models",
     "record_esr",
+    "time_window",
 ]
 
 #: File formats every figure is saved in.
@@ -99,7 +100,9 @@ FAILED_ESR = 1.0
 _WINDOW = 6.0
 
 
-def _window(sc: Showcase) -> tuple[float, float] | None:
+def time_window(sc: Showcase) -> tuple[float, float] | None:
+    """The stretch ``(t0, t1)`` [s] of the record the time-domain figures draw: its middle
+    :data:`_WINDOW` seconds, or None for the whole record when it is not much longer."""
     t = sc.record.t
     d = float(t[-1] - t[0])
     if d <= 1.5 * _WINDOW:
@@ -169,7 +172,7 @@ def _fig4(res: StudyResult) -> Any:
     if isinstance(F, str):
         return f"the LTI model failed on {res.hysteresis.record.name}: {F}"  # type: ignore[union-attr]
     sc = res.hysteresis
-    return plot_lti_hysteresis(sc.record, F, label=label, window=_window(sc))[0].figure  # type: ignore[union-attr, arg-type]
+    return plot_lti_hysteresis(sc.record, F, label=label, window=time_window(sc))[0].figure  # type: ignore[union-attr, arg-type]
 
 
 def _fig6(res: StudyResult) -> Any:
@@ -185,7 +188,7 @@ def _fig6(res: StudyResult) -> Any:
     if isinstance(F, str):
         return f"the LPV model failed on {sc.record.name}: {F}"
     return plot_model_tracking(
-        sc.record, F, label=label, window=_window(sc), source=res.protocol.input
+        sc.record, F, label=label, window=time_window(sc), source=res.protocol.input
     )[0].figure
 
 
@@ -301,7 +304,7 @@ def _all_models(plane: str) -> Callable[[StudyResult], Any]:
             overlay=overlay_models(res, failed),
             failed=failed,
             titles=titles,
-            window=_window(sc),
+            window=time_window(sc),
         )
         fig.suptitle(f"Record {sc.record.name} (scored in fold {sc.fold})", fontsize=9.5)
         return fig

@@ -20,7 +20,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mrdamper.study.figures import FIGURE_DPI, FIGURES, failed_models, overlay_models
+from mrdamper.study.figures import (
+    FIGURE_DPI,
+    FIGURES,
+    failed_models,
+    overlay_models,
+    time_window,
+)
+from mrdamper.study.provenance import records_text
 from mrdamper.study.report_tables import (
     analysis_table,
     energy_display,
@@ -34,7 +41,7 @@ from mrdamper.study.report_tables import (
     summary_table,
 )
 from mrdamper.study.result import StudyResult
-from mrdamper.study.tables import PAPER_HEADLINE
+from mrdamper.study.tables import PAPER_HEADLINE, TIMING_COLUMNS
 
 __all__ = ["figure_captions", "render_report"]
 
@@ -202,15 +209,15 @@ def _summary_section(res: StudyResult, summary: pd.DataFrame, failed: dict[str, 
         '<p class="small">ESR (eq. 24, mean squared error over the variance of the measured '
         "force) [-] and SSSE "
         "(eq. 23, an RMS error) [N] over the scored records with status <code>ok</code>; q1-q3 is "
-        f"the interquartile range. <i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) "
+        "the interquartile range (- for a single score, which has no spread). "
+        f"<i>{_e(ref)} ESR vs this model</i>: how much lower (or higher) "
         f"{_e(ref)}'s mean ESR is than the row model's mean, 100 (other - "
         + _e(ref)
         + ") / other, the way the headline and the "
         "paper state 51 % and 36.8 %; likewise for SSSE. A model whose mean ESR exceeds 1 (an "
         "error larger than the signal) or that never simulated is marked failed; its row stays. "
-        "Fit times are summed over folds (simulation times are in <code>summary.csv</code>). "
-        + _data_note(res)
-        + "</p>"
+        "Fit and simulation times are in <code>timings.csv</code> and <code>timings.json</code>, "
+        "not here: the same study gives the same report, byte for byte. " + _data_note(res) + "</p>"
     )
     return "\n".join(out)
 
@@ -277,12 +284,9 @@ def _by_group_section(res: StudyResult) -> str:
 
 
 def _failures_section(res: StudyResult) -> str:
-    fits = res.fits[
-        ["fold", "model", "status", "fit_time_s", "n_train", "train_samples", "error", "note"]
-    ]
+    fits = res.fits[["fold", "model", "status", "n_train", "train_samples", "error", "note"]]
     fits = fits.rename(
         columns={
-            "fit_time_s": "fit time [s]",
             "n_train": "training records",
             "train_samples": "training samples",
         }
@@ -301,14 +305,30 @@ def _failures_section(res: StudyResult) -> str:
         )
     notes = res.results[(res.results["status"] == "ok") & (res.results["note"].astype(str) != "")]
     if not notes.empty:
-        grp = notes.groupby("model", sort=False).agg(
-            rows=("record", "count"), example=("note", "first")
-        )
         out.append(
-            "<p>Warnings while simulating (e.g. extrapolation outside the identified range):</p>"
-            + _table(grp.reset_index(), cls="left")
+            "<p>Warnings while simulating (e.g. extrapolation outside the identified range), the "
+            "same warning of several models on one row:</p>"
+            + _table(_merged_notes(notes), cls="left")
         )
     return "\n".join(out)
+
+
+def _merged_notes(notes: pd.DataFrame) -> pd.DataFrame:
+    """One row per distinct warning (the model's name taken out of its text): the models that
+    gave it, the number of result rows and one example."""
+    first = notes.groupby("model", sort=False).agg(rows=("record", "count"), note=("note", "first"))
+    merged: dict[str, dict[str, Any]] = {}
+    for model, row in first.iterrows():
+        key = str(row["note"]).replace(f" {model} ", " <model> ")
+        slot = merged.setdefault(key, {"models": [], "rows": 0})
+        slot["models"].append(str(model))
+        slot["rows"] += int(row["rows"])
+    return pd.DataFrame(
+        [
+            {"models": ", ".join(v["models"]), "rows": v["rows"], "example": k}
+            for k, v in merged.items()
+        ]
+    )
 
 
 def _analysis_section(res: StudyResult) -> str:
@@ -368,7 +388,18 @@ def _record_text(res: StudyResult, which: str) -> str:
             "widest velocity range"
         )
     )
-    return f"Record <code>{_e(sc.record.name)}</code> ({_e(level)}; fold {_e(sc.fold)}; {_e(why)})."
+    t = sc.record.t
+    win = time_window(sc)
+    shown = (
+        f"drawn from t = {win[0]:.3g} to {win[1]:.3g} s (the middle {win[1] - win[0]:.3g} s of "
+        f"{float(t[-1] - t[0]):.3g} s)"
+        if win is not None
+        else f"drawn whole, t = {float(t[0]):.3g} to {float(t[-1]):.3g} s"
+    )
+    return (
+        f"Record <code>{_e(sc.record.name)}</code> ({_e(level)}; fold {_e(sc.fold)}; {_e(why)}; "
+        f"{_e(shown)})."
+    )
 
 
 def figure_captions(res: StudyResult, failed: dict[str, str] | None = None) -> dict[str, str]:
@@ -448,6 +479,29 @@ def _figures_section(res: StudyResult, saved: Mapping[str, Any], failed: dict[st
     return "\n".join(out)
 
 
+def _provenance_section(info: Mapping[str, Any]) -> str:
+    """The mrdamper version, commit and settings of the study (also in ``study.json``)."""
+    prov = info.get("provenance") or {}
+    settings = dict(prov.get("settings") or {})
+    models = settings.pop("models", {})
+    rows = [
+        ("mrdamper", prov.get("mrdamper_version", "not recorded")),
+        ("commit", prov.get("git_commit") or "not run from a git checkout"),
+        *((k.replace("_", " "), v) for k, v in settings.items()),
+        *(
+            (f"model {label}", ", ".join(f"{k}={v!r}" for k, v in spec.items()))
+            for label, spec in models.items()
+        ),
+    ]
+    body = "".join(f'<tr><th>{_e(k)}</th><td class="text">{_e(v)}</td></tr>' for k, v in rows)
+    return (
+        "<details><summary>Provenance: mrdamper "
+        f"{_e(prov.get('mrdamper_version', '?'))}, commit "
+        f"{_e((prov.get('git_commit') or 'none')[:12])}, settings</summary>"
+        f'<div class="tablewrap"><table class="left">{body}</table></div></details>'
+    )
+
+
 def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, Any]) -> str:
     """Return the HTML text of the report.
 
@@ -462,15 +516,15 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
     """
     info = res.info
     failed = failed_models(res)
-    results_cols = [c for c in res.results.columns if c not in ("note",)]
+    what = records_text(info.get("n_records", "?"), str(info.get("data_origin", "")))
+    title = f"Which damper model? {len(res.specs)} models compared on {what}"
+    results_cols = [c for c in res.results.columns if c not in ("note", *TIMING_COLUMNS)]
     all_rows = res.results[results_cols].rename(
         columns={
             "esr": "ESR [-]",
             "ssse": "SSSE [N]",
             "nrmse": "NRMSE [-]",
             "fit_pct": "fit [%]",
-            "fit_time_s": "fit time [s]",
-            "sim_time_s": "simulation time [s]",
             "current": f"current [{_unit(res)}]",
             "amplitude": "amplitude [m]",
             "frequency": "frequency [Hz]",
@@ -480,15 +534,14 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>mrdamper study: {_e(res.protocol.name)}</title><style>{_CSS}</style></head><body>",
-        f"<h1>MR damper model comparison: {_e(res.protocol.name)}</h1>",
+        f"<title>{_e(title)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>{_e(title)}</h1>",
         (
-            f'<p class="small">{_e(info.get("n_records", "?"))} records '
-            f"({_e(info.get('data_origin', 'origin not recorded'))}), "
-            f"{_e(info.get('n_folds', '?'))} fold(s), {len(res.specs)} models; seed "
-            f"{_e(info.get('seed'))}; run on {_e(info.get('executor', '?'))} in "
-            f"{float(info.get('wall_time_s', float('nan'))):.1f} s.</p>"
+            f'<p class="small">Protocol <code>{_e(res.protocol.name)}</code>: '
+            f"{_e(res.protocol.description or 'no description')} {_e(info.get('n_folds', '?'))} "
+            f"fold(s); seed {_e(info.get('seed'))}; run on {_e(info.get('executor', '?'))}.</p>"
         ),
+        _provenance_section(info),
         "<h2>Summary</h2>",
         _summary_section(res, summary, failed),
         "<h2>Which model for this damper?</h2>",

@@ -82,7 +82,8 @@ def selection_table(selection: SelectionResult) -> pd.DataFrame:
     DataFrame
         Columns: model, recommended (``yes`` on the recommended row), mean, median and worst ESR
         over the held-out records [-], folds ok / failed, held-out records outside the model's
-        identified range, mean fit time [s] and the first failure.
+        identified range and the first failure (no times: the report is the same for the same
+        study; fit times are in ``timings.json``).
     """
     t = selection.table
     return pd.DataFrame(
@@ -96,7 +97,6 @@ def selection_table(selection: SelectionResult) -> pd.DataFrame:
                 f"{int(a)} / {int(b)}" for a, b in zip(t["folds_ok"], t["folds_failed"])
             ],
             "outside range": t["clipped"].astype(int).to_numpy(),
-            "fit time [s]": t["fit_s"].to_numpy(),
             "failure": [str(x) for x in t["error"]],
         }
     )
@@ -123,7 +123,8 @@ def summary_table(
         median and quartiles of ESR [-], mean and quartiles of SSSE [N] (the median is in
         ``summary.csv``), rank by mean ESR, ``<reference> ESR vs this model`` and the same for SSSE
         (the improvement of the reference's mean over the row model's mean, as the headline and
-        the paper state it), total fit time [s] (simulation times are in ``summary.csv``).
+        the paper state it). No times: they go to ``timings.json``, so that the same study gives
+        the same report.
     """
     failed = failed or {}
     ref = summary[summary["model"] == reference]
@@ -141,9 +142,9 @@ def summary_table(
                 "scored (ok / failed)": f"{int(r['n_ok'])} / {int(r['n_failed'])}",
                 "ESR mean [-]": r["esr_mean"],
                 "ESR median [-]": r["esr_median"],
-                "ESR q1-q3 [-]": _span(r["esr_q1"], r["esr_q3"]),
+                "ESR q1-q3 [-]": _span(r["esr_q1"], r["esr_q3"], r["n_ok"]),
                 "SSSE mean [N]": r["ssse_mean"],
-                "SSSE q1-q3 [N]": _span(r["ssse_q1"], r["ssse_q3"]),
+                "SSSE q1-q3 [N]": _span(r["ssse_q1"], r["ssse_q3"], r["n_ok"]),
                 "rank (mean ESR)": int(ranks[k]) if np.isfinite(ranks[k]) else None,
                 f"{reference} ESR vs this model": "reference"
                 if is_ref
@@ -151,7 +152,6 @@ def summary_table(
                 f"{reference} SSSE vs this model": "reference"
                 if is_ref
                 else _vs(ref_ssse, float(r["ssse_mean"])),
-                "fit time [s]": r["fit_time_s"],
             }
         )
     out = pd.DataFrame(rows)
@@ -170,9 +170,12 @@ def _natural(x: Any) -> tuple[Any, ...]:
     return (1, *[(0, float(p), "") if k % 2 else (1, 0.0, p) for k, p in enumerate(parts)])
 
 
-def _span(a: float, b: float) -> str:
+def _span(a: float, b: float, n: Any = 2) -> str:
+    """``"a-b"``; ``"-"`` with fewer than two scores (``n`` of them: one has no spread)."""
     if not (np.isfinite(a) and np.isfinite(b)):
         return ""
+    if not n >= 2:
+        return "-"
     return f"{format_number(a, 3)}\u2013{format_number(b, 3)}"
 
 

@@ -35,6 +35,7 @@ from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.executor import ProcessExecutor, StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
+from mrdamper.study.provenance import provenance
 from mrdamper.study.records import Record, Records, as_list, as_loaded, load_all
 from mrdamper.study.result import Showcase, StudyResult
 from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_from_scores
@@ -253,6 +254,7 @@ def run_study(
         "sources": sorted({str(e.metadata["source"]) for e in records if e.metadata.get("source")}),
         "python": platform.python_version(),
         "platform": platform.platform(),
+        "provenance": provenance(protocol, specs, int(seed)),
     }
     return StudyResult(
         protocol=protocol,
@@ -316,6 +318,7 @@ def _execute(
             handles[id(e)] = ex.share(e)
         return handles[id(e)]
 
+    ex.prepare([e for fold in folds for part in (fold.train, fold.score) for e in part])
     n_sims = sum(len(f.score) for f in folds) * len(specs)
     fits: dict[Any, tuple[int, int]] = {}  # future -> (fold, model)
     sims: dict[Any, tuple[int, int, int]] = {}  # future -> (fold, model, scored record)

@@ -171,6 +171,21 @@ def selection_folds(
     return "time", out
 
 
+def _check_settings(kind: str, settings: Mapping[str, Any]) -> None:
+    """Refuse an unknown kind, a setting ``kind`` does not take or a value it cannot use, in one
+    line naming ``kind.setting`` (so that no fold runs with settings that cannot work)."""
+    from mrdamper.models.registry import get_estimator, known_kinds
+
+    if kind not in known_kinds():
+        raise DataValidationError(
+            kind, f"unknown model kind {kind!r}; expected one of {known_kinds()}"
+        )
+    try:
+        get_estimator(kind, **settings)._validate()
+    except DataValidationError as exc:
+        raise DataValidationError(f"{kind}.{exc.field}", str(exc).split(": ", 1)[-1]) from None
+
+
 def cross_validate(
     data: Experiment | Iterable[Experiment],
     *,
@@ -208,10 +223,17 @@ def cross_validate(
     """
     from mrdamper.models.registry import available_models, get_estimator
 
-    exps = as_experiment_set(data, name="data")
-    split, parts = selection_folds(exps, folds, n_folds)
     kinds = list(models) if models is not None else available_models()
     extra = {k: dict(v) for k, v in (settings or {}).items()}
+    for kind in [*extra, *kinds]:  # every setting checked before any fold runs
+        _check_settings(kind, {"input": input, **extra.get(kind, {})})
+        if kind not in kinds:
+            raise DataValidationError(
+                f"{kind}.{next(iter(extra[kind]), '')}",
+                f"a setting of {kind!r}, which is not among the models {kinds}",
+            )
+    exps = as_experiment_set(data, name="data")
+    split, parts = selection_folds(exps, folds, n_folds)
     notes: list[str] = []
     rates = sorted({e.fs for e in exps})
     if len(rates) > 1:

@@ -7,13 +7,13 @@ Shared by every file reader: numeric checks, unit conversion (once, through
 from __future__ import annotations
 
 import os
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
 
+from mrdamper._warn import warn_user
 from mrdamper.data.experiment import DEFAULT_TIME_TOLERANCE, Experiment, NanPolicy
 from mrdamper.data.plausibility import check_plausibility
 from mrdamper.data.readers._columns import COLUMN_ALIASES, ColumnSpec, resolve_columns
@@ -325,7 +325,7 @@ def build_experiment(
             f"of a straight line (rounded values); rate estimated as {fs_est:.10g} Hz and time "
             "regenerated as t0 + k/fs (declare the rate with fs= / --fs to silence this)"
         )
-        warnings.warn(note, Note, stacklevel=2)
+        warn_user(note, Note)
         meta["repairs"] = tuple(meta.get("repairs", ())) + (note,)
         exp = Experiment.from_arrays(
             **arrays,
