@@ -7,10 +7,11 @@
   force of any :class:`~mrdamper.data.Experiment` in free run (from the record's x, v and electrical
   input only; the measured force is never fed back), saves to versioned JSON and loads back
   bit-identically.
-* Every family's ``predict`` (hence ``simulate`` and ``score``) says in one :class:`~mrdamper.errors.\
-Note` when the record leaves the model's training envelope (``provenance["envelope"]``, written at
-  fit time; :mod:`mrdamper.models.envelope`), naming the dimension and by how much. The check is
-  added to the family's ``predict`` here, once, when its class is defined.
+* Every family's ``predict`` (hence ``simulate`` and ``score``) says in one
+  :class:`~mrdamper.errors.Note` when the record leaves the model's training envelope
+  (``provenance["envelope"]``, written at fit time; :mod:`mrdamper.models.envelope`), naming the
+  dimension and by how much. The check is added to the family's ``predict`` here, once, when its
+  class is defined.
 """
 
 from __future__ import annotations

@@ -168,16 +168,20 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
     if half > 0 and reach > (1 + tol) * half:
         out["displacement"] = (
             reach / half,
-            f"displacement [{slo * 1e3:.3g}, {shi * 1e3:.3g}] mm against [{lo * 1e3:.3g}, "
-            f"{hi * 1e3:.3g}] mm ({reach / half:.2f} x the reach)",
+            (
+                f"displacement [{slo * 1e3:.3g}, {shi * 1e3:.3g}] mm against [{lo * 1e3:.3g}, "
+                f"{hi * 1e3:.3g}] mm ({reach / half:.2f} x the reach)"
+            ),
         )
     ft, fs = trained.get("f_band"), seen.get("f_band")
     if ft and fs is not None and float(fs) > (1 + tol) * float(ft):
         r = float(fs) / float(ft)
         out["frequency"] = (
             r,
-            f"frequency content up to {float(fs):.3g} Hz against {float(ft):.3g} Hz ({r:.2f} x; "
-            f"{BAND_SHARE:.0%} of the velocity power)",
+            (
+                f"frequency content up to {float(fs):.3g} Hz against {float(ft):.3g} Hz "
+                f"({r:.2f} x; {BAND_SHARE:.0%} of the velocity power)"
+            ),
         )
     elo, ehi = (float(b) for b in trained["e_range"])
     sel, seh = (float(b) for b in seen["e_range"])
@@ -186,8 +190,10 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
     if out_by > tol:
         out["electrical"] = (
             1.0 + out_by,
-            f"electrical input [{sel:.3g}, {seh:.3g}] against [{elo:.3g}, {ehi:.3g}] "
-            f"({out_by:.0%} of the range outside)",
+            (
+                f"electrical input [{sel:.3g}, {seh:.3g}] against [{elo:.3g}, {ehi:.3g}] "
+                f"({out_by:.0%} of the range outside)"
+            ),
         )
     return out
 

@@ -127,7 +127,7 @@ def _sine(fs: float, amp: float, freq: float, mid: float) -> np.ndarray:
     from mrdamper.signals import sine
 
     x = sine(fs, CYCLES / freq, amplitude=amp, frequency=freq)
-    per = max(int(round(fs / freq)), 1)
+    per = max(round(fs / freq), 1)
     ramp = np.clip(np.arange(x.size) / per, 0.0, 1.0)
     return mid + x * (0.5 - 0.5 * np.cos(np.pi * ramp))
 
@@ -248,7 +248,7 @@ def _check(model: Any, rec: Experiment, env: dict[str, Any], fs: float) -> dict[
         why = f"{word}: peak {peak:.4g} N = {peak / f_max:.2f} x the largest training force"
     if group == "beyond" and not why:
         freq = float(rec.metadata["frequency"])
-        per = max(int(round(fs / freq)), 1)
+        per = max(round(fs / freq), 1)
         tail = slice(rec.n - CYCLES_CHECKED * per, rec.n)
         power = float(np.mean(F[tail] * rec.v[tail]))
         row["mean_power_W"] = power
