@@ -119,8 +119,14 @@ def _record(
 ) -> Experiment:
     t = np.arange(x.size) / fs
     v = np.gradient(x, 1.0 / fs)
-    chan = {"i": e} if source == "i" else {"voltage": e}
-    return Experiment(t=t, x=x, v=v, F=np.zeros_like(x), name=name, metadata=meta, **chan)
+    return Experiment(
+        t=t, x=x, v=v, F=np.zeros_like(x), name=name, metadata=meta, **_channel(source, e)
+    )
+
+
+def _channel(source: str, e: np.ndarray) -> dict[str, Any]:
+    """The electrical channel keyword of :class:`Experiment` (``i`` or ``voltage``)."""
+    return {"i": e, "voltage": None} if source == "i" else {"i": None, "voltage": e}
 
 
 def _sine(fs: float, amp: float, freq: float, mid: float) -> np.ndarray:
@@ -211,7 +217,7 @@ def stress_motions(
             F=np.zeros(r.n),
             name=f"{r.name} backwards ({label})",
             metadata={"group": "inside"},
-            **({"i": e} if source == "i" else {"voltage": e}),
+            **_channel(source, e),
         )
         out.append(rev)
     x = _random_motion(fs, env, seed)
