@@ -126,7 +126,8 @@ def test_stress_test_fails_a_model_that_bursts_or_diverges() -> None:
 def test_a_kind_that_fails_the_stress_test_is_not_recommended_and_the_table_says_why() -> None:
     rows = [
         {"model": m, "fold": f"c{k}", "record": f"r{k}", "esr": esr, "clipped": False, "error": ""}
-        for m, esr in (("narx", 0.01), ("sp1", 0.02)) for k in range(3)
+        for m, esr in (("narx", 0.01), ("sp1", 0.02))
+        for k in range(3)
     ]
     rows += [
         {"model": "narx", "fold": "beyond: x", "record": "big", "esr": 0.5, "clipped": False,
@@ -183,3 +184,15 @@ def test_the_default_model_set_has_the_papers_lpv_beside_the_default_one() -> No
     assert first["model"] == "lpv-paper" and second["model"] == "lpv"
     assert first["esr_improvement_pct"] == pytest.approx(50.0)
     assert [h["model"] for h in headlines(summary[summary["model"] != "lpv-paper"])] == ["lpv"]
+
+
+def test_the_report_says_which_input_each_lpv_uses() -> None:
+    from mrdamper.study.protocol import ModelSpec
+    from mrdamper.study.report import _model_text
+
+    p = Protocol()
+    paper = _model_text(p, ModelSpec("lpv", {"input_signal": "u"}, "lpv-paper"))
+    default = _model_text(p, ModelSpec("lpv"))
+    assert paper.startswith("lpv-paper (lpv, input_signal='u', input: static zone-law input u")
+    assert default == "lpv (input: zone-law input with a hysteretic pre-yield state (default))"
+    assert _model_text(p, ModelSpec("sp1")) == "sp1"
