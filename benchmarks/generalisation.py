@@ -31,10 +31,18 @@ pre-yield share chosen on the training records. Scoring uses ``range_policy="cli
 currents and voltages leave the training range by sensor noise only). A model that fails to fit or
 simulate is reported (``failed`` in the table), never dropped.
 
+**Recommended against best** (``--select``): ``mrdamper select`` (:func:`mrdamper.study.
+cross_validate`, with its folds beyond the training envelope and its stress test) is run on each
+scenario's training records with the same kinds and settings; the columns ``select`` (the kind it
+recommends), ``select_esr`` (that kind's test ESR, from the table) and ``select/best`` (its ratio to
+the best kind of the row among the registered kinds, the ``lpv-*`` variants excluded since
+``select`` does not consider them) say how far the recommendation is from the best choice.
+
 Run::
 
     python benchmarks/generalisation.py          # every scenario, full length
     python benchmarks/generalisation.py --quick  # shorter rig records, fewer grids (a test runs it)
+    python benchmarks/generalisation.py --quick --select --scenarios rig  # with select's column
 """
 
 from __future__ import annotations
@@ -218,6 +226,21 @@ def run_scenario(sc: Scenario, models: list[str], with_val: bool) -> list[dict[s
     return rows
 
 
+def select_on(sc: Scenario, models: list[str]) -> tuple[str | None, float, str]:
+    """``(recommended kind, select's run time [s], reason)`` of ``cross_validate`` on the
+    scenario's training records (the scenario's input and per-kind settings)."""
+    from mrdamper.study import cross_validate
+
+    source = sc.settings("bingham").get("input", "i")
+    settings = {k: {a: b for a, b in sc.settings(k).items() if a != "input"} for k in models}
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = cross_validate(sc.train, models=models, input=source, settings=settings)
+    print(f"\n[{sc.name}] select:\n{res.table.to_string()}", file=sys.stderr, flush=True)
+    return res.recommended, time.perf_counter() - t0, res.reason
+
+
 # ----------------------------------------------------------------------------- scenarios
 def _loco(train: ExperimentSet) -> list[tuple[ExperimentSet, ExperimentSet]]:
     return [(fit, val) for _, fit, val in train.leave_one_group_out("condition")]
@@ -375,8 +398,12 @@ SCENARIOS: dict[str, Callable[[bool], Scenario]] = {
 
 
 # ----------------------------------------------------------------------------- output
-def table(rows: list[dict[str, Any]]) -> pd.DataFrame:
-    """Mean test ESR, one row per (scenario, test set), one column per model, plus the best."""
+def table(
+    rows: list[dict[str, Any]], selected: dict[str, str | None] | None = None
+) -> pd.DataFrame:
+    """Mean test ESR, one row per (scenario, test set), one column per model, plus the best (and,
+    with ``selected`` (scenario -> recommended kind), ``select``, ``select_esr`` and
+    ``select/best``: against the best registered kind, variants excluded)."""
     df = pd.DataFrame(rows)
     tab = df.pivot_table(
         index=["scenario", "test"],
@@ -392,6 +419,19 @@ def table(rows: list[dict[str, Any]]) -> pd.DataFrame:
         index=pd.MultiIndex.from_tuples(keys, names=["scenario", "test"]), columns=order
     )
     tab["best"] = [row.idxmin() if row.notna().any() else "-" for _, row in tab.iterrows()]
+    if selected:
+        kinds = [c for c in order if c in set(available_models())]
+        picks, esrs, ratios = [], [], []
+        for (scenario, _), row in tab.iterrows():
+            pick = selected.get(scenario)
+            best = pd.to_numeric(row[kinds], errors="coerce").min()
+            esr = float(row[pick]) if pick in row.index else float("nan")
+            picks.append(pick or "-")
+            esrs.append(esr)
+            ratios.append(esr / best if best > 0 else float("nan"))
+        tab["select"] = picks
+        tab["select_esr"] = esrs
+        tab["select/best"] = ratios
     return tab
 
 
@@ -422,9 +462,15 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     ap.add_argument(
         "--csv", type=Path, default=None, help="also write the per-test rows to this CSV"
     )
+    ap.add_argument(
+        "--select",
+        action="store_true",
+        help="also run mrdamper select on each training set (columns select, select/best)",
+    )
     args = ap.parse_args(argv)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
+    selected: dict[str, str | None] = {}
     t0 = time.perf_counter()
     for name in args.scenarios:
         sc = SCENARIOS[name](args.quick)
@@ -435,7 +481,11 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
             flush=True,
         )
         rows += run_scenario(sc, models, with_val=not args.quick)
-    tab = table(rows)
+        if args.select:
+            pick, secs, reason = select_on(sc, models)
+            selected[sc.name] = pick
+            print(f"  select: {pick} in {secs:.0f} s: {reason}", file=sys.stderr, flush=True)
+    tab = table(rows, selected)
     print(
         f"## Generalisation: mean test ESR ({'quick' if args.quick else 'full'}; "
         f"{time.perf_counter() - t0:.0f} s)\n"

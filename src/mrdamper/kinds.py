@@ -18,7 +18,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["KINDS", "Item", "KindSpec", "add", "default_kinds", "rows", "spec"]
+__all__ = [
+    "KINDS",
+    "VARIANTS",
+    "Item",
+    "KindSpec",
+    "Variant",
+    "add",
+    "default_kinds",
+    "input_text",
+    "rows",
+    "spec",
+]
 
 #: One kernel signature: module, kernel (numba dispatcher) name, argument types, compile cost [s].
 #: Argument codes: ``F`` float64, ``I`` int64, ``B`` bool; arrays ``f`` (float64) or ``i``
@@ -223,6 +234,64 @@ KINDS: tuple[KindSpec, ...] = (
         default=False,
     ),
 )
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A labelled setting of a kind that the study runs by default beside the kind itself.
+
+    Attributes
+    ----------
+    label : str
+        Name in tables and figures (unique among the models of a study).
+    kind : str
+        The kind (a row of :data:`KINDS`).
+    settings : tuple of (str, object)
+        Estimator settings.
+    summary : str
+        One line for reports.
+    """
+
+    label: str
+    kind: str
+    settings: tuple[tuple[str, object], ...]
+    summary: str
+
+
+#: Variants the study (and the demo) runs right after their kind when no model list is given:
+#: the paper's own LPV model (static zone-law input ``u``) beside the default LPV (hysteretic
+#: input), so that the paper's headline is compared on the paper's model.
+VARIANTS: tuple[Variant, ...] = (
+    Variant(
+        "lpv-paper",
+        "lpv",
+        (("input_signal", "u"),),
+        "the paper's LPV model: static zone-law input u",
+    ),
+)
+
+#: LPV input signals in words (:func:`input_text`).
+_LPV_INPUTS = {
+    "hysteretic": "zone-law input with a hysteretic pre-yield state (default)",
+    "u": "static zone-law input u (the paper's)",
+    "v": "velocity (ablation)",
+}
+
+
+def input_text(kind: str, settings: dict[str, object]) -> str:
+    """Which input an LPV-structure model uses, in words (``""`` for other kinds).
+
+    Parameters
+    ----------
+    kind : str
+        Model kind.
+    settings : dict
+        Its estimator settings (``input_signal`` absent: the default).
+    """
+    if kind != "lpv":
+        return ""
+    return _LPV_INPUTS.get(str(settings.get("input_signal", "hysteretic")), "")
+
 
 _ADDED: dict[str, KindSpec] = {}
 

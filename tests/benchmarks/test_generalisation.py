@@ -44,3 +44,18 @@ def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFix
     for _, row in tab.iterrows():
         vals = row.drop("best").astype(float)
         assert row["best"] == vals.idxmin()
+
+
+def test_select_column_compares_the_recommendation_with_the_best_kind() -> None:
+    bench = _load_benchmark()
+    rows = [
+        {"scenario": "s", "test": t, "model": m, "esr": esr, "fit_s": 0.0, "error": ""}
+        for t, vals in (("t1", (0.02, 0.04, 0.01)), ("t2", (0.03, 0.02, 0.01)))
+        for m, esr in zip(("lpv", "sp1", "lpv-u"), vals, strict=True)
+    ]
+    tab = bench.table(rows, {"s": "sp1"})
+    assert list(tab["select"]) == ["sp1", "sp1"]
+    assert list(tab["select_esr"]) == [0.04, 0.02]
+    # against the best registered kind (lpv-u is a variant select does not consider)
+    assert list(tab["select/best"]) == pytest.approx([2.0, 1.0])
+    assert "select" not in bench.table(rows).columns

@@ -75,7 +75,8 @@ def test_recommends_the_true_family(records) -> None:
     assert set(res.table.index) == set(KINDS)
     assert "lowest mean free-run ESR" in res.reason and "2 condition folds" in res.reason
     assert res.table.loc["bingham", "mean_esr"] < 1e-3 < res.table.loc["lti", "mean_esr"]
-    assert len(res.scores) == len(KINDS) * len(records)
+    inside = res.scores[~res.scores["beyond"]]
+    assert len(inside) == len(KINDS) * len(records)
 
 
 def test_failing_kind_is_a_row_not_a_recommendation(records, monkeypatch) -> None:
@@ -125,12 +126,15 @@ def test_close_runner_up_is_named_as_a_tie() -> None:
     tab = pd.DataFrame(
         {
             "mean_esr": [0.0180, 0.0182, 0.0244],
+            "rank_esr": [0.0180, 0.0182, 0.0244],
             "worst_esr": [0.09, 0.07, 0.1],
             "folds_failed": [0, 0, 0],
+            "stress": ["-", "-", "-"],
+            "status": ["eligible"] * 3,
         },
         index=["narx", "spencer", "lpv"],
     )
-    best, reason = _recommend(tab, "condition", 6)
+    best, reason = _recommend(tab, "condition", 6, 0, "")
     assert best == "narx" and "next: spencer 0.0182 (only 1% higher: a tie" in reason
-    _, reason = _recommend(tab.drop("spencer"), "condition", 6)
+    _, reason = _recommend(tab.drop("spencer"), "condition", 6, 0, "")
     assert "tie" not in reason

@@ -2,7 +2,10 @@
 
 Cross-validates every model kind on the records in the given files / folders
 (:func:`mrdamper.study.cross_validate`: folds by condition or record, time blocks for one
-record), prints the table of left-out free-run ESR and recommends one kind with the reason.
+record; folds that leave the training envelope; a stress test of every kind fitted on all the
+records), prints the table of left-out free-run ESR and recommends one kind with the reason and
+the envelope it was validated in. ``--inside-only`` skips the beyond-envelope folds and the
+stress test (faster; the recommendation then rewards interpolation only).
 ``--csv`` also writes the table (atomically; never overwriting without ``--force``). On a terminal
 a live line on standard error shows which kind and fold is being fitted, the fit's stage and the
 elapsed time (``--no-progress`` turns it off).
@@ -76,6 +79,13 @@ def select(
             "--set", help="Estimator setting of one kind, KIND.KEY=VALUE (JSON value), repeatable."
         ),
     ] = None,
+    inside_only: Annotated[
+        bool,
+        typer.Option(
+            "--inside-only",
+            help="Skip the folds beyond the training envelope and the stress test (faster).",
+        ),
+    ] = False,
     csv: Annotated[
         Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")
     ] = None,
@@ -108,25 +118,31 @@ def select(
             n_folds=n_folds,
             input=source,  # type: ignore[arg-type]
             settings=_kind_settings(settings),
+            beyond=not inside_only,
+            stress=not inside_only,
         )
     tab = res.table.reset_index()
+    beyond = f" + {res.n_beyond} beyond the training envelope" if res.n_beyond else ""
     typer.echo(
-        f"{len(records)} record(s); {res.n_folds} {res.split} folds; free-run ESR on the left-out "
-        "data\n"
+        f"{len(records)} record(s); {res.n_folds} {res.split} folds{beyond}; free-run ESR on the "
+        "left-out data\n"
     )
     cols = [
         "model",
         "mean_esr",
-        "median_esr",
         "worst_esr",
-        "folds_ok",
         "folds_failed",
+        "beyond_esr",
+        "rank_esr",
         "clipped",
         "fit_s",
+        "status",
     ]
     typer.echo(tab[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}", na_rep="-"))
     for _, row in tab[tab["error"] != ""].iterrows():
         typer.echo(f"  {row['model']}: {row['error']}")
+    for fold in dict.fromkeys(res.scores.loc[res.scores["beyond"], "fold"]):
+        typer.echo(f"  {fold}")
     for note in res.notes:
         typer.echo(f"note: {note}")
     typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")

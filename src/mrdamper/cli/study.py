@@ -121,12 +121,12 @@ def print_summary(res: Any, out: Path | None = None) -> None:
             markup=True,
             highlight=False,
         )
-    hl = res.headline()
-    console.print(
-        "[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): "
-        f"{hl['text']}",
-        highlight=False,
-    )
+    for hl in res.headlines():
+        console.print(
+            "[bold]Headline[/] (LPV vs the best of the paper's classical models P-15, SP-1..SP-4): "
+            f"{hl['text']}",
+            highlight=False,
+        )
     console.print(
         "The paper reports LPV 51 % lower mean ESR and 36.8 % lower mean SSSE than its best "
         "classical model (SP-1).",

@@ -194,6 +194,9 @@ class NARXForm(NamedTuple):
         Initial-condition samples (the largest lag).
     f_initial : float
         Force [N] of the first ``p`` samples (the free run's initial conditions).
+    x_lo, x_hi, v_limit : float
+        The displacement [m] and velocity magnitude [m/s] the regressors are clipped to (the
+        training envelope; infinite: no clipping). ``tanh(v / v0)`` reads the clipped velocity.
     """
 
     base: IntArray
@@ -204,19 +207,24 @@ class NARXForm(NamedTuple):
     bound: float
     p: int
     f_initial: float
+    x_lo: float
+    x_hi: float
+    v_limit: float
 
 
 @njit(cache=True)
 def _present(form: NARXForm, r: int, x: float, v: float, e: float) -> float:  # pragma: no cover
-    """Scaled value of signal row ``r`` (not the force) at the present sample."""
+    """Scaled value of signal row ``r`` (not the force) at the present sample (x and v clipped
+    to the form's limits)."""
+    vc = min(max(v, -form.v_limit), form.v_limit)
     if r == 1:
-        val = x
+        val = min(max(x, form.x_lo), form.x_hi)
     elif r == 2:
-        val = v
+        val = vc
     elif r == 3:
         val = e
     else:
-        val = np.tanh(v / form.v0)
+        val = np.tanh(vc / form.v0)
     out: float = val / form.scales[r]
     return out
 

@@ -7,12 +7,19 @@
   force of any :class:`~mrdamper.data.Experiment` in free run (from the record's x, v and electrical
   input only; the measured force is never fed back), saves to versioned JSON and loads back
   bit-identically.
+* Every family's ``predict`` (hence ``simulate`` and ``score``) says in one
+  :class:`~mrdamper.errors.Note` when the record leaves the model's training envelope
+  (``provenance["envelope"]``, written at fit time; :mod:`mrdamper.models.envelope`), naming the
+  dimension and by how much. The check is added to the family's ``predict`` here, once, when its
+  class is defined.
 """
 
 from __future__ import annotations
 
 import abc
+import contextvars
 import dataclasses
+import functools
 import json
 import time
 import typing
@@ -39,7 +46,7 @@ from mrdamper.models._schema import (
     decode_value,
     encode_value,
 )
-from mrdamper.models.envelope import training_envelope
+from mrdamper.models.envelope import envelope_note, envelope_of, training_envelope
 from mrdamper.models.levels import single_level
 from mrdamper.models.settings import (
     check_bool,
@@ -211,6 +218,31 @@ class SimulationResult:
         return ax
 
 
+# ----------------------------------------------------------------------------- envelope check
+#: True while a ``predict`` that already checked the envelope runs (inner calls do not repeat it).
+_IN_PREDICT: contextvars.ContextVar[bool] = contextvars.ContextVar("_IN_PREDICT", default=False)
+
+
+def _with_envelope_check(predict: Any) -> Any:
+    """``predict`` that first says when the record leaves the model's training envelope."""
+
+    @functools.wraps(predict)
+    def checked(self: FittedModel, experiment: Experiment) -> np.ndarray:
+        if _IN_PREDICT.get():
+            return cast(np.ndarray, predict(self, experiment))
+        token = _IN_PREDICT.set(True)
+        try:
+            note = self.envelope_note(experiment)
+            if note:
+                warnings.warn(note, Note, stacklevel=2)
+            return cast(np.ndarray, predict(self, experiment))
+        finally:
+            _IN_PREDICT.reset(token)
+
+    checked.envelope_checked = True  # type: ignore[attr-defined]
+    return checked
+
+
 # ----------------------------------------------------------------------------- base classes
 @dataclass(frozen=True)
 class FittedModel(abc.ABC):
@@ -242,10 +274,44 @@ class FittedModel(abc.ABC):
     def __post_init__(self) -> None:
         object.__setattr__(self, "input_range", tuple(float(b) for b in self.input_range))
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        own = cls.__dict__.get("predict")
+        if (
+            own is not None
+            and not getattr(own, "__isabstractmethod__", False)
+            and not getattr(own, "envelope_checked", False)
+        ):
+            cls.predict = _with_envelope_check(own)  # type: ignore[method-assign]
+
+    @property
+    def envelope(self) -> dict[str, Any] | None:
+        """The training envelope (:mod:`mrdamper.models.envelope`) or None (a model saved before
+        envelopes were recorded, or built by hand)."""
+        env = dict(self.provenance or {}).get("envelope")
+        return dict(env) if env else None
+
+    def envelope_note(self, experiment: Experiment) -> str:
+        """One line saying how ``experiment`` leaves the training envelope (velocity,
+        displacement, frequency content, electrical input, by how much), or ``""`` when it stays
+        inside or the model carries no envelope."""
+        env = self.envelope
+        if env is None or not isinstance(experiment, Experiment):
+            return ""
+        try:
+            e = experiment.electrical(self.input)
+        except Exception:  # noqa: BLE001 - a missing channel is reported by predict itself
+            return ""
+        seen = envelope_of([experiment.x], [experiment.v], [e], dt=[experiment.dt])
+        return envelope_note(self.kind, experiment.name, env, seen)
+
     # --- to implement -------------------------------------------------------------------
     @abc.abstractmethod
     def predict(self, experiment: Experiment) -> np.ndarray:
-        """Free-run force prediction [N] for one record (uses x, v and the electrical input)."""
+        """Free-run force prediction [N] for one record (uses x, v and the electrical input).
+
+        A record outside the training envelope is predicted all the same, with one
+        :class:`~mrdamper.errors.Note` saying where it leaves it (:meth:`envelope_note`)."""
 
     # --- shared behaviour ---------------------------------------------------------------
     def electrical_input(self, experiment: Experiment) -> np.ndarray:

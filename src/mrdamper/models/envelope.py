@@ -1,8 +1,14 @@
 """The training envelope of a model: how far its identification data moved the damper.
 
 Stored at fit time in ``provenance["envelope"]`` (:meth:`mrdamper.models.base.Estimator.fit`), so
-a tool that uses the model elsewhere (the quarter car) can say how far it leaves it. The same
-function measures the envelope of any motion (a loop run), so the two are comparable.
+a tool that uses the model elsewhere (the quarter car, :meth:`~mrdamper.models.FittedModel.predict`
+on a new record, the study) can say how far it leaves it. The same function measures the envelope
+of any motion (a loop run, a record), so the two are comparable.
+
+The dimensions: velocity (largest ``|v|``), displacement (the ``x`` range), frequency content (the
+band holding :data:`BAND_SHARE` of the velocity's power, when sampling intervals are given) and
+electrical input (its range). :func:`envelope_note` says in one line which of them a record
+leaves, and by how much.
 """
 
 from __future__ import annotations
@@ -12,16 +18,68 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SWITCH_FRACTION", "envelope_of", "excursions", "training_envelope"]
+__all__ = [
+    "BAND_SHARE",
+    "ENVELOPE_TOLERANCE",
+    "SWITCH_FRACTION",
+    "band_frequency",
+    "envelope_note",
+    "envelope_of",
+    "excursions",
+    "leaves",
+    "training_envelope",
+]
 
 #: A sample "switches" when its input changes by more than this fraction of the input range [-].
 SWITCH_FRACTION = 0.05
+#: Share of the velocity's power below the frequency band measure ``f_band`` [-].
+BAND_SHARE = 0.95
+#: A record leaves the envelope in a dimension when it exceeds the training value by more than
+#: this fraction (velocity, displacement reach, frequency band) or leaves the electrical range by
+#: more than this fraction of its width [-].
+ENVELOPE_TOLERANCE = 0.05
+
+
+def band_frequency(v: np.ndarray, dt: float, share: float = BAND_SHARE) -> float:
+    """Frequency below which ``share`` of the velocity's power lies [Hz] (0 for no motion).
+
+    Parameters
+    ----------
+    v : ndarray
+        Velocity [m/s], uniformly sampled.
+    dt : float
+        Sampling interval [s].
+    share : float
+        Power share [-], in (0, 1].
+    """
+    a = np.asarray(v, dtype=np.float64)
+    if a.size < 4:
+        return 0.0
+    p = np.abs(np.fft.rfft(a - a.mean())) ** 2
+    c = np.cumsum(p)
+    if c[-1] <= 0.0:
+        return 0.0
+    k = int(np.searchsorted(c, share * c[-1]))
+    return float(k / (a.size * dt))
 
 
 def envelope_of(
-    x: Sequence[np.ndarray], v: Sequence[np.ndarray], e: Sequence[np.ndarray], F: Any = None
+    x: Sequence[np.ndarray],
+    v: Sequence[np.ndarray],
+    e: Sequence[np.ndarray],
+    F: Any = None,
+    dt: Sequence[float] | None = None,
 ) -> dict[str, Any]:
     """Envelope of records (lists of per-record arrays).
+
+    Parameters
+    ----------
+    x, v, e : sequence of ndarray
+        Displacement [m], velocity [m/s] and electrical input [A] or [V] of each record.
+    F : sequence of ndarray, optional
+        Force [N] of each record (gives ``f_max``).
+    dt : sequence of float, optional
+        Sampling interval [s] of each record (gives ``f_band``).
 
     Returns
     -------
@@ -30,7 +88,8 @@ def envelope_of(
         [min, max] electrical input [A] or [V]; ``v_switch`` largest ``|v|`` [m/s] at a sample
         where the input changes by more than :data:`SWITCH_FRACTION` of its range (current
         switching while moving; 0 when it never switches); ``f_max`` largest ``|F|`` [N] when
-        ``F`` is given.
+        ``F`` is given; ``f_band`` the highest :func:`band_frequency` of a record [Hz] when
+        ``dt`` is given.
     """
     lo = min(float(np.min(a)) for a in e)
     hi = max(float(np.max(a)) for a in e)
@@ -49,6 +108,8 @@ def envelope_of(
     }
     if F is not None:
         out["f_max"] = max(float(np.max(np.abs(a))) for a in F)
+    if dt is not None:
+        out["f_band"] = max(band_frequency(vk, float(h)) for vk, h in zip(v, dt))
     return out
 
 
@@ -56,7 +117,11 @@ def training_envelope(records: Iterable[Any], electrical: Sequence[np.ndarray]) 
     """:func:`envelope_of` the training records (``electrical``: their input channel)."""
     recs = list(records)
     return envelope_of(
-        [r.x for r in recs], [r.v for r in recs], list(electrical), [r.F for r in recs]
+        [r.x for r in recs],
+        [r.v for r in recs],
+        list(electrical),
+        [r.F for r in recs],
+        [r.dt for r in recs],
     )
 
 
@@ -81,3 +146,63 @@ def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float
         "stroke": ratio(span_s, span_t),
         "switching": ratio(seen["v_switch"], trained["v_switch"]),
     }
+
+
+def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[float, str]]:
+    """The dimensions in which ``seen`` leaves ``trained`` by more than
+    :data:`ENVELOPE_TOLERANCE`: dimension -> (ratio, one-phrase description).
+
+    ``velocity``: largest ``|v|`` seen / trained; ``displacement``: largest distance from the
+    training range's centre, seen / trained half-span; ``frequency``: ``f_band`` seen / trained
+    (when both carry it); ``electrical``: distance outside the training range / its width.
+    """
+    out: dict[str, tuple[float, str]] = {}
+    tol = ENVELOPE_TOLERANCE
+    vt, vs = float(trained["v_max"]), float(seen["v_max"])
+    if vt > 0 and vs > (1 + tol) * vt:
+        out["velocity"] = (vs / vt, f"velocity {vs:.3g} m/s against {vt:.3g} m/s ({vs / vt:.2f} x)")
+    lo, hi = (float(b) for b in trained["x_range"])
+    slo, shi = (float(b) for b in seen["x_range"])
+    half, mid = 0.5 * (hi - lo), 0.5 * (hi + lo)
+    reach = max(abs(shi - mid), abs(slo - mid))
+    if half > 0 and reach > (1 + tol) * half:
+        out["displacement"] = (
+            reach / half,
+            (
+                f"displacement [{slo * 1e3:.3g}, {shi * 1e3:.3g}] mm against [{lo * 1e3:.3g}, "
+                f"{hi * 1e3:.3g}] mm ({reach / half:.2f} x the reach)"
+            ),
+        )
+    ft, fs = trained.get("f_band"), seen.get("f_band")
+    if ft and fs is not None and float(fs) > (1 + tol) * float(ft):
+        r = float(fs) / float(ft)
+        out["frequency"] = (
+            r,
+            (
+                f"frequency content up to {float(fs):.3g} Hz against {float(ft):.3g} Hz "
+                f"({r:.2f} x; {BAND_SHARE:.0%} of the velocity power)"
+            ),
+        )
+    elo, ehi = (float(b) for b in trained["e_range"])
+    sel, seh = (float(b) for b in seen["e_range"])
+    width = max(ehi - elo, 1e-12 * max(1.0, abs(ehi)))
+    out_by = max(seh - ehi, elo - sel, 0.0) / width
+    if out_by > tol:
+        out["electrical"] = (
+            1.0 + out_by,
+            (
+                f"electrical input [{sel:.3g}, {seh:.3g}] against [{elo:.3g}, {ehi:.3g}] "
+                f"({out_by:.0%} of the range outside)"
+            ),
+        )
+    return out
+
+
+def envelope_note(kind: str, record: str, trained: dict[str, Any], seen: dict[str, Any]) -> str:
+    """One line saying how record ``record`` leaves the ``kind`` model's training envelope, or
+    ``""`` when it stays inside (see :func:`leaves`)."""
+    out = leaves(trained, seen)
+    if not out:
+        return ""
+    what = "; ".join(text for _, text in out.values())
+    return f"{kind}: record {record!r} leaves the model's training envelope: {what}"

@@ -39,7 +39,7 @@ import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import InitVar, dataclass
-from typing import Any, ClassVar, cast
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
@@ -146,6 +146,12 @@ class NARXModel(FittedModel):
         Velocity of the ``tanh(v / v0)`` feature [m/s].
     force_bound : float
         Free-run force magnitude regarded as divergence [N].
+    x_limits : (float, float)
+        Displacement range [m] the ``x`` regressors are clipped to (``(-inf, inf)``: none).
+    v_limit : float
+        Velocity magnitude [m/s] the ``v`` and ``tanh(v / v0)`` regressors are clipped to
+        (``inf``: none). The estimator sets both to the training envelope
+        (``extrapolation="clip"``): a polynomial fed values it never saw can burst.
 
     Examples
     --------
@@ -172,10 +178,23 @@ class NARXModel(FittedModel):
     scales: np.ndarray
     v0: float = 1.0
     force_bound: float = 1e9
+    x_limits: tuple[float, float] = (-math.inf, math.inf)
+    v_limit: float = math.inf
 
     def __post_init__(self) -> None:
         super().__post_init__()
         set_ = object.__setattr__
+        lim = tuple(float(b) for b in self.x_limits)
+        if len(lim) != 2 or any(math.isnan(b) for b in lim) or not lim[0] <= lim[1]:
+            raise DataValidationError(
+                "x_limits", f"expected (low, high) with low <= high, got {self.x_limits!r}"
+            )
+        set_(self, "x_limits", lim)
+        if isinstance(self.v_limit, bool) or not float(self.v_limit) > 0:
+            raise DataValidationError(
+                "v_limit", f"expected a positive velocity [m/s] or inf, got {self.v_limit!r}"
+            )
+        set_(self, "v_limit", float(self.v_limit))
         base = np.array(self.base, dtype=np.int64).reshape(-1, 2)
         terms = np.array(self.terms, dtype=np.int64)
         theta = np.array(self.theta, dtype=np.float64)
@@ -287,6 +306,8 @@ class NARXModel(FittedModel):
             to_model_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)
             for a in (experiment.F, experiment.x, experiment.v, e)
         ]
+        rows[1] = np.clip(rows[1], *self.x_limits)
+        rows[2] = np.clip(rows[2], -self.v_limit, self.v_limit)
         rows.append(np.tanh(rows[2] / self.v0))
         S = np.vstack(rows)
         S /= self.scales[:, None]
@@ -350,6 +371,9 @@ class NARXModel(FittedModel):
             self.force_bound / float(self.scales[0]),
             p,
             float(f_initial),
+            self.x_limits[0],
+            self.x_limits[1],
+            self.v_limit,
         )
         size = 1 + len(SIGNALS) * p
 
@@ -418,6 +442,12 @@ class NARXEstimator(Estimator):
         Largest accepted condition number of the chosen (normalised) regression matrix [-].
     bound_factor : float
         Free-run divergence bound as a multiple of the largest training |F| [-].
+    extrapolation : {"clip", "free"}
+        ``"clip"`` (default): the fitted model clips its displacement and velocity regressors to
+        the training range (``x_limits``, ``v_limit``), so a motion beyond the training envelope
+        meets the polynomial only where it was identified (the force stays bounded; beyond the
+        envelope it follows the edge of the training data). ``"free"``: no clipping (the
+        polynomial extrapolates and can burst).
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
     """
@@ -440,6 +470,7 @@ class NARXEstimator(Estimator):
     model_fs: float | None = None
     cond_max: float = 1e8
     bound_factor: float = 10.0
+    extrapolation: Literal["clip", "free"] = "clip"
     range_policy: RangePolicy = "error"
     fs: InitVar[float | None] = None
     refine_max_nfev: InitVar[int | None] = None
@@ -551,6 +582,10 @@ class NARXEstimator(Estimator):
         report("least squares of the selected terms")
         theta, cond = least_squares_terms(records, weights, base, terms, p, self.cond_max)
         model = dataclasses.replace(probe, terms=terms, theta=theta)
+        if self.extrapolation == "clip":
+            x_lo = min(float(np.min(e.x)) for e in exps)
+            x_hi = max(float(np.max(e.x)) for e in exps)
+            model = dataclasses.replace(model, x_limits=(x_lo, x_hi), v_limit=v_max)
         bound = model.force_bound / model.scales[0]
         report("free run of the least-squares model")
         cost_ls = free_run_cost(base, terms, theta, bound, records, weights, p)
@@ -579,6 +614,7 @@ class NARXEstimator(Estimator):
                 "use_tanh": self.use_tanh,
                 "n_terms": self.n_terms,
                 "refine": self.refine,
+                "extrapolation": self.extrapolation,
             },
             "err": [float(x) for x in err],
             "err_total": float(np.sum(err)),

@@ -50,7 +50,12 @@ FAMILIES: tuple[tuple[type, Any, Any, Any], ...] = (
         L.step_force,
         L.step_advance,
     ),
-    (N.NARXForm, N.NARXForm(_I2, _I2, _F, _F, 1.0, 1.0, 1, 0.0), N.step_force, N.step_advance),
+    (
+        N.NARXForm,
+        N.NARXForm(_I2, _I2, _F, _F, 1.0, 1.0, 1, 0.0, -np.inf, np.inf, np.inf),
+        N.step_force,
+        N.step_advance,
+    ),
 )
 
 

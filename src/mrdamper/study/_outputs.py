@@ -54,6 +54,7 @@ def write_tables(res: StudyResult, d: Path, summary: pd.DataFrame) -> None:
     atomic_write_text(d / "protocol.json", res.protocol.to_json() + "\n")
     info: dict[str, Any] = {k: v for k, v in res.info.items() if k not in TIMING_INFO}
     info["headline"] = dict(res.headline())
+    info["headlines"] = [dict(h) for h in res.headlines()]
     atomic_write_text(d / "study.json", json.dumps(info, indent=2, default=str) + "\n")
     timings: dict[str, Any] = {k: res.info[k] for k in TIMING_INFO if k in res.info}
     timings["per_model"] = {

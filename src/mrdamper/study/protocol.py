@@ -431,13 +431,23 @@ class Protocol:
         return {**dict(self.settings.get(spec.kind, {})), **dict(spec.settings)}
 
     def resolved_models(self) -> tuple[ModelSpec, ...]:
-        """The model specs to run: the protocol's, or the installed default models."""
+        """The model specs to run: the protocol's, or the installed default models, each followed
+        by its default variants (:data:`mrdamper.kinds.VARIANTS`: the paper's LPV, label
+        ``lpv-paper``, after the default LPV)."""
         if self.models:
             return self.models
         from mrdamper.models import available_models
 
         have = set(available_models())
-        return tuple(ModelSpec(k) for k in kinds.default_kinds() if k in have)
+        out: list[ModelSpec] = []
+        for k in kinds.default_kinds():
+            if k not in have:
+                continue
+            out.append(ModelSpec(k))
+            out += [
+                ModelSpec(v.kind, dict(v.settings), v.label) for v in kinds.VARIANTS if v.kind == k
+            ]
+        return tuple(out)
 
     def with_models(self, models: Sequence[ModelSpec | str | Mapping[str, Any]]) -> Protocol:
         """Copy with another model list."""

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper import kinds
 from mrdamper.study.figures import (
     FIGURE_DPI,
     FIGURES,
@@ -108,6 +109,9 @@ def _model_text(p: Any, spec: Any) -> str:
     settings = p.settings_for(spec)
     extra = [spec.kind] if spec.label != spec.kind else []
     extra += [f"{k}={v!r}" for k, v in settings.items()]
+    which = kinds.input_text(spec.kind, settings)
+    if which:
+        extra.append(f"input: {which}")
     return str(spec.label) + (f" ({', '.join(extra)})" if extra else "")
 
 
@@ -157,11 +161,21 @@ def _protocol_section(res: StudyResult) -> str:
 
 
 def _headline_text(res: StudyResult) -> tuple[str, str]:
-    hl = res.headline()
-    cls = "headline" if hl.get("available") else "warn"
+    hls = res.headlines()
+    cls = "headline" if any(h.get("available") for h in hls) else "warn"
+    lines = []
+    for h in hls:
+        spec = next((s for s in res.specs if s.label == h["model"]), None)
+        which = (
+            kinds.input_text(spec.kind, res.protocol.settings_for(spec)) if spec is not None else ""
+        )
+        lines.append(_e(h["text"]) + (f" (input: {_e(which)})" if which else ""))
     text = (
         "<b>Headline</b> (LPV against the best of the paper's classical models, P-15 and "
-        "SP-1..SP-4): " + _e(hl["text"]) + ". " + _e(PAPER_HEADLINE["text"])
+        "SP-1..SP-4; the paper's LPV first, as the paper compares it, then the default's): "
+        + "; ".join(lines)
+        + ". "
+        + _e(PAPER_HEADLINE["text"])
     )
     return cls, text
 

@@ -21,7 +21,7 @@ from mrdamper.models import FittedModel
 from mrdamper.study.analysis_step import AnalysisOutcome
 from mrdamper.study.protocol import ModelSpec, Protocol
 from mrdamper.study.selection import SelectionResult
-from mrdamper.study.tables import headline, summarize
+from mrdamper.study.tables import headline, headlines, summarize
 
 __all__ = ["Showcase", "StudyResult"]
 
@@ -107,6 +107,11 @@ class StudyResult:
     def headline(self, model: str = "lpv") -> dict[str, Any]:
         """``model`` against the best of the paper's classical models (P-15, SP-1..SP-4)."""
         return headline(self.summary, model)
+
+    def headlines(self) -> list[dict[str, Any]]:
+        """The paper's LPV (static input) against the paper's classical models when the study ran
+        it, then the default LPV (:func:`~mrdamper.study.tables.headlines`)."""
+        return headlines(self.summary)
 
     def to_frame(self) -> pd.DataFrame:
         """The per-record results table."""

@@ -13,8 +13,20 @@ Folds (nothing is scored on a record, or part of a record, it was trained on):
 else ``"time"``. Every model kind is fitted with its defaults (plus ``input`` and any
 ``settings``) on each training part and scored in free run (ESR, eq. 24) on the part left out,
 with ``range_policy="clip"`` (a left-out level outside the training range is clipped and counted
-in the ``clipped`` column). The recommendation is the kind with the lowest mean ESR among those
-that fitted and simulated on every fold; a runner-up within 5 % is named as a tie.
+in the ``clipped`` column).
+
+Beyond the training envelope (``beyond=True``, default): every kind is also scored on the folds of
+:func:`mrdamper.study.envelope_folds.envelope_folds` (the largest amplitude, the highest frequency
+or velocity held out; for one record, a later block whose range exceeds the earlier one's), and
+(``stress=True``, default) fitted once on all the records and stress-tested
+(:func:`mrdamper.study.stress.stress_test`: motions beyond the envelope must stay bounded,
+dissipative and free of divergence; new motions inside it must be free of bursts).
+
+The recommendation is the kind with the lowest ``rank_esr`` among those that fitted and simulated
+on every fold (inside and beyond the envelope) and passed the stress test; ``rank_esr`` is the mean
+of the in-envelope mean ESR and the beyond-envelope mean ESR (the in-envelope mean alone when there
+is no beyond-envelope fold). A runner-up within 5 % is named as a tie. The ``status`` column says
+why a kind is not recommended; the reason states the envelope the recommendation was validated in.
 """
 
 from __future__ import annotations
@@ -41,8 +53,12 @@ __all__ = [
     "selection_from_scores",
 ]
 
-#: Columns of :attr:`SelectionResult.scores`.
-SCORE_COLUMNS: tuple[str, ...] = ("model", "fold", "record", "esr", "clipped", "error")
+#: Columns of :attr:`SelectionResult.scores` (``beyond``: the fold leaves the training envelope;
+#: optional in :func:`selection_from_scores`, False when absent).
+SCORE_COLUMNS: tuple[str, ...] = ("model", "fold", "record", "esr", "clipped", "error", "beyond")
+_REQUIRED: tuple[str, ...] = SCORE_COLUMNS[:-1]
+#: A runner-up within this fraction of the recommended kind's ``rank_esr`` is a tie [-].
+TIE = 0.05
 
 FoldKind = Literal["auto", "condition", "record", "time"]
 #: Discrete-time model kinds: they need one model rate when records have different rates.
@@ -57,9 +73,13 @@ class SelectionResult:
     ----------
     table : DataFrame
         One row per model kind: ``mean_esr``, ``median_esr``, ``worst_esr`` (over left-out
-        records), ``folds_ok``, ``folds_failed``, ``clipped`` (left-out records clipped to the
-        training range), ``fit_s`` (mean fit time [s]) and ``error`` (first failure); sorted by
-        ``mean_esr`` with failing kinds last.
+        records inside the envelope), ``folds_ok``, ``folds_failed``, ``beyond_esr`` (mean over
+        the beyond-envelope folds; NaN without them), ``beyond_failed``, ``rank_esr`` (the
+        ranking index, see the module docstring), ``stress`` (``"ok"``, the first failure, or
+        ``"-"`` when not run), ``clipped`` (left-out records clipped to the training range),
+        ``fit_s`` (mean fit time [s]), ``error`` (first failure) and ``status``
+        (``"recommended"``, ``"eligible"`` or why not); sorted by ``rank_esr``, kinds that cannot
+        be recommended last.
     scores : DataFrame
         One row per (kind, fold, left-out record): ``esr``, ``error``.
     split : str
@@ -72,6 +92,12 @@ class SelectionResult:
         One sentence saying why.
     notes : list of str
         Settings chosen for the user (e.g. a common model rate).
+    n_beyond : int
+        Number of beyond-envelope folds.
+    stress : dict
+        Kind -> :class:`~mrdamper.study.stress.StressResult` (empty when not run).
+    envelope : str
+        The envelope of the records, in words (what the recommendation was validated in).
     """
 
     table: pd.DataFrame
@@ -81,6 +107,9 @@ class SelectionResult:
     recommended: str | None
     reason: str
     notes: list[str] = field(default_factory=list)
+    n_beyond: int = 0
+    stress: dict[str, Any] = field(default_factory=dict)
+    envelope: str = ""
 
     def to_frame(self) -> pd.DataFrame:
         """The per-kind table."""
@@ -194,6 +223,9 @@ def cross_validate(
     n_folds: int = 5,
     input: str = "i",
     settings: Mapping[str, Mapping[str, Any]] | None = None,
+    beyond: bool = True,
+    stress: bool = True,
+    seed: int = 0,
 ) -> SelectionResult:
     """Cross-validate every model kind on ``data`` and recommend one.
 
@@ -211,6 +243,12 @@ def cross_validate(
         Electrical input channel of every model.
     settings : mapping, optional
         Extra estimator settings per kind, e.g. ``{"lpv": {"n_m": 2}}``.
+    beyond : bool
+        Also score every kind on the folds that leave the training envelope.
+    stress : bool
+        Also fit every kind on all the records and stress-test it.
+    seed : int
+        Seed of the stress test's random motion.
 
     Returns
     -------
@@ -218,10 +256,12 @@ def cross_validate(
 
     Notes
     -----
-    Reports the stage ``"cross-validation: fits"`` (fits done of the kinds times the folds) to
-    :mod:`mrdamper.progress`; each fit's own stages come prefixed with the kind and fold.
+    Reports the stage ``"cross-validation: fits"`` (fits done of the kinds times the folds, plus
+    one fit on all the records per kind when ``stress``) to :mod:`mrdamper.progress`; each fit's
+    own stages come prefixed with the kind and fold.
     """
-    from mrdamper.models.registry import available_models, get_estimator
+    from mrdamper.models.registry import available_models
+    from mrdamper.study.envelope_folds import envelope_folds
 
     kinds = list(models) if models is not None else available_models()
     extra = {k: dict(v) for k, v in (settings or {}).items()}
@@ -234,6 +274,7 @@ def cross_validate(
             )
     exps = as_experiment_set(data, name="data")
     split, parts = selection_folds(exps, folds, n_folds)
+    extra_parts = envelope_folds(exps) if beyond else []
     notes: list[str] = []
     rates = sorted({e.fs for e in exps})
     if len(rates) > 1:
@@ -241,66 +282,123 @@ def cross_validate(
             f"records have rates {rates} Hz: discrete models ({', '.join(_DISCRETE)}) run at "
             f"the lowest, {rates[0]:g} Hz"
         )
+    if beyond and not extra_parts:
+        notes.append(
+            "no fold leaves the training envelope (the records share one range, or the later "
+            "part of the record stays within the earlier one's): validated inside it only"
+        )
+    plan = [(p, False) for p in parts] + [(p, True) for p in extra_parts]
     rows: list[dict[str, Any]] = []
     fit_times: dict[str, list[float]] = {k: [] for k in kinds}
-    n_fits, done = len(kinds) * len(parts), 0
+    stressed: dict[str, Any] = {}
+    n_fits, done = len(kinds) * (len(plan) + int(stress)), 0
     for kind in kinds:
-        for label, train, test in parts:
+        options = {"input": input, **extra.get(kind, {})}
+        for (label, train, test), out in plan:
             report("cross-validation: fits", done, n_fits)
             done += 1
-            fold = f"{kind}, fold {label} ({done} of {n_fits})"
-            t0 = time.perf_counter()
-            try:
-                with warnings.catch_warnings(), section(fold):
-                    warnings.simplefilter("ignore")
-                    model = get_estimator(kind, **{"input": input, **extra.get(kind, {})}).fit(
-                        train
-                    )
-            except Exception as exc:  # noqa: BLE001 - a failing kind is a row of the table
-                rows += [
-                    {
-                        "model": kind,
-                        "fold": label,
-                        "record": e.name,
-                        "esr": np.nan,
-                        "clipped": False,
-                        "error": f"fit: {type(exc).__name__}: {exc}",
-                    }
-                    for e in test
-                ]
+            where = f"{kind}, fold {label} ({done} of {n_fits})"
+            model, elapsed, err = _fit(kind, options, train, where)
+            if model is None:
+                rows += [_row(kind, label, e.name, np.nan, False, f"fit: {err}", out) for e in test]
                 continue
-            fit_times[kind].append(time.perf_counter() - t0)
-            report(f"{fold}: scoring the left-out data")
-            for e in test:
-                clipped = _outside(model, e)
-                try:
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore")
-                        esr = model.with_range_policy("clip").score(e).esr
-                    rows.append(
-                        {
-                            "model": kind,
-                            "fold": label,
-                            "record": e.name,
-                            "esr": float(esr),
-                            "clipped": clipped,
-                            "error": "",
-                        }
-                    )
-                except Exception as exc:  # noqa: BLE001 - reported
-                    rows.append(
-                        {
-                            "model": kind,
-                            "fold": label,
-                            "record": e.name,
-                            "esr": np.nan,
-                            "clipped": clipped,
-                            "error": f"simulate: {type(exc).__name__}: {exc}",
-                        }
-                    )
+            if not out:
+                fit_times[kind].append(elapsed)
+            report(f"{where}: scoring the left-out data")
+            rows += [_score(model, kind, label, e, out) for e in test]
+        if stress:
+            report("cross-validation: fits", done, n_fits)
+            done += 1
+            where = f"{kind}, all records ({done} of {n_fits})"
+            stressed[kind] = _stress(kind, options, exps, where, seed)
     report("cross-validation: fits", n_fits, n_fits)
     scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
-    return selection_from_scores(scores, kinds, fit_times, split, len(parts), notes)
+    return selection_from_scores(
+        scores,
+        kinds,
+        fit_times,
+        split,
+        len(parts),
+        notes,
+        stress=stressed,
+        envelope=_envelope_text(exps, input),
+    )
+
+
+def _row(
+    kind: str, fold: str, record: str, esr: float, clipped: bool, error: str, out: bool
+) -> dict[str, Any]:
+    return {
+        "model": kind,
+        "fold": fold,
+        "record": record,
+        "esr": esr,
+        "clipped": clipped,
+        "error": error,
+        "beyond": out,
+    }
+
+
+def _fit(
+    kind: str, options: Mapping[str, Any], train: ExperimentSet, where: str
+) -> tuple[Any, float, str]:
+    """``(model or None, fit time [s], error text)``: warnings silenced, failures caught."""
+    from mrdamper.models.registry import get_estimator
+
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings(), section(where):
+            warnings.simplefilter("ignore")
+            model = get_estimator(kind, **options).fit(train)
+    except Exception as exc:  # noqa: BLE001 - a failing kind is a row of the table
+        return None, time.perf_counter() - t0, f"{type(exc).__name__}: {exc}"
+    return model, time.perf_counter() - t0, ""
+
+
+def _score(model: Any, kind: str, label: str, e: Experiment, out: bool) -> dict[str, Any]:
+    clipped = _outside(model, e)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            esr = float(model.with_range_policy("clip").score(e).esr)
+    except Exception as exc:  # noqa: BLE001 - reported
+        return _row(
+            kind, label, e.name, np.nan, clipped, f"simulate: {type(exc).__name__}: {exc}", out
+        )
+    return _row(kind, label, e.name, esr, clipped, "", out)
+
+
+def _stress(
+    kind: str, options: Mapping[str, Any], exps: ExperimentSet, where: str, seed: int
+) -> Any:
+    from mrdamper.study.stress import StressResult, stress_test
+
+    model, _, err = _fit(kind, options, exps, where)
+    if model is None:
+        return StressResult(pd.DataFrame(), False, f"fit on all the records failed: {err}")
+    report(f"{where}: stress test")
+    try:
+        return stress_test(model, exps, seed=seed)
+    except Exception as exc:  # noqa: BLE001 - reported
+        return StressResult(pd.DataFrame(), False, f"{type(exc).__name__}: {exc}")
+
+
+def _envelope_text(exps: ExperimentSet, source: str) -> str:
+    """The records' envelope in words (velocity, displacement, frequency band, input)."""
+    from mrdamper.models.envelope import envelope_of
+
+    try:
+        elec = [np.asarray(e.electrical(source)) for e in exps]  # type: ignore[arg-type]
+    except Exception:  # noqa: BLE001 - a missing channel fails every fit anyway
+        return ""
+    env = envelope_of([e.x for e in exps], [e.v for e in exps], elec, dt=[e.dt for e in exps])
+    unit = "A" if source == "i" else "V"
+    lo, hi = env["x_range"]
+    return (
+        f"|v| <= {env['v_max']:.3g} m/s, x in [{lo * 1e3:.3g}, {hi * 1e3:.3g}] mm, frequency "
+        f"band <= {env['f_band']:.3g} Hz, {source} in [{env['e_range'][0]:.3g}, "
+        f"{env['e_range'][1]:.3g}] {unit}"
+    )
 
 
 def selection_from_scores(
@@ -310,9 +408,12 @@ def selection_from_scores(
     split: str,
     n_folds: int,
     notes: Sequence[str] = (),
+    *,
+    stress: Mapping[str, Any] | None = None,
+    envelope: str = "",
 ) -> SelectionResult:
     """The selection table and recommendation from held-out scores, by the rule of
-    :func:`cross_validate` (lowest mean ESR among the kinds that passed every fold).
+    :func:`cross_validate` (module docstring).
 
     :func:`cross_validate` calls it on its own folds; a study calls it on the scores of its
     protocol's folds (:attr:`mrdamper.study.StudyResult.selection`).
@@ -322,7 +423,8 @@ def selection_from_scores(
     scores : DataFrame
         One row per (model, fold, left-out record) with the columns :data:`SCORE_COLUMNS`:
         ``esr`` (NaN when it failed), ``clipped`` (bool: the record left the model's range),
-        ``error`` (empty when ok; a non-empty error fails the model's fold).
+        ``error`` (empty when ok; a non-empty error fails the model's fold), ``beyond``
+        (optional: the fold leaves the training envelope).
     kinds : sequence of str
         Models in table order before sorting (every one gets a row).
     fit_times : mapping
@@ -330,21 +432,44 @@ def selection_from_scores(
     split : str
         Fold kind, for the reason text.
     n_folds : int
-        Number of folds.
+        Number of folds inside the envelope.
     notes : sequence of str
         Notes carried into the result.
+    stress : mapping, optional
+        Model -> :class:`~mrdamper.study.stress.StressResult` (models without one: ``"-"``).
+    envelope : str
+        The records' envelope in words, for the reason.
 
     Returns
     -------
     SelectionResult
     """
-    missing = [c for c in SCORE_COLUMNS if c not in scores.columns]
+    missing = [c for c in _REQUIRED if c not in scores.columns]
     if missing:
         raise DataValidationError("scores", f"missing column(s) {missing}")
+    scores = scores.copy()
+    if "beyond" not in scores.columns:
+        scores["beyond"] = False
+    scores["beyond"] = scores["beyond"].eq(True)
     times = {k: list(fit_times.get(k, ())) for k in kinds}
-    table = _summarise(scores, list(kinds), times)
-    recommended, reason = _recommend(table, split, n_folds)
-    return SelectionResult(table, scores.copy(), split, n_folds, recommended, reason, list(notes))
+    stress = dict(stress or {})
+    table = _summarise(scores, list(kinds), times, stress)
+    n_beyond = int(scores.loc[scores["beyond"], "fold"].nunique())
+    recommended, reason = _recommend(table, split, n_folds, n_beyond, envelope)
+    if recommended is not None:
+        table.loc[recommended, "status"] = "recommended"
+    return SelectionResult(
+        table,
+        scores,
+        split,
+        n_folds,
+        recommended,
+        reason,
+        list(notes),
+        n_beyond,
+        stress,
+        envelope,
+    )
 
 
 def _outside(model: Any, e: Experiment) -> bool:
@@ -358,48 +483,101 @@ def _outside(model: Any, e: Experiment) -> bool:
 
 
 def _summarise(
-    scores: pd.DataFrame, kinds: list[str], fit_times: Mapping[str, Sequence[float]]
+    scores: pd.DataFrame,
+    kinds: list[str],
+    fit_times: Mapping[str, Sequence[float]],
+    stress: Mapping[str, Any],
 ) -> pd.DataFrame:
     out = []
     for k in kinds:
-        s = scores[scores["model"] == k]
+        every = scores[scores["model"] == k]
+        s = every[~every["beyond"]]
+        b = every[every["beyond"]]
         failed_folds = s.loc[s["error"] != "", "fold"].nunique()
-        errs = s.loc[s["error"] != "", "error"]
+        b_failed = b.loc[b["error"] != "", "fold"].nunique()
+        errs = every.loc[every["error"] != "", "error"]
         esr = s["esr"].dropna()
+        mean = float(esr.mean()) if failed_folds == 0 and len(esr) else np.nan
+        b_esr = float(b["esr"].mean()) if len(b) and b_failed == 0 else np.nan
+        rank = mean if b.empty else (0.5 * (mean + b_esr) if np.isfinite(b_esr) else np.nan)
+        st = stress.get(k)
+        st_text = "-" if st is None else str(st.reason)
+        status = "eligible"
+        if failed_folds:
+            status = f"not recommended: failed {failed_folds} fold(s)"
+        elif b_failed:
+            status = "not recommended: failed beyond the training envelope"
+        elif st is not None and not st.passed:
+            status = f"not recommended: stress test: {st.reason}"
+        elif not np.isfinite(rank):
+            status = "not recommended: no score"
         out.append(
             {
                 "model": k,
-                "mean_esr": float(esr.mean()) if failed_folds == 0 and len(esr) else np.nan,
+                "mean_esr": mean,
                 "median_esr": float(esr.median()) if len(esr) else np.nan,
                 "worst_esr": float(esr.max()) if len(esr) else np.nan,
                 "folds_ok": int(s["fold"].nunique() - failed_folds),
                 "folds_failed": int(failed_folds),
+                "beyond_esr": b_esr,
+                "beyond_failed": int(b_failed),
+                "rank_esr": rank,
+                "stress": st_text[:160],
                 "clipped": int(s["clipped"].sum()),
                 "fit_s": float(np.mean(fit_times[k])) if fit_times[k] else np.nan,
                 "error": str(errs.iloc[0])[:120] if len(errs) else "",
+                "status": status,
             }
         )
     t = pd.DataFrame(out).set_index("model")
-    return t.sort_values(["mean_esr", "median_esr"], na_position="last")
+    t["_ok"] = t["status"] == "eligible"
+    t = t.sort_values(["_ok", "rank_esr", "median_esr"], ascending=[False, True, True])
+    return t.drop(columns="_ok")
 
 
-def _recommend(table: pd.DataFrame, split: str, n: int) -> tuple[str | None, str]:
-    ok = table.dropna(subset=["mean_esr"])
+def _recommend(
+    table: pd.DataFrame, split: str, n: int, n_beyond: int, envelope: str
+) -> tuple[str | None, str]:
+    ok = table[table["status"] == "eligible"]
     folds = f"{n} {split} fold{'s' if n != 1 else ''}"
+    if n_beyond:
+        folds += f" and {n_beyond} beyond-envelope fold{'s' if n_beyond != 1 else ''}"
     if ok.empty:
-        return None, f"no model kind fitted and simulated on all {folds}"
+        return None, f"no model kind fitted, simulated and passed every check on {folds}"
     best = str(ok.index[0])
+    first = ok.iloc[0]
+    what = (
+        "mean free-run ESR (inside and beyond the training envelope, averaged)"
+        if n_beyond
+        else "mean free-run ESR on the left-out data"
+    )
     reason = (
-        f"{best} has the lowest mean free-run ESR on the left-out data, "
-        f"{ok['mean_esr'].iloc[0]:.3g} over {folds} (worst left-out record "
-        f"{ok['worst_esr'].iloc[0]:.3g})"
+        f"{best} has the lowest {what}, {first['rank_esr']:.3g} over {folds} (inside "
+        f"{first['mean_esr']:.3g}, worst left-out record {first['worst_esr']:.3g}"
+        + (f"; beyond {first['beyond_esr']:.3g}" if n_beyond else "")
+        + ")"
     )
     if len(ok) > 1:
-        gap = ok["mean_esr"].iloc[1] / ok["mean_esr"].iloc[0] - 1.0
-        reason += f"; next: {ok.index[1]} {ok['mean_esr'].iloc[1]:.3g}"
-        if gap < 0.05:
+        gap = ok["rank_esr"].iloc[1] / ok["rank_esr"].iloc[0] - 1.0
+        reason += f"; next: {ok.index[1]} {ok['rank_esr'].iloc[1]:.3g}"
+        if gap < TIE:
             reason += f" (only {gap:.0%} higher: a tie at this data size, either will do)"
-    failing = table.index[table["folds_failed"] > 0].tolist()
+    failing = table.index[table["status"].str.startswith("not recommended")].tolist()
     if failing:
-        reason += f"; failed on some fold: {', '.join(failing)}"
+        reason += f"; not recommended: {', '.join(failing)} (see status)"
+    if envelope:
+        reason += f". Validated within {envelope}"
+        if n_beyond or first["stress"] == "ok":
+            reason += (
+                " and beyond it ("
+                + ", ".join(
+                    (["held-out folds beyond the training part"] if n_beyond else [])
+                    + (
+                        ["stress motions to amplitude x1.5, frequency x2"]
+                        if first["stress"] == "ok"
+                        else []
+                    )
+                )
+                + ")"
+            )
     return best, reason

@@ -17,9 +17,11 @@ import pandas as pd
 __all__ = [
     "PAPER_CLASSICAL",
     "PAPER_HEADLINE",
+    "PAPER_LPV",
     "RESULT_COLUMNS",
     "TIMING_COLUMNS",
     "headline",
+    "headlines",
     "improvement_pct",
     "summarize",
 ]
@@ -58,6 +60,9 @@ PAPER_HEADLINE: dict[str, Any] = {
         "classical model (SP-1), on its own test rig."
     ),
 }
+
+#: Label of the paper's own LPV model (static input) in the study's default model set.
+PAPER_LPV = "lpv-paper"
 
 _SUMMARY_COLUMNS = (
     "model",
@@ -196,3 +201,23 @@ def headline(summary: pd.DataFrame, model: str = "lpv") -> dict[str, Any]:
     out["available"] = True
     out["text"] = f"{model}: " + "; ".join(parts)
     return out
+
+
+def headlines(summary: pd.DataFrame) -> list[dict[str, Any]]:
+    """The headline as the paper states it, then the default's: :func:`headline` of the paper's
+    LPV (label :data:`PAPER_LPV`, static input) when the study ran it, then of the default LPV
+    (label ``lpv``, hysteretic input).
+
+    Parameters
+    ----------
+    summary : DataFrame
+        :func:`summarize` output.
+
+    Returns
+    -------
+    list of dict
+        One :func:`headline` per LPV the study ran (at least the default's, possibly unavailable).
+    """
+    labels = set(summary["model"])
+    out = [headline(summary, PAPER_LPV)] if PAPER_LPV in labels else []
+    return out + [headline(summary, "lpv")]

@@ -40,15 +40,18 @@ static const double {P}_V0 = {v0}; /* velocity of the tanh feature [m/s] */
 static const double {P}_BOUND = {bound}; /* largest accepted scaled |F| */
 static const double {P}_F_INITIAL = {f_initial}; /* force of the first p samples [N] */
 static const double {P}_DT = {dt}; /* model sample time [s] */
+static const double {P}_X_LO = {x_lo}; /* regressors clipped to the training envelope [m] */
+static const double {P}_X_HI = {x_hi};
+static const double {P}_V_LIMIT = {v_limit}; /* [m/s] */
 
-/* scaled value of signal row r (not the force) at the present sample */
+/* scaled value of signal row r (not the force) at the present sample (x, v clipped) */
 static double {p}_present(int r, double x, double v, double e)
 {{
-    double val;
-    if (r == 1) val = x;
-    else if (r == 2) val = v;
+    double val, vc = v < -{P}_V_LIMIT ? -{P}_V_LIMIT : (v > {P}_V_LIMIT ? {P}_V_LIMIT : v);
+    if (r == 1) val = x < {P}_X_LO ? {P}_X_LO : (x > {P}_X_HI ? {P}_X_HI : x);
+    else if (r == 2) val = vc;
     else if (r == 3) val = e;
-    else val = tanh(v / {P}_V0);
+    else val = tanh(vc / {P}_V0);
     return val / {P}_SCALES[r];
 }}
 
@@ -134,6 +137,9 @@ def render_narx_form(form: NK.NARXForm, dt: float, ctx: Context) -> Rendered:
         "bound": lit(form.bound),
         "f_initial": lit(form.f_initial),
         "dt": lit(dt),
+        "x_lo": lit(form.x_lo),
+        "x_hi": lit(form.x_hi),
+        "v_limit": lit(form.v_limit),
     }
     body = _NARX.format(**fmt) + STEP_WRAPPER.format(p=p, P=P, n=n)
     return Rendered(
