@@ -4,9 +4,9 @@ A kernel that takes a step's ``force`` / ``advance`` as arguments is specialised
 functions and cannot be cached on disk (numba does not cache a signature holding dispatchers), so
 every process would compile it again for every family (tens of seconds for the quarter-car loop).
 For the families this version defines, :func:`pack` puts the form in a *packed form*: the tuple
-``(code, spencer, p15, static, lpv, narx)`` holding the family's form at its place and a small
-placeholder form elsewhere. :func:`family_force` and :func:`family_advance` take a packed form
-and call the family's own ``step_force`` / ``step_advance`` on a runtime branch of ``code``: a
+``(code, spencer, p15, static, lpv, narx, hysteresis)`` holding the family's form at its place and
+a small placeholder form elsewhere. :func:`family_force` and :func:`family_advance` take a packed
+form and call the family's own ``step_force`` / ``step_advance`` on a runtime branch of ``code``: a
 kernel that reaches them as globals (not arguments) has a signature of arrays and tuples only and
 is compiled once and cached on disk. The step functions are the families' own: nothing is
 re-implemented. A step whose functions are not a built-in family's (a family added at run time)
@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from mrdamper.models import _hysteresis_kernels as H
 from mrdamper.models import _lpv_step as L
 from mrdamper.models import _narx_kernels as N
 from mrdamper.models import _p15_kernels as P
@@ -56,6 +57,7 @@ FAMILIES: tuple[tuple[type, Any, Any, Any], ...] = (
         N.step_force,
         N.step_advance,
     ),
+    (H.HysteresisForm, H.HysteresisForm(0, _F, 1.0), H.step_force, H.step_advance),
 )
 
 
@@ -105,6 +107,8 @@ def family_force(pk, s, x, v, e):  # type: ignore[no-untyped-def]  # pragma: no 
         return L.step_force(pk[4], s, x, v, e)
     if code == 4:
         return N.step_force(pk[5], s, x, v, e)
+    if code == 5:
+        return H.step_force(pk[6], s, x, v, e)
     return np.nan
 
 
@@ -122,4 +126,6 @@ def family_advance(pk, s, x0, v0, e0, x1, v1, e1, dt):  # type: ignore[no-untype
         return L.step_advance(pk[4], s, x0, v0, e0, x1, v1, e1, dt)
     if code == 4:
         return N.step_advance(pk[5], s, x0, v0, e0, x1, v1, e1, dt)
+    if code == 5:
+        return H.step_advance(pk[6], s, x0, v0, e0, x1, v1, e1, dt)
     return 2
