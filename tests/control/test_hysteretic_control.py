@@ -204,7 +204,7 @@ def test_c_export_matches_python(rig, tmp_path: Path) -> None:
     """Forward model and regularised inverse in C against the Python model and inverse."""
     m, train = rig
     e, i = _varying_current(train[4])
-    _, c = export_c(m, tmp_path, name="hys", reg=50.0)
+    _, c = export_c(m, tmp_path, name="hys", reg=50.0, n_grid=32)  # inverse_current's grid
     lib_path = tmp_path / "libhys.so"
     cmd = [str(GCC), "-std=c99", "-Wall", "-Werror", "-O2", "-shared", "-fPIC", str(c)]
     subprocess.run([*cmd, "-o", str(lib_path), "-lm"], check=True, capture_output=True)
@@ -218,7 +218,7 @@ def test_c_export_matches_python(rig, tmp_path: Path) -> None:
     assert _rel(F_inv_c, res.F_achieved) < 1e-9
     # with a drive lag: the lead horizon holds the Dahl state, in C as in Python
     lagged = dataclasses.replace(m, eta=80.0)
-    _, c = export_c(lagged, tmp_path, name="hys_lag", reg=50.0)
+    _, c = export_c(lagged, tmp_path, name="hys_lag", reg=50.0, n_grid=32)
     lib_path = tmp_path / "libhys_lag.so"
     cmd = [str(GCC), "-std=c99", "-Wall", "-Werror", "-O2", "-shared", "-fPIC", str(c)]
     subprocess.run([*cmd, "-o", str(lib_path), "-lm"], check=True, capture_output=True)
