@@ -36,6 +36,10 @@ FAMILY = {
     "spencer": ["start 1 of 2: least squares: evaluation", "best start: least squares: evaluation"],
     "bingham": ["least squares: record"],
     "narx": ["term selection: record", "output-error refinement: evaluation"],
+    "tanh": ["step-size check"],
+    "boucwen": ["step-size check"],
+    "dahl": ["step-size check"],
+    "lugre": ["step-size check"],
 }
 
 Event = tuple[str, "int | None", "int | None"]
@@ -123,7 +127,10 @@ def test_fit_reports_stages_and_gives_the_same_model(kind: str, records: list[Ex
     assert stages.index("preparing the training data") < stages.index("identifying")
     assert events[-1] == ("done", None, None)
     _check_counts(events)
-    counted = [(d, t) for _, d, t in events if d is not None and t is not None]
+    # the four standard hysteresis models count their evaluations without a total (a
+    # finite-difference Jacobian calls the residuals a number of times not known ahead)
+    no_total = kind in ("tanh", "boucwen", "dahl", "lugre")
+    counted = [(d, t) for _, d, t in events if d is not None and (t is not None or no_total)]
     assert counted, f"{kind}: no stage counts its steps"
     if kind.startswith("sp"):
         assert any(re.fullmatch(r"start 1 of \d+: least squares: evaluation", s) for s in stages)
@@ -167,7 +174,12 @@ def test_cross_validate_reports_folds(records: list[Experiment]) -> None:
     with warnings.catch_warnings(), progress.listening(lambda s, d, t: events.append((s, d, t))):
         warnings.simplefilter("ignore")
         res = cross_validate(
-            records, models=["bingham", "sp1"], folds="record", settings={"bingham": {"degree": 1}}
+            records,
+            models=["bingham", "sp1"],
+            folds="record",
+            settings={"bingham": {"degree": 1}},
+            beyond=False,  # the in-envelope folds only: their count is checked below
+            stress=False,
         )
     n = 2 * res.n_folds
     fits = [(d, t) for s, d, t in events if s == "cross-validation: fits"]
