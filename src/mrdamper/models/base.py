@@ -14,13 +14,12 @@ from __future__ import annotations
 import abc
 import dataclasses
 import json
-import math
 import time
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Literal, cast
+from typing import Any, ClassVar, Literal, NamedTuple, cast
 
 import numpy as np
 import pandas as pd
@@ -31,6 +30,14 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
 from mrdamper.metrics import Scores, score_arrays
 from mrdamper.models import _scale
+from mrdamper.models._json import (
+    SCHEMA_NAME,
+    SCHEMA_VERSION,
+    _check_schema,
+    _has_nan,
+    decode_value,
+    encode_value,
+)
 from mrdamper.models.envelope import training_envelope
 from mrdamper.models.settings import (
     check_bool,
@@ -47,6 +54,7 @@ __all__ = [
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
     "TIMING_PROVENANCE",
+    "Choice",
     "Estimator",
     "FittedModel",
     "Identified",
@@ -63,9 +71,6 @@ __all__ = [
     "single_level",
     "single_level_note",
 ]
-
-SCHEMA_NAME = "mrdamper.model"
-SCHEMA_VERSION = 1
 
 #: Provenance entries that are wall-clock or CPU times [s]. They stay on the in-memory model but
 #: are never written to a model file, so that the same fit gives the same bytes.
@@ -162,55 +167,6 @@ def single_level_note(kind: str, source: str, level: float) -> str:
         f"are constants and its identified range is [{level:g}, {level:g}] {unit}; other levels "
         "follow range_policy"
     )
-
-
-# ----------------------------------------------------------------------------- JSON encoding
-def encode_value(value: Any) -> Any:
-    """Encode a parameter value as JSON-safe data (ndarrays keep dtype and shape exactly).
-
-    Parameters
-    ----------
-    value : object
-        Number, array, sequence or mapping of them.
-    """
-    if isinstance(value, np.ndarray):
-        return {
-            "__ndarray__": value.ravel().tolist(),
-            "dtype": str(value.dtype),
-            "shape": list(value.shape),
-        }
-    if isinstance(value, (np.floating, float)):
-        f = float(value)
-        if not math.isfinite(f):
-            return {"__float__": repr(f)}
-        return f
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (list, tuple)):
-        return [encode_value(v) for v in value]
-    if isinstance(value, Mapping):
-        return {str(k): encode_value(v) for k, v in value.items()}
-    return value
-
-
-def decode_value(value: Any) -> Any:
-    """Inverse of :func:`encode_value` (lists stay lists; dataclasses convert where needed).
-
-    Parameters
-    ----------
-    value : object
-        JSON data written by :func:`encode_value`.
-    """
-    if isinstance(value, dict):
-        if "__ndarray__" in value:
-            arr = np.array(value["__ndarray__"], dtype=value.get("dtype", "float64"))
-            return arr.reshape(value["shape"])
-        if "__float__" in value:
-            return float(value["__float__"])
-        return {k: decode_value(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [decode_value(v) for v in value]
-    return value
 
 
 # ----------------------------------------------------------------------------- results
@@ -431,6 +387,21 @@ class TrainingData:
         return self.level is not None
 
 
+class Choice(NamedTuple):
+    """Settings chosen on the training records (:meth:`Estimator._choose_settings`).
+
+    Attributes
+    ----------
+    estimator : Estimator
+        The estimator with the chosen settings; the fit template fits it on the training records.
+    provenance : callable
+        Adds the record of the choice to the fitted model's provenance (dict -> dict).
+    """
+
+    estimator: Estimator
+    provenance: Callable[[dict[str, Any]], dict[str, Any]]
+
+
 @dataclass(frozen=True, eq=False)
 class Identified:
     """What a family's identification step returns: the model's own parameters and provenance.
@@ -464,8 +435,11 @@ class Estimator(abc.ABC):
        without motion);
     3. read the electrical input of every record, its identified range and whether it takes a
        single level (:class:`TrainingData`);
-    4. call :meth:`_identify`;
-    5. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
+    4. let the family choose settings left open on the training records
+       (:meth:`_choose_settings`, e.g. the LPV hysteretic input's stroke and blend): if it does,
+       fit the estimator with the chosen settings instead and add the choice to its provenance;
+    5. call :meth:`_identify`;
+    6. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
        and provenance (the single-level note, the training records' sampling intervals
        ``record_dt`` [s], wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
 
@@ -543,6 +517,13 @@ class Estimator(abc.ABC):
         self._validate()
         report("preparing the training data")
         records, options, segments = self._training_set(data, options)
+        choice = self._choose_settings(records, options)
+        if choice is not None:
+            model = choice.estimator.fit(records, **options)
+            provenance = choice.provenance(dict(model.provenance))
+            if segments:
+                provenance["segments"] = segments
+            return dataclasses.replace(model, provenance=provenance)
         prepared = self._prepare(records)
         report("identifying")
         result = self._identify(prepared, **options)
@@ -567,6 +548,14 @@ class Estimator(abc.ABC):
         )
         report("done")
         return model
+
+    def _choose_settings(self, records: ExperimentSet, options: Mapping[str, Any]) -> Choice | None:
+        """Settings the family chooses on the training records, or None (the default: none).
+
+        Called by :meth:`fit` with the records the fit sees and the per-fit options; the chosen
+        estimator must leave nothing open (its own call returns None).
+        """
+        return None
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """The family's identification step on the prepared training data (to implement)."""
@@ -665,27 +654,3 @@ SEGMENT_SAMPLES` cut into consecutive segments (bounded work arrays; a note says
                     "derive_velocity / --derive-velocity)",
                 )
         return exps
-
-
-def _has_nan(value: Any) -> bool:
-    """True if a decoded parameter (number, array, nested list / dict) contains a NaN."""
-    if isinstance(value, np.ndarray):
-        return value.dtype.kind in "fc" and bool(np.isnan(value).any())
-    if isinstance(value, float):
-        return math.isnan(value)
-    if isinstance(value, (list, tuple)):
-        return any(_has_nan(v) for v in value)
-    if isinstance(value, Mapping):
-        return any(_has_nan(v) for v in value.values())
-    return False
-
-
-def _check_schema(data: Mapping[str, Any]) -> None:
-    if data.get("schema") != SCHEMA_NAME:
-        raise SchemaError(f"schema: expected {SCHEMA_NAME!r}, got {data.get('schema')!r}")
-    ver = data.get("schema_version")
-    if ver != SCHEMA_VERSION:
-        raise SchemaError(f"schema_version: expected {SCHEMA_VERSION}, got {ver!r}")
-    for key in ("kind", "input", "input_range", "parameters"):
-        if key not in data:
-            raise SchemaError(f"{key}: missing from model file")

@@ -14,7 +14,8 @@ from typing import Any
 
 from mrdamper import kinds
 from mrdamper.errors import SchemaError
-from mrdamper.models.base import Estimator, FittedModel, _check_schema
+from mrdamper.models._json import _check_schema
+from mrdamper.models.base import Estimator, FittedModel
 
 __all__ = [
     "available_models",

@@ -26,7 +26,7 @@ from mrdamper.control.c_render._common import (
     lit,
     solver,
 )
-from mrdamper.control.inverse import horizon_samples, lpv_hysteresis, lpv_law_arrays
+from mrdamper.control.inverse import horizon_samples
 
 __all__ = ["render_lpv"]
 
@@ -303,24 +303,23 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
         inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt) if has_inverse else (0.0, np.inf)
     )
     fmt = fmt_base(model, ctx, lam, rate_step)
-    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
-    blend, stroke = lpv_hysteresis(model)
+    c = model.lpv_input.c_constants()  # the LPV input's constants: what the compiled step reads
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta / model.fs))
     fmt.update(
         n_m=model.n_m,
         n_p=model.n_rho + 1,
-        n_d=gm.shape[1],
+        n_d=c["gamma_m"].shape[1],
         alpha=arr2(model.alpha),
         beta=arr2(model.beta),
         offset=lit(model.offset),
         lag=lit(lag),
-        mode=mode,
-        gm=arr2(gm),
-        gc=arr2(gc),
-        mu_high=arr1(mu_h),
-        mu_low=arr1(mu_l),
-        blend=lit(blend),
-        stroke=lit(stroke),
+        mode=c["mode"],
+        gm=arr2(c["gamma_m"]),
+        gc=arr2(c["gamma_c"]),
+        mu_high=arr1(c["mu_high"]),
+        mu_low=arr1(c["mu_low"]),
+        blend=lit(c["blend"]),
+        stroke=lit(c["stroke"]),
         dt=lit(dt),
         horizon=horizon_samples(model.eta, dt),
         golden=lit(K.GOLDEN),

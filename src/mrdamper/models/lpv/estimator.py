@@ -19,11 +19,12 @@ import pandas as pd
 
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
 from mrdamper.analysis.scheduling import Reading
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
 from mrdamper.models.base import (
+    Choice,
     Estimator,
     FittedModel,
     Identified,
@@ -35,6 +36,7 @@ from mrdamper.models.base import (
 from mrdamper.models.lpv import fit as _lpv_fit
 from mrdamper.models.lpv import inputs as _lpv_inputs
 from mrdamper.models.lpv import kernels as K
+from mrdamper.models.lpv.inputs import LPVInput
 from mrdamper.models.lpv.model import (
     InputSignal,
     LPVModel,
@@ -111,6 +113,18 @@ class LPVEstimator(Estimator):
         over the identified ``rho`` range (every frozen pole of modulus below 0.999 on a
         101-point grid) and the fit refuses, naming the pole, when the returned model would not be
         frozen-stable. ``"warn"``: unconstrained refinement; an unstable result only warns.
+
+    Notes
+    -----
+    ``fit(data, record_weights=None)`` is the fit template of
+    :class:`~mrdamper.models.base.Estimator`; its one option ``record_weights`` gives one
+    non-negative weight per record [-], multiplying that record's share of the least-squares and
+    output-error costs (on top of ``weighting``), e.g. to mix measured records with synthetic ones
+    without duplicating records (default: all 1). A hysteretic input with ``stroke`` or ``blend``
+    left None has them chosen first (the template's settings-choice hook). The fit raises
+    :class:`~mrdamper.errors.IdentificationError` for a rank-deficient regression, too few
+    scheduling levels for ``n_rho``, or (with ``stability="enforce"``) no frozen-stable model,
+    naming the pole.
     """
 
     kind: ClassVar[str] = "lpv"
@@ -150,6 +164,7 @@ class LPVEstimator(Estimator):
 
     def _validate(self) -> None:
         super()._validate()
+        self._input_class().open_settings(self.reading, self.stroke, self.blend)
         check_int("n_m", self.n_m, 1)
         for name in ("n_rho", "laws_degree", "n_bins", "max_nfev"):
             check_int(name, getattr(self, name), 0)
@@ -163,7 +178,7 @@ class LPVEstimator(Estimator):
         prov: dict[str, Any],
         single: bool = False,
     ) -> ZoneLaws | None:
-        if self.input_signal == "v":
+        if not self._input_class().needs_laws:
             return None
         if self.zone_laws is not None:
             return self.zone_laws
@@ -193,59 +208,15 @@ class LPVEstimator(Estimator):
             exps, degree=0 if single else self.laws_degree, by=by, source=self.input
         )
 
-    def fit(
-        self,
-        data: Experiment | Iterable[Experiment],
-        *,
-        record_weights: Sequence[float] | None = None,
-        **options: Any,
-    ) -> TransferFunctionModel:
-        """Identify the model from one record or a collection (records keep their own start).
+    def _choose_settings(self, records: ExperimentSet, options: Mapping[str, Any]) -> Choice | None:
+        """The hysteretic input's ``stroke`` / ``blend`` left None: chosen on the training
+        records (:func:`mrdamper.models.lpv.inputs.fit_choosing`); None when nothing is open."""
+        if not self._input_class().open_settings(self.reading, self.stroke, self.blend):
+            return None
+        return _lpv_inputs.fit_choosing(self, records, options.get("record_weights"))
 
-        Parameters
-        ----------
-        data : Experiment or iterable of Experiment
-            Training records.
-        record_weights : sequence of float, optional
-            One non-negative weight per record [-], multiplying that record's share of the
-            least-squares and output-error costs (on top of ``weighting``); e.g. to mix measured
-            records with synthetic ones without duplicating records. Default: all 1.
-        **options
-            Refused (an error names the option): the LPV estimator takes no other option.
-
-        Raises
-        ------
-        IdentificationError
-            Rank-deficient regression, too few scheduling levels for ``n_rho``, or (with
-            ``stability="enforce"``) no frozen-stable model; the message names the pole.
-        """
-        self._check_fit_options(options)
-        self._validate()
-        if _lpv_inputs.needs_choice(self):  # hysteretic input: stroke / blend on training data
-            records, opts, segments = self._training_set(data, {"record_weights": record_weights})
-            model = cast(
-                TransferFunctionModel,
-                _lpv_inputs.fit_choosing(self, records, opts["record_weights"]),
-            )
-            if segments:
-                model = dataclasses.replace(
-                    model, provenance={**model.provenance, "segments": segments}
-                )
-        else:
-            model = cast(
-                TransferFunctionModel, super().fit(data, record_weights=record_weights, **options)
-            )
-        pmax = float(model.provenance["max_frozen_pole"])
-        if pmax >= 1.0:
-            lo, hi = model.rho_range
-            warnings.warn(
-                f"{self.kind}: identified model is not frozen-stable over rho in "
-                f"[{lo:.4g}, {hi:.4g}] (max frozen pole modulus {pmax:.4f} at rho = "
-                f"{model.provenance['max_frozen_pole_rho']:.4g})",
-                RuntimeWarning,
-                stacklevel=2,
-            )
-        return model
+    def _input_class(self) -> type[LPVInput]:
+        return _lpv_inputs.input_class(self.input_signal)
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """Joint least squares, then output-error refinement under frozen stability."""
@@ -260,21 +231,14 @@ class LPVEstimator(Estimator):
         prov: dict[str, Any] = {}
         report("zone laws")
         laws = self._laws(exps, rhos, prov, single=data.single)
+        lpv_input = _lpv_inputs.from_saved(
+            self.input_signal, laws, self.reading, self.stroke, self.blend
+        )
         F, U, R, w = [], [], [], []
         for k, (e, el) in enumerate(zip(exps, data.electrical)):
             report("LPV input signals", k, len(exps))
             e.require_samples(self.n_m + 2, "LPV identification")
-            u, rho = model_signals(
-                e,
-                el,
-                fs=fs,
-                eta=self.eta,
-                input_signal=self.input_signal,
-                zone_laws=laws,
-                reading=self.reading,
-                stroke=self.stroke,
-                blend=self.blend,
-            )
+            u, rho = model_signals(e, el, fs=fs, eta=self.eta, lpv_input=lpv_input)
             Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
             U.append(u)
@@ -340,19 +304,26 @@ class LPVEstimator(Estimator):
             for c in K.split_theta(fit.theta, self.n_m, n_p)
         )
         prov.update(max_frozen_pole=pmax, max_frozen_pole_rho=rho_at, frozen_stable=pmax < 1.0)
+        if pmax >= 1.0:  # stability="warn"
+            warnings.warn(
+                f"{self.kind}: identified model is not frozen-stable over rho in "
+                f"[{rho_range[0]:.4g}, {rho_range[1]:.4g}] (max frozen pole modulus {pmax:.4f} at "
+                f"rho = {rho_at:.4g})",
+                RuntimeWarning,
+                stacklevel=3,
+            )
         return Identified(
             parameters={
                 "alpha": alpha,
                 "beta": beta,
                 "offset": fit.offset,
                 "fs": fs,
-                "input_signal": self.input_signal,
                 "reading": self.reading,
                 "zone_laws": laws,
                 "eta": self.eta,
                 "rho_range": rho_range,
                 "force_bound": bound,
-                **_lpv_inputs.model_settings(self),
+                **lpv_input.saved(),  # input_signal, stroke, blend
             },
             provenance=prov,
         )
@@ -436,7 +407,8 @@ def select_order(
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", RuntimeWarning)
-                    m = LPVEstimator(n_m=n_m, n_rho=n_rho, **settings).fit(tr)
+                    est = LPVEstimator(n_m=n_m, n_rho=n_rho, **settings)
+                    m = cast(TransferFunctionModel, est.fit(tr))
                     row["train_esr"] = float(np.mean([m.score(e).esr for e in tr]))
                     sc = [m.score(e) for e in va]
                 row.update(

@@ -1,34 +1,71 @@
-"""The hysteretic LPV input (``input_signal="hysteretic"``): settings, model input and the choice
-of its stroke scale and pre-yield share on the training records.
+"""The LPV input ``u``: one strategy object per kind of input, and the choice of its settings.
 
-The input itself is :func:`mrdamper.analysis.hysteretic.hysteretic_input`. When the estimator's
-``stroke`` [m] or ``blend`` [-] is None, the model is fitted for every value of a small grid and
-the one with the lowest mean free-run ESR on the training records is returned (the grid and its
-scores are in ``provenance["hysteretic_choice"]``). Nothing but the training records is used.
+The model's input is built from the velocity and the scheduling variable ``rho`` in one of three
+ways, each a class with one interface (:class:`LPVInput`):
+
+========================  ====================================================================
+:class:`StaticInput`      ``"u"``: the paper's zone-law input of eqs. 19-22 (``reading``)
+:class:`HystereticInput`  ``"hysteretic"``: the same with a Dahl pre-yield state of stroke
+                          scale ``stroke`` [m] and share ``blend`` [-]
+                          (:mod:`mrdamper.analysis.hysteretic`)
+:class:`VelocityInput`    ``"v"``: the velocity itself (ablation)
+========================  ====================================================================
+
+The interface: :meth:`~LPVInput.signal` (the input of a record at the model rate),
+:meth:`~LPVInput.kernel_arrays` (what the per-sample step reads: the zone-law mode and arrays and
+the Dahl state's ``blend`` / ``stroke``; the compiled step, the inverse, the quarter car and the C
+rendering all use these numbers), :meth:`~LPVInput.dahl_along` (the Dahl state along a motion),
+:meth:`~LPVInput.steady` (the input of a steady motion), :meth:`~LPVInput.c_constants` (the
+input's constants in the C template) and :meth:`~LPVInput.saved` (the fields of the model file:
+``input_signal`` is the saved name, :data:`INPUTS` maps it back; files of earlier versions load
+unchanged). A later input is one more class and one more row of :data:`INPUTS`.
+
+When a hysteretic estimator's ``stroke`` [m] or ``blend`` [-] is None, the model is fitted for
+every value of a small grid and the one with the lowest mean free-run ESR on the training records
+is returned (:func:`fit_choosing`, the estimator's settings-choice hook of the fit template; the
+grid and its scores are in ``provenance["hysteretic_choice"]``). Nothing but the training records
+is used.
 """
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import warnings
 from collections.abc import Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
+import numpy.typing as npt
 
+from mrdamper.analysis.hysteretic import dahl_state, hysteretic_input
+from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
+from mrdamper.models.base import Choice
+from mrdamper.models.lpv.step import MODE_CONTINUOUS, MODE_LITERAL, MODE_V, zone_input
 from mrdamper.progress import report, section
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.analysis import ZoneLaws
 
 __all__ = [
     "BLENDS",
+    "INPUTS",
     "STROKES",
-    "check_model",
+    "HystereticInput",
+    "InputArrays",
+    "LPVInput",
+    "StaticInput",
+    "VelocityInput",
     "fit_choosing",
-    "model_settings",
-    "needs_choice",
+    "from_saved",
+    "input_class",
 ]
+
+FloatArray = npt.NDArray[np.float64]
 
 #: Candidate stroke scales ``x_y`` [m] when ``stroke`` is not given.
 STROKES: tuple[float, ...] = (5e-5, 1e-4, 2e-4)
@@ -40,6 +77,32 @@ CHOICE_THRESHOLD = 250_000
 CHOICE_BUDGET = 120_000
 #: Output-error iteration budget of each candidate's fit (the chosen one is refitted in full).
 CHOICE_NFEV = 10
+
+
+class InputArrays(NamedTuple):
+    """The input as the per-sample step reads it (:func:`~mrdamper.models.lpv.step.zone_input`).
+
+    Attributes
+    ----------
+    mode : int
+        ``MODE_V`` (``u = v``), ``MODE_CONTINUOUS`` or ``MODE_LITERAL`` (reading of eq. 22).
+    gamma_m, gamma_c : ndarray, shape (3, degree + 1)
+        Zone-law slopes and intercepts (zeros of shape (3, 1) for the velocity input).
+    mu_high, mu_low : ndarray, shape (2,)
+        Breakpoint laws (zeros for the velocity input).
+    blend : float
+        Share of the Dahl state in the pre-yield input [-] (0: a static input).
+    stroke : float
+        Stroke scale of the Dahl state [m] (0 for the static inputs).
+    """
+
+    mode: int
+    gamma_m: FloatArray
+    gamma_c: FloatArray
+    mu_high: FloatArray
+    mu_low: FloatArray
+    blend: float
+    stroke: float
 
 
 def _check_stroke(value: Any) -> float:
@@ -58,59 +121,208 @@ def _check_blend(value: Any) -> float:
     return float(value)
 
 
-def _check_others(obj: Any) -> None:
-    for name in ("stroke", "blend"):
-        if getattr(obj, name) is not None:
+class LPVInput(abc.ABC):
+    """One kind of LPV input (immutable); see the module docstring for the interface."""
+
+    #: Saved name (the model file's ``input_signal``).
+    name: ClassVar[str]
+    #: Whether the input is built with zone laws (the estimator fits them when not given).
+    needs_laws: ClassVar[bool] = True
+    #: Zone laws the input is built with (None: the input needs none).
+    laws: ZoneLaws | None = None
+
+    @classmethod
+    def open_settings(cls, reading: str, stroke: Any, blend: Any) -> tuple[str, ...]:
+        """Validate an estimator's settings of this input; the names left to choose on the
+        training records (none by default: a static input takes no ``stroke`` / ``blend``)."""
+        for name, value in (("stroke", stroke), ("blend", blend)):
+            if value is not None:
+                raise DataValidationError(
+                    name,
+                    f"applies to input_signal='hysteretic' only; got {name}={value!r} "
+                    f"with input_signal={cls.name!r}",
+                )
+        return ()
+
+    @classmethod
+    @abc.abstractmethod
+    def build(cls, laws: ZoneLaws | None, reading: Reading, stroke: Any, blend: Any) -> LPVInput:
+        """The input of a fitted model from its saved fields (validated; one-line errors)."""
+
+    @abc.abstractmethod
+    def signal(self, v: FloatArray, rho: FloatArray, dt: float) -> FloatArray:
+        """The input ``u`` [m/s] of one record from its velocity [m/s] and ``rho`` at the model
+        rate (sample time ``dt`` [s])."""
+
+    @abc.abstractmethod
+    def kernel_arrays(self) -> InputArrays:
+        """The input as the per-sample step, the inverse and the quarter car read it."""
+
+    @abc.abstractmethod
+    def steady(self, v_ref: float, rho: float) -> float:
+        """The input [m/s] of a steady motion at ``v_ref`` [m/s] (a Dahl state settled at
+        ``sign(v_ref)``) and frozen ``rho``."""
+
+    def dahl_along(self, v: FloatArray, dt: float) -> FloatArray:
+        """The Dahl state [-] along the velocity ``v`` [m/s] from rest (zeros: no Dahl state)."""
+        return np.zeros(v.size)
+
+    def saved(self) -> dict[str, Any]:
+        """The model's fields that carry the input (``input_signal``, ``stroke``, ``blend``)."""
+        return {"input_signal": self.name, "stroke": None, "blend": None}
+
+    def c_constants(self) -> dict[str, Any]:
+        """The input's constants in the C template (``mode``, law arrays, ``blend``,
+        ``stroke``): the numbers the compiled step reads, so C and Python agree by construction."""
+        return self.kernel_arrays()._asdict()
+
+
+def _law_arrays(laws: ZoneLaws) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    return (
+        np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
+        np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
+        np.asarray(laws.mu_high, dtype=np.float64),
+        np.asarray(laws.mu_low, dtype=np.float64),
+    )
+
+
+def _need_laws(name: str, laws: ZoneLaws | None) -> ZoneLaws:
+    if laws is None:
+        raise DataValidationError("zone_laws", f"input_signal={name!r} needs zone laws to build u")
+    return laws
+
+
+@dataclass(frozen=True, eq=False)
+class VelocityInput(LPVInput):
+    """``u = v``: the velocity itself (ablation)."""
+
+    name: ClassVar[str] = "v"
+    needs_laws: ClassVar[bool] = False
+
+    @classmethod
+    def build(cls, laws: ZoneLaws | None, reading: Reading, stroke: Any, blend: Any) -> LPVInput:
+        cls.open_settings(reading, stroke, blend)
+        return cls()
+
+    def signal(self, v: FloatArray, rho: FloatArray, dt: float) -> FloatArray:
+        return v
+
+    def kernel_arrays(self) -> InputArrays:
+        z = np.zeros((3, 1))
+        return InputArrays(MODE_V, z, z.copy(), np.zeros(2), np.zeros(2), 0.0, 0.0)
+
+    def steady(self, v_ref: float, rho: float) -> float:
+        return float(v_ref)
+
+
+@dataclass(frozen=True, eq=False)
+class StaticInput(LPVInput):
+    """The zone-law input ``u(v, rho)`` of eqs. 19-22 (the paper's), reading ``reading``."""
+
+    name: ClassVar[str] = "u"
+    laws: ZoneLaws
+    reading: Reading = "continuous"
+
+    @classmethod
+    def build(cls, laws: ZoneLaws | None, reading: Reading, stroke: Any, blend: Any) -> LPVInput:
+        cls.open_settings(reading, stroke, blend)
+        return cls(_need_laws(cls.name, laws), reading)
+
+    def signal(self, v: FloatArray, rho: FloatArray, dt: float) -> FloatArray:
+        return np.asarray(self.laws.scheduling_input(v, rho, reading=self.reading))
+
+    def kernel_arrays(self) -> InputArrays:
+        mode = MODE_CONTINUOUS if self.reading == "continuous" else MODE_LITERAL
+        return InputArrays(mode, *_law_arrays(self.laws), 0.0, 0.0)
+
+    def steady(self, v_ref: float, rho: float) -> float:
+        u = self.laws.scheduling_input(np.array([v_ref]), np.array([rho]), reading=self.reading)
+        return float(u[0])
+
+
+@dataclass(frozen=True, eq=False)
+class HystereticInput(StaticInput):
+    """The zone-law input with a Dahl pre-yield state (continuous reading; see
+    :mod:`mrdamper.analysis.hysteretic`): stroke scale ``stroke`` [m], share ``blend`` [-]."""
+
+    name: ClassVar[str] = "hysteretic"
+    stroke: float = 0.0
+    blend: float = 0.0
+
+    @classmethod
+    def open_settings(cls, reading: str, stroke: Any, blend: Any) -> tuple[str, ...]:
+        if reading != "continuous":
             raise DataValidationError(
-                name,
-                f"applies to input_signal='hysteretic' only; got {name}={getattr(obj, name)!r} "
-                f"with input_signal={obj.input_signal!r}",
+                "reading",
+                f"the hysteretic input builds on the continuous reading, got {reading!r}",
             )
+        if stroke is not None:
+            _check_stroke(stroke)
+        if blend is not None:
+            _check_blend(blend)
+        return tuple(n for n, val in (("stroke", stroke), ("blend", blend)) if val is None)
 
+    @classmethod
+    def build(cls, laws: ZoneLaws | None, reading: Reading, stroke: Any, blend: Any) -> LPVInput:
+        if stroke is None or blend is None:
+            raise DataValidationError(
+                "stroke", "input_signal='hysteretic' needs both stroke [m] and blend [-]"
+            )
+        cls.open_settings(reading, stroke, blend)
+        laws = _need_laws(cls.name, laws)
+        return cls(laws, "continuous", _check_stroke(stroke), _check_blend(blend))
 
-def check_model(model: Any) -> None:
-    """Validate (and store as floats) a fitted model's ``stroke`` and ``blend``."""
-    if model.input_signal != "hysteretic":
-        _check_others(model)
-        return
-    if model.stroke is None or model.blend is None:
-        raise DataValidationError(
-            "stroke", "input_signal='hysteretic' needs both stroke [m] and blend [-]"
+    def signal(self, v: FloatArray, rho: FloatArray, dt: float) -> FloatArray:
+        return hysteretic_input(self.laws, v, rho, dt, self.stroke, self.blend)
+
+    def kernel_arrays(self) -> InputArrays:
+        return InputArrays(MODE_CONTINUOUS, *_law_arrays(self.laws), self.blend, self.stroke)
+
+    def steady(self, v_ref: float, rho: float) -> float:
+        if self.blend == 0.0:  # the static input exactly
+            return super().steady(v_ref, rho)
+        a = self.kernel_arrays()
+        z_ss = float(np.sign(v_ref))  # steady motion: the Dahl state has reached sign(v_ref)
+        return float(
+            zone_input(
+                float(v_ref), rho, a.mode, a.gamma_m, a.gamma_c, a.mu_high, a.mu_low, z_ss, a.blend
+            )
         )
-    if model.reading != "continuous":
+
+    def dahl_along(self, v: FloatArray, dt: float) -> FloatArray:
+        if self.blend == 0.0:
+            return np.zeros(v.size)
+        return np.asarray(dahl_state(v, dt, self.stroke))
+
+    def saved(self) -> dict[str, Any]:
+        return {"input_signal": self.name, "stroke": self.stroke, "blend": self.blend}
+
+
+#: Every LPV input by its saved name (the model file's and the estimator's ``input_signal``).
+INPUTS: dict[str, type[LPVInput]] = {
+    c.name: c for c in (StaticInput, VelocityInput, HystereticInput)
+}
+
+
+def input_class(name: str) -> type[LPVInput]:
+    """The input class saved as ``name``; an unknown name is refused in one line."""
+    try:
+        return INPUTS[name]
+    except (KeyError, TypeError):
         raise DataValidationError(
-            "reading",
-            f"the hysteretic input builds on the continuous reading, got {model.reading!r}",
-        )
-    object.__setattr__(model, "stroke", _check_stroke(model.stroke))
-    object.__setattr__(model, "blend", _check_blend(model.blend))
+            "input_signal", f"expected one of {sorted(INPUTS)}, got {name!r}"
+        ) from None
 
 
-def model_settings(est: Any) -> dict[str, Any]:
-    """Fields of the fitted model that carry the hysteretic input's settings."""
-    if est.input_signal != "hysteretic":
-        return {}
-    return {"stroke": est.stroke, "blend": est.blend}
+def from_saved(
+    name: str, laws: ZoneLaws | None, reading: Reading, stroke: Any, blend: Any
+) -> LPVInput:
+    """The input of a fitted model from its saved fields (``input_signal`` and the others)."""
+    return input_class(name).build(laws, reading, stroke, blend)
 
 
-def needs_choice(est: Any) -> bool:
-    """Validate the estimator's ``stroke`` / ``blend``; True when one must be chosen."""
-    if est.input_signal != "hysteretic":
-        _check_others(est)
-        return False
-    if est.reading != "continuous":
-        raise DataValidationError(
-            "reading", f"the hysteretic input builds on the continuous reading, got {est.reading!r}"
-        )
-    if est.stroke is not None:
-        _check_stroke(est.stroke)
-    if est.blend is not None:
-        _check_blend(est.blend)
-    return est.stroke is None or est.blend is None
-
-
-def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] | None) -> Any:
-    """Fit every grid candidate of ``stroke`` / ``blend``; keep the lowest mean training ESR.
+def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] | None) -> Choice:
+    """Fit every grid candidate of ``stroke`` / ``blend``; choose the lowest mean training ESR.
 
     The criterion is the mean free-run ESR over the training records (weighted by
     ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises, of each
@@ -119,6 +331,12 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
     long campaigns (more than :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
     scored on evenly spread 20 s windows of the records (:data:`CHOICE_BUDGET` samples in all), and
     the chosen candidate is then fitted on every record.
+
+    Returns
+    -------
+    Choice
+        The estimator with the chosen ``stroke`` and ``blend`` (the fit template fits it on every
+        training record) and the provenance of the choice.
 
     Raises
     ------
@@ -133,7 +351,6 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
         threshold=CHOICE_THRESHOLD,
         budget=CHOICE_BUDGET,
     )
-    full, full_weights = exps, record_weights
     if plan is not None:  # long campaign: choose on windows, refit the choice on everything
         exps = ExperimentSet(
             [exps[r].slice(a, b, name=f"{exps[r].name}[{a}:{b}]") for r, a, b in plan],
@@ -176,21 +393,26 @@ def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] 
         )
     report("hysteretic input: candidate", n_cand, n_cand)
     final = dataclasses.replace(est, stroke=best[1], blend=best[2])
-    model = final.fit(full, record_weights=full_weights)
-    prov = {**model.provenance, "hysteretic_choice": rows}
-    prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
-    if plan is not None:
-        prov["hysteretic_windows"] = {
-            "windows": len(plan),
-            "samples_used": int(sum(b - a for _, a, b in plan)),
-            "note": "stroke and blend chosen on evenly spread windows; the model fitted on all",
-        }
-    prov["hysteretic_note"] = (
-        f"stroke = {model.stroke:g} m and blend = {model.blend:g} chosen on the training records "
-        f"(lowest mean free-run ESR of {len(rows)} candidates, each refined with at most "
-        f"{min(est.max_nfev, CHOICE_NFEV)} iterations)"
-        if np.isfinite(best[0])
-        else f"every candidate diverged in free run on the training records; the first "
-        f"(stroke = {model.stroke:g} m, blend = {model.blend:g}) is returned"
-    )
-    return dataclasses.replace(model, provenance=prov)
+    chosen_stroke, chosen_blend = best[1], best[2]
+    finite = bool(np.isfinite(best[0]))
+
+    def provenance(prov: dict[str, Any]) -> dict[str, Any]:
+        prov = {**prov, "hysteretic_choice": rows}
+        prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
+        if plan is not None:
+            prov["hysteretic_windows"] = {
+                "windows": len(plan),
+                "samples_used": int(sum(b - a for _, a, b in plan)),
+                "note": "stroke and blend chosen on evenly spread windows; the model fitted on all",
+            }
+        prov["hysteretic_note"] = (
+            f"stroke = {chosen_stroke:g} m and blend = {chosen_blend:g} chosen on the training "
+            f"records (lowest mean free-run ESR of {len(rows)} candidates, each refined with at "
+            f"most {min(est.max_nfev, CHOICE_NFEV)} iterations)"
+            if finite
+            else f"every candidate diverged in free run on the training records; the first "
+            f"(stroke = {chosen_stroke:g} m, blend = {chosen_blend:g}) is returned"
+        )
+        return prov
+
+    return Choice(final, provenance)

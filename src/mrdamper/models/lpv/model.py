@@ -22,13 +22,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 import pandas as pd
 
 from mrdamper.analysis import ZoneLaws
-from mrdamper.analysis.hysteretic import hysteretic_input
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
@@ -38,6 +37,7 @@ from mrdamper.models.base import (
 from mrdamper.models.lpv import inputs as _lpv_inputs
 from mrdamper.models.lpv import kernels as K
 from mrdamper.models.lpv import step as _lpv_step
+from mrdamper.models.lpv.inputs import LPVInput
 from mrdamper.models.protocols import ScheduledForm
 from mrdamper.models.rates import (
     to_model_rate,
@@ -63,11 +63,7 @@ def model_signals(
     *,
     fs: float,
     eta: float | None,
-    input_signal: InputSignal,
-    zone_laws: ZoneLaws | None,
-    reading: Reading,
-    stroke: float | None = None,
-    blend: float | None = None,
+    lpv_input: LPVInput,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The LPV model's input ``u`` and scheduling variable ``rho`` at the model rate, one record.
 
@@ -77,10 +73,8 @@ def model_signals(
        through the drive lag ``d rho/dt = -eta (rho - input)`` when ``eta`` is set, resampled
        from the record rate to ``fs``;
     2. the velocity [m/s], resampled to ``fs``;
-    3. ``u``: the scheduling input of the zone laws at ``(v, rho)`` (``input_signal="u"``,
-       reading ``reading`` of eq. 22), the same with a hysteretic pre-yield state driven by the
-       displacement (``input_signal="hysteretic"``, :mod:`mrdamper.analysis.hysteretic`), or the
-       velocity itself (``input_signal="v"``).
+    3. ``u``: the LPV input built from them (:meth:`~mrdamper.models.lpv.inputs.LPVInput.signal`:
+       the zone-law input, the same with a hysteretic pre-yield state, or the velocity).
 
     Parameters
     ----------
@@ -92,15 +86,8 @@ def model_signals(
         Model rate [Hz].
     eta : float or None
         Drive-lag rate [1/s]; None: ``rho`` is the electrical input.
-    input_signal : {"u", "v", "hysteretic"}
-        LPV input.
-    zone_laws : ZoneLaws or None
-        Laws that build ``u`` (needed unless ``input_signal="v"``).
-    reading : {"continuous", "literal"}
-        Reading of eq. (22).
-    stroke, blend : float, optional
-        Stroke scale [m] and pre-yield share [-] of the hysteretic input (needed for
-        ``input_signal="hysteretic"``, ignored otherwise).
+    lpv_input : LPVInput
+        The LPV input (:mod:`mrdamper.models.lpv.inputs`).
 
     Returns
     -------
@@ -112,20 +99,7 @@ def model_signals(
         rho = K.first_order_lag(rho, experiment.dt, eta)
     rho = to_model_rate(np.asarray(rho, dtype=np.float64), experiment.fs, fs)
     v = to_model_rate(np.asarray(experiment.v), experiment.fs, fs)
-    if input_signal == "v":
-        u = v
-    elif zone_laws is None:
-        raise DataValidationError(
-            "zone_laws", f"input_signal={input_signal!r} needs zone laws to build u"
-        )
-    elif input_signal == "hysteretic":
-        if stroke is None or blend is None:
-            raise DataValidationError(
-                "stroke", "input_signal='hysteretic' needs both stroke [m] and blend [-]"
-            )
-        u = hysteretic_input(zone_laws, v, rho, 1.0 / fs, stroke, blend)
-    else:
-        u = zone_laws.scheduling_input(v, rho, reading=reading)
+    u = lpv_input.signal(np.asarray(v, dtype=np.float64), rho, 1.0 / fs)
     return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(rho, dtype=np.float64)
 
 
@@ -148,8 +122,9 @@ class TransferFunctionModel(FittedModel):
     fs : float
         Sampling rate the discrete model runs at [Hz].
     input_signal : {"u", "v", "hysteretic"}
-        LPV input: the scheduling input of the zone laws, the raw velocity, or the zone-law input
-        with a hysteretic pre-yield state (:mod:`mrdamper.analysis.hysteretic`).
+        Saved name of the LPV input: the scheduling input of the zone laws, the raw velocity, or
+        the zone-law input with a hysteretic pre-yield state. The model builds the input object
+        from it and the fields below (:attr:`lpv_input`, :mod:`mrdamper.models.lpv.inputs`).
     stroke, blend : float or None
         Stroke scale [m] and pre-yield share [-] of the hysteretic input (None otherwise).
     reading : {"continuous", "literal"}
@@ -181,7 +156,6 @@ class TransferFunctionModel(FittedModel):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _lpv_inputs.check_model(self)  # hysteretic input: stroke and blend
         set_ = object.__setattr__
         for name in ("alpha", "beta"):
             arr = np.array(getattr(self, name), dtype=np.float64)
@@ -197,14 +171,13 @@ class TransferFunctionModel(FittedModel):
             )
         if isinstance(self.zone_laws, Mapping):
             set_(self, "zone_laws", ZoneLaws.from_dict(self.zone_laws))
-        if self.input_signal not in ("u", "v", "hysteretic"):
-            raise DataValidationError(
-                "input_signal", f"expected 'u', 'v' or 'hysteretic', got {self.input_signal!r}"
-            )
-        if self.input_signal != "v" and self.zone_laws is None:
-            raise DataValidationError(
-                "zone_laws", f"input_signal={self.input_signal!r} needs zone laws to build u"
-            )
+        lpv_input = _lpv_inputs.from_saved(
+            self.input_signal, self.zone_laws, self.reading, self.stroke, self.blend
+        )
+        set_(self, "_lpv_input", lpv_input)
+        saved = lpv_input.saved()
+        set_(self, "stroke", saved["stroke"])
+        set_(self, "blend", saved["blend"])
         if not self.fs > 0:
             raise DataValidationError("fs", f"expected a positive rate [Hz], got {self.fs}")
         set_(self, "offset", float(self.offset))
@@ -251,6 +224,11 @@ class TransferFunctionModel(FittedModel):
             )
         return np.asarray(e, dtype=np.float64)
 
+    @property
+    def lpv_input(self) -> LPVInput:
+        """The model's LPV input (:mod:`mrdamper.models.lpv.inputs`), built from its fields."""
+        return cast(LPVInput, self.__dict__["_lpv_input"])
+
     def model_signals(self, experiment: Experiment) -> tuple[np.ndarray, np.ndarray]:
         """``(u, rho)`` at the model rate ``fs`` for one record (see :func:`model_signals`)."""
         return model_signals(
@@ -258,11 +236,7 @@ class TransferFunctionModel(FittedModel):
             self.electrical_input(experiment),
             fs=self.fs,
             eta=self.eta,
-            input_signal=self.input_signal,
-            zone_laws=self.zone_laws,
-            reading=self.reading,
-            stroke=self.stroke,
-            blend=self.blend,
+            lpv_input=self.lpv_input,
         )
 
     def law_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -272,19 +246,12 @@ class TransferFunctionModel(FittedModel):
         -------
         gamma_m, gamma_c : ndarray, shape (3, degree + 1)
             Slope and intercept laws (float64, C-contiguous); zeros of shape (3, 1) when the input
-            is the velocity (``input_signal="v"``) or the model has no laws.
+            is the velocity (``input_signal="v"``).
         mu_high, mu_low : ndarray, shape (2,)
             Breakpoint laws; zeros in the same case.
         """
-        laws = self.zone_laws
-        if self.input_signal == "v" or laws is None:
-            return np.zeros((3, 1)), np.zeros((3, 1)), np.zeros(2), np.zeros(2)
-        return (
-            np.ascontiguousarray(laws.gamma_m, dtype=np.float64),
-            np.ascontiguousarray(laws.gamma_c, dtype=np.float64),
-            np.asarray(laws.mu_high, dtype=np.float64),
-            np.asarray(laws.mu_low, dtype=np.float64),
-        )
+        a = self.lpv_input.kernel_arrays()
+        return a.gamma_m, a.gamma_c, a.mu_high, a.mu_low
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N] from the record's velocity and electrical input.
@@ -322,27 +289,20 @@ class TransferFunctionModel(FittedModel):
             Interval [s] and largest velocity [m/s] the step will see; unused by this family
             (the common signature of :meth:`~mrdamper.models.FittedModel.step`).
         """
-        gm, gc, mu_h, mu_l = self.law_arrays()
-        if self.input_signal == "v" or self.zone_laws is None:
-            mode = _lpv_step.MODE_V
-        elif self.reading == "continuous":
-            mode = _lpv_step.MODE_CONTINUOUS
-        else:
-            mode = _lpv_step.MODE_LITERAL
-        hys = self.input_signal == "hysteretic"
+        a = self.lpv_input.kernel_arrays()
         form = _lpv_step.LPVForm(
             np.ascontiguousarray(self.alpha),
             np.ascontiguousarray(self.beta),
             float(self.offset),
             float(self.force_bound),
             -1.0 if self.eta is None else float(self.eta),
-            mode,
-            gm,
-            gc,
-            mu_h,
-            mu_l,
-            float(self.blend) if hys and self.blend else 0.0,
-            float(self.stroke) if hys and self.stroke else 0.0,
+            a.mode,
+            a.gamma_m,
+            a.gamma_c,
+            a.mu_high,
+            a.mu_low,
+            a.blend,
+            a.stroke,
         )
         feedthrough = self.kind == "lpv" and self.eta is None
         return _lpv_step.make_step(self.kind, form, self.fs, feedthrough)
@@ -396,7 +356,7 @@ class LPVModel(TransferFunctionModel):
         ``stroke``: the kernels step the Dahl state along the motion and rebuild ``u`` from
         ``(v, z, rho)``.
         """
-        gm, gc, mu_h, mu_l = self.law_arrays()
+        a = self.lpv_input.kernel_arrays()
         return ScheduledForm(
             alpha=np.ascontiguousarray(self.alpha),
             beta=np.ascontiguousarray(self.beta),
@@ -405,12 +365,12 @@ class LPVModel(TransferFunctionModel):
             eta=self.eta,
             input_signal=self.input_signal,
             reading=self.reading,
-            gamma_m=gm,
-            gamma_c=gc,
-            mu_high=mu_h,
-            mu_low=mu_l,
-            blend=float(self.blend) if self.input_signal == "hysteretic" and self.blend else 0.0,
-            stroke=float(self.stroke) if self.input_signal == "hysteretic" and self.stroke else 0.0,
+            gamma_m=a.gamma_m,
+            gamma_c=a.gamma_c,
+            mu_high=a.mu_high,
+            mu_low=a.mu_low,
+            blend=a.blend,
+            stroke=a.stroke,
         )
 
 
