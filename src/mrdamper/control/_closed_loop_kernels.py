@@ -19,7 +19,7 @@ __all__ = ["run_loop", "step_inverse"]
 
 
 @njit(cache=False)
-def _lead_force(
+def _lead_force(  # type: ignore[no-untyped-def]
     force, advance, form, state, scratch, x, v, e, dt, n_lead, offset
 ):  # pragma: no cover - numba
     """Mean model force (rest force removed) over ``n_lead`` samples of ``dt`` ahead, with the
@@ -37,7 +37,7 @@ def _lead_force(
 
 
 @njit(cache=False)
-def step_inverse(
+def step_inverse(  # type: ignore[no-untyped-def]
     force, advance, form, state, scratch, x, v, dt, n_lead, offset, target, a, b, prev, lam2, n_pts
 ):  # pragma: no cover - numba
     """Regularised inverse of a model through its step, one control sample.
@@ -78,7 +78,7 @@ def step_inverse(
 
 
 @njit(cache=False)
-def run_loop(
+def run_loop(  # type: ignore[no-untyped-def]
     zr,
     h,
     n_sub,

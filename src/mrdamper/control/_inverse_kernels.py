@@ -49,7 +49,7 @@ N_GOLDEN = 50
 
 
 @njit(cache=True)
-def lpv_inverse(
+def lpv_inverse(  # type: ignore[no-untyped-def]
     v,
     F_desired,
     alpha,
@@ -138,7 +138,7 @@ def lpv_inverse(
 
 
 @njit(cache=True)
-def horizon_cost(
+def horizon_cost(  # type: ignore[no-untyped-def]
     cf,
     yb,
     ub,
@@ -202,7 +202,7 @@ def horizon_cost(
 
 
 @njit(cache=True)
-def _horizon_j(
+def _horizon_j(  # type: ignore[no-untyped-def]
     cf,
     yb,
     ub,
@@ -262,7 +262,7 @@ def _horizon_j(
 
 
 @njit(cache=True)
-def horizon_step(
+def horizon_step(  # type: ignore[no-untyped-def]
     cf,
     yb,
     ub,
@@ -301,8 +301,8 @@ def horizon_step(
     us = np.zeros(n_m)
     c2 = np.zeros(n_p)
 
-    def cost(r):  # the horizon cost at rho = r (inlined by numba)
-        return _horizon_j(
+    def cost(r: float) -> float:  # the horizon cost at rho = r (inlined by numba)
+        return _horizon_j(  # type: ignore[no-any-return]  # numba kernel, untyped
             cf,
             yb,
             ub,
@@ -365,7 +365,7 @@ def horizon_step(
 
 
 @njit(cache=True)
-def past_buffers(y, u, k, yb, ub):  # pragma: no cover - numba
+def past_buffers(y, u, k, yb, ub):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """``yb[j] = y[k-1-j]``, ``ub[j] = u[k-1-j]`` (zero before the start).
 
     Returns the entries in use.
@@ -379,7 +379,7 @@ def past_buffers(y, u, k, yb, ub):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def lpv_inverse_reg(
+def lpv_inverse_reg(  # type: ignore[no-untyped-def]
     v,
     F_desired,
     alpha,
@@ -425,7 +425,7 @@ def lpv_inverse_reg(
 
 
 @njit(cache=True)
-def lpv_inverse_reg_hys(
+def lpv_inverse_reg_hys(  # type: ignore[no-untyped-def]
     v,
     F_desired,
     alpha,
@@ -538,7 +538,7 @@ def lpv_inverse_reg_hys(
 
 
 @njit(cache=True)
-def static_inverse_reg(
+def static_inverse_reg(  # type: ignore[no-untyped-def]
     x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step, lag
 ):  # pragma: no cover
     """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`).

@@ -89,7 +89,7 @@ def force_authority(model: Any, v_ref: float) -> float:
 
         def steady(r: float) -> float:
             gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
-            return gain * lpv_input.steady(float(v_ref), r)
+            return gain * float(lpv_input.steady(float(v_ref), r))
 
         return abs(steady(hi) - steady(lo)) / (hi - lo)
     comp, power, theta, f0 = static_map_arrays(model)

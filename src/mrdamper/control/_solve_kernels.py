@@ -27,7 +27,7 @@ _N_BISECT = 200
 
 
 @njit(cache=True)
-def _bisect(c, target, deriv, a, b):  # pragma: no cover - numba
+def _bisect(c, target, deriv, a, b):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Root of ``poly(c) - target`` (or of the derivative) in ``[a, b]`` given a sign change."""
     fa = _dpoly(c, a) if deriv else _poly(c, a) - target
     for _ in range(_N_BISECT):
@@ -45,7 +45,7 @@ def _bisect(c, target, deriv, a, b):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def _nearest_root(c, target, lo, hi, prev, n_grid):  # pragma: no cover - numba
+def _nearest_root(c, target, lo, hi, prev, n_grid):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Root of ``poly(c) - target`` in ``[lo, hi]`` nearest ``prev`` (NaN when no sign change)."""
     h = (hi - lo) / n_grid
     best = np.nan
@@ -72,7 +72,7 @@ def _nearest_root(c, target, lo, hi, prev, n_grid):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # pragma: no cover - numba
+def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Admissible ``r`` in ``[lo, hi]`` with ``|poly(c)(r) - target| <= tol`` nearest ``prev``.
 
     ``prev`` itself is kept when it meets the band; otherwise the exact solution (root of
@@ -127,20 +127,20 @@ def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # pragma: no cover - 
 
 
 @njit(cache=True)
-def _slope_poly(cf, target, r, prev, lam2):  # pragma: no cover - numba
+def _slope_poly(cf, target, r, prev, lam2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Half the derivative of the regularised objective, ``(F - target) F' + lam2 (r - prev)``."""
     return (_poly(cf, r) - target) * _dpoly(cf, r) + lam2 * (r - prev)
 
 
 @njit(cache=True)
-def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # pragma: no cover - numba
+def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     return (sp_force1(x, v, r, comp, power, theta, f0) - target) * sp_dforce1(
         x, v, r, comp, power, theta
     ) + lam2 * (r - prev)
 
 
 @njit(cache=True)
-def _bisect_slope(
+def _bisect_slope(  # type: ignore[no-untyped-def]
     is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b
 ):  # pragma: no cover
     """Zero of the objective's slope in ``[a, b]``, to machine precision.
@@ -165,7 +165,7 @@ def _bisect_slope(
 
 
 @njit(cache=True)
-def _reg_solve(
+def _reg_solve(  # type: ignore[no-untyped-def]
     is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
 ):  # pragma: no cover
     """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
@@ -223,7 +223,7 @@ def _reg_solve(
 
 
 @njit(cache=True)
-def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # pragma: no cover - numba
+def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Minimiser of ``(poly(cf)(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
 
     Grid scan of ``n_grid`` intervals (``prev`` included); then the zero of the objective's slope
@@ -236,7 +236,7 @@ def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # pragma: no cover - 
 
 
 @njit(cache=True)
-def reg_solve_static(
+def reg_solve_static(  # type: ignore[no-untyped-def]
     x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
 ):  # pragma: no cover
     """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""

@@ -156,7 +156,7 @@ class InverseResult:
     @property
     def error(self) -> np.ndarray:
         """``F_achieved - F_desired`` [N]."""
-        return self.F_achieved - self.F_desired
+        return np.asarray(self.F_achieved - self.F_desired)
 
     @property
     def saturated_fraction(self) -> float:
