@@ -15,10 +15,11 @@ from pathlib import Path
 
 import pytest
 
-from mrdamper import Experiment, get_estimator, known_kinds, progress, write_csv
+from mrdamper import Experiment, get_estimator, progress, write_csv
+from tests.conftest import package_kinds
 from tests.models.test_single_level import _sine  # three short sines through the rig damper
 
-KINDS = known_kinds()
+KINDS = package_kinds()
 FAST = {"spencer": {"n_starts": 2, "screen_nfev": 5, "max_nfev": 20}}
 TEMPLATE = ["preparing the training data", "identifying", "done"]
 #: Stages of each family's own steps (exact names; the SP maps' first start is "start 1 of N").

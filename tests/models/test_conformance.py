@@ -26,11 +26,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mrdamper import DataValidationError, Experiment, get_estimator, known_kinds, load_model
+from mrdamper import DataValidationError, Experiment, get_estimator, load_model
 from mrdamper.errors import IdentificationError
 from mrdamper.models.base import TIMING_PROVENANCE, FittedModel
 from mrdamper.models.step import run_step
 from mrdamper.rig import reference_damper
+from tests.conftest import package_kinds
 
 FS = 500.0
 LEVELS = (0.2, 0.5, 0.8)
@@ -115,7 +116,7 @@ def _step(model: FittedModel, record: Experiment) -> Any:
     return model.step()
 
 
-KINDS = known_kinds()
+KINDS = package_kinds()
 
 
 @pytest.mark.parametrize("kind", KINDS)

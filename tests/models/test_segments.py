@@ -11,12 +11,13 @@ import warnings
 import numpy as np
 import pytest
 
-from mrdamper import Experiment, get_estimator, known_kinds
+from mrdamper import Experiment, get_estimator
 from mrdamper.errors import Note
 from mrdamper.models import _scale
 from mrdamper.rig import reference_damper
+from tests.conftest import package_kinds
 
-KINDS = known_kinds()
+KINDS = package_kinds()
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 20}}
 FS = 500.0
 CAP = 1500

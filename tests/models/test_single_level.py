@@ -9,12 +9,13 @@ import warnings
 import numpy as np
 import pytest
 
-from mrdamper import Experiment, OutOfRangeError, get_estimator, known_kinds
+from mrdamper import Experiment, OutOfRangeError, get_estimator
 from mrdamper.rig import reference_damper
+from tests.conftest import package_kinds
 
 LEVEL = 0.5
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 30}}
-KINDS = known_kinds()
+KINDS = package_kinds()
 
 
 def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:
