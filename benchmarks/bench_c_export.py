@@ -34,9 +34,9 @@ from _timing import best_time
 from mrdamper.control import _inverse_kernels as IK
 from mrdamper.control.c_export import export_c
 from mrdamper.control.inverse import lpv_law_arrays, static_map_arrays
-from mrdamper.models import _lpv_kernels as LK
 from mrdamper.models._sp_kernels import sp_force
 from mrdamper.models.lpv import LPVModel
+from mrdamper.models.lpv import kernels as LK
 from mrdamper.models.semiphenomenological import SP1Model
 
 _P = ctypes.POINTER(ctypes.c_double)

@@ -28,8 +28,8 @@ import numpy as np
 from _timing import best_time
 from scipy import signal
 
-from mrdamper.models import _lpv_fit
-from mrdamper.models import _lpv_kernels as K
+from mrdamper.models.lpv import fit as _lpv_fit
+from mrdamper.models.lpv import kernels as K
 
 N = 1_000_000
 REPEATS = 9

@@ -1,7 +1,7 @@
 """Does the hysteretic LPV input's candidate grid matter? Generalisation with a wide grid.
 
 The default grid of the hysteretic input (stroke scale 0.05 / 0.1 / 0.2 mm x pre-yield share
-0.25 / 0.5, ``mrdamper.models._lpv_inputs``) was narrowed after a prototype sweep that was also
+0.25 / 0.5, ``mrdamper.models.lpv.inputs``) was narrowed after a prototype sweep that was also
 scored on the generalisation test sets. This script reruns the LPV column of
 ``benchmarks/generalisation.py`` with a wide grid fixed a priori (stroke scale 0.02, 0.05, 0.1,
 0.2, 0.5, 1 and 2 mm x share 0.25, 0.5 and 0.75: 21 candidates), still chosen on the training
@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from mrdamper.models import _lpv_inputs
+from mrdamper.models.lpv import inputs as _lpv_inputs
 
 #: The a-priori wide grid: stroke scales [m] and pre-yield shares [-].
 WIDE_STROKES = (2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3)

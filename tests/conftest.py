@@ -15,6 +15,16 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO_ROOT.parent / "shared" / "data"))
 
 
+def package_kinds() -> list[str]:
+    """The kinds of the package's kind table, in ``known_kinds()`` order: not the toy families
+    that some test modules register at import (``known_kinds()`` lists them once collected)."""
+    from mrdamper import known_kinds
+    from mrdamper.kinds import KINDS
+
+    own = {row.kind for row in KINDS}
+    return [k for k in known_kinds() if k in own]
+
+
 def _require(path: Path) -> Path:
     if not path.exists():
         pytest.skip(

@@ -10,8 +10,8 @@ module of the package is an import of it, and the kind table's module names
 * packages import only packages of a lower layer (:data:`LAYERS`);
 * a module never imports a private module (a path part with a leading underscore) or a private
   name of another package. ``mrdamper._io`` and ``mrdamper._warn`` are shared by design; within
-  one subpackage (for example ``models.lpv`` -> ``models._lpv_kernels``) private imports are the
-  point of privacy.
+  one subpackage (for example ``models.lpv.estimator`` -> ``models._scale``) private imports are
+  the point of privacy.
 
 A failure prints every offending edge.
 """

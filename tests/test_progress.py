@@ -16,12 +16,10 @@ from pathlib import Path
 import pytest
 
 from mrdamper import Experiment, get_estimator, progress, write_csv
-from mrdamper.kinds import KINDS as KIND_ROWS
+from tests.conftest import package_kinds
 from tests.models.test_single_level import _sine  # three short sines through the rig damper
 
-#: The kinds of this version (the kind table's rows; test doubles registered by other test
-#: modules are left out).
-KINDS = [row.kind for row in KIND_ROWS]
+KINDS = package_kinds()
 FAST = {"spencer": {"n_starts": 2, "screen_nfev": 5, "max_nfev": 20}}
 TEMPLATE = ["preparing the training data", "identifying", "done"]
 #: Stages of each family's own steps (exact names; the SP maps' first start is "start 1 of N").

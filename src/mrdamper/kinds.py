@@ -75,7 +75,7 @@ class KindSpec:
     kernels: tuple[Item, ...] = ()
 
 
-_LPV = "mrdamper.models._lpv_kernels"
+_LPV = "mrdamper.models.lpv.kernels"
 _SPENCER = "mrdamper.models._spencer_kernels"
 _SP = "mrdamper.models._sp_kernels"
 _NARX = "mrdamper.models._narx_kernels"

@@ -87,6 +87,7 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 
 
 @needs_gcc
+@pytest.mark.slow  # C parity on fitted real-data models (the synthetic parity tests stay quick)
 @pytest.mark.parametrize("kind", ["lpv", "sp1"])
 def test_c_matches_python_on_a_quiroz_record(
     tmp_path: Path, quiroz_models: dict[str, Any], quiroz_records: list[Any], kind: str
@@ -104,6 +105,7 @@ def test_c_matches_python_on_a_quiroz_record(
 
 
 @needs_gcc
+@pytest.mark.slow  # C parity with a drive lag on a model fitted to the Dyke record
 def test_c_with_drive_lag_on_dyke(
     tmp_path: Path, dyke_models: dict[str, Any], dyke_record: Any
 ) -> None:

@@ -13,9 +13,9 @@ import pytest
 from mrdamper.control import InverseResult, driver_command, inverse_current
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError
-from mrdamper.models import _lpv_kernels as LK
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel
+from mrdamper.models.lpv import kernels as LK
 from mrdamper.models.semiphenomenological import SP3Model
 
 matplotlib.use("Agg")

@@ -70,6 +70,7 @@ def test_rate_bound_and_weight() -> None:
             inverse_current(m, e, F, **bad)  # type: ignore[arg-type]
 
 
+@pytest.mark.slow  # accuracy check on the 30 Quiroz records
 def test_quiroz_targets_every_record(
     quiroz_models: dict[str, Any], quiroz_records: list[Any]
 ) -> None:
@@ -80,6 +81,7 @@ def test_quiroz_targets_every_record(
         assert bad.empty, f"{kind}: {bad.to_string()}"
 
 
+@pytest.mark.slow  # accuracy check on the Dyke record
 @pytest.mark.parametrize(
     ("kind", "figure"), [("sp1", "force"), ("lpv", "force"), ("sp1", "voltage"), ("lpv", "voltage")]
 )

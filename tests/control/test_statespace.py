@@ -10,8 +10,8 @@ import pytest
 
 from mrdamper import DataValidationError
 from mrdamper.control import frozen_stability, simulate_state_space, state_space, to_control
-from mrdamper.models import _lpv_kernels as K
 from mrdamper.models.lpv import LPVModel
+from mrdamper.models.lpv import kernels as K
 
 ALPHA = np.array([[-1.2, 0.30, -0.10], [0.45, -0.10, 0.05], [-0.02, 0.01, 0.0]])
 BETA = np.array([[900.0, 1500.0, -400.0], [-500.0, -700.0, 300.0], [10.0, 5.0, 1.0]])

@@ -28,10 +28,10 @@ import pytest
 
 from mrdamper import DataValidationError, Experiment, get_estimator, load_model
 from mrdamper.errors import IdentificationError
-from mrdamper.kinds import KINDS as KIND_ROWS
 from mrdamper.models.base import TIMING_PROVENANCE, FittedModel
 from mrdamper.models.step import run_step
 from mrdamper.rig import reference_damper
+from tests.conftest import package_kinds
 
 FS = 500.0
 LEVELS = (0.2, 0.5, 0.8)
@@ -116,9 +116,7 @@ def _step(model: FittedModel, record: Experiment) -> Any:
     return model.step()
 
 
-#: The kinds of this version (the kind table's rows; test doubles registered by other test
-#: modules are left out).
-KINDS = [row.kind for row in KIND_ROWS]
+KINDS = package_kinds()
 
 
 @pytest.mark.parametrize("kind", KINDS)

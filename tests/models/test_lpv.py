@@ -20,8 +20,8 @@ from mrdamper import (
 )
 from mrdamper.analysis import ZoneLaws
 from mrdamper.errors import Note
-from mrdamper.models import _lpv_kernels as K
 from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel, select_order
+from mrdamper.models.lpv import kernels as K
 
 FS = 200.0
 ALPHA = np.array([[-1.2, 0.30, -0.10], [0.45, -0.10, 0.05]])  # a_j(rho), rho in [0, 1]

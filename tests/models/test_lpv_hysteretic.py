@@ -12,8 +12,8 @@ from mrdamper import DataValidationError, Experiment
 from mrdamper.analysis import ZoneLaws
 from mrdamper.analysis.hysteretic import dahl_state, hysteretic_input
 from mrdamper.control import c_source, inverse_current, lpv_export_data, state_space
-from mrdamper.models import _lpv_inputs
 from mrdamper.models.lpv import LPVEstimator, LPVModel
+from mrdamper.models.lpv import inputs as _lpv_inputs
 from mrdamper.rig import VirtualRig, reference_damper
 
 X_Y = 1e-4  # stroke scale [m]

@@ -11,8 +11,8 @@ import pytest
 
 from mrdamper import DataValidationError, IdentificationError
 from mrdamper.data.readers import read_directory
-from mrdamper.models import _lpv_fit
 from mrdamper.models.lpv import LPVEstimator
+from mrdamper.models.lpv import fit as _lpv_fit
 
 from .test_lpv import ALPHA, FS, _record, _train
 

@@ -77,8 +77,10 @@ DYKE: dict[str, float] = {
     "bingham": 0.153524,
     "narx": 0.0469363,
 }
-#: Kinds whose pinned fit takes longer than about 10 s on the shared machine.
-SLOW = {"spencer"}
+#: Kinds whose pinned fit takes longer than about 3 s on the shared machine (accuracy checks: out
+#: of the ``-m "not slow"`` dev loop, run by CI with everything else; the quick kinds stay in it as
+#: a guard on the real-data numbers).
+SLOW = {"spencer", "p15", "sp1", "narx", "lpv", "lti"}
 
 
 def _bench() -> ModuleType:

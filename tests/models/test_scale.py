@@ -105,7 +105,7 @@ def test_windows_and_full_data_check(kind: str, records, small_windows) -> None:
 
 
 def test_lpv_qr_factor_matches_full_regression(monkeypatch: pytest.MonkeyPatch) -> None:
-    from mrdamper.models import _lpv_kernels as LK
+    from mrdamper.models.lpv import kernels as LK
 
     rng = np.random.default_rng(1)
     n = 3000
@@ -127,7 +127,7 @@ def test_lpv_qr_factor_matches_full_regression(monkeypatch: pytest.MonkeyPatch) 
 def test_lpv_least_squares_record_by_record_matches_concatenated(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from mrdamper.models import _lpv_fit
+    from mrdamper.models.lpv import fit as _lpv_fit
 
     rng = np.random.default_rng(2)
     U = [rng.standard_normal(n) for n in (1500, 2500)]

@@ -13,13 +13,11 @@ import pytest
 
 from mrdamper import Experiment, get_estimator
 from mrdamper.errors import Note
-from mrdamper.kinds import KINDS as KIND_ROWS
 from mrdamper.models import _scale
 from mrdamper.rig import reference_damper
+from tests.conftest import package_kinds
 
-#: The kinds of this version (the kind table's rows; test doubles registered by other test
-#: modules are left out).
-KINDS = [row.kind for row in KIND_ROWS]
+KINDS = package_kinds()
 FAST = {"spencer": {"n_starts": 1, "max_nfev": 20}}
 FS = 500.0
 CAP = 1500

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from mrdamper import Experiment, OutOfRangeError, get_estimator
-from mrdamper.kinds import KINDS as KIND_ROWS
 from mrdamper.rig import reference_damper
+from tests.conftest import package_kinds
 
 LEVEL = 0.5
 FAST = {
@@ -21,9 +21,7 @@ FAST = {
     "dahl": {"n_starts": 1, "max_nfev": 30},
     "lugre": {"n_starts": 1, "max_nfev": 30},
 }
-#: The kinds of this version (the kind table's rows; test doubles registered by other test
-#: modules are left out).
-KINDS = [row.kind for row in KIND_ROWS]
+KINDS = package_kinds()
 
 
 def _sine(amp: float, freq: float, level: float, name: str, fs: float = 500.0) -> Experiment:

@@ -16,6 +16,7 @@ def short_doe(rig_damper):
     return doe.table_ii(seed=0, scale=0.1, damper=rig_damper, experiments=[1, 2, 6, 7, 8])
 
 
+@pytest.mark.slow  # every real model fitted and scored on a short DoE
 def test_quick_doe_study_with_real_models(short_doe, tmp_path) -> None:
     res = run_study(short_doe, doe_protocol(), ["lti", "sp2"], workers=2, progress=False)
     an = res.analyses["all"]

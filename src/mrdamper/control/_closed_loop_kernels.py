@@ -41,7 +41,9 @@ LEAD_FORCE: Any = None
 STEP_INVERSE: Any = None
 
 
-def _lead_force(form, state, scratch, x, v, e, dt, n_lead, offset):  # pragma: no cover - numba
+def _lead_force(  # type: ignore[no-untyped-def]
+    form, state, scratch, x, v, e, dt, n_lead, offset
+):  # pragma: no cover - numba
     """Mean model force (rest force removed) over ``n_lead`` samples of ``dt`` ahead, with the
     input ``e`` and the damper velocity ``v`` held (NaN when the step fails)."""
     scratch[:] = state
@@ -56,7 +58,7 @@ def _lead_force(form, state, scratch, x, v, e, dt, n_lead, offset):  # pragma: n
     return acc / n_lead
 
 
-def _step_inverse(
+def _step_inverse(  # type: ignore[no-untyped-def]
     form, state, scratch, x, v, dt, n_lead, offset, target, a, b, prev, lam2, n_pts
 ):  # pragma: no cover - numba
     """Regularised inverse of a model through its step, one control sample.
@@ -94,7 +96,7 @@ def _step_inverse(
     return best, abs(gbest - target)
 
 
-def _loop(
+def _loop(  # type: ignore[no-untyped-def]
     zr,
     h,
     n_sub,

@@ -43,7 +43,7 @@ CTRL_PASSIVE, CTRL_SKYHOOK, CTRL_GROUNDHOOK, CTRL_HYBRID = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # pragma: no cover - numba
+def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     fs = k_s * (zs - zu)
     out[0] = vs
     out[1] = (-fs - F) / m_s
@@ -52,7 +52,7 @@ def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # pragma: 
 
 
 @njit(cache=True)
-def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
+def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     vrel = vs - vu
     sky = c_sky * vs if vs * vrel > 0.0 else 0.0
     gnd = -c_gnd * vu if -vu * vrel > 0.0 else 0.0
@@ -64,7 +64,7 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def control_sample(
+def control_sample(  # type: ignore[no-untyped-def]
     k,
     zs,
     vs,
@@ -212,7 +212,7 @@ def control_sample(
 # function it calls in another module (the inverse kernels) changes; after editing those, delete
 # this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
 @njit(cache=True)
-def simulate(
+def simulate(  # type: ignore[no-untyped-def]
     zr,
     h,
     n_sub,

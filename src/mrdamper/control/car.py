@@ -299,13 +299,13 @@ class QuarterCarResult:
     @property
     def travel(self) -> np.ndarray:
         """Suspension travel ``z_s - z_u`` [m] (positive: extension)."""
-        return self.z_s - self.z_u
+        return np.asarray(self.z_s - self.z_u)
 
     @property
     def tyre_load(self) -> np.ndarray:
         """Dynamic tyre load [N] (positive: more load than static)."""
         vr = np.gradient(self.z_r, 1.0 / self.fs)
-        return -(self.car.k_t * (self.z_u - self.z_r) + self.car.c_t * (self.v_u - vr))
+        return np.asarray(-(self.car.k_t * (self.z_u - self.z_r) + self.car.c_t * (self.v_u - vr)))
 
     def metrics(self) -> dict[str, Any]:
         """RMS and peak figures of the run.

@@ -72,7 +72,6 @@ import numpy as np
 from mrdamper._io import FileKind, atomic_write_text, json_kind, mat_kind
 from mrdamper._io.atomic import atomic_write_with
 from mrdamper._warn import warn_user
-from mrdamper.control.inverse import lpv_hysteresis
 from mrdamper.control.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import encode_value
@@ -126,9 +125,9 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     C_poly[0, :, :] = model.beta[::-1, :]
     mats = [state_space(model, float(r)) for r in grid]
     poles = np.array([np.sort_complex(m.poles) for m in mats]).reshape(grid.size, n)
-    laws = model.zone_laws if model.input_signal in ("u", "hysteretic") else None
-    hysteretic = model.input_signal == "hysteretic"
-    blend, stroke = lpv_hysteresis(model)
+    lpv_input = model.lpv_input
+    laws = lpv_input.laws
+    saved = lpv_input.saved()  # input_signal; stroke and blend None unless hysteretic
     elec = "A" if model.input == "i" else "V"
     return {
         "schema": EXPORT_SCHEMA,
@@ -152,14 +151,14 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
         "poles_re": poles.real.copy(),
         "poles_im": poles.imag.copy(),
         "max_pole_modulus": np.abs(poles).max(axis=1) if n else np.zeros(grid.size),
-        "input_signal": model.input_signal,
+        "input_signal": saved["input_signal"],
         "reading": model.reading,
         "gamma_m": np.zeros((0, 0)) if laws is None else np.array(laws.gamma_m),
         "gamma_c": np.zeros((0, 0)) if laws is None else np.array(laws.gamma_c),
         "mu_high": np.zeros(0) if laws is None else np.array(laws.mu_high),
         "mu_low": np.zeros(0) if laws is None else np.array(laws.mu_low),
-        "blend": blend,
-        "stroke": stroke if hysteretic else float("nan"),
+        "blend": 0.0 if saved["blend"] is None else float(saved["blend"]),
+        "stroke": float("nan") if saved["stroke"] is None else float(saved["stroke"]),
         "units": {
             "Ts": "s",
             "F0": "N",

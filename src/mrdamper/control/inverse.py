@@ -80,11 +80,23 @@ import pandas as pd
 
 from mrdamper._warn import warn_user
 from mrdamper.control import _inverse_kernels as K
+from mrdamper.control._inverse_setup import (
+    DEFAULT_REG_FRACTION,
+    DEFAULT_REG_TIME,
+    dahl_along,
+    default_reg,
+    force_authority,
+    horizon_samples,
+    lpv_hysteresis,
+    lpv_law_arrays,
+    model_input_limits,
+    reg_settings,
+    static_map_arrays,
+)
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
-from mrdamper.models.kernels import MODE_CONTINUOUS, MODE_LITERAL, MODE_V, sp_force1, zone_input
-from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
+from mrdamper.models.protocols import InvertibleModel, scheduled_form
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -144,7 +156,7 @@ class InverseResult:
     @property
     def error(self) -> np.ndarray:
         """``F_achieved - F_desired`` [N]."""
-        return self.F_achieved - self.F_desired
+        return np.asarray(self.F_achieved - self.F_desired)
 
     @property
     def saturated_fraction(self) -> float:
@@ -266,19 +278,6 @@ def _motion(data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         "experiment_or_arrays",
         f"expected an Experiment or a mapping with t, x, v, got {type(data).__name__}",
     )
-
-
-def model_input_limits(model: Any) -> tuple[float, float]:
-    """Default input limits: the identified ``input_range``.
-
-    For an LPV model (or a static map with a drive lag) it is intersected with the scheduling range
-    ``rho_range`` the model was identified on (beyond it the coefficients are extrapolated).
-    """
-    lo, hi = (float(b) for b in model.input_range)
-    rr = getattr(model, "rho_range", None)
-    if rr is not None and rr[1] > rr[0]:
-        lo, hi = max(lo, float(rr[0])), min(hi, float(rr[1]))
-    return lo, hi
 
 
 def _range(model: FittedModel, i_range: Any) -> tuple[float, float]:
@@ -414,7 +413,7 @@ def inverse_current(
             dt_inv = 1.0 / sched.fs
         else:
             dt_inv = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
-        lam, step_rate = _reg_settings(model, v, reg, rate, lo, hi, dt_inv)
+        lam, step_rate = reg_settings(model, v, reg, rate, lo, hi, dt_inv)
         if horizon is not None and (
             isinstance(horizon, bool)
             or not isinstance(horizon, (int, float, np.floating))
@@ -540,7 +539,7 @@ def _lpv(
     mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     v = np.ascontiguousarray(v, dtype=np.float64)
-    blend, z = _dahl_along(model, v, 1.0 / model.fs)  # as the model: dt = 1 / fs
+    blend, z = dahl_along(model, v, 1.0 / model.fs)  # as the model: dt = 1 / fs
     rho, _, sat = K.lpv_inverse(
         v,
         np.ascontiguousarray(Fd),
@@ -564,144 +563,6 @@ def _lpv(
     if model.eta is None:
         return rho, rho, sat
     return rho, driver_command(rho, model.eta, dt, (lo, hi)), sat
-
-
-def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """A static map as the arrays of :func:`~mrdamper.models.kernels.sp_force1`.
-
-    SP-1..SP-4 map directly; a Bingham model is ``fc(i) sign(v) + c0(i) v + f0`` with the sign
-    written as ``tanh(v / v_eps)`` (``tanh(1e300 v)``, i.e. the exact sign, when ``v_eps = 0``).
-
-    Returns
-    -------
-    comp, power : ndarray of int64
-    theta : ndarray
-    f0 : float [N]
-    """
-    form = model.inverse_form() if isinstance(model, InvertibleModel) else None
-    if isinstance(form, StaticMapForm):
-        return form.comp, form.power, form.theta, float(form.f0)
-    raise TypeError(
-        f"model: kind {getattr(model, 'kind', type(model).__name__)!r} is not a static map"
-    )
-
-
-def force_authority(model: Any, v_ref: float) -> float:
-    """Steady force range per unit input at velocity ``v_ref`` [N/A] or [N/V].
-
-    ``|F(v_ref, hi) - F(v_ref, lo)| / (hi - lo)`` over the model's ``input_range`` at ``x = 0``;
-    for an LPV model the force is the frozen-``rho`` steady state
-    ``F0 + sum_j b_j(rho) / (1 + sum_j a_j(rho)) u(v_ref, rho)`` (hysteretic input: with the Dahl
-    state of a steady motion, ``z = sign(v_ref)``). It sets the scale of the default
-    regularisation weight.
-
-    Parameters
-    ----------
-    model : InvertibleModel
-        LPV model or static map.
-    v_ref : float
-        Velocity at which the steady force is taken [m/s].
-    """
-    lo, hi = model_input_limits(model)
-    if not hi > lo:
-        raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
-    if scheduled_form(model) is not None:
-        blend, _ = lpv_hysteresis(model)
-        mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
-
-        def steady(r: float) -> float:
-            gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
-            if model.input_signal == "v" or model.zone_laws is None:
-                u = float(v_ref)
-            elif blend != 0.0:  # steady motion: the Dahl state has reached sign(v_ref)
-                z_ss = float(np.sign(v_ref))
-                u = float(zone_input(float(v_ref), r, mode, gm, gc, mu_h, mu_l, z_ss, blend))
-            else:
-                u = float(
-                    model.zone_laws.scheduling_input(
-                        np.array([v_ref]), np.array([r]), reading=model.reading
-                    )[0]
-                )
-            return gain * u
-
-        return abs(steady(hi) - steady(lo)) / (hi - lo)
-    comp, power, theta, f0 = static_map_arrays(model)
-    return abs(
-        sp_force1(0.0, float(v_ref), hi, comp, power, theta, f0)
-        - sp_force1(0.0, float(v_ref), lo, comp, power, theta, f0)
-    ) / (hi - lo)
-
-
-#: Default regularisation weight at 200 Hz as a fraction of :func:`force_authority` (where it was
-#: chosen).
-DEFAULT_REG_FRACTION = 0.5
-#: Smoothing time constant of the default weight [s]: the fraction 0.5 at 200 Hz (see
-#: :func:`default_reg`).
-DEFAULT_REG_TIME = 0.005 / float(np.log(5.0))
-
-
-def default_reg(model: Any, v_ref: float, dt: float, authority: float | None = None) -> float:
-    """Default regularisation weight [N/A] or [N/V] for an inverse running every ``dt`` [s].
-
-    Per sample the regularised input is, to first order, ``q i[k-1] + (1 - q) i_exact`` with
-    ``q = reg^2 / (s^2 + reg^2)`` where ``s = |dF/di|``. The default makes this a first-order
-    smoothing of time constant :data:`DEFAULT_REG_TIME` where ``s`` equals the force authority at
-    ``v_ref`` (:func:`force_authority`), whatever the sample rate::
-
-        reg = force_authority(model, v_ref) * sqrt(q / (1 - q)),   q = exp(-dt / DEFAULT_REG_TIME)
-
-    At 200 Hz this is :data:`DEFAULT_REG_FRACTION` (0.5) times the authority; at 3 kHz about 3.0.
-    ``authority`` [N per input unit], when given, replaces :func:`force_authority` (a model
-    stepped through its per-sample step, whose authority is measured on the step).
-    """
-    if not (np.isfinite(dt) and dt > 0):
-        raise DataValidationError("dt", f"expected a positive sampling interval [s], got {dt!r}")
-    q = float(np.exp(-dt / DEFAULT_REG_TIME))
-    auth = force_authority(model, v_ref) if authority is None else float(authority)
-    return float(np.sqrt(q / (1.0 - q))) * auth
-
-
-def _reg_settings(
-    model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float, dt: float
-) -> tuple[float, float]:
-    if reg is None:
-        vpk = float(np.max(np.abs(v))) if v.size else 0.0
-        lam = default_reg(model, vpk, dt) if vpk > 0 else 0.0
-    else:
-        if (
-            isinstance(reg, bool)
-            or not isinstance(reg, (int, float, np.floating))
-            or not (np.isfinite(reg) and reg >= 0)
-        ):
-            raise DataValidationError(
-                "reg", f"expected a regularisation weight >= 0 [N per input unit], got {reg!r}"
-            )
-        lam = float(reg)
-    if rate is None:
-        step_rate = np.inf
-    else:
-        if (
-            isinstance(rate, bool)
-            or not isinstance(rate, (int, float, np.floating))
-            or not rate > 0
-        ):
-            raise DataValidationError(
-                "rate", f"expected a positive input rate bound [A/s] or [V/s], got {rate!r}"
-            )
-        step_rate = float(rate)
-    return lam, step_rate
-
-
-def horizon_samples(eta: float | None, dt: float, horizon: float | None = None) -> int:
-    """Samples of the lead horizon of the drive-lag inverse: ``round(horizon / dt)``, at least 1.
-
-    ``horizon`` [s] defaults to the lag time constant ``1 / eta`` [s]; without a drive lag
-    (``eta`` None) the horizon is 1 (the present sample).
-    """
-    if eta is None:
-        return 1
-    T = 1.0 / float(eta) if horizon is None else float(horizon)
-    return max(1, round(T / dt))
 
 
 def _lpv_reg(
@@ -730,7 +591,7 @@ def _lpv_reg(
     dt = 1.0 / model.fs
     mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
-    blend, z = _dahl_along(model, vm, dt)
+    blend, z = dahl_along(model, vm, dt)
     rho, _, sat = K.lpv_inverse_reg_hys(
         vm,
         Fm,
@@ -766,37 +627,6 @@ def _lpv_reg(
     tr = t - t[0]
     back = np.minimum(np.rint(tr * model.fs).astype(np.int64), rho.size - 1)
     return np.interp(tr, tm, rho), np.interp(tr, tm, w), sat[back]
-
-
-def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Zone-law arrays of an LPV or LTI model for the kernels: ``(mode, gamma_m, gamma_c,
-    mu_high, mu_low)`` (the hysteretic input uses the continuous reading's laws, see
-    :func:`lpv_hysteresis` for its other settings)."""
-    gm, gc, mu_h, mu_l = model.law_arrays()
-    if model.input_signal == "v" or model.zone_laws is None:
-        mode = MODE_V
-    else:
-        mode = MODE_CONTINUOUS if model.reading == "continuous" else MODE_LITERAL
-    return mode, gm, gc, mu_h, mu_l
-
-
-def lpv_hysteresis(model: Any) -> tuple[float, float]:
-    """``(blend, stroke)`` of an LPV or LTI model's hysteretic input [-], [m]; ``(0.0, 0.0)`` for
-    the static inputs ``"u"`` and ``"v"`` (``blend = 0`` is the static input in every kernel)."""
-    if getattr(model, "input_signal", None) != "hysteretic" or model.zone_laws is None:
-        return 0.0, 0.0
-    return float(model.blend), float(model.stroke)
-
-
-def _dahl_along(model: Any, v: np.ndarray, dt: float) -> tuple[float, np.ndarray]:
-    """``(blend, z)``: the Dahl state [-] along the velocity ``v`` [m/s] at the model rate, from
-    rest, as the model's own prediction computes it (zeros for a static input)."""
-    from mrdamper.analysis.hysteretic import dahl_state
-
-    blend, stroke = lpv_hysteresis(model)
-    if blend == 0.0:
-        return 0.0, np.zeros(v.size)
-    return blend, dahl_state(v, dt, stroke)
 
 
 def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:

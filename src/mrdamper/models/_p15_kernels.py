@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from mrdamper.models._lpv_step import lag_step
+from mrdamper.models._lag import lag_step
 from mrdamper.models.step import STATUS_DIVERGED, STATUS_OK
 
 __all__ = ["GAMMA", "MAX_SUBSTEPS", "P15Form", "p15i_run", "step_advance", "step_force", "substeps"]

@@ -371,7 +371,7 @@ def lpv_qr_factor(
     """Triangular factor ``(R, z)`` of the weighted LPV regression ``[X t]``, block by block.
 
     ``build`` is the kernel that materialises the rows of whole records
-    (:func:`~mrdamper.models._lpv_kernels.build_regressors`); it is called on blocks of
+    (:func:`~mrdamper.models.lpv.kernels.build_regressors`); it is called on blocks of
     :data:`QR_BLOCK` rows (each with the ``n_m`` samples before it, so the lags are exact), and the
     blocks are folded into the QR factor. ``min |R c - z|`` has the solution and ``R`` the
     singular values of ``min |X c - t|``; memory is one block instead of the whole ``X``.

@@ -16,7 +16,7 @@ from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import IdentificationError
-from mrdamper.models._lpv_kernels import first_order_lag
+from mrdamper.models._lag import first_order_lag
 from mrdamper.models._sp_kernels import COMPONENTS, N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.progress import counted
 

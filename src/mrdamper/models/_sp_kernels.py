@@ -21,7 +21,7 @@ import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models._arrays import readonly
-from mrdamper.models._lpv_step import lag_step
+from mrdamper.models._lag import lag_step
 from mrdamper.models.step import STATUS_OK, Step
 
 if TYPE_CHECKING:  # pragma: no cover

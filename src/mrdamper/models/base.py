@@ -24,10 +24,10 @@ import json
 import time
 import typing
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Literal, cast
+from typing import Any, ClassVar, Literal, NamedTuple, cast
 
 import numpy as np
 import pandas as pd
@@ -65,6 +65,7 @@ __all__ = [
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
     "TIMING_PROVENANCE",
+    "Choice",
     "Estimator",
     "FittedModel",
     "Identified",
@@ -452,6 +453,21 @@ class TrainingData:
         return self.level is not None
 
 
+class Choice(NamedTuple):
+    """Settings chosen on the training records (:meth:`Estimator._choose_settings`).
+
+    Attributes
+    ----------
+    estimator : Estimator
+        The estimator with the chosen settings; the fit template fits it on the training records.
+    provenance : callable
+        Adds the record of the choice to the fitted model's provenance (dict -> dict).
+    """
+
+    estimator: Estimator
+    provenance: Callable[[dict[str, Any]], dict[str, Any]]
+
+
 @dataclass(frozen=True, eq=False)
 class Identified:
     """What a family's identification step returns: the model's own parameters and provenance.
@@ -480,15 +496,19 @@ class Estimator(abc.ABC):
     not express. :meth:`fit` does everything else, the same way for every family:
 
     1. validate the settings (:meth:`_validate`: every ``Literal`` field against its choices,
-       every ``bool`` field is a bool, then the family's own checks); a family whose drive-lag
-       setting ``eta`` is ``"auto"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag`
-       instead, which identifies the lag on an inner split and then runs steps 2-5 with it;
-    2. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
+       every ``bool`` field is a bool, then the family's own checks);
+    2. if the family leaves settings open (:meth:`_open_settings`, e.g. the LPV hysteretic
+       input's stroke and blend), let it choose them on the training records
+       (:meth:`_choose_settings`), fit the estimator with the chosen settings instead and add
+       the choice to its provenance; otherwise, a family whose drive-lag setting ``eta`` is
+       ``"auto"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag` instead, which
+       identifies the lag on an inner split and then runs steps 3-6 with it;
+    3. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
        without motion);
-    3. read the electrical input of every record, its identified range and whether it takes a
+    4. read the electrical input of every record, its identified range and whether it takes a
        single level (:class:`TrainingData`);
-    4. call :meth:`_identify`;
-    5. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
+    5. call :meth:`_identify`;
+    6. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
        and provenance (the single-level note, the training records' sampling intervals
        ``record_dt`` [s], wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
 
@@ -564,6 +584,15 @@ class Estimator(abc.ABC):
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()
+        if self._open_settings():  # chosen on the training records, before the drive lag
+            report("preparing the training data")
+            records, options, segments = self._training_set(data, options)
+            choice = self._choose_settings(records, options)
+            model = choice.estimator.fit(records, **options)
+            provenance = choice.provenance(dict(model.provenance))
+            if segments:
+                provenance["segments"] = segments
+            return dataclasses.replace(model, provenance=provenance)
         if getattr(self, "eta", None) == lag.AUTO:
             fitted: FittedModel = lag.fit_with_lag(self, data, options)  # the lag, identified
             return fitted
@@ -593,6 +622,18 @@ class Estimator(abc.ABC):
         )
         report("done")
         return model
+
+    def _open_settings(self) -> bool:
+        """Whether settings are left open, to be chosen on the training records (default: no)."""
+        return False
+
+    def _choose_settings(self, records: ExperimentSet, options: Mapping[str, Any]) -> Choice:
+        """The settings left open (:meth:`_open_settings`), chosen on the training records.
+
+        Called by :meth:`fit` with the records the fit sees and the per-fit options; the chosen
+        estimator must leave nothing open.
+        """
+        raise NotImplementedError(f"{type(self).__name__} leaves no setting open")
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
         """The family's identification step on the prepared training data (to implement)."""

@@ -4,10 +4,11 @@ Each function is defined once, in its family's kernel module, and used there by 
 per-sample step (:mod:`mrdamper.models.step`) and its free-run kernels; the inverse, the quarter
 car and the exports of :mod:`mrdamper.control` import them from here instead of keeping copies.
 
-* LPV / LTI (:mod:`mrdamper.models._lpv_step`): :func:`lpv_coefficients` (the output step as a
+* LPV / LTI (:mod:`mrdamper.models.lpv.step`): :func:`lpv_coefficients` (the output step as a
   polynomial in the present scheduling value), :func:`poly`, :func:`dpoly`, :func:`zone_input`
   (the zone-law input, static or hysteretic; modes :data:`MODE_V`, :data:`MODE_CONTINUOUS`,
-  :data:`MODE_LITERAL`), :func:`lag_step` (one sample of the drive lag);
+  :data:`MODE_LITERAL`);
+* every family's drive lag (:mod:`mrdamper.models._lag`): :func:`lag_step`;
 * hysteretic input (:mod:`mrdamper.analysis.hysteretic`): :func:`dahl_step`;
 * static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models._sp_kernels`): :func:`sp_force1`
   (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
@@ -23,17 +24,7 @@ when the function changes; delete the caller's ``__pycache__/*.nb*`` files after
 from __future__ import annotations
 
 from mrdamper.analysis.hysteretic import dahl_step
-from mrdamper.models._lpv_step import (
-    MODE_CONTINUOUS,
-    MODE_LITERAL,
-    MODE_V,
-    dpoly,
-    lag_step,
-    lpv_coefficients,
-    poly,
-    zone_input,
-)
-from mrdamper.models._lpv_step import N_HEAD as LPV_N_HEAD
+from mrdamper.models._lag import lag_step
 from mrdamper.models._narx_kernels import NARXForm
 from mrdamper.models._p15_kernels import GAMMA as P15_GAMMA
 from mrdamper.models._p15_kernels import MAX_SUBSTEPS as P15_MAX_SUBSTEPS
@@ -43,6 +34,16 @@ from mrdamper.models._spencer_kernels import PARAM_NAMES as SPENCER_PARAM_NAMES
 from mrdamper.models._spencer_kernels import Y_LIMIT as SPENCER_Y_LIMIT
 from mrdamper.models._spencer_kernels import Z_LIMIT as SPENCER_Z_LIMIT
 from mrdamper.models._spencer_kernels import SpencerForm
+from mrdamper.models.lpv.step import (
+    MODE_CONTINUOUS,
+    MODE_LITERAL,
+    MODE_V,
+    dpoly,
+    lpv_coefficients,
+    poly,
+    zone_input,
+)
+from mrdamper.models.lpv.step import N_HEAD as LPV_N_HEAD
 
 __all__ = [
     "LPV_N_HEAD",

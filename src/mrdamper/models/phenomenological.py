@@ -80,7 +80,7 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _p15_kernels as _k
 from mrdamper.models import _scale
-from mrdamper.models._lpv_kernels import first_order_lag
+from mrdamper.models._lag import first_order_lag
 from mrdamper.models._p15_fit import (
     BERNSTEIN_TO_POWER,
     bernstein_basis,

@@ -75,7 +75,7 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.models import _scale
-from mrdamper.models._lpv_kernels import first_order_lag
+from mrdamper.models._lag import first_order_lag
 from mrdamper.models._sp_fit import identify, single_level_terms, stack
 from mrdamper.models._sp_kernels import COMPONENTS, make_static_step, sp_force
 from mrdamper.models.base import (

@@ -21,11 +21,11 @@ import numpy as np
 from numba import njit
 
 from mrdamper.models import _hysteresis_kernels as H
-from mrdamper.models import _lpv_step as L
 from mrdamper.models import _narx_kernels as N
 from mrdamper.models import _p15_kernels as P
 from mrdamper.models import _sp_kernels as S
 from mrdamper.models import _spencer_kernels as SP
+from mrdamper.models.lpv import step as L
 from mrdamper.models.step import Step
 
 __all__ = ["FAMILIES", "family_advance", "family_force", "pack", "placeholder"]

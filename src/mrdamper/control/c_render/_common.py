@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from mrdamper.control import _inverse_kernels as K
+from mrdamper.control import _solve_kernels as K
 from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
     default_reg,

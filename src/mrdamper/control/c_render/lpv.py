@@ -159,7 +159,7 @@ LPV_STEP = (
 static const double {P}_BOUND = {bound}; /* largest |y| [N] of the step (divergence) */
 static const double {P}_ETA = {eta}; /* drive-lag rate [1/s]; negative: no lag */
 
-/* The model's per-sample step (mrdamper.models._lpv_step) on the state
+/* The model's per-sample step (mrdamper.models.lpv.step) on the state
    s = (rho, z, y[k-N_M] .. y[k-1], u[k-N_M] .. u[k-1]), oldest first; the input as given. */
 static double {p}_sforce(const double *s, double e, double *r)
 {{

@@ -17,7 +17,7 @@ import numpy.typing as npt
 from numba import njit
 from scipy.linalg import blas as _blas
 
-from mrdamper.models._lpv_step import lag_step
+from mrdamper.models._lag import first_order_lag
 
 __all__ = [
     "build_regressors",
@@ -430,18 +430,6 @@ def simulate_sensitivity(
             for c in range(P):
                 J[k, c] -= al * J[k - 1 - ll, c]
     return y, J, -1
-
-
-@njit(cache=True)
-def first_order_lag(w: FloatArray, dt: float, eta: float) -> FloatArray:  # pragma: no cover - numba
-    """Exact zero-order-hold discretisation of ``dr/dt = -eta (r - w)``, ``r[0] = w[0]``."""
-    n = w.size
-    r = np.empty(n)
-    e = np.exp(-eta * dt)
-    r[0] = w[0]
-    for k in range(1, n):
-        r[k] = lag_step(r[k - 1], w[k - 1], e)
-    return r
 
 
 @njit(cache=True)

@@ -14,9 +14,9 @@ from scipy import optimize
 
 from mrdamper._warn import warn_user
 from mrdamper.errors import IdentificationError
-from mrdamper.models import _lpv_kernels as K
 from mrdamper.models import _scale
-from mrdamper.models._lpv_kernels import frozen_poles, largest_frozen_pole, split_theta
+from mrdamper.models.lpv import kernels as K
+from mrdamper.models.lpv.kernels import frozen_poles, largest_frozen_pole, split_theta
 from mrdamper.progress import counted, report
 
 __all__ = [
@@ -189,10 +189,10 @@ def refine_output_error(
 
     ``solver="gauss-newton"`` (default): :func:`_levenberg_marquardt` on the Gauss-Newton normal
     equations ``J^T J``, ``J^T e`` accumulated by
-    :func:`~mrdamper.models._lpv_kernels.oe_normal_equations` in one pass per record without
+    :func:`~mrdamper.models.lpv.kernels.oe_normal_equations` in one pass per record without
     storing the Jacobian. ``solver="least_squares"``: ``scipy.optimize.least_squares`` (MINPACK
     Levenberg-Marquardt) with the analytic Jacobian of
-    :func:`~mrdamper.models._lpv_kernels.simulate_sensitivity` (slower: it stores and factors
+    :func:`~mrdamper.models.lpv.kernels.simulate_sensitivity` (slower: it stores and factors
     ``J``). A candidate whose free run diverges is rejected (infinite cost / large residuals).
 
     With ``rho_grid`` the refinement is constrained to frozen stability over that grid: a

@@ -3,7 +3,7 @@
 One sample of the model of :mod:`mrdamper.models.lpv`, written once: every tool that steps an LPV
 model (its per-sample step :func:`step_force` / :func:`step_advance`, the causal inverse and the
 quarter car of :mod:`mrdamper.control`) calls these functions. The fused free-run kernels of
-:mod:`mrdamper.models._lpv_kernels` are a fast path tested against this step sample by sample.
+:mod:`mrdamper.models.lpv.kernels` are a fast path tested against this step sample by sample.
 
 * :func:`lpv_coefficients`: the force at sample ``k`` as a polynomial in the present scheduling
   value ``rho[k]`` once the past outputs and inputs are fixed (``b_0 = 0``)::
@@ -31,6 +31,7 @@ import numpy.typing as npt
 from numba import njit
 
 from mrdamper.analysis.hysteretic import dahl_step
+from mrdamper.models._lag import lag_step
 from mrdamper.models.step import STATUS_DIVERGED, STATUS_OK, Step
 
 __all__ = [
@@ -72,13 +73,6 @@ def dpoly(c, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     for p in range(c.size - 1, 0, -1):
         acc = acc * r + p * c[p]
     return acc
-
-
-@njit(cache=True)
-def lag_step(r, w, e):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
-    """The drive lag's next value from its value ``r`` and the command ``w`` held over the
-    sample; ``e = exp(-eta dt)``."""
-    return e * r + (1.0 - e) * w
 
 
 @njit(cache=True)
