@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control.fidelity import closed_loop_fidelity
-from mrdamper.models._lpv_inputs import BLENDS, STROKES
+from mrdamper.models.lpv.inputs import BLENDS, STROKES
 from mrdamper.models.registry import get_estimator, known_kinds
 from mrdamper.rig.doe import table_ii
 from mrdamper.rig.doe_control import control_extension
