@@ -1,5 +1,5 @@
-"""The values the fit template and the families pass: training data, identification result, a
-choice of settings, and the result of a free-run simulation.
+"""The values the fit template and the families pass (training data, identification result) and
+the result of a free-run simulation.
 
 Re-exported by :mod:`mrdamper.models.base` (the fit template, :class:`~mrdamper.models.Estimator`,
 builds and reads them).
@@ -7,9 +7,9 @@ builds and reads them).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -18,10 +18,7 @@ from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.metrics import Scores, score_arrays
 
-if TYPE_CHECKING:
-    from mrdamper.models.base import Estimator
-
-__all__ = ["Choice", "Identified", "SimulationResult", "TrainingData"]
+__all__ = ["Identified", "SimulationResult", "TrainingData"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,21 +99,6 @@ class TrainingData:
     def single(self) -> bool:
         """True when the electrical input takes one level over all the training data."""
         return self.level is not None
-
-
-class Choice(NamedTuple):
-    """Settings chosen on the training records (``Estimator._choose_settings``).
-
-    Attributes
-    ----------
-    estimator : Estimator
-        The estimator with the chosen settings; the fit template fits it on the training records.
-    provenance : callable
-        Adds the record of the choice to the fitted model's provenance (dict -> dict).
-    """
-
-    estimator: Estimator
-    provenance: Callable[[dict[str, Any]], dict[str, Any]]
 
 
 @dataclass(frozen=True, eq=False)

@@ -24,10 +24,10 @@ import json
 import time
 import typing
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Literal, cast
+from typing import Any, ClassVar, Literal, NamedTuple, cast
 
 import numpy as np
 
@@ -45,7 +45,7 @@ from mrdamper.models._schema import (
     decode_value,
     encode_value,
 )
-from mrdamper.models._values import Choice, Identified, SimulationResult, TrainingData
+from mrdamper.models._values import Identified, SimulationResult, TrainingData
 from mrdamper.models.envelope import envelope_note, envelope_of, training_envelope
 from mrdamper.models.levels import single_level
 from mrdamper.models.settings import (
@@ -371,6 +371,21 @@ class FittedModel(abc.ABC):
         then unless the existing file is a model file (:data:`MODEL_FILE`)."""
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False)
         return atomic_write_text(path, text + "\n", force=force, kind=MODEL_FILE)
+
+
+class Choice(NamedTuple):
+    """Settings chosen on the training records (:meth:`Estimator._choose_settings`).
+
+    Attributes
+    ----------
+    estimator : Estimator
+        The estimator with the chosen settings; the fit template fits it on the training records.
+    provenance : callable
+        Adds the record of the choice to the fitted model's provenance (dict -> dict).
+    """
+
+    estimator: Estimator
+    provenance: Callable[[dict[str, Any]], dict[str, Any]]
 
 
 class Estimator(abc.ABC):
