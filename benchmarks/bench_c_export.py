@@ -5,7 +5,7 @@ synthetic coefficients, on a random-velocity record:
 
 * forward model: C ``<name>_run`` (the per-sample ``<name>_step`` in a loop) against the numba
   record kernel the library uses (``simulate_record`` for LPV, ``sp_force`` for SP-1);
-* regularised inverse: C ``<name>_inverse_run`` against the numba kernel (``lpv_inverse_reg``,
+* regularised inverse: C ``<name>_inverse_run`` against the numba kernel (``lpv_inverse_reg_hys``,
   ``static_inverse_reg``), same weight and grid (32 intervals).
 
 The C code is compiled with ``gcc -std=c99 -O2``; both are called once per record through their
@@ -32,6 +32,7 @@ import numpy as np
 from _timing import best_time
 
 from mrdamper.control import _inverse_kernels as IK
+from mrdamper.control._forms import inverse_form
 from mrdamper.control.c_export import export_c
 from mrdamper.control.inverse import lpv_law_arrays, static_map_arrays
 from mrdamper.models._sp_kernels import sp_force
@@ -83,6 +84,19 @@ def main(argv: list[str] | None = None) -> int:
     comp, power, theta, f0 = static_map_arrays(sp1)
     F_sp = sp_force(x, v, i, comp, power, theta, f0)
     mode, gm, gc, mu_h, mu_l = lpv_law_arrays(lpv)
+    inv_lpv = inverse_form(
+        lam=REG,
+        n_grid=N_GRID,
+        is_lpv=True,
+        alpha=lpv.alpha,
+        beta=lpv.beta,
+        mode=mode,
+        gm=gm,
+        gc=gc,
+        mu_high=mu_h,
+        mu_low=mu_l,
+    )
+    z_static = np.zeros(n)  # the static input: no Dahl state
     out = [np.zeros(n) for _ in range(2)]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -107,26 +121,7 @@ def main(argv: list[str] | None = None) -> int:
                     out[0].ctypes.data_as(_P),
                     out[1].ctypes.data_as(_P),
                 ),
-                lambda: IK.lpv_inverse_reg(
-                    v,
-                    F_lpv,
-                    lpv.alpha,
-                    lpv.beta,
-                    0.0,
-                    0.0,
-                    1.0,
-                    -1.0,
-                    mode,
-                    gm,
-                    gc,
-                    mu_h,
-                    mu_l,
-                    0.0,
-                    N_GRID,
-                    REG,
-                    np.inf,
-                    1,
-                ),
+                lambda: IK.lpv_inverse_reg_hys(v, F_lpv, inv_lpv, 0.0, 1.0, 0.0, np.inf, z_static),
             ),
             ("sp1", "forward"): (
                 lambda: libs["sp1"].b_sp1_run(

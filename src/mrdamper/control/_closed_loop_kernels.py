@@ -101,15 +101,8 @@ def _loop(  # type: ignore[no-untyped-def]
     h,
     n_sub,
     car,
-    ctrl,
-    gains,
-    lo,
-    hi,
-    lam,
-    rate_step,
-    n_grid,
+    form,
     bound,
-    inv,
     c_step,
     c_form,
     c_state,
@@ -126,13 +119,10 @@ def _loop(  # type: ignore[no-untyped-def]
     ----------
     zr : float64[:]
         Road at the plant rate [m], ``n_ctrl * n_sub + 1`` samples; ``h`` the plant step [s].
-    car, ctrl, gains, lo, hi, rate_step, n_grid, bound
-        As :func:`~mrdamper.control._quarter_car_kernels.simulate`; ``lam`` the regularisation
-        weight [N per input unit].
-    inv : tuple
-        The controller model's inverse arrays ``(is_lpv, comp, power, theta, f0, alpha, beta,
-        offset, lag, mode, gm, gc, mu_high, mu_low, horizon, blend, stroke)`` (ignored when
-        ``c_step``).
+    car, form, bound
+        As :func:`~mrdamper.control._quarter_car_kernels.simulate`: ``form`` the controller
+        (:class:`~mrdamper.control._forms.ControllerForm`), its inverse arrays ignored when
+        ``c_step``.
     c_step : bool
         The controller steps its model (``C_FORCE``, ``C_ADVANCE`` on ``c_form``, state
         ``c_state``, force at rest ``c_offset`` [N]) as an observer driven by the measured damper
@@ -161,8 +151,8 @@ def _loop(  # type: ignore[no-untyped-def]
         the plant's ``advance`` status).
     """
     m_s, m_u, k_s, k_t, c_t = car[0], car[1], car[2], car[3], car[4]
-    (is_lpv, comp, power, theta, f0, alpha, beta, offset) = inv[:8]
-    (lag, mode, gm, gc, mu_high, mu_low, horizon, blend, stroke) = inv[8:]
+    ctrl, gains, lo, hi, rate_step = form.ctrl, form.gains, form.lo, form.hi, form.rate_step
+    alpha = form.inverse.alpha
     i_const = gains[3]
     n_ctrl = (zr.size - 1) // n_sub
     n = n_ctrl * n_sub
@@ -181,10 +171,9 @@ def _loop(  # type: ignore[no-untyped-def]
     st = np.zeros(4)
     tmp = np.zeros(4)
     kk = np.zeros((4, 4))
-    lam2 = lam * lam
     prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
     mem = np.array([prev, prev, 0.0, 0.0])
-    dt_c = n_sub * h
+    dt_c = form.dt_c
     e = prev
     xc, vc = 0.0, 0.0  # damper motion at the previous control sample
     Fh, xs, vs_, es = 0.0, 0.0, 0.0, 0.0
@@ -219,7 +208,7 @@ def _loop(  # type: ignore[no-untyped-def]
                     a,
                     b,
                     prev,
-                    lam2,
+                    form.inverse.lam2,
                     4,
                 )
                 ok = err <= 0.05 * abs(target) + 1.0
@@ -227,45 +216,11 @@ def _loop(  # type: ignore[no-untyped-def]
             e = r
         else:
             r, ok, target, _ = control_sample(
-                k,
-                st[0],
-                st[1],
-                st[2],
-                st[3],
-                dt_c,
-                ctrl,
-                gains,
-                lo,
-                hi,
-                lam2,
-                rate_step,
-                n_grid,
-                is_lpv,
-                comp,
-                power,
-                theta,
-                f0,
-                alpha,
-                beta,
-                offset,
-                lag,
-                mode,
-                gm,
-                gc,
-                mu_high,
-                mu_low,
-                horizon,
-                blend,
-                stroke,
-                y,
-                u,
-                cf,
-                yb,
-                ub,
-                rho,
-                mem,
+                k, st[0], st[1], st[2], st[3], form, y, u, cf, yb, ub, rho, mem
             )
-            e = mem[1] if lag >= 0.0 else r  # the command (through a drive lag: its inverse)
+            e = (
+                mem[1] if form.inverse.lag >= 0.0 else r
+            )  # the command (through a drive lag: its inverse)
         xc, vc = x_d, v_d
         Fd[k] = target
         E[k] = e

@@ -35,7 +35,6 @@ __all__ = [
     "dahl_step",
     "horizon_step",
     "lpv_inverse",
-    "lpv_inverse_reg",
     "lpv_inverse_reg_hys",
     "reg_solve_poly",
     "reg_solve_static",
@@ -138,39 +137,17 @@ def lpv_inverse(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def horizon_cost(  # type: ignore[no-untyped-def]
-    cf,
-    yb,
-    ub,
-    valid,
-    alpha,
-    beta,
-    offset,
-    r,
-    w,
-    lag,
-    horizon,
-    v,
-    target,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    z,
-    blend,
-    ys,
-    us,
-    c2,
-):  # pragma: no cover - numba
+def horizon_cost(inv, cf, yb, ub, valid, r, w, v, target, z, ys, us, c2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Mean squared force error over ``horizon`` samples with the command ``w`` held.
 
-    Sample 0 has the coefficients ``cf`` (fixed by the past) and scheduling value ``r``; then the
-    model runs on: ``rho <- lag rho + (1 - lag) w``, the velocity held at ``v`` and the Dahl state
-    at ``z`` (the hysteretic input with share ``blend``; 0: static input), the past buffers
+    ``inv`` is the model's :class:`~mrdamper.control._forms.InverseForm`. Sample 0 has the
+    coefficients ``cf`` (fixed by the past) and scheduling value ``r``; then the model runs on:
+    ``rho <- lag rho + (1 - lag) w``, the velocity held at ``v`` and the Dahl state at ``z`` (the
+    hysteretic input with share ``blend``; 0: static input), the past buffers
     ``yb``, ``ub`` (most recent first, ``valid`` entries in use) copied into ``ys``, ``us``. Every
     sample is compared with the same ``target`` (the desired force now: nothing later is known).
     """
+    alpha, beta, offset, lag = inv.alpha, inv.beta, inv.offset, inv.lag
     n_m, n_p = alpha.shape
     for j in range(n_m):
         ys[j] = yb[j]
@@ -180,12 +157,12 @@ def horizon_cost(  # type: ignore[no-untyped-def]
     acc = e * e
     rr = r
     nv = valid
-    for _ in range(1, horizon):
+    for _ in range(1, inv.horizon):
         for j in range(n_m - 1, 0, -1):
             ys[j] = ys[j - 1]
             us[j] = us[j - 1]
         ys[0] = F - offset
-        us[0] = _u_of(v, rr, mode, gm, gc, mu_high, mu_low, z, blend)
+        us[0] = _u_of(v, rr, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z, inv.blend)
         if nv < n_m:
             nv += 1
         rr = lag * rr + (1.0 - lag) * w
@@ -198,137 +175,36 @@ def horizon_cost(  # type: ignore[no-untyped-def]
         F = _poly(c2, rr)
         e = F - target
         acc += e * e
-    return acc / horizon
+    return acc / inv.horizon
 
 
 @njit(cache=True)
-def _horizon_j(  # type: ignore[no-untyped-def]
-    cf,
-    yb,
-    ub,
-    valid,
-    alpha,
-    beta,
-    offset,
-    r,
-    prev,
-    hold,
-    lag,
-    horizon,
-    v,
-    target,
-    lam2,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    z,
-    blend,
-    ys,
-    us,
-    c2,
-):  # pragma: no cover - numba
-    w = (r - lag * prev) / (1.0 - lag)
+def _horizon_j(inv, cf, yb, ub, valid, r, prev, hold, v, target, z, ys, us, c2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    w = (r - inv.lag * prev) / (1.0 - inv.lag)
     d = r - hold
-    return (
-        horizon_cost(
-            cf,
-            yb,
-            ub,
-            valid,
-            alpha,
-            beta,
-            offset,
-            r,
-            w,
-            lag,
-            horizon,
-            v,
-            target,
-            mode,
-            gm,
-            gc,
-            mu_high,
-            mu_low,
-            z,
-            blend,
-            ys,
-            us,
-            c2,
-        )
-        + lam2 * d * d
-    )
+    return horizon_cost(inv, cf, yb, ub, valid, r, w, v, target, z, ys, us, c2) + inv.lam2 * d * d
 
 
 @njit(cache=True)
-def horizon_step(  # type: ignore[no-untyped-def]
-    cf,
-    yb,
-    ub,
-    valid,
-    alpha,
-    beta,
-    offset,
-    a,
-    b,
-    prev,
-    hold,
-    lag,
-    horizon,
-    v,
-    target,
-    lam2,
-    n_grid,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    z,
-    blend,
-):  # pragma: no cover - numba
+def horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v, target, z):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """``rho[k]`` in ``[a, b]`` minimising the horizon cost (:func:`horizon_cost`) of the command it
-    implies, ``w = (rho - lag prev) / (1 - lag)``, plus ``lam2 (rho - hold)^2``.
+    implies, ``w = (rho - lag prev) / (1 - lag)``, plus ``lam2 (rho - hold)^2`` (``inv``: the
+    model's :class:`~mrdamper.control._forms.InverseForm`, with ``lag``, ``horizon``, ``lam2``,
+    ``n_grid``).
 
     Grid scan of ``n_grid`` intervals (``hold`` included), then ``N_GOLDEN`` golden-section steps
     on the grid intervals either side of the best point (the result is kept only if better).
     Returns ``(rho, reachable)``: ``reachable`` is False when ``target`` lies outside the forces of
     the present sample on the grid.
     """
-    n_m, n_p = alpha.shape
+    n_m, n_p = inv.alpha.shape
+    n_grid = inv.n_grid
     ys = np.zeros(n_m)
     us = np.zeros(n_m)
     c2 = np.zeros(n_p)
 
     def cost(r: float) -> float:  # the horizon cost at rho = r (inlined by numba)
-        return _horizon_j(  # type: ignore[no-any-return]  # numba kernel, untyped
-            cf,
-            yb,
-            ub,
-            valid,
-            alpha,
-            beta,
-            offset,
-            r,
-            prev,
-            hold,
-            lag,
-            horizon,
-            v,
-            target,
-            lam2,
-            mode,
-            gm,
-            gc,
-            mu_high,
-            mu_low,
-            z,
-            blend,
-            ys,
-            us,
-            c2,
-        )
+        return _horizon_j(inv, cf, yb, ub, valid, r, prev, hold, v, target, z, ys, us, c2)  # type: ignore[no-any-return]  # numba kernel, untyped
 
     best = min(max(hold, a), b)
     best_j = cost(best)
@@ -379,74 +255,7 @@ def past_buffers(y, u, k, yb, ub):  # type: ignore[no-untyped-def]  # pragma: no
 
 
 @njit(cache=True)
-def lpv_inverse_reg(  # type: ignore[no-untyped-def]
-    v,
-    F_desired,
-    alpha,
-    beta,
-    offset,
-    lo,
-    hi,
-    lag,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    rho0,
-    n_grid,
-    lam,
-    rate_step,
-    horizon,
-):  # pragma: no cover - numba
-    """:func:`lpv_inverse_reg_hys` with the static input (``blend = 0``)."""
-    return lpv_inverse_reg_hys(
-        v,
-        F_desired,
-        alpha,
-        beta,
-        offset,
-        lo,
-        hi,
-        lag,
-        mode,
-        gm,
-        gc,
-        mu_high,
-        mu_low,
-        rho0,
-        n_grid,
-        lam,
-        rate_step,
-        horizon,
-        np.zeros(v.size),
-        0.0,
-    )
-
-
-@njit(cache=True)
-def lpv_inverse_reg_hys(  # type: ignore[no-untyped-def]
-    v,
-    F_desired,
-    alpha,
-    beta,
-    offset,
-    lo,
-    hi,
-    lag,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    rho0,
-    n_grid,
-    lam,
-    rate_step,
-    horizon,
-    z,
-    blend,
-):  # pragma: no cover - numba
+def lpv_inverse_reg_hys(v, F_desired, inv, lo, hi, rho0, rate_step, z):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse`).
 
     Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
@@ -455,8 +264,10 @@ def lpv_inverse_reg_hys(  # type: ignore[no-untyped-def]
     ``rho[k]`` would take with the previous command held (the regularisation then penalises command
     changes, not the lag's own motion). With a drive lag and ``horizon > 1`` (from the third sample
     on) the force term is the mean over ``horizon`` samples with the implied command held
-    (:func:`horizon_step`): a causal lead over the lag. Other arguments (the Dahl state ``z`` and
-    share ``blend`` of the hysteretic input included) as :func:`lpv_inverse`.
+    (:func:`horizon_step`): a causal lead over the lag. ``inv`` is the model's
+    :class:`~mrdamper.control._forms.InverseForm` (with ``lam2``, ``n_grid`` and ``horizon``); the
+    Dahl state ``z`` of the hysteretic input (share ``inv.blend``) and the other arguments as
+    :func:`lpv_inverse`. ``blend = 0``: the static input (``z`` unused).
 
     Returns
     -------
@@ -464,6 +275,7 @@ def lpv_inverse_reg_hys(  # type: ignore[no-untyped-def]
     saturated : bool[:]
         True where ``F_desired[k]`` lies outside the forces the admissible interval gives.
     """
+    alpha, beta, offset, lag = inv.alpha, inv.beta, inv.offset, inv.lag
     n = v.size
     n_p = alpha.shape[1]
     y = np.zeros(n)
@@ -476,7 +288,6 @@ def lpv_inverse_reg_hys(  # type: ignore[no-untyped-def]
     ub = np.zeros(alpha.shape[0])
     prev = min(max(rho0, lo), hi)
     w_prev = prev
-    lam2 = lam * lam
     for k in range(n):
         lpv_coefficients(cf, y, u, k, alpha, beta, offset)
         a, b = lo, hi
@@ -496,43 +307,18 @@ def lpv_inverse_reg_hys(  # type: ignore[no-untyped-def]
             lag >= 0.0 and k >= 2
         ):  # rho with the previous command held: the lag's own motion is free
             hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-        if lag >= 0.0 and k >= 2 and horizon > 1:
+        if lag >= 0.0 and k >= 2 and inv.horizon > 1:
             valid = past_buffers(y, u, k, yb, ub)
-            r, ok = horizon_step(
-                cf,
-                yb,
-                ub,
-                valid,
-                alpha,
-                beta,
-                offset,
-                a,
-                b,
-                prev,
-                hold,
-                lag,
-                horizon,
-                v[k],
-                F_desired[k],
-                lam2,
-                n_grid,
-                mode,
-                gm,
-                gc,
-                mu_high,
-                mu_low,
-                z[k],
-                blend,
-            )
+            r, ok = horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v[k], F_desired[k], z[k])
         else:
-            r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, lam2, n_grid)
+            r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, inv.lam2, inv.n_grid)
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         rho[k] = r
         F[k] = _poly(cf, r)
         y[k] = F[k] - offset
         sat[k] = not ok
-        u[k] = _u_of(v[k], r, mode, gm, gc, mu_high, mu_low, z[k], blend)
+        u[k] = _u_of(v[k], r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z[k], inv.blend)
         prev = r
     return rho, F, sat
 
@@ -546,7 +332,7 @@ def static_inverse_reg(  # type: ignore[no-untyped-def]
     With a drive lag (``lag = exp(-eta dt) >= 0``; -1 for none) the map sees ``rho``, the lagged
     command, and the unknown is ``rho[k]`` within the lag's reach from ``rho[k-1]`` (the command in
     ``[lo, hi]``), regularised towards the ``rho`` the previous command would give, exactly as
-    :func:`lpv_inverse_reg`; ``rho[1] = rho[0]`` (the lag starts at rest).
+    :func:`lpv_inverse_reg_hys`; ``rho[1] = rho[0]`` (the lag starts at rest).
     """
     n = x.size
     out = np.zeros(n)

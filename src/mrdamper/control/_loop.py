@@ -5,7 +5,9 @@ compiled loops take (the fused static-map / LPV kernel of :mod:`._quarter_car_ke
 generic-plant kernel of :mod:`._closed_loop_kernels`): the inverse's arrays, the input limits,
 the control sample and plant step, the regularisation weight, the controller code and gains, the
 car scaled by the motion ratio and the road at the plant rate. :func:`loop_result` builds the
-:class:`~mrdamper.control.quarter_car.QuarterCarResult` from what a kernel returns.
+:class:`~mrdamper.control.quarter_car.QuarterCarResult` from what a kernel returns;
+:func:`controller_form` gives the controller and the model's inverse as the kernels read them
+(:mod:`mrdamper.control._forms`).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from mrdamper.control import _quarter_car_kernels as QK
+from mrdamper.control._forms import ControllerForm, inverse_form
 from mrdamper.control.car import Controller, QuarterCar, QuarterCarResult, Road, positive
 from mrdamper.control.inverse import (
     default_reg,
@@ -27,7 +30,15 @@ from mrdamper.control.inverse import (
 )
 from mrdamper.errors import DataValidationError
 
-__all__ = ["CONTROL_CODES", "LoopSetup", "damper_arrays", "loop_result", "loop_setup", "positive"]
+__all__ = [
+    "CONTROL_CODES",
+    "LoopSetup",
+    "controller_form",
+    "damper_arrays",
+    "loop_result",
+    "loop_setup",
+    "positive",
+]
 
 #: Controller name -> kernel code.
 CONTROL_CODES = {
@@ -219,6 +230,15 @@ def loop_setup(
         z_in=z_in,
         n_ctrl=n_ctrl,
         mr=mr,
+    )
+
+
+def controller_form(s: LoopSetup, n_grid: int) -> ControllerForm:
+    """The controller of the run ``s`` as the compiled loops read it, with the damper model's
+    inverse (``n_grid`` intervals of its search grid)."""
+    inv = inverse_form(lam=s.lam, n_grid=int(n_grid), horizon=int(s.n_h), **s.arrays)
+    return ControllerForm(
+        int(s.code), s.gains, float(s.lo), float(s.hi), float(s.step_rate), s.n_sub * s.h, inv
     )
 
 

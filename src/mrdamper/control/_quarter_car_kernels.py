@@ -64,48 +64,12 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def control_sample(  # type: ignore[no-untyped-def]
-    k,
-    zs,
-    vs,
-    zu,
-    vu,
-    dt_c,
-    ctrl,
-    gains,
-    lo,
-    hi,
-    lam2,
-    rate_step,
-    n_grid,
-    is_lpv,
-    comp,
-    power,
-    theta,
-    f0,
-    alpha,
-    beta,
-    offset,
-    lag,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    horizon,
-    blend,
-    stroke,
-    y,
-    u,
-    cf,
-    yb,
-    ub,
-    rho,
-    mem,
-):  # pragma: no cover - numba
+def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """The controller and the damper model's inverse at control sample ``k``.
 
-    The car state ``zs, vs, zu, vu`` is the one at the sample instant. ``mem`` carries the
+    ``form`` is the controller (:class:`~mrdamper.control._forms.ControllerForm`, with the damper
+    model's inverse). The car state ``zs, vs, zu, vu`` is the one at the sample instant. ``mem``
+    carries the
     controller's memory ``[previous input, previous command, Dahl state, previous damper
     velocity]`` (start: the first two the initial input, the others 0); ``y, u`` (LPV past outputs
     and inputs) and ``rho`` are written at index ``k``; ``cf, yb, ub`` are scratch. The model's
@@ -123,12 +87,15 @@ def control_sample(  # type: ignore[no-untyped-def]
     F_model : float
         The model's force for ``r`` (preload removed) [N].
     """
-    c_sky, c_gnd, alpha_h, i_const = gains[0], gains[1], gains[2], gains[3]
+    inv = form.inverse
+    ctrl, lo, hi, rate_step, dt_c = form.ctrl, form.lo, form.hi, form.rate_step, form.dt_c
+    alpha, beta, offset, lag, f0 = inv.alpha, inv.beta, inv.offset, inv.lag, inv.f0
+    c_sky, c_gnd, alpha_h, i_const = form.gains[0], form.gains[1], form.gains[2], form.gains[3]
     prev, w_prev, z_d, v_prev = mem[0], mem[1], mem[2], mem[3]
     x_d = zs - zu
     v_d = vs - vu
-    if blend != 0.0 and k >= 1:
-        z_d = dahl_step(z_d, v_prev, v_d, dt_c, stroke)
+    if inv.blend != 0.0 and k >= 1:
+        z_d = dahl_step(z_d, v_prev, v_d, dt_c, inv.stroke)
     v_prev = v_d
     # --- input for this sample
     a, b = lo, hi
@@ -144,7 +111,7 @@ def control_sample(  # type: ignore[no-untyped-def]
         target = np.nan
     else:
         target = _desired(ctrl, vs, vu, c_sky, c_gnd, alpha_h)
-    if is_lpv:
+    if inv.is_lpv:
         lpv_coefficients(cf, y, u, k, alpha, beta, offset)
         if ctrl == CTRL_PASSIVE:
             r = min(max(i_const, a), b)
@@ -153,41 +120,18 @@ def control_sample(  # type: ignore[no-untyped-def]
             hold = prev
             if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
                 hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-            if lag >= 0.0 and k >= 2 and horizon > 1:
+            if lag >= 0.0 and k >= 2 and inv.horizon > 1:
                 valid = past_buffers(y, u, k, yb, ub)
                 r, ok = horizon_step(
-                    cf,
-                    yb,
-                    ub,
-                    valid,
-                    alpha,
-                    beta,
-                    offset,
-                    a,
-                    b,
-                    prev,
-                    hold,
-                    lag,
-                    horizon,
-                    v_d,
-                    target + offset,
-                    lam2,
-                    n_grid,
-                    mode,
-                    gm,
-                    gc,
-                    mu_high,
-                    mu_low,
-                    z_d,
-                    blend,
+                    inv, cf, yb, ub, valid, a, b, prev, hold, v_d, target + offset, z_d
                 )
             else:
-                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, lam2, n_grid)
+                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, inv.lam2, inv.n_grid)
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         Fk = _poly(cf, r)
         y[k] = Fk - offset
-        u[k] = _u_of(v_d, r, mode, gm, gc, mu_high, mu_low, z_d, blend)
+        u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
         F_model = Fk - offset
     else:
         if ctrl == CTRL_PASSIVE:
@@ -198,11 +142,22 @@ def control_sample(  # type: ignore[no-untyped-def]
             if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
                 hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
             r, ok = reg_solve_static(
-                x_d, v_d, comp, power, theta, f0, target + f0, a, b, hold, lam2, n_grid
+                x_d,
+                v_d,
+                inv.comp,
+                inv.power,
+                inv.theta,
+                f0,
+                target + f0,
+                a,
+                b,
+                hold,
+                inv.lam2,
+                inv.n_grid,
             )
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
-        F_model = sp_force1(x_d, v_d, r, comp, power, theta, f0) - f0
+        F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0
     rho[k] = r
     mem[0], mem[1], mem[2], mem[3] = r, w_prev, z_d, v_prev
     return r, ok, target, F_model
@@ -212,37 +167,7 @@ def control_sample(  # type: ignore[no-untyped-def]
 # function it calls in another module (the inverse kernels) changes; after editing those, delete
 # this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
 @njit(cache=True)
-def simulate(  # type: ignore[no-untyped-def]
-    zr,
-    h,
-    n_sub,
-    car,
-    is_lpv,
-    comp,
-    power,
-    theta,
-    f0,
-    alpha,
-    beta,
-    offset,
-    lag,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    ctrl,
-    gains,
-    lo,
-    hi,
-    lam,
-    rate_step,
-    n_grid,
-    bound,
-    horizon,
-    blend,
-    stroke,
-):  # pragma: no cover - numba
+def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Run the quarter car over a road.
 
     Parameters
@@ -253,23 +178,15 @@ def simulate(  # type: ignore[no-untyped-def]
         Plant step [s]; the control (and LPV model) sample is ``n_sub * h``.
     car : float64[:]
         ``[m_s, m_u, k_s, k_t, c_t]`` [kg, kg, N/m, N/m, N s/m].
-    is_lpv : bool
-        LPV damper (``alpha``, ``beta``, ``offset``, ``lag``, zone laws) or static map (``comp``,
-        ``power``, ``theta``, ``f0``).
-    ctrl : int
-        Controller code (module docstring); ``gains = [c_sky, c_gnd, alpha, i_const]``.
-    lo, hi : float
-        Input limits; ``lam`` [N per input unit] regularisation weight, ``rate_step`` largest input
-        change per control sample, ``n_grid`` search grid of the inverse.
+    form : ControllerForm
+        The controller and the damper model's inverse
+        (:class:`~mrdamper.control._forms.ControllerForm`; its control sample ``dt_c`` is
+        ``n_sub * h``): an LPV damper (``is_lpv``; with a drive lag, the inverse's lead
+        ``horizon`` [samples]; with the hysteretic input, the Dahl state ``z`` of share ``blend``
+        and stroke scale ``stroke`` integrated in the loop from the damper velocity at every
+        control sample with the model's exact update, from rest ``z = 0``) or a static map.
     bound : float
         Largest admissible ``|state|`` (divergence check).
-    horizon : int
-        Lead horizon [samples] of the inverse of an LPV damper with a drive lag (``horizon_step``);
-        1: the present sample only.
-    blend, stroke : float
-        Hysteretic input of an LPV damper: share ``lambda`` [-] and stroke scale ``x_y`` [m] of
-        the Dahl state ``z``, integrated in the loop from the damper velocity at every control
-        sample with the model's exact update (from rest, ``z = 0``); ``blend = 0``: static input.
 
     Returns
     -------
@@ -285,68 +202,33 @@ def simulate(  # type: ignore[no-untyped-def]
         First diverged plant step or -1.
     """
     m_s, m_u, k_s, k_t, c_t = car[0], car[1], car[2], car[3], car[4]
-    i_const = gains[3]
+    inv = form.inverse
+    is_lpv, comp, power, theta, f0 = inv.is_lpv, inv.comp, inv.power, inv.theta, inv.f0
+    i_const = form.gains[3]
     n_ctrl = (zr.size - 1) // n_sub
     X = np.zeros((n_ctrl * n_sub, 5))
     F = np.zeros(n_ctrl)
     Fd = np.zeros(n_ctrl)
     rho = np.zeros(n_ctrl)
     sat = np.zeros(n_ctrl, dtype=np.bool_)
-    n_p = alpha.shape[1]
+    n_p = inv.alpha.shape[1]
     y = np.zeros(n_ctrl)
     u = np.zeros(n_ctrl)
     cf = np.zeros(n_p)
-    yb = np.zeros(alpha.shape[0])
-    ub = np.zeros(alpha.shape[0])
+    yb = np.zeros(inv.alpha.shape[0])
+    ub = np.zeros(inv.alpha.shape[0])
     st = np.zeros(4)
     tmp = np.zeros(4)
     k1 = np.zeros(4)
     k2 = np.zeros(4)
     k3 = np.zeros(4)
     k4 = np.zeros(4)
-    lam2 = lam * lam
-    prev = min(max(i_const, lo), hi) if ctrl == CTRL_PASSIVE else lo
-    dt_c = n_sub * h
+    lo, hi = form.lo, form.hi
+    prev = min(max(i_const, lo), hi) if form.ctrl == CTRL_PASSIVE else lo
     mem = np.array([prev, prev, 0.0, 0.0])  # prev, w_prev, Dahl state, previous velocity
     for k in range(n_ctrl):
         r, ok, target, F[k] = control_sample(
-            k,
-            st[0],
-            st[1],
-            st[2],
-            st[3],
-            dt_c,
-            ctrl,
-            gains,
-            lo,
-            hi,
-            lam2,
-            rate_step,
-            n_grid,
-            is_lpv,
-            comp,
-            power,
-            theta,
-            f0,
-            alpha,
-            beta,
-            offset,
-            lag,
-            mode,
-            gm,
-            gc,
-            mu_high,
-            mu_low,
-            horizon,
-            blend,
-            stroke,
-            y,
-            u,
-            cf,
-            yb,
-            ub,
-            rho,
-            mem,
+            k, st[0], st[1], st[2], st[3], form, y, u, cf, yb, ub, rho, mem
         )
         Fd[k] = target
         sat[k] = not ok

@@ -44,7 +44,13 @@ from typing import Any
 import numpy as np
 
 from mrdamper.control import _closed_loop_kernels as CK
-from mrdamper.control._loop import LoopSetup, damper_arrays, loop_result, loop_setup
+from mrdamper.control._loop import (
+    LoopSetup,
+    controller_form,
+    damper_arrays,
+    loop_result,
+    loop_setup,
+)
 from mrdamper.control.car import positive
 from mrdamper.control.fmu_plant import is_fmu
 from mrdamper.control.inverse import model_input_limits
@@ -305,40 +311,13 @@ def _run(
         c_state = c.initial_state(0.0, 0.0, s.lo)
         c_offset = float(c.force(c.form, c_state, 0.0, 0.0, s.lo))
         n_lead = sc.n_lead
-    a = s.arrays
-    inv = (
-        bool(a["is_lpv"]),
-        a["comp"],
-        a["power"],
-        a["theta"],
-        float(a["f0"]),
-        a["alpha"],
-        a["beta"],
-        float(a["offset"]),
-        float(a["lag"]),
-        int(a["mode"]),
-        a["gm"],
-        a["gc"],
-        a["mu_high"],
-        a["mu_low"],
-        int(s.n_h),
-        float(a["blend"]),
-        float(a["stroke"]),
-    )
     head = (
         s.zr,
         s.h,
         s.n_sub,
         s.car_arr,
-        s.code,
-        s.gains,
-        s.lo,
-        s.hi,
-        s.lam,
-        s.step_rate,
-        int(n_grid),
+        controller_form(s, n_grid),
         float(bound) * s.mr,
-        inv,
         sc is not None,
     )
     p_packed, c_packed = pack(pstep), pack(c)

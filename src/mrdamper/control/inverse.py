@@ -80,6 +80,7 @@ import pandas as pd
 
 from mrdamper._warn import warn_user
 from mrdamper.control import _inverse_kernels as K
+from mrdamper.control._forms import inverse_form
 from mrdamper.control._inverse_setup import (
     DEFAULT_REG_FRACTION,
     DEFAULT_REG_TIME,
@@ -592,28 +593,23 @@ def _lpv_reg(
     mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
     blend, z = dahl_along(model, vm, dt)
-    rho, _, sat = K.lpv_inverse_reg_hys(
-        vm,
-        Fm,
-        np.ascontiguousarray(model.alpha),
-        np.ascontiguousarray(model.beta),
-        float(model.offset),
-        lo,
-        hi,
-        lag,
-        mode,
-        gm,
-        gc,
-        mu_h,
-        mu_l,
-        lo,
-        n_grid,
-        lam,
-        rate * dt,
-        n_h,
-        z,
-        blend,
+    inv = inverse_form(
+        lam=lam,
+        n_grid=n_grid,
+        horizon=n_h,
+        lag=lag,
+        is_lpv=True,
+        alpha=model.alpha,
+        beta=model.beta,
+        offset=model.offset,
+        mode=mode,
+        gm=gm,
+        gc=gc,
+        mu_high=mu_h,
+        mu_low=mu_l,
+        blend=blend,
     )
+    rho, _, sat = K.lpv_inverse_reg_hys(vm, Fm, inv, lo, hi, lo, rate * dt, z)
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
         return rho, w, sat

@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control import _quarter_car_kernels as QK
-from mrdamper.control._loop import LoopSetup, loop_result, loop_setup
+from mrdamper.control._loop import LoopSetup, controller_form, loop_result, loop_setup
 from mrdamper.control.car import (
     CONTROLLERS,
     Controller,
@@ -139,37 +139,8 @@ def simulate_quarter_car(
         i_range=i_range,
         substeps=substeps,
     )
-    a = s.arrays
     X, F, Fd, rho, sat, bad = QK.simulate(
-        s.zr,
-        s.h,
-        s.n_sub,
-        s.car_arr,
-        a["is_lpv"],
-        a["comp"],
-        a["power"],
-        a["theta"],
-        a["f0"],
-        a["alpha"],
-        a["beta"],
-        a["offset"],
-        a["lag"],
-        a["mode"],
-        a["gm"],
-        a["gc"],
-        a["mu_high"],
-        a["mu_low"],
-        s.code,
-        s.gains,
-        s.lo,
-        s.hi,
-        s.lam,
-        s.step_rate,
-        int(n_grid),
-        float(bound) * s.mr,
-        s.n_h,
-        a["blend"],
-        a["stroke"],
+        s.zr, s.h, s.n_sub, s.car_arr, controller_form(s, n_grid), float(bound) * s.mr
     )
     if bad >= 0:
         raise SimulationDivergedError(
