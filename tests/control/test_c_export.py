@@ -325,3 +325,54 @@ def test_exported_inverse_with_its_defaults_is_the_quarter_cars(
         res.F_desired[k] + preload,
     )
     assert _rel(i_c, res.i[k]) < 1e-9
+
+
+# ------------------------------------------------------------ the one-state hysteresis families
+def _hysteresis_truths() -> dict[str, dict[str, float]]:
+    """Each family's known-answer parameters (``tests/models/test_<kind>.py``)."""
+    from tests.models import test_boucwen, test_dahl, test_lugre, test_tanh
+
+    return {
+        m.__name__.rsplit("_", 1)[1]: dict(m.TRUE)
+        for m in (test_tanh, test_boucwen, test_dahl, test_lugre)
+    }
+
+
+def _c_vs_step(model: Any, folder: Path, name: str, x: Any, v: Any, e: Any, dt: float) -> float:
+    from mrdamper.models.step import run_step
+
+    F_py, status, _ = run_step(model.step(dt=dt), x, v, e, dt)
+    assert status == 0
+    lib = _build(model, folder, name, dt=dt)
+    assert not hasattr(lib, f"{name}_inverse_run")
+    return _rel(_forward(lib, name, x, v, e), F_py)
+
+
+@needs_gcc
+@pytest.mark.parametrize("kind", ["tanh", "boucwen", "dahl", "lugre"])
+def test_c_hysteresis_step_with_and_without_lag(tmp_path: Path, kind: str) -> None:
+    """The C step of each one-state family equals its Python step (and so ``predict``) on a
+    multi-sine record with a stepped current: without a lag, with a drive lag of 60 1/s, and
+    (Bouc-Wen) with ``n = 1.5``, whose ``|z|**n`` takes ``pow``."""
+    from mrdamper.models import model_class
+    from tests.models.hysteresis_cases import record
+
+    params = _hysteresis_truths()[kind]
+    rec = record(5, duration=1.0)
+    variants = [(params, 0.0), (params, 60.0)]
+    if kind == "boucwen":
+        variants.append(({**params, "n": 1.5}, 60.0))
+    for j, (p, eta) in enumerate(variants):
+        model = model_class(kind)(**p, eta=eta, input="i", input_range=(0.0, 1.0))
+        assert _c_vs_step(model, tmp_path, f"h{j}_{kind}", rec.x, rec.v, rec.i, rec.dt) < 1e-9
+
+
+@needs_gcc
+def test_c_hysteresis_on_a_quiroz_record(tmp_path: Path, quiroz_records: list[Any]) -> None:
+    """The four families with the known-answer parameters, driven by a measured record."""
+    from mrdamper.models import model_class
+
+    rec = next(e for e in quiroz_records if e.name == "sine_25mm_0.5Hz_0.5A")
+    for kind, params in _hysteresis_truths().items():
+        model = model_class(kind)(**params, eta=40.0, input="i", input_range=(0.0, 2.25))
+        assert _c_vs_step(model, tmp_path, f"q_{kind}", rec.x, rec.v, rec.i, rec.dt) < 1e-9

@@ -52,7 +52,7 @@ __all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]
 #: Model kinds :func:`export_c` handles.
 C_KINDS = tuple(RENDERERS)
 #: Kinds whose C step needs the sample time ``dt`` given at export (no rate of their own).
-NEEDS_DT = ("spencer", "p15")
+NEEDS_DT = ("spencer", "p15", "tanh", "boucwen", "dahl", "lugre")
 
 
 def render(

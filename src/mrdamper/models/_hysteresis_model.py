@@ -146,10 +146,12 @@ class HysteresisModel(FittedModel):
     def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
-        The state is ``(z, u)``, at rest ``(0, e[0])``. ``advance`` integrates an interval with
-        the RK4 sub-steps of :meth:`predict` (the same compiled interval), no longer than
-        ``max_h``: the automatic choice for an interval of ``dt`` [s] and velocities up to
-        ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is set).
+        The state is ``(z, u)``, at rest ``(0, e[0])``. Without a drive lag the force reads the
+        present input (``feedthrough``); with one it reads the lagged input ``u``, a state.
+        ``advance`` integrates an interval with the RK4 sub-steps of :meth:`predict` (the same
+        compiled interval), no longer than ``max_h``: the automatic choice for an interval of
+        ``dt`` [s] and velocities up to ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is
+        set).
 
         Parameters
         ----------
@@ -165,7 +167,14 @@ class HysteresisModel(FittedModel):
         def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
             return np.array([0.0, e0])
 
-        return Step(self.kind, form, _k.step_force, _k.step_advance, initial_state)
+        return Step(
+            self.kind,
+            form,
+            _k.step_force,
+            _k.step_advance,
+            initial_state,
+            feedthrough=self.eta == 0.0,
+        )
 
 
 @dataclass
