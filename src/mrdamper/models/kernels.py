@@ -13,6 +13,10 @@ car and the exports of :mod:`mrdamper.control` import them from here instead of 
   (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
 * Spencer (:mod:`mrdamper.models._spencer_kernels`): its form :class:`SpencerForm`, parameter
   order and divergence bounds, for the C rendering of its step;
+* tanh, Bouc-Wen, Dahl and LuGre (:mod:`mrdamper.models._hysteresis_kernels`): their form
+  :class:`HysteresisForm`, family codes :data:`HYSTERESIS_FAMILIES`, parameter orders
+  :data:`HYSTERESIS_PARAM_NAMES` and divergence bound :data:`HYSTERESIS_Z_LIMIT`, for the C
+  rendering of their step;
 * the forms and constants the C renderers of P-15 (:class:`P15Form`, :data:`P15_GAMMA`,
   :data:`P15_MAX_SUBSTEPS`), NARX (:class:`NARXForm`) and LPV (:data:`LPV_N_HEAD`) read.
 
@@ -23,6 +27,10 @@ when the function changes; delete the caller's ``__pycache__/*.nb*`` files after
 from __future__ import annotations
 
 from mrdamper.analysis.hysteretic import dahl_step
+from mrdamper.models._hysteresis_kernels import FAMILIES as HYSTERESIS_FAMILIES
+from mrdamper.models._hysteresis_kernels import PARAM_NAMES as HYSTERESIS_PARAM_NAMES
+from mrdamper.models._hysteresis_kernels import Z_LIMIT as HYSTERESIS_Z_LIMIT
+from mrdamper.models._hysteresis_kernels import HysteresisForm
 from mrdamper.models._lpv_step import (
     MODE_CONTINUOUS,
     MODE_LITERAL,
@@ -45,6 +53,9 @@ from mrdamper.models._spencer_kernels import Z_LIMIT as SPENCER_Z_LIMIT
 from mrdamper.models._spencer_kernels import SpencerForm
 
 __all__ = [
+    "HYSTERESIS_FAMILIES",
+    "HYSTERESIS_PARAM_NAMES",
+    "HYSTERESIS_Z_LIMIT",
     "LPV_N_HEAD",
     "MODE_CONTINUOUS",
     "MODE_LITERAL",
@@ -54,6 +65,7 @@ __all__ = [
     "SPENCER_PARAM_NAMES",
     "SPENCER_Y_LIMIT",
     "SPENCER_Z_LIMIT",
+    "HysteresisForm",
     "NARXForm",
     "P15Form",
     "SpencerForm",

@@ -1,7 +1,7 @@
 """C rendering of the one-state hysteresis families' per-sample step (``tanh``, ``boucwen``,
 ``dahl``, ``lugre``), from their form alone.
 
-The form (:class:`mrdamper.models._hysteresis_kernels.HysteresisForm`: the family code, the
+The form (:class:`mrdamper.models.kernels.HysteresisForm`: the family code, the
 parameter vector in the family's ``PARAM_NAMES`` order and the largest RK4 sub-step ``max_h``) and
 the fixed sample time ``dt`` given at export are all the C code needs. Only the chosen family's
 state derivative and force are rendered; the interval is the shared one of
@@ -26,7 +26,7 @@ from mrdamper.control.c_render._common import (
     require_dt,
     step_state,
 )
-from mrdamper.models import _hysteresis_kernels as HK
+from mrdamper.models import kernels as HK
 
 __all__ = ["render_hysteresis", "render_hysteresis_form"]
 
@@ -177,7 +177,7 @@ void {p}_step_init(double *s, double x0, double v0, double e0)
 
 
 def _family(code: int) -> str:
-    return next(name for name, c in HK.FAMILIES.items() if c == code)
+    return next(name for name, c in HK.HYSTERESIS_FAMILIES.items() if c == code)
 
 
 def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> Rendered:
@@ -195,7 +195,7 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
     """
     p, P = ctx.p, ctx.P
     family = _family(int(form.family))
-    names = HK.PARAM_NAMES[family]
+    names = HK.HYSTERESIS_PARAM_NAMES[family]
     consts = "".join(
         _PARAM.format(P=P, name=n.upper(), value=lit(v), doc=n) for n, v in zip(names, form.p)
     )
@@ -203,7 +203,7 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
     pieces = [
         consts,
         "\n",
-        _HEAD.format(P=P, max_h=lit(form.max_h), dt=lit(dt), z_limit=lit(HK.Z_LIMIT)),
+        _HEAD.format(P=P, max_h=lit(form.max_h), dt=lit(dt), z_limit=lit(HK.HYSTERESIS_Z_LIMIT)),
     ]
     if family in ("tanh", "boucwen"):
         pieces.append(_SIGN.format(**fmt))
@@ -213,7 +213,7 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
     z_loop = _Z_LOOP.format(**fmt) if family in _ZDOT else "    /* no z: a static map of u */"
     pieces.append(_STEP.format(z_loop=z_loop, **fmt))
     pieces.append(STEP_WRAPPER.format(p=p, P=P, n=2))
-    lag = "drive lag eta [1/s]" if form.p[HK.ETA] > 0.0 else "no drive lag"
+    lag = "with a drive lag" if form.p[0] > 0.0 else "no drive lag"  # p[0]: eta
     return Rendered(
         step_state(p, 2, f"evolutionary variable z, lagged input u ({family}, {lag})"),
         "".join(pieces),
