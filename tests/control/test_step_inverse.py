@@ -77,3 +77,18 @@ def test_refusals() -> None:
 
     with pytest.raises(TypeError, match="'tanh', 'boucwen', 'dahl', 'lugre'"):
         inverse_current(spencer1997(), rec, np.zeros(rec.n))
+
+
+def test_quarter_car_with_a_hysteresis_model_as_controller() -> None:
+    """A model without a drive lag (``eta = 0``) drives the quarter car with the passive and the
+    semi-active controllers (its step stands in for the controller's model; the passive input is
+    the constant one, not passed through a lag that the model does not have)."""
+    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.control.quarter_car import iso_road
+
+    model = _truth("dahl")
+    road = iso_road("C", duration=1.5)
+    soft = simulate_closed_loop(model, road, "soft")
+    assert np.all(soft.i == model.input_range[0]) and np.isfinite(soft.metrics()["rms_acc"])
+    sky = simulate_closed_loop(model, road, "skyhook")
+    assert sky.i.max() > sky.i.min()  # the controller moves the input
