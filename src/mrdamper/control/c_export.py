@@ -21,10 +21,12 @@ the zone laws, the optional drive lag and, for the hysteretic input, the Dahl st
 in the state struct; an LTI model has no inverse: its force does not depend on the present
 input), the static maps ``sp1``..``sp4`` and ``bingham``, and ``spencer`` (its per-sample step,
 :meth:`~mrdamper.models.spencer.SpencerModel.step`, at the fixed sample time ``dt`` given with
-the export; no inverse), ``p15`` (its step at ``dt``; no inverse) and ``narx`` (at its own rate;
-no inverse). Every rendering also defines the family's per-sample step as
-``<name>_step_init`` / ``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of
-``<name>_step_size()`` entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
+the export; no inverse), ``p15`` (its step at ``dt``; no inverse), ``narx`` (at its own rate;
+no inverse) and the one-state hysteresis families ``tanh``, ``boucwen``, ``dahl``, ``lugre``
+(their step at ``dt``, :mod:`mrdamper.control.c_render.hysteresis`; no C inverse). Every
+rendering also defines the family's per-sample step as ``<name>_step_init`` /
+``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of ``<name>_step_size()``
+entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
 :class:`mrdamper.control.fmu_plant.FMUPlant` runs from the quarter car. The defaults of the
 inverse are the quarter car's (grid, reference velocity, regularisation at its control sample).
 
@@ -116,8 +118,8 @@ def c_source(
     n_grid : int, optional
         Search grid of the inverse (default the quarter car's, 16).
     dt : float, optional
-        Sample time [s]: required for a Spencer or P-15 model (the interval ``<name>_step``
-        integrates);
+        Sample time [s]: required for a Spencer, P-15, tanh, Bouc-Wen, Dahl or LuGre model (the
+        interval ``<name>_step`` integrates);
         for a static map, the interval of the inverse's rate bound (only used with ``rate``) and
         of the default ``reg``; an LPV model runs at its own rate.
     """

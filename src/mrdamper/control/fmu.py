@@ -234,7 +234,8 @@ def fmu_sources(
     inverse : bool
         The FMU of the inverse (kinds whose C export has one).
     dt : float, optional
-        Communication step [s] of a kind without its own sample time (Spencer, static maps;
+        Communication step [s] of a kind without its own sample time (Spencer, P-15, the static
+        maps, tanh, Bouc-Wen, Dahl, LuGre;
         default :func:`training_dt`); an LPV / LTI model runs at its rate ``1 / fs`` and a
         different ``dt`` is refused.
     reg : float, optional
