@@ -234,3 +234,27 @@ def test_fmu_plant_refusals(tmp_path: Path, kind_models: dict[str, Any]) -> None
         FMUPlant(bad)
     plant = resolve_plant(str(export_fmu(sp1, tmp_path / "d.fmu", name="d", dt=1e-3)))
     assert plant.kind == "sp1" and plant.input == sp1.input and plant.step().dt is None
+
+
+def test_inverse_fmu_of_a_hysteresis_model(tmp_path: Path) -> None:
+    """The inverse FMU of a Dahl model (closed form per sample through its step) driven by fmpy
+    against ``inverse_current``; a Dahl model with a drive lag has no inverse to export."""
+    from mrdamper.control import inverse_current
+    from mrdamper.models.dahl import DahlModel
+    from tests.models.hysteresis_cases import record
+
+    rec = record(5, duration=0.5)
+    model = DahlModel(
+        c0a=900.0, c0b=5000.0, k0=400.0, Fda=150.0, Fdb=800.0, sigma=3000.0,
+        input_range=(0.0, 1.0),
+    )  # fmt: skip
+    model = dataclasses.replace(model, substeps=model.substeps_for(rec))
+    F = model.predict(rec)
+    fmu = _validated(model, tmp_path / "inv.fmu", name="inv", dt=rec.dt, inverse=True, reg=200.0)
+    out = run_fmu(fmu, rec.x, rec.v, F)
+    res = inverse_current(model, rec, F, reg=200.0)
+    assert _rel(out[:, 0], res.i) < 1e-9
+    assert _rel(out[:, 1], res.F_achieved) < 1e-9
+    lagged = dataclasses.replace(model, eta=50.0)
+    with pytest.raises(DataValidationError, match="inverse: the C export of a dahl"):
+        export_fmu(lagged, tmp_path / "lag.fmu", dt=rec.dt, inverse=True)

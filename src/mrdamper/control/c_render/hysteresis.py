@@ -11,7 +11,16 @@ many on ``u`` with the input linear in between, or ``u = e1`` without a lag, the
 in the same order. ``<name>_step_force`` reads ``u = s[1]`` with a lag and the present input
 without one. The rest state is ``(z, u) = (0, e0)``. After a failed interval (non-finite state,
 ``|z|`` beyond its bound) the step returns NaN from then on and ``status`` keeps the code 1. The
-input is not clipped (the Python step does not clip either); no C inverse.
+input is not clipped (the Python step does not clip either).
+
+Without a drive lag the rendering also has the inverse (``<name>_inverse_step``), the closed form
+of :func:`~mrdamper.models._hysteresis_kernels.inverse_run` one sample a call: the state is
+advanced from the previous call's motion to this one's with the previous input held, the input in
+the identified range (and within the rate bound of the previous one) minimising
+``(F(e) - F_desired)^2 + reg^2 (e - e_prev)^2`` is taken from the force at both ends of the range
+(the force is affine in the present input), and ``*F_out`` gets the force with it. The
+regularisation weight is fixed into the code (default
+:func:`~mrdamper.control.inverse.default_reg` at ``v_ref`` and ``dt``).
 """
 
 from __future__ import annotations
@@ -19,9 +28,12 @@ from __future__ import annotations
 from typing import Any
 
 from mrdamper.control.c_render._common import (
+    COMMON,
     STEP_WRAPPER,
     Context,
     Rendered,
+    fmt_base,
+    inverse_settings,
     lit,
     require_dt,
     step_state,
@@ -176,11 +188,59 @@ void {p}_step_init(double *s, double x0, double v0, double e0)
 """
 
 
+_INVERSE = r"""
+static const double {P}_LO = {lo}; /* inverse input range */
+static const double {P}_HI = {hi};
+static const double {P}_LAM2 = {lam2}; /* squared regularisation weight [N^2 per input unit^2] */
+static const double {P}_RATE_STEP = {rate_step}; /* largest input change per sample */
+
+/* minimiser of (F(e) - target)^2 + lam^2 (e - prev)^2 on [a, b]: F is affine in e at the state */
+static double {p}_inverse_solve(const double *s, double x, double v, double target, double a,
+                                double b, double prev)
+{{
+    double f_a = {p}_step_force(s, x, v, a), f_b, g, den, e;
+    if (!(b > a)) return a;
+    f_b = {p}_step_force(s, x, v, b);
+    g = (f_b - f_a) / (b - a);
+    den = g * g + {P}_LAM2;
+    e = den == 0.0 ? a : a + (g * (target - f_a) + {P}_LAM2 * (prev - a)) / den;
+    return {p}_dmin({p}_dmax(e, a), b);
+}}
+
+double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
+{{
+    double a = {P}_LO, b = {P}_HI, e;
+    if (s->status == 0 && s->k > 0) {{
+        s->status = {p}_step_advance(s->s, s->x, s->v, s->e, x, v, s->e, {P}_DT);
+        a = {p}_dmax(a, s->e - {P}_RATE_STEP);
+        b = {p}_dmin(b, s->e + {P}_RATE_STEP);
+    }}
+    if (s->status != 0) {{
+        if (F_out) *F_out = NAN;
+        return NAN;
+    }}
+    e = {p}_inverse_solve(s->s, x, v, F_desired, a, b, s->k > 0 ? s->e : {P}_LO);
+    if (s->k == 0) s->s[1] = e;
+    s->x = x;
+    s->v = v;
+    s->e = e;
+    s->k += 1;
+    if (F_out) *F_out = {p}_step_force(s->s, x, v, e);
+    return e;
+}}
+"""
+
+
 def _family(code: int) -> str:
     return next(name for name, c in HK.HYSTERESIS_FAMILIES.items() if c == code)
 
 
-def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> Rendered:
+def render_hysteresis_form(
+    form: HK.HysteresisForm,
+    dt: float,
+    ctx: Context,
+    inverse: dict[str, str] | None = None,
+) -> Rendered:
     """C of the hysteresis step given by ``form``, called once per sample of ``dt`` [s].
 
     Parameters
@@ -191,7 +251,10 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
     dt : float
         Sample time [s] of the C step.
     ctx : Context
-        Export options (only the name is used: there is no C inverse).
+        Export options (the name; the inverse's settings come in ``inverse``).
+    inverse : dict, optional
+        Format fields of the inverse (``lo``, ``hi``, ``lam2``, ``rate_step`` as C literals);
+        None: no inverse (a model with a drive lag has none).
     """
     p, P = ctx.p, ctx.P
     family = _family(int(form.family))
@@ -201,6 +264,7 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
     )
     fmt = {"p": p, "P": P}
     pieces = [
+        COMMON.format(**fmt) if inverse is not None else "",
         consts,
         "\n",
         _HEAD.format(P=P, max_h=lit(form.max_h), dt=lit(dt), z_limit=lit(HK.HYSTERESIS_Z_LIMIT)),
@@ -213,13 +277,21 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
     z_loop = _Z_LOOP.format(**fmt) if family in _ZDOT else "    /* no z: a static map of u */"
     pieces.append(_STEP.format(z_loop=z_loop, **fmt))
     pieces.append(STEP_WRAPPER.format(p=p, P=P, n=2))
+    if inverse is not None:
+        pieces.append(_INVERSE.format(**fmt, **inverse))
     lag = "with a drive lag" if form.p[0] > 0.0 else "no drive lag"  # p[0]: eta
     return Rendered(
         step_state(p, 2, f"evolutionary variable z, lagged input u ({family}, {lag})"),
         "".join(pieces),
-        False,
+        inverse is not None,
         [
-            "The input is not clipped; no inverse.",
+            "The input is not clipped"
+            + (
+                f"; inverse on [{inverse['lo_text']}, {inverse['hi_text']}], regularisation "
+                f"weight {inverse['lam_text']} (closed form per sample)."
+                if inverse is not None
+                else "; no inverse (a drive lag: the force does not read the present input)."
+            ),
             f"Sample rate: {1.0 / dt!r} Hz (one call per sample of {dt!r} s).",
             f"RK4 sub-steps of at most {form.max_h!r} s.",
         ],
@@ -229,6 +301,22 @@ def render_hysteresis_form(form: HK.HysteresisForm, dt: float, ctx: Context) -> 
 
 
 def render_hysteresis(model: Any, ctx: Context) -> Rendered:
-    """C of ``model.step(dt=ctx.dt)`` (the sample time is required)."""
+    """C of ``model.step(dt=ctx.dt)`` (the sample time is required) and, without a drive lag, of
+    its inverse (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``; ``ctx.rate``)."""
     dt = require_dt(model, ctx)
-    return render_hysteresis_form(model.step(dt=dt).form, dt, ctx)
+    step = model.step(dt=dt)
+    inverse = None
+    if step.feedthrough:  # no drive lag: the force reads the present input
+        lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt)
+        base = fmt_base(model, ctx, lam, rate_step)
+        lo, hi = model.input_range
+        inverse = {
+            "lo": base["lo"],
+            "hi": base["hi"],
+            "lam2": base["lam2"],
+            "rate_step": base["rate_step"],
+            "lo_text": repr(float(lo)),
+            "hi_text": repr(float(hi)),
+            "lam_text": repr(lam),
+        }
+    return render_hysteresis_form(step.form, dt, ctx, inverse)
