@@ -23,7 +23,8 @@ input), the static maps ``sp1``..``sp4`` and ``bingham``, and ``spencer`` (its p
 :meth:`~mrdamper.models.spencer.SpencerModel.step`, at the fixed sample time ``dt`` given with
 the export; no inverse), ``p15`` (its step at ``dt``; no inverse), ``narx`` (at its own rate;
 no inverse) and the one-state hysteresis families ``tanh``, ``boucwen``, ``dahl``, ``lugre``
-(their step at ``dt``, :mod:`mrdamper.control.c_render.hysteresis`; no C inverse). Every
+(their step at ``dt``, :mod:`mrdamper.control.c_render.hysteresis`; without a drive lag also
+their closed-form inverse). Every
 rendering also defines the family's per-sample step as ``<name>_step_init`` /
 ``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of ``<name>_step_size()``
 entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
