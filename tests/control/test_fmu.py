@@ -184,25 +184,30 @@ def test_fmu_of_every_kind_validates_and_matches_run_step(
     model, rec = kind_models[kind], kind_probe.slice(0, 300)
     e = model.electrical_input(rec)
     fmu = _validated(model, tmp_path / f"{kind}.fmu", name=f"f_{kind}", dt=rec.dt)
-    F_py, status, _ = run_step(model.step(dt=rec.dt), rec.x, rec.v, e, rec.dt)
+    step = model.step(dt=rec.dt)
+    F_py, status, _ = run_step(step, rec.x, rec.v, e, rec.dt)
     assert status == 0
     assert _rel(run_fmu(fmu, rec.x, rec.v, e)[:, 0], F_py) < 1e-9
+    from mrdamper.control.fmu_plant import FMUPlant
+
+    assert FMUPlant(fmu).step().feedthrough == step.feedthrough  # recorded in the FMU
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", ["spencer", "narx"])
+@pytest.mark.parametrize("kind", ["spencer", "narx", "lugre"])
 def test_quarter_car_with_the_fmu_as_plant(
     tmp_path: Path, kind: str, kind_models: dict[str, Any]
 ) -> None:
     """The quarter car (an SP-1 skyhook controller, ISO class C) with the FMU as the damper
     (``plant=damper.fmu``: the FMU's binary stepped from the compiled loop) gives the metrics of
-    the same loop with the model itself as the damper, to 1e-9 (a continuous-time and a
-    discrete-time plant; each family's loop compiles once, some 20 s)."""
+    the same loop with the model itself as the damper, to 1e-9 (continuous-time plants, one of
+    them a hysteresis family, and a discrete-time plant; each family's loop compiles once, some
+    20 s)."""
     from mrdamper.control.closed_loop import simulate_closed_loop
     from mrdamper.control.quarter_car import iso_road
 
     plant = kind_models[kind]
-    fmu = export_fmu(plant, tmp_path / "d.fmu", name="d", dt=1e-3 if kind == "spencer" else None)
+    fmu = export_fmu(plant, tmp_path / "d.fmu", name="d", dt=None if kind == "narx" else 1e-3)
     road = iso_road("C", duration=1.0)
     ctrl = kind_models["sp1"]
     a = simulate_closed_loop(ctrl, road, "skyhook", plant=plant).metrics()
@@ -229,3 +234,27 @@ def test_fmu_plant_refusals(tmp_path: Path, kind_models: dict[str, Any]) -> None
         FMUPlant(bad)
     plant = resolve_plant(str(export_fmu(sp1, tmp_path / "d.fmu", name="d", dt=1e-3)))
     assert plant.kind == "sp1" and plant.input == sp1.input and plant.step().dt is None
+
+
+def test_inverse_fmu_of_a_hysteresis_model(tmp_path: Path) -> None:
+    """The inverse FMU of a Dahl model (closed form per sample through its step) driven by fmpy
+    against ``inverse_current``; a Dahl model with a drive lag has no inverse to export."""
+    from mrdamper.control import inverse_current
+    from mrdamper.models.dahl import DahlModel
+    from tests.models.hysteresis_cases import record
+
+    rec = record(5, duration=0.5)
+    model = DahlModel(
+        c0a=900.0, c0b=5000.0, k0=400.0, Fda=150.0, Fdb=800.0, sigma=3000.0,
+        input_range=(0.0, 1.0),
+    )  # fmt: skip
+    model = dataclasses.replace(model, substeps=model.substeps_for(rec))
+    F = model.predict(rec)
+    fmu = _validated(model, tmp_path / "inv.fmu", name="inv", dt=rec.dt, inverse=True, reg=200.0)
+    out = run_fmu(fmu, rec.x, rec.v, F)
+    res = inverse_current(model, rec, F, reg=200.0)
+    assert _rel(out[:, 0], res.i) < 1e-9
+    assert _rel(out[:, 1], res.F_achieved) < 1e-9
+    lagged = dataclasses.replace(model, eta=50.0)
+    with pytest.raises(DataValidationError, match="inverse: the C export of a dahl"):
+        export_fmu(lagged, tmp_path / "lag.fmu", dt=rec.dt, inverse=True)

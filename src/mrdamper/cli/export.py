@@ -68,8 +68,9 @@ def export(
         typer.Option(
             "--dt",
             help=(
-                "Sample time [s] of a Spencer or P-15 model's C step and of their or a static "
-                "map's FMU (default: the training records' sampling interval)."
+                "Sample time [s] of a Spencer, P-15, tanh, Bouc-Wen, Dahl or LuGre model's C "
+                "step and of their or a static map's FMU (default: the training records' "
+                "sampling interval)."
             ),
         ),
     ] = None,
@@ -125,7 +126,10 @@ def export(
 
 
 def inverse(
-    model_file: Annotated[Path, typer.Argument(help="Model file (lpv, sp1..sp4, bingham).")],
+    model_file: Annotated[
+        Path,
+        typer.Argument(help="Model file (lpv, sp1..sp4, bingham, tanh, boucwen, dahl, lugre)."),
+    ],
     data: Annotated[
         Path, typer.Argument(help="One record file; its force column F is the desired force.")
     ],

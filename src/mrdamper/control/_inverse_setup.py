@@ -15,7 +15,12 @@ import numpy as np
 
 from mrdamper.errors import DataValidationError
 from mrdamper.models.kernels import sp_force1
-from mrdamper.models.protocols import InvertibleModel, StaticMapForm, scheduled_form
+from mrdamper.models.protocols import (
+    InvertibleModel,
+    StaticMapForm,
+    StepInvertibleModel,
+    scheduled_form,
+)
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -84,6 +89,8 @@ def force_authority(model: Any, v_ref: float) -> float:
     lo, hi = model_input_limits(model)
     if not hi > lo:
         raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
+    if isinstance(model, StepInvertibleModel):  # measured on the model's step
+        return model.force_authority(float(v_ref))
     if scheduled_form(model) is not None:
         lpv_input = model.lpv_input
 

@@ -153,6 +153,7 @@ def loop_setup(
     ``arrays`` overrides :func:`damper_arrays` (a model without inverse arrays); ``authority``
     [N per input unit] then sets the default regularisation weight (:func:`default_reg`).
     """
+    own = arrays is None  # the model's own inverse arrays (not a model stepped instead)
     arrays = damper_arrays(model) if arrays is None else arrays
     lo, hi = (
         model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
@@ -174,7 +175,8 @@ def loop_setup(
     else:
         n_h = 1
         n_sub = 1
-        if getattr(model, "eta", None) is not None:  # static map with a drive lag, at the road rate
+        # a static map with a drive lag, at the road rate (a stepped model's lag is in its step)
+        if own and getattr(model, "eta", None) is not None:
             arrays["lag"] = float(np.exp(-model.eta / road.fs))
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
         raise DataValidationError("substeps", f"expected an int >= 1, got {substeps!r}")

@@ -21,10 +21,13 @@ the zone laws, the optional drive lag and, for the hysteretic input, the Dahl st
 in the state struct; an LTI model has no inverse: its force does not depend on the present
 input), the static maps ``sp1``..``sp4`` and ``bingham``, and ``spencer`` (its per-sample step,
 :meth:`~mrdamper.models.spencer.SpencerModel.step`, at the fixed sample time ``dt`` given with
-the export; no inverse), ``p15`` (its step at ``dt``; no inverse) and ``narx`` (at its own rate;
-no inverse). Every rendering also defines the family's per-sample step as
-``<name>_step_init`` / ``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of
-``<name>_step_size()`` entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
+the export; no inverse), ``p15`` (its step at ``dt``; no inverse), ``narx`` (at its own rate;
+no inverse) and the one-state hysteresis families ``tanh``, ``boucwen``, ``dahl``, ``lugre``
+(their step at ``dt``, :mod:`mrdamper.control.c_render.hysteresis`; without a drive lag also
+their closed-form inverse). Every
+rendering also defines the family's per-sample step as ``<name>_step_init`` /
+``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of ``<name>_step_size()``
+entries laid out as the Python step's (:mod:`mrdamper.models.step`), which
 :class:`mrdamper.control.fmu_plant.FMUPlant` runs from the quarter car. The defaults of the
 inverse are the quarter car's (grid, reference velocity, regularisation at its control sample).
 
@@ -52,7 +55,7 @@ __all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]
 #: Model kinds :func:`export_c` handles.
 C_KINDS = tuple(RENDERERS)
 #: Kinds whose C step needs the sample time ``dt`` given at export (no rate of their own).
-NEEDS_DT = ("spencer", "p15")
+NEEDS_DT = ("spencer", "p15", "tanh", "boucwen", "dahl", "lugre")
 
 
 def render(
@@ -116,8 +119,8 @@ def c_source(
     n_grid : int, optional
         Search grid of the inverse (default the quarter car's, 16).
     dt : float, optional
-        Sample time [s]: required for a Spencer or P-15 model (the interval ``<name>_step``
-        integrates);
+        Sample time [s]: required for a Spencer, P-15, tanh, Bouc-Wen, Dahl or LuGre model (the
+        interval ``<name>_step`` integrates);
         for a static map, the interval of the inverse's rate bound (only used with ``rate``) and
         of the default ``reg``; an LPV model runs at its own rate.
     """

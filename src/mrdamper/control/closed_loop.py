@@ -26,7 +26,8 @@ Numerics of the generic loop (:mod:`mrdamper.control._closed_loop_kernels`):
   (:func:`~mrdamper.control._quarter_car_kernels.control_sample`: the model runs as an observer
   of the measured damper motion); with a drive lag the command is the lag's inverse of the chosen
   ``rho`` and reaches the plant one control sample later than the model assumes. A model with a
-  continuous-time step and no inverse form (Spencer, P-15) is stepped as an observer of the
+  continuous-time step and no inverse form (Spencer, P-15, tanh, Bouc-Wen, Dahl, LuGre) is
+  stepped as an observer of the
   measured motion and the applied input and inverted over a lead of ``n_lead`` control samples
   (the 63 % rise time of its force after an input step, measured on the step):
   :func:`~mrdamper.control._closed_loop_kernels._step_inverse`. Discrete-time models without an
@@ -282,7 +283,8 @@ def _step_control_of(model: Any, dt_c: float, v_ref: float) -> StepControl:
         raise DataValidationError(
             "MODEL",
             f"kind {model.kind!r} has no inverse ({why}): semi-active controllers need a static "
-            "map, an LPV model or a continuous-time model (spencer, p15); passive soft/hard work",
+            "map, an LPV model or a continuous-time model (spencer, p15, tanh, boucwen, dahl, "
+            "lugre); passive soft/hard work",
         )
     return step_control(model, dt_c, positive("v_ref", v_ref, "m/s"))
 

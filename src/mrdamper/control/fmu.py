@@ -121,6 +121,7 @@ def _model_description(
     inverse: bool,
     sources: list[str],
     own_rate: bool = False,
+    feedthrough: bool = True,
 ) -> str:
     unit = "A" if model.input == "i" else "V"
     lo, hi = (float(b) for b in model.input_range)
@@ -183,6 +184,7 @@ def _model_description(
             "inputMax": repr(hi),
             "sampleTime": repr(dt),
             "ownSampleTime": "true" if own_rate else "false",
+            "feedthrough": "true" if feedthrough else "false",
         },
     )
     mv = ET.SubElement(root, "ModelVariables")
@@ -232,7 +234,8 @@ def fmu_sources(
     inverse : bool
         The FMU of the inverse (kinds whose C export has one).
     dt : float, optional
-        Communication step [s] of a kind without its own sample time (Spencer, static maps;
+        Communication step [s] of a kind without its own sample time (Spencer, P-15, the static
+        maps, tanh, Bouc-Wen, Dahl, LuGre;
         default :func:`training_dt`); an LPV / LTI model runs at its rate ``1 / fs`` and a
         different ``dt`` is refused.
     reg : float, optional
@@ -287,7 +290,7 @@ def fmu_sources(
     }
     files = {
         "modelDescription.xml": _model_description(
-            model, name, guid, step, inverse, sources, r.step_dt
+            model, name, guid, step, inverse, sources, r.step_dt, model.step(dt=step).feedthrough
         ),
         f"sources/{name}.h": header,
         f"sources/{name}.c": src,

@@ -143,6 +143,10 @@ class FMUPlant:
         self.sample_time = float(ann["sampleTime"])
         own = ann.get("ownSampleTime")
         self._discrete = own == "true" if own is not None else self.kind in DISCRETE_KINDS
+        feed = ann.get("feedthrough")  # FMUs written before it was recorded: by kind
+        self._feedthrough = (
+            feed == "true" if feed is not None else self.kind not in ("spencer", "p15", "lti")
+        )
         tmp = Path(tempfile.mkdtemp(prefix="mrdamper-fmu-plant-"))
         self._finalizer = weakref.finalize(self, shutil.rmtree, tmp, True)
         so = tmp / f"{ident}.so"
@@ -166,7 +170,7 @@ class FMUPlant:
             step_advance,
             self.initial_state,
             dt=self.sample_time if self._discrete else None,
-            feedthrough=self.kind not in ("spencer", "p15", "lti"),
+            feedthrough=self._feedthrough,
         )
 
     def __repr__(self) -> str:

@@ -97,7 +97,7 @@ from mrdamper.control._inverse_setup import (
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
-from mrdamper.models.protocols import InvertibleModel, scheduled_form
+from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel, scheduled_form
 
 __all__ = [
     "DEFAULT_REG_FRACTION",
@@ -330,7 +330,9 @@ def inverse_current(
     Parameters
     ----------
     model : FittedModel
-        An LPV model (kind ``"lpv"``) or a static map (``"sp1"``..``"sp4"``, ``"bingham"``).
+        An LPV model (kind ``"lpv"``), a static map (``"sp1"``..``"sp4"``, ``"bingham"``) or a
+        model solved through its own step (``"tanh"``, ``"boucwen"``, ``"dahl"``, ``"lugre"``
+        without a drive lag: closed form per sample, their ``invert_record``).
     experiment_or_arrays : Experiment or mapping
         The motion: a record (its force and electrical channels are not used) or a mapping with
         arrays ``t`` [s], ``x`` [m], ``v`` [m/s].
@@ -376,11 +378,12 @@ def inverse_current(
     OutOfRangeError
         ``i_range`` outside the model's identified input range.
     """
-    if not isinstance(model, InvertibleModel):
+    if not isinstance(model, (InvertibleModel, StepInvertibleModel)):
         kind = getattr(model, "kind", type(model).__name__)
         raise TypeError(
             f"model: no inverse for kind {kind!r}; supported kinds are 'lpv' (dynamic, causal "
-            f"per-sample solution) and the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham'"
+            f"per-sample solution), the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham' and "
+            f"'tanh', 'boucwen', 'dahl', 'lugre' (without a drive lag)"
             + (
                 " (an LTI model's force does not depend on the present current)"
                 if kind == "lti"
@@ -409,7 +412,14 @@ def inverse_current(
         raise DataValidationError("tol", f"expected a force tolerance >= 0 [N], got {tol!r}")
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
-    if method == "regularised":
+    if isinstance(model, StepInvertibleModel):  # closed form per sample through its step
+        dt = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
+        lam, step_rate = (
+            (0.0, np.inf) if method == "exact" else reg_settings(model, v, reg, rate, lo, hi, dt)
+        )
+        rho, sat = model.invert_record(x, v, Fd, dt, lo, hi, reg=lam, max_change=step_rate * dt)
+        w = rho
+    elif method == "regularised":
         if sched is not None:
             dt_inv = 1.0 / sched.fs
         else:

@@ -40,6 +40,8 @@ __all__ = [
     "TANH",
     "HysteresisForm",
     "auto_substeps",
+    "inverse_run",
+    "inverse_step",
     "simulate",
     "step_advance",
     "step_force",
@@ -257,6 +259,118 @@ def step_advance(
     """Advance ``s`` over one interval of ``dt`` [s] (RK4, inputs linear in between)."""
     nsub = max(1, math.ceil(dt / form.max_h * (1.0 - 1e-12)))
     return _interval(form.family, s, x0, v0, e0, x1, v1, e1, dt, form.p, nsub)
+
+
+# ----------------------------------------------------------------------------- inverse
+@njit(cache=True)
+def inverse_step(
+    form: HysteresisForm,
+    s: FloatArray,
+    x: float,
+    v: float,
+    F_desired: float,
+    lo: float,
+    hi: float,
+    prev: float,
+    lam2: float,
+) -> tuple[float, bool]:
+    """The input in ``[lo, hi]`` closest to ``F_desired`` at the state ``s``, in closed form.
+
+    Without a drive lag (``eta = 0``) the force of every family is affine in the present input
+    ``e`` at a given state and motion (its input laws are ``a + b e``), so with
+    ``F(e) = step_force(form, s, x, v, e)``, ``F(e) = F(lo) + g (e - lo)`` with
+    ``g = (F(hi) - F(lo)) / (hi - lo)``, and the minimiser of
+    ``(F(e) - F_desired)^2 + lam2 (e - prev)^2`` over ``[lo, hi]`` is the unconstrained one,
+    ``lo + (g (F_desired - F(lo)) + lam2 (prev - lo)) / (g^2 + lam2)``, clipped (the objective is a
+    convex quadratic). ``lam2 = 0`` gives the exact solution of ``F(e) = F_desired`` where it is in
+    reach; without authority (``g = 0``) and regularisation the input is ``lo``.
+
+    Parameters
+    ----------
+    form : HysteresisForm
+        The step's form (``eta = 0``).
+    s : ndarray
+        State ``(z, u)`` at the present sample (not changed).
+    x, v : float
+        Displacement [m] and velocity [m/s] at the present sample.
+    F_desired : float
+        Desired force [N].
+    lo, hi : float
+        Admissible input interval [A] or [V].
+    prev : float
+        Input the regularisation pulls towards (the previous one) [A] or [V].
+    lam2 : float
+        Squared regularisation weight [N^2 per input unit^2].
+
+    Returns
+    -------
+    e : float
+        The input [A] or [V].
+    saturated : bool
+        True when no input in ``[lo, hi]`` gives ``F_desired`` (to rounding).
+    """
+    f_lo = step_force(form, s, x, v, lo)
+    if not hi > lo:
+        return lo, abs(f_lo - F_desired) > 1e-12 * (abs(f_lo) + abs(F_desired))
+    f_hi = step_force(form, s, x, v, hi)
+    g = (f_hi - f_lo) / (hi - lo)
+    den = g * g + lam2
+    e = lo if den == 0.0 else lo + (g * (F_desired - f_lo) + lam2 * (prev - lo)) / den
+    e = min(max(e, lo), hi)
+    slack = 1e-12 * (abs(f_lo) + abs(f_hi) + abs(F_desired))
+    reach = min(f_lo, f_hi) - slack <= F_desired <= max(f_lo, f_hi) + slack
+    return e, not reach
+
+
+@njit(cache=True)
+def inverse_run(
+    form: HysteresisForm,
+    x: FloatArray,
+    v: FloatArray,
+    F_desired: FloatArray,
+    dt: float,
+    lo: float,
+    hi: float,
+    lam2: float,
+    max_change: float,
+) -> tuple[FloatArray, npt.NDArray[np.bool_], int, int]:
+    """Causal inverse along a record: :func:`inverse_step` at every sample, the state advanced by
+    :func:`step_advance` with the motion and the input found (held over the interval: without a
+    drive lag ``z`` depends on the motion only and ``u`` follows the input).
+
+    The input at sample ``k`` is confined to ``[lo, hi]`` and, from the second sample on, to
+    ``max_change`` of the previous input; the regularisation pulls towards the previous input
+    (towards ``lo`` at the first sample). The state starts at rest, ``(0, e[0])``.
+
+    Returns
+    -------
+    e : ndarray
+        Input [A] or [V] at every sample.
+    saturated : ndarray of bool
+        Samples where no admissible input gives the desired force.
+    status, sample : int
+        Status of the step (0 ok) and the first failing sample (-1 when ok).
+    """
+    n = x.size
+    e = np.zeros(n)
+    sat = np.zeros(n, dtype=np.bool_)
+    s = np.zeros(2)
+    prev = lo
+    for k in range(n):
+        a, b = lo, hi
+        if k >= 1:
+            a = max(a, prev - max_change)
+            b = min(b, prev + max_change)
+        e[k], sat[k] = inverse_step(form, s, x[k], v[k], F_desired[k], a, b, prev, lam2)
+        if k == 0:
+            s[1] = e[0]
+        prev = e[k]
+        if k == n - 1:
+            break
+        status = step_advance(form, s, x[k], v[k], e[k], x[k + 1], v[k + 1], e[k], dt)
+        if status != STATUS_OK:
+            return e, sat, status, k + 1
+    return e, sat, STATUS_OK, -1
 
 
 # ----------------------------------------------------------------------------- step size

@@ -146,10 +146,12 @@ class HysteresisModel(FittedModel):
     def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
-        The state is ``(z, u)``, at rest ``(0, e[0])``. ``advance`` integrates an interval with
-        the RK4 sub-steps of :meth:`predict` (the same compiled interval), no longer than
-        ``max_h``: the automatic choice for an interval of ``dt`` [s] and velocities up to
-        ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is set).
+        The state is ``(z, u)``, at rest ``(0, e[0])``. Without a drive lag the force reads the
+        present input (``feedthrough``); with one it reads the lagged input ``u``, a state.
+        ``advance`` integrates an interval with the RK4 sub-steps of :meth:`predict` (the same
+        compiled interval), no longer than ``max_h``: the automatic choice for an interval of
+        ``dt`` [s] and velocities up to ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is
+        set).
 
         Parameters
         ----------
@@ -165,7 +167,120 @@ class HysteresisModel(FittedModel):
         def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
             return np.array([0.0, e0])
 
-        return Step(self.kind, form, _k.step_force, _k.step_advance, initial_state)
+        return Step(
+            self.kind,
+            form,
+            _k.step_force,
+            _k.step_advance,
+            initial_state,
+            feedthrough=self.eta == 0.0,
+        )
+
+    def invert_record(
+        self,
+        x: np.ndarray,
+        v: np.ndarray,
+        F_desired: np.ndarray,
+        dt: float,
+        lo: float,
+        hi: float,
+        *,
+        reg: float = 0.0,
+        max_change: float = math.inf,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Causal per-sample inverse along a record, through the model's step.
+
+        At every sample the input in ``[lo, hi]`` (and within ``max_change`` of the previous
+        one) minimising ``(F(e) - F_desired)^2 + reg^2 (e - e_prev)^2`` is taken in closed form
+        (:func:`~._hysteresis_kernels.inverse_step`: the force is affine in the present input at
+        the present state), then the state is advanced with the motion. The step has the RK4
+        sub-steps :meth:`predict` takes on the record, so the model's free run with the inputs
+        found gives ``F_desired`` wherever it is in reach (``reg = 0``).
+
+        Parameters
+        ----------
+        x, v, F_desired : ndarray
+            Displacement [m], velocity [m/s] and desired force [N], one value a sample.
+        dt : float
+            Sampling interval [s].
+        lo, hi : float
+            Input limits [A] or [V].
+        reg : float
+            Regularisation weight [N per input unit]; 0: the exact solution per sample.
+        max_change : float
+            Largest input change per sample [A] or [V].
+
+        Returns
+        -------
+        e : ndarray
+            Input [A] or [V].
+        saturated : ndarray of bool
+            Samples where no admissible input gives the desired force.
+
+        Raises
+        ------
+        DataValidationError
+            With a drive lag (the force does not depend on the present input).
+        SimulationDivergedError
+            If the state becomes non-finite or leaves its bound.
+        """
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise DataValidationError(
+                "dt", f"expected a positive sampling interval [s], got {dt!r}"
+            )
+        if self.eta > 0.0:
+            raise DataValidationError(
+                "eta",
+                f"the {self.kind} model has a drive lag ({self.eta!r} 1/s): its force does not "
+                "depend on the present input, so it has no per-sample inverse",
+            )
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        v = np.ascontiguousarray(v, dtype=np.float64)
+        vmax = float(np.max(np.abs(v))) if v.size else 0.0
+        form = self.step(dt=dt, vmax=vmax).form
+        e, sat, status, sample = _k.inverse_run(
+            form,
+            x,
+            v,
+            np.ascontiguousarray(F_desired, dtype=np.float64),
+            float(dt),
+            float(lo),
+            float(hi),
+            float(reg) ** 2,
+            float(max_change),
+        )
+        if status != _k.STATUS_OK:
+            raise SimulationDivergedError(
+                self.kind, int(sample), "inverse: state became non-finite or unbounded"
+            )
+        return np.asarray(e), np.asarray(sat)
+
+    def force_authority(self, v_ref: float) -> float:
+        """Steady force range per input unit at the velocity ``v_ref`` [m/s] [N per input unit].
+
+        The free run at the constant velocity ``v_ref`` with the input held at each end of
+        ``input_range``, long enough for the state to settle (ten time constants of the fastest
+        rate, at least 0.3 s, 3000 samples), compared at its last sample. It scales the default
+        regularisation weight of the inverse (:func:`mrdamper.control.inverse.default_reg`).
+        """
+        lo, hi = (float(b) for b in self.input_range)
+        if not hi > lo:
+            raise DataValidationError("input_range", f"expected low < high, got {(lo, hi)}")
+        p = self.parameter_vector()
+        rate = _k.fastest_rate(self.family, p, abs(v_ref))
+        T = min(max(0.3, 10.0 / rate), 30.0) if rate > 0.0 else 0.3
+        n = 3001
+        dt = T / (n - 1)
+        v = np.full(n, float(v_ref))
+        x = v * (np.arange(n) * dt) - 0.5 * v_ref * T  # centred stroke
+        nsub = self.substeps or _k.auto_substeps(self.family, p, dt, abs(v_ref))
+        ends = []
+        for e in (lo, hi):
+            F, status, _ = _k.simulate(_k.FAMILIES[self.family], x, v, np.full(n, e), dt, p, nsub)
+            if status != _k.STATUS_OK:
+                raise SimulationDivergedError(self.kind, n, f"steady run at {v_ref!r} m/s")
+            ends.append(float(F[-1]))
+        return abs(ends[1] - ends[0]) / (hi - lo)
 
 
 @dataclass

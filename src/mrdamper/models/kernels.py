@@ -14,6 +14,10 @@ car and the exports of :mod:`mrdamper.control` import them from here instead of 
   (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
 * Spencer (:mod:`mrdamper.models._spencer_kernels`): its form :class:`SpencerForm`, parameter
   order and divergence bounds, for the C rendering of its step;
+* tanh, Bouc-Wen, Dahl and LuGre (:mod:`mrdamper.models._hysteresis_kernels`): their form
+  :class:`HysteresisForm`, family codes :data:`HYSTERESIS_FAMILIES`, parameter orders
+  :data:`HYSTERESIS_PARAM_NAMES` and divergence bound :data:`HYSTERESIS_Z_LIMIT`, for the C
+  rendering of their step;
 * the forms and constants the C renderers of P-15 (:class:`P15Form`, :data:`P15_GAMMA`,
   :data:`P15_MAX_SUBSTEPS`), NARX (:class:`NARXForm`) and LPV (:data:`LPV_N_HEAD`) read.
 
@@ -24,6 +28,10 @@ when the function changes; delete the caller's ``__pycache__/*.nb*`` files after
 from __future__ import annotations
 
 from mrdamper.analysis.hysteretic import dahl_step
+from mrdamper.models._hysteresis_kernels import FAMILIES as HYSTERESIS_FAMILIES
+from mrdamper.models._hysteresis_kernels import PARAM_NAMES as HYSTERESIS_PARAM_NAMES
+from mrdamper.models._hysteresis_kernels import Z_LIMIT as HYSTERESIS_Z_LIMIT
+from mrdamper.models._hysteresis_kernels import HysteresisForm
 from mrdamper.models._lag import lag_step
 from mrdamper.models._narx_kernels import NARXForm
 from mrdamper.models._p15_kernels import GAMMA as P15_GAMMA
@@ -46,6 +54,9 @@ from mrdamper.models.lpv.step import (
 from mrdamper.models.lpv.step import N_HEAD as LPV_N_HEAD
 
 __all__ = [
+    "HYSTERESIS_FAMILIES",
+    "HYSTERESIS_PARAM_NAMES",
+    "HYSTERESIS_Z_LIMIT",
     "LPV_N_HEAD",
     "MODE_CONTINUOUS",
     "MODE_LITERAL",
@@ -55,6 +66,7 @@ __all__ = [
     "SPENCER_PARAM_NAMES",
     "SPENCER_Y_LIMIT",
     "SPENCER_Z_LIMIT",
+    "HysteresisForm",
     "NARXForm",
     "P15Form",
     "SpencerForm",

@@ -13,6 +13,11 @@ in one of two plain-array forms that the control kernels step through:
 
 Spencer, P-15 and NARX have no such form yet; every kind has a per-sample step
 (:meth:`~mrdamper.models.base.FittedModel.step`, :mod:`mrdamper.models.step`).
+
+A model whose per-sample step can be solved for the present input in closed form (the force is
+affine in it at the present state: ``tanh``, ``boucwen``, ``dahl``, ``lugre`` without a drive
+lag) implements :class:`StepInvertibleModel`: :func:`mrdamper.control.inverse_current` runs its
+:meth:`~StepInvertibleModel.invert_record`.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ __all__ = [
     "InvertibleModel",
     "ScheduledForm",
     "StaticMapForm",
+    "StepInvertibleModel",
     "scheduled_form",
 ]
 
@@ -131,6 +137,39 @@ class InvertibleModel(Protocol):
 
     def with_range_policy(self, policy: Any) -> Any:
         """Copy of the model with another out-of-range policy."""
+        ...
+
+
+@runtime_checkable
+class StepInvertibleModel(Protocol):
+    """A fitted model inverted sample by sample through its own step (see the module docstring).
+
+    Implemented by the ``tanh``, ``boucwen``, ``dahl`` and ``lugre`` models
+    (:class:`~mrdamper.models._hysteresis_model.HysteresisModel`); a model with a drive lag
+    refuses in one line (its force does not depend on the present input).
+    """
+
+    kind: Any
+    input: Any
+    input_range: tuple[float, float]
+
+    def invert_record(
+        self,
+        x: np.ndarray,
+        v: np.ndarray,
+        F_desired: np.ndarray,
+        dt: float,
+        lo: float,
+        hi: float,
+        *,
+        reg: float = 0.0,
+        max_change: float = ...,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Input [A] or [V] and saturation flags of the causal per-sample inverse."""
+        ...
+
+    def force_authority(self, v_ref: float) -> float:
+        """Steady force range per input unit at the velocity ``v_ref`` [m/s]."""
         ...
 
 

@@ -29,7 +29,10 @@ sp1..sp4       ``StaticStepForm``  ``(rho,)``: the map's input (drive lag)      
 bingham        ``StaticStepForm``  ``(rho,)``                                        any
 lpv, lti       ``LPVForm``         ``rho``, Dahl ``z``, past outputs and inputs      ``1/fs``
 narx           ``NARXForm``        samples seen, last ``max_lag`` scaled samples     ``1/fs``
+tanh..lugre    ``HysteresisForm``  ``(z, u)``, RK4 sub-steps <= ``max_h``            any
 =============  ==================  ================================================  ==========
+
+(``tanh..lugre``: the one-state hysteresis families ``tanh``, ``boucwen``, ``dahl``, ``lugre``.)
 
 The simulation loop (:func:`run`) calls ``force`` and ``advance`` and never re-implements them;
 the per-sample pieces the inverse and the quarter car of :mod:`mrdamper.control` need (the LPV

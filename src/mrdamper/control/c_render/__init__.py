@@ -17,6 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from mrdamper.control.c_render._common import Context, Rendered
+from mrdamper.control.c_render.hysteresis import render_hysteresis
 from mrdamper.control.c_render.lpv import render_lpv
 from mrdamper.control.c_render.narx import render_narx
 from mrdamper.control.c_render.p15 import render_p15
@@ -37,4 +38,8 @@ RENDERERS: dict[str, Callable[[Any, Context], Rendered]] = {
     "spencer": render_spencer,
     "p15": render_p15,
     "narx": render_narx,
+    "tanh": render_hysteresis,
+    "boucwen": render_hysteresis,
+    "dahl": render_hysteresis,
+    "lugre": render_hysteresis,
 }
