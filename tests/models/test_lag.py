@@ -13,10 +13,12 @@ import numpy as np
 import pytest
 
 from mrdamper import DataValidationError, Experiment
-from mrdamper.models import get_estimator
+from mrdamper.models import get_estimator, model_class
 from mrdamper.models.lag import AUTO, check_lag, lag_applies
 from mrdamper.models.semiphenomenological import SP3Model
 from mrdamper.signals import aprbs
+from tests.models import hysteresis_cases as cases
+from tests.models.test_dahl import TRUE as DAHL
 
 TRUE_ETA = 60.0
 TRUTH = SP3Model(
@@ -51,7 +53,19 @@ def test_bad_lag_refused_naming_eta(value: object) -> None:
 
 
 def test_default_is_auto_for_every_family_with_a_lag() -> None:
-    for kind in ("lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4"):
+    for kind in (
+        "lpv",
+        "lti",
+        "p15",
+        "sp1",
+        "sp2",
+        "sp3",
+        "sp4",
+        "tanh",
+        "boucwen",
+        "dahl",
+        "lugre",
+    ):
         assert get_estimator(kind).eta == AUTO
 
 
@@ -82,3 +96,22 @@ def test_lag_identified_on_the_inner_split() -> None:
     saved = json.loads(json.dumps(model.to_dict()))
     assert "lag_selection_s" not in saved["provenance"]
     assert saved["provenance"]["drive_lag"]["eta"] == chosen
+
+
+def test_lag_of_a_hysteresis_model_identified() -> None:
+    """Known answer for the one-state hysteresis families (the same step): a Dahl model whose
+    stepped voltage reaches the laws through a lag of 300 1/s (between two grid points)."""
+    truth = model_class("dahl")(**DAHL, eta=300.0, input="voltage", input_range=(0.0, 1.0))
+    train = []
+    for seed in (11, 12):
+        e = cases.record(seed, name=f"r{seed}")
+        e = Experiment(t=e.t, x=e.x, v=e.v, F=e.F, voltage=e.i, name=e.name)
+        train.append(e.replace(F=truth.predict(e)))
+    model = get_estimator("dahl", input="voltage", n_starts=1).fit(train)
+    assert model.eta == pytest.approx(300.0, rel=0.1)
+    lag = model.provenance["drive_lag"]
+    assert lag["eta"] == model.eta and len(lag["candidates"]) >= 5
+    assert min(lag["validation_esr"]) == lag["validation_esr"][lag["candidates"].index(model.eta)]
+    held = get_estimator("dahl", input="voltage", eta=None, n_starts=1).fit(train)
+    assert held.eta == 0.0 and "drive_lag" not in held.provenance
+    assert model.provenance["mean_record_esr"] < 0.1 * held.provenance["mean_record_esr"]

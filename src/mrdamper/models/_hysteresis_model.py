@@ -33,6 +33,7 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.step import Step
 from mrdamper.progress import report
 
@@ -309,9 +310,11 @@ class HysteresisEstimator(Estimator):
         Tolerances of :func:`scipy.optimize.least_squares`.
     substeps : int
         RK4 sub-steps per sample (0 = automatic); kept by the fitted model.
-    eta : float or None
-        Drive-lag rate [1/s] from the electrical input to the laws (held, not identified);
-        None: no lag.
+    eta : float, "auto" or None
+        Rate [1/s] of the first-order drive lag from the electrical input to the laws.
+        ``"auto"`` (default): identified on the training records when the input is a command
+        voltage that varies within a record, none otherwise (:mod:`mrdamper.models.lag`); a
+        number: held at that rate; None: no lag.
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
     step_tolerance : float
@@ -335,7 +338,7 @@ class HysteresisEstimator(Estimator):
     xtol: float = 1e-8
     gtol: float = 1e-8
     substeps: int = 0
-    eta: float | None = None
+    eta: float | Literal["auto"] | None = "auto"
     range_policy: RangePolicy = "error"
     step_tolerance: float = 1e-4
 
@@ -349,11 +352,11 @@ class HysteresisEstimator(Estimator):
         check_number(
             "step_tolerance", self.step_tolerance, what="a positive finite number (ESR units)"
         )
-        if self.eta is not None:
-            check_number("eta", self.eta, what="a positive drive-lag rate [1/s] or None")
+        check_lag(self.eta)
         check_mappings(self.spec, self._fit_settings())
 
     def _fit_settings(self) -> FitSettings:
+        """The settings the fit reads (``eta`` as given: :meth:`_identify` resolves it)."""
         names = [f.name for f in dataclasses.fields(FitSettings)]
         return FitSettings(**{n: getattr(self, n) for n in names})
 
@@ -366,9 +369,8 @@ class HysteresisEstimator(Estimator):
             Every start diverged, or the optimiser returned a non-finite result.
         """
         exps, windows = _scale.window_set(data.records, budget=_scale.WINDOW_BUDGET_SPENCER)
-        params, provenance = identify(
-            self.spec, self._fit_settings(), exps, single=data.single, kind=self.kind
-        )
+        settings = dataclasses.replace(self._fit_settings(), eta=resolved(self.eta))
+        params, provenance = identify(self.spec, settings, exps, single=data.single, kind=self.kind)
         parameters: dict[str, Any] = {**params, "substeps": int(self.substeps)}
         model = self.model_class(**parameters, input=self.input, input_range=data.input_range)
         assert isinstance(model, HysteresisModel)
