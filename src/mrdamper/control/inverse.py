@@ -50,7 +50,7 @@ LPV model (kind ``"lpv"``), causal and in one pass
     of ``rho`` grow from sample to sample (unstable zero dynamics of the exact inverse, seen on
     identified models) until the command chatters between its limits. Holding the command while
     the force is within ``tol`` removes that drift.
-Drive lag (LPV with ``eta``)
+Drive lag (LPV, and tanh, Bouc-Wen, Dahl, LuGre with ``eta``)
     ``rho`` is then the lagged input ``rho[k] = e rho[k-1] + (1 - e) w[k-1]``, ``e = exp(-eta dt)``.
     The command ``w`` within the limits reaches only
     ``rho[k] in [e rho[k-1] + (1-e) lo, e rho[k-1] + (1-e) hi]``, which is the interval searched at
@@ -331,8 +331,9 @@ def inverse_current(
     ----------
     model : FittedModel
         An LPV model (kind ``"lpv"``), a static map (``"sp1"``..``"sp4"``, ``"bingham"``) or a
-        model solved through its own step (``"tanh"``, ``"boucwen"``, ``"dahl"``, ``"lugre"``
-        without a drive lag: closed form per sample, their ``invert_record``).
+        model solved through its own step (``"tanh"``, ``"boucwen"``, ``"dahl"``, ``"lugre"``:
+        closed form per sample, their ``invert_record``; with a drive lag for the lagged input,
+        then the command through :func:`driver_command`).
     experiment_or_arrays : Experiment or mapping
         The motion: a record (its force and electrical channels are not used) or a mapping with
         arrays ``t`` [s], ``x`` [m], ``v`` [m/s].
@@ -383,7 +384,7 @@ def inverse_current(
         raise TypeError(
             f"model: no inverse for kind {kind!r}; supported kinds are 'lpv' (dynamic, causal "
             f"per-sample solution), the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham' and "
-            f"'tanh', 'boucwen', 'dahl', 'lugre' (without a drive lag)"
+            f"'tanh', 'boucwen', 'dahl', 'lugre'"
             + (
                 " (an LTI model's force does not depend on the present current)"
                 if kind == "lti"
@@ -418,7 +419,7 @@ def inverse_current(
             (0.0, np.inf) if method == "exact" else reg_settings(model, v, reg, rate, lo, hi, dt)
         )
         rho, sat = model.invert_record(x, v, Fd, dt, lo, hi, reg=lam, max_change=step_rate * dt)
-        w = rho
+        w = rho if model.eta == 0.0 else driver_command(rho, model.eta, dt, (lo, hi))
     elif method == "regularised":
         if sched is not None:
             dt_inv = 1.0 / sched.fs

@@ -274,29 +274,29 @@ def inverse_step(
     prev: float,
     lam2: float,
 ) -> tuple[float, bool]:
-    """The input in ``[lo, hi]`` closest to ``F_desired`` at the state ``s``, in closed form.
+    """The input ``u`` in ``[lo, hi]`` closest to ``F_desired`` at the state ``s``, in closed form.
 
-    Without a drive lag (``eta = 0``) the force of every family is affine in the present input
-    ``e`` at a given state and motion (its input laws are ``a + b e``), so with
-    ``F(e) = step_force(form, s, x, v, e)``, ``F(e) = F(lo) + g (e - lo)`` with
+    The force of every family is affine in the input ``u`` its laws read (``a + b u``) at a given
+    evolutionary state ``z`` and motion: without a drive lag ``u`` is the present input, with one
+    the lagged input. So with ``F(u) = _force(z, u)``, ``F(u) = F(lo) + g (u - lo)`` with
     ``g = (F(hi) - F(lo)) / (hi - lo)``, and the minimiser of
-    ``(F(e) - F_desired)^2 + lam2 (e - prev)^2`` over ``[lo, hi]`` is the unconstrained one,
+    ``(F(u) - F_desired)^2 + lam2 (u - prev)^2`` over ``[lo, hi]`` is the unconstrained one,
     ``lo + (g (F_desired - F(lo)) + lam2 (prev - lo)) / (g^2 + lam2)``, clipped (the objective is a
-    convex quadratic). ``lam2 = 0`` gives the exact solution of ``F(e) = F_desired`` where it is in
+    convex quadratic). ``lam2 = 0`` gives the exact solution of ``F(u) = F_desired`` where it is in
     reach; without authority (``g = 0``) and regularisation the input is ``lo``.
 
     Parameters
     ----------
     form : HysteresisForm
-        The step's form (``eta = 0``).
+        The step's form.
     s : ndarray
-        State ``(z, u)`` at the present sample (not changed).
+        State ``(z, u)`` at the present sample (only ``z`` is read; not changed).
     x, v : float
         Displacement [m] and velocity [m/s] at the present sample.
     F_desired : float
         Desired force [N].
     lo, hi : float
-        Admissible input interval [A] or [V].
+        Admissible interval of ``u`` [A] or [V].
     prev : float
         Input the regularisation pulls towards (the previous one) [A] or [V].
     lam2 : float
@@ -304,15 +304,15 @@ def inverse_step(
 
     Returns
     -------
-    e : float
+    u : float
         The input [A] or [V].
     saturated : bool
         True when no input in ``[lo, hi]`` gives ``F_desired`` (to rounding).
     """
-    f_lo = step_force(form, s, x, v, lo)
+    f_lo = _force(form.family, form.p, x, v, s[0], lo)
     if not hi > lo:
         return lo, abs(f_lo - F_desired) > 1e-12 * (abs(f_lo) + abs(F_desired))
-    f_hi = step_force(form, s, x, v, hi)
+    f_hi = _force(form.family, form.p, x, v, s[0], hi)
     g = (f_hi - f_lo) / (hi - lo)
     den = g * g + lam2
     e = lo if den == 0.0 else lo + (g * (F_desired - f_lo) + lam2 * (prev - lo)) / den
@@ -335,17 +335,24 @@ def inverse_run(
     max_change: float,
 ) -> tuple[FloatArray, npt.NDArray[np.bool_], int, int]:
     """Causal inverse along a record: :func:`inverse_step` at every sample, the state advanced by
-    :func:`step_advance` with the motion and the input found (held over the interval: without a
-    drive lag ``z`` depends on the motion only and ``u`` follows the input).
+    :func:`step_advance` with the motion and the input found (held over the interval).
+
+    ``z`` depends on the motion only, so the inverse solves for the input the laws read, ``u``.
+    Without a drive lag that is the input itself. With one (``eta > 0``) it is the lagged input,
+    which a command held over each interval within ``[lo, hi]`` moves as
+    ``u[k] = c u[k-1] + (1 - c) w[k-1]``, ``c = exp(-eta dt)``: from the third sample on ``u[k]``
+    is confined to ``[c u[k-1] + (1 - c) lo, c u[k-1] + (1 - c) hi]``, and the lag starts at rest,
+    ``u[1] = u[0]`` (the command is the lead filter of ``u``,
+    :func:`mrdamper.control.inverse.driver_command`).
 
     The input at sample ``k`` is confined to ``[lo, hi]`` and, from the second sample on, to
     ``max_change`` of the previous input; the regularisation pulls towards the previous input
-    (towards ``lo`` at the first sample). The state starts at rest, ``(0, e[0])``.
+    (towards ``lo`` at the first sample). The state starts at rest, ``(0, u[0])``.
 
     Returns
     -------
-    e : ndarray
-        Input [A] or [V] at every sample.
+    u : ndarray
+        Input [A] or [V] at every sample (with a drive lag: the lagged input).
     saturated : ndarray of bool
         Samples where no admissible input gives the desired force.
     status, sample : int
@@ -356,17 +363,22 @@ def inverse_run(
     sat = np.zeros(n, dtype=np.bool_)
     s = np.zeros(2)
     prev = lo
+    eta = form.p[ETA]
+    c = math.exp(-eta * dt)
     for k in range(n):
         a, b = lo, hi
+        if eta > 0.0 and k == 1:
+            a = b = prev
+        elif eta > 0.0 and k >= 2:
+            a, b = c * prev + (1.0 - c) * lo, c * prev + (1.0 - c) * hi
         if k >= 1:
             a = max(a, prev - max_change)
             b = min(b, prev + max_change)
         e[k], sat[k] = inverse_step(form, s, x[k], v[k], F_desired[k], a, b, prev, lam2)
-        if k == 0:
-            s[1] = e[0]
         prev = e[k]
         if k == n - 1:
             break
+        s[1] = e[k]  # with a lag only z is read: u is the one chosen
         status = step_advance(form, s, x[k], v[k], e[k], x[k + 1], v[k + 1], e[k], dt)
         if status != STATUS_OK:
             return e, sat, status, k + 1

@@ -191,12 +191,19 @@ class HysteresisModel(FittedModel):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Causal per-sample inverse along a record, through the model's step.
 
-        At every sample the input in ``[lo, hi]`` (and within ``max_change`` of the previous
-        one) minimising ``(F(e) - F_desired)^2 + reg^2 (e - e_prev)^2`` is taken in closed form
-        (:func:`~._hysteresis_kernels.inverse_step`: the force is affine in the present input at
-        the present state), then the state is advanced with the motion. The step has the RK4
-        sub-steps :meth:`predict` takes on the record, so the model's free run with the inputs
-        found gives ``F_desired`` wherever it is in reach (``reg = 0``).
+        At every sample the input ``u`` the laws read, in its admissible interval (within
+        ``max_change`` of the previous one), minimising
+        ``(F(u) - F_desired)^2 + reg^2 (u - u_prev)^2`` is taken in closed form
+        (:func:`~._hysteresis_kernels.inverse_step`: the force is affine in ``u`` at the present
+        state), then the state is advanced with the motion. Without a drive lag ``u`` is the input
+        itself, in ``[lo, hi]``. With one it is the lagged input, confined to what a command in
+        ``[lo, hi]`` held over the interval reaches (:func:`~._hysteresis_kernels.inverse_run`);
+        the command is then :func:`mrdamper.control.inverse.driver_command` of it, which
+        :func:`mrdamper.control.inverse_current` applies. The step has the RK4 sub-steps
+        :meth:`predict` takes on the record, so without a lag the model's free run with the
+        inputs found gives ``F_desired`` wherever it is in reach (``reg = 0``); with a lag the
+        free run reads the command linearly interpolated between samples, not held, so it
+        differs from ``F_desired`` by that half-sample shift of the command.
 
         Parameters
         ----------
@@ -209,31 +216,23 @@ class HysteresisModel(FittedModel):
         reg : float
             Regularisation weight [N per input unit]; 0: the exact solution per sample.
         max_change : float
-            Largest input change per sample [A] or [V].
+            Largest change of ``u`` per sample [A] or [V].
 
         Returns
         -------
-        e : ndarray
-            Input [A] or [V].
+        u : ndarray
+            Input the laws read [A] or [V] (with a drive lag: the lagged input).
         saturated : ndarray of bool
             Samples where no admissible input gives the desired force.
 
         Raises
         ------
-        DataValidationError
-            With a drive lag (the force does not depend on the present input).
         SimulationDivergedError
             If the state becomes non-finite or leaves its bound.
         """
         if not (math.isfinite(dt) and dt > 0.0):
             raise DataValidationError(
                 "dt", f"expected a positive sampling interval [s], got {dt!r}"
-            )
-        if self.eta > 0.0:
-            raise DataValidationError(
-                "eta",
-                f"the {self.kind} model has a drive lag ({self.eta!r} 1/s): its force does not "
-                "depend on the present input, so it has no per-sample inverse",
             )
         x = np.ascontiguousarray(x, dtype=np.float64)
         v = np.ascontiguousarray(v, dtype=np.float64)

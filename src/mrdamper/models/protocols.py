@@ -15,9 +15,10 @@ Spencer, P-15 and NARX have no such form yet; every kind has a per-sample step
 (:meth:`~mrdamper.models.base.FittedModel.step`, :mod:`mrdamper.models.step`).
 
 A model whose per-sample step can be solved for the present input in closed form (the force is
-affine in it at the present state: ``tanh``, ``boucwen``, ``dahl``, ``lugre`` without a drive
-lag) implements :class:`StepInvertibleModel`: :func:`mrdamper.control.inverse_current` runs its
-:meth:`~StepInvertibleModel.invert_record`.
+affine in it at the present state: ``tanh``, ``boucwen``, ``dahl``, ``lugre``; with a drive lag
+the input solved for is the lagged one) implements :class:`StepInvertibleModel`:
+:func:`mrdamper.control.inverse_current` runs its :meth:`~StepInvertibleModel.invert_record`
+(and, with a drive lag, the command through the lag's inverse).
 """
 
 from __future__ import annotations
@@ -145,13 +146,14 @@ class StepInvertibleModel(Protocol):
     """A fitted model inverted sample by sample through its own step (see the module docstring).
 
     Implemented by the ``tanh``, ``boucwen``, ``dahl`` and ``lugre`` models
-    (:class:`~mrdamper.models._hysteresis_model.HysteresisModel`); a model with a drive lag
-    refuses in one line (its force does not depend on the present input).
+    (:class:`~mrdamper.models._hysteresis_model.HysteresisModel`). ``eta`` is the drive-lag rate
+    [1/s] (0: none); with a lag :meth:`invert_record` returns the lagged input.
     """
 
     kind: Any
     input: Any
     input_range: tuple[float, float]
+    eta: float
 
     def invert_record(
         self,
@@ -165,7 +167,8 @@ class StepInvertibleModel(Protocol):
         reg: float = 0.0,
         max_change: float = ...,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Input [A] or [V] and saturation flags of the causal per-sample inverse."""
+        """Input the force reads [A] or [V] (with a drive lag, the lagged input) and saturation
+        flags of the causal per-sample inverse."""
         ...
 
     def force_authority(self, v_ref: float) -> float:
