@@ -13,18 +13,22 @@ without one. The rest state is ``(z, u) = (0, e0)``. After a failed interval (no
 ``|z|`` beyond its bound) the step returns NaN from then on and ``status`` keeps the code 1. The
 input is not clipped (the Python step does not clip either).
 
-Without a drive lag the rendering also has the inverse (``<name>_inverse_step``), the closed form
-of :func:`~mrdamper.models._hysteresis_kernels.inverse_run` one sample a call: the state is
-advanced from the previous call's motion to this one's with the previous input held, the input in
-the identified range (and within the rate bound of the previous one) minimising
-``(F(e) - F_desired)^2 + reg^2 (e - e_prev)^2`` is taken from the force at both ends of the range
-(the force is affine in the present input), and ``*F_out`` gets the force with it. The
-regularisation weight is fixed into the code (default
-:func:`~mrdamper.control.inverse.default_reg` at ``v_ref`` and ``dt``).
+The rendering also has the inverse (``<name>_inverse_step``), the closed form of
+:func:`~mrdamper.models._hysteresis_kernels.inverse_run` one sample a call: the state is advanced
+from the previous call's motion to this one's with the previous input held, the input ``u`` the
+laws read, in its admissible interval (the identified range, or with a drive lag what a command in
+it reaches from the previous ``u``; within the rate bound of the previous one), minimising
+``(F(u) - F_desired)^2 + reg^2 (u - u_prev)^2`` is taken from the force at both ends of the
+interval (the force is affine in ``u``), and ``*F_out`` gets the force with it. It returns ``u``:
+without a lag the input, with one the lagged input (the driver command is its lead filter,
+:func:`mrdamper.control.driver_command`, as for the LPV export). The regularisation weight is
+fixed into the code (default :func:`~mrdamper.control.inverse.default_reg` at ``v_ref`` and
+``dt``).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from mrdamper.control.c_render._common import (
@@ -193,14 +197,24 @@ static const double {P}_LO = {lo}; /* inverse input range */
 static const double {P}_HI = {hi};
 static const double {P}_LAM2 = {lam2}; /* squared regularisation weight [N^2 per input unit^2] */
 static const double {P}_RATE_STEP = {rate_step}; /* largest input change per sample */
+static const double {P}_LAG = {lag}; /* exp(-eta dt) of the drive lag, or -1: none */
 
-/* minimiser of (F(e) - target)^2 + lam^2 (e - prev)^2 on [a, b]: F is affine in e at the state */
+/* force at the state s with the input the laws read set to u (with a drive lag: the lagged one) */
+static double {p}_force_at(const double *s, double x, double v, double u)
+{{
+    double t[2];
+    t[0] = s[0];
+    t[1] = u;
+    return {p}_step_force(t, x, v, u);
+}}
+
+/* minimiser of (F(u) - target)^2 + lam^2 (u - prev)^2 on [a, b]: F is affine in u at the state */
 static double {p}_inverse_solve(const double *s, double x, double v, double target, double a,
                                 double b, double prev)
 {{
-    double f_a = {p}_step_force(s, x, v, a), f_b, g, den, e;
+    double f_a = {p}_force_at(s, x, v, a), f_b, g, den, e;
     if (!(b > a)) return a;
-    f_b = {p}_step_force(s, x, v, b);
+    f_b = {p}_force_at(s, x, v, b);
     g = (f_b - f_a) / (b - a);
     den = g * g + {P}_LAM2;
     e = den == 0.0 ? a : a + (g * (target - f_a) + {P}_LAM2 * (prev - a)) / den;
@@ -212,6 +226,13 @@ double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, doub
     double a = {P}_LO, b = {P}_HI, e;
     if (s->status == 0 && s->k > 0) {{
         s->status = {p}_step_advance(s->s, s->x, s->v, s->e, x, v, s->e, {P}_DT);
+        if ({P}_LAG >= 0.0 && s->k == 1) {{ /* the lag starts at rest */
+            a = s->e;
+            b = s->e;
+        }} else if ({P}_LAG >= 0.0) {{ /* what a command in the range reaches */
+            a = {P}_LAG * s->e + (1.0 - {P}_LAG) * {P}_LO;
+            b = {P}_LAG * s->e + (1.0 - {P}_LAG) * {P}_HI;
+        }}
         a = {p}_dmax(a, s->e - {P}_RATE_STEP);
         b = {p}_dmin(b, s->e + {P}_RATE_STEP);
     }}
@@ -220,7 +241,7 @@ double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, doub
         return NAN;
     }}
     e = {p}_inverse_solve(s->s, x, v, F_desired, a, b, s->k > 0 ? s->e : {P}_LO);
-    if (s->k == 0) s->s[1] = e;
+    s->s[1] = e;
     s->x = x;
     s->v = v;
     s->e = e;
@@ -229,6 +250,21 @@ double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, doub
     return e;
 }}
 """
+
+
+def _inverse_note(inverse: dict[str, str] | None, lagged: bool) -> str:
+    if inverse is None:
+        return "."
+    note = (
+        f"; inverse on [{inverse['lo_text']}, {inverse['hi_text']}], regularisation "
+        f"weight {inverse['lam_text']} (closed form per sample)."
+    )
+    if lagged:
+        note += (
+            " With the drive lag it returns the lagged input; the driver command is its lead "
+            "filter (mrdamper.control.driver_command)."
+        )
+    return note
 
 
 def _family(code: int) -> str:
@@ -253,8 +289,8 @@ def render_hysteresis_form(
     ctx : Context
         Export options (the name; the inverse's settings come in ``inverse``).
     inverse : dict, optional
-        Format fields of the inverse (``lo``, ``hi``, ``lam2``, ``rate_step`` as C literals);
-        None: no inverse (a model with a drive lag has none).
+        Format fields of the inverse (``lo``, ``hi``, ``lam2``, ``rate_step``, ``lag`` as C
+        literals); None: no inverse.
     """
     p, P = ctx.p, ctx.P
     family = _family(int(form.family))
@@ -285,13 +321,7 @@ def render_hysteresis_form(
         "".join(pieces),
         inverse is not None,
         [
-            "The input is not clipped"
-            + (
-                f"; inverse on [{inverse['lo_text']}, {inverse['hi_text']}], regularisation "
-                f"weight {inverse['lam_text']} (closed form per sample)."
-                if inverse is not None
-                else "; no inverse (a drive lag: the force does not read the present input)."
-            ),
+            "The input is not clipped" + _inverse_note(inverse, form.p[0] > 0.0),
             f"Sample rate: {1.0 / dt!r} Hz (one call per sample of {dt!r} s).",
             f"RK4 sub-steps of at most {form.max_h!r} s.",
         ],
@@ -301,22 +331,21 @@ def render_hysteresis_form(
 
 
 def render_hysteresis(model: Any, ctx: Context) -> Rendered:
-    """C of ``model.step(dt=ctx.dt)`` (the sample time is required) and, without a drive lag, of
-    its inverse (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``; ``ctx.rate``)."""
+    """C of ``model.step(dt=ctx.dt)`` (the sample time is required) and of its inverse
+    (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``; ``ctx.rate``)."""
     dt = require_dt(model, ctx)
     step = model.step(dt=dt)
-    inverse = None
-    if step.feedthrough:  # no drive lag: the force reads the present input
-        lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt)
-        base = fmt_base(model, ctx, lam, rate_step)
-        lo, hi = model.input_range
-        inverse = {
-            "lo": base["lo"],
-            "hi": base["hi"],
-            "lam2": base["lam2"],
-            "rate_step": base["rate_step"],
-            "lo_text": repr(float(lo)),
-            "hi_text": repr(float(hi)),
-            "lam_text": repr(lam),
-        }
+    lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt)
+    base = fmt_base(model, ctx, lam, rate_step)
+    lo, hi = model.input_range
+    inverse = {
+        "lo": base["lo"],
+        "hi": base["hi"],
+        "lam2": base["lam2"],
+        "rate_step": base["rate_step"],
+        "lag": lit(math.exp(-model.eta * dt) if model.eta > 0.0 else -1.0),
+        "lo_text": repr(float(lo)),
+        "hi_text": repr(float(hi)),
+        "lam_text": repr(lam),
+    }
     return render_hysteresis_form(step.form, dt, ctx, inverse)
