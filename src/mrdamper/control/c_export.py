@@ -9,8 +9,8 @@ dynamic allocation, no globals that change: all state lives in a caller-owned st
   input [A] or [V] at this sample (clipped to the identified input range);
 * ``double <name>_inverse_step(<name>_state *s, double x, double v, double F_desired,
   double *F_out)``: the regularised inverse (:func:`mrdamper.control.inverse_current`, method
-  ``"regularised"``), one sample: returns the input (for an LPV model with a drive lag, the
-  scheduling value ``rho``; the driver command is the lead filter of
+  ``"regularised"``), one sample: returns the input (for a model with a drive lag, the lagged
+  input ``rho``; the driver command is the lead filter of
   :func:`mrdamper.control.driver_command`) and writes the force the model gives with it to
   ``*F_out`` (may be NULL);
 * ``void <name>_run(...)`` / ``<name>_inverse_run(...)``: the step functions over arrays.
@@ -23,8 +23,8 @@ input), the static maps ``sp1``..``sp4`` and ``bingham``, and ``spencer`` (its p
 :meth:`~mrdamper.models.spencer.SpencerModel.step`, at the fixed sample time ``dt`` given with
 the export; no inverse), ``p15`` (its step at ``dt``; no inverse), ``narx`` (at its own rate;
 no inverse) and the one-state hysteresis families ``tanh``, ``boucwen``, ``dahl``, ``lugre``
-(their step at ``dt``, :mod:`mrdamper.control.c_render.hysteresis`; without a drive lag also
-their closed-form inverse). Every
+(their step at ``dt``, :mod:`mrdamper.control.c_render.hysteresis`, and their closed-form
+inverse). Every
 rendering also defines the family's per-sample step as ``<name>_step_init`` /
 ``<name>_step_force`` / ``<name>_step_advance`` on a ``double`` state of ``<name>_step_size()``
 entries laid out as the Python step's (:mod:`mrdamper.models.step`), which

@@ -15,8 +15,8 @@ Variables (value references in brackets): the forward FMU has the inputs ``x`` [
 [m], ``v`` [1] velocity [m/s], the electrical input [2] named after the model's channel (``i``
 [A] or ``voltage`` [V]) and the output ``F`` [3] force [N]. The inverse FMU (``inverse=True``, for
 kinds whose C export has an inverse) has the inputs ``x``, ``v`` and ``F_desired`` [2] [N] and the
-outputs: the electrical input [3] (for an LPV model with a drive lag, the scheduling value
-``rho``, as ``<name>_inverse_step``) and ``F_achieved`` [4], the model's force with it [N].
+outputs: the electrical input [3] (for a model with a drive lag, the lagged input ``rho``, as
+``<name>_inverse_step``) and ``F_achieved`` [4], the model's force with it [N].
 
 FMI 2.0 rather than 3.0: the FMU importers of Simulink, OpenModelica, Dymola and Simcenter
 Amesim read FMI 2.0 co-simulation FMUs, while FMI 3.0 import is newer and not in every release
