@@ -7,9 +7,9 @@ Protocols (no tuning on test data):
   SSSE per model, per fold and overall.
 * Dyke (``ranran_50.csv``, random displacement, switching command voltage): first 70 % of the
   record trains, last 30 % tests. Every model with a drive-lag setting (LPV, LTI, P-15,
-  SP-1..SP-4) identifies the lag of the drive on the training part only (its default
-  ``eta="auto"``: first 80 % fits, last 20 % validates, ``mrdamper.models.lag``); the chosen rate
-  is printed.
+  SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) identifies the lag of the drive on the training part
+  only (its default ``eta="auto"``: first 80 % fits, last 20 % validates,
+  ``mrdamper.models.lag``); the chosen rate is printed.
 * Labcontrol (``labcontrol2021_utfpr``, constant-voltage sine records at 100 Hz on a third
   damper): fit on ``train/`` (23 records, four voltage levels), score every record of ``test/``
   (15 records); the LPV/LTI model rate is the record rate.
@@ -25,7 +25,7 @@ Run::
     python benchmarks/accuracy_real_data.py                 # both protocols, every model
     python benchmarks/accuracy_real_data.py --models lpv lti sp1 --protocol quiroz
     python benchmarks/accuracy_real_data.py --models p15 --set p15.method=equation-error
-    python benchmarks/accuracy_real_data.py --models tanh dahl --protocol all --set tanh.eta=250.0
+    python benchmarks/accuracy_real_data.py --models tanh dahl --protocol dyke --set tanh.eta=250.0
 """
 
 from __future__ import annotations

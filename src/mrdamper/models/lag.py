@@ -3,8 +3,8 @@
 When the electrical input is a command to a drive (``input="voltage"``), the coil current follows
 the command through the drive's dynamics, modelled as a first-order lag
 ``d rho/dt = -eta (rho - voltage)``. The families with an ``eta`` setting (LPV, LTI, P-15,
-SP-1..SP-4) take ``eta="auto"`` by default, and :meth:`mrdamper.models.Estimator.fit` then calls
-:func:`fit_with_lag`:
+SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) take ``eta="auto"`` by default, and
+:meth:`mrdamper.models.Estimator.fit` then calls :func:`fit_with_lag`:
 
 * input ``"i"`` (the current is measured), or a voltage that is constant within every record (a
   lag of a constant is the constant): no lag (``eta=None``), the fit is the plain fit;

@@ -100,9 +100,9 @@ def dyke_protocol(models: Sequence[Any] = ()) -> Protocol:
 
     The electrical input is the command voltage; the force-velocity analysis is skipped (the
     voltage switches on a 10 ms grid, there are no constant-current records). Every model with a
-    drive-lag setting (LPV, LTI, P-15, SP-1..SP-4) identifies its drive lag on the training part
-    (its default ``eta="auto"``, :mod:`mrdamper.models.lag`); LPV and LTI run at the record rate
-    3004.8 Hz (their default). The test
+    drive-lag setting (LPV, LTI, P-15, SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) identifies its
+    drive lag on the training part (its default ``eta="auto"``, :mod:`mrdamper.models.lag`); LPV
+    and LTI run at the record rate 3004.8 Hz (their default). The test
     part's voltage exceeds the training range by < 0.1 %, so models are scored with
     ``range_policy="clip"``.
 
