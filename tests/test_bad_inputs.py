@@ -187,6 +187,7 @@ def test_model_rate_setting_is_model_fs_and_old_fs_still_works(tmp_path, capsys)
     assert "--set model_fs=" in _one_line_error(code, err)
 
 
+@pytest.mark.slow
 def test_every_record_reading_command_takes_the_reader_options(tmp_path, capsys) -> None:
     from mrdamper.cli._records import READER_OPTIONS
 
@@ -212,6 +213,7 @@ def test_every_record_reading_command_takes_the_reader_options(tmp_path, capsys)
     assert json.loads(out)["mean"]["n_scored"] == 1
 
 
+@pytest.mark.slow
 def test_study_on_own_records_runs_a_default_protocol_and_says_which(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "mine", currents=(0.0, 0.25, 0.5, 0.75, 1.0))
     out = tmp_path / "out"
@@ -651,6 +653,7 @@ def test_implausible_units_warn_and_bounds_can_be_overridden(tmp_path, capsys) -
 
 
 # ----------------------------------------------------------------------------- reproducibility
+@pytest.mark.slow
 def test_reruns_are_byte_identical(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "d", currents=(0.0, 0.5, 1.0, 0.25))
     outs = [tmp_path / "o1", tmp_path / "o2"]

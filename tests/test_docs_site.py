@@ -19,6 +19,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 def test_mkdocs_build_strict(tmp_path: Path) -> None:
     for mod in ("mkdocs", "mkdocstrings", "mkdocstrings_handlers.python", "material"):
         if importlib.util.find_spec(mod.split(".")[0]) is None:

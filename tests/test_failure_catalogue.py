@@ -103,6 +103,7 @@ def _attempts(h: Path) -> list[list[str]]:
     return [[*a, "--force"] for a in out]
 
 
+@pytest.mark.slow
 def test_force_never_destroys_anything_in_a_sandboxed_home(home: Path, capsys) -> None:
     before = _snapshot(home)
     attempts = _attempts(home)
@@ -133,6 +134,7 @@ def test_home_and_repository_root_are_named_in_one_line(home: Path, capsys, monk
     assert f"{home / 'results'} is a non-empty folder mrdamper did not write" in line
 
 
+@pytest.mark.slow
 def test_force_replaces_what_mrdamper_wrote(tmp_path: Path, capsys) -> None:
     data = _folder(tmp_path / "d")
     model = tmp_path / "m.json"
@@ -305,6 +307,7 @@ def _dead_pid() -> int:
     return proc.pid
 
 
+@pytest.mark.slow
 def test_rerun_removes_partial_folders_of_dead_runs_only(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "d")
     dead = tmp_path / f".o.partial-{_dead_pid()}-abc123"
@@ -324,6 +327,7 @@ def test_rerun_removes_partial_folders_of_dead_runs_only(tmp_path, capsys) -> No
     assert hidden == [alive.name, mine.name]
 
 
+@pytest.mark.slow
 def test_quartercar_failure_leaves_no_table(tmp_path, capsys, monkeypatch) -> None:
     from matplotlib.figure import Figure
 
@@ -364,6 +368,7 @@ def test_c_export_onto_a_full_disk_leaves_nothing(tmp_path, capsys, monkeypatch)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["lpv.json"]
 
 
+@pytest.mark.slow
 def test_each_exit_status(tmp_path, capsys, monkeypatch) -> None:
     import mrdamper.cli.models as cli_models
     from mrdamper.models.semiphenomenological import _SPEstimator as SPEstimator
@@ -442,6 +447,7 @@ main(sys.argv[2:])
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+@pytest.mark.slow
 def test_a_stopped_study_leaves_no_worker_running(sig, tmp_path) -> None:
     """SIGTERM: handled like Ctrl-C (status 143, nothing written); SIGKILL cannot be handled,
     but the workers still end with their parent."""

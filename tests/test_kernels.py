@@ -77,6 +77,7 @@ def test_kernels_named_last_come_after_the_others_of_their_module(
     assert [sorted(m) for m in plain] == [sorted(m) for m in late]
 
 
+@pytest.mark.slow
 def test_rig_items_are_the_signatures_the_virtual_rig_compiles() -> None:
     """RIG_ITEMS must follow the rig: the early compilation is of no use if they drift."""
     import subprocess

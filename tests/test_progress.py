@@ -113,6 +113,7 @@ def test_listener_is_restored_after_an_error() -> None:
 
 # ----------------------------------------------------------------------------- fits
 @pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.slow
 def test_fit_reports_stages_and_gives_the_same_model(kind: str, records: list[Experiment]) -> None:
     quiet, none = _fit(kind, records, listen=False)
     assert none == []
@@ -141,6 +142,7 @@ def test_fit_reports_stages_and_gives_the_same_model(kind: str, records: list[Ex
         assert ("least squares: record", 3, 3) in events
 
 
+@pytest.mark.slow
 def test_lpv_least_squares_solver_counts_evaluations(records: list[Experiment]) -> None:
     events: list[Event] = []
     est = get_estimator("lpv", oe_solver="least_squares", stroke=0.01, blend=0.5, max_nfev=5)
@@ -232,6 +234,7 @@ def test_fit_cli_prints_nothing_extra_off_a_terminal(
     assert err == ""
 
 
+@pytest.mark.slow
 def test_fit_cli_shows_stages_and_time_on_a_terminal(
     tmp_path: Path,
     records: list[Experiment],

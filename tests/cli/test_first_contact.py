@@ -35,6 +35,7 @@ def two_runs(tmp_path_factory):
     return outs
 
 
+@pytest.mark.slow
 def test_identical_runs_give_identical_files_but_the_timings(two_runs) -> None:
     a, b = two_runs
     files = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
@@ -79,6 +80,7 @@ def test_record_wording_of_the_virtual_rig() -> None:
     assert records_text(1, "measured") == "1 measured record"
 
 
+@pytest.mark.slow
 def test_one_scored_record_shows_no_quartiles(tmp_path, capsys) -> None:
     data = tmp_path / "one"
     data.mkdir()
@@ -178,6 +180,7 @@ def _rounded_time_folder(path):
     return path
 
 
+@pytest.mark.slow
 def test_a_reading_note_appears_once_in_a_study(tmp_path, capsys) -> None:
     data = _rounded_time_folder(tmp_path / "rounded")
     code, _o, err = _run(

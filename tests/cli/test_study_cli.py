@@ -41,6 +41,7 @@ def _run(args, capsys):
     return code, out.out, out.err
 
 
+@pytest.mark.slow
 def test_study_on_a_folder_writes_report_and_prints_summary(tmp_path, capsys) -> None:
     data = tmp_path / "sine"
     _write_sine_folder(data)
@@ -133,6 +134,7 @@ def test_study_with_a_protocol_file(tmp_path, capsys) -> None:
     assert json.loads((out / "protocol.json").read_text())["name"] == "train-on-10mm"
 
 
+@pytest.mark.slow
 def test_study_on_a_dask_scheduler_address(tmp_path, capsys) -> None:
     distributed = pytest.importorskip("distributed")
     data = tmp_path / "sine"
@@ -160,6 +162,7 @@ def test_study_on_a_dask_scheduler_address(tmp_path, capsys) -> None:
     assert len(pd.read_csv(tmp_path / "out" / "results.csv")) == 6
 
 
+@pytest.mark.slow
 def test_demo_quick_on_the_virtual_rig(tmp_path, capsys, monkeypatch) -> None:
     doe = pytest.importorskip("mrdamper.rig.doe")
     try:

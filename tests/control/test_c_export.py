@@ -248,6 +248,7 @@ def _step_lib(model: Any, folder: Path, name: str, dt: float) -> ctypes.CDLL:
 
 @needs_gcc
 @pytest.mark.parametrize("kind", C_KINDS)
+@pytest.mark.slow
 def test_c_step_of_every_kind_matches_run_step(
     tmp_path: Path, kind: str, kind_models: dict[str, Any], kind_probe: Any
 ) -> None:

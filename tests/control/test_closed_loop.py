@@ -65,6 +65,7 @@ class _RuntimeFamily:
         )
 
 
+@pytest.mark.slow
 def test_a_family_added_at_run_time_takes_the_function_path() -> None:
     # its step is not packed: the loop compiled with its functions gives the cached loop's numbers
     road = _road(1.0)
@@ -75,6 +76,7 @@ def test_a_family_added_at_run_time_takes_the_function_path() -> None:
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
 
 
+@pytest.mark.slow
 def test_reference_damper_as_controller_and_plant_equals_itself() -> None:
     truth = reference_damper("quiroz2022")
     res = closed_loop_fidelity(

@@ -59,6 +59,7 @@ def test_spencer_fmu_matches_step_and_predict(tmp_path: Path) -> None:
     ]
 
 
+@pytest.mark.slow
 def test_fmu_on_quiroz_records(
     tmp_path: Path, quiroz_models: dict[str, Any], quiroz_records: list[Any]
 ) -> None:

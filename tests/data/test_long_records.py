@@ -104,6 +104,7 @@ def _peak_bytes(read: object) -> tuple[Experiment, int]:
 
 
 @pytest.mark.parametrize("reader", ["parquet", "csv"])
+@pytest.mark.slow
 def test_reading_costs_about_the_record_itself(tmp_path: Path, reader: str) -> None:
     """NumPy memory (traced) while reading: the record's channels plus a small margin.
 

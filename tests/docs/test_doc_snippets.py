@@ -2,9 +2,11 @@
 
 How the blocks run:
 
-* one test per page; the page's blocks run in order, then all of them once more in the same
-  folder (every documented block must run twice in a row: a second run finds the first one's
-  outputs), in one fresh temporary folder that has
+* one test per page; the page's blocks run in order, then once more in the same folder every
+  block that wrote or changed a file there on its first run (every documented block must run
+  twice in a row, and a second run finds the first one's outputs; a block that wrote nothing
+  meets on its second run the folder it met on its first, so it is not run again), in one fresh
+  temporary folder that has
   ``../shared`` (a link to the shared folder holding ``data/``) beside it and a link
   ``benchmarks/`` to the repository's benchmarks, so commands are written as a user at the
   repository root would write them (``../shared/data/...``);
@@ -146,32 +148,49 @@ def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
     (tmp_path / "shared").symlink_to(SHARED_DATA.parent, target_is_directory=True)
     (work / "benchmarks").symlink_to(REPO_ROOT / "benchmarks", target_is_directory=True)
     env = _env()
-    for b, run in [(b, run) for run in (1, 2) for b in runnable]:
-        code = as_run(b)
-        cmd = ["bash", "-e", "-c", code] if b.lang == "bash" else [sys.executable, "-c", code]
-        try:
-            proc = subprocess.run(
-                cmd,
-                cwd=work,
-                env=env,
-                capture_output=True,
-                text=True,
-                timeout=BLOCK_TIMEOUT_S,
-                check=False,
-            )
-        except subprocess.TimeoutExpired:
-            pytest.fail(
-                f"{b.page}:{b.line} ({b.lang}, run {run}) ran longer than {BLOCK_TIMEOUT_S} s"
-            )
-        if proc.returncode != 0:
-            tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-15:])
-            pytest.fail(
-                f"{b.page}:{b.line} ({b.lang}, run {run} of 2) exited {proc.returncode}:\n"
-                f"{code}\n"
-                f"--- output ---\n{tail}"
-            )
-        if b.expected is not None:
-            _check_output(b, proc.stdout, run)
+    writers = [b for b in runnable if _run_block(b, 1, work, env)]
+    for b in writers:
+        _run_block(b, 2, work, env)
+
+
+def _run_block(b: Block, run: int, work: Path, env: dict[str, str]) -> bool:
+    """Run one block in ``work`` (failing the test if it fails); True if it wrote a file there."""
+    code = as_run(b)
+    before = _snapshot(work)
+    cmd = ["bash", "-e", "-c", code] if b.lang == "bash" else [sys.executable, "-c", code]
+    try:
+        proc = subprocess.run(
+            cmd,
+            cwd=work,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=BLOCK_TIMEOUT_S,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{b.page}:{b.line} ({b.lang}, run {run}) ran longer than {BLOCK_TIMEOUT_S} s")
+    if proc.returncode != 0:
+        tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-15:])
+        pytest.fail(
+            f"{b.page}:{b.line} ({b.lang}, run {run} of 2) exited {proc.returncode}:\n"
+            f"{code}\n"
+            f"--- output ---\n{tail}"
+        )
+    if b.expected is not None:
+        _check_output(b, proc.stdout, run)
+    return _snapshot(work) != before
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
+    """Every file under ``folder`` (links not followed) with its modification time and size."""
+    out: dict[str, tuple[int, int]] = {}
+    for root, dirs, files in os.walk(folder):
+        dirs[:] = [d for d in dirs if not (Path(root) / d).is_symlink()]
+        for name in files:
+            st = (Path(root) / name).lstat()
+            out[os.path.relpath(Path(root) / name, folder)] = (st.st_mtime_ns, st.st_size)
+    return out
 
 
 def _squeeze(text: str) -> str:
@@ -196,3 +215,13 @@ def test_shown_output_must_come_out() -> None:
         _check_output(b, "ESR 0.0206\n", 1)
     page = REPO_ROOT / "docs" / "tutorial.md"
     assert any(blk.expected for blk in blocks_of(page))
+
+
+def test_a_block_that_writes_runs_again(tmp_path: Path) -> None:
+    env = _env()
+    reader = Block("x.md", 1, "bash", "ls\n", None)
+    writer = Block("x.md", 2, "bash", "set -o noclobber; echo 1 > out.txt\n", None)
+    assert not _run_block(reader, 1, tmp_path, env)
+    assert _run_block(writer, 1, tmp_path, env)
+    with pytest.raises(pytest.fail.Exception, match="run 2 of 2"):
+        _run_block(writer, 2, tmp_path, env)  # refuses to overwrite its own output

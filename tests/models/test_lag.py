@@ -81,6 +81,7 @@ def test_current_input_or_constant_voltage_fits_as_without_lag() -> None:
     assert get_estimator("sp3", input="voltage").fit(const).eta is None
 
 
+@pytest.mark.slow
 def test_lag_identified_on_the_inner_split() -> None:
     train = [_record(3, "a"), _record(4, "b")]
     test = _record(5, "test")

@@ -75,6 +75,7 @@ def _known_laws() -> ZoneLaws:
 @pytest.mark.parametrize(
     ("refine", "solver"), [(False, "gauss-newton"), (True, "gauss-newton"), (True, "least_squares")]
 )
+@pytest.mark.slow
 def test_identifies_known_lpv_coefficients(refine, solver) -> None:
     est = LPVEstimator(
         n_m=2, n_rho=2, input_signal="v", offset=False, refine=refine, oe_solver=solver

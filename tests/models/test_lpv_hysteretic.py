@@ -150,6 +150,7 @@ def test_fit_on_rig_records(rig_data) -> None:
     assert e_hys < 0.5 * e_static
 
 
+@pytest.mark.slow
 def test_choice_on_training_records_and_round_trip(rig_data) -> None:
     train, test = rig_data
     m = _fit(train[::2], blend=0.5)  # the default input; stroke chosen
@@ -187,6 +188,7 @@ def test_settings_and_refusals(rig_data) -> None:
     assert inverse_current(m, train[0], np.asarray(train[0].F)).i.size == train[0].n
 
 
+@pytest.mark.slow
 def test_long_campaigns_choose_on_windows(rig_data, monkeypatch) -> None:
     """Above the threshold the candidates are compared on windows; the model uses every sample."""
     train, _ = rig_data

@@ -82,6 +82,7 @@ def quiroz_fold(quiroz_unfiltered_dir: Path):
 
 
 @pytest.mark.realdata
+@pytest.mark.slow
 def test_enforced_stability_on_a_fold_where_the_unconstrained_fit_is_unstable(quiroz_fold) -> None:
     with pytest.warns(RuntimeWarning, match="not frozen-stable"):
         free = LPVEstimator(model_fs=200.0, stability="warn", input_signal="u").fit(quiroz_fold)

@@ -78,6 +78,7 @@ def test_chunked_qr_matches_lstsq(monkeypatch: pytest.MonkeyPatch) -> None:
     )
 
 
+@pytest.mark.slow
 def test_below_threshold_uses_every_sample(records) -> None:  # type: ignore[no-untyped-def]
     m = get_estimator("narx").fit(records)
     assert "refine_windows" not in m.provenance and "full_data_check" not in m.provenance

@@ -19,6 +19,7 @@ def fast_damper(monkeypatch: pytest.MonkeyPatch, damper) -> None:  # type: ignor
     monkeypatch.setattr(cli_rig, "_damper", lambda spec: damper)
 
 
+@pytest.mark.slow
 def test_rig_doe_writes_files_and_refuses_to_overwrite(
     fast_damper: None, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -100,6 +100,7 @@ def test_tables_keep_failed_rows_with_status_units_and_comparisons(result) -> No
     assert tab.loc["wild", "toy ESR vs this model"].endswith("% lower")
 
 
+@pytest.mark.slow
 def test_report_html_rows_rounding_and_failed_note(result, tmp_path) -> None:
     out = write_study(result, tmp_path / "out")
     html = (out / "report.html").read_text()
@@ -179,6 +180,7 @@ def test_layout_probe_catches_an_overflowing_table(tmp_path) -> None:
 
 
 @pytest.mark.parametrize("width", [800, 1280])
+@pytest.mark.slow
 def test_report_tables_fit_the_browser_window(result, tmp_path, width) -> None:
     browser = find_browser()
     if browser is None:

@@ -89,6 +89,7 @@ def test_unknown_model_or_setting_is_refused_before_running(doe) -> None:
         run_study(doe, doe_protocol(), [ModelSpec("toy", {"order": 3})], workers=1, progress=False)
 
 
+@pytest.mark.slow
 def test_write_outputs_and_report(result, tmp_path) -> None:
     out = write_study(result, tmp_path / "out")
     names = {p.name for p in out.iterdir()}
@@ -169,6 +170,7 @@ def test_interrupted_write_leaves_nothing_that_looks_complete(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_report_renders_in_a_headless_browser(result, tmp_path) -> None:
     browser = next(
         (

@@ -69,6 +69,7 @@ def test_time_folds_of_one_record(records) -> None:
         selection_folds(records, folds="time")
 
 
+@pytest.mark.slow
 def test_recommends_the_true_family(records) -> None:
     res = cross_validate(ExperimentSet(records), models=KINDS)
     assert res.table.index[0] == "bingham" == res.recommended
@@ -100,6 +101,7 @@ def test_a_setting_that_cannot_work_is_refused_before_any_fold(records) -> None:
         cross_validate(records, models=["bingham", "sp2"], settings={"sp2": {"n_starts": 0}})
 
 
+@pytest.mark.slow
 def test_cli_select_prints_table_and_recommendation(records, tmp_path: Path, capsys) -> None:
     d = tmp_path / "data"
     d.mkdir()

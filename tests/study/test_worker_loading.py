@@ -104,6 +104,7 @@ def _cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]
     return code, capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_cli_load_option(
     doe_folder: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
