@@ -22,12 +22,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mrdamper.control._solve_kernels import (
+from mrdamper.models.kernels import (
+    dahl_step,
+    lpv_coefficients,
     reg_solve_poly,
     reg_solve_static,
     solve_interval,
+    sp_force1,
 )
-from mrdamper.models.kernels import dahl_step, lpv_coefficients, sp_force1
 from mrdamper.models.kernels import poly as _poly
 from mrdamper.models.kernels import zone_input as _u_of
 

@@ -32,6 +32,8 @@ from mrdamper.models._hysteresis_kernels import FAMILIES as HYSTERESIS_FAMILIES
 from mrdamper.models._hysteresis_kernels import PARAM_NAMES as HYSTERESIS_PARAM_NAMES
 from mrdamper.models._hysteresis_kernels import Z_LIMIT as HYSTERESIS_Z_LIMIT
 from mrdamper.models._hysteresis_kernels import HysteresisForm
+from mrdamper.models._inverse_step import _N_BISECT as INVERSE_N_BISECT
+from mrdamper.models._inverse_step import reg_solve_poly, reg_solve_static, solve_interval
 from mrdamper.models._lag import lag_step
 from mrdamper.models._narx_kernels import NARXForm
 from mrdamper.models._p15_kernels import GAMMA as P15_GAMMA
@@ -57,6 +59,7 @@ __all__ = [
     "HYSTERESIS_FAMILIES",
     "HYSTERESIS_PARAM_NAMES",
     "HYSTERESIS_Z_LIMIT",
+    "INVERSE_N_BISECT",
     "LPV_N_HEAD",
     "MODE_CONTINUOUS",
     "MODE_LITERAL",
@@ -75,6 +78,9 @@ __all__ = [
     "lag_step",
     "lpv_coefficients",
     "poly",
+    "reg_solve_poly",
+    "reg_solve_static",
+    "solve_interval",
     "sp_dforce1",
     "sp_force1",
     "zone_input",

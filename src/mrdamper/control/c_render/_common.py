@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 
-from mrdamper.control import _solve_kernels as K
 from mrdamper.control.inverse import (
     DEFAULT_REG_FRACTION,
     default_reg,
@@ -21,6 +20,7 @@ from mrdamper.control.inverse import (
     model_input_limits,
 )
 from mrdamper.errors import DataValidationError
+from mrdamper.models.kernels import INVERSE_N_BISECT
 
 __all__ = [
     "BISECT",
@@ -144,7 +144,7 @@ def fmt_base(
         "lam2": lit(lam * lam),
         "rate_step": lit(rate_step),
         "n_grid": ctx.n_grid,
-        "n_bisect": K._N_BISECT,
+        "n_bisect": INVERSE_N_BISECT,
     }
 
 

@@ -1,7 +1,9 @@
-"""Numba solvers of the inverse: one scalar input per sample (plain values only).
+"""The inverse step of the LPV and static-map families: the input that gives a desired force at one
+sample (numba, plain values only; a record's inverse in :mod:`mrdamper.control.inverse` runs it
+sample by sample, and the C export renders the same choice).
 
 * :func:`solve_interval`: the exact inverse's choice at one sample (see
-  :mod:`mrdamper.control._inverse_kernels`): the previous input when its force is within ``tol``
+  :mod:`mrdamper.control.inverse`): the previous input when its force is within ``tol``
   of the target, else the exact solution nearest it, else the nearest edge of the tolerance
   band, else the minimum of ``|F - target|``; solutions by bisection of the sign changes on a
   uniform grid;
@@ -9,7 +11,7 @@
   ``(F - target)^2 + lam2 (r - prev)^2`` over the interval, for the LPV force polynomial and for
   a static map.
 
-The force itself comes from :mod:`mrdamper.models.kernels` (one definition each).
+The force itself comes from the families' steps (one definition each).
 """
 
 from __future__ import annotations
@@ -17,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mrdamper.models.kernels import dpoly as _dpoly
-from mrdamper.models.kernels import poly as _poly
-from mrdamper.models.kernels import sp_dforce1, sp_force1
+from mrdamper.models._sp_kernels import sp_dforce1, sp_force1
+from mrdamper.models.lpv.step import dpoly as _dpoly
+from mrdamper.models.lpv.step import poly as _poly
 
 __all__ = ["reg_solve_poly", "reg_solve_static", "solve_interval"]
 
