@@ -143,7 +143,8 @@ def plot_model_panels(
         top.text(
             1.01,
             0.0,
-            "not overlaid:\n" + "\n".join(left_out),
+            "not overlaid:\n"
+            + "\n".join(", ".join(left_out[k : k + 3]) for k in range(0, len(left_out), 3)),
             transform=top.transAxes,
             fontsize=7,
             va="bottom",
