@@ -34,7 +34,7 @@ from _timing import best_time
 from mrdamper.control import _inverse_kernels as IK
 from mrdamper.control._forms import inverse_form
 from mrdamper.control.c_export import export_c
-from mrdamper.control.inverse import lpv_law_arrays, static_map_arrays
+from mrdamper.control.inverse import lpv_inverse_fields, static_map_arrays
 from mrdamper.models._sp_kernels import sp_force
 from mrdamper.models.lpv import LPVModel
 from mrdamper.models.lpv import kernels as LK
@@ -83,19 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     F_lpv = LK.simulate_record(v, i, lpv.alpha, lpv.beta, 1e12)[0]
     comp, power, theta, f0 = static_map_arrays(sp1)
     F_sp = sp_force(x, v, i, comp, power, theta, f0)
-    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(lpv)
-    inv_lpv = inverse_form(
-        lam=REG,
-        n_grid=N_GRID,
-        is_lpv=True,
-        alpha=lpv.alpha,
-        beta=lpv.beta,
-        mode=mode,
-        gm=gm,
-        gc=gc,
-        mu_high=mu_h,
-        mu_low=mu_l,
-    )
+    inv_lpv = inverse_form(lam=REG, n_grid=N_GRID, **lpv_inverse_fields(lpv))
     z_static = np.zeros(n)  # the static input: no Dahl state
     out = [np.zeros(n) for _ in range(2)]
     rows = []

@@ -30,6 +30,7 @@ __all__ = [
     "force_authority",
     "horizon_samples",
     "lpv_hysteresis",
+    "lpv_inverse_fields",
     "lpv_law_arrays",
     "model_input_limits",
     "reg_settings",
@@ -193,6 +194,31 @@ def lpv_hysteresis(model: Any) -> tuple[float, float]:
     the static inputs ``"u"`` and ``"v"`` (``blend = 0`` is the static input in every kernel)."""
     a = model.lpv_input.kernel_arrays()
     return a.blend, a.stroke
+
+
+def lpv_inverse_fields(model: Any) -> dict[str, Any]:
+    """The LPV part of an :class:`~mrdamper.control._forms.InverseForm` for ``model`` (an LPV or
+    LTI model): ``is_lpv``, the coefficients ``alpha``, ``beta``, ``offset`` [N] of its
+    scheduled form and its input's arrays (:func:`lpv_law_arrays`, :func:`lpv_hysteresis`), as
+    keyword arguments of :func:`~mrdamper.control._forms.inverse_form`."""
+    form = scheduled_form(model)
+    if form is None:
+        raise DataValidationError("model", f"expected an LPV or LTI model, got {model.kind!r}")
+    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
+    blend, stroke = lpv_hysteresis(model)
+    return {
+        "is_lpv": True,
+        "alpha": form.alpha,
+        "beta": form.beta,
+        "offset": form.offset,
+        "mode": mode,
+        "gm": gm,
+        "gc": gc,
+        "mu_high": mu_h,
+        "mu_low": mu_l,
+        "blend": blend,
+        "stroke": stroke,
+    }
 
 
 def dahl_along(model: Any, v: np.ndarray, dt: float) -> tuple[float, np.ndarray]:

@@ -19,12 +19,11 @@ import numpy as np
 
 from mrdamper.control import _quarter_car_kernels as QK
 from mrdamper.control._forms import ControllerForm, inverse_form
+from mrdamper.control._inverse_setup import lpv_inverse_fields
 from mrdamper.control.car import Controller, QuarterCar, QuarterCarResult, Road, positive
 from mrdamper.control.inverse import (
     default_reg,
     horizon_samples,
-    lpv_hysteresis,
-    lpv_law_arrays,
     model_input_limits,
     static_map_arrays,
 )
@@ -80,23 +79,8 @@ def damper_arrays(model: Any) -> dict[str, Any]:
             comp=np.array([3], np.int64), power=np.array([0], np.int64), theta=np.array([model.c])
         )
         return out
-    form = scheduled_form(model)
-    if form is not None:
-        mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
-        blend, stroke = lpv_hysteresis(model)
-        out.update(
-            blend=blend,
-            stroke=stroke,
-            is_lpv=True,
-            alpha=form.alpha,
-            beta=form.beta,
-            offset=form.offset,
-            mode=mode,
-            gm=gm,
-            gc=gc,
-            mu_high=mu_h,
-            mu_low=mu_l,
-        )
+    if scheduled_form(model) is not None:
+        out.update(lpv_inverse_fields(model))
         return out
     comp, power, theta, f0 = static_map_arrays(model)
     out.update(comp=comp, power=power, theta=theta, f0=f0)

@@ -89,6 +89,7 @@ from mrdamper.control._inverse_setup import (
     force_authority,
     horizon_samples,
     lpv_hysteresis,
+    lpv_inverse_fields,
     lpv_law_arrays,
     model_input_limits,
     reg_settings,
@@ -109,6 +110,7 @@ __all__ = [
     "horizon_samples",
     "inverse_current",
     "lpv_hysteresis",
+    "lpv_inverse_fields",
     "lpv_law_arrays",
     "model_input_limits",
     "static_map_arrays",
@@ -601,25 +603,9 @@ def _lpv_reg(
     vm = np.ascontiguousarray(to_model_rate(v, fs_rec, model.fs))
     Fm = np.ascontiguousarray(to_model_rate(Fd, fs_rec, model.fs))
     dt = 1.0 / model.fs
-    mode, gm, gc, mu_h, mu_l = lpv_law_arrays(model)
     lag = -1.0 if model.eta is None else float(np.exp(-model.eta * dt))
-    blend, z = dahl_along(model, vm, dt)
-    inv = inverse_form(
-        lam=lam,
-        n_grid=n_grid,
-        horizon=n_h,
-        lag=lag,
-        is_lpv=True,
-        alpha=model.alpha,
-        beta=model.beta,
-        offset=model.offset,
-        mode=mode,
-        gm=gm,
-        gc=gc,
-        mu_high=mu_h,
-        mu_low=mu_l,
-        blend=blend,
-    )
+    _, z = dahl_along(model, vm, dt)
+    inv = inverse_form(lam=lam, n_grid=n_grid, horizon=n_h, lag=lag, **lpv_inverse_fields(model))
     rho, _, sat = K.lpv_inverse_reg_hys(vm, Fm, inv, lo, hi, lo, rate * dt, z)
     w = rho if model.eta is None else driver_command(rho, model.eta, dt, (lo, hi))
     if abs(fs_rec - model.fs) <= 1e-9 * model.fs:
