@@ -28,11 +28,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.fidelity import closed_loop_fidelity
 from mrdamper.models.lpv.inputs import BLENDS, STROKES
 from mrdamper.models.registry import get_estimator, known_kinds
 from mrdamper.rig.doe import table_ii
-from mrdamper.rig.doe_control import control_extension
 from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
 
 
@@ -61,10 +61,19 @@ def main() -> None:
     ap.add_argument("--scale", type=float, default=1.0, help="DoE duration factor [-]")
     ap.add_argument("--duration", type=float, default=20.0, help="road length [s]")
     ap.add_argument(
+        "--max-substeps", type=int, default=64, help="finest plant step [steps per road sample]"
+    )
+    ap.add_argument(
         "--extension",
         action="store_true",
-        help="train on Table II + the control-oriented extension (rig.doe_control); the LPV "
-        "model's stroke and blend are then chosen on held-out extension records (seed 2)",
+        help="train on Table II + the control-oriented extension (control.doe_extension: the "
+        "loop of a first model fitted on Table II, replayed on the rig); the LPV model's stroke "
+        "and blend are then chosen on held-out extension records (seed 2)",
+    )
+    ap.add_argument(
+        "--first",
+        default="sp1",
+        help="kind of the first model (fitted on Table II) whose loop gives the extension",
     )
     a = ap.parse_args()
     a.out.mkdir(parents=True, exist_ok=True)
@@ -75,8 +84,11 @@ def main() -> None:
         doe = list(table_ii(seed=0, scale=a.scale, damper=truth))
         held_out: list = []
         if a.extension:
-            ext = list(control_extension(seed=1, scale=a.scale, damper=truth))
-            held_out = list(control_extension(seed=2, scale=a.scale, damper=truth))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                first = get_estimator(a.first, input=truth.input).fit(doe)
+            ext = list(control_extension(seed=1, scale=a.scale, damper=truth, model=first))
+            held_out = list(control_extension(seed=2, scale=a.scale, damper=truth, model=first))
             rig_s = [sum(r.n for r in recs) * r0.dt for recs, r0 in ((doe, doe[0]), (ext, ext[0]))]
             print(f"{name}: rig time Table II {rig_s[0]:.0f} s + extension {rig_s[1]:.0f} s")
             doe = doe + ext
@@ -98,6 +110,7 @@ def main() -> None:
                         speeds=speeds,
                         controllers=a.controllers.split(","),
                         duration=a.duration,
+                        max_substeps=a.max_substeps,
                     )
             except Exception as exc:  # noqa: BLE001 - a failing kind keeps its row and reason
                 failed.append({"kind": kind, "reason": f"{type(exc).__name__}: {exc}"})

@@ -1,11 +1,12 @@
 """``mrdamper rig``: the virtual test rig from the command line.
 
 ``mrdamper rig doe --out DIR [--seed N] [--scale S] [--fs HZ] [--damper NAME|FILE] [--workers W]
-[--format csv|parquet] [--extension none|control] [--no-progress] [--force]``
+[--format csv|parquet] [--extension none|control] [--loop-model FILE] [--no-progress] [--force]``
 generates the paper's Table II design of experiments (with ``--extension control`` also the
-control-oriented extension, :mod:`mrdamper.rig.doe_control`) and writes one file per record (CSV
-or Parquet) plus ``manifest.csv``; on a terminal it shows a progress bar, and it says how much it
-wrote.
+control-oriented extension, :mod:`mrdamper.control.doe_extension`: the quarter-car loop's damper
+motions and currents replayed on the rig, the loop run with ``--loop-model`` or the rig's damper)
+and writes one file per record (CSV or Parquet) plus ``manifest.csv``; on a terminal it shows a
+progress bar, and it says how much it wrote.
 """
 
 from __future__ import annotations
@@ -67,9 +68,18 @@ def doe(
         typer.Option(
             "--extension",
             help="none (Table II only) or control: add the control-oriented extension "
-            "(quarter-car damper motions with a fast APRBS current; root seed SEED + 1).",
+            "(the quarter-car loop's damper motions, replayed with the loop's current and with "
+            "a fast APRBS current; root seed SEED + 1).",
         ),
     ] = "none",
+    loop_model: Annotated[
+        Path | None,
+        typer.Option(
+            "--loop-model",
+            help="Saved model (JSON) whose quarter-car loop gives the extension's motions "
+            "(default: the rig's damper).",
+        ),
+    ] = None,
 ) -> None:
     """Generate the paper's Table II DoE on the virtual rig.
 
@@ -85,13 +95,19 @@ def doe(
         raise DataValidationError(
             "--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}"
         )
+    if loop_model is not None and extension != "control":
+        raise DataValidationError("--loop-model", "expected only with --extension control")
+    inputs = [Path(damper)] if damper and Path(damper).exists() else []
     check_output(
-        out, force=force, folder=True, inputs=[damper] if damper and Path(damper).exists() else []
+        out, force=force, folder=True, inputs=[*inputs, *([loop_model] if loop_model else [])]
     )
+    from mrdamper.control.doe_extension import control_extension
     from mrdamper.data import ExperimentSet
-    from mrdamper.rig.doe_control import CONTROL_EXTENSION, control_extension
+    from mrdamper.models.registry import load_model
+    from mrdamper.rig.doe_control import CONTROL_EXTENSION
 
-    n_ext = len(CONTROL_EXTENSION) if extension == "control" else 0
+    first = None if loop_model is None else load_model(loop_model)
+    n_ext = 2 * len(CONTROL_EXTENSION) if extension == "control" else 0
     n_rec = sum(s.replicates for s in TABLE_II) + n_ext
     written: list[int] = []
     with _bar(not no_progress) as bar:
@@ -106,7 +122,9 @@ def doe(
             progress=lambda _rec: bar.advance(gen),
         )
         if n_ext:
-            ext = control_extension(seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper))
+            ext = control_extension(
+                seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper), model=first
+            )
             for _ in range(n_ext):
                 bar.advance(gen)
             records = ExperimentSet([*records, *ext], name=records.name + "+control")

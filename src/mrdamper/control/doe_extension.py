@@ -1,0 +1,142 @@
+"""The control-oriented extension of the design of experiments: the loop's motions on the rig.
+
+A model identified on Table II is extrapolated in a quarter-car loop: the loop moves the damper
+several times faster and switches the current while it moves. :func:`control_extension` measures
+where the loop goes: it runs the quarter car (:func:`~mrdamper.control.closed_loop.
+simulate_closed_loop`) with a first model of the damper as controller model and damper, one run
+per row of :data:`~mrdamper.rig.doe_control.CONTROL_EXTENSION` (ISO 8608 roads B, C, D, the five
+controllers), and replays each run's damper travel on the rig with the run's current and with an
+APRBS current (:func:`~mrdamper.rig.doe_control.replay_loop_motion`). On a physical rig the first
+model is one fitted on Table II (any kind that can be the quarter car's damper and controller
+model; a static map fits in seconds); on the virtual rig it defaults to the rig's own damper.
+
+Seeds: ``numpy.random.SeedSequence(seed)`` split into one child per row (as
+:func:`~mrdamper.rig.doe.table_ii` does), each split into the road, the APRBS current and the two
+rig runs; a different root seed gives held-out records.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from mrdamper.control.car import QuarterCar, iso_road
+from mrdamper.control.closed_loop import simulate_closed_loop
+from mrdamper.control.quarter_car_study import default_rate
+from mrdamper.data import ExperimentSet
+from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
+from mrdamper.rig.doe import current_range, record_seeds
+from mrdamper.rig.doe_control import CONTROL_EXTENSION, ControlRow, replay_loop_motion
+from mrdamper.rig.virtual_rig import VirtualRig
+from mrdamper.signals.common import check_positive, child_seeds
+
+__all__ = ["control_extension", "loop_motion"]
+
+#: Plant steps per control sample of the loop runs (the motion only has to be the loop's).
+SUBSTEPS = 2
+
+
+def loop_motion(
+    model: Any, row: ControlRow, duration: float, road_seed: int, rig_fs: float, car: QuarterCar
+) -> tuple[np.ndarray, np.ndarray]:
+    """Damper travel [m] and electrical input [A or V] of one loop run at the rig's rate.
+
+    The quarter car ``car`` runs on the row's ISO 8608 road (``duration`` [s], phases from
+    ``road_seed``) with ``model`` as controller model and damper, at the model's loop rate
+    (:func:`~mrdamper.control.quarter_car_study.default_rate`) with :data:`SUBSTEPS` plant steps
+    per control sample; the travel (times the motion ratio) and the applied input are
+    interpolated onto the rig's sampling grid.
+    """
+    fs = default_rate(model)
+    road = iso_road(row.road_class, speed=row.speed, duration=duration, fs=fs, seed=road_seed)
+    r = simulate_closed_loop(model, road, row.controller, car, substeps=SUBSTEPS)
+    t = np.arange(round(duration * rig_fs)) / rig_fs
+    travel = np.interp(t, r.t, r.travel * car.motion_ratio)
+    # the input is held per control sample: take the held value, not an interpolation
+    idx = np.minimum(np.searchsorted(r.t, t, side="right") - 1, r.t.size - 1)
+    return travel, r.i[np.maximum(idx, 0)]
+
+
+def control_extension(
+    seed: int = 1,
+    scale: float = 1.0,
+    fs: float = 1000.0,
+    damper: FittedModel | None = None,
+    *,
+    rig: VirtualRig | None = None,
+    model: Any = None,
+    rows: tuple[ControlRow, ...] = CONTROL_EXTENSION,
+    car: QuarterCar | None = None,
+) -> ExperimentSet:
+    """Generate the control-oriented extension on the virtual rig (see the module docstring).
+
+    Parameters
+    ----------
+    seed : int
+        Root seed (default 1: not the seed of Table II's default 0); same seed, same bytes.
+    scale : float
+        Duration factor [-] of the rows' roads (records at least 2 s).
+    fs : float
+        Sampling rate [Hz].
+    damper : FittedModel, optional
+        Damper under test (default: the shipped reference damper).
+    rig : VirtualRig, optional
+        A configured rig instead of ``fs`` and ``damper``.
+    model : FittedModel, optional
+        The first model whose loop gives the motions (default: the rig's damper itself). Its
+        input must be the rig's (current or voltage).
+    rows : tuple of ControlRow
+        The loop runs (default :data:`~mrdamper.rig.doe_control.CONTROL_EXTENSION`).
+    car : QuarterCar, optional
+        The car of the loop runs (default :class:`~mrdamper.control.car.QuarterCar`).
+
+    Returns
+    -------
+    ExperimentSet
+        Records ``ctrl{k:02d}``, two per row (loop current, then APRBS current), with metadata
+        ``pattern``, ``displacement`` (road, controller, loop model), ``duration``, ``seed``.
+    """
+    scale = check_positive("scale", scale, "-")
+    if rig is None:
+        rig = VirtualRig(damper=damper, fs=check_positive("fs", fs, "Hz"))
+    elif damper is not None:
+        raise DataValidationError("damper", "give either damper or rig, not both")
+    loop_model = rig.model if model is None else model
+    if str(getattr(loop_model, "input", rig.model.input)) != str(rig.model.input):
+        raise DataValidationError(
+            "model",
+            f"expected a model driven by the rig's input {rig.model.input!r}, got "
+            f"{getattr(loop_model, 'input', None)!r}",
+        )
+    car = QuarterCar() if car is None else car
+    lo, hi = current_range(rig.model, rig)
+    out = []
+    for k, (row, s) in enumerate(zip(rows, record_seeds(seed, len(rows)), strict=True)):
+        duration = row.duration * scale
+        if duration < 2.0:
+            raise DataValidationError(
+                "scale", f"{scale:g} makes row {k + 1} {duration:g} s; at least 2 s is needed"
+            )
+        s_road, s_aprbs, s_loop, s_rand = child_seeds(s, 4)
+        road_seed = int(s_road.generate_state(1)[0])
+        travel, current = loop_motion(loop_model, row, duration, road_seed, rig.fs, car)
+        meta = {
+            "displacement": (
+                f"quarter car ({row.controller}, {loop_model.kind} model), "
+                f"ISO {row.road_class} @ {row.speed:g} m/s"
+            ),
+            "duration": duration,
+        }
+        out += replay_loop_motion(
+            rig,
+            travel,
+            current,
+            current_range=(lo, hi),
+            seeds=(s_aprbs, s_loop, s_rand),
+            names=(f"ctrl{2 * k + 1:02d}", f"ctrl{2 * k + 2:02d}"),
+            metadata=meta,
+            seed_label=s,
+        )
+    return ExperimentSet(out, name=f"control_extension_seed{seed}")
