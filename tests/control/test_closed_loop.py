@@ -177,3 +177,18 @@ def test_cli_plant_refusals(
     assert info.value.code == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and field in err
+
+
+def test_a_refused_run_keeps_its_rows_and_names_the_metric() -> None:
+    # one run that does not converge does not take the others with it: its rows are NaN and a
+    # note gives the figure and the metric that moved
+    res = closed_loop_fidelity(
+        _sp3(), "rig", controllers=["hard"], duration=1.0, tol=1e-12, max_substeps=2
+    )
+    t = res.table()
+    assert len(t) == 6 and t["predicted"].isna().all() and t["error_pct"].isna().all()
+    refused = [n for n in res.notes if "refused" in n]
+    assert len(refused) == 2  # predicted and achieved
+    assert any(m in refused[0] for m in ("rms_acc", "a_w", "rms_tyre_load", "rms_travel"))
+    assert "%" in refused[0] and "\n" not in refused[0]
+    assert all("refused" in r for r in res.runs)

@@ -12,10 +12,10 @@ import pytest
 
 import mrdamper.cli.rig as cli_rig
 from mrdamper.cli.main import main
-from mrdamper.errors import DataValidationError
-from mrdamper.rig.doe import table_ii
 from mrdamper.control.doe_extension import control_extension
+from mrdamper.errors import DataValidationError
 from mrdamper.models.bingham import BinghamModel
+from mrdamper.rig.doe import table_ii
 from mrdamper.rig.doe_control import CONTROL_EXTENSION
 
 

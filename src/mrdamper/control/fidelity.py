@@ -124,15 +124,17 @@ def checked_run(
     while True:
         b = run(2 * s)
         mb = loop_metrics(b)
-        change = max(
-            abs(ma[k] - mb[k]) / max(abs(mb[k]), _FLOOR[k]) for k in ma if np.isfinite(mb[k])
-        )
+        changes = {
+            k: abs(ma[k] - mb[k]) / max(abs(mb[k]), _FLOOR[k]) for k in ma if np.isfinite(mb[k])
+        }
+        worst = max(changes, key=changes.__getitem__)
+        change = changes[worst]
         if change <= tol:
             return a, s, change
         if 2 * s >= max_substeps:
             raise MrDamperError(
                 f"substeps: the plant step is not converged: halving it at {2 * s} steps per "
-                f"road sample still moves a metric by {100 * change:.2g} % (> {100 * tol:g} %)"
+                f"road sample still moves {worst} by {100 * change:.2g} % (> {100 * tol:g} %)"
             )
         s, a, ma = 2 * s, b, mb
 
@@ -261,23 +263,33 @@ def closed_loop_fidelity(
                             model, road, c, car, plant=p, substeps=s, reg=reg, rate=rate
                         )
 
-                    r, s, change = checked_run(run, tol=tol, max_substeps=max_substeps)
-                    share, f_hf = oscillation(r)
-                    exc = _envelope_note(model, r)
-                    info = {
+                    where = f"{c.kind}, ISO {cls} @ {sp:g} m/s, {side}"
+                    info: dict[str, Any] = {
                         "controller": c.kind,
                         "road": cls,
                         "speed_m_s": float(sp),
                         "side": side,
-                        "substeps": s,
-                        "halving_change_pct": 100 * change,
-                        "hf_share": share,
-                        "hf_peak_hz": f_hf,
                     }
+                    try:
+                        r, s, change = checked_run(run, tol=tol, max_substeps=max_substeps)
+                    except MrDamperError as exc_refused:  # this run only: the others go on
+                        runs.append({**info, "refused": str(exc_refused)})
+                        notes.append(f"{where}: refused: {exc_refused}")
+                        out[side] = dict.fromkeys(METRICS, float("nan"))
+                        continue
+                    share, f_hf = oscillation(r)
+                    exc = _envelope_note(model, r)
+                    info.update(
+                        {
+                            "substeps": s,
+                            "halving_change_pct": 100 * change,
+                            "hf_share": share,
+                            "hf_peak_hz": f_hf,
+                        }
+                    )
                     if exc is not None:
                         info.update({f"excursion_{k}": v for k, v in exc.items()})
                     runs.append(info)
-                    where = f"{c.kind}, ISO {cls} @ {sp:g} m/s, {side}"
                     if share > HF_SHARE:
                         notes.append(
                             f"{where}: sampled-loop oscillation: {100 * share:.0f} % of the body "
@@ -293,7 +305,7 @@ def closed_loop_fidelity(
                     out[side] = loop_metrics(r)
                 for metric in METRICS:
                     pr, ac = out["predicted"][metric], out["achieved"][metric]
-                    err = 100.0 * (pr - ac) / ac if ac != 0 else float("nan")
+                    err = 100.0 * (pr - ac) / ac if ac != 0 else float("nan")  # NaN if refused
                     rows.append(
                         {
                             "controller": c.kind,

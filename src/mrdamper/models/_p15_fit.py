@@ -79,6 +79,9 @@ __all__ = [
 COND_FAIL, COND_WARN = 1e10, 1e6
 #: Samples required per coefficient.
 SAMPLES_PER_PARAMETER = 10
+#: A shooting stage that used its whole budget continues while the budget cut its cost by more
+#: than this share [-] (up to ``shoot_nfev_max`` evaluations in all).
+SHOOT_PROGRESS = 0.01
 
 
 def cutoff_hz(setting: float | str | None, fs: float) -> float | None:
@@ -474,6 +477,7 @@ def identify_output_error(
     segment_stride: int,
     shoot_nfev: int,
     max_nfev: int,
+    shoot_nfev_max: int | None = None,
     max_samples: int,
     jacobian: str,
     bound: float,
@@ -577,6 +581,16 @@ def identify_output_error(
 
     if shoot_nfev > 0:
         theta = solve(theta, "shooting", shoot_nfev, "multiple shooting: evaluation")
+        # a stage stopped by its budget while still descending continues, one budget at a time
+        used, top = stages[-1]["nfev"], shoot_nfev if shoot_nfev_max is None else shoot_nfev_max
+        while (
+            stages[-1]["status"] == 0
+            and used < top
+            and stages[-1]["cost_after"] < (1.0 - SHOOT_PROGRESS) * stages[-1]["cost_before"]
+        ):
+            n = min(shoot_nfev, top - used)
+            theta = solve(theta, "shooting", n, "multiple shooting (continued): evaluation")
+            used += stages[-1]["nfev"]
     if max_nfev > 0:
         theta = solve(theta, "free", max_nfev, "free-run refinement: evaluation")
     B, f0 = prob.unpack(theta)
