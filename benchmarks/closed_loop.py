@@ -36,18 +36,31 @@ from mrdamper.rig.doe import table_ii
 from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
 
 
-def choose_on_held_out(train: list, held_out: list, input: str) -> Any:
+def choose_on_held_out(train: list, held_out: list, input: str, **settings: Any) -> Any:
     """The default LPV model with the hysteretic input's stroke and blend chosen on held-out
     records (smallest open-loop RMS force error there), not on the training fit."""
     best, best_err = None, np.inf
     for stroke in STROKES:
         for blend in BLENDS:
-            m = get_estimator("lpv", input=input, stroke=stroke, blend=blend).fit(train)
+            m = get_estimator("lpv", input=input, stroke=stroke, blend=blend, **settings).fit(train)
             err = float(np.sqrt(np.mean([np.mean((m.predict(r) - r.F) ** 2) for r in held_out])))
             print(f"  lpv stroke {stroke:g} m, blend {blend:g}: held-out RMS error {err:.1f} N")
             if err < best_err:
                 best, best_err = m, err
     return best
+
+
+def _write(out: Path, name: str, tables: list, runs: list, failed: list) -> None:
+    """Write what is done so far (after every kind: a long run keeps its finished kinds)."""
+    if tables:
+        table = pd.concat(tables, ignore_index=True)
+        table.to_csv(out / f"closed_loop_{name}.csv", index=False, float_format="%.6g")
+        pd.concat(runs, ignore_index=True).to_csv(
+            out / f"closed_loop_runs_{name}.csv", index=False, float_format="%.6g"
+        )
+    pd.DataFrame(failed, columns=["kind", "reason"]).to_csv(
+        out / f"closed_loop_failed_{name}.csv", index=False
+    )
 
 
 def main() -> None:
@@ -69,6 +82,12 @@ def main() -> None:
         help="train on Table II + the control-oriented extension (control.doe_extension: the "
         "loop of a first model fitted on Table II, replayed on the rig); the LPV model's stroke "
         "and blend are then chosen on held-out extension records (seed 2)",
+    )
+    ap.add_argument(
+        "--lpv-fs",
+        type=float,
+        default=None,
+        help="LPV model rate [Hz] (default: the record rate); records are up-sampled to it",
     )
     ap.add_argument(
         "--first",
@@ -99,10 +118,11 @@ def main() -> None:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
+                    lpv_settings = {"model_fs": a.lpv_fs} if kind == "lpv" and a.lpv_fs else {}
                     if kind == "lpv" and held_out:
-                        model = choose_on_held_out(doe, held_out, truth.input)
+                        model = choose_on_held_out(doe, held_out, truth.input, **lpv_settings)
                     else:
-                        model = get_estimator(kind, input=truth.input).fit(doe)
+                        model = get_estimator(kind, input=truth.input, **lpv_settings).fit(doe)
                     res = closed_loop_fidelity(
                         model,
                         truth,
@@ -115,20 +135,17 @@ def main() -> None:
             except Exception as exc:  # noqa: BLE001 - a failing kind keeps its row and reason
                 failed.append({"kind": kind, "reason": f"{type(exc).__name__}: {exc}"})
                 print(f"{name} {kind}: {failed[-1]['reason']}")
+                _write(a.out, name, tables, runs, failed)
                 continue
             tables.append(res.table().assign(kind=kind))
             runs.append(res.runs_frame().assign(kind=kind))
             for note in res.notes[:3]:
                 print(f"{name} {kind}: warning: {note}")
             print(f"{name} {kind}: {time.perf_counter() - t0:.0f} s")
+            _write(a.out, name, tables, runs, failed)
         if not tables:
             continue
         table = pd.concat(tables, ignore_index=True)
-        table.to_csv(a.out / f"closed_loop_{name}.csv", index=False, float_format="%.6g")
-        pd.concat(runs, ignore_index=True).to_csv(
-            a.out / f"closed_loop_runs_{name}.csv", index=False, float_format="%.6g"
-        )
-        pd.DataFrame(failed).to_csv(a.out / f"closed_loop_failed_{name}.csv", index=False)
         worst = (
             table.assign(abs_err=table["error_pct"].abs())
             .pivot_table(index="kind", columns="metric", values="abs_err", aggfunc="max")
