@@ -192,3 +192,16 @@ def test_a_refused_run_keeps_its_rows_and_names_the_metric() -> None:
     assert any(m in refused[0] for m in ("rms_acc", "a_w", "rms_tyre_load", "rms_travel"))
     assert "%" in refused[0] and "\n" not in refused[0]
     assert all("refused" in r for r in res.runs)
+
+
+def test_a_sampled_loop_oscillation_is_detected_with_its_frequency() -> None:
+    # a run whose body acceleration carries an 83 Hz limit cycle (as an LPV model at 1 kHz in
+    # passive hard on a smooth road) against the same run without it
+    from mrdamper.control.fidelity import HF_SHARE, oscillation
+
+    r = simulate_closed_loop(_sp3(), _road(2.0), "soft")
+    clean, _ = oscillation(r)
+    assert clean < HF_SHARE
+    wobble = 3.0 * np.std(r.a_s) * np.sin(2 * np.pi * 83.0 * r.t)
+    share, peak = oscillation(dataclasses.replace(r, a_s=r.a_s + wobble))
+    assert share > HF_SHARE and abs(peak - 83.0) <= 1.0
