@@ -369,6 +369,53 @@ def _simulate_generic(
     return y, -1
 
 
+@njit(cache=True, inline="always")
+def _output_and_regressors(
+    k: int,
+    u: FloatArray,
+    r: float,
+    alpha: FloatArray,
+    beta: FloatArray,
+    y: FloatArray,
+    pw: FloatArray,
+    a: FloatArray,
+    row: FloatArray,
+) -> float:  # pragma: no cover - numba
+    """One sample of the free run and its regressors, shared by the sensitivity kernels.
+
+    Fills ``pw`` with the powers of ``r = rho[k]``, ``a`` with the denominator coefficients
+    ``a_j(r)`` and the first ``2 n_m n_p`` entries of ``row`` with the regressors
+    ``[-y[k-1-j] r^p ..., u[k-1-j] r^p ...]``; returns the output ``y[k]`` (from the outputs
+    ``y[:k]`` already computed; zero initial conditions).
+    """
+    n_m, n_p = alpha.shape
+    pw[0] = 1.0
+    for p in range(1, n_p):
+        pw[p] = pw[p - 1] * r
+    acc = 0.0
+    for j in range(n_m):
+        aj = 0.0
+        bj = 0.0
+        for p in range(n_p):
+            aj += alpha[j, p] * pw[p]
+            bj += beta[j, p] * pw[p]
+        a[j] = aj
+        if k - 1 - j >= 0:
+            acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+    c = 0
+    for j in range(n_m):
+        yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
+        for p in range(n_p):
+            row[c] = yv * pw[p]
+            c += 1
+    for j in range(n_m):
+        uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
+        for p in range(n_p):
+            row[c] = uv * pw[p]
+            c += 1
+    return acc
+
+
 @njit(cache=True)
 def simulate_sensitivity(
     u: FloatArray, rho: FloatArray, alpha: FloatArray, beta: FloatArray, bound: float
@@ -395,34 +442,10 @@ def simulate_sensitivity(
     a = np.empty(n_m)
     pw = np.empty(n_p)
     for k in range(n):
-        r = rho[k]
-        pw[0] = 1.0
-        for p in range(1, n_p):
-            pw[p] = pw[p - 1] * r
-        acc = 0.0
-        for j in range(n_m):
-            aj = 0.0
-            bj = 0.0
-            for p in range(n_p):
-                aj += alpha[j, p] * pw[p]
-                bj += beta[j, p] * pw[p]
-            a[j] = aj
-            if k - 1 - j >= 0:
-                acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+        acc = _output_and_regressors(k, u, rho[k], alpha, beta, y, pw, a, J[k])
         if not (abs(acc) <= bound):
             return y, J, k
         y[k] = acc
-        c = 0
-        for j in range(n_m):
-            yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
-            for p in range(n_p):
-                J[k, c] = yv * pw[p]
-                c += 1
-        for j in range(n_m):
-            uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
-            for p in range(n_p):
-                J[k, c] = uv * pw[p]
-                c += 1
         for ll in range(n_m):
             if k - 1 - ll < 0:
                 break
@@ -476,34 +499,10 @@ def oe_normal_equations(
     if with_offset:
         row[P] = 1.0
     for k in range(n):
-        r = rho[k]
-        pw[0] = 1.0
-        for p in range(1, n_p):
-            pw[p] = pw[p - 1] * r
-        acc = 0.0
-        for j in range(n_m):
-            aj = 0.0
-            bj = 0.0
-            for p in range(n_p):
-                aj += alpha[j, p] * pw[p]
-                bj += beta[j, p] * pw[p]
-            a[j] = aj
-            if k - 1 - j >= 0:
-                acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
+        acc = _output_and_regressors(k, u, rho[k], alpha, beta, y, pw, a, row)
         if not (abs(acc) <= bound):
             return np.inf, g, H, k
         y[k] = acc
-        c = 0
-        for j in range(n_m):
-            yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
-            for p in range(n_p):
-                row[c] = yv * pw[p]
-                c += 1
-        for j in range(n_m):
-            uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
-            for p in range(n_p):
-                row[c] = uv * pw[p]
-                c += 1
         for ll in range(n_m):
             al = a[ll]
             for c in range(P):
