@@ -32,6 +32,12 @@ from mrdamper.models import Estimator, FittedModel
 from mrdamper.models.base import RangePolicy
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.control_step import (
+    ControlRelevance,
+    ControlSettings,
+    control_relevance,
+    truth_damper,
+)
 from mrdamper.study.executor import ProcessExecutor, StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
@@ -42,7 +48,10 @@ from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_f
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
-__all__ = ["META_COLUMNS", "data_origin", "run_study"]
+__all__ = ["DEFAULT_CONTROL", "META_COLUMNS", "data_origin", "run_study"]
+
+#: The control-relevance step a study runs unless told otherwise (short roads, one class/speed).
+DEFAULT_CONTROL = ControlSettings()
 
 #: Record metadata copied into the results table when present.
 META_COLUMNS: tuple[str, ...] = (
@@ -172,6 +181,7 @@ def run_study(
     scheduler: Any = None,
     seed: int = 0,
     progress: bool = True,
+    control: ControlSettings | None = DEFAULT_CONTROL,
 ) -> StudyResult:
     """Fit every model of ``protocol`` on each fold of ``data`` and score it on the fold's records.
 
@@ -193,6 +203,11 @@ def run_study(
         Passed as ``seed`` to every estimator that takes one (unless its settings set it).
     progress : bool
         Show a progress bar (on standard error).
+    control : ControlSettings or None
+        The control-relevance step after the fits
+        (:func:`~mrdamper.study.control_step.control_relevance`: the first fold's models in the
+        quarter-car loop, against the rig's reference damper when the truth is known); None
+        skips it.
 
     Returns
     -------
@@ -244,10 +259,15 @@ def run_study(
     fitted = _fitted_models(folds, specs, fit_out)
     selection = _selection(folds, specs, fit_out, sim_out, protocol)
     showcase, hysteresis = _showcases(folds, specs, fitted, protocol)
+    t_control = time.perf_counter()
+    control_res = (
+        None if control is None else _control(folds, specs, fitted, fits, records, control)
+    )
     info = {
         "seed": int(seed),
         "executor": executor.description,
         "wall_time_s": time.perf_counter() - t_start,
+        "control_time_s": time.perf_counter() - t_control,
         "n_records": len(records),
         "data_origin": data_origin(records),
         "n_folds": len(folds),
@@ -268,6 +288,30 @@ def run_study(
         hysteresis=hysteresis,
         info=info,
         selection=selection,
+        control=control_res,
+    )
+
+
+def _control(
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    fitted: Mapping[tuple[str, str], FittedModel],
+    fits: pd.DataFrame,
+    records: Records,
+    settings: ControlSettings,
+) -> ControlRelevance:
+    """The first fold's models in the quarter-car loop (the truth is the rig's damper when every
+    record comes from it)."""
+    fold = folds[0].name
+    first = fits[fits["fold"] == fold]
+    return control_relevance(
+        {label: m for (f, label), m in fitted.items() if f == fold},
+        [s.label for s in specs],
+        {s.label: s.kind for s in specs},
+        truth_damper(records, settings.plant),
+        fold,
+        settings,
+        fit_errors=dict(zip(first["model"], first["error"].astype(str))),
     )
 
 
