@@ -106,3 +106,14 @@ def test_settings_are_checked() -> None:
         ControlSettings(duration=1.0)
     with pytest.raises(DataValidationError, match="controller"):
         ControlSettings(controllers=("soft", "sky"))
+
+
+def test_command_line_settings() -> None:
+    from mrdamper.cli.study import control_settings
+    from mrdamper.errors import DataValidationError
+
+    assert control_settings(True, "C", 3.0) is None
+    s = control_settings(False, "c, d", 6.0)
+    assert s.road_classes == ("C", "D") and s.duration == 6.0
+    with pytest.raises(DataValidationError, match="--control-roads"):
+        control_settings(False, "C,Z", 3.0)
