@@ -7,7 +7,9 @@ each model of the first fold as the controller's model:
   controller runs with the model as the damper (*predicted*) and with the rig's reference damper
   (*achieved*), :func:`~mrdamper.control.fidelity.closed_loop_fidelity`; with ``fronts`` the
   gain fronts of each invertible model are also swept on a coarse grid
-  (:func:`~mrdamper.control.fronts.gain_fronts`);
+  (:func:`~mrdamper.control.fronts.gain_fronts`; single runs at the road's step, not checked by
+  halving, and only for the models with a closed-form inverse, static maps and LPV, to keep the
+  step short);
 * **measured data** (no truth in the loop): each model runs predicted only, every run checked by
   halving the plant step, and each metric is compared with the median of the models on the same
   controller and road (``vs_median_pct = 100 (metric - median) / median``).
@@ -20,7 +22,7 @@ quick study stays quick; :class:`ControlSettings` changes them and ``control=Non
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +33,7 @@ from mrdamper.control.car import CONTROLLERS, Controller, QuarterCar
 from mrdamper.control.fidelity import METRICS, checked_run, closed_loop_fidelity, loop_metrics
 from mrdamper.control.fronts import FrontsResult, gain_fronts
 from mrdamper.errors import DataValidationError, interrupt_in_chain
+from mrdamper.models.protocols import InvertibleModel
 
 __all__ = [
     "CONTROL_COLUMNS",
@@ -38,6 +41,7 @@ __all__ = [
     "ControlRelevance",
     "ControlSettings",
     "control_relevance",
+    "model_in_loop",
     "plot_fronts",
     "truth_damper",
 ]
@@ -82,7 +86,8 @@ class ControlSettings:
     controllers : tuple of str
         Controllers (default all five).
     fronts : bool
-        With a known truth, also sweep the gain fronts (coarse grid) of each invertible model.
+        With a known truth, also sweep the gain fronts (coarse grid) of each model with a
+        closed-form inverse (static maps, LPV).
     plant : str, optional
         The damper of the virtual-rig records, when it is not the rig's default reference
         (``"rig:spencer1997"`` or a model file); ignored on measured data.
@@ -220,6 +225,72 @@ def _spread(df: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def model_in_loop(
+    label: str,
+    kind: str,
+    model: Any,
+    truth: str | None,
+    settings: ControlSettings,
+    car: QuarterCar | None = None,
+) -> tuple[list[dict[str, Any]], FrontsResult | str | None, list[str]]:
+    """One model in the loop: its rows, its gain fronts (or why not; None when not asked) and
+    its warnings. A task of the study's executor (``model`` may be a saved model's dict)."""
+    from mrdamper.control.closed_loop import resolve_plant
+    from mrdamper.models import model_from_dict
+
+    s = settings
+    car = QuarterCar() if car is None else car
+    if isinstance(model, Mapping):
+        model = model_from_dict(dict(model))
+    plant = None if truth is None else resolve_plant(truth)
+    rows: list[dict[str, Any]] = []
+    notes: list[str] = []
+    for ctrl in s.controllers:
+        try:
+            if plant is None:
+                rows += _predicted_rows(label, model, ctrl, s, car)
+                continue
+            res = closed_loop_fidelity(
+                model,
+                plant,
+                road_classes=s.road_classes,
+                speeds=s.speeds,
+                controllers=[ctrl],
+                duration=s.duration,
+                car=car,
+            )
+        except Exception as exc:  # noqa: BLE001 - the row keeps the one-line reason
+            rows.append(_failed_row(label, kind, ctrl, _reason(exc)))
+            continue
+        for r in res.table().to_dict("records"):
+            rows.append({"model": label, "kind": kind, "unit": res.unit(r["metric"]), **r})
+        notes += [f"{label}: {n}" for n in res.notes if "carries no training envelope" not in n]
+    fronts: FrontsResult | str | None = None
+    if plant is not None and s.fronts and not isinstance(model, InvertibleModel):
+        fronts = (
+            f"not swept in the study: the {model.kind} model has no closed-form inverse (its "
+            "controllers, if any, solve through its step, several times slower); `mrdamper "
+            "quartercar MODEL --plant rig --tune` sweeps it"
+        )
+    elif plant is not None and s.fronts:
+        try:
+            fronts = gain_fronts(
+                model,
+                plant,
+                road_classes=s.road_classes[:1],
+                speeds=s.speeds[:1],
+                duration=s.duration,
+                car=car,
+                grids=STUDY_GRIDS,
+                alphas=(0.5,),
+                levels=STUDY_LEVELS,
+                check=False,
+            )
+        except Exception as exc:  # noqa: BLE001 - the figure says why
+            fronts = _reason(exc)
+    return rows, fronts, notes
+
+
 def control_relevance(
     models: Mapping[str, Any],
     labels: Sequence[str],
@@ -230,13 +301,14 @@ def control_relevance(
     *,
     fit_errors: Mapping[str, str] | None = None,
     car: QuarterCar | None = None,
+    submit: Callable[..., Any] | None = None,
 ) -> ControlRelevance:
     """Every model in the loop (module docstring).
 
     Parameters
     ----------
     models : mapping
-        Label -> fitted model (the fold's successful fits).
+        Label -> fitted model, or its dict (the fold's successful fits).
     labels : sequence of str
         Every model of the study, in display order (a label without a model gets a row with
         its fit error).
@@ -250,62 +322,41 @@ def control_relevance(
     fit_errors : mapping, optional
         Label -> why its fit failed.
     car : QuarterCar, optional
+    submit : callable, optional
+        ``submit(fn, *args)`` returning a future (a study executor's): each model runs as a task
+        there; default: one after the other here.
     """
     s = ControlSettings() if settings is None else settings
-    car = QuarterCar() if car is None else car
-    plant = None
-    if truth is not None:
-        from mrdamper.control.closed_loop import resolve_plant
-
-        plant = resolve_plant(truth)
+    pending: dict[str, Any] = {}
+    for label, model in models.items():  # in the mapping's order (the costliest first)
+        args = (label, kinds.get(label, "?"), model, truth, s, car)
+        pending[label] = submit(model_in_loop, *args) if submit else model_in_loop(*args)
     rows: list[dict[str, Any]] = []
     notes: list[str] = []
     fronts: dict[str, FrontsResult | str] = {}
     for label in labels:
-        kind = kinds.get(label, "?")
-        model = models.get(label)
-        if model is None:
-            why = (fit_errors or {}).get(label) or "no fitted model"
-            rows += [_failed_row(label, kind, c, f"fit failed: {why}") for c in s.controllers]
-            fronts[label] = f"fit failed: {why}"
+        if label not in pending:
+            why = f"fit failed: {(fit_errors or {}).get(label) or 'no fitted model'}"
+            rows += [_failed_row(label, kinds.get(label, "?"), c, why) for c in s.controllers]
+            if truth is not None and s.fronts:
+                fronts[label] = why
             continue
-        for ctrl in s.controllers:
-            try:
-                if plant is None:
-                    rows += _predicted_rows(label, model, ctrl, s, car)
-                    continue
-                res = closed_loop_fidelity(
-                    model,
-                    plant,
-                    road_classes=s.road_classes,
-                    speeds=s.speeds,
-                    controllers=[ctrl],
-                    duration=s.duration,
-                    car=car,
-                )
-            except Exception as exc:  # noqa: BLE001 - the row keeps the one-line reason
-                rows.append(_failed_row(label, kind, ctrl, _reason(exc)))
-                continue
-            for r in res.table().to_dict("records"):
-                rows.append({"model": label, "kind": kind, "unit": res.unit(r["metric"]), **r})
-            notes += [f"{label}: {n}" for n in res.notes if "carries no training envelope" not in n]
-        if plant is not None and s.fronts:
-            try:
-                fronts[label] = gain_fronts(
-                    model,
-                    plant,
-                    road_classes=s.road_classes[:1],
-                    speeds=s.speeds[:1],
-                    duration=s.duration,
-                    car=car,
-                    grids=STUDY_GRIDS,
-                    alphas=(0.5,),
-                    levels=STUDY_LEVELS,
-                )
-            except Exception as exc:  # noqa: BLE001 - the figure says why
-                fronts[label] = _reason(exc)
+        out = pending[label]
+        try:
+            got, fr, n = out.result() if submit else out
+        except Exception as exc:  # noqa: BLE001 - a worker's failure keeps the model's rows
+            why = f"worker error: {_reason(exc)}"
+            got, fr, n = (
+                [_failed_row(label, kinds.get(label, "?"), c, why) for c in s.controllers],
+                why,
+                [],
+            )
+        rows += got
+        notes += n
+        if fr is not None:
+            fronts[label] = fr
     table = pd.DataFrame(rows, columns=list(CONTROL_COLUMNS))
-    if plant is None:
+    if truth is None:
         table = _spread(table)
     return ControlRelevance(truth, fold, s, table, fronts, notes)
 

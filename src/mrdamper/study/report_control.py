@@ -174,7 +174,8 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
                 '<p>Gain fronts (figure <a href="#control_fronts"><code>control_fronts'
                 "</code></a>, points in <code>control_fronts/</code>): on the first road, passive "
                 f"inputs at {len(STUDY_LEVELS)} levels and a coarse grid of "
-                "gains. Each controller's gain is chosen on the model (skyhook: best a_w, "
+                "gains, single runs at the road's step (not checked by halving, unlike the "
+                "table above). Each controller's gain is chosen on the model (skyhook: best a_w, "
                 "groundhook: best tyre load, hybrid: the mean of both, each as the gain over the "
                 "passive front at equal RMS travel, positive = better than passive) and run "
                 "with the reference damper:</p>"

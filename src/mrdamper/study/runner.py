@@ -251,6 +251,11 @@ def run_study(
     executor = make_executor(workers, scheduler)
     try:
         _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
+        t_control = time.perf_counter()
+        control_res = None
+        if control is not None:
+            control_res = _control(executor, folds, specs, fit_out, records, control)
+        t_control = time.perf_counter() - t_control
     except BaseException:
         executor.close(cancel=True)
         raise
@@ -259,15 +264,11 @@ def run_study(
     fitted = _fitted_models(folds, specs, fit_out)
     selection = _selection(folds, specs, fit_out, sim_out, protocol)
     showcase, hysteresis = _showcases(folds, specs, fitted, protocol)
-    t_control = time.perf_counter()
-    control_res = (
-        None if control is None else _control(folds, specs, fitted, fits, records, control)
-    )
     info = {
         "seed": int(seed),
         "executor": executor.description,
         "wall_time_s": time.perf_counter() - t_start,
-        "control_time_s": time.perf_counter() - t_control,
+        "control_time_s": t_control,
         "n_records": len(records),
         "data_origin": data_origin(records),
         "n_folds": len(folds),
@@ -293,25 +294,26 @@ def run_study(
 
 
 def _control(
+    ex: StudyExecutor,
     folds: list[Fold],
     specs: Sequence[ModelSpec],
-    fitted: Mapping[tuple[str, str], FittedModel],
-    fits: pd.DataFrame,
+    fit_out: Mapping[tuple[int, int], FitOutcome],
     records: Records,
     settings: ControlSettings,
 ) -> ControlRelevance:
-    """The first fold's models in the quarter-car loop (the truth is the rig's damper when every
-    record comes from it)."""
-    fold = folds[0].name
-    first = fits[fits["fold"] == fold]
+    """The first fold's models in the quarter-car loop, one task per model on the executor (the
+    truth is the rig's damper when every record comes from it)."""
+    done = {s.label: fit_out[(0, si)] for si, s in enumerate(specs)}
+    order = sorted(specs, key=lambda s: _cost_rank(s.kind))  # the longest task starts first
     return control_relevance(
-        {label: m for (f, label), m in fitted.items() if f == fold},
+        {s.label: done[s.label].model for s in order if done[s.label].ok},
         [s.label for s in specs],
         {s.label: s.kind for s in specs},
         truth_damper(records, settings.plant),
-        fold,
+        folds[0].name,
         settings,
-        fit_errors=dict(zip(first["model"], first["error"].astype(str))),
+        fit_errors={k: str(v.error) for k, v in done.items()},
+        submit=ex.submit,
     )
 
 
