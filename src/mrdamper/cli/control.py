@@ -16,6 +16,11 @@ damper: ``DIR/closed_loop.csv`` gets the metrics predicted (MODEL as damper) aga
 (PLANT as damper) per controller, road and speed (:mod:`mrdamper.control.fidelity`) and
 ``DIR/closed_loop_runs.csv`` the numerics of every run (plant sub-steps, halving change,
 high-frequency share, training-envelope excursions); warnings are printed one a line.
+
+With ``--tune`` the passive inputs and the semi-active gains are swept on each ISO road
+(:mod:`mrdamper.control.fronts`), with MODEL as the damper and, with ``--plant``, with PLANT:
+``DIR/fronts.csv`` (every point), ``DIR/fronts.png`` (predicted and achieved fronts) and the gains
+chosen on the model, printed.
 """
 
 from __future__ import annotations
@@ -47,6 +52,12 @@ _FIDELITY_FILES: dict[str, FileKind] = {
         "runs written by 'mrdamper quartercar --plant'", ("controller", "road")
     ),
 }
+
+#: The sweep of ``quartercar --tune``.
+_FRONTS_CSV = csv_kind(
+    "gain sweep written by 'mrdamper quartercar --tune' (road, speed_m_s, side, ...)",
+    ("road", "speed_m_s", "side"),
+)
 
 
 def _slug(name: str) -> str:
@@ -110,6 +121,14 @@ def quartercar(
     force: Annotated[
         bool, typer.Option("--force", help="Overwrite existing output files.")
     ] = False,
+    tune: Annotated[
+        bool,
+        typer.Option(
+            "--tune",
+            help="Sweep the passive inputs and the semi-active gains on the model (and on PLANT "
+            "when given): writes fronts.csv and fronts.png and prints the gains chosen.",
+        ),
+    ] = False,
     plant: Annotated[
         str | None,
         typer.Option(
@@ -122,8 +141,7 @@ def quartercar(
 ) -> None:
     """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
     from mrdamper._io import check_output, check_writable, write_files
-    from mrdamper.cli.models import parse_settings
-    from mrdamper.control.quarter_car import Controller, QuarterCar
+    from mrdamper.control.quarter_car import Controller
     from mrdamper.control.quarter_car_study import compare_controllers
     from mrdamper.models.registry import load_model
 
@@ -131,19 +149,15 @@ def quartercar(
         raise DataValidationError("--out", f"{out} exists and is not a folder")
     if not (speed > 0):
         raise DataValidationError("--speed", f"expected a vehicle speed > 0 [m/s], got {speed:g}")
+    if tune:
+        _tune(model_file, plant, out, roads, speed, duration, seed, force, _car(car))
+        return
     if plant is not None:
         _fidelity(model_file, plant, out, roads, controllers, speed, duration, seed, force)
         return
     check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
     check_writable(out / "quartercar.csv", force, inputs=[model_file], kind=QUARTERCAR_CSV)
-    car_kw = parse_settings(car)
-    fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
-    unknown = sorted(set(car_kw) - set(fields))
-    if unknown:
-        raise DataValidationError(
-            "--car", f"unknown parameter(s) {unknown}; expected some of {list(fields)}"
-        )
-    qc = QuarterCar(**car_kw)
+    qc = _car(car)
     m = load_model(model_file)
     ctrls = [
         Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha)
@@ -213,6 +227,76 @@ def quartercar(
     typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
 
 
+def _car(car: list[str] | None) -> Any:
+    """The :class:`QuarterCar` of the ``--car KEY=VALUE`` settings."""
+    from mrdamper.cli.models import parse_settings
+    from mrdamper.control.quarter_car import QuarterCar
+
+    car_kw = parse_settings(car)
+    fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
+    unknown = sorted(set(car_kw) - set(fields))
+    if unknown:
+        raise DataValidationError(
+            "--car", f"unknown parameter(s) {unknown}; expected some of {list(fields)}"
+        )
+    return QuarterCar(**car_kw)
+
+
+def _inputs(model_file: Path, plant: str | None) -> list[Path]:
+    return [model_file] + ([Path(plant)] if plant is not None and Path(plant).is_file() else [])
+
+
+def _text_writer(text: str) -> Callable[[Path], object]:
+    return lambda p: p.write_text(text, encoding="utf-8")
+
+
+def _tune(
+    model_file: Path,
+    plant: str | None,
+    out: Path,
+    roads: str,
+    speed: float,
+    duration: float,
+    seed: int,
+    force: bool,
+    car: Any,
+) -> None:
+    from mrdamper._io import check_output, check_writable, write_files
+    from mrdamper.control.fronts import gain_fronts
+    from mrdamper.models.registry import load_model
+
+    inputs = _inputs(model_file, plant)
+    check_output(out, force=force, folder=True, mode="add", inputs=inputs)
+    check_writable(out / "fronts.csv", force, inputs=inputs, kind=_FRONTS_CSV)
+    check_writable(out / "fronts.png", force, inputs=inputs, kind=_PNG)
+    m = load_model(model_file)
+    res = gain_fronts(
+        m,
+        plant,
+        road_classes=[r.strip().upper() for r in roads.split(",") if r.strip()],
+        speeds=[speed],
+        duration=duration,
+        seed=seed,
+        car=car,
+    )
+    text = res.table().to_csv(index=False, float_format="%.6g")
+    files: dict[str, tuple[FileKind, Callable[[Path], object]]] = {
+        "fronts.csv": (_FRONTS_CSV, _text_writer(text)),
+        "fronts.png": (_PNG, _png_writer(res.plot())),
+    }
+    write_files(out, files, force=force)
+    chosen = res.chosen()
+    sides = ["predicted"] + (["achieved"] if plant is not None else [])
+    cols = ["road", "controller", "c_sky", "c_ground", "alpha"]
+    for side in sides:
+        cols += [f"{c}_{side}" for c in ("a_w", "rms_travel", "aw_gain_pct", "tyre_gain_pct")]
+    shown = chosen[cols].rename(columns=lambda c: c.replace("_predicted", " pred.").replace(
+        "_achieved", " ach.").replace("_pct", " [%]"))  # fmt: skip
+    typer.echo("gains chosen on the model (gain over passive at equal travel, positive = better):")
+    typer.echo(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
+
+
 def _fidelity(
     model_file: Path,
     plant: str,
@@ -229,7 +313,7 @@ def _fidelity(
     from mrdamper.control.fidelity import closed_loop_fidelity
     from mrdamper.models.registry import load_model
 
-    inputs = [model_file] + ([Path(plant)] if Path(plant).is_file() else [])
+    inputs = _inputs(model_file, plant)
     check_output(out, force=force, folder=True, mode="add", inputs=inputs)
     for name, kind in _FIDELITY_FILES.items():
         check_writable(out / name, force, inputs=inputs, kind=kind)
@@ -249,12 +333,9 @@ def _fidelity(
         "closed_loop_runs.csv": res.runs_frame().to_csv(index=False, float_format="%.6g"),
     }
 
-    def writer(text: str) -> Callable[[Path], object]:
-        return lambda p: p.write_text(text, encoding="utf-8")
-
     write_files(
         out,
-        {name: (kind, writer(texts[name])) for name, kind in _FIDELITY_FILES.items()},
+        {name: (kind, _text_writer(texts[name])) for name, kind in _FIDELITY_FILES.items()},
         force=force,
     )
     shown = table.assign(metric=[f"{k} [{res.unit(k)}]" for k in table["metric"]]).rename(

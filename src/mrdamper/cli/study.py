@@ -177,6 +177,15 @@ def study(
         help="Where records are read: worker (by the tasks that use them; this process keeps "
         "headers only) or parent (all into memory first).",
     ),
+    no_control: bool = typer.Option(
+        False, "--no-control", help="Skip the control-relevance step (quarter-car loop)."
+    ),
+    control_roads: str = typer.Option(
+        "C", "--control-roads", help="ISO 8608 classes of the control-relevance step (A..H)."
+    ),
+    control_duration: float = typer.Option(
+        3.0, "--control-duration", help="Road length of the control-relevance step [s] (>= 2)."
+    ),
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Fit and score every model of a protocol on DATA.
@@ -205,8 +214,25 @@ def study(
         scheduler=scheduler,
         seed=seed,
         progress=not no_progress,
+        control=control_settings(no_control, control_roads, control_duration),
     )
     write_or_fail(res, out, force)
+
+
+def control_settings(off: bool, roads: str, duration: float) -> Any:
+    """The :class:`~mrdamper.study.control_step.ControlSettings` of the command's options (None
+    with ``--no-control``)."""
+    from mrdamper.study.control_step import ControlSettings
+
+    if off:
+        return None
+    classes = tuple(r.strip().upper() for r in roads.split(",") if r.strip())
+    bad = [c for c in classes if c not in tuple("ABCDEFGH")]
+    if bad or not classes:
+        raise DataValidationError(
+            "--control-roads", f"expected ISO 8608 classes A..H, comma-separated, got {roads!r}"
+        )
+    return ControlSettings(road_classes=classes, duration=duration)
 
 
 def demo(
@@ -232,6 +258,15 @@ def demo(
         None, "--scale", help="Duration scale of the records (overrides --quick)."
     ),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
+    no_control: bool = typer.Option(
+        False, "--no-control", help="Skip the control-relevance step (quarter-car loop)."
+    ),
+    control_roads: str = typer.Option(
+        "C", "--control-roads", help="ISO 8608 classes of the control-relevance step (A..H)."
+    ),
+    control_duration: float = typer.Option(
+        3.0, "--control-duration", help="Road length of the control-relevance step [s] (>= 2)."
+    ),
 ) -> None:
     """Generate the paper's Table II experiments on the virtual rig and compare every model.
 
@@ -282,7 +317,13 @@ def demo(
     )
     try:
         res = run_study(
-            data, doe_protocol(), kinds, workers=workers, seed=seed, progress=not no_progress
+            data,
+            doe_protocol(),
+            kinds,
+            workers=workers,
+            seed=seed,
+            progress=not no_progress,
+            control=control_settings(no_control, control_roads, control_duration),
         )
     finally:
         compiled.finish_ahead(cancel=True)  # no-op: the study waited for it

@@ -14,6 +14,7 @@ Examples
 """
 
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.control_step import ControlRelevance, ControlSettings
 from mrdamper.study.default import choose_protocol, default_protocol
 from mrdamper.study.executor import make_executor
 from mrdamper.study.presets import (
@@ -42,6 +43,8 @@ from mrdamper.study.writer import write_study
 __all__ = [
     "DEFAULT_MODELS",
     "AnalysisOutcome",
+    "ControlRelevance",
+    "ControlSettings",
     "Fold",
     "ModelSpec",
     "Protocol",

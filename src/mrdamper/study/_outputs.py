@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +25,10 @@ from mrdamper.errors import OutputExistsError
 from mrdamper.study.result import StudyResult
 from mrdamper.study.tables import TIMING_COLUMNS
 
-__all__ = ["TIMING_INFO", "naming_output", "prepare_out", "write_tables"]
+__all__ = ["TIMING_INFO", "naming_output", "prepare_out", "slug", "write_tables"]
 
 #: Entries of ``StudyResult.info`` that are wall-clock times (``timings.json``, not ``study.json``).
-TIMING_INFO: tuple[str, ...] = ("wall_time_s",)
+TIMING_INFO: tuple[str, ...] = ("wall_time_s", "control_time_s")
 
 
 def prepare_out(res: StudyResult, out_dir: str | os.PathLike[str], force: bool) -> Path:
@@ -39,7 +40,8 @@ def prepare_out(res: StudyResult, out_dir: str | os.PathLike[str], force: bool) 
 
 def write_tables(res: StudyResult, d: Path, summary: pd.DataFrame) -> None:
     """Write ``results.csv``, ``summary.csv``, ``fits.csv``, ``roles.csv``, ``protocol.json``,
-    ``study.json`` (no times) and ``timings.csv``, ``timings.json`` (the times) into ``d``."""
+    ``study.json`` (no times), ``control.csv`` and ``control_fronts/<model>.csv`` (when the
+    control step ran) and ``timings.csv``, ``timings.json`` (the times) into ``d``."""
     timing = [c for c in TIMING_COLUMNS if c in res.results.columns]
     atomic_write_text(d / "results.csv", res.results.drop(columns=timing).to_csv(index=False))
     keys = [c for c in ("fold", "model", "record") if c in res.results.columns]
@@ -51,6 +53,12 @@ def write_tables(res: StudyResult, d: Path, summary: pd.DataFrame) -> None:
         d / "fits.csv", res.fits.drop(columns=timing, errors="ignore").to_csv(index=False)
     )
     atomic_write_text(d / "roles.csv", res.roles.to_csv(index=False))
+    if res.control is not None:
+        atomic_write_text(d / "control.csv", res.control.table.to_csv(index=False))
+        for label, fr in res.control.fronts.items():
+            if not isinstance(fr, str):
+                text = fr.table().to_csv(index=False)
+                atomic_write_text(d / "control_fronts" / f"{slug(label, 'model')}.csv", text)
     atomic_write_text(d / "protocol.json", res.protocol.to_json() + "\n")
     info: dict[str, Any] = {k: v for k, v in res.info.items() if k not in TIMING_INFO}
     info["headline"] = dict(res.headline())
@@ -62,6 +70,11 @@ def write_tables(res: StudyResult, d: Path, summary: pd.DataFrame) -> None:
         for row in summary.to_dict("records")
     }
     atomic_write_text(d / "timings.json", json.dumps(timings, indent=2, default=str) + "\n")
+
+
+def slug(text: str, default: str = "fold") -> str:
+    """``text`` as a file name (runs of other characters than letters, digits, ``_.-`` -> ``_``)."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or default
 
 
 def naming_output(exc: OSError, out: Path) -> OSError:

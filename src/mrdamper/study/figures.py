@@ -90,6 +90,16 @@ FIGURES: dict[str, tuple[int | None, str]] = {
             "dissipated per cycle (table below)."
         ),
     ),
+    "control_fronts": (
+        None,
+        (
+            "Control relevance: comfort (ISO 2631 weighted RMS body acceleration a_w) against "
+            "road holding (RMS dynamic tyre load) on the quarter car, per model as the "
+            "controller's model: passive inputs (line, soft to hard) and the semi-active "
+            "controllers' gains (points), predicted with the model as the damper (open "
+            "markers, dashed) and achieved with the rig's reference damper (filled, solid)."
+        ),
+    ),
 }
 
 #: A model whose mean ESR over the study, or whose ESR on the drawn record, exceeds this [-] is
@@ -326,6 +336,14 @@ def _energy_titles(sc: Showcase, titles: Mapping[str, str]) -> dict[str, str]:
     return out
 
 
+def _control_fronts(res: StudyResult) -> Any:
+    from mrdamper.study.control_step import plot_fronts
+
+    if res.control is None:
+        return "the control-relevance step was switched off"
+    return plot_fronts(res.control)
+
+
 _DRAW: dict[str, Callable[[StudyResult], Any]] = {
     "fig01_fv_map": _fig1,
     "fig02_zone_fit": _fig2,
@@ -337,6 +355,7 @@ _DRAW: dict[str, Callable[[StudyResult], Any]] = {
     "fig09_force_time": _all_models("ft"),
     "fig10_fv_models": _all_models("fv"),
     "fig11_fx_loops": _all_models("fx"),
+    "control_fronts": _control_fronts,
 }
 
 

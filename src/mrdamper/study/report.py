@@ -29,6 +29,7 @@ from mrdamper.study.figures import (
     time_window,
 )
 from mrdamper.study.provenance import records_text
+from mrdamper.study.report_control import control_section
 from mrdamper.study.report_tables import (
     analysis_table,
     energy_display,
@@ -560,6 +561,8 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
         _summary_section(res, summary, failed),
         "<h2>Which model for this damper?</h2>",
         _selection_section(res),
+        "<h2>Control relevance</h2>",
+        control_section(res, _table, _unit(res)),
         "<h2>ESR per condition and per current level</h2>",
         _by_group_section(res),
         "<h2>Protocol</h2>",
@@ -579,7 +582,8 @@ def render_report(res: StudyResult, summary: pd.DataFrame, saved: Mapping[str, A
             f'<p class="small">Python {_e(info.get("python", ""))} on '
             f"{_e(info.get('platform', ''))}. Files next to "
             "this report: results.csv, summary.csv, fits.csv, roles.csv, protocol.json, "
-            "study.json, models/, analysis/, figures/.</p>"
+            "study.json, control.csv, control_fronts/ (when the control step ran), models/, "
+            "analysis/, figures/.</p>"
         ),
         "</body></html>",
     ]

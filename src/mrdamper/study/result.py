@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from mrdamper.data import Experiment
 from mrdamper.models import FittedModel
 from mrdamper.study.analysis_step import AnalysisOutcome
+from mrdamper.study.control_step import ControlRelevance
 from mrdamper.study.protocol import ModelSpec, Protocol
 from mrdamper.study.selection import SelectionResult
 from mrdamper.study.tables import headline, headlines, summarize
@@ -80,6 +81,9 @@ class StudyResult:
         The model-selection table and recommendation of ``mrdamper select``, computed from this
         study's held-out scores (scored records that trained nothing in their fold), with the
         rule of :func:`~mrdamper.study.selection.cross_validate`.
+    control : ControlRelevance or None
+        Every model in the quarter-car loop (:mod:`mrdamper.study.control_step`), None when the
+        step was switched off.
     """
 
     protocol: Protocol
@@ -93,6 +97,7 @@ class StudyResult:
     hysteresis: Showcase | None = None
     info: Mapping[str, Any] = field(default_factory=dict)
     selection: SelectionResult | None = None
+    control: ControlRelevance | None = None
 
     @property
     def labels(self) -> list[str]:

@@ -32,6 +32,12 @@ from mrdamper.models import Estimator, FittedModel
 from mrdamper.models.base import RangePolicy
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
+from mrdamper.study.control_step import (
+    ControlRelevance,
+    ControlSettings,
+    control_relevance,
+    truth_damper,
+)
 from mrdamper.study.executor import ProcessExecutor, StudyExecutor, make_executor
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
@@ -42,7 +48,10 @@ from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_f
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
-__all__ = ["META_COLUMNS", "data_origin", "run_study"]
+__all__ = ["DEFAULT_CONTROL", "META_COLUMNS", "data_origin", "run_study"]
+
+#: The control-relevance step a study runs unless told otherwise (short roads, one class/speed).
+DEFAULT_CONTROL = ControlSettings()
 
 #: Record metadata copied into the results table when present.
 META_COLUMNS: tuple[str, ...] = (
@@ -172,6 +181,7 @@ def run_study(
     scheduler: Any = None,
     seed: int = 0,
     progress: bool = True,
+    control: ControlSettings | None = DEFAULT_CONTROL,
 ) -> StudyResult:
     """Fit every model of ``protocol`` on each fold of ``data`` and score it on the fold's records.
 
@@ -193,6 +203,11 @@ def run_study(
         Passed as ``seed`` to every estimator that takes one (unless its settings set it).
     progress : bool
         Show a progress bar (on standard error).
+    control : ControlSettings or None
+        The control-relevance step after the fits
+        (:func:`~mrdamper.study.control_step.control_relevance`: the first fold's models in the
+        quarter-car loop, against the rig's reference damper when the truth is known); None
+        skips it.
 
     Returns
     -------
@@ -236,6 +251,11 @@ def run_study(
     executor = make_executor(workers, scheduler)
     try:
         _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
+        t_control = time.perf_counter()
+        control_res = None
+        if control is not None:
+            control_res = _control(executor, folds, specs, fit_out, records, control)
+        t_control = time.perf_counter() - t_control
     except BaseException:
         executor.close(cancel=True)
         raise
@@ -248,6 +268,7 @@ def run_study(
         "seed": int(seed),
         "executor": executor.description,
         "wall_time_s": time.perf_counter() - t_start,
+        "control_time_s": t_control,
         "n_records": len(records),
         "data_origin": data_origin(records),
         "n_folds": len(folds),
@@ -268,6 +289,31 @@ def run_study(
         hysteresis=hysteresis,
         info=info,
         selection=selection,
+        control=control_res,
+    )
+
+
+def _control(
+    ex: StudyExecutor,
+    folds: list[Fold],
+    specs: Sequence[ModelSpec],
+    fit_out: Mapping[tuple[int, int], FitOutcome],
+    records: Records,
+    settings: ControlSettings,
+) -> ControlRelevance:
+    """The first fold's models in the quarter-car loop, one task per model on the executor (the
+    truth is the rig's damper when every record comes from it)."""
+    done = {s.label: fit_out[(0, si)] for si, s in enumerate(specs)}
+    order = sorted(specs, key=lambda s: _cost_rank(s.kind))  # the longest task starts first
+    return control_relevance(
+        {s.label: done[s.label].model for s in order if done[s.label].ok},
+        [s.label for s in specs],
+        {s.label: s.kind for s in specs},
+        truth_damper(records, settings.plant),
+        folds[0].name,
+        settings,
+        fit_errors={k: str(v.error) for k, v in done.items()},
+        submit=ex.submit,
     )
 
 

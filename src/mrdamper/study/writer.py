@@ -13,22 +13,17 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from mrdamper._io import atomic_write_text, write_folder
 from mrdamper.study import report
-from mrdamper.study._outputs import naming_output, prepare_out, write_tables
+from mrdamper.study._outputs import naming_output, prepare_out, slug, write_tables
 from mrdamper.study.figures import FIGURE_DPI, FIGURE_FORMATS, make_figures
 from mrdamper.study.result import StudyResult
 
 __all__ = ["save_figures", "write_study"]
-
-
-def _slug(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "fold"
 
 
 def write_study(
@@ -72,11 +67,11 @@ def _write_into(res: StudyResult, d: Path, figures: bool) -> None:
     summary = res.summary
     write_tables(res, d, summary)
     for (fold, label), model in res.models.items():
-        model.save(d / "models" / _slug(fold) / f"{_slug(label)}.json")
+        model.save(d / "models" / slug(fold) / f"{slug(label)}.json")
     for fold, an in res.analyses.items():
         if an.laws is not None and hasattr(an.laws, "to_dict"):
             text = json.dumps(an.laws.to_dict(), indent=1)
-            atomic_write_text(d / "analysis" / f"{_slug(fold)}_zone_laws.json", text + "\n")
+            atomic_write_text(d / "analysis" / f"{slug(fold)}_zone_laws.json", text + "\n")
     saved = save_figures(make_figures(res), d / "figures") if figures else {}
     html = report.render_report(res, summary, saved)
     atomic_write_text(d / "report.html", html)

@@ -1,0 +1,119 @@
+"""The study's control-relevance step: predicted against achieved on the virtual rig, the spread
+of the models on measured data, failing models keeping their rows, and the report section."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mrdamper.study import doe_protocol, run_study
+from mrdamper.study.control_step import ControlSettings, control_relevance, truth_damper
+from mrdamper.study.report import render_report
+
+QUICK = ControlSettings(duration=2.0, controllers=("soft", "skyhook"), fronts=False)
+
+
+@pytest.fixture(scope="module")
+def rig_study():  # type: ignore[no-untyped-def]
+    doe = pytest.importorskip("mrdamper.rig.doe")
+    pytest.importorskip("mrdamper.rig.reference").reference_damper()
+    data = doe.table_ii(seed=0, scale=0.07, experiments=[1, 6, 7, 8])
+    return run_study(
+        data,
+        doe_protocol(),
+        ["sp1", "lti", "toyfail"],
+        workers=1,
+        progress=False,
+        control=ControlSettings(duration=2.0, controllers=("soft", "skyhook")),
+    )
+
+
+@pytest.mark.slow  # fits SP-1 and LTI on a short DoE, then the loop with the rig's damper
+def test_a_rig_study_gets_predicted_against_achieved(rig_study) -> None:  # type: ignore[no-untyped-def]
+    cr = rig_study.control
+    assert cr is not None and cr.truth == "rig"
+    t = cr.table
+    sp1 = t[(t["model"] == "sp1") & (t["metric"] == "a_w")]
+    assert list(sp1["controller"]) == ["soft", "skyhook"]
+    assert np.isfinite(sp1[["predicted", "achieved", "error_pct"]].to_numpy()).all()
+    got = 100 * (sp1["predicted"] - sp1["achieved"]) / sp1["achieved"]
+    np.testing.assert_allclose(sp1["error_pct"], got)
+    # LTI has no inverse: passive rows, and one row with the reason for skyhook
+    lti = t[t["model"] == "lti"]
+    assert lti[(lti["controller"] == "soft") & (lti["metric"] == "a_w")]["achieved"].notna().all()
+    sky = lti[lti["controller"] == "skyhook"]
+    assert len(sky) == 1 and "no inverse" in sky["reason"].iloc[0]
+    fail = t[t["model"] == "toyfail"]
+    assert len(fail) == 2 and fail["reason"].str.startswith("fit failed: ").all()
+    assert not isinstance(cr.fronts["sp1"], str) and "fit failed" in str(cr.fronts["toyfail"])
+    assert "control_time_s" in rig_study.info
+    html = render_report(rig_study, rig_study.summary, {})
+    sec = html[html.index("<h2>Control relevance</h2>") :]
+    sec = sec[: sec.index("<h2>", 10)]
+    assert "The truth is known" in sec and "quiroz2022" in sec
+    assert "no inverse" in sec and "fit failed" in sec and "Gain fronts" in sec
+    assert "control_time_s" not in html
+    # the same step again gives the same table (the report stays byte-identical)
+    again = control_relevance(
+        {"sp1": rig_study.models[("all", "sp1")]}, ["sp1"], {"sp1": "sp1"}, "rig", "all",
+        ControlSettings(duration=2.0, controllers=("soft", "skyhook"), fronts=False),
+    )  # fmt: skip
+    pd.testing.assert_frame_equal(
+        again.table.drop(columns="reason").reset_index(drop=True),
+        t[t["model"] == "sp1"].drop(columns="reason").reset_index(drop=True),
+    )
+
+
+def test_measured_data_say_no_truth_and_show_the_spread(doe) -> None:  # type: ignore[no-untyped-def]
+    from mrdamper.models.semiphenomenological import SP1Estimator, SP3Estimator
+
+    models = {"sp1": SP1Estimator().fit(doe), "sp3": SP3Estimator().fit(doe)}
+    assert truth_damper(doe) is None
+    cr = control_relevance(
+        models, ["sp1", "sp3", "toy"], {"sp1": "sp1", "sp3": "sp3", "toy": "toy"}, None, "all",
+        QUICK, fit_errors={"toy": "IdentificationError: singular"},
+    )  # fmt: skip
+    t = cr.table
+    assert cr.truth is None and t["achieved"].isna().all()
+    aw = t[(t["metric"] == "a_w") & (t["controller"] == "skyhook")].set_index("model")
+    med = aw["predicted"].median()
+    np.testing.assert_allclose(aw["vs_median_pct"], 100 * (aw["predicted"] - med) / med)
+    assert aw.loc["sp1", "vs_median_pct"] != 0
+    assert aw.loc["sp1", "vs_median_pct"] == pytest.approx(-aw.loc["sp3", "vs_median_pct"])
+    assert t[t["model"] == "toy"]["reason"].str.contains("singular").all()
+
+
+def test_a_measured_study_reports_no_truth_and_keeps_failing_rows(doe) -> None:  # type: ignore[no-untyped-def]
+    res = run_study(
+        doe, doe_protocol(), ["toy", "toyfail"], workers=1, progress=False, control=QUICK
+    )
+    cr = res.control
+    assert cr is not None and cr.truth is None
+    assert set(cr.table["model"]) == {"toy", "toyfail"}
+    assert cr.table["reason"].notna().all()  # neither can run in the loop: each keeps its rows
+    html = render_report(res, res.summary, {})
+    assert "No truth is available" in html and "the records are measured" in html
+    off = run_study(doe, doe_protocol(), ["toy"], workers=1, progress=False, control=None)
+    assert off.control is None
+    assert "switched off" in render_report(off, off.summary, {})
+
+
+def test_settings_are_checked() -> None:
+    from mrdamper.errors import DataValidationError
+
+    with pytest.raises(DataValidationError, match="duration"):
+        ControlSettings(duration=1.0)
+    with pytest.raises(DataValidationError, match="controller"):
+        ControlSettings(controllers=("soft", "sky"))
+
+
+def test_command_line_settings() -> None:
+    from mrdamper.cli.study import control_settings
+    from mrdamper.errors import DataValidationError
+
+    assert control_settings(True, "C", 3.0) is None
+    s = control_settings(False, "c, d", 6.0)
+    assert s.road_classes == ("C", "D") and s.duration == 6.0
+    with pytest.raises(DataValidationError, match="--control-roads"):
+        control_settings(False, "C,Z", 3.0)
