@@ -38,6 +38,7 @@ from mrdamper.models.envelope import envelope_of, excursions
 __all__ = [
     "METRICS",
     "FidelityResult",
+    "NotConvergedError",
     "checked_run",
     "closed_loop_fidelity",
     "loop_metrics",
@@ -101,6 +102,11 @@ def oscillation(r: QuarterCarResult) -> tuple[float, float]:
     return float(np.sum(p[hf]) / total), float(f[hf][np.argmax(p[hf])])
 
 
+class NotConvergedError(MrDamperError):
+    """The halving check refused a run: the plant step is not converged (the message gives the
+    figure and the metric)."""
+
+
 def checked_run(
     run: Callable[[int], QuarterCarResult], *, tol: float = 0.005, max_substeps: int = 16
 ) -> tuple[QuarterCarResult, int, float]:
@@ -118,8 +124,8 @@ def checked_run(
 
     Raises
     ------
-    MrDamperError
-        Not converged at ``max_substeps`` (the message gives the figure).
+    NotConvergedError
+        Not converged at ``max_substeps`` (the message gives the figure and the metric).
     """
     s = 1
     a = run(s)
@@ -135,7 +141,7 @@ def checked_run(
         if change <= tol:
             return a, s, change
         if 2 * s >= max_substeps:
-            raise MrDamperError(
+            raise NotConvergedError(
                 f"substeps: the plant step is not converged: halving it at {2 * s} steps per "
                 f"road sample still moves {worst} by {100 * change:.2g} % (> {100 * tol:g} %)"
             )
@@ -275,7 +281,7 @@ def closed_loop_fidelity(
                     }
                     try:
                         r, s, change = checked_run(run, tol=tol, max_substeps=max_substeps)
-                    except MrDamperError as exc_refused:  # this run only: the others go on
+                    except NotConvergedError as exc_refused:  # this run only: the others go on
                         runs.append({**info, "refused": str(exc_refused)})
                         notes.append(f"{where}: refused: {exc_refused}")
                         out[side] = dict.fromkeys(METRICS, float("nan"))
