@@ -219,10 +219,11 @@ def study(
     write_or_fail(res, out, force)
 
 
-def control_settings(off: bool, roads: str, duration: float) -> Any:
+def control_settings(off: bool, roads: str, duration: float, quick: bool = False) -> Any:
     """The :class:`~mrdamper.study.control_step.ControlSettings` of the command's options (None
-    with ``--no-control``)."""
-    from mrdamper.study.control_step import ControlSettings
+    with ``--no-control``; with ``quick``, the demo's ``--quick``, passive soft and skyhook only
+    and no gain fronts)."""
+    from mrdamper.study.control_step import QUICK_CONTROLLERS, ControlSettings
 
     if off:
         return None
@@ -231,6 +232,10 @@ def control_settings(off: bool, roads: str, duration: float) -> Any:
     if bad or not classes:
         raise DataValidationError(
             "--control-roads", f"expected ISO 8608 classes A..H, comma-separated, got {roads!r}"
+        )
+    if quick:
+        return ControlSettings(
+            road_classes=classes, duration=duration, controllers=QUICK_CONTROLLERS, fronts=False
         )
     return ControlSettings(road_classes=classes, duration=duration)
 
@@ -259,7 +264,10 @@ def demo(
     ),
     no_progress: bool = typer.Option(False, "--no-progress", help="Do not show progress bars."),
     no_control: bool = typer.Option(
-        False, "--no-control", help="Skip the control-relevance step (quarter-car loop)."
+        False,
+        "--no-control",
+        help="Skip the control-relevance step (quarter-car loop; with --quick: soft and skyhook, "
+        "no gain fronts).",
     ),
     control_roads: str = typer.Option(
         "C", "--control-roads", help="ISO 8608 classes of the control-relevance step (A..H)."
@@ -323,7 +331,7 @@ def demo(
             workers=workers,
             seed=seed,
             progress=not no_progress,
-            control=control_settings(no_control, control_roads, control_duration),
+            control=control_settings(no_control, control_roads, control_duration, quick),
         )
     finally:
         compiled.finish_ahead(cancel=True)  # no-op: the study waited for it

@@ -71,6 +71,10 @@ STUDY_GRIDS: dict[str, tuple[float, ...]] = {
 STUDY_LEVELS: tuple[float, ...] = (0.0, 0.05, 0.2, 0.5, 1.0)
 
 
+#: Controllers of the control step of ``mrdamper demo --quick`` (no gain fronts either).
+QUICK_CONTROLLERS = ("soft", "skyhook")
+
+
 @dataclass(frozen=True)
 class ControlSettings:
     """What the control-relevance step runs.
