@@ -8,6 +8,7 @@ Usage::
     python benchmarks/bench_demo.py              # quick x {1, 2} workers, full x {1, 2} workers
     python benchmarks/bench_demo.py --no-full    # quick only
     python benchmarks/bench_demo.py --full-workers 2   # full demo with 2 workers only
+    python benchmarks/bench_demo.py --quick --models lpv,sp1   # only these models (a smoke run)
 
 Each case runs the real command line in a fresh process (imports and compiled-kernel cache loads
 included) into a temporary folder, after one untimed warm-up of ``--quick`` that fills the numba
@@ -33,21 +34,17 @@ import pandas as pd
 TARGETS = {"quick": 60.0, "full": 180.0}
 
 
-def run(mode: str, workers: int, root: Path) -> dict[str, object]:
+def _demo(out: Path, workers: int, quick: bool, models: str | None) -> list[str]:
+    """The ``mrdamper demo`` command line of one case."""
+    cmd = [sys.executable, "-m", "mrdamper", "demo", "--out", str(out)]
+    cmd += ["--workers", str(workers), "--no-progress"]
+    cmd += ["--quick"] if quick else []
+    return cmd + (["--models", models] if models else [])
+
+
+def run(mode: str, workers: int, root: Path, models: str | None = None) -> dict[str, object]:
     out = root / f"{mode}-{workers}"
-    cmd = [
-        sys.executable,
-        "-m",
-        "mrdamper",
-        "demo",
-        "--out",
-        str(out),
-        "--workers",
-        str(workers),
-        "--no-progress",
-    ]
-    if mode == "quick":
-        cmd.append("--quick")
+    cmd = _demo(out, workers, mode == "quick", models)
     env = dict(os.environ, MPLBACKEND="Agg")
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
@@ -99,30 +96,24 @@ def main() -> None:
         default=[1, 2],
         help="worker counts for the quick demo",
     )
+    ap.add_argument(
+        "--models",
+        default=None,
+        help="comma-separated model kinds passed to every demo (default: all installed)",
+    )
     args = ap.parse_args()
     print(f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs")
     with tempfile.TemporaryDirectory(prefix="bench-demo-") as tmp:
         root = Path(tmp)
         subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "mrdamper",
-                "demo",
-                "--quick",
-                "--out",
-                str(root / "warm"),
-                "--no-progress",
-                "--workers",
-                "1",
-            ],
+            _demo(root / "warm", 1, True, args.models),
             capture_output=True,
             env=dict(os.environ, MPLBACKEND="Agg"),
             check=True,
         )
-        rows = [run("quick", w, root) for w in args.quick_workers]
+        rows = [run("quick", w, root, args.models) for w in args.quick_workers]
         if not (args.no_full or args.quick):
-            rows += [run("full", w, root) for w in args.full_workers]
+            rows += [run("full", w, root, args.models) for w in args.full_workers]
     df = pd.DataFrame(rows)
     for mode in df["mode"].unique():
         sel = df["mode"] == mode

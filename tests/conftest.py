@@ -55,3 +55,19 @@ def quiroz_filtered_dir(shared_data: Path) -> Path:
 def dyke_csv(shared_data: Path) -> Path:
     """The Dyke (1996) random-excitation record with command voltage."""
     return _require(shared_data / "dyke1996_nees" / "ranran_50.csv")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Start the longest tests first: the documentation blocks, then the modules holding ``slow``
+    tests (each module kept together, so its module-scoped fixtures are built once per worker),
+    then the rest, each group in collection order. The test workers steal work from each other
+    (``--dist worksteal``), so what is left at the end is short tests and both cores stay busy."""
+    slow_modules = {item.module for item in items if item.get_closest_marker("slow")}
+
+    def group(item: pytest.Item) -> int:
+        if getattr(item, "originalname", "") == "test_page_blocks_run":
+            return 0
+        return 1 if getattr(item, "module", None) in slow_modules else 2
+
+    order = {id(item): (group(item), k) for k, item in enumerate(items)}
+    items.sort(key=lambda item: order[id(item)])

@@ -2,7 +2,11 @@
 
 How the blocks run:
 
-* one test per page; the page's blocks run in order, then once more in the same folder every
+* one test per page, or per folder of a page: a line ``<!-- doc-test: folder NAME -->`` between
+  blocks puts the blocks after it (up to the next such line) in folder NAME; the blocks before
+  the first such line are in folder ``main``. The blocks of one folder use no file that a block
+  of another folder wrote, and each folder runs as its own test (so the test workers share a
+  long page). A folder's blocks run in page order, then once more in the same folder every
   block that wrote or changed a file there on its first run (every documented block must run
   twice in a row, and a second run finds the first one's outputs; a block that wrote nothing
   meets on its second run the folder it met on its first, so it is not run again), in one fresh
@@ -45,6 +49,7 @@ BLOCK_TIMEOUT_S = 600
 _FENCE = re.compile(r"^\s*```\s*([A-Za-z0-9_+-]*)\s*$")
 _OUTPUT = re.compile(r"^\s*<!--\s*doc-test:\s*output\s*-->\s*$")
 _SKIP = re.compile(r'^\s*<!--\s*doc-test:\s*skip\s+"([^"]+)"\s*-->\s*$')
+_FOLDER = re.compile(r"^\s*<!--\s*doc-test:\s*folder\s+([A-Za-z0-9_.-]+)\s*-->\s*$")
 _PIP = re.compile(r"^\s*(?:python3?\s+-m\s+)?pip3?\s+install\b[^&]*?(?:&&\s*(?P<rest>.*))?$")
 
 
@@ -59,6 +64,8 @@ class Block:
     skip: str | None
     #: The output the page shows for this block (a marked ``text`` block after it), or None.
     expected: str | None = None
+    #: The folder of the page the block runs in (named by the last ``folder`` line before it).
+    folder: str = "main"
 
 
 def doc_pages() -> list[Path]:
@@ -72,10 +79,13 @@ def blocks_of(page: Path) -> list[Block]:
     lines = page.read_text(encoding="utf-8").splitlines()
     out: list[Block] = []
     k = 0
-    rel = str(page.relative_to(REPO_ROOT))
+    folder = "main"
+    rel = str(page.relative_to(REPO_ROOT)) if page.is_relative_to(REPO_ROOT) else page.name
     while k < len(lines):
         m = _FENCE.match(lines[k])
         if not m:
+            named = _FOLDER.match(lines[k])
+            folder = named.group(1) if named else folder
             k += 1
             continue
         start, lang = k, m.group(1).lower()
@@ -90,8 +100,17 @@ def blocks_of(page: Path) -> list[Block]:
         if lang in ("bash", "python"):
             prev = _SKIP.match(lines[start - 1]) if start > 0 else None
             code = textwrap.dedent("\n".join(body)) + "\n"  # blocks indented inside list items
-            out.append(Block(rel, start + 1, lang, code, prev.group(1) if prev else None))
+            skip = prev.group(1) if prev else None
+            out.append(Block(rel, start + 1, lang, code, skip, folder=folder))
     return out
+
+
+def folders_of(page: Path) -> dict[str, list[Block]]:
+    """The page's blocks by folder, each list in page order (folders without blocks left out)."""
+    groups: dict[str, list[Block]] = {}
+    for b in blocks_of(page):
+        groups.setdefault(b.folder, []).append(b)
+    return groups
 
 
 def as_run(block: Block) -> str:
@@ -119,6 +138,13 @@ def _env() -> dict[str, str]:
 
 #: Pages with at least one bash or python block (the API reference pages have none).
 PAGES = [p for p in doc_pages() if blocks_of(p)]
+#: (page, blocks) of every folder of every page.
+PARTS = [(p, blocks) for p in PAGES for blocks in folders_of(p).values()]
+#: Test ids: the page, followed by the folder's name on pages with several folders.
+PART_IDS = [
+    blocks[0].page if len(folders_of(p)) == 1 else f"{blocks[0].page}:{blocks[0].folder}"
+    for p, blocks in PARTS
+]
 
 
 def test_the_convention_is_parsed() -> None:
@@ -135,9 +161,8 @@ def test_the_convention_is_parsed() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("page", PAGES, ids=[str(p.relative_to(REPO_ROOT)) for p in PAGES])
-def test_page_blocks_run(page: Path, tmp_path: Path) -> None:
-    blocks = blocks_of(page)
+@pytest.mark.parametrize(("page", "blocks"), PARTS, ids=PART_IDS)
+def test_page_blocks_run(page: Path, blocks: list[Block], tmp_path: Path) -> None:
     runnable = [b for b in blocks if b.skip is None]
     if not runnable:
         pytest.skip("; ".join(f"line {b.line}: {b.skip}" for b in blocks))
@@ -225,3 +250,17 @@ def test_a_block_that_writes_runs_again(tmp_path: Path) -> None:
     assert _run_block(writer, 1, tmp_path, env)
     with pytest.raises(pytest.fail.Exception, match="run 2 of 2"):
         _run_block(writer, 2, tmp_path, env)  # refuses to overwrite its own output
+
+
+def test_a_page_splits_into_folders(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    fence = "```"
+    page.write_text(
+        f"{fence}bash\nls\n{fence}\n<!-- doc-test: folder b -->\n"
+        f"{fence}python\nprint(1)\n{fence}\n<!-- doc-test: folder main -->\n"
+        f"{fence}bash\npwd\n{fence}\n",
+        encoding="utf-8",
+    )
+    got = {name: [b.line for b in blocks] for name, blocks in folders_of(page).items()}
+    assert got == {"main": [1, 9], "b": [5]}
+    assert len(PARTS) > len(PAGES)  # the long pages are split
