@@ -410,11 +410,12 @@ class P15Estimator(Estimator):
         Use every ``segment_stride``-th segment in the shooting stage (1: all).
     shoot_nfev, max_nfev : int
         Evaluation budgets of the shooting stage and of the free-run stage (0 skips a stage).
-    shoot_nfev_max : int
+    shoot_nfev_max : int, optional
         Largest number of shooting evaluations in all: a shooting stage stopped by its budget
         ``shoot_nfev`` while the budget still cut the cost by more than 1 % continues with
-        another budget, up to this number (default 120; ``shoot_nfev`` turns the continuation
-        off). A stage that converges within its first budget is not affected.
+        another budget, up to this number (default None: 4 x ``shoot_nfev``, 120 with the
+        defaults; ``shoot_nfev`` turns the continuation off). A stage that converges within its
+        first budget is not affected.
     max_samples : int
         Largest number of residual samples per evaluation (every k-th sample).
     jacobian : {"sensitivity", "2-point", "3-point"}
@@ -447,7 +448,7 @@ class P15Estimator(Estimator):
     segment_stride: int = 1
     shoot_nfev: int = 30
     max_nfev: int = 20
-    shoot_nfev_max: int = 120
+    shoot_nfev_max: int | None = None
     max_samples: int = 20000
     jacobian: Literal["sensitivity", "2-point", "3-point"] = "sensitivity"
     step_tolerance: float = 1e-4
@@ -525,7 +526,9 @@ class P15Estimator(Estimator):
                 segment_stride=self.segment_stride,
                 shoot_nfev=self.shoot_nfev,
                 max_nfev=self.max_nfev,
-                shoot_nfev_max=self.shoot_nfev_max,
+                shoot_nfev_max=(
+                    4 * self.shoot_nfev if self.shoot_nfev_max is None else self.shoot_nfev_max
+                ),
                 max_samples=self.max_samples,
                 jacobian=self.jacobian,
                 bound=bound,
@@ -613,12 +616,13 @@ class P15Estimator(Estimator):
         check_int("filter_order", self.filter_order, 1, 8)
         for name, low in (
             ("shoot_nfev", 0),
-            ("shoot_nfev_max", 0),
             ("max_nfev", 0),
             ("max_samples", 100),
             ("segment_stride", 1),
         ):
             check_int(name, getattr(self, name), low)
+        if self.shoot_nfev_max is not None:
+            check_int("shoot_nfev_max", self.shoot_nfev_max, 0)
         for name in ("max_step", "segment", "step_tolerance"):
             check_number(name, getattr(self, name))
 
