@@ -214,15 +214,14 @@ def quartercar(
         "mean_input",
     ]
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    from mrdamper.control.fidelity import HF_FACTOR, HF_SHARE, oscillation
+    from mrdamper.control.fidelity import HF_SHARE, oscillation, oscillation_note
 
     for (road, ctrl), res in cmp.results.items():
         share, peak = oscillation(res)
         if road.startswith("ISO") and share > HF_SHARE:
             typer.echo(
-                f"warning: {ctrl}, {road}: sampled-loop oscillation: {100 * share:.0f} % of the "
-                f"body acceleration power above {HF_FACTOR * qc.wheel_hop_frequency():.0f} Hz, "
-                f"peak at {peak:.1f} Hz: the metrics are the model's sampled loop, not the damper's"
+                f"warning: {ctrl}, {road}: {oscillation_note(share, peak, qc)}: the metrics are "
+                "the model's sampled loop, not the damper's"
             )
     typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
 

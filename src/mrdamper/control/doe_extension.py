@@ -27,7 +27,7 @@ from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
-from mrdamper.rig.doe import current_range, record_seeds
+from mrdamper.rig.doe import current_range, record_seeds, resolve_rig
 from mrdamper.rig.doe_control import CONTROL_EXTENSION, ControlRow, replay_loop_motion
 from mrdamper.rig.virtual_rig import VirtualRig
 from mrdamper.signals.common import check_positive, child_seeds
@@ -99,10 +99,7 @@ def control_extension(
         ``pattern``, ``displacement`` (road, controller, loop model), ``duration``, ``seed``.
     """
     scale = check_positive("scale", scale, "-")
-    if rig is None:
-        rig = VirtualRig(damper=damper, fs=check_positive("fs", fs, "Hz"))
-    elif damper is not None:
-        raise DataValidationError("damper", "give either damper or rig, not both")
+    rig = resolve_rig(rig, damper, fs)
     loop_model = rig.model if model is None else model
     if str(getattr(loop_model, "input", rig.model.input)) != str(rig.model.input):
         raise DataValidationError(

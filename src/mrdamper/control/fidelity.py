@@ -43,6 +43,7 @@ __all__ = [
     "closed_loop_fidelity",
     "loop_metrics",
     "oscillation",
+    "oscillation_note",
 ]
 
 #: Metric name -> unit (``mean_current`` is in the model's input unit: [A], or [V]).
@@ -105,6 +106,15 @@ def oscillation(r: QuarterCarResult) -> tuple[float, float]:
 class NotConvergedError(MrDamperError):
     """The halving check refused a run: the plant step is not converged (the message gives the
     figure and the metric)."""
+
+
+def oscillation_note(share: float, peak: float, car: QuarterCar) -> str:
+    """The one-line description of a sampled-loop oscillation (:func:`oscillation`'s ``share``
+    [-] and ``peak`` [Hz] on ``car``)."""
+    return (
+        f"sampled-loop oscillation: {100 * share:.0f} % of the body acceleration power above "
+        f"{HF_FACTOR * car.wheel_hop_frequency():.0f} Hz, peak at {peak:.1f} Hz"
+    )
 
 
 def checked_run(
@@ -258,6 +268,7 @@ def closed_loop_fidelity(
     runs: list[dict[str, Any]] = []
     notes: list[str] = []
     fs = default_rate(model)
+    discrete = getattr(model.step(), "dt", None) is not None  # an LPV, LTI or NARX step
     for cls in road_classes:
         for sp in speeds:
             road = iso_road(cls, speed=float(sp), duration=duration, fs=fs, seed=seed)
@@ -300,17 +311,13 @@ def closed_loop_fidelity(
                         info.update({f"excursion_{k}": v for k, v in exc.items()})
                     runs.append(info)
                     if share > HF_SHARE:
-                        notes.append(
-                            f"{where}: sampled-loop oscillation: {100 * share:.0f} % of the body "
-                            f"acceleration power above {HF_FACTOR * car.wheel_hop_frequency():.0f}"
-                            f" Hz, peak at {f_hf:.1f} Hz"
-                            + (
+                        advice = ""
+                        if side == "predicted" and discrete:
+                            advice = (
                                 f"; a discrete-time model: identify it at a higher rate (now "
                                 f"{float(model.fs):g} Hz; LPV setting model_fs)"
-                                if side == "predicted" and getattr(model.step(), "dt", None)
-                                else ""
                             )
-                        )
+                        notes.append(f"{where}: {oscillation_note(share, f_hf, car)}{advice}")
                     if side == "achieved" and exc is not None and max(exc.values()) > 1.0:
                         notes.append(
                             f"{where}: the loop leaves the {model.kind} model's training envelope:"

@@ -249,6 +249,17 @@ def make_record(
     return rig.run(x_cmd, i_cmd, seed=s_rig, name=name, metadata=meta, seed_label=int(record_seed))
 
 
+def resolve_rig(rig: VirtualRig | None, damper: FittedModel | None, fs: float) -> VirtualRig:
+    """The rig a DoE generator runs on: ``rig`` itself, or a new rig with ``damper`` (default:
+    the shipped reference damper) sampled at ``fs`` [Hz]; giving both ``rig`` and ``damper`` is
+    refused in one line."""
+    if rig is None:
+        return VirtualRig(damper=damper, fs=check_positive("fs", fs, "Hz"))
+    if damper is not None:
+        raise DataValidationError("damper", "give either damper or rig, not both")
+    return rig
+
+
 def table_ii(
     seed: int = 0,
     scale: float = 1.0,
@@ -297,10 +308,7 @@ def table_ii(
     (61, 'exp1_rep01')
     """
     scale = _check_scale(scale, TABLE_II)
-    if rig is None:
-        rig = VirtualRig(damper=damper, fs=check_positive("fs", fs, "Hz"))
-    elif damper is not None:
-        raise DataValidationError("damper", "give either damper or rig, not both")
+    rig = resolve_rig(rig, damper, fs)
     rows = [(spec, r) for spec in TABLE_II for r in range(1, spec.replicates + 1)]
     wanted = None if experiments is None else {int(k) for k in experiments}
     if wanted is not None and not wanted <= {s.experiment for s in TABLE_II}:
