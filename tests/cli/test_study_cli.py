@@ -99,6 +99,8 @@ def test_study_refuses_non_empty_out_before_computing(tmp_path, capsys) -> None:
             ["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"],
             "give either --workers or --scheduler",
         ),
+        (["--control-plant", "rig:nope"], "--control-plant: expected rig, rig:NAME"),
+        (["--control-plant", "missing.json"], "or a model file, got 'missing.json'"),
     ],
 )
 def test_study_bad_options_one_line_errors(tmp_path, capsys, extra, message) -> None:

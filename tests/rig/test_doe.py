@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from mrdamper._io import MARK_NAME
+from mrdamper.data.readers.manifest import OPTIONAL_COLUMNS
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.rig import VirtualRig
 from mrdamper.rig.doe import TABLE_II, constant_current_sweep, make_record, table_ii
@@ -143,10 +144,13 @@ def test_write_records_byte_identical_and_no_overwrite(doe, tmp_path: Path) -> N
     for name in files:
         assert (a / name).read_bytes() == (b / name).read_bytes()
     lines = (a / "manifest.csv").read_text().splitlines()
-    assert lines[0].split(",") == list(MANIFEST_COLUMNS)
+    columns = [*MANIFEST_COLUMNS, *OPTIONAL_COLUMNS]
+    assert lines[0].split(",") == columns
     assert len(lines) == 1 + len(sub)
-    first = dict(zip(MANIFEST_COLUMNS, lines[1].split(",")))
+    first = dict(zip(columns, lines[1].split(",")))
     assert first["file"] == "exp3_rep01.csv" and int(first["seed"]) == sub[0].metadata["seed"]
+    # the damper behind the records: its kind, and "custom" for a damper that is not shipped
+    assert (first["damper"], first["reference_damper"]) == (sub[0].metadata["damper"], "custom")
     back = read_doe(a)
     assert back.names == sub.names
     for e, ref in zip(back, sub):
@@ -154,7 +158,15 @@ def test_write_records_byte_identical_and_no_overwrite(doe, tmp_path: Path) -> N
             np.testing.assert_array_equal(
                 getattr(e, ch), getattr(ref, ch)
             )  # exact float round trip
-        for key in ("experiment", "replicate", "pattern", "displacement", "seed", "source"):
+        for key in (
+            "experiment",
+            "replicate",
+            "pattern",
+            "displacement",
+            "seed",
+            "source",
+            *OPTIONAL_COLUMNS,
+        ):
             assert e.metadata[key] == ref.metadata[key]
     with pytest.raises(OutputExistsError, match="not empty"):
         write_records(sub, a)
@@ -196,3 +208,15 @@ def test_read_doe_reports_problems(doe, tmp_path: Path) -> None:
     (tmp_path / "d" / "exp3_rep02.csv").unlink()
     with pytest.raises(FileNotFoundError, match="exp3_rep02"):
         read_doe(tmp_path / "d")
+
+
+def test_a_manifest_without_the_damper_columns_still_reads(doe, tmp_path: Path) -> None:
+    sub = doe.filter(experiment=3)[:2]
+    write_records(sub, tmp_path / "d")
+    manifest = tmp_path / "d" / "manifest.csv"
+    rows = [line.split(",") for line in manifest.read_text().splitlines()]
+    keep = len(MANIFEST_COLUMNS)
+    manifest.write_text("\n".join(",".join(r[:keep]) for r in rows) + "\n")
+    back = read_doe(tmp_path / "d")
+    assert back.names == sub.names
+    assert all("reference_damper" not in e.metadata for e in back)

@@ -186,6 +186,13 @@ def study(
     control_duration: float = typer.Option(
         3.0, "--control-duration", help="Road length of the control-relevance step [s] (>= 2)."
     ),
+    control_plant: str = typer.Option(
+        None,
+        "--control-plant",
+        help="The damper behind virtual-rig records, as the truth of the control-relevance step: "
+        "rig, rig:NAME or a model file (default: the damper the records name; unused on "
+        "measured data).",
+    ),
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Fit and score every model of a protocol on DATA.
@@ -200,9 +207,11 @@ def study(
         from mrdamper.study.executor import check_scheduler_address
 
         check_scheduler_address(scheduler)
-    _check_out(out, force, [data])
+    plant_inputs = [Path(control_plant)] if control_plant and Path(control_plant).exists() else []
+    _check_out(out, force, [data, *plant_inputs])
     _headless()
     kinds = _models(models)
+    control = control_settings(no_control, control_roads, control_duration, plant=control_plant)
     records = study_records(data, pattern, load=load, **(read_kw or {}))  # type: ignore[arg-type]
     proto, why = choose_protocol(records, protocol)
     typer.echo(f"{len(records)} records from {data}; {why}", err=True)
@@ -214,17 +223,28 @@ def study(
         scheduler=scheduler,
         seed=seed,
         progress=not no_progress,
-        control=control_settings(no_control, control_roads, control_duration),
+        control=control,
     )
     write_or_fail(res, out, force)
 
 
-def control_settings(off: bool, roads: str, duration: float, quick: bool = False) -> Any:
+def control_settings(
+    off: bool, roads: str, duration: float, quick: bool = False, plant: str | None = None
+) -> Any:
     """The :class:`~mrdamper.study.control_step.ControlSettings` of the command's options (None
     with ``--no-control``; with ``quick``, the demo's ``--quick``, passive soft and skyhook only
-    and no gain fronts)."""
+    and no gain fronts; ``plant``, the study's ``--control-plant``, checked here)."""
+    from mrdamper.rig.reference import REFERENCE_DAMPERS
     from mrdamper.study.control_step import QUICK_CONTROLLERS, ControlSettings
 
+    if plant is not None:
+        name = plant[4:] if plant.startswith("rig:") else None
+        if not (plant == "rig" or name in REFERENCE_DAMPERS or Path(plant).is_file()):
+            raise DataValidationError(
+                "--control-plant",
+                f"expected rig, rig:NAME (NAME one of {list(REFERENCE_DAMPERS)}) or a model file, "
+                f"got {plant!r}",
+            )
     if off:
         return None
     classes = tuple(r.strip().upper() for r in roads.split(",") if r.strip())
@@ -235,9 +255,13 @@ def control_settings(off: bool, roads: str, duration: float, quick: bool = False
         )
     if quick:
         return ControlSettings(
-            road_classes=classes, duration=duration, controllers=QUICK_CONTROLLERS, fronts=False
+            road_classes=classes,
+            duration=duration,
+            controllers=QUICK_CONTROLLERS,
+            fronts=False,
+            plant=plant,
         )
-    return ControlSettings(road_classes=classes, duration=duration)
+    return ControlSettings(road_classes=classes, duration=duration, plant=plant)
 
 
 def demo(

@@ -14,6 +14,7 @@ from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.readers.manifest import (
     MANIFEST_COLUMNS,
     MANIFEST_NAME,
+    OPTIONAL_COLUMNS,
     is_doe_folder,
     manifest_rows,
 )
@@ -96,7 +97,8 @@ def write_records(
     def build(tmp: Path) -> None:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(MANIFEST_COLUMNS)
+        columns = (*MANIFEST_COLUMNS, *OPTIONAL_COLUMNS)
+        w.writerow(columns)
         for rec in records:
             file = f"{rec.name}.{format}"
             if format == "parquet":
@@ -109,7 +111,7 @@ def write_records(
                 progress(tmp / file)
             meta = dict(rec.metadata)
             row = {**meta, "name": rec.name, "samples": rec.n, "file": file}
-            w.writerow([_cell(row.get(c)) for c in MANIFEST_COLUMNS])
+            w.writerow([_cell(row.get(c)) for c in columns])
         atomic_write_text(tmp / MANIFEST_NAME, buf.getvalue())
 
     # built in a private sibling folder, then moved into place (with force: merged into the

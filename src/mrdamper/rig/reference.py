@@ -8,6 +8,7 @@ were calibrated is described in ``docs/calibration.md``.
 
 from __future__ import annotations
 
+import dataclasses
 from importlib import resources
 from typing import Any
 
@@ -16,10 +17,13 @@ from mrdamper.models.base import FittedModel
 from mrdamper.models.registry import load_model
 
 __all__ = [
+    "CUSTOM_DAMPER",
     "DEFAULT_REFERENCE",
     "REFERENCE_DAMPERS",
+    "REFERENCE_KEY",
     "available_reference_dampers",
     "reference_damper",
+    "reference_name",
     "resolve_damper",
 ]
 
@@ -28,6 +32,12 @@ REFERENCE_DAMPERS: tuple[str, ...] = ("quiroz2022", "spencer1997")
 
 #: The damper the virtual rig uses when none is given.
 DEFAULT_REFERENCE = "quiroz2022"
+
+#: Provenance key of a loaded reference damper, and metadata key of the records the rig makes with
+#: it: the reference damper's name.
+REFERENCE_KEY = "reference_damper"
+#: The ``reference_damper`` metadata of records made with a damper that is not a shipped one.
+CUSTOM_DAMPER = "custom"
 
 
 def _parameters_dir() -> Any:  # importlib Traversable
@@ -78,7 +88,15 @@ def reference_damper(name: str = DEFAULT_REFERENCE) -> FittedModel:
             f"(installed: {available_reference_dampers()})"
         )
     with resources.as_file(res) as path:
-        return load_model(path)
+        model = load_model(path)
+    # the name travels with the model, so records of the rig can say which damper made them
+    return dataclasses.replace(model, provenance={**model.provenance, REFERENCE_KEY: name})
+
+
+def reference_name(model: Any) -> str | None:
+    """The name of the shipped reference damper ``model`` was loaded as, else None."""
+    name = dict(getattr(model, "provenance", None) or {}).get(REFERENCE_KEY)
+    return str(name) if name in REFERENCE_DAMPERS else None
 
 
 def resolve_damper(spec: str | None) -> FittedModel | None:

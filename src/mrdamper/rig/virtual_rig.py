@@ -177,7 +177,9 @@ class VirtualRig:
             Record name.
         metadata : mapping, optional
             Extra metadata; the rig adds ``source="virtual rig"``, ``seed``, ``damper`` (kind),
-            ``fs`` and the drawn variation (``force_gain``, ``force_drift``, ``force_offset``).
+            ``reference_damper`` (the name of the shipped reference damper, or ``"custom"`` for any
+            other damper), ``fs`` and the drawn variation (``force_gain``, ``force_drift``,
+            ``force_offset``).
         seed_label : int or str, optional
             Value stored as metadata ``seed`` (default: ``seed`` itself, or a description of it for
             a SeedSequence). The DoE stores the record seed the run's SeedSequence derives from.
@@ -237,6 +239,9 @@ class VirtualRig:
             fs=fs,
             **drawn.to_metadata(),
         )
+        from mrdamper.rig.reference import CUSTOM_DAMPER, REFERENCE_KEY, reference_name
+
+        meta[REFERENCE_KEY] = reference_name(self.model) or CUSTOM_DAMPER
         v_meas = _velocity(x_meas, fs, self.velocity_cutoff)
         note = (
             f"v = central difference of x after zero-phase Butterworth low-pass (order "

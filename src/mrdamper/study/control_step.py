@@ -155,10 +155,15 @@ def truth_damper(records: Iterable[Any], plant: str | None = None) -> str | None
 
     Every record must come from the virtual rig (metadata ``source``) with one damper kind
     (metadata ``damper``). The truth is then ``plant`` when given (``"rig:NAME"`` or a model
-    file, :func:`~mrdamper.control.closed_loop.resolve_plant`), else the rig's default
-    reference damper (``"rig"``) when the records' damper is a Spencer model (the records do
-    not name which reference damper generated them: the default is assumed); otherwise None.
+    file, :func:`~mrdamper.control.closed_loop.resolve_plant`); else the shipped reference damper
+    the records name (metadata ``reference_damper``, written by the rig and kept in the manifest
+    of ``mrdamper rig doe``): ``"rig"`` for the default one, ``"rig:NAME"`` for another; None when
+    they name another damper (``"custom"``) or disagree. Records that name none (written before
+    the rig named its damper) are taken to be the default reference damper's when their damper is
+    a Spencer model.
     """
+    from mrdamper.rig.reference import DEFAULT_REFERENCE, REFERENCE_DAMPERS, REFERENCE_KEY
+
     recs = list(records)
     if not recs or any(e.metadata.get("source") != "virtual rig" for e in recs):
         return None
@@ -167,7 +172,13 @@ def truth_damper(records: Iterable[Any], plant: str | None = None) -> str | None
         return None
     if plant is not None:
         return plant
-    return "rig" if kinds == {"spencer"} else None
+    names = {str(e.metadata.get(REFERENCE_KEY, "")) for e in recs}
+    if names == {""}:
+        return "rig" if kinds == {"spencer"} else None
+    if len(names) != 1 or not names <= set(REFERENCE_DAMPERS):
+        return None
+    (name,) = names
+    return "rig" if name == DEFAULT_REFERENCE else f"rig:{name}"
 
 
 def _reason(exc: BaseException) -> str:

@@ -22,6 +22,7 @@ The choice and its reason come back as one line, which ``mrdamper study`` prints
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 from pathlib import Path
 
@@ -89,12 +90,14 @@ def default_protocol(data: Records) -> tuple[Protocol, str]:
     if len(data) == 0:
         raise SchemaError("data: no records to study")
     if all("experiment" in e.metadata for e in data):
-        proto = doe_protocol()
+        # the design's input is the records' channel (a voltage-driven damper's rig writes
+        # 'voltage')
+        proto = dataclasses.replace(doe_protocol(), input=_input_of(data))
         return (
             proto,
             (
                 f"protocol {proto.name!r} (records carry 'experiment' metadata: Table II design "
-                "of experiments)"
+                f"of experiments; input {proto.input!r})"
             ),
         )
     if all("condition" in e.metadata for e in data):

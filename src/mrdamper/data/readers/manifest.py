@@ -15,7 +15,13 @@ from typing import Any
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["MANIFEST_COLUMNS", "MANIFEST_NAME", "is_doe_folder", "manifest_rows"]
+__all__ = [
+    "MANIFEST_COLUMNS",
+    "MANIFEST_NAME",
+    "OPTIONAL_COLUMNS",
+    "is_doe_folder",
+    "manifest_rows",
+]
 
 #: File name of the manifest written beside the records.
 MANIFEST_NAME = "manifest.csv"
@@ -32,6 +38,11 @@ MANIFEST_COLUMNS: tuple[str, ...] = (
     "seed",
     "file",
 )
+
+#: Columns a manifest may have beyond :data:`MANIFEST_COLUMNS` (older manifests lack them): the
+#: damper's model kind and which damper it was (a shipped reference damper's name, or
+#: ``"custom"``), so a study of the folder knows the truth behind the records.
+OPTIONAL_COLUMNS: tuple[str, ...] = ("damper", "reference_damper")
 
 _MANIFEST_TYPES: dict[str, type] = {
     "experiment": int,
@@ -81,7 +92,8 @@ def manifest_rows(folder: str | os.PathLike[str]) -> list[tuple[Path, str, dict[
     list of (Path, str, dict, int)
         ``(file, record name, metadata, samples)`` in manifest order; the metadata holds
         ``experiment``, ``replicate``, ``pattern``, ``displacement``, ``duration`` [s],
-        ``max_frequency`` [Hz], ``seed`` and ``source="virtual rig"``.
+        ``max_frequency`` [Hz], ``seed``, ``source="virtual rig"`` and, when the manifest has
+        them (:data:`OPTIONAL_COLUMNS`), ``damper`` and ``reference_damper``.
 
     Raises
     ------
@@ -109,6 +121,9 @@ def manifest_rows(folder: str | os.PathLike[str]) -> list[tuple[Path, str, dict[
                 raise DataValidationError(
                     col, f"{manifest} row {k + 1}: {row[col]!r} is not a valid {typ.__name__}"
                 ) from None
+        for col in OPTIONAL_COLUMNS:
+            if row.get(col):
+                meta[col] = row[col]
         samples = int(meta.pop("samples"))
         path = root / row["file"]
         if not path.is_file():
