@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from mrdamper.data import Experiment
 from mrdamper.rig import VirtualRig
@@ -64,3 +65,29 @@ def test_a_voltage_driven_rig_design_is_studied_on_its_voltage() -> None:
     proto, why = default_protocol(data)
     assert proto.name == "doe" and proto.input == "voltage" and "input 'voltage'" in why
     assert truth_damper(data) == "rig:spencer1997"
+
+
+def test_a_refused_loop_run_says_why_in_its_rows(monkeypatch: pytest.MonkeyPatch) -> None:
+    from mrdamper.control import fidelity
+    from mrdamper.models.semiphenomenological import SP1Estimator
+    from mrdamper.rig.doe import table_ii
+    from mrdamper.study.control_step import ControlSettings, model_in_loop
+
+    data = table_ii(seed=0, scale=0.07, experiments=[1, 6])
+    model = SP1Estimator().fit(data)
+    real = fidelity.checked_run
+    calls = {"n": 0}
+
+    def refuse_the_first(run, **kw):  # type: ignore[no-untyped-def]
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise fidelity.NotConvergedError("halving still moves a_w by 9 %")
+        return real(run, **kw)
+
+    monkeypatch.setattr(fidelity, "checked_run", refuse_the_first)
+    settings = ControlSettings(duration=2.0, controllers=("soft",), fronts=False)
+    rows, _, _ = model_in_loop("sp1", "sp1", model, "rig", settings)
+    assert rows and all(np.isnan(r["predicted"]) for r in rows)
+    why = "predicted run refused: halving still moves a_w by 9 %"
+    assert {r.get("reason") for r in rows} == {why}
+    assert all(np.isfinite(r["achieved"]) for r in rows if r["metric"] != "rms_tracking")

@@ -277,8 +277,18 @@ def model_in_loop(
         except Exception as exc:  # noqa: BLE001 - the row keeps the one-line reason
             rows.append(_failed_row(label, kind, ctrl, _reason(exc)))
             continue
+        refused: dict[tuple[str, float], str] = {}
+        for run in res.runs:  # one controller: a road and speed name the run
+            if "refused" in run:
+                key = (run["road"], run["speed_m_s"])
+                why = f"{run['side']} run refused: {run['refused']}"
+                refused[key] = f"{refused[key]}; {why}" if key in refused else why
         for r in res.table().to_dict("records"):
-            rows.append({"model": label, "kind": kind, "unit": res.unit(r["metric"]), **r})
+            row = {"model": label, "kind": kind, "unit": res.unit(r["metric"]), **r}
+            said = refused.get((r["road"], r["speed_m_s"]))
+            if said is not None:  # its NaN cells say why
+                row["reason"] = said
+            rows.append(row)
         notes += [f"{label}: {n}" for n in res.notes if "carries no training envelope" not in n]
     fronts: FrontsResult | str | None = None
     if plant is not None and s.fronts and not isinstance(model, InvertibleModel):
