@@ -427,6 +427,9 @@ class Estimator(abc.ABC):
     #: Per-fit options that hold one value per training record (they follow a long record into
     #: its segments, :meth:`_training_set`).
     per_record_options: ClassVar[tuple[str, ...]] = ()
+    #: Per-fit options used only by the settings choice (:meth:`_choose_settings`): not passed to
+    #: the fit of the chosen estimator, and refused when no setting is left open.
+    choice_options: ClassVar[tuple[str, ...]] = ()
     #: Old setting name -> current name. Old names are still accepted, with a note.
     renamed_settings: ClassVar[Mapping[str, str]] = {}
 
@@ -485,11 +488,18 @@ class Estimator(abc.ABC):
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()
-        if self._open_settings():  # chosen on the training records, before the drive lag
+        open_settings = self._open_settings()
+        for key in self.choice_options:
+            if options.get(key) is not None and not open_settings:
+                raise DataValidationError(
+                    key, f"{self.kind}: no setting is left open to choose, so {key} has no use"
+                )
+        if open_settings:  # chosen on the training records, before the drive lag
             report("preparing the training data")
             records, options, segments = self._training_set(data, options)
             choice = self._choose_settings(records, options)
-            model = choice.estimator.fit(records, **options)
+            fit_options = {k: v for k, v in options.items() if k not in self.choice_options}
+            model = choice.estimator.fit(records, **fit_options)
             provenance = choice.provenance(dict(model.provenance))
             if segments:
                 provenance["segments"] = segments
