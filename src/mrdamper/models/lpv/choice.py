@@ -15,10 +15,11 @@ estimator's ``choose_on``:
     ``current``, else by the constant level of the electrical input, else as one group of records
     with a varying input), in the order given, is held out: every level keeps at least two
     records in the inner-training part, so the zone laws and ``n_rho`` see every level. When that
-    holds out nothing (no level has :data:`HOLD_EVERY` records, e.g. a single record), the last
-    :data:`HELD_OUT_FRACTION` of every record (in time) is held out instead. Records given to the
-    fit as ``choice_records`` replace the split: the candidates are fitted on every training
-    record and scored on those.
+    holds out fewer than :data:`MIN_HELD_OUT` records (e.g. a single record, or three records of
+    three different excitations: one held-out record would be a third of the variety and a noisy
+    score), the last :data:`HELD_OUT_FRACTION` of every record (in time) is held out instead.
+    Records given to the fit as ``choice_records`` replace the split: the candidates are fitted
+    on every training record and scored on those.
 ``"training"``
     The candidates are fitted and scored on the training records themselves (the behaviour
     before the held-out choice).
@@ -55,6 +56,7 @@ __all__ = [
     "CHOOSE_ON",
     "HELD_OUT_FRACTION",
     "HOLD_EVERY",
+    "MIN_HELD_OUT",
     "InnerSplit",
     "fit_choosing",
     "inner_split",
@@ -64,7 +66,9 @@ __all__ = [
 CHOOSE_ON: tuple[str, ...] = ("held-out", "training")
 #: Every HOLD_EVERY-th record of each electrical level is held out [-].
 HOLD_EVERY = 3
-#: Share of every record (its end, in time) held out when no record can be [-].
+#: Fewest whole records held out; with fewer, the records' ends are held out instead.
+MIN_HELD_OUT = 2
+#: Share of every record (its end, in time) held out when records are not [-].
 HELD_OUT_FRACTION = 0.3
 #: Samples of a part above which the candidates are compared on windows of its records, and the
 #: samples those windows hold (20 s windows).
@@ -97,7 +101,10 @@ class InnerSplit(NamedTuple):
     def record(self) -> dict[str, Any]:
         """The split as the provenance keeps it (what was held out and how)."""
         how = {
-            "records": f"every {HOLD_EVERY}th record of each electrical level (order given)",
+            "records": (
+                f"records {HOLD_EVERY}, {2 * HOLD_EVERY}, ... of each electrical level "
+                "(in the order given)"
+            ),
             "time": f"the last {HELD_OUT_FRACTION:.0%} of every record",
             "given": "records given to the fit (choice_records)",
             "training": "none: scored on the training records",
@@ -138,7 +145,8 @@ def inner_split(
     Returns
     -------
     InnerSplit
-        Whole records held out (``how="records"``) or, when that holds out none, the last
+        Whole records held out (``how="records"``) or, when that holds out fewer than
+        :data:`MIN_HELD_OUT`, the last
         :data:`HELD_OUT_FRACTION` of every record (``how="time"``).
     """
     groups: dict[tuple[str, float], list[int]] = {}
@@ -147,7 +155,7 @@ def inner_split(
     held = sorted(
         k for ks in groups.values() for j, k in enumerate(ks) if j % HOLD_EVERY == HOLD_EVERY - 1
     )
-    if held:
+    if len(held) >= MIN_HELD_OUT:
         kept = [k for k in range(len(exps)) if k not in set(held)]
         return InnerSplit(
             ExperimentSet([exps[k] for k in kept], name="inner training"),
