@@ -327,12 +327,13 @@ def _note(best: tuple[float, float, float], n: int, nfev: int, split: InnerSplit
             f"every candidate diverged in free run on the {split.held_out.name} records; the first "
             f"(stroke = {x_y:g} m, blend = {lam:g}) is returned"
         )
-    where = (
-        "the training records"
-        if split.how == "training"
-        else f"{len(split.held_out)} held-out records ({split.record()['how']}), fitted on "
-        f"{len(split.fit)} inner-training records"
-    )
+    n_out, n_in = len(split.held_out), len(split.fit)
+    where = {
+        "training": "the training records",
+        "records": f"{n_out} held-out records, fitted on the {n_in} others",
+        "time": f"the last {HELD_OUT_FRACTION:.0%} of the {n_out} records, fitted on the rest",
+        "given": f"{n_out} given records (choice_records), fitted on the {n_in} training records",
+    }[split.how]
     return (
         f"stroke = {x_y:g} m and blend = {lam:g} chosen on {where} (lowest mean free-run ESR of "
         f"{n} candidates, each refined with at most {nfev} iterations)"
