@@ -14,6 +14,7 @@ from mrdamper import DataValidationError, Experiment
 from mrdamper.data import ExperimentSet
 from mrdamper.models.lpv import LPVEstimator, LPVModel
 from mrdamper.models.lpv import choice as _choice
+from mrdamper.models.lpv import inputs as _lpv_inputs
 
 FS = 200.0
 
@@ -89,7 +90,7 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     info = held.provenance["hysteretic_held_out"]
     assert info["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
     rows = held.provenance["hysteretic_choice"]
-    assert len(rows) == len(_choice.STROKES) * len(_choice.BLENDS)
+    assert len(rows) == len(_lpv_inputs.STROKES) * len(_lpv_inputs.BLENDS)
     best = min(rows, key=lambda r: r["held_out_esr"])
     assert (held.stroke, held.blend) == (best["stroke"], best["blend"])
     assert "held-out" in held.provenance["hysteretic_note"]
@@ -139,4 +140,4 @@ def test_long_campaigns_choose_on_windows_of_both_parts(rig_data, monkeypatch) -
     info = m.provenance["hysteretic_windows"]
     assert info["windows"] == 6 and info["scored_on"]["windows"] == 3
     assert m.provenance["n_samples"] == sum(e.n for e in train)
-    assert m.stroke in _choice.STROKES
+    assert m.stroke in _lpv_inputs.STROKES

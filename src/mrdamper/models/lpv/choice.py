@@ -46,7 +46,7 @@ from mrdamper.errors import DataValidationError, IdentificationError, Simulation
 from mrdamper.models import _scale
 from mrdamper.models.base import Choice
 from mrdamper.models.levels import single_level
-from mrdamper.models.lpv.inputs import BLENDS, STROKES
+from mrdamper.models.lpv import inputs as _inputs
 from mrdamper.progress import report, section
 
 __all__ = [
@@ -223,8 +223,8 @@ def _windowed(
 
 
 def _candidates(est: Any) -> list[tuple[float, float]]:
-    strokes = STROKES if est.stroke is None else (float(est.stroke),)
-    blends = BLENDS if est.blend is None else (float(est.blend),)
+    strokes = _inputs.STROKES if est.stroke is None else (float(est.stroke),)
+    blends = _inputs.BLENDS if est.blend is None else (float(est.blend),)
     return [(x_y, lam) for x_y in strokes for lam in blends]
 
 
