@@ -399,9 +399,10 @@ class Estimator(abc.ABC):
     1. validate the settings (:meth:`_validate`: every ``Literal`` field against its choices,
        every ``bool`` field is a bool, then the family's own checks);
     2. if the family leaves settings open (:meth:`_open_settings`, e.g. the LPV hysteretic
-       input's stroke and blend), let it choose them on the training records
-       (:meth:`_choose_settings`), fit the estimator with the chosen settings instead and add
-       the choice to its provenance; otherwise, a family whose drive-lag setting ``eta`` is
+       input's stroke and blend), let it choose them on the training records or records held
+       out of them (:meth:`_choose_settings`; per-fit options in :attr:`choice_options` serve
+       only this step), fit the estimator with the chosen settings instead and add the choice
+       to its provenance; otherwise, a family whose drive-lag setting ``eta`` is
        ``"auto"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag` instead, which
        identifies the lag on an inner split and then runs steps 3-6 with it;
     3. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
