@@ -53,7 +53,6 @@ __all__ = [
     "CHOICE_BUDGET",
     "CHOICE_NFEV",
     "CHOICE_THRESHOLD",
-    "CHOOSE_ON",
     "HELD_OUT_FRACTION",
     "HOLD_EVERY",
     "MIN_HELD_OUT",
@@ -62,8 +61,6 @@ __all__ = [
     "inner_split",
 ]
 
-#: Where the candidates are scored: an inner split of the training records, or the training fit.
-CHOOSE_ON: tuple[str, ...] = ("held-out", "training")
 #: Every HOLD_EVERY-th record of each electrical level is held out [-].
 HOLD_EVERY = 3
 #: Fewest whole records held out; with fewer, the records' ends are held out instead.
