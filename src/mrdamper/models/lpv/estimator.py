@@ -86,8 +86,9 @@ class LPVEstimator(Estimator):
     choose_on : {"held-out", "training"}
         Where the open ``stroke`` / ``blend`` candidates are scored: on records held out of the
         training records (default; every third record of each electrical level, or the last
-        30 % of every record when no record can be held out) or on the training records
-        themselves (:mod:`mrdamper.models.lpv.choice`). Unused when nothing is open.
+        30 % of every record when that would hold out fewer than two records) or on the
+        training records themselves (:mod:`mrdamper.models.lpv.choice`). Unused when nothing is
+        open.
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
