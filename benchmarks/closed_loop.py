@@ -105,12 +105,14 @@ def main() -> None:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     lpv_settings = {"model_fs": a.lpv_fs} if kind == "lpv" and a.lpv_fs else {}
-                    est = get_estimator(kind, input=truth.input, **lpv_settings)
                     if kind == "lpv" and held_out:  # stroke and blend scored on held_out
+                        est = get_estimator(
+                            kind, input=truth.input, choose_on="held-out", **lpv_settings
+                        )
                         model = est.fit(doe, choice_records=held_out)
                         print(f"{name} lpv: {model.provenance['hysteretic_note']}")
                     else:
-                        model = est.fit(doe)
+                        model = get_estimator(kind, input=truth.input, **lpv_settings).fit(doe)
                     run = partial(
                         closed_loop_fidelity,
                         model,

@@ -27,8 +27,8 @@ candidates (the latter two up-sample the 200 Hz records); ``lpv-val`` uses the p
 ``u`` (with the default hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
 model with the paper's static zone-law input (``input_signal="u"``, the default before the
 hysteretic input); the ``lpv`` column has the default hysteretic input, its stroke scale and
-pre-yield share chosen on records held out of the training records (the estimator's default
-``choose_on="held-out"``). Scoring uses ``range_policy="clip"`` (measured
+pre-yield share chosen on the training records (the estimator's default
+``choose_on="training"``). Scoring uses ``range_policy="clip"`` (measured
 currents and voltages leave the training range by sensor noise only). A model that fails to fit or
 simulate is reported (``failed`` in the table), never dropped.
 

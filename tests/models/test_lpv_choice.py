@@ -85,8 +85,8 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     records it did not fit, and picks a candidate that predicts a small-stroke chirp (never seen)
     better than the candidate the training fit picks."""
     train, test = rig_data
-    held = _fit(train)
-    trained = _fit(train, settings={"choose_on": "training"})
+    held = _fit(train, settings={"choose_on": "held-out"})
+    trained = _fit(train)  # the default: chosen on the training fit
     info = held.provenance["hysteretic_held_out"]
     assert info["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
     rows = held.provenance["hysteretic_choice"]
@@ -95,6 +95,7 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     assert (held.stroke, held.blend) == (best["stroke"], best["blend"])
     assert "held-out" in held.provenance["hysteretic_note"]
     assert held.provenance["settings"]["choose_on"] == "held-out"
+    assert trained.provenance["settings"]["choose_on"] == "training"
     assert held.provenance["n_samples"] == sum(e.n for e in train)  # refitted on every record
     # the former choice: scored on the training records, no split recorded
     assert "train_esr" in trained.provenance["hysteretic_choice"][0]
@@ -105,7 +106,7 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
 
 def test_given_choice_records_score_the_candidates(rig_data) -> None:
     train, test = rig_data
-    m = _fit(train[:6], choice_records=test)
+    m = _fit(train[:6], choice_records=test, settings={"choose_on": "held-out"})
     info = m.provenance["hysteretic_held_out"]
     assert info["held_out"] == ["chirp"] and info["inner_training"] == list(
         ExperimentSet(train[:6]).names
@@ -122,11 +123,11 @@ def test_refusals(rig_data) -> None:
         LPVEstimator(choose_on="validation").fit(train)  # type: ignore[arg-type]
     assert "\n" not in str(exc.value)
     with pytest.raises(DataValidationError, match="^choice_records: .*choose_on='training'"):
-        LPVEstimator(choose_on="training").fit(train, choice_records=test)
+        LPVEstimator().fit(train, choice_records=test)  # choose_on="training", the default
     with pytest.raises(DataValidationError, match="^choice_records: .*no setting is left open"):
         LPVEstimator(input_signal="u").fit(train, choice_records=test)
     with pytest.raises(DataValidationError, match="^choice_records: .*at least one record"):
-        LPVEstimator().fit(train, choice_records=[])
+        LPVEstimator(choose_on="held-out").fit(train, choice_records=[])
 
 
 @pytest.mark.slow
@@ -136,7 +137,7 @@ def test_long_campaigns_choose_on_windows_of_both_parts(rig_data, monkeypatch) -
     train, _ = rig_data
     monkeypatch.setattr(_choice, "CHOICE_THRESHOLD", 1000)
     monkeypatch.setattr(_choice, "CHOICE_BUDGET", 4000)
-    m = _fit(train)
+    m = _fit(train, settings={"choose_on": "held-out"})
     info = m.provenance["hysteretic_windows"]
     assert info["windows"] == 6 and info["scored_on"]["windows"] == 3
     assert m.provenance["n_samples"] == sum(e.n for e in train)

@@ -21,11 +21,7 @@ The LPV and LTI values were measured again when their default input became the h
 branch that introduced it and after it was merged onto the unified skeleton. The Dyke values of
 SP-1..SP-4 were measured again when the benchmark gave them the same drive lag as the LPV model.
 The Quiroz NARX value was measured again when NARX started clipping its regressors to the
-training envelope by default (``extrapolation="clip"``): 0.0108954 -> 0.0103553. The Quiroz LPV
-value was measured again when the hysteretic input's stroke and blend came to be chosen on
-held-out records by default (``choose_on="held-out"``, ``mrdamper.models.lpv.choice``): 0.00832719
--> 0.00953549 (this fold chooses 0.1 mm / 0.5 instead of 0.2 mm / 0.25; the mean over the six
-folds fell, 0.01767 -> 0.01753). The LTI values and the Dyke LPV value did not move.
+training envelope by default (``extrapolation="clip"``): 0.0108954 -> 0.0103553.
 """
 
 from __future__ import annotations
@@ -53,11 +49,10 @@ LAGGED = {"lpv", "lti", "p15", "sp1", "sp2", "sp3", "sp4"}
 #: Relative tolerance: the fourth significant digit.
 RTOL = 5e-5
 
-#: Mean test ESR of the Quiroz fold holding out 10 mm / 2 Hz (docs/results.md: 0.00833 (LPV with
-#: the training choice of its input's stroke and blend), 0.206,
+#: Mean test ESR of the Quiroz fold holding out 10 mm / 2 Hz (docs/results.md: 0.00833, 0.206,
 #: 0.00650, 0.0281, 0.0504, 0.0370, 0.0357, 0.00879, 0.0761, 0.0109).
 QUIROZ: dict[str, float] = {
-    "lpv": 0.00953549,  # 0.00832719 before stroke / blend were chosen on held-out records
+    "lpv": 0.00832719,
     "lti": 0.206264,
     "p15": 0.00527541,  # 0.00649598 before the shooting stage continued past its first budget
     "sp1": 0.0281058,
