@@ -1,7 +1,7 @@
 """The hysteretic LPV input's ``stroke`` / ``blend`` chosen on held-out records
-(:mod:`mrdamper.models.lpv.choice`): the inner split (every level kept, deterministic, the time
-split of few records), the held-out choice against the training choice on rig records, the given
-choice records, and the refusals."""
+(``choose_on="held-out"``, :mod:`mrdamper.models.lpv.choice`): the inner split (every level kept,
+deterministic, the time split of few records), the held-out choice against the default training
+choice on rig records, the given choice records, and the refusals."""
 
 from __future__ import annotations
 
@@ -97,7 +97,7 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     assert held.provenance["settings"]["choose_on"] == "held-out"
     assert trained.provenance["settings"]["choose_on"] == "training"
     assert held.provenance["n_samples"] == sum(e.n for e in train)  # refitted on every record
-    # the former choice: scored on the training records, no split recorded
+    # the default choice: scored on the training records, no split recorded
     assert "train_esr" in trained.provenance["hysteretic_choice"][0]
     assert "hysteretic_held_out" not in trained.provenance
     assert (held.stroke, held.blend) != (trained.stroke, trained.blend)
