@@ -41,37 +41,44 @@ def _fit(train, **options) -> LPVModel:
 
 
 # ----------------------------------------------------------------------------- the inner split
-def test_every_third_record_of_each_level_is_held_out_and_every_level_kept() -> None:
-    # four levels, records interleaved; level 3 has only two records (none of it held out)
+def test_each_record_of_a_level_is_held_out_once_and_every_level_kept() -> None:
+    # four levels, records interleaved; level 3 has only two records (never held out)
     recs = [_record(lev, k) for k in range(4) for lev in (0.0, 1.0, 2.0)]
     recs += [_record(3.0, k) for k in range(2)]
-    split = _choice.inner_split(ExperimentSet(recs), "voltage")
-    assert split.how == "records"
-    assert list(split.held_out.names) == ["L0.0_2", "L1.0_2", "L2.0_2"]
-    kept = [e.metadata["current"] for e in split.fit]
-    assert sorted(set(kept)) == [0.0, 1.0, 2.0, 3.0]
-    assert min(kept.count(lev) for lev in (0.0, 1.0, 2.0, 3.0)) >= 2
-    assert len(split.fit) + len(split.held_out) == len(recs)
-    # deterministic: the same records give the same split
-    again = _choice.inner_split(ExperimentSet(recs), "voltage")
-    assert list(again.held_out.names) == list(split.held_out.names)
+    folds = _choice.inner_splits(ExperimentSet(recs), "voltage")
+    assert len(folds) == _choice.HOLD_EVERY and {f.how for f in folds} == {"records"}
+    assert list(folds[2].held_out.names) == ["L0.0_2", "L1.0_2", "L2.0_2"]
+    assert list(folds[0].held_out.names) == ["L0.0_0", "L1.0_0", "L2.0_0"] + [
+        "L0.0_3",
+        "L1.0_3",
+        "L2.0_3",
+    ]
+    held = [n for f in folds for n in f.held_out.names]
+    assert sorted(held) == sorted(e.name for e in recs if e.metadata["current"] != 3.0)
+    for f in folds:
+        kept = [e.metadata["current"] for e in f.fit]
+        assert min(kept.count(lev) for lev in (0.0, 1.0, 2.0, 3.0)) >= 2
+        assert len(f.fit) + len(f.held_out) == len(recs)
+    # deterministic: the same records give the same folds
+    again = _choice.inner_splits(ExperimentSet(recs), "voltage")
+    assert [list(f.held_out.names) for f in again] == [list(f.held_out.names) for f in folds]
 
 
 def test_levels_of_the_constant_input_when_no_record_carries_a_current() -> None:
     recs = [_record(lev, k, metadata=False) for lev in (0.0, 1.5) for k in range(3)]
     weights = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
-    split = _choice.inner_split(ExperimentSet(recs), "voltage", weights)
-    assert list(split.held_out.names) == ["L0.0_2", "L1.5_2"]
-    assert split.held_out_weights == [3.0, 6.0]
-    assert split.fit_weights == [1.0, 2.0, 4.0, 5.0]
+    fold = _choice.inner_splits(ExperimentSet(recs), "voltage", weights)[2]
+    assert list(fold.held_out.names) == ["L0.0_2", "L1.5_2"]
+    assert fold.held_out_weights == [3.0, 6.0]
+    assert fold.fit_weights == [1.0, 2.0, 4.0, 5.0]
 
 
 @pytest.mark.parametrize("n_records", [1, 3])
 def test_few_records_hold_out_the_end_of_every_record(n_records: int) -> None:
-    """One record, or three records of one group (one held-out record is too few): the last
-    30 % of every record is held out, the first 70 % fits."""
+    """One record, or three records of one group (folds of one held-out record are too few): the
+    last 30 % of every record is held out, the first 70 % fits."""
     recs = [_record(0.0, k, n=1000, metadata=False, varying=True) for k in range(n_records)]
-    split = _choice.inner_split(ExperimentSet(recs), "voltage")
+    (split,) = _choice.inner_splits(ExperimentSet(recs), "voltage")
     assert split.how == "time"
     assert [e.n for e in split.fit] == [700] * n_records
     assert [e.n for e in split.held_out] == [300] * n_records
@@ -81,16 +88,18 @@ def test_few_records_hold_out_the_end_of_every_record(n_records: int) -> None:
 
 # ----------------------------------------------------------------------------- the choice
 def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data) -> None:
-    """Rig sines at three currents: the held-out choice scores each candidate on the 5 Hz / 2 mm
-    records it did not fit, and picks a candidate that predicts a small-stroke chirp (never seen)
-    better than the candidate the training fit picks."""
+    """Rig sines at three currents: the held-out choice scores each candidate on three folds of
+    records it did not fit (each record held out once), and picks a candidate that predicts a
+    small-stroke chirp (never seen) better than the candidate the training fit picks."""
     train, test = rig_data
     held = _fit(train, settings={"choose_on": "held-out"})
     trained = _fit(train)  # the default: chosen on the training fit
-    info = held.provenance["hysteretic_held_out"]
-    assert info["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
+    folds = held.provenance["hysteretic_held_out"]["folds"]
+    assert folds[2]["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
+    assert sorted(n for f in folds for n in f["held_out"]) == sorted(e.name for e in train)
     rows = held.provenance["hysteretic_choice"]
     assert len(rows) == len(_lpv_inputs.STROKES) * len(_lpv_inputs.BLENDS)
+    assert all(len(r["fold_esr"]) == 3 for r in rows)
     best = min(rows, key=lambda r: r["held_out_esr"])
     assert (held.stroke, held.blend) == (best["stroke"], best["blend"])
     assert "held-out" in held.provenance["hysteretic_note"]
@@ -138,7 +147,7 @@ def test_long_campaigns_choose_on_windows_of_both_parts(rig_data, monkeypatch) -
     monkeypatch.setattr(_choice, "CHOICE_THRESHOLD", 1000)
     monkeypatch.setattr(_choice, "CHOICE_BUDGET", 4000)
     m = _fit(train, settings={"choose_on": "held-out"})
-    info = m.provenance["hysteretic_windows"]
+    info = m.provenance["hysteretic_windows"]  # of the first fold
     assert info["windows"] == 6 and info["scored_on"]["windows"] == 3
     assert m.provenance["n_samples"] == sum(e.n for e in train)
     assert m.stroke in _lpv_inputs.STROKES

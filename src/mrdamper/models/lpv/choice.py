@@ -62,7 +62,7 @@ __all__ = [
     "MIN_HELD_OUT",
     "InnerSplit",
     "fit_choosing",
-    "inner_split",
+    "inner_splits",
 ]
 
 #: Every HOLD_EVERY-th record of each electrical level is held out [-].
@@ -129,10 +129,10 @@ def _pick(values: Sequence[float] | None, index: Iterable[int]) -> list[float] |
     return None if values is None else [float(values[k]) for k in index]
 
 
-def inner_split(
+def inner_splits(
     exps: ExperimentSet, source: ElectricalSource, record_weights: Sequence[float] | None = None
-) -> InnerSplit:
-    """The inner split of the training records that scores the candidates (module docstring).
+) -> tuple[InnerSplit, ...]:
+    """The inner folds of the training records that score the candidates (module docstring).
 
     Parameters
     ----------
@@ -145,40 +145,56 @@ def inner_split(
 
     Returns
     -------
-    InnerSplit
-        Whole records held out (``how="records"``) or, when that holds out fewer than
-        :data:`MIN_HELD_OUT`, the last
+    tuple of InnerSplit
+        :data:`HOLD_EVERY` folds of whole records (``how="records"``; fold ``r`` holds out the
+        records ``j`` with ``j % HOLD_EVERY == r`` of every level with at least
+        :data:`HOLD_EVERY` records, so each such record is held out once) or, when a fold would
+        hold out fewer than :data:`MIN_HELD_OUT` records, one split holding out the last
         :data:`HELD_OUT_FRACTION` of every record (``how="time"``).
     """
     groups: dict[tuple[str, float], list[int]] = {}
     for k, e in enumerate(exps):
         groups.setdefault(_level_key(e, source), []).append(k)
-    held = sorted(
-        k for ks in groups.values() for j, k in enumerate(ks) if j % HOLD_EVERY == HOLD_EVERY - 1
-    )
-    if len(held) >= MIN_HELD_OUT:
-        kept = [k for k in range(len(exps)) if k not in set(held)]
-        return InnerSplit(
-            ExperimentSet([exps[k] for k in kept], name="inner training"),
-            ExperimentSet([exps[k] for k in held], name="held out"),
-            _pick(record_weights, kept),
-            _pick(record_weights, held),
-            "records",
+    folds = [
+        sorted(
+            k
+            for ks in groups.values()
+            if len(ks) >= HOLD_EVERY
+            for j, k in enumerate(ks)
+            if j % HOLD_EVERY == r
         )
+        for r in range(HOLD_EVERY)
+    ]
+    if all(len(held) >= MIN_HELD_OUT for held in folds):
+        out = []
+        for held in folds:
+            kept = [k for k in range(len(exps)) if k not in set(held)]
+            out.append(
+                InnerSplit(
+                    ExperimentSet([exps[k] for k in kept], name="inner training"),
+                    ExperimentSet([exps[k] for k in held], name="held out"),
+                    _pick(record_weights, kept),
+                    _pick(record_weights, held),
+                    "records",
+                )
+            )
+        return tuple(out)
     cuts = [round((1.0 - HELD_OUT_FRACTION) * e.n) for e in exps]
     every = range(len(exps))
-    return InnerSplit(
-        ExperimentSet(
-            [e.slice(0, c, name=f"{e.name}[0:{c}]") for e, c in zip(exps, cuts)],
-            name="inner training",
+    return (
+        InnerSplit(
+            ExperimentSet(
+                [e.slice(0, c, name=f"{e.name}[0:{c}]") for e, c in zip(exps, cuts)],
+                name="inner training",
+            ),
+            ExperimentSet(
+                [e.slice(c, e.n, name=f"{e.name}[{c}:{e.n}]") for e, c in zip(exps, cuts)],
+                name="held out",
+            ),
+            _pick(record_weights, every),
+            _pick(record_weights, every),
+            "time",
         ),
-        ExperimentSet(
-            [e.slice(c, e.n, name=f"{e.name}[{c}:{e.n}]") for e, c in zip(exps, cuts)],
-            name="held out",
-        ),
-        _pick(record_weights, every),
-        _pick(record_weights, every),
-        "time",
     )
 
 
@@ -187,21 +203,21 @@ def _choice_split(
     exps: ExperimentSet,
     record_weights: Sequence[float] | None,
     choice_records: Experiment | Iterable[Experiment] | None,
-) -> InnerSplit:
-    """The split of the estimator's ``choose_on`` (and the fit's ``choice_records``)."""
+) -> tuple[InnerSplit, ...]:
+    """The folds of the estimator's ``choose_on`` (and the fit's ``choice_records``)."""
     if est.choose_on == "training":
         if choice_records is not None:
             raise DataValidationError(
                 "choice_records", "applies to choose_on='held-out' only; got choose_on='training'"
             )
         w = _pick(record_weights, range(len(exps)))
-        return InnerSplit(exps, exps, w, w, "training")
+        return (InnerSplit(exps, exps, w, w, "training"),)
     if choice_records is not None:
         given = as_experiment_set(choice_records, name="choice records")
         if len(given) == 0:
             raise DataValidationError("choice_records", "expected at least one record, got none")
-        return InnerSplit(exps, given, _pick(record_weights, range(len(exps))), None, "given")
-    return inner_split(exps, est.input, record_weights)
+        return (InnerSplit(exps, given, _pick(record_weights, range(len(exps))), None, "given"),)
+    return inner_splits(exps, est.input, record_weights)
 
 
 def _windowed(
@@ -263,14 +279,9 @@ def fit_choosing(
     DataValidationError
         ``choice_records`` with ``choose_on="training"``, or empty.
     """
-    split = _choice_split(est, exps, record_weights, choice_records)
-    fit_set, fit_w, fit_win = _windowed(split.fit, split.fit_weights)
-    if split.how == "training":
-        score_set, score_w, score_win = fit_set, fit_w, None
-    else:
-        score_set, score_w, score_win = _windowed(split.held_out, split.held_out_weights)
-    key = "train_esr" if split.how == "training" else "held_out_esr"
-    w = np.ones(len(score_set)) if score_w is None else np.asarray(score_w, dtype=float)
+    folds = [_Fold(split) for split in _choice_split(est, exps, record_weights, choice_records)]
+    how = folds[0].split.how
+    key = "train_esr" if how == "training" else "held_out_esr"
     nfev = min(est.max_nfev, CHOICE_NFEV)
     rows: list[dict[str, Any]] = []
     best: tuple[float, float, float] | None = None
@@ -282,18 +293,21 @@ def fit_choosing(
         with warnings.catch_warnings(), section(f"hysteretic candidate {k} of {len(cands)}"):
             warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
             try:
-                model = cand.fit(fit_set, record_weights=fit_w)
+                scores = [fold.score(cand) for fold in folds]
             except IdentificationError as exc:
                 first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {exc}"
                 rows.append({"stroke": x_y, "blend": lam, key: None, "error": str(exc)})
                 continue
-            try:
-                report(f"free-run ESR on the {split.held_out.name} records")
-                esr = [model.with_range_policy("ignore").score(e).esr for e in score_set]
-                score, err = float(np.average(esr, weights=w)), ""
-            except SimulationDivergedError as exc:  # e.g. an unrefined, unstable candidate
-                score, err = float("inf"), str(exc)
-        rows.append({"stroke": x_y, "blend": lam, key: score, "error": err})
+        score = float(np.mean([sc for sc, _ in scores]))
+        row = {
+            "stroke": x_y,
+            "blend": lam,
+            key: score,
+            "error": "; ".join(e for _, e in scores if e),
+        }
+        if len(folds) > 1:
+            row["fold_esr"] = [sc for sc, _ in scores]
+        rows.append(row)
         if best is None or score < best[0]:
             best = (score, x_y, lam)
     if best is None:
@@ -302,17 +316,20 @@ def fit_choosing(
         )
     report("hysteretic input: candidate", len(cands), len(cands))
     chosen = dataclasses.replace(est, stroke=best[1], blend=best[2])
-    note = _note(best, len(rows), nfev, split)
+    note = _note(best, len(rows), nfev, [f.split for f in folds])
 
     def provenance(prov: dict[str, Any]) -> dict[str, Any]:
         prov = {**prov, "hysteretic_choice": rows, "hysteretic_note": note}
         prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
-        if split.how != "training":
-            prov["hysteretic_held_out"] = split.record()
-        if fit_win is not None or score_win is not None:
+        if how != "training":
+            records = [f.split.record() for f in folds]
+            prov["hysteretic_held_out"] = (
+                records[0] if len(records) == 1 else {"how": records[0]["how"], "folds": records}
+            )
+        windows = [f.windows for f in folds if f.windows is not None]
+        if windows:
             prov["hysteretic_windows"] = {
-                **(fit_win or {"windows": len(fit_set), "samples_used": sum(e.n for e in fit_set)}),
-                "scored_on": score_win,
+                **windows[0],
                 "note": "stroke and blend chosen on evenly spread windows; the model fitted on all",
             }
         return prov
@@ -320,9 +337,47 @@ def fit_choosing(
     return Choice(chosen, provenance)
 
 
-def _note(best: tuple[float, float, float], n: int, nfev: int, split: InnerSplit) -> str:
+class _Fold:
+    """One fold of the choice: its part to fit and its part to score, windowed when long."""
+
+    def __init__(self, split: InnerSplit) -> None:
+        self.split = split
+        self.fit_set, self.fit_w, fit_win = _windowed(split.fit, split.fit_weights)
+        if split.how == "training":
+            self.score_set, score_w, score_win = self.fit_set, self.fit_w, None
+        else:
+            self.score_set, score_w, score_win = _windowed(split.held_out, split.held_out_weights)
+        self.w = np.ones(len(self.score_set)) if score_w is None else np.asarray(score_w, float)
+        self.windows: dict[str, Any] | None = None
+        if fit_win is not None or score_win is not None:
+            self.windows = {
+                **(
+                    fit_win
+                    or {"windows": len(self.fit_set), "samples_used": _samples(self.fit_set)}
+                ),
+                "scored_on": score_win,
+            }
+
+    def score(self, cand: Any) -> tuple[float, str]:
+        """The candidate fitted on the fold's fit part: its mean free-run ESR on the scored part
+        (inf, with the reason, when a free run diverges)."""
+        model = cand.fit(self.fit_set, record_weights=self.fit_w)
+        report(f"free-run ESR on the {self.split.held_out.name} records")
+        try:
+            esr = [model.with_range_policy("ignore").score(e).esr for e in self.score_set]
+        except SimulationDivergedError as exc:  # e.g. an unrefined, unstable candidate
+            return float("inf"), str(exc)
+        return float(np.average(esr, weights=self.w)), ""
+
+
+def _samples(exps: ExperimentSet) -> int:
+    return int(sum(e.n for e in exps))
+
+
+def _note(best: tuple[float, float, float], n: int, nfev: int, splits: Sequence[InnerSplit]) -> str:
     """One line on what was chosen, where it was scored and how."""
     score, x_y, lam = best
+    split = splits[0]
     if not np.isfinite(score):
         return (
             f"every candidate diverged in free run on the {split.held_out.name} records; the first "
@@ -331,7 +386,8 @@ def _note(best: tuple[float, float, float], n: int, nfev: int, split: InnerSplit
     n_out, n_in = len(split.held_out), len(split.fit)
     where = {
         "training": "the training records",
-        "records": f"{n_out} held-out records, fitted on the {n_in} others",
+        "records": f"{len(splits)} folds of held-out records (each record of a level with at "
+        f"least {HOLD_EVERY} records held out once; mean over the folds), fitted on the others",
         "time": f"the last {HELD_OUT_FRACTION:.0%} of the {n_out} records, fitted on the rest",
         "given": f"{n_out} given records (choice_records), fitted on the {n_in} training records",
     }[split.how]
