@@ -11,22 +11,25 @@ estimator's ``choose_on``:
 ``"training"`` (default)
     The candidates are fitted and scored on the training records themselves.
 ``"held-out"``
-    An inner split of the training records (:func:`inner_split`): the candidates are fitted on
-    its inner-training part and scored on its held-out part. With several records, every
-    :data:`HOLD_EVERY`-th record of each electrical level (records grouped by their metadata
-    ``current``, else by the constant level of the electrical input, else as one group of records
-    with a varying input), in the order given, is held out: every level keeps at least two
-    records in the inner-training part, so the zone laws and ``n_rho`` see every level. When that
-    holds out fewer than :data:`MIN_HELD_OUT` records (e.g. a single record, or three records of
-    three different excitations: one held-out record would be a third of the variety and a noisy
-    score), the last :data:`HELD_OUT_FRACTION` of every record (in time) is held out instead.
-    Records given to the fit as ``choice_records`` replace the split: the candidates are fitted
-    on every training record and scored on those.
+    Inner folds of the training records (:func:`inner_splits`): the candidates are fitted on each
+    fold's inner-training part and scored on its held-out part; a candidate's score is the mean
+    over the folds. The records are grouped by electrical level (their metadata ``current``, else
+    the constant level of the electrical input, else one group of records with a varying input);
+    in each level with at least :data:`HOLD_EVERY` records, fold ``r`` holds out the records
+    ``j`` (in the order given) with ``j % HOLD_EVERY == r``, so each such record is held out once
+    and every level keeps at least two records in every inner-training part (the zone laws and
+    ``n_rho`` see every level). When a fold would hold out fewer than :data:`MIN_HELD_OUT` records
+    (e.g. a single record, or three records of three different excitations: one held-out record
+    would be a third of the variety and a noisy score), one split holding out the last
+    :data:`HELD_OUT_FRACTION` of every record (in time) is used instead. Records given to the fit
+    as ``choice_records`` replace the folds: the candidates are fitted on every training record
+    and scored on those.
 
-The held-out choice is not the default: on the shared data it was better on the Quiroz
-leave-one-condition-out folds (mean test ESR 0.01753 against 0.01767) and three times better on the
-virtual-rig chirp, but worse on three of the four Quiroz generalisation test sets (up to 45 %), and
-equal on Dyke, Labcontrol and the demo (``docs/results.md``).
+The held-out choice costs :data:`HOLD_EVERY` times the candidate fits of the training choice when
+it uses folds of records. It is not the default: on the shared data (``docs/results.md``) it chose
+a candidate three times better on the virtual-rig chirp, but was slightly worse on the Quiroz
+leave-one-condition-out folds (mean test ESR 0.01783 against 0.01767) and the rig road (0.00874
+against 0.00849), and equal on the Quiroz generalisation sets, Dyke, Labcontrol and the demo.
 
 On long campaigns (a part above :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
 scored on evenly spread 20 s windows of that part (:data:`CHOICE_BUDGET` samples in all;

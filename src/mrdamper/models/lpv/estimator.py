@@ -85,9 +85,10 @@ class LPVEstimator(Estimator):
         it is chosen over a grid (lowest mean free-run ESR where ``choose_on`` says).
     choose_on : {"training", "held-out"}
         Where the open ``stroke`` / ``blend`` candidates are scored: on the training records
-        themselves (default) or on records held out of them (every third record of each
-        electrical level, or the last 30 % of every record when that would hold out fewer than
-        two records; :mod:`mrdamper.models.lpv.choice`). Unused when nothing is open.
+        themselves (default) or on records held out of them (three folds, each holding out every
+        third record of each electrical level; the last 30 % of every record when a fold would
+        hold out fewer than two records; :mod:`mrdamper.models.lpv.choice`). Unused when nothing
+        is open.
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
@@ -133,7 +134,7 @@ class LPVEstimator(Estimator):
     without duplicating records (default: all 1). A hysteretic input with ``stroke`` or ``blend``
     left None has them chosen first (the template's settings-choice hook); the option
     ``choice_records`` (records not in the training set) then scores the candidates instead of
-    the inner split (with ``choose_on="held-out"`` only; the model is fitted on the training
+    the inner folds (with ``choose_on="held-out"`` only; the model is fitted on the training
     records alone). The fit raises
     :class:`~mrdamper.errors.IdentificationError` for a rank-deficient regression, too few
     scheduling levels for ``n_rho``, or (with ``stability="enforce"``) no frozen-stable model,
