@@ -27,7 +27,8 @@ candidates (the latter two up-sample the 200 Hz records); ``lpv-val`` uses the p
 ``u`` (with the default hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
 model with the paper's static zone-law input (``input_signal="u"``, the default before the
 hysteretic input); the ``lpv`` column has the default hysteretic input, its stroke scale and
-pre-yield share chosen on the training records. Scoring uses ``range_policy="clip"`` (measured
+pre-yield share chosen on the training records (the estimator's default
+``choose_on="training"``). Scoring uses ``range_policy="clip"`` (measured
 currents and voltages leave the training range by sensor noise only). A model that fails to fit or
 simulate is reported (``failed`` in the table), never dropped.
 
@@ -43,11 +44,13 @@ Run::
     python benchmarks/generalisation.py          # every scenario, full length
     python benchmarks/generalisation.py --quick  # shorter rig records, fewer grids (a test runs it)
     python benchmarks/generalisation.py --quick --select --scenarios rig  # with select's column
+    python benchmarks/generalisation.py --quick --models lpv --lpv-choose-on held-out
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -452,6 +455,13 @@ def to_markdown(tab: pd.DataFrame) -> str:
     )
 
 
+def _with_lpv(
+    settings: Callable[[str], dict[str, Any]], choose_on: str
+) -> Callable[[str], dict[str, Any]]:
+    """A scenario's settings with the LPV's ``choose_on`` given."""
+    return lambda kind: {**settings(kind), **({"choose_on": choose_on} if kind == "lpv" else {})}
+
+
 def main(argv: list[str] | None = None) -> pd.DataFrame:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="short rig records, no validation grids")
@@ -467,6 +477,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         action="store_true",
         help="also run mrdamper select on each training set (columns select, select/best)",
     )
+    ap.add_argument(
+        "--lpv-choose-on",
+        choices=["training", "held-out"],
+        default=None,
+        help="where the LPV input's stroke and blend are chosen (default: the estimator's)",
+    )
     args = ap.parse_args(argv)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
@@ -474,6 +490,8 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     t0 = time.perf_counter()
     for name in args.scenarios:
         sc = SCENARIOS[name](args.quick)
+        if args.lpv_choose_on is not None:
+            sc = dataclasses.replace(sc, settings=_with_lpv(sc.settings, args.lpv_choose_on))
         print(
             f"{sc.name}: {len(sc.train)} training records; tests "
             f"{ {k: len(v) for k, v in sc.tests.items()} }",

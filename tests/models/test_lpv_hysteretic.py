@@ -13,8 +13,8 @@ from mrdamper.analysis import ZoneLaws
 from mrdamper.analysis.hysteretic import dahl_state, hysteretic_input
 from mrdamper.control import c_source, inverse_current, lpv_export_data, state_space
 from mrdamper.models.lpv import LPVEstimator, LPVModel
+from mrdamper.models.lpv import choice as _lpv_choice
 from mrdamper.models.lpv import inputs as _lpv_inputs
-from mrdamper.rig import VirtualRig, reference_damper
 
 X_Y = 1e-4  # stroke scale [m]
 
@@ -104,33 +104,6 @@ def test_zero_blend_is_the_static_input() -> None:
 
 
 # ----------------------------------------------------------------------------- identification
-@pytest.fixture(scope="module")
-def rig_data() -> tuple[list[Experiment], list[Experiment]]:
-    """Short rig sines at three currents (training) and a 1-10 Hz small-stroke chirp (test)."""
-    fs = 1000.0
-    rig = VirtualRig(damper=reference_damper("quiroz2022"), fs=fs)
-    train, seed = [], 0
-    for amp, f in ((0.015, 0.5), (0.005, 2.0), (0.002, 5.0)):
-        t = np.arange(round(2.5 / f * fs)) / fs
-        x = amp * np.sin(2 * np.pi * f * t) * np.clip(t * f, 0.0, 1.0)
-        for cur in (0.0, 0.5, 1.0):
-            seed += 1
-            train.append(
-                rig.run(
-                    x,
-                    np.full(t.size, cur),
-                    seed=seed,
-                    name=f"s{amp}_{f}_{cur}",
-                    metadata={"current": cur},
-                )
-            )
-    t = np.arange(4000) / fs
-    f_inst = 1.0 + 9.0 * t / t[-1]
-    x = 0.05 / (2 * np.pi * f_inst) * np.sin(2 * np.pi * np.cumsum(f_inst) / fs)
-    test = [rig.run(x, np.full(t.size, 0.5), seed=99, name="chirp", metadata={"current": 0.5})]
-    return train, test
-
-
 def _fit(train: list[Experiment], **settings) -> LPVModel:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -153,7 +126,7 @@ def test_fit_on_rig_records(rig_data) -> None:
 @pytest.mark.slow
 def test_choice_on_training_records_and_round_trip(rig_data) -> None:
     train, test = rig_data
-    m = _fit(train[::2], blend=0.5)  # the default input; stroke chosen
+    m = _fit(train[::2], blend=0.5)  # the default input and choice; stroke chosen
     rows = m.provenance["hysteretic_choice"]
     assert [r["stroke"] for r in rows] == list(_lpv_inputs.STROKES)
     best = min(rows, key=lambda r: r["train_esr"])
@@ -192,8 +165,8 @@ def test_settings_and_refusals(rig_data) -> None:
 def test_long_campaigns_choose_on_windows(rig_data, monkeypatch) -> None:
     """Above the threshold the candidates are compared on windows; the model uses every sample."""
     train, _ = rig_data
-    monkeypatch.setattr(_lpv_inputs, "CHOICE_THRESHOLD", 1000)
-    monkeypatch.setattr(_lpv_inputs, "CHOICE_BUDGET", 4000)
+    monkeypatch.setattr(_lpv_choice, "CHOICE_THRESHOLD", 1000)
+    monkeypatch.setattr(_lpv_choice, "CHOICE_BUDGET", 4000)
     m = _fit(train[:6], blend=0.5)
     info = m.provenance["hysteretic_windows"]  # (records shorter than a window: whole records)
     assert info["windows"] == 6 and info["samples_used"] == sum(e.n for e in train[:6])

@@ -399,9 +399,10 @@ class Estimator(abc.ABC):
     1. validate the settings (:meth:`_validate`: every ``Literal`` field against its choices,
        every ``bool`` field is a bool, then the family's own checks);
     2. if the family leaves settings open (:meth:`_open_settings`, e.g. the LPV hysteretic
-       input's stroke and blend), let it choose them on the training records
-       (:meth:`_choose_settings`), fit the estimator with the chosen settings instead and add
-       the choice to its provenance; otherwise, a family whose drive-lag setting ``eta`` is
+       input's stroke and blend), let it choose them on the training records or records held
+       out of them (:meth:`_choose_settings`; per-fit options in :attr:`choice_options` serve
+       only this step), fit the estimator with the chosen settings instead and add the choice
+       to its provenance; otherwise, a family whose drive-lag setting ``eta`` is
        ``"auto"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag` instead, which
        identifies the lag on an inner split and then runs steps 3-6 with it;
     3. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
@@ -427,6 +428,9 @@ class Estimator(abc.ABC):
     #: Per-fit options that hold one value per training record (they follow a long record into
     #: its segments, :meth:`_training_set`).
     per_record_options: ClassVar[tuple[str, ...]] = ()
+    #: Per-fit options used only by the settings choice (:meth:`_choose_settings`): not passed to
+    #: the fit of the chosen estimator, and refused when no setting is left open.
+    choice_options: ClassVar[tuple[str, ...]] = ()
     #: Old setting name -> current name. Old names are still accepted, with a note.
     renamed_settings: ClassVar[Mapping[str, str]] = {}
 
@@ -485,11 +489,18 @@ class Estimator(abc.ABC):
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()
-        if self._open_settings():  # chosen on the training records, before the drive lag
+        open_settings = self._open_settings()
+        for key in self.choice_options:
+            if options.get(key) is not None and not open_settings:
+                raise DataValidationError(
+                    key, f"{self.kind}: no setting is left open to choose, so {key} has no use"
+                )
+        if open_settings:  # chosen on the training records, before the drive lag
             report("preparing the training data")
             records, options, segments = self._training_set(data, options)
             choice = self._choose_settings(records, options)
-            model = choice.estimator.fit(records, **options)
+            fit_options = {k: v for k, v in options.items() if k not in self.choice_options}
+            model = choice.estimator.fit(records, **fit_options)
             provenance = choice.provenance(dict(model.provenance))
             if segments:
                 provenance["segments"] = segments

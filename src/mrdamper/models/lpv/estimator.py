@@ -35,6 +35,7 @@ from mrdamper.models.base import (
     check_number,
 )
 from mrdamper.models.lag import check_lag, resolved
+from mrdamper.models.lpv import choice as _lpv_choice
 from mrdamper.models.lpv import fit as _lpv_fit
 from mrdamper.models.lpv import inputs as _lpv_inputs
 from mrdamper.models.lpv import kernels as K
@@ -81,7 +82,13 @@ class LPVEstimator(Estimator):
         the inverse and the state-space / C exports), or the raw velocity (ablation).
     stroke, blend : float, optional
         Stroke scale [m] and pre-yield share [-] of the hysteretic input; when either is None
-        it is chosen on the training records (lowest mean free-run training ESR over a grid).
+        it is chosen over a grid (lowest mean free-run ESR where ``choose_on`` says).
+    choose_on : {"training", "held-out"}
+        Where the open ``stroke`` / ``blend`` candidates are scored: on the training records
+        themselves (default) or on records held out of them (three folds, each holding out every
+        third record of each electrical level; the last 30 % of every record when a fold would
+        hold out fewer than two records; :mod:`mrdamper.models.lpv.choice`). Unused when nothing
+        is open.
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
@@ -125,7 +132,10 @@ class LPVEstimator(Estimator):
     non-negative weight per record [-], multiplying that record's share of the least-squares and
     output-error costs (on top of ``weighting``), e.g. to mix measured records with synthetic ones
     without duplicating records (default: all 1). A hysteretic input with ``stroke`` or ``blend``
-    left None has them chosen first (the template's settings-choice hook). The fit raises
+    left None has them chosen first (the template's settings-choice hook); the option
+    ``choice_records`` (records not in the training set) then scores the candidates instead of
+    the inner folds (with ``choose_on="held-out"`` only; the model is fitted on the training
+    records alone). The fit raises
     :class:`~mrdamper.errors.IdentificationError` for a rank-deficient regression, too few
     scheduling levels for ``n_rho``, or (with ``stability="enforce"``) no frozen-stable model,
     naming the pole.
@@ -133,8 +143,9 @@ class LPVEstimator(Estimator):
 
     kind: ClassVar[str] = "lpv"
     model_class: ClassVar[type[FittedModel]] = LPVModel
-    fit_options: ClassVar[tuple[str, ...]] = ("record_weights",)
+    fit_options: ClassVar[tuple[str, ...]] = ("record_weights", "choice_records")
     per_record_options: ClassVar[tuple[str, ...]] = ("record_weights",)
+    choice_options: ClassVar[tuple[str, ...]] = ("choice_records",)
 
     n_m: int = 3
     n_rho: int = 2
@@ -156,6 +167,7 @@ class LPVEstimator(Estimator):
     stability: Literal["enforce", "warn"] = "enforce"
     stroke: float | None = None
     blend: float | None = None
+    choose_on: Literal["training", "held-out"] = "training"
     fs: InitVar[float | None] = None
 
     renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
@@ -217,9 +229,11 @@ class LPVEstimator(Estimator):
         return bool(self._input_class().open_settings(self.reading, self.stroke, self.blend))
 
     def _choose_settings(self, records: ExperimentSet, options: Mapping[str, Any]) -> Choice:
-        """The hysteretic input's ``stroke`` / ``blend`` left None, chosen on the training
-        records (:func:`mrdamper.models.lpv.inputs.fit_choosing`)."""
-        return _lpv_inputs.fit_choosing(self, records, options.get("record_weights"))
+        """The hysteretic input's ``stroke`` / ``blend`` left None, chosen where ``choose_on``
+        says (:func:`mrdamper.models.lpv.choice.fit_choosing`)."""
+        return _lpv_choice.fit_choosing(
+            self, records, options.get("record_weights"), options.get("choice_records")
+        )
 
     def _input_class(self) -> type[LPVInput]:
         return _lpv_inputs.input_class(self.input_signal)

@@ -19,19 +19,13 @@ rendering all use these numbers), :meth:`~LPVInput.dahl_along` (the Dahl state a
 the model file: ``input_signal`` is the saved name, :data:`INPUTS` maps it back; files of earlier
 versions load unchanged). A later input is one more class and one more row of :data:`INPUTS`.
 
-When a hysteretic estimator's ``stroke`` [m] or ``blend`` [-] is None, the model is fitted for
-every value of a small grid and the one with the lowest mean free-run ESR on the training records
-is returned (:func:`fit_choosing`, the estimator's settings-choice hook of the fit template; the
-grid and its scores are in ``provenance["hysteretic_choice"]``). Nothing but the training records
-is used.
+When a hysteretic estimator's ``stroke`` [m] or ``blend`` [-] is None, they are chosen on the
+grid :data:`STROKES` x :data:`BLENDS` by :func:`mrdamper.models.lpv.choice.fit_choosing`.
 """
 
 from __future__ import annotations
 
 import abc
-import dataclasses
-import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
@@ -40,12 +34,8 @@ import numpy.typing as npt
 
 from mrdamper.analysis.hysteretic import dahl_state, hysteretic_input
 from mrdamper.analysis.scheduling import Reading
-from mrdamper.data import ExperimentSet
-from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _scale
-from mrdamper.models.base import Choice
+from mrdamper.errors import DataValidationError
 from mrdamper.models.lpv.step import MODE_CONTINUOUS, MODE_LITERAL, MODE_V, zone_input
-from mrdamper.progress import report, section
 
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.analysis import ZoneLaws
@@ -59,7 +49,6 @@ __all__ = [
     "LPVInput",
     "StaticInput",
     "VelocityInput",
-    "fit_choosing",
     "from_saved",
     "input_class",
 ]
@@ -70,12 +59,6 @@ FloatArray = npt.NDArray[np.float64]
 STROKES: tuple[float, ...] = (5e-5, 1e-4, 2e-4)
 #: Candidate pre-yield shares ``lambda`` [-] when ``blend`` is not given.
 BLENDS: tuple[float, ...] = (0.25, 0.5)
-#: Training samples above which the candidates are compared on windows of the records, and the
-#: samples those windows hold (20 s windows): the comparison costs six fits.
-CHOICE_THRESHOLD = 250_000
-CHOICE_BUDGET = 120_000
-#: Output-error iteration budget of each candidate's fit (the chosen one is refitted in full).
-CHOICE_NFEV = 10
 
 
 class InputArrays(NamedTuple):
@@ -313,100 +296,3 @@ def from_saved(
 ) -> LPVInput:
     """The input of a fitted model from its saved fields (``input_signal`` and the others)."""
     return input_class(name).build(laws, reading, stroke, blend)
-
-
-def fit_choosing(est: Any, exps: ExperimentSet, record_weights: Sequence[float] | None) -> Choice:
-    """Fit every grid candidate of ``stroke`` / ``blend``; choose the lowest mean training ESR.
-
-    The criterion is the mean free-run ESR over the training records (weighted by
-    ``record_weights`` when given), the quantity the default ``weighting="esr"`` minimises, of each
-    candidate fitted with at most :data:`CHOICE_NFEV` output-error iterations; the chosen
-    candidate is then fitted with the estimator's full budget. On
-    long campaigns (more than :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
-    scored on evenly spread 20 s windows of the records (:data:`CHOICE_BUDGET` samples in all), and
-    the chosen candidate is then fitted on every record.
-
-    Returns
-    -------
-    Choice
-        The estimator with the chosen ``stroke`` and ``blend`` (the fit template fits it on every
-        training record) and the provenance of the choice.
-
-    Raises
-    ------
-    IdentificationError
-        When no candidate could be fitted (the first failure is named).
-    """
-    strokes = STROKES if est.stroke is None else (float(est.stroke),)
-    blends = BLENDS if est.blend is None else (float(est.blend),)
-    plan = _scale.plan_windows(
-        [e.n for e in exps],
-        min(e.fs for e in exps),
-        threshold=CHOICE_THRESHOLD,
-        budget=CHOICE_BUDGET,
-    )
-    if plan is not None:  # long campaign: choose on windows, refit the choice on everything
-        exps = ExperimentSet(
-            [exps[r].slice(a, b, name=f"{exps[r].name}[{a}:{b}]") for r, a, b in plan],
-            name="windows",
-        )
-        if record_weights is not None:
-            record_weights = [float(record_weights[r]) for r, _, _ in plan]
-    w = np.ones(len(exps)) if record_weights is None else np.asarray(record_weights, dtype=float)
-    rows: list[dict[str, Any]] = []
-    best: tuple[float, float, float] | None = None
-    first_error = ""
-    n_cand = len(strokes) * len(blends)
-    for x_y in strokes:
-        for lam in blends:
-            cand = dataclasses.replace(
-                est, stroke=x_y, blend=lam, max_nfev=min(est.max_nfev, CHOICE_NFEV)
-            )
-            k = len(rows) + 1
-            report("hysteretic input: candidate", k - 1, n_cand)
-            with warnings.catch_warnings(), section(f"hysteretic candidate {k} of {n_cand}"):
-                warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
-                try:
-                    model = cand.fit(exps, record_weights=record_weights)
-                except IdentificationError as exc:
-                    first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {exc}"
-                    rows.append({"stroke": x_y, "blend": lam, "train_esr": None, "error": str(exc)})
-                    continue
-                try:
-                    report("free-run ESR on the training records")
-                    esr = [model.with_range_policy("ignore").score(e).esr for e in exps]
-                    score, err = float(np.average(esr, weights=w)), ""
-                except SimulationDivergedError as exc:  # e.g. an unrefined, unstable candidate
-                    score, err = float("inf"), str(exc)
-            rows.append({"stroke": x_y, "blend": lam, "train_esr": score, "error": err})
-            if best is None or score < best[0]:
-                best = (score, x_y, lam)
-    if best is None:
-        raise IdentificationError(
-            f"{est.kind}: no hysteretic-input candidate could be fitted; {first_error}"
-        )
-    report("hysteretic input: candidate", n_cand, n_cand)
-    final = dataclasses.replace(est, stroke=best[1], blend=best[2])
-    chosen_stroke, chosen_blend = best[1], best[2]
-    finite = bool(np.isfinite(best[0]))
-
-    def provenance(prov: dict[str, Any]) -> dict[str, Any]:
-        prov = {**prov, "hysteretic_choice": rows}
-        prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
-        if plan is not None:
-            prov["hysteretic_windows"] = {
-                "windows": len(plan),
-                "samples_used": int(sum(b - a for _, a, b in plan)),
-                "note": "stroke and blend chosen on evenly spread windows; the model fitted on all",
-            }
-        prov["hysteretic_note"] = (
-            f"stroke = {chosen_stroke:g} m and blend = {chosen_blend:g} chosen on the training "
-            f"records (lowest mean free-run ESR of {len(rows)} candidates, each refined with at "
-            f"most {min(est.max_nfev, CHOICE_NFEV)} iterations)"
-            if finite
-            else f"every candidate diverged in free run on the training records; the first "
-            f"(stroke = {chosen_stroke:g} m, blend = {chosen_blend:g}) is returned"
-        )
-        return prov
-
-    return Choice(final, provenance)

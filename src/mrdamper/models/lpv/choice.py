@@ -1,0 +1,400 @@
+"""The hysteretic input's open settings (``stroke`` [m], ``blend`` [-]) chosen on the records.
+
+When a hysteretic LPV / LTI estimator leaves ``stroke`` or ``blend`` None, :func:`fit_choosing`
+(the estimator's settings-choice hook of the fit template) fits the model for every candidate of
+the grid :data:`~mrdamper.models.lpv.inputs.STROKES` x :data:`~mrdamper.models.lpv.inputs.BLENDS`
+with at most :data:`CHOICE_NFEV` output-error iterations, scores each in free run (mean ESR,
+eq. 24) and returns the estimator with the best candidate, which the template then fits on every
+training record with the full budget. Where the candidates are fitted and scored is the
+estimator's ``choose_on``:
+
+``"training"`` (default)
+    The candidates are fitted and scored on the training records themselves.
+``"held-out"``
+    Inner folds of the training records (:func:`inner_splits`): the candidates are fitted on each
+    fold's inner-training part and scored on its held-out part; a candidate's score is the mean
+    over the folds. The records are grouped by electrical level (their metadata ``current``, else
+    the constant level of the electrical input, else one group of records with a varying input);
+    in each level with at least :data:`HOLD_EVERY` records, fold ``r`` holds out the records
+    ``j`` (in the order given) with ``j % HOLD_EVERY == r``, so each such record is held out once
+    and every level keeps at least two records in every inner-training part (the zone laws and
+    ``n_rho`` see every level). When a fold would hold out fewer than :data:`MIN_HELD_OUT` records
+    (e.g. a single record, or three records of three different excitations: one held-out record
+    would be a third of the variety and a noisy score), one split holding out the last
+    :data:`HELD_OUT_FRACTION` of every record (in time) is used instead. Records given to the fit
+    as ``choice_records`` replace the folds: the candidates are fitted on every training record
+    and scored on those.
+
+The held-out choice costs :data:`HOLD_EVERY` times the candidate fits of the training choice when
+it uses folds of records. It is not the default: on the shared data (``docs/results.md``) it chose
+a candidate three times better on the virtual-rig chirp, but was slightly worse on the Quiroz
+leave-one-condition-out folds (mean test ESR 0.01783 against 0.01767) and the rig road (0.00874
+against 0.00849), and equal on the Quiroz generalisation sets, Dyke, Labcontrol and the demo.
+
+On long campaigns (a part above :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
+scored on evenly spread 20 s windows of that part (:data:`CHOICE_BUDGET` samples in all;
+:func:`mrdamper.models._scale.plan_windows`); the chosen candidate is then fitted on every record.
+The grid, every candidate's score, and which records or blocks were held out are in the model's
+provenance (``hysteretic_choice``, ``hysteretic_held_out``, ``hysteretic_note``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from collections.abc import Iterable, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
+from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
+from mrdamper.models import _scale
+from mrdamper.models.base import Choice
+from mrdamper.models.levels import single_level
+from mrdamper.models.lpv import inputs as _inputs
+from mrdamper.progress import report, section
+
+__all__ = [
+    "CHOICE_BUDGET",
+    "CHOICE_NFEV",
+    "CHOICE_THRESHOLD",
+    "HELD_OUT_FRACTION",
+    "HOLD_EVERY",
+    "MIN_HELD_OUT",
+    "InnerSplit",
+    "fit_choosing",
+    "inner_splits",
+]
+
+#: Every HOLD_EVERY-th record of each electrical level is held out [-].
+HOLD_EVERY = 3
+#: Fewest whole records held out; with fewer, the records' ends are held out instead.
+MIN_HELD_OUT = 2
+#: Share of every record (its end, in time) held out when records are not [-].
+HELD_OUT_FRACTION = 0.3
+#: Samples of a part above which the candidates are compared on windows of its records, and the
+#: samples those windows hold (20 s windows).
+CHOICE_THRESHOLD = 250_000
+CHOICE_BUDGET = 120_000
+#: Output-error iteration budget of each candidate's fit (the chosen one is refitted in full).
+CHOICE_NFEV = 10
+
+
+class InnerSplit(NamedTuple):
+    """Records the candidates are fitted on and records they are scored on.
+
+    Attributes
+    ----------
+    fit, held_out : ExperimentSet
+        Inner-training part and held-out part.
+    fit_weights, held_out_weights : list of float or None
+        Per-record weights [-] of each part (None: all 1).
+    how : {"records", "time", "given", "training"}
+        Whole records held out per level, the end of every record held out, records given by
+        the caller, or no split (the training records score themselves).
+    """
+
+    fit: ExperimentSet
+    held_out: ExperimentSet
+    fit_weights: list[float] | None
+    held_out_weights: list[float] | None
+    how: str
+
+    def record(self) -> dict[str, Any]:
+        """The split as the provenance keeps it (what was held out and how)."""
+        how = {
+            "records": (
+                f"records {HOLD_EVERY}, {2 * HOLD_EVERY}, ... of each electrical level "
+                "(in the order given)"
+            ),
+            "time": f"the last {HELD_OUT_FRACTION:.0%} of every record",
+            "given": "records given to the fit (choice_records)",
+            "training": "none: scored on the training records",
+        }[self.how]
+        return {
+            "how": how,
+            "held_out": list(self.held_out.names),
+            "inner_training": list(self.fit.names),
+        }
+
+
+def _level_key(e: Experiment, source: ElectricalSource) -> tuple[str, float]:
+    """The electrical level a record belongs to (its metadata current, else its constant input)."""
+    if "current" in e.metadata:
+        return ("current", float(e.metadata["current"]))
+    level = single_level(np.asarray(e.electrical(source)))
+    return ("varying", 0.0) if level is None else ("level", float(f"{level:.6g}"))
+
+
+def _pick(values: Sequence[float] | None, index: Iterable[int]) -> list[float] | None:
+    return None if values is None else [float(values[k]) for k in index]
+
+
+def inner_splits(
+    exps: ExperimentSet, source: ElectricalSource, record_weights: Sequence[float] | None = None
+) -> tuple[InnerSplit, ...]:
+    """The inner folds of the training records that score the candidates (module docstring).
+
+    Parameters
+    ----------
+    exps : ExperimentSet
+        Training records.
+    source : {"i", "voltage"}
+        Electrical input channel (groups records with a constant input by its level).
+    record_weights : sequence of float, optional
+        One weight per record [-], carried into both parts.
+
+    Returns
+    -------
+    tuple of InnerSplit
+        :data:`HOLD_EVERY` folds of whole records (``how="records"``; fold ``r`` holds out the
+        records ``j`` with ``j % HOLD_EVERY == r`` of every level with at least
+        :data:`HOLD_EVERY` records, so each such record is held out once) or, when a fold would
+        hold out fewer than :data:`MIN_HELD_OUT` records, one split holding out the last
+        :data:`HELD_OUT_FRACTION` of every record (``how="time"``).
+    """
+    groups: dict[tuple[str, float], list[int]] = {}
+    for k, e in enumerate(exps):
+        groups.setdefault(_level_key(e, source), []).append(k)
+    folds = [
+        sorted(
+            k
+            for ks in groups.values()
+            if len(ks) >= HOLD_EVERY
+            for j, k in enumerate(ks)
+            if j % HOLD_EVERY == r
+        )
+        for r in range(HOLD_EVERY)
+    ]
+    if all(len(held) >= MIN_HELD_OUT for held in folds):
+        out = []
+        for held in folds:
+            kept = [k for k in range(len(exps)) if k not in set(held)]
+            out.append(
+                InnerSplit(
+                    ExperimentSet([exps[k] for k in kept], name="inner training"),
+                    ExperimentSet([exps[k] for k in held], name="held out"),
+                    _pick(record_weights, kept),
+                    _pick(record_weights, held),
+                    "records",
+                )
+            )
+        return tuple(out)
+    cuts = [round((1.0 - HELD_OUT_FRACTION) * e.n) for e in exps]
+    every = range(len(exps))
+    return (
+        InnerSplit(
+            ExperimentSet(
+                [e.slice(0, c, name=f"{e.name}[0:{c}]") for e, c in zip(exps, cuts)],
+                name="inner training",
+            ),
+            ExperimentSet(
+                [e.slice(c, e.n, name=f"{e.name}[{c}:{e.n}]") for e, c in zip(exps, cuts)],
+                name="held out",
+            ),
+            _pick(record_weights, every),
+            _pick(record_weights, every),
+            "time",
+        ),
+    )
+
+
+def _choice_split(
+    est: Any,
+    exps: ExperimentSet,
+    record_weights: Sequence[float] | None,
+    choice_records: Experiment | Iterable[Experiment] | None,
+) -> tuple[InnerSplit, ...]:
+    """The folds of the estimator's ``choose_on`` (and the fit's ``choice_records``)."""
+    if est.choose_on == "training":
+        if choice_records is not None:
+            raise DataValidationError(
+                "choice_records", "applies to choose_on='held-out' only; got choose_on='training'"
+            )
+        w = _pick(record_weights, range(len(exps)))
+        return (InnerSplit(exps, exps, w, w, "training"),)
+    if choice_records is not None:
+        given = as_experiment_set(choice_records, name="choice records")
+        if len(given) == 0:
+            raise DataValidationError("choice_records", "expected at least one record, got none")
+        return (InnerSplit(exps, given, _pick(record_weights, range(len(exps))), None, "given"),)
+    return inner_splits(exps, est.input, record_weights)
+
+
+def _windowed(
+    exps: ExperimentSet, weights: list[float] | None
+) -> tuple[ExperimentSet, list[float] | None, dict[str, Any] | None]:
+    """Evenly spread windows of a part above :data:`CHOICE_THRESHOLD` samples (else the part)."""
+    plan = _scale.plan_windows(
+        [e.n for e in exps],
+        min(e.fs for e in exps),
+        threshold=CHOICE_THRESHOLD,
+        budget=CHOICE_BUDGET,
+    )
+    if plan is None:
+        return exps, weights, None
+    wins = ExperimentSet(
+        [exps[r].slice(a, b, name=f"{exps[r].name}[{a}:{b}]") for r, a, b in plan], name="windows"
+    )
+    info = {"windows": len(plan), "samples_used": int(sum(b - a for _, a, b in plan))}
+    return wins, _pick(weights, [r for r, _, _ in plan]), info
+
+
+def _candidates(est: Any) -> list[tuple[float, float]]:
+    strokes = _inputs.STROKES if est.stroke is None else (float(est.stroke),)
+    blends = _inputs.BLENDS if est.blend is None else (float(est.blend),)
+    return [(x_y, lam) for x_y in strokes for lam in blends]
+
+
+def fit_choosing(
+    est: Any,
+    exps: ExperimentSet,
+    record_weights: Sequence[float] | None,
+    choice_records: Experiment | Iterable[Experiment] | None = None,
+) -> Choice:
+    """Fit every grid candidate of ``stroke`` / ``blend`` and choose the lowest mean free-run ESR
+    on the held-out part of the estimator's split (module docstring).
+
+    Parameters
+    ----------
+    est : LPVEstimator
+        Estimator with ``stroke`` or ``blend`` None; its ``choose_on`` says where candidates are
+        scored.
+    exps : ExperimentSet
+        Training records.
+    record_weights : sequence of float, optional
+        Per-record weights [-] of the fits and of the mean ESR.
+    choice_records : Experiment or iterable of Experiment, optional
+        Records that score the candidates instead of the inner split (``choose_on="held-out"``).
+
+    Returns
+    -------
+    Choice
+        The estimator with the chosen ``stroke`` and ``blend`` (the fit template fits it on every
+        training record) and the provenance of the choice.
+
+    Raises
+    ------
+    IdentificationError
+        When no candidate could be fitted (the first failure is named).
+    DataValidationError
+        ``choice_records`` with ``choose_on="training"``, or empty.
+    """
+    folds = [_Fold(split) for split in _choice_split(est, exps, record_weights, choice_records)]
+    how = folds[0].split.how
+    key = "train_esr" if how == "training" else "held_out_esr"
+    nfev = min(est.max_nfev, CHOICE_NFEV)
+    rows: list[dict[str, Any]] = []
+    best: tuple[float, float, float] | None = None
+    first_error = ""
+    cands = _candidates(est)
+    for k, (x_y, lam) in enumerate(cands, start=1):
+        cand = dataclasses.replace(est, stroke=x_y, blend=lam, max_nfev=nfev)
+        report("hysteretic input: candidate", k - 1, len(cands))
+        with warnings.catch_warnings(), section(f"hysteretic candidate {k} of {len(cands)}"):
+            warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
+            try:
+                scores = [fold.score(cand) for fold in folds]
+            except IdentificationError as exc:
+                first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {exc}"
+                rows.append({"stroke": x_y, "blend": lam, key: None, "error": str(exc)})
+                continue
+        score = float(np.mean([sc for sc, _ in scores]))
+        row = {
+            "stroke": x_y,
+            "blend": lam,
+            key: score,
+            "error": "; ".join(e for _, e in scores if e),
+        }
+        if len(folds) > 1:
+            row["fold_esr"] = [sc for sc, _ in scores]
+        rows.append(row)
+        if best is None or score < best[0]:
+            best = (score, x_y, lam)
+    if best is None:
+        raise IdentificationError(
+            f"{est.kind}: no hysteretic-input candidate could be fitted; {first_error}"
+        )
+    report("hysteretic input: candidate", len(cands), len(cands))
+    chosen = dataclasses.replace(est, stroke=best[1], blend=best[2])
+    note = _note(best, len(rows), nfev, [f.split for f in folds])
+
+    def provenance(prov: dict[str, Any]) -> dict[str, Any]:
+        prov = {**prov, "hysteretic_choice": rows, "hysteretic_note": note}
+        prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
+        if how != "training":
+            records = [f.split.record() for f in folds]
+            prov["hysteretic_held_out"] = (
+                records[0] if len(records) == 1 else {"how": records[0]["how"], "folds": records}
+            )
+        windows = [f.windows for f in folds if f.windows is not None]
+        if windows:
+            prov["hysteretic_windows"] = {
+                **windows[0],
+                "note": "stroke and blend chosen on evenly spread windows; the model fitted on all",
+            }
+        return prov
+
+    return Choice(chosen, provenance)
+
+
+class _Fold:
+    """One fold of the choice: its part to fit and its part to score, windowed when long."""
+
+    def __init__(self, split: InnerSplit) -> None:
+        self.split = split
+        self.fit_set, self.fit_w, fit_win = _windowed(split.fit, split.fit_weights)
+        if split.how == "training":
+            self.score_set, score_w, score_win = self.fit_set, self.fit_w, None
+        else:
+            self.score_set, score_w, score_win = _windowed(split.held_out, split.held_out_weights)
+        self.w = np.ones(len(self.score_set)) if score_w is None else np.asarray(score_w, float)
+        self.windows: dict[str, Any] | None = None
+        if fit_win is not None or score_win is not None:
+            self.windows = {
+                **(
+                    fit_win
+                    or {"windows": len(self.fit_set), "samples_used": _samples(self.fit_set)}
+                ),
+                "scored_on": score_win,
+            }
+
+    def score(self, cand: Any) -> tuple[float, str]:
+        """The candidate fitted on the fold's fit part: its mean free-run ESR on the scored part
+        (inf, with the reason, when a free run diverges)."""
+        model = cand.fit(self.fit_set, record_weights=self.fit_w)
+        report(f"free-run ESR on the {self.split.held_out.name} records")
+        try:
+            esr = [model.with_range_policy("ignore").score(e).esr for e in self.score_set]
+        except SimulationDivergedError as exc:  # e.g. an unrefined, unstable candidate
+            return float("inf"), str(exc)
+        return float(np.average(esr, weights=self.w)), ""
+
+
+def _samples(exps: ExperimentSet) -> int:
+    return int(sum(e.n for e in exps))
+
+
+def _note(best: tuple[float, float, float], n: int, nfev: int, splits: Sequence[InnerSplit]) -> str:
+    """One line on what was chosen, where it was scored and how."""
+    score, x_y, lam = best
+    split = splits[0]
+    if not np.isfinite(score):
+        return (
+            f"every candidate diverged in free run on the {split.held_out.name} records; the first "
+            f"(stroke = {x_y:g} m, blend = {lam:g}) is returned"
+        )
+    n_out, n_in = len(split.held_out), len(split.fit)
+    where = {
+        "training": "the training records",
+        "records": f"{len(splits)} folds of held-out records (each record of a level with at "
+        f"least {HOLD_EVERY} records held out once; mean over the folds), fitted on the others",
+        "time": f"the last {HELD_OUT_FRACTION:.0%} of the {n_out} records, fitted on the rest",
+        "given": f"{n_out} given records (choice_records), fitted on the {n_in} training records",
+    }[split.how]
+    return (
+        f"stroke = {x_y:g} m and blend = {lam:g} chosen on {where} (lowest mean free-run ESR of "
+        f"{n} candidates, each refined with at most {nfev} iterations)"
+    )
