@@ -1,7 +1,8 @@
 """The hysteretic LPV input's ``stroke`` / ``blend`` chosen on held-out records
-(``choose_on="held-out"``, :mod:`mrdamper.models.lpv.choice`): the inner split (every level kept,
-deterministic, the time split of few records), the held-out choice against the default training
-choice on rig records, the given choice records, and the refusals."""
+(:mod:`mrdamper.models.lpv.choice`): the inner split (every level kept, deterministic, the time
+split of few records), the held-out and the beyond-envelope (default) choices against the
+training choice on rig records, the fallback of records without a frequency band above the
+others, the given choice records, and the refusals."""
 
 from __future__ import annotations
 
@@ -93,7 +94,7 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     small-stroke chirp (never seen) better than the candidate the training fit picks."""
     train, test = rig_data
     held = _fit(train, settings={"choose_on": "held-out"})
-    trained = _fit(train)  # the default: chosen on the training fit
+    trained = _fit(train, settings={"choose_on": "training"})
     folds = held.provenance["hysteretic_held_out"]["folds"]
     assert folds[2]["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
     assert sorted(n for f in folds for n in f["held_out"]) == sorted(e.name for e in train)
@@ -106,11 +107,54 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     assert held.provenance["settings"]["choose_on"] == "held-out"
     assert trained.provenance["settings"]["choose_on"] == "training"
     assert held.provenance["n_samples"] == sum(e.n for e in train)  # refitted on every record
-    # the default choice: scored on the training records, no split recorded
+    # the training choice: scored on the training records, no split recorded
     assert "train_esr" in trained.provenance["hysteretic_choice"][0]
     assert "hysteretic_held_out" not in trained.provenance
     assert (held.stroke, held.blend) != (trained.stroke, trained.blend)
     assert held.score(test[0]).esr < 0.6 * trained.score(test[0]).esr
+
+
+def test_beyond_choice_scores_on_the_highest_frequency_records(rig_data) -> None:
+    """The default: the candidates are fitted on the sines below 5 Hz and scored on the 5 Hz
+    ones (every current); the chosen candidate predicts the unseen 1-10 Hz chirp better than the
+    one the training fit picks."""
+    train, test = rig_data
+    beyond = _fit(train)
+    trained = _fit(train, settings={"choose_on": "training"})
+    info = beyond.provenance["hysteretic_held_out"]
+    assert "highest frequency held out" in info["how"]
+    assert info["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
+    assert len(info["inner_training"]) == 6
+    rows = beyond.provenance["hysteretic_choice"]
+    best = min(rows, key=lambda r: r["held_out_esr"])
+    assert (beyond.stroke, beyond.blend) == (best["stroke"], best["blend"])
+    assert beyond.provenance["settings"]["choose_on"] == "beyond"
+    assert "beyond the envelope" in beyond.provenance["hysteretic_note"]
+    assert beyond.provenance["n_samples"] == sum(e.n for e in train)  # refitted on every record
+    assert beyond.score(test[0]).esr < 0.6 * trained.score(test[0]).esr
+
+
+def test_beyond_choice_without_a_frequency_band_uses_the_held_out_split() -> None:
+    """Records of one frequency band (no fold beyond the others) fall back to the held-out split:
+    here three records of one group, so the last 30 % of every record."""
+    same = ExperimentSet(
+        [_record(lev, 0, n=600) for lev in (0.0, 1.0)] + [_record(lev, 0, n=600) for lev in (0.5,)]
+    )
+    assert _choice.beyond_split(same) is None
+    (split,) = _choice._choice_split(LPVEstimator(input="voltage"), same, None, None)
+    assert split.how == "time"
+    assert split.record()["how"] == "the last 30% of every record"
+
+
+def test_beyond_split_of_one_record_holds_out_its_later_block() -> None:
+    """One record whose later part moves further than its earlier part: that block is held out."""
+    t = np.arange(2000) / FS
+    v = 0.05 * np.sin(2 * np.pi * 1.0 * t) * np.where(t > 6.0, 2.0, 1.0)
+    e = Experiment(t=t, x=np.cumsum(v) / FS, v=v, F=1000.0 * v, voltage=np.full(t.size, 1.0))
+    split = _choice.beyond_split(ExperimentSet([e]), record_weights=[2.0])
+    assert split is not None and split.how == "beyond" and split.label.startswith("later block")
+    assert split.fit[0].n + split.held_out[0].n == e.n
+    assert split.fit_weights is None  # one record split in time: no per-record weights
 
 
 def test_given_choice_records_score_the_candidates(rig_data) -> None:
@@ -132,7 +176,7 @@ def test_refusals(rig_data) -> None:
         LPVEstimator(choose_on="validation").fit(train)  # type: ignore[arg-type]
     assert "\n" not in str(exc.value)
     with pytest.raises(DataValidationError, match="^choice_records: .*choose_on='training'"):
-        LPVEstimator().fit(train, choice_records=test)  # choose_on="training", the default
+        LPVEstimator(choose_on="training").fit(train, choice_records=test)
     with pytest.raises(DataValidationError, match="^choice_records: .*no setting is left open"):
         LPVEstimator(input_signal="u").fit(train, choice_records=test)
     with pytest.raises(DataValidationError, match="^choice_records: .*at least one record"):

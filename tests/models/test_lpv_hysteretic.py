@@ -126,7 +126,7 @@ def test_fit_on_rig_records(rig_data) -> None:
 @pytest.mark.slow
 def test_choice_on_training_records_and_round_trip(rig_data) -> None:
     train, test = rig_data
-    m = _fit(train[::2], blend=0.5)  # the default input and choice; stroke chosen
+    m = _fit(train[::2], blend=0.5, choose_on="training")  # the default input; stroke chosen
     rows = m.provenance["hysteretic_choice"]
     assert [r["stroke"] for r in rows] == list(_lpv_inputs.STROKES)
     best = min(rows, key=lambda r: r["train_esr"])
@@ -167,7 +167,7 @@ def test_long_campaigns_choose_on_windows(rig_data, monkeypatch) -> None:
     train, _ = rig_data
     monkeypatch.setattr(_lpv_choice, "CHOICE_THRESHOLD", 1000)
     monkeypatch.setattr(_lpv_choice, "CHOICE_BUDGET", 4000)
-    m = _fit(train[:6], blend=0.5)
+    m = _fit(train[:6], blend=0.5, choose_on="training")
     info = m.provenance["hysteretic_windows"]  # (records shorter than a window: whole records)
     assert info["windows"] == 6 and info["samples_used"] == sum(e.n for e in train[:6])
     assert m.provenance["n_samples"] == sum(e.n for e in train[:6])  # the final fit: every sample

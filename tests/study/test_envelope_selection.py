@@ -14,9 +14,9 @@ import pytest
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.envelope import envelope_of
+from mrdamper.models.envelope_folds import envelope_folds
 from mrdamper.models.narx import NARXModel
 from mrdamper.study import cross_validate
-from mrdamper.study.envelope_folds import envelope_folds
 from mrdamper.study.protocol import Protocol
 from mrdamper.study.selection import SCORE_COLUMNS, selection_from_scores
 from mrdamper.study.stress import StressResult, stress_motions, stress_test

@@ -16,7 +16,7 @@ with ``range_policy="clip"`` (a left-out level outside the training range is cli
 in the ``clipped`` column).
 
 Beyond the training envelope (``beyond=True``, default): every kind is also scored on the folds of
-:func:`mrdamper.study.envelope_folds.envelope_folds` (the largest amplitude, the highest frequency
+:func:`mrdamper.models.envelope_folds.envelope_folds` (the largest amplitude, the highest frequency
 or velocity held out; for one record, a later block whose range exceeds the earlier one's), and
 (``stress=True``, default) fitted once on all the records and stress-tested
 (:func:`mrdamper.study.stress.stress_test`: motions beyond the envelope must stay bounded,
@@ -260,8 +260,8 @@ def cross_validate(
     one fit on all the records per kind when ``stress``) to :mod:`mrdamper.progress`; each fit's
     own stages come prefixed with the kind and fold.
     """
+    from mrdamper.models.envelope_folds import envelope_folds
     from mrdamper.models.registry import available_models
-    from mrdamper.study.envelope_folds import envelope_folds
 
     kinds = list(models) if models is not None else available_models()
     extra = {k: dict(v) for k, v in (settings or {}).items()}

@@ -83,12 +83,15 @@ class LPVEstimator(Estimator):
     stroke, blend : float, optional
         Stroke scale [m] and pre-yield share [-] of the hysteretic input; when either is None
         it is chosen over a grid (lowest mean free-run ESR where ``choose_on`` says).
-    choose_on : {"training", "held-out"}
-        Where the open ``stroke`` / ``blend`` candidates are scored: on the training records
-        themselves (default) or on records held out of them (three folds, each holding out every
-        third record of each electrical level; the last 30 % of every record when a fold would
-        hold out fewer than two records; :mod:`mrdamper.models.lpv.choice`). Unused when nothing
-        is open.
+    choose_on : {"beyond", "training", "held-out"}
+        Where the open ``stroke`` / ``blend`` candidates are scored
+        (:mod:`mrdamper.models.lpv.choice`). ``"beyond"`` (default): on the training records of
+        the highest frequency band, fitted on the others (one record: its later block that
+        leaves the earlier range, fitted on the earlier part); as ``"held-out"`` when the records
+        have no such band. ``"training"``: on the training records themselves. ``"held-out"``:
+        on records held out of them (three folds, each holding out every third record of each
+        electrical level; the last 30 % of every record when a fold would hold out fewer than
+        two records). Unused when nothing is open.
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
@@ -134,8 +137,8 @@ class LPVEstimator(Estimator):
     without duplicating records (default: all 1). A hysteretic input with ``stroke`` or ``blend``
     left None has them chosen first (the template's settings-choice hook); the option
     ``choice_records`` (records not in the training set) then scores the candidates instead of
-    the inner folds (with ``choose_on="held-out"`` only; the model is fitted on the training
-    records alone). The fit raises
+    the inner folds (with ``choose_on="held-out"`` or ``"beyond"``; the model is fitted on the
+    training records alone). The fit raises
     :class:`~mrdamper.errors.IdentificationError` for a rank-deficient regression, too few
     scheduling levels for ``n_rho``, or (with ``stability="enforce"``) no frozen-stable model,
     naming the pole.
@@ -167,7 +170,7 @@ class LPVEstimator(Estimator):
     stability: Literal["enforce", "warn"] = "enforce"
     stroke: float | None = None
     blend: float | None = None
-    choose_on: Literal["training", "held-out"] = "training"
+    choose_on: Literal["beyond", "training", "held-out"] = "beyond"
     fs: InitVar[float | None] = None
 
     renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}

@@ -1,4 +1,5 @@
-"""Folds that leave the training envelope, for :func:`mrdamper.study.cross_validate`.
+"""Folds that leave the training envelope: for :func:`mrdamper.study.select` and the LPV
+estimator's ``choose_on="beyond"`` (:mod:`mrdamper.models.lpv.choice`).
 
 Cross-validation inside the envelope (leave a condition, a record or a time block out) rewards
 models that interpolate. These folds hold out what lies beyond the rest of the data:
