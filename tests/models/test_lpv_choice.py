@@ -134,27 +134,29 @@ def test_beyond_choice_scores_on_the_highest_frequency_records(rig_data) -> None
     assert beyond.score(test[0]).esr < 0.6 * trained.score(test[0]).esr
 
 
-def test_beyond_choice_without_a_frequency_band_uses_the_held_out_split() -> None:
-    """Records of one frequency band (no fold beyond the others) fall back to the held-out split:
-    here three records of one group, so the last 30 % of every record."""
-    same = ExperimentSet(
-        [_record(lev, 0, n=600) for lev in (0.0, 1.0)] + [_record(lev, 0, n=600) for lev in (0.5,)]
-    )
+def test_beyond_choice_falls_back_to_the_training_choice() -> None:
+    """Records of one frequency band (no fold beyond the others), or a band that would take more
+    than a third of the records (two conditions: the candidates would be fitted on one), are
+    chosen on the training records."""
+    same = ExperimentSet([_record(lev, 0, n=600) for lev in (0.0, 1.0, 0.5)])
     assert _choice.beyond_split(same) is None
     (split,) = _choice._choice_split(LPVEstimator(input="voltage"), same, None, None)
-    assert split.how == "time"
-    assert split.record()["how"] == "the last 30% of every record"
+    assert split.how == "training"
+    two = ExperimentSet([_record(lev, k, n=600) for k in (0, 5) for lev in (0.0, 1.0)])
+    assert _choice.envelope_folds(two)  # a frequency fold exists: half of the records
+    assert _choice.beyond_split(two) is None
+    three = ExperimentSet([_record(lev, k, n=600) for k in (0, 3, 6) for lev in (0.0, 1.0)])
+    split = _choice.beyond_split(three, record_weights=[1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
+    assert split is not None and list(split.held_out.names) == ["L0.0_6", "L1.0_6"]
+    assert split.held_out_weights == [5.0, 6.0] and split.fit_weights == [1.0, 2.0, 3.0, 4.0]
 
 
-def test_beyond_split_of_one_record_holds_out_its_later_block() -> None:
-    """One record whose later part moves further than its earlier part: that block is held out."""
+def test_one_record_is_chosen_on_the_training_fit() -> None:
     t = np.arange(2000) / FS
-    v = 0.05 * np.sin(2 * np.pi * 1.0 * t) * np.where(t > 6.0, 2.0, 1.0)
+    v = 0.05 * np.sin(2 * np.pi * 1.0 * t) * np.where(t > 8.0, 2.0, 1.0)
     e = Experiment(t=t, x=np.cumsum(v) / FS, v=v, F=1000.0 * v, voltage=np.full(t.size, 1.0))
-    split = _choice.beyond_split(ExperimentSet([e]), record_weights=[2.0])
-    assert split is not None and split.how == "beyond" and split.label.startswith("later block")
-    assert split.fit[0].n + split.held_out[0].n == e.n
-    assert split.fit_weights is None  # one record split in time: no per-record weights
+    assert _choice.envelope_folds(ExperimentSet([e]))  # a later block leaves the earlier range
+    assert _choice.beyond_split(ExperimentSet([e])) is None
 
 
 def test_given_choice_records_score_the_candidates(rig_data) -> None:

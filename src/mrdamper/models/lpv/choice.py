@@ -12,10 +12,10 @@ estimator's ``choose_on``:
     The candidates are fitted on the training records below the highest frequency band and
     scored on the records of that band (the ``"highest frequency held out"`` fold of
     :func:`mrdamper.models.envelope_folds.envelope_folds`: every current of the highest-frequency
-    condition); for one record, on its later block that leaves the earlier block's range. The
-    input's pre-yield shape is what decides how the model extrapolates in frequency, so it is
-    chosen where the model has to extrapolate. Records without such a fold (one frequency band,
-    a record that never leaves its earlier range) are chosen on as ``"held-out"`` says.
+    condition). The input's pre-yield shape is what decides how the model extrapolates in
+    frequency, so it is chosen where the model has to extrapolate. One record, records without
+    such a band, or a band of more than :data:`MAX_BEYOND_SHARE` of the records (two sine
+    conditions: the candidates would be fitted on one) are chosen on as ``"training"`` says.
 ``"training"``
     The candidates are fitted and scored on the training records themselves.
 ``"held-out"``
@@ -68,12 +68,13 @@ from mrdamper.models.lpv import inputs as _inputs
 from mrdamper.progress import report, section
 
 __all__ = [
-    "BEYOND_FOLDS",
+    "BEYOND_FOLD",
     "CHOICE_BUDGET",
     "CHOICE_NFEV",
     "CHOICE_THRESHOLD",
     "HELD_OUT_FRACTION",
     "HOLD_EVERY",
+    "MAX_BEYOND_SHARE",
     "MIN_HELD_OUT",
     "InnerSplit",
     "beyond_split",
@@ -218,9 +219,13 @@ def inner_splits(
     )
 
 
-#: Labels of :func:`~mrdamper.models.envelope_folds.envelope_folds` folds the beyond-envelope
-#: choice scores on (the frequency fold of several records, the later block of one record).
-BEYOND_FOLDS: tuple[str, ...] = ("beyond: highest frequency", "beyond: later block")
+#: Largest share of the training records the beyond-envelope split may hold out [-]; above it
+#: the candidates would be fitted on too little (e.g. one of two sine conditions) and the training
+#: choice is used.
+MAX_BEYOND_SHARE = 1.0 / 3.0
+#: Label of the :func:`~mrdamper.models.envelope_folds.envelope_folds` fold the beyond-envelope
+#: choice scores on.
+BEYOND_FOLD = "beyond: highest frequency"
 
 
 def beyond_split(
@@ -233,23 +238,25 @@ def beyond_split(
     exps : ExperimentSet
         Training records.
     record_weights : sequence of float, optional
-        One weight per record [-] (whole records only; a split of one record drops them).
+        One weight per record [-].
 
     Returns
     -------
     InnerSplit or None
-        ``how="beyond"``: the records of the highest frequency band held out (several records),
-        or the later block of one record; None when the records have no such fold.
+        ``how="beyond"``: the records of the highest frequency band held out; None for one
+        record, records without such a band, or a band of more than :data:`MAX_BEYOND_SHARE` of
+        the records.
     """
+    if len(exps) < 2:
+        return None
     for label, fit, held in envelope_folds(exps):
-        if not label.startswith(BEYOND_FOLDS):
+        if not label.startswith(BEYOND_FOLD):
             continue
-        if record_weights is None or len(exps) == 1:
-            w_fit, w_held = None, None
-        else:
-            index = {e.name: k for k, e in enumerate(exps)}
-            w_fit = _pick(record_weights, [index[e.name] for e in fit])
-            w_held = _pick(record_weights, [index[e.name] for e in held])
+        if len(held) > MAX_BEYOND_SHARE * len(exps):
+            return None  # too little left to fit the candidates on
+        index = {e.name: k for k, e in enumerate(exps)}
+        w_fit = _pick(record_weights, [index[e.name] for e in fit])
+        w_held = _pick(record_weights, [index[e.name] for e in held])
         return InnerSplit(
             ExperimentSet(list(fit), name="inner training"),
             ExperimentSet(list(held), name="held out"),
@@ -272,7 +279,7 @@ def _choice_split(
         beyond = beyond_split(exps, record_weights)
         if beyond is not None:
             return (beyond,)
-    if est.choose_on == "training":
+    if est.choose_on == "training" or (est.choose_on == "beyond" and choice_records is None):
         if choice_records is not None:
             raise DataValidationError(
                 "choice_records",

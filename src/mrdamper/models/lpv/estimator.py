@@ -86,12 +86,12 @@ class LPVEstimator(Estimator):
     choose_on : {"beyond", "training", "held-out"}
         Where the open ``stroke`` / ``blend`` candidates are scored
         (:mod:`mrdamper.models.lpv.choice`). ``"beyond"`` (default): on the training records of
-        the highest frequency band, fitted on the others (one record: its later block that
-        leaves the earlier range, fitted on the earlier part); as ``"held-out"`` when the records
-        have no such band. ``"training"``: on the training records themselves. ``"held-out"``:
-        on records held out of them (three folds, each holding out every third record of each
-        electrical level; the last 30 % of every record when a fold would hold out fewer than
-        two records). Unused when nothing is open.
+        the highest frequency band, fitted on the others; as ``"training"`` for one record,
+        records without such a band, or a band of more than a third of the records.
+        ``"training"``: on the training records themselves. ``"held-out"``: on records held out
+        of them (three folds, each holding out every third record of each electrical level; the
+        last 30 % of every record when a fold would hold out fewer than two records). Unused
+        when nothing is open.
     reading : {"continuous", "literal"}
         Reading of eq. (22).
     zone_laws : ZoneLaws, optional
