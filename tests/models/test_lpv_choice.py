@@ -114,30 +114,36 @@ def test_held_out_choice_generalises_where_the_training_choice_does_not(rig_data
     assert held.score(test[0]).esr < 0.6 * trained.score(test[0]).esr
 
 
-def test_beyond_choice_scores_on_the_highest_frequency_records(rig_data) -> None:
-    """The default: the candidates are fitted on the sines below 5 Hz and scored on the 5 Hz
-    ones (every current); the chosen candidate predicts the unseen 1-10 Hz chirp better than the
-    one the training fit picks."""
+def test_beyond_choice_scores_on_held_out_records_and_the_highest_frequency_ones(
+    rig_data,
+) -> None:
+    """The default: the three folds of held-out records plus one fold holding out the 5 Hz sines
+    (every current), fitted on the others; the chosen candidate predicts the unseen 1-10 Hz chirp
+    better than the one the training fit picks."""
     train, test = rig_data
     beyond = _fit(train)
     trained = _fit(train, settings={"choose_on": "training"})
-    info = beyond.provenance["hysteretic_held_out"]
-    assert "highest frequency held out" in info["how"]
-    assert info["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
-    assert len(info["inner_training"]) == 6
+    folds = beyond.provenance["hysteretic_held_out"]["folds"]
+    assert len(folds) == _choice.HOLD_EVERY + 1
+    assert "highest frequency held out" in folds[-1]["how"]
+    assert folds[-1]["held_out"] == ["s0.002_5.0_0.0", "s0.002_5.0_0.5", "s0.002_5.0_1.0"]
+    assert len(folds[-1]["inner_training"]) == 6
     rows = beyond.provenance["hysteretic_choice"]
+    assert all(len(r["fold_esr"]) == _choice.HOLD_EVERY + 1 for r in rows)
+    for r in rows:
+        assert r["held_out_esr"] == pytest.approx(np.mean(r["fold_esr"]))
     best = min(rows, key=lambda r: r["held_out_esr"])
     assert (beyond.stroke, beyond.blend) == (best["stroke"], best["blend"])
     assert beyond.provenance["settings"]["choose_on"] == "beyond"
-    assert "beyond the envelope" in beyond.provenance["hysteretic_note"]
+    assert "beyond the others' envelope" in beyond.provenance["hysteretic_note"]
     assert beyond.provenance["n_samples"] == sum(e.n for e in train)  # refitted on every record
     assert beyond.score(test[0]).esr < 0.6 * trained.score(test[0]).esr
 
 
 def test_beyond_choice_falls_back_to_the_training_choice() -> None:
-    """Records of one frequency band (no fold beyond the others), or a band that would take more
-    than a third of the records (two conditions: the candidates would be fitted on one), are
-    chosen on the training records."""
+    """Records with neither folds of records (fewer than three per level) nor a band beyond the
+    others that holds at most a third of them (one band; two conditions: the candidates would be
+    fitted on one) are chosen on the training records."""
     same = ExperimentSet([_record(lev, 0, n=600) for lev in (0.0, 1.0, 0.5)])
     assert _choice.beyond_split(same) is None
     (split,) = _choice._choice_split(LPVEstimator(input="voltage"), same, None, None)

@@ -85,9 +85,10 @@ class LPVEstimator(Estimator):
         it is chosen over a grid (lowest mean free-run ESR where ``choose_on`` says).
     choose_on : {"beyond", "training", "held-out"}
         Where the open ``stroke`` / ``blend`` candidates are scored
-        (:mod:`mrdamper.models.lpv.choice`). ``"beyond"`` (default): on the training records of
-        the highest frequency band, fitted on the others; as ``"training"`` for one record,
-        records without such a band, or a band of more than a third of the records.
+        (:mod:`mrdamper.models.lpv.choice`). ``"beyond"`` (default): on held-out records inside
+        and beyond the training envelope (the ``"held-out"`` folds of whole records, plus the
+        records of the highest frequency band held out when they are at most a third of the
+        records), each fitted on the others; as ``"training"`` when there is neither.
         ``"training"``: on the training records themselves. ``"held-out"``: on records held out
         of them (three folds, each holding out every third record of each electrical level; the
         last 30 % of every record when a fold would hold out fewer than two records). Unused
