@@ -65,6 +65,17 @@ def test_leaves_names_each_dimension_and_by_how_much() -> None:
     assert "\n" not in note
 
 
+def test_one_trained_level_is_named_with_the_distance_not_a_share_of_no_range() -> None:
+    trained = {"v_max": 0.1, "x_range": [-0.01, 0.01], "e_range": [0.5, 0.5], "f_band": 2.0}
+    seen = {**trained, "e_range": [1.0, 1.0]}
+    ratio, text = leaves(trained, seen)["electrical"]
+    assert ratio == pytest.approx(2.0)
+    assert text == "electrical input [1, 1] against the one level trained, 0.5 (0.5 beyond it)"
+    assert leaves(trained, {**trained, "e_range": [0.5, 0.5]}) == {}
+    at_zero = {**trained, "e_range": [0.0, 0.0]}
+    assert "(0.2 beyond it)" in leaves(at_zero, {**trained, "e_range": [0.0, 0.2]})["electrical"][1]
+
+
 def test_predict_simulate_and_score_say_once_when_a_record_leaves(tmp_path: Path) -> None:
     m = _model_with_envelope()
     assert m.envelope is not None and m.envelope["f_band"] == pytest.approx(1.0, abs=0.3)

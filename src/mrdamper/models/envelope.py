@@ -185,8 +185,19 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
         )
     elo, ehi = (float(b) for b in trained["e_range"])
     sel, seh = (float(b) for b in seen["e_range"])
-    width = max(ehi - elo, 1e-12 * max(1.0, abs(ehi)))
-    out_by = max(seh - ehi, elo - sel, 0.0) / width
+    beyond = max(seh - ehi, elo - sel, 0.0)
+    if ehi - elo <= 1e-9 * max(1.0, abs(ehi)):  # one level trained: no range to compare with
+        level = abs(ehi) if ehi != 0.0 else 1.0
+        if beyond / level > tol:
+            out["electrical"] = (
+                1.0 + beyond / level,
+                (
+                    f"electrical input [{sel:.3g}, {seh:.3g}] against the one level trained, "
+                    f"{elo:.3g} ({beyond:.3g} beyond it)"
+                ),
+            )
+        return out
+    out_by = beyond / (ehi - elo)
     if out_by > tol:
         out["electrical"] = (
             1.0 + out_by,
