@@ -234,7 +234,9 @@ BEYOND_FOLD = "beyond: highest frequency"
 
 
 def beyond_split(
-    exps: ExperimentSet, record_weights: Sequence[float] | None = None
+    exps: ExperimentSet,
+    record_weights: Sequence[float] | None = None,
+    source: ElectricalSource = "i",
 ) -> InnerSplit | None:
     """The beyond-envelope split of the training records (module docstring), or None.
 
@@ -244,6 +246,8 @@ def beyond_split(
         Training records.
     record_weights : sequence of float, optional
         One weight per record [-].
+    source : {"i", "voltage"}
+        Electrical input channel (the held-out band must leave every level in the fit part).
 
     Returns
     -------
@@ -259,6 +263,8 @@ def beyond_split(
             continue
         if len(held) > MAX_BEYOND_SHARE * len(exps):
             return None  # too little left to fit the candidates on
+        if {_level_key(e, source) for e in fit} != {_level_key(e, source) for e in exps}:
+            return None  # the band holds every record of a level: the zone laws would miss it
         index = {e.name: k for k, e in enumerate(exps)}
         w_fit = _pick(record_weights, [index[e.name] for e in fit])
         w_held = _pick(record_weights, [index[e.name] for e in held])
@@ -283,7 +289,7 @@ def _choice_split(
     if est.choose_on == "beyond" and choice_records is None:
         inside = inner_splits(exps, est.input, record_weights)
         folds = tuple(f for f in inside if f.how == "records")
-        beyond = beyond_split(exps, record_weights)
+        beyond = beyond_split(exps, record_weights, est.input)
         if folds or beyond is not None:
             return folds + (() if beyond is None else (beyond,))
     if est.choose_on == "training" or (est.choose_on == "beyond" and choice_records is None):
