@@ -1,0 +1,247 @@
+"""An exported C inverse as the quarter car's inverse: its library's per-sample step, called from
+compiled code.
+
+A library compiled from the C export (:func:`mrdamper.control.c_export.export_c`, for example
+``gcc -shared -fPIC -O2 mrd_damper.c -o libmrd_damper.so -lm``) defines
+``<name>_inverse_step(s, x, v, F_desired, F_out)``, the model's regularised inverse one sample at
+a time with its memory (previous input, drive-lag command, LPV past outputs and inputs, Dahl
+state) in a caller-owned ``<name>_state`` of ``<name>_state_size()`` bytes, and
+``<name>_kind()``. :class:`CInverse` loads it with ``ctypes`` and the quarter car
+(:func:`~mrdamper.control.quarter_car.simulate_quarter_car` and
+:func:`~mrdamper.control.closed_loop.simulate_closed_loop`, ``c_inverse=``) calls it at every
+control sample in place of its own inverse, through a numba-compiled function holding the C
+function in the controller's form, as :mod:`mrdamper.control.fmu_plant` calls an FMU's step.
+Everything else stays the loop's: the controller's desired force, the input limits and rate
+bound the loop applies to passive controllers, the model's force for the chosen input (the LPV
+model's recursion, the static map) and the plant. The C inverse uses the settings fixed at its
+export (regularisation weight, grid, rate bound): exported with every default, they are the quarter
+car's, and the loop gives the Python inverse's numbers to rounding.
+
+Only the inverses the quarter car itself runs per sample can be substituted: a static map
+(``sp1``..``sp4``, ``bingham``) or an LPV model. The one-state hysteresis families export a
+closed-form inverse, while the quarter car inverts them over a lead through their step
+(:mod:`mrdamper.control.closed_loop`): not the same controller, so they are refused.
+
+``saturated`` keeps its meaning: the desired force lies outside the model's forces on the
+inverse's search grid, which the loop evaluates with the Python model (the C function returns the
+input and the force only).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import types
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from mrdamper.control import _closed_loop_kernels as CK
+from mrdamper.control import _quarter_car_kernels as QK
+from mrdamper.control._forms import ControllerForm
+from mrdamper.errors import DataValidationError
+from mrdamper.models.kernels import poly as _poly
+from mrdamper.models.kernels import sp_force1
+
+__all__ = [
+    "CControllerForm",
+    "CInverse",
+    "c_inverse_form",
+    "c_kernels",
+    "grid_reach",
+    "load_c_inverse",
+]
+
+#: Kinds whose inverse the quarter car runs per sample (the ones a C inverse can replace).
+LOOP_KINDS = ("sp1", "sp2", "sp3", "sp4", "bingham", "lpv")
+
+
+class CControllerForm(NamedTuple):
+    """:class:`~mrdamper.control._forms.ControllerForm` with the C inverse: its function
+    (a ``ctypes`` function object, typed by signature), its state and the force it returns."""
+
+    ctrl: int
+    gains: Any
+    lo: float
+    hi: float
+    rate_step: float
+    dt_c: float
+    inverse: Any
+    c_step: Any
+    c_state: Any
+    c_out: Any
+
+
+@njit(cache=True)
+def grid_reach(is_lpv, cf, x, v, comp, power, theta, f0, target, a, b, hold, n_grid):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Whether ``target`` [N] lies between the least and largest model forces at the inputs the
+    inverse's grid visits on ``[a, b]`` (the ``reachable`` flag of
+    :func:`~mrdamper.control._inverse_kernels.reg_solve_poly`,
+    ``reg_solve_static`` and ``horizon_step``: ``hold`` clipped, then ``n_grid`` intervals)."""
+    r = min(max(hold, a), b)
+    f = _poly(cf, r) if is_lpv else sp_force1(x, v, r, comp, power, theta, f0)
+    fmin = f
+    fmax = f
+    if b <= a:
+        return fmin == target
+    h = (b - a) / n_grid
+    for q in range(n_grid + 1):
+        r = b if q == n_grid else a + q * h
+        f = _poly(cf, r) if is_lpv else sp_force1(x, v, r, comp, power, theta, f0)
+        fmin = min(fmin, f)
+        fmax = max(fmax, f)
+    return fmin <= target <= fmax
+
+
+@njit(cache=False)
+def c_invert(form, k, x_d, v_d, target, a, b, prev, hold, cf, y, u, yb, ub, z_d):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """``<name>_inverse_step`` at this control sample (the arguments of
+    :func:`~mrdamper.control._quarter_car_kernels.invert_model`); ``(r, reachable)``."""
+    r = form.c_step(form.c_state.ctypes, x_d, v_d, target, form.c_out.ctypes)
+    inv = form.inverse
+    ok = grid_reach(
+        inv.is_lpv,
+        cf,
+        x_d,
+        v_d,
+        inv.comp,
+        inv.power,
+        inv.theta,
+        inv.f0,
+        target,
+        a,
+        b,
+        hold,
+        inv.n_grid,
+    )
+    return r, ok
+
+
+def _rebound(fn: Any, **names: Any) -> Any:
+    """A non-cached compiled copy of the compiled function ``fn`` with globals ``names`` rebound
+    (numba freezes globals at compile time)."""
+    py = fn.py_func
+    copy = types.FunctionType(py.__code__, {**py.__globals__, **names}, py.__name__)
+    copy.__defaults__ = py.__defaults__
+    copy.__doc__ = py.__doc__
+    return njit(cache=False)(copy)
+
+
+_KERNELS: dict[str, Any] = {}
+
+
+def c_kernels() -> dict[str, Any]:
+    """The quarter car's kernels with the C inverse in place of
+    :func:`~mrdamper.control._quarter_car_kernels.invert_model`, compiled once per process (a
+    kernel holding ``ctypes`` functions is not cached on disk): ``"sample"`` the controller sample,
+    ``"simulate"`` the fused kernel, ``"loop"`` the generic-plant loop of the built-in families
+    (a family added at run time: :func:`~mrdamper.control._closed_loop_kernels.run_loop` with
+    ``control=c_kernels()["sample"]``)."""
+    if not _KERNELS:
+        sample = _rebound(QK.control_sample, INVERT=c_invert)
+        _KERNELS["sample"] = sample
+        _KERNELS["simulate"] = _rebound(QK.simulate, control_sample=sample)
+        _KERNELS["loop"] = CK.compile_loop(
+            CK.family_force,
+            CK.family_advance,
+            CK.family_force,
+            CK.family_advance,
+            cache=False,
+            control=sample,
+        )
+    return _KERNELS
+
+
+class CInverse:
+    """A compiled C export of a damper model, whose inverse drives the quarter car.
+
+    Parameters
+    ----------
+    path : str or Path
+        The shared library compiled from ``<name>.c``.
+    name : str, optional
+        The export's prefix (``name`` of :func:`~mrdamper.control.c_export.export_c`); default
+        the file's stem without a leading ``lib`` (``libmrd_damper.so``: ``mrd_damper``).
+
+    Attributes
+    ----------
+    path : Path
+        The library.
+    name : str
+        The prefix.
+    kind : str
+        The exported model's kind.
+    """
+
+    def __init__(self, path: str | Path, name: str | None = None) -> None:
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise DataValidationError("c_inverse", f"{self.path}: no such library")
+        stem = self.path.name.split(".", 1)[0]
+        self.name = name if name is not None else stem.removeprefix("lib")
+        try:
+            self._lib = ctypes.CDLL(str(self.path.resolve()))
+        except OSError as exc:
+            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise DataValidationError(
+                "c_inverse", f"{self.path.name}: not a loadable shared library ({why})"
+            ) from None
+        p = self.name
+        try:
+            kind, size = getattr(self._lib, f"{p}_kind"), getattr(self._lib, f"{p}_state_size")
+            init, step = getattr(self._lib, f"{p}_init"), getattr(self._lib, f"{p}_inverse_step")
+        except AttributeError as exc:
+            missing = str(exc).rsplit(":", 1)[-1].strip()
+            raise DataValidationError(
+                "c_inverse",
+                f"{self.path.name}: not the inverse of an mrdamper C export named {p!r} (no "
+                f"{missing}; an export without an inverse, another name or an older export)",
+            ) from None
+        d, vp = ctypes.c_double, ctypes.c_void_p
+        kind.restype, kind.argtypes = ctypes.c_char_p, []
+        size.restype, size.argtypes = ctypes.c_long, []
+        init.restype, init.argtypes = None, [vp]
+        step.restype, step.argtypes = d, [vp, d, d, d, vp]
+        self.kind = kind().decode("ascii")
+        self._size = int(size())
+        self._init, self._step = init, step
+
+    def check(self, model: Any) -> None:
+        """Refuse (one line) a model of another kind than the export's, or one whose inverse the
+        quarter car does not run per sample."""
+        mk = getattr(model, "kind", type(model).__name__)
+        if mk != self.kind:
+            raise DataValidationError(
+                "c_inverse", f"{self.path.name} inverts a {self.kind} model, the model is {mk}"
+            )
+        if mk not in LOOP_KINDS:
+            raise DataValidationError(
+                "c_inverse",
+                f"the quarter car inverts a {mk} model through its step, not per sample as the "
+                f"C export does: a C inverse runs in the loop for kinds {list(LOOP_KINDS)}",
+            )
+
+    def form(self, base: ControllerForm) -> CControllerForm:
+        """``base`` with the C inverse and a new state from rest (one per run)."""
+        state = np.zeros(-(-self._size // 8))
+        self._init(state.ctypes.data)
+        return CControllerForm(*base, self._step, state, np.zeros(1))
+
+    def __repr__(self) -> str:
+        return f"CInverse({str(self.path)!r}, kind={self.kind!r})"
+
+
+def load_c_inverse(model: Any, spec: Any) -> CInverse:
+    """The C inverse ``spec`` (a :class:`CInverse` or the path of its library) checked against
+    ``model`` (one-line errors: no such file, not a C export with an inverse, another kind, a kind
+    the quarter car does not invert per sample)."""
+    inv = spec if isinstance(spec, CInverse) else CInverse(spec)
+    inv.check(model)
+    return inv
+
+
+def c_inverse_form(model: Any, spec: Any, base: ControllerForm) -> CControllerForm:
+    """The controller form of a quarter-car run of ``model`` with the C inverse ``spec``
+    (:func:`load_c_inverse`), for the kernels of :func:`c_kernels`."""
+    return load_c_inverse(model, spec).form(base)
