@@ -321,8 +321,7 @@ def _tune(
         "_achieved", " ach.").replace("_pct", " [%]"))  # fmt: skip
     typer.echo("gains chosen on the model (gain over passive at equal travel, positive = better):")
     typer.echo(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    how = f" (inverse: {c_inverse.name})" if c_inverse is not None else ""
-    typer.echo(f"{m.kind}{how}: wrote {', '.join(files)} in {out}")
+    typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
 
 
 def _fidelity(

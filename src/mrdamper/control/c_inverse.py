@@ -43,6 +43,7 @@ from mrdamper.control._forms import ControllerForm
 from mrdamper.errors import DataValidationError
 from mrdamper.models.kernels import poly as _poly
 from mrdamper.models.kernels import sp_force1
+from mrdamper.models.step_dispatch import family_advance, family_force
 
 __all__ = [
     "CControllerForm",
@@ -143,12 +144,7 @@ def c_kernels() -> dict[str, Any]:
         _KERNELS["sample"] = sample
         _KERNELS["simulate"] = _rebound(QK.simulate, control_sample=sample)
         _KERNELS["loop"] = CK.compile_loop(
-            CK.family_force,
-            CK.family_advance,
-            CK.family_force,
-            CK.family_advance,
-            cache=False,
-            control=sample,
+            family_force, family_advance, family_force, family_advance, cache=False, control=sample
         )
     return _KERNELS
 

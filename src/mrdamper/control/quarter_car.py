@@ -146,7 +146,8 @@ def simulate_quarter_car(
         i_range=i_range,
         substeps=substeps,
     )
-    kernel, form = QK.simulate, controller_form(s, n_grid)
+    kernel: Any = QK.simulate
+    form: Any = controller_form(s, n_grid)
     if c_inverse is not None:
         kernel, form = c_kernels()["simulate"], c_inverse_form(model, c_inverse, form)
     X, F, Fd, rho, sat, bad = kernel(s.zr, s.h, s.n_sub, s.car_arr, form, float(bound) * s.mr)
