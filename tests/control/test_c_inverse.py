@@ -133,3 +133,15 @@ def test_libraries_that_are_not_the_models_export_are_refused(
         simulate_closed_loop(
             tanh, road, "skyhook", c_inverse=_library(tanh, tmp_path, "th", dt=1e-3)
         )
+
+
+@needs_gcc
+def test_the_export_of_another_model_of_the_same_kind_is_refused(
+    tmp_path: Path, kind_models: dict[str, Any]
+) -> None:
+    sp1 = kind_models["sp1"]
+    lib = CInverse(_library(sp1, tmp_path, "s1"))
+    lib.check(sp1)
+    other = dataclasses.replace(sp1, S=tuple(1.01 * np.asarray(sp1.S)))
+    with pytest.raises(DataValidationError, match="the export of another sp1 model"):
+        simulate_closed_loop(other, iso_road("C", duration=2.0), "skyhook", c_inverse=lib)

@@ -22,7 +22,9 @@ Only the inverses the quarter car itself runs per sample can be substituted: a s
 closed-form inverse, while the quarter car inverts them over a lead through their step
 (:mod:`mrdamper.control.closed_loop`): not the same controller, so they are refused.
 
-``saturated`` keeps its meaning: the desired force lies outside the model's forces on the
+:meth:`CInverse.check` refuses, in one line, a library of another kind and one exported from
+another model of the kind (its forward step, ``<name>_step_*``, against the model's on a probe
+motion). ``saturated`` keeps its meaning: the desired force lies outside the model's forces on the
 inverse's search grid, which the loop evaluates with the Python model (the C function returns the
 input and the force only).
 """
@@ -184,24 +186,31 @@ class CInverse:
                 "c_inverse", f"{self.path.name}: not a loadable shared library ({why})"
             ) from None
         p = self.name
+        d, vp = ctypes.c_double, ctypes.c_void_p
+        signatures = {  # restype, argtypes
+            "kind": (ctypes.c_char_p, []),
+            "state_size": (ctypes.c_long, []),
+            "init": (None, [vp]),
+            "inverse_step": (d, [vp, d, d, d, vp]),
+            "step_init": (None, [vp, d, d, d]),
+            "step_force": (d, [vp, d, d, d]),
+            "step_advance": (ctypes.c_int, [vp, d, d, d, d, d, d, d]),
+        }
+        fns: dict[str, Any] = {}
         try:
-            kind, size = getattr(self._lib, f"{p}_kind"), getattr(self._lib, f"{p}_state_size")
-            init, step = getattr(self._lib, f"{p}_init"), getattr(self._lib, f"{p}_inverse_step")
-        except AttributeError as exc:
-            missing = str(exc).rsplit(":", 1)[-1].strip()
+            for fn, (restype, argtypes) in signatures.items():
+                fns[fn] = getattr(self._lib, f"{p}_{fn}")
+                fns[fn].restype, fns[fn].argtypes = restype, argtypes
+        except AttributeError:
             raise DataValidationError(
                 "c_inverse",
                 f"{self.path.name}: not the inverse of an mrdamper C export named {p!r} (no "
-                f"{missing}; an export without an inverse, another name or an older export)",
+                f"{p}_{fn}; an export without an inverse, another name or an older export)",
             ) from None
-        d, vp = ctypes.c_double, ctypes.c_void_p
-        kind.restype, kind.argtypes = ctypes.c_char_p, []
-        size.restype, size.argtypes = ctypes.c_long, []
-        init.restype, init.argtypes = None, [vp]
-        step.restype, step.argtypes = d, [vp, d, d, d, vp]
-        self.kind = kind().decode("ascii")
-        self._size = int(size())
-        self._init, self._step = init, step
+        self.kind = fns["kind"]().decode("ascii")
+        self._size = int(fns["state_size"]())
+        self._init, self._step = fns["init"], fns["inverse_step"]
+        self._forward = [fns["step_init"], fns["step_force"], fns["step_advance"]]
 
     def check(self, model: Any) -> None:
         """Refuse (one line) a model of another kind than the export's, or one whose inverse the
@@ -217,6 +226,40 @@ class CInverse:
                 f"the quarter car inverts a {mk} model through its step, not per sample as the "
                 f"C export does: a C inverse runs in the loop for kinds {list(LOOP_KINDS)}",
             )
+        rel = self._forward_gap(model)
+        if not rel <= 1e-9:
+            raise DataValidationError(
+                "c_inverse",
+                f"{self.path.name} is the export of another {mk} model (its force differs from "
+                f"the model's by {rel:.3g} of the force scale on a probe motion)",
+            )
+
+    def _forward_gap(self, model: Any) -> float:
+        """Largest difference between the library's per-sample step (``<name>_step_*``) and the
+        model's, over 20 samples of a probe motion through the input range, relative to the largest
+        force (the export's forward step equals the model's to 1e-9)."""
+        from mrdamper.control.inverse import model_input_limits
+        from mrdamper.models.step import run_step
+
+        step = model.step()
+        dt = 1e-3 if step.dt is None else float(step.dt)
+        t = np.arange(20) * dt
+        w = 2.0 * np.pi / (t[-1] + dt)
+        x, v = 0.01 * np.sin(w * t), 0.01 * w * np.cos(w * t)
+        lo, hi = model_input_limits(model)
+        e = lo + (hi - lo) * t / t[-1]
+        f_py, status, _ = run_step(step, x, v, e, dt)
+        init, force, advance = self._forward
+        state = np.zeros(step.initial_state(x[0], v[0], e[0]).size)
+        init(state.ctypes.data, x[0], v[0], e[0])
+        f_c = np.zeros(t.size)
+        for k in range(t.size):
+            f_c[k] = force(state.ctypes.data, x[k], v[k], e[k])
+            if k + 1 < t.size:
+                args = (x[k], v[k], e[k], x[k + 1], v[k + 1], e[k + 1], dt)
+                advance(state.ctypes.data, *args)
+        scale = float(np.max(np.abs(f_py))) if status == 0 else np.nan
+        return float(np.max(np.abs(f_c - f_py)) / scale) if scale > 0 else np.inf
 
     def form(self, base: ControllerForm) -> CControllerForm:
         """``base`` with the C inverse and a new state from rest (one per run)."""
