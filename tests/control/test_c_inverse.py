@@ -145,3 +145,21 @@ def test_the_export_of_another_model_of_the_same_kind_is_refused(
     other = dataclasses.replace(sp1, S=tuple(1.01 * np.asarray(sp1.S)))
     with pytest.raises(DataValidationError, match="the export of another sp1 model"):
         simulate_closed_loop(other, iso_road("C", duration=2.0), "skyhook", c_inverse=lib)
+
+
+@needs_gcc
+@pytest.mark.slow  # two loops compiled with the FMU's functions (about 20 s)
+def test_exported_controller_on_the_exported_plant(
+    tmp_path: Path, kind_models: dict[str, Any]
+) -> None:
+    """The C inverse drives the model's FMU as the plant (a family added at run time: the loop
+    compiled with the FMU's step functions) and gives the Python inverse's metrics there too."""
+    from mrdamper.control.fmu import export_fmu
+
+    sp1 = kind_models["sp1"]
+    fmu = export_fmu(sp1, tmp_path / "sp1.fmu")
+    lib = _library(sp1, tmp_path, "f_sp1")
+    road = iso_road("C", duration=2.0)
+    py = simulate_closed_loop(sp1, road, "skyhook", plant=fmu)
+    c = simulate_closed_loop(sp1, road, "skyhook", plant=fmu, c_inverse=lib)
+    assert max(_rel_changes(py, c).values()) < 1e-9
