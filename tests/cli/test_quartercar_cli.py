@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import shutil
+import subprocess
 from pathlib import Path
 
 import pandas as pd
@@ -69,3 +71,35 @@ def test_quartercar_bad_options(
     assert info.value.code == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and field in err
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found")
+def test_quartercar_with_the_exported_c_inverse(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--c-inverse``: the library compiled from the model's C export (every default) drives the
+    car and the table is the Python inverse's, to the last printed digit; with ``--plant`` or
+    ``--reg`` it is refused in one line."""
+    model = SP3.save(tmp_path / "sp3.json")
+    main(["export", str(model), "--format", "c", "--out", str(tmp_path / "c"), "--name", "sp3"])
+    lib = tmp_path / "c" / "libsp3.so"
+    cc = [str(shutil.which("gcc")), "-std=c99", "-O2", "-shared", "-fPIC"]
+    subprocess.run([*cc, str(tmp_path / "c" / "sp3.c"), "-o", str(lib), "-lm"], check=True)
+    run = ["--roads", "C", "--no-bump", "--duration", "3", "--controllers", "soft,skyhook"]
+    main(["quartercar", str(model), "--out", str(tmp_path / "py"), *run])
+    main(
+        ["quartercar", str(model), "--out", str(tmp_path / "c_run"), "--c-inverse", str(lib), *run]
+    )
+    assert "(inverse: libsp3.so)" in capsys.readouterr().out
+    py = (tmp_path / "py" / "quartercar.csv").read_text(encoding="utf-8")
+    assert (tmp_path / "c_run" / "quartercar.csv").read_text(encoding="utf-8") == py
+    for extra in (["--plant", "rig"], ["--reg", "100"]):
+        with pytest.raises(SystemExit) as info:
+            main(
+                ["quartercar", str(model), "--out", str(tmp_path / "x"), "--c-inverse", str(lib)]
+                + run
+                + extra
+            )
+        assert info.value.code == 2
+        err = capsys.readouterr().err
+        assert f"--c-inverse: not with {extra[0]}" in err and len(err.strip().splitlines()) == 1

@@ -304,35 +304,6 @@ def test_lpv_and_static_renderings_read_their_step_forms(kind_models: dict[str, 
         assert sform.f0 == f0
 
 
-@needs_gcc
-@pytest.mark.parametrize("kind", ["sp1", "lpv"])
-def test_exported_inverse_with_its_defaults_is_the_quarter_cars(
-    tmp_path: Path, kind: str, kind_models: dict[str, Any]
-) -> None:
-    """The C inverse exported with its defaults, fed the quarter car's damper motion and desired
-    force at every control sample (skyhook, ISO class C), returns exactly the input the quarter
-    car applied: substituted into the loop it gives the same trajectory, hence the same metrics.
-    (A replay: the compiled loop has no hook for an external controller.)"""
-    from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
-
-    model = kind_models[kind]
-    res = simulate_quarter_car(model, iso_road("C", duration=2.0), "skyhook")
-    assert res.i.max() > res.i.min()  # the controller moves the input
-    form = model.step().form
-    preload = form.offset if kind == "lpv" else form.f0
-    every = round(res.fs / model.fs) if kind == "lpv" else 1
-    k = np.arange(0, res.t.size, every)
-    lib = _build(model, tmp_path, f"inv_{kind}")  # every default
-    i_c, _ = _inverse(
-        lib,
-        f"inv_{kind}",
-        res.z_s[k] - res.z_u[k],
-        res.v_s[k] - res.v_u[k],
-        res.F_desired[k] + preload,
-    )
-    assert _rel(i_c, res.i[k]) < 1e-9
-
-
 # ------------------------------------------------------------ the one-state hysteresis families
 def _hysteresis_truths() -> dict[str, dict[str, float]]:
     """Each family's known-answer parameters (``tests/models/test_<kind>.py``)."""

@@ -8,7 +8,9 @@ existing file without ``--force``:
 * ``DIR/time_<road>.png``: time histories of the first ISO road (2 s in its middle) and of the bump;
 * ``DIR/spectra_<road>.png``: body-acceleration PSD and transmissibility of the first ISO road.
 
-The table is also printed.
+The table is also printed. With ``--c-inverse LIB.so`` (a shared library compiled from MODEL's
+C export, ``mrdamper export --format c``) the library's inverse drives the car in place of the
+Python one (:mod:`mrdamper.control.c_inverse`).
 
 With ``--plant PLANT`` (a model file, ``rig`` for the virtual rig's reference damper or
 ``rig:NAME``) the controller is still built from MODEL but the car is also driven with PLANT as its
@@ -138,6 +140,14 @@ def quartercar(
             "(PLANT) metrics.",
         ),
     ] = None,
+    c_inverse: Annotated[
+        Path | None,
+        typer.Option(
+            "--c-inverse",
+            help="A shared library compiled from MODEL's C export (mrdamper export --format c): "
+            "its inverse drives the car in place of the Python one (settings fixed at export).",
+        ),
+    ] = None,
 ) -> None:
     """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
     from mrdamper._io import check_output, check_writable, write_files
@@ -149,16 +159,32 @@ def quartercar(
         raise DataValidationError("--out", f"{out} exists and is not a folder")
     if not (speed > 0):
         raise DataValidationError("--speed", f"expected a vehicle speed > 0 [m/s], got {speed:g}")
+    if c_inverse is not None:
+        for flag, given in (("--plant", plant), ("--reg", reg), ("--rate", rate)):
+            if given is not None:
+                raise DataValidationError(
+                    "--c-inverse",
+                    f"not with {flag}: the C inverse drives the model as its own damper with the "
+                    "settings of its export",
+                )
+        if tune:
+            raise DataValidationError("--c-inverse", "not with --tune (a sweep of gains)")
     if tune:
         _tune(model_file, plant, out, roads, speed, duration, seed, force, _car(car))
         return
     if plant is not None:
         _fidelity(model_file, plant, out, roads, controllers, speed, duration, seed, force)
         return
-    check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
-    check_writable(out / "quartercar.csv", force, inputs=[model_file], kind=QUARTERCAR_CSV)
+    inputs = [model_file] + ([c_inverse] if c_inverse is not None else [])
+    check_output(out, force=force, folder=True, mode="add", inputs=inputs)
+    check_writable(out / "quartercar.csv", force, inputs=inputs, kind=QUARTERCAR_CSV)
     qc = _car(car)
     m = load_model(model_file)
+    extra: dict[str, Any] = {}
+    if c_inverse is not None:
+        from mrdamper.control.c_inverse import load_c_inverse
+
+        extra["c_inverse"] = load_c_inverse(m, c_inverse)
     ctrls = [
         Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha)
         for c in controllers.split(",")
@@ -179,6 +205,7 @@ def quartercar(
             bump_length=bump_length,
             reg=reg,
             rate=rate,
+            **extra,
         )
     except TypeError as exc:
         raise DataValidationError("MODEL", str(exc)) from exc
@@ -223,7 +250,8 @@ def quartercar(
                 f"warning: {ctrl}, {road}: {oscillation_note(share, peak, qc)}: the metrics are "
                 "the model's sampled loop, not the damper's"
             )
-    typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
+    how = f" (inverse: {c_inverse.name})" if c_inverse is not None else ""
+    typer.echo(f"{m.kind}{how}: wrote {', '.join(files)} in {out}")
 
 
 def _car(car: list[str] | None) -> Any:

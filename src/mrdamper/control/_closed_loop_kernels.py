@@ -278,12 +278,17 @@ def compile_loop(
     p_advance: Callable[..., int],
     *,
     cache: bool,
+    control: Any = None,
 ) -> Any:
     """:func:`_loop` compiled with the controller model's and the plant's step functions bound
     (see the module docstring); ``cache`` caches it on disk (only for functions that are the same
-    in every process)."""
+    in every process); ``control`` replaces
+    :func:`~mrdamper.control._quarter_car_kernels.control_sample` (a variant with another inverse:
+    :mod:`mrdamper.control.c_inverse`)."""
     names = dict(globals())
     names.update(C_FORCE=c_force, C_ADVANCE=c_advance, P_FORCE=p_force, P_ADVANCE=p_advance)
+    if control is not None:
+        names["control_sample"] = control
 
     def bind(fn: Any, cached: bool) -> Any:
         copy = types.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__)
@@ -309,10 +314,13 @@ def run_loop(
     c_advance: Callable[..., int],
     p_force: Callable[..., float],
     p_advance: Callable[..., int],
+    control: Any = None,
 ) -> Any:
     """The loop for step functions of a family added at run time (compiled on its first run in
-    this process, kept for the next)."""
-    key = (c_force, c_advance, p_force, p_advance)
+    this process, kept for the next); ``control`` as :func:`compile_loop`."""
+    key = (c_force, c_advance, p_force, p_advance, control)
     if key not in _RUNTIME:
-        _RUNTIME[key] = compile_loop(c_force, c_advance, p_force, p_advance, cache=False)
+        _RUNTIME[key] = compile_loop(
+            c_force, c_advance, p_force, p_advance, cache=False, control=control
+        )
     return _RUNTIME[key]

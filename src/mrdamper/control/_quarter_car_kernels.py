@@ -64,6 +64,32 @@ def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def invert_model(form, k, x_d, v_d, target, a, b, prev, hold, cf, y, u, yb, ub, z_d):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """The damper model's regularised inverse at control sample ``k`` (the quarter car's own).
+
+    ``target`` is the desired force with the model's rest force (LPV offset, static map ``f0``)
+    [N]; ``[a, b]`` the admissible inputs, ``prev`` the previous input and ``hold`` the input the
+    regularisation pulls towards; ``cf`` the LPV polynomial of the sample (:func:`control_sample`
+    computes it), ``y, u`` the LPV past outputs and inputs, ``yb, ub`` scratch, ``z_d`` the Dahl
+    state. Returns ``(r, reachable)``.
+    """
+    inv = form.inverse
+    if inv.is_lpv:
+        if inv.lag >= 0.0 and k >= 2 and inv.horizon > 1:
+            valid = past_buffers(y, u, k, yb, ub)
+            return horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v_d, target, z_d)
+        return reg_solve_poly(cf, target, a, b, hold, inv.lam2, inv.n_grid)
+    return reg_solve_static(
+        x_d, v_d, inv.comp, inv.power, inv.theta, inv.f0, target, a, b, hold, inv.lam2, inv.n_grid
+    )
+
+
+#: The inverse :func:`control_sample` calls; a compiled variant binds another (an exported C
+#: inverse: :mod:`mrdamper.control.c_inverse`).
+INVERT = invert_model
+
+
+@njit(cache=True)
 def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """The controller and the damper model's inverse at control sample ``k``.
 
@@ -120,13 +146,9 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
             hold = prev
             if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
                 hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-            if lag >= 0.0 and k >= 2 and inv.horizon > 1:
-                valid = past_buffers(y, u, k, yb, ub)
-                r, ok = horizon_step(
-                    inv, cf, yb, ub, valid, a, b, prev, hold, v_d, target + offset, z_d
-                )
-            else:
-                r, ok = reg_solve_poly(cf, target + offset, a, b, hold, inv.lam2, inv.n_grid)
+            r, ok = INVERT(
+                form, k, x_d, v_d, target + offset, a, b, prev, hold, cf, y, u, yb, ub, z_d
+            )
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         Fk = _poly(cf, r)
@@ -141,20 +163,7 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
             hold = prev
             if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
                 hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
-            r, ok = reg_solve_static(
-                x_d,
-                v_d,
-                inv.comp,
-                inv.power,
-                inv.theta,
-                f0,
-                target + f0,
-                a,
-                b,
-                hold,
-                inv.lam2,
-                inv.n_grid,
-            )
+            r, ok = INVERT(form, k, x_d, v_d, target + f0, a, b, prev, hold, cf, y, u, yb, ub, z_d)
         if lag >= 0.0:
             w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
         F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0

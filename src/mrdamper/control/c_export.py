@@ -13,7 +13,10 @@ dynamic allocation, no globals that change: all state lives in a caller-owned st
   input ``rho``; the driver command is the lead filter of
   :func:`mrdamper.control.driver_command`) and writes the force the model gives with it to
   ``*F_out`` (may be NULL);
-* ``void <name>_run(...)`` / ``<name>_inverse_run(...)``: the step functions over arrays.
+* ``void <name>_run(...)`` / ``<name>_inverse_run(...)``: the step functions over arrays;
+* ``long <name>_state_size(void)`` (``sizeof(<name>_state)``) and ``const char *<name>_kind(void)``
+  (the model kind), with which :class:`mrdamper.control.c_inverse.CInverse` checks a compiled
+  library and owns its state, to run ``<name>_inverse_step`` inside the quarter-car loop.
 
 Model kinds with C export (:data:`C_KINDS`, each rendered by its family's renderer in
 :mod:`mrdamper.control.c_render`): ``lpv`` and ``lti`` (the input-output recursion of eq. 9 with
@@ -46,7 +49,13 @@ from typing import Any
 
 from mrdamper._io import c_code_kind, check_output, write_files
 from mrdamper.control.c_render import RENDERERS, Context, Rendered
-from mrdamper.control.c_render._common import INVERSE_RUN, RUN, STEP_SIZE, quarter_car_defaults
+from mrdamper.control.c_render._common import (
+    IDENTITY,
+    INVERSE_RUN,
+    RUN,
+    STEP_SIZE,
+    quarter_car_defaults,
+)
 from mrdamper.control.export import warn_if_unstable
 from mrdamper.errors import DataValidationError
 
@@ -149,6 +158,8 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
             "double v1, double e1, double dt);"
         ),
         f"long {p}_step_size(void);",
+        f"long {p}_state_size(void); /* sizeof({p}_state) [bytes] */",
+        f"const char *{p}_kind(void); /* the model kind, {model.kind!r} */",
     ]
     protos += step_protos
     if r.has_inverse:
@@ -177,6 +188,7 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
     )
     src = f'/* {name}.c: see {name}.h. */\n#include <math.h>\n#include "{name}.h"\n'
     src += r.body + RUN.format(p=p) + STEP_SIZE.format(p=p, P=name.upper())
+    src += IDENTITY.format(p=p, kind=model.kind)
     if r.has_inverse:
         src += INVERSE_RUN.format(p=p)
     return header, src

@@ -52,6 +52,7 @@ from mrdamper.control._loop import (
     loop_result,
     loop_setup,
 )
+from mrdamper.control.c_inverse import c_inverse_form, c_kernels, load_c_inverse
 from mrdamper.control.car import positive
 from mrdamper.control.fmu_plant import is_fmu
 from mrdamper.control.inverse import model_input_limits
@@ -202,6 +203,7 @@ def simulate_closed_loop(
     i_range: tuple[float, float] | None = None,
     n_grid: int = 16,
     bound: float = 10.0,
+    c_inverse: Any = None,
 ) -> QuarterCarResult:
     """Drive the quarter car with ``model``'s controller and ``plant`` as the damper.
 
@@ -222,6 +224,9 @@ def simulate_closed_loop(
         Plant steps per road sample.
     reg, v_ref, rate, i_range, n_grid, bound
         As :func:`~mrdamper.control.quarter_car.simulate_quarter_car`.
+    c_inverse : CInverse, str or Path, optional
+        A compiled C export of ``model`` (a static map or an LPV model) whose inverse replaces the
+        loop's own at every control sample (:mod:`mrdamper.control.c_inverse`).
 
     Returns
     -------
@@ -248,12 +253,15 @@ def simulate_closed_loop(
             n_grid=n_grid,
             bound=bound,
             substeps=substeps,
+            c_inverse=c_inverse,
         )
     check_pair(model, plant)
     passive = ctrl.kind in ("soft", "hard")
     sc: StepControl | None = None
     arrays = None
     if not invertible:
+        if c_inverse is not None:
+            load_c_inverse(model, c_inverse)  # refuses the kind (one line)
         arrays = damper_arrays(None)
         if not passive:
             sc = _step_control_of(model, 1.0 / road.fs, v_ref)
@@ -270,7 +278,7 @@ def simulate_closed_loop(
         arrays=arrays,
         authority=None if sc is None else sc.authority,
     )
-    return _run(model, plant, s, sc, n_grid, bound)
+    return _run(model, plant, s, sc, n_grid, bound, c_inverse)
 
 
 def _step_control_of(model: Any, dt_c: float, v_ref: float) -> StepControl:
@@ -290,7 +298,13 @@ def _step_control_of(model: Any, dt_c: float, v_ref: float) -> StepControl:
 
 
 def _run(
-    model: Any, plant: Any, s: LoopSetup, sc: StepControl | None, n_grid: int, bound: float
+    model: Any,
+    plant: Any,
+    s: LoopSetup,
+    sc: StepControl | None,
+    n_grid: int,
+    bound: float,
+    c_inverse: Any = None,
 ) -> QuarterCarResult:
     pstep = plant_step(plant, s.h)
     p_every = 0
@@ -313,22 +327,19 @@ def _run(
         c_state = c.initial_state(0.0, 0.0, s.lo)
         c_offset = float(c.force(c.form, c_state, 0.0, 0.0, s.lo))
         n_lead = sc.n_lead
-    head = (
-        s.zr,
-        s.h,
-        s.n_sub,
-        s.car_arr,
-        controller_form(s, n_grid),
-        float(bound) * s.mr,
-        sc is not None,
-    )
+    form: Any = controller_form(s, n_grid)
+    packed_loop, control = CK.run_loop_packed, None
+    if c_inverse is not None:
+        form = c_inverse_form(model, c_inverse, form)
+        packed_loop, control = c_kernels()["loop"], c_kernels()["sample"]
+    head = (s.zr, s.h, s.n_sub, s.car_arr, form, float(bound) * s.mr, sc is not None)
     p_packed, c_packed = pack(pstep), pack(c)
     if p_packed is not None and c_packed is not None:  # built-in families: the cached kernel
-        out = CK.run_loop_packed(
+        out = packed_loop(
             *head, c_packed, c_state, c_offset, int(n_lead), p_packed, p_state, p_offset, p_every
         )
     else:  # a family added at run time: its functions as arguments (compiled in this process)
-        loop = CK.run_loop(c.force, c.advance, pstep.force, pstep.advance)
+        loop = CK.run_loop(c.force, c.advance, pstep.force, pstep.advance, control)
         out = loop(
             *head, c.form, c_state, c_offset, int(n_lead), pstep.form, p_state, p_offset, p_every
         )

@@ -37,6 +37,7 @@ import pandas as pd
 
 from mrdamper.control import _quarter_car_kernels as QK
 from mrdamper.control._loop import LoopSetup, controller_form, loop_result, loop_setup
+from mrdamper.control.c_inverse import c_inverse_form, c_kernels
 from mrdamper.control.car import (
     CONTROLLERS,
     Controller,
@@ -77,6 +78,7 @@ def simulate_quarter_car(
     n_grid: int = 16,
     bound: float = 10.0,
     substeps: int = 1,
+    c_inverse: Any = None,
 ) -> QuarterCarResult:
     """Drive the quarter car over ``road`` with ``model`` as its damper under ``controller``.
 
@@ -108,6 +110,11 @@ def simulate_quarter_car(
     substeps : int
         Plant steps per road sample (the road is interpolated linearly in between; the control
         sample is unchanged); 1: the plant step is the road's sampling interval.
+    c_inverse : CInverse, str or Path, optional
+        A compiled C export of ``model`` whose inverse replaces the loop's own at every control
+        sample (:class:`~mrdamper.control.c_inverse.CInverse`; a path is loaded with the prefix
+        taken from the file name). Its settings are the ones fixed at export: ``reg``, ``rate``
+        and ``n_grid`` then only matter for the ``saturated`` flag and passive controllers.
 
     Returns
     -------
@@ -139,9 +146,11 @@ def simulate_quarter_car(
         i_range=i_range,
         substeps=substeps,
     )
-    X, F, Fd, rho, sat, bad = QK.simulate(
-        s.zr, s.h, s.n_sub, s.car_arr, controller_form(s, n_grid), float(bound) * s.mr
-    )
+    kernel: Any = QK.simulate
+    form: Any = controller_form(s, n_grid)
+    if c_inverse is not None:
+        kernel, form = c_kernels()["simulate"], c_inverse_form(model, c_inverse, form)
+    X, F, Fd, rho, sat, bad = kernel(s.zr, s.h, s.n_sub, s.car_arr, form, float(bound) * s.mr)
     if bad >= 0:
         raise SimulationDivergedError(
             getattr(model, "kind", "damper"),

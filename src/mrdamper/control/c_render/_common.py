@@ -25,6 +25,7 @@ from mrdamper.models.kernels import INVERSE_N_BISECT
 __all__ = [
     "BISECT",
     "COMMON",
+    "IDENTITY",
     "INVERSE_RUN",
     "INV_CONST",
     "RUN",
@@ -259,6 +260,13 @@ void {p}_run(long n, const double *x, const double *v, const double *input, doub
 
 STEP_SIZE = r"""
 long {p}_step_size(void) {{ return {P}_STEP_N; }}
+"""
+
+#: What a caller loading the compiled library needs to check it and to own a state: the size of
+#: ``<name>_state`` [bytes] and the model kind.
+IDENTITY = r"""
+long {p}_state_size(void) {{ return (long)sizeof({p}_state); }}
+const char *{p}_kind(void) {{ return "{kind}"; }}
 """
 
 INVERSE_RUN = (
