@@ -84,3 +84,18 @@ def kind_probe() -> Any:
     from tests.models.test_conformance import _record
 
     return _record(0.008, 2.0, (0.3, 0.7, 0.4, 0.6), "probe", 3.0)
+
+
+def toy_lti() -> Any:
+    """A first-order LTI damper model on the velocity (1 kHz; no inverse form)."""
+    import numpy as np
+
+    from mrdamper.models.lpv import LTIModel
+
+    return LTIModel(
+        alpha=np.array([[-0.9], [0.2]]),
+        beta=np.array([[300.0], [-100.0]]),
+        fs=1000.0,
+        input_signal="v",
+        input_range=(0.0, 1.0),
+    )

@@ -19,8 +19,8 @@ from mrdamper.control.c_export import C_KINDS, c_source, export_c
 from mrdamper.control.inverse import default_reg
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.models.bingham import BinghamModel
-from mrdamper.models.lpv import LTIModel
 from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel
+from tests.control.conftest import toy_lti
 
 GCC = shutil.which("gcc")
 needs_gcc = pytest.mark.skipif(GCC is None, reason="gcc not found")
@@ -135,13 +135,7 @@ def test_c_bingham_and_lti(tmp_path: Path) -> None:
     )
     lib = _build(bing, tmp_path, "bing")
     assert _rel(_forward(lib, "bing", x, v, i), bing.predict(e)) < 1e-9
-    lti = LTIModel(
-        alpha=np.array([[-0.9], [0.2]]),
-        beta=np.array([[300.0], [-100.0]]),
-        fs=1000.0,
-        input_signal="v",
-        input_range=(0.0, 1.0),
-    )
+    lti = toy_lti()
     lib = _build(lti, tmp_path, "lti")
     assert _rel(_forward(lib, "lti", x, v, i), lti.predict(e)) < 1e-9
     assert not hasattr(

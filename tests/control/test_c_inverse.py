@@ -20,6 +20,7 @@ from mrdamper.control.fidelity import loop_metrics
 from mrdamper.control.inverse import default_reg
 from mrdamper.control.quarter_car import QuarterCarResult, iso_road
 from mrdamper.errors import DataValidationError
+from tests.control.conftest import toy_lti
 from tests.control.test_c_export import GCC, needs_gcc
 
 METRICS = ("rms_acc", "a_w", "rms_tyre_load", "rms_travel", "rms_tracking", "mean_current")
@@ -114,15 +115,7 @@ def test_libraries_that_are_not_the_models_export_are_refused(
         CInverse(lib, name="wrong")
     with pytest.raises(DataValidationError, match="inverts a sp1 model, the model is lpv"):
         simulate_closed_loop(lpv, road, "skyhook", c_inverse=lib)
-    from mrdamper.models.lpv import LTIModel
-
-    lti = LTIModel(
-        alpha=np.array([[-0.9], [0.2]]),
-        beta=np.array([[300.0], [-100.0]]),
-        fs=1000.0,
-        input_signal="v",
-        input_range=(0.0, 1.0),
-    )
+    lti = toy_lti()
     with pytest.raises(DataValidationError, match="no lti_inverse_step"):
         CInverse(_library(lti, tmp_path, "lti"))  # an export without an inverse
     from mrdamper.models import model_class
