@@ -62,6 +62,9 @@ class KindSpec:
     kernels : tuple of Item
         Compiled kernels (with the argument types of the library's calls) that the kind's fit and
         simulation run.
+    interpolation_only : bool
+        A black-box kind that nothing in its structure carries beyond its training envelope:
+        ``select`` scores it but does not recommend it when it validates beyond the envelope.
     """
 
     kind: str
@@ -73,6 +76,7 @@ class KindSpec:
     default: bool = True
     cost_rank: int = 9
     kernels: tuple[Item, ...] = ()
+    interpolation_only: bool = False
 
 
 _LPV = "mrdamper.models.lpv.kernels"
@@ -195,6 +199,7 @@ KINDS: tuple[KindSpec, ...] = (
             (_NARX, "_free_run", "f2 i2r i2r f1r I F", 0.2),
             (_NARX, "_fill_candidates", "f2 i2r i2r I I f2A", 0.3),
         ),
+        interpolation_only=True,
     ),
     KindSpec(
         "tanh",

@@ -404,7 +404,7 @@ def test_eta_is_fixed_for_constant_input_and_redundancy_is_reported() -> None:
     ]
     fit = SpencerEstimator(n_starts=1, max_nfev=40).fit(train)
     assert "eta" in fit.provenance["fixed"]
-    assert any("constant" in n for n in fit.provenance["notes"])
+    assert any("does not switch" in n for n in fit.provenance["notes"])
     assert fit.provenance["mean_record_esr"] < 1e-3
     # freeing A (redundant with the scale of z) is detected as ill-conditioning
     with warnings.catch_warnings(record=True) as caught:
@@ -413,6 +413,26 @@ def test_eta_is_fixed_for_constant_input_and_redundancy_is_reported() -> None:
     assert loose.provenance["cond_JTJ"] > fit.provenance["cond_JTJ"]
     assert loose.provenance["ill_conditioned"]
     assert any("ill-conditioned" in str(w.message) for w in caught)
+
+
+def test_eta_is_fixed_when_a_held_current_is_noisy_and_free_when_it_switches() -> None:
+    """Sensor noise on a held current (0.5 % of the range) is not a switch; a step is."""
+    truth = SpencerModel(**TRUE, input="i", input_range=(-0.1, 1.1))
+    rng = np.random.default_rng(3)
+    held = [
+        _record(seed=s, duration=0.5, levels=(c, c), name=f"c{c}")
+        for s, c in ((1, 0.0), (2, 1.0))
+    ]
+    noisy = [_with_force(truth, r.replace(i=r.i + 0.005 * rng.standard_normal(r.n))) for r in held]
+    assert all(np.ptp(r.i) > 0.0 for r in noisy)
+    switching = [_with_force(truth, _record(seed=4, duration=0.5, levels=(0.0, 1.0)))]
+    est = SpencerEstimator(n_starts=1, max_nfev=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        on_noise = est.fit(noisy)
+        on_switching = est.fit(switching)
+    assert on_noise.provenance["fixed"].get("eta") == 100.0
+    assert "eta" not in on_switching.provenance["fixed"]
 
 
 # ----------------------------------------------------------------------------- real data

@@ -13,12 +13,12 @@ import pytest
 
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.models.bingham import BinghamModel
-from mrdamper.models.envelope import envelope_of
+from mrdamper.models.envelope import envelope_of, training_envelope
 from mrdamper.models.envelope_folds import envelope_folds
 from mrdamper.models.narx import NARXModel
 from mrdamper.study import cross_validate
 from mrdamper.study.protocol import Protocol
-from mrdamper.study.selection import SCORE_COLUMNS, selection_from_scores
+from mrdamper.study.selection import INTERPOLATION_ONLY, SCORE_COLUMNS, selection_from_scores
 from mrdamper.study.stress import StressResult, stress_motions, stress_test
 from mrdamper.study.tables import headlines
 
@@ -101,6 +101,25 @@ def test_stress_test_passes_a_sound_model_and_builds_its_motions() -> None:
     assert (res.table.loc[res.table["group"] == "beyond", "mean_power_W"] > 0).all()
 
 
+def test_stress_levels_are_the_core_of_the_input_range_not_a_drive_spike() -> None:
+    """A switching transient of a few samples (a drive's overshoot) sets the range's ends but
+    is not a level the damper ran at: the stress motions hold the ends of the 99 % core."""
+    recs = [_sine(0.01, 1.0, lev) for lev in (0.0, 0.5, 1.0)]
+    i = recs[0].i.copy()
+    i[100:103] = -0.4
+    recs[0] = recs[0].replace(i=i)
+    env = training_envelope(recs, [r.i for r in recs])
+    assert env["e_range"][0] == -0.4 and env["e_core_range"] == [0.0, 1.0]
+    model = dataclasses.replace(TRUTH, provenance={"envelope": env, "record_dt": [0.002]})
+    beyond = [m for m in stress_motions(model, recs) if m.metadata["group"] == "beyond"]
+    assert {float(m.i[0]) for m in beyond} == {0.0, 1.0}
+    # a model saved before the core range was recorded keeps the full range
+    old = {k: v for k, v in env.items() if k != "e_core_range"}
+    model = dataclasses.replace(TRUTH, provenance={"envelope": old, "record_dt": [0.002]})
+    beyond = [m for m in stress_motions(model, recs) if m.metadata["group"] == "beyond"]
+    assert {float(m.i[0]) for m in beyond} == {-0.4, 1.0}
+
+
 def test_stress_test_fails_a_model_that_bursts_or_diverges() -> None:
     recs = [_sine(0.01, 1.0, lev) for lev in (0.0, 0.5, 1.0)]
     unstable = NARXModel(  # F[k] = 1.02 F[k-1] + c v[k]: grows without bound
@@ -126,11 +145,11 @@ def test_stress_test_fails_a_model_that_bursts_or_diverges() -> None:
 def test_a_kind_that_fails_the_stress_test_is_not_recommended_and_the_table_says_why() -> None:
     rows = [
         {"model": m, "fold": f"c{k}", "record": f"r{k}", "esr": esr, "clipped": False, "error": ""}
-        for m, esr in (("narx", 0.01), ("sp1", 0.02))
+        for m, esr in (("p15", 0.01), ("sp1", 0.02))
         for k in range(3)
     ]
     rows += [
-        {"model": "narx", "fold": "beyond: x", "record": "big", "esr": 0.5, "clipped": False,
+        {"model": "p15", "fold": "beyond: x", "record": "big", "esr": 0.5, "clipped": False,
          "error": "", "beyond": True},
         {"model": "sp1", "fold": "beyond: x", "record": "big", "esr": 0.03, "clipped": False,
          "error": "", "beyond": True},
@@ -139,20 +158,41 @@ def test_a_kind_that_fails_the_stress_test_is_not_recommended_and_the_table_says
     ok = StressResult(pd.DataFrame(), True, "ok")
     bad = StressResult(pd.DataFrame(), False, "burst: peak 3 x the largest training force (x)")
     res = selection_from_scores(
-        scores, ["narx", "sp1"], {}, "condition", 3, stress={"narx": bad, "sp1": ok},
+        scores, ["p15", "sp1"], {}, "condition", 3, stress={"p15": bad, "sp1": ok},
         envelope="|v| <= 0.1 m/s",
     )  # fmt: skip
     assert res.recommended == "sp1" and res.n_beyond == 1
-    assert res.table.loc["narx", "status"].startswith("not recommended: stress test: burst")
+    assert res.table.loc["p15", "status"].startswith("not recommended: stress test: burst")
     assert res.table.loc["sp1", "rank_esr"] == pytest.approx(0.5 * (0.02 + 0.03))
-    assert "Validated within |v| <= 0.1 m/s" in res.reason and "narx" in res.reason
+    assert "Validated within |v| <= 0.1 m/s" in res.reason and "p15" in res.reason
     # without the stress failure, the beyond-envelope fold alone ranks sp1 first
-    res2 = selection_from_scores(scores, ["narx", "sp1"], {}, "condition", 3)
-    assert res2.recommended == "sp1" and res2.table.loc["narx", "status"] == "eligible"
+    res2 = selection_from_scores(scores, ["p15", "sp1"], {}, "condition", 3)
+    assert res2.recommended == "sp1" and res2.table.loc["p15", "status"] == "eligible"
     # the study's scores (no 'beyond' column) are all inside the envelope
     study = scores[~scores["beyond"].eq(True)].drop(columns="beyond")
-    inside = selection_from_scores(study, ["narx", "sp1"], {}, "c", 3)
-    assert inside.recommended == "narx" and inside.n_beyond == 0
+    inside = selection_from_scores(study, ["p15", "sp1"], {}, "c", 3)
+    assert inside.recommended == "p15" and inside.n_beyond == 0
+
+
+def test_an_interpolation_only_kind_is_not_recommended_when_validated_beyond() -> None:
+    """NARX best everywhere: scored and shown, but recommended only when the selection stays
+    inside the training envelope."""
+    rows = [
+        {"model": m, "fold": f, "record": "r", "esr": esr, "clipped": False, "error": "",
+         "beyond": f.startswith("beyond")}
+        for m, esr in (("narx", 0.01), ("sp1", 0.02))
+        for f in ("c0", "c1", "beyond: x")
+    ]  # fmt: skip
+    scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
+    res = selection_from_scores(scores, ["narx", "sp1"], {}, "condition", 2)
+    assert res.recommended == "sp1"
+    assert res.table.loc["narx", "status"] == f"not recommended: {INTERPOLATION_ONLY}"
+    assert res.table.loc["narx", "rank_esr"] < res.table.loc["sp1", "rank_esr"]
+    ok = StressResult(pd.DataFrame(), True, "ok")
+    inside = scores[~scores["beyond"]]
+    stressed = selection_from_scores(inside, ["narx", "sp1"], {}, "c", 2, stress={"narx": ok})
+    assert stressed.recommended == "sp1"
+    assert selection_from_scores(inside, ["narx", "sp1"], {}, "c", 2).recommended == "narx"
 
 
 def test_cross_validate_scores_beyond_the_envelope_and_stress_tests() -> None:

@@ -27,6 +27,7 @@ from mrdamper.errors import DataValidationError, IdentificationError
 from mrdamper.models import _spencer_kernels as _k
 from mrdamper.models._spencer_kernels import PARAM_NAMES as PARAMETER_NAMES
 from mrdamper.models._spencer_kernels import auto_substeps
+from mrdamper.models.envelope import SWITCH_FRACTION
 from mrdamper.progress import counted, report
 
 __all__ = ["COND_WARNING", "DEFAULT_BOUNDS", "FitSettings", "check_settings", "identify"]
@@ -289,7 +290,13 @@ class _Objective:
 
 
 def _constant_input(recs: list[_Record]) -> bool:
-    return all(r.emax - r.emin <= 1e-12 * max(1.0, abs(r.emax)) for r in recs)
+    """The electrical input never switches within a record: each record's input spans at most
+    :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the training input range (or of its level,
+    for one level), so sensor noise on a held current does not count as a switch."""
+    lo = min(r.emin for r in recs)
+    hi = max(r.emax for r in recs)
+    scale = (hi - lo) if hi - lo > 1e-12 * max(1.0, abs(hi)) else max(abs(lo), abs(hi), 1e-300)
+    return all(r.emax - r.emin <= SWITCH_FRACTION * scale for r in recs)
 
 
 def identify(
@@ -316,7 +323,10 @@ def identify(
     if "eta" not in fixed and (est.fix_eta == "always" or (est.fix_eta == "auto" and constant)):
         fixed["eta"] = start_user.get("eta", 100.0)
         if constant:
-            notes.append("eta fixed: the electrical input is constant within every record")
+            notes.append(
+                f"eta fixed at {fixed['eta']:g} 1/s: the electrical input does not switch within "
+                "any record, so the filter rate cannot be identified"
+            )
     bounds = dict(DEFAULT_BOUNDS)
     bounds.update({k: (float(b[0]), float(b[1])) for k, b in (est.bounds or {}).items()})
 

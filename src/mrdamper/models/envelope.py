@@ -20,6 +20,7 @@ import numpy as np
 
 __all__ = [
     "BAND_SHARE",
+    "CORE_SHARE",
     "ENVELOPE_TOLERANCE",
     "SWITCH_FRACTION",
     "band_frequency",
@@ -32,6 +33,9 @@ __all__ = [
 
 #: A sample "switches" when its input changes by more than this fraction of the input range [-].
 SWITCH_FRACTION = 0.05
+#: Share of the samples whose electrical input lies in ``e_core_range`` [-] (the rest, split
+#: evenly below and above, are spikes such as a drive's switching transients).
+CORE_SHARE = 0.99
 #: Share of the velocity's power below the frequency band measure ``f_band`` [-].
 BAND_SHARE = 0.95
 #: A record leaves the envelope in a dimension when it exceeds the training value by more than
@@ -114,15 +118,21 @@ def envelope_of(
 
 
 def training_envelope(records: Iterable[Any], electrical: Sequence[np.ndarray]) -> dict[str, Any]:
-    """:func:`envelope_of` the training records (``electrical``: their input channel)."""
+    """:func:`envelope_of` the training records (``electrical``: their input channel), plus
+    ``e_core_range``: the range holding :data:`CORE_SHARE` of the input samples (quantiles over
+    all records) [A] or [V]."""
     recs = list(records)
-    return envelope_of(
+    e = list(electrical)
+    out = envelope_of(
         [r.x for r in recs],
         [r.v for r in recs],
-        list(electrical),
+        e,
         [r.F for r in recs],
         [r.dt for r in recs],
     )
+    tails = [0.5 * (1.0 - CORE_SHARE), 1.0 - 0.5 * (1.0 - CORE_SHARE)]
+    out["e_core_range"] = [float(b) for b in np.quantile(np.concatenate(e), tails)]
+    return out
 
 
 def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float]:

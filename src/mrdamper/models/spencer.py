@@ -365,8 +365,9 @@ class SpencerEstimator(Estimator):
     fixed : mapping, optional
         Parameters held at a value. Default ``{"x0": 0.0, "A": 1.0}``: ``k1 x0`` duplicates
         ``f0``, and ``A`` is redundant with the scale of z (alpha, beta, gamma absorb it). When
-        the electrical input is constant within every record, ``eta`` cannot be identified and
-        is also fixed (at ``start["eta"]`` or 100 1/s) unless ``fix_eta="never"``.
+        the electrical input does not switch within any record (each record's input spans at
+        most 5 % of the training input range, so noise on a held current does not count),
+        ``eta`` cannot be identified and is also fixed (at ``start["eta"]`` or 100 1/s) unless ``fix_eta="never"``.
     bounds : mapping, optional
         ``name -> (low, high)`` overriding the default bounds (see :data:`DEFAULT_BOUNDS`).
     n_starts : int

@@ -23,7 +23,9 @@ or velocity held out; for one record, a later block whose range exceeds the earl
 dissipative and free of divergence; new motions inside it must be free of bursts).
 
 The recommendation is the kind with the lowest ``rank_esr`` among those that fitted and simulated
-on every fold (inside and beyond the envelope) and passed the stress test; ``rank_esr`` is the mean
+on every fold (inside and beyond the envelope) and passed the stress test, and that are not
+interpolation-only (:attr:`mrdamper.kinds.KindSpec.interpolation_only`: NARX) when the selection
+validates beyond the envelope (beyond-envelope folds or the stress test); ``rank_esr`` is the mean
 of the in-envelope mean ESR and the beyond-envelope mean ESR (the in-envelope mean alone when there
 is no beyond-envelope fold). A runner-up within 5 % is named as a tie. The ``status`` column says
 why a kind is not recommended; the reason states the envelope the recommendation was validated in.
@@ -59,6 +61,13 @@ SCORE_COLUMNS: tuple[str, ...] = ("model", "fold", "record", "esr", "clipped", "
 _REQUIRED: tuple[str, ...] = SCORE_COLUMNS[:-1]
 #: A runner-up within this fraction of the recommended kind's ``rank_esr`` is a tie [-].
 TIE = 0.05
+
+#: Why an interpolation-only kind (:attr:`mrdamper.kinds.KindSpec.interpolation_only`) is not
+#: recommended when the selection validates beyond the training envelope.
+INTERPOLATION_ONLY = (
+    "interpolation-only (a black-box model: nothing in its structure carries it beyond the "
+    "training envelope)"
+)
 
 FoldKind = Literal["auto", "condition", "record", "time"]
 #: Discrete-time model kinds: they need one model rate when records have different rates.
@@ -453,8 +462,8 @@ def selection_from_scores(
     scores["beyond"] = scores["beyond"].eq(True)
     times = {k: list(fit_times.get(k, ())) for k in kinds}
     stress = dict(stress or {})
-    table = _summarise(scores, list(kinds), times, stress)
     n_beyond = int(scores.loc[scores["beyond"], "fold"].nunique())
+    table = _summarise(scores, list(kinds), times, stress, beyond=bool(n_beyond or stress))
     recommended, reason = _recommend(table, split, n_folds, n_beyond, envelope)
     if recommended is not None:
         table.loc[recommended, "status"] = "recommended"
@@ -487,7 +496,11 @@ def _summarise(
     kinds: list[str],
     fit_times: Mapping[str, Sequence[float]],
     stress: Mapping[str, Any],
+    *,
+    beyond: bool,
 ) -> pd.DataFrame:
+    from mrdamper.kinds import spec
+
     out = []
     for k in kinds:
         every = scores[scores["model"] == k]
@@ -511,6 +524,8 @@ def _summarise(
             status = f"not recommended: stress test: {st.reason}"
         elif not np.isfinite(rank):
             status = "not recommended: no score"
+        elif beyond and getattr(spec(k), "interpolation_only", False):
+            status = f"not recommended: {INTERPOLATION_ONLY}"
         out.append(
             {
                 "model": k,

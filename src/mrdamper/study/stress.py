@@ -8,7 +8,9 @@ step) on motions built with :mod:`mrdamper.signals` from the model's training en
 displacement range with the training's largest velocity (amplitude ``A0`` = half the range,
 frequency ``f0 = v_max / (2 pi A0)``), ramped in from rest over one cycle. It is run with the
 amplitude times :data:`AMPLITUDE_FACTOR` and with the frequency times :data:`FREQUENCY_FACTOR`,
-each at both ends of the electrical input range. Every run must be
+each at both ends of the electrical input range (the range holding 99 % of the training input
+samples, ``e_core_range``, so that a drive's switching spikes are not taken for levels the damper
+was run at; models saved without it use the full range). Every run must be
 
 * finite (no divergence error, no NaN),
 * bounded: ``max |F| <= BOUND_FACTOR * (velocity ratio) * f_max`` (``f_max`` the largest training
@@ -21,7 +23,7 @@ each at both ends of the electrical input range. Every run must be
 one with the largest force, and the one with the largest displacement range), and a band-limited
 random motion (an ISO 8608 road profile, :func:`mrdamper.signals.road_profile`, scaled to the
 training displacement range and slowed down until its velocity stays within the training's) with an
-APRBS electrical input over the training range, started from rest. Every run must be finite and
+APRBS electrical input over the same range, started from rest. Every run must be finite and
 free of bursts: ``max |F| <= BURST_FACTOR * f_max``.
 
 A model that fails any check is not recommended by :func:`mrdamper.study.cross_validate`; the
@@ -185,7 +187,7 @@ def stress_motions(
     lo, hi = (float(b) for b in env["x_range"])
     a0, mid = 0.5 * (hi - lo), 0.5 * (hi + lo)
     f0 = float(env["v_max"]) / (2 * np.pi * a0) if a0 > 0 else 1.0
-    e_lo, e_hi = (float(b) for b in env["e_range"])
+    e_lo, e_hi = (float(b) for b in env.get("e_core_range", env["e_range"]))
     out: list[Experiment] = []
     for what, amp, freq in (
         (f"amplitude x{AMPLITUDE_FACTOR:g}", AMPLITUDE_FACTOR * a0, f0),
