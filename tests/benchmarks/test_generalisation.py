@@ -28,9 +28,10 @@ def _load_benchmark():
 @pytest.mark.slow
 def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bench = _load_benchmark()
-    # the paper's model, a classical peer and the black-box peer on every scenario (the benchmark
-    # runs every kind; here the table's shape and these peers are checked)
-    models = ["lpv", "sp1", "narx"]
+    # a classical peer and the black-box peer on every scenario, with the paper's LPV (static
+    # input, the lpv-u column the benchmark always adds); the benchmark runs every kind, here the
+    # table's shape is checked (the default LPV's cells are measured in docs/results.md)
+    models = ["sp1", "narx"]
     tab = bench.main(["--quick", "--models", *models])
     out = capsys.readouterr().out
     assert "| scenario | test |" in out

@@ -186,3 +186,8 @@ def test_demo_quick_on_the_virtual_rig(tmp_path, capsys, monkeypatch) -> None:
     # second run refuses to overwrite, one line, exit 2
     code, _, stderr = _run(["demo", "--scale", "0.1", "--models", "sp2", "--workers", "1"], capsys)
     assert code == 2 and "pass --force" in stderr
+    # with --force the same command runs again over its own outputs
+    again = ["demo", "--scale", "0.1", "--models", "sp2", "--workers", "1", "--no-progress"]
+    code, _, stderr = _run([*again, "--force"], capsys)
+    assert code == 0, stderr
+    assert set(pd.read_csv(out / "results.csv")["model"]) == {"sp2"}

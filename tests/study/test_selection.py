@@ -122,7 +122,7 @@ def test_cli_select_prints_table_and_recommendation(records, tmp_path: Path, cap
     assert "KIND.KEY=VALUE" in capsys.readouterr().err
 
 
-def test_close_runner_up_is_named_as_a_tie() -> None:
+def test_a_tie_goes_to_the_kind_with_the_lowest_worst_record() -> None:
     from mrdamper.study.selection import _recommend
 
     tab = pd.DataFrame(
@@ -137,6 +137,8 @@ def test_close_runner_up_is_named_as_a_tie() -> None:
         index=["narx", "spencer", "lpv"],
     )
     best, reason = _recommend(tab, "condition", 6, 0, "")
-    assert best == "narx" and "next: spencer 0.0182 (only 1% higher: a tie" in reason
-    _, reason = _recommend(tab.drop("spencer"), "condition", 6, 0, "")
-    assert "tie" not in reason
+    assert best == "spencer"
+    assert reason.startswith("spencer and narx tie (mean free-run ESR within 5% of the lowest")
+    assert "0.07 against 0.09 (narx)" in reason
+    best, reason = _recommend(tab.drop("spencer"), "condition", 6, 0, "")
+    assert best == "narx" and "tie" not in reason and "next: lpv 0.0244" in reason

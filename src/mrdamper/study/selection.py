@@ -27,7 +27,10 @@ on every fold (inside and beyond the envelope) and passed the stress test, and t
 interpolation-only (:attr:`mrdamper.kinds.KindSpec.interpolation_only`: NARX) when the selection
 validates beyond the envelope (beyond-envelope folds or the stress test); ``rank_esr`` is the mean
 of the in-envelope mean ESR and the beyond-envelope mean ESR (the in-envelope mean alone when there
-is no beyond-envelope fold). A runner-up within 5 % is named as a tie. The ``status`` column says
+is no beyond-envelope fold). Kinds within :data:`TIE` (5 %) of the lowest ``rank_esr`` tie (the
+difference is within what the folds can tell apart); among them the one with the lowest worst
+left-out record (``worst_esr``) is recommended, the one that fails least badly on a condition it
+was not trained on. The ``status`` column says
 why a kind is not recommended; the reason states the envelope the recommendation was validated in.
 """
 
@@ -59,7 +62,7 @@ __all__ = [
 #: optional in :func:`selection_from_scores`, False when absent).
 SCORE_COLUMNS: tuple[str, ...] = ("model", "fold", "record", "esr", "clipped", "error", "beyond")
 _REQUIRED: tuple[str, ...] = SCORE_COLUMNS[:-1]
-#: A runner-up within this fraction of the recommended kind's ``rank_esr`` is a tie [-].
+#: Kinds within this fraction of the lowest ``rank_esr`` tie; the lowest ``worst_esr`` decides [-].
 TIE = 0.05
 
 #: Why an interpolation-only kind (:attr:`mrdamper.kinds.KindSpec.interpolation_only`) is not
@@ -559,8 +562,10 @@ def _recommend(
         folds += f" and {n_beyond} beyond-envelope fold{'s' if n_beyond != 1 else ''}"
     if ok.empty:
         return None, f"no model kind fitted, simulated and passed every check on {folds}"
-    best = str(ok.index[0])
-    first = ok.iloc[0]
+    tied = ok[ok["rank_esr"] <= (1.0 + TIE) * ok["rank_esr"].iloc[0]]
+    best = str(tied["worst_esr"].idxmin()) if tied["worst_esr"].notna().any() else str(ok.index[0])
+    first = ok.loc[best]
+    others = ok.drop(index=best)
     what = (
         "mean free-run ESR (inside and beyond the training envelope, averaged)"
         if n_beyond
@@ -572,11 +577,19 @@ def _recommend(
         + (f"; beyond {first['beyond_esr']:.3g}" if n_beyond else "")
         + ")"
     )
-    if len(ok) > 1:
-        gap = ok["rank_esr"].iloc[1] / ok["rank_esr"].iloc[0] - 1.0
-        reason += f"; next: {ok.index[1]} {ok['rank_esr'].iloc[1]:.3g}"
-        if gap < TIE:
-            reason += f" (only {gap:.0%} higher: a tie at this data size, either will do)"
+    if len(tied) > 1:
+        rivals = tied.drop(index=best)
+        reason = (
+            f"{best} and {', '.join(rivals.index)} tie (mean free-run ESR within {TIE:.0%} of the "
+            f"lowest, {ok['rank_esr'].iloc[0]:.3g}); {best} has the lowest worst left-out record, "
+            f"{first['worst_esr']:.3g} against "
+            + ", ".join(f"{r['worst_esr']:.3g} ({k})" for k, r in rivals.iterrows())
+            + f": {first['rank_esr']:.3g} over {folds} (inside {first['mean_esr']:.3g}"
+            + (f"; beyond {first['beyond_esr']:.3g}" if n_beyond else "")
+            + ")"
+        )
+    elif len(others):
+        reason += f"; next: {others.index[0]} {others['rank_esr'].iloc[0]:.3g}"
     failing = table.index[table["status"].str.startswith("not recommended")].tolist()
     if failing:
         reason += f"; not recommended: {', '.join(failing)} (see status)"
