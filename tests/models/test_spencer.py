@@ -420,8 +420,7 @@ def test_eta_is_fixed_when_a_held_current_is_noisy_and_free_when_it_switches() -
     truth = SpencerModel(**TRUE, input="i", input_range=(-0.1, 1.1))
     rng = np.random.default_rng(3)
     held = [
-        _record(seed=s, duration=0.5, levels=(c, c), name=f"c{c}")
-        for s, c in ((1, 0.0), (2, 1.0))
+        _record(seed=s, duration=0.5, levels=(c, c), name=f"c{c}") for s, c in ((1, 0.0), (2, 1.0))
     ]
     noisy = [_with_force(truth, r.replace(i=r.i + 0.005 * rng.standard_normal(r.n))) for r in held]
     assert all(np.ptp(r.i) > 0.0 for r in noisy)

@@ -367,7 +367,8 @@ class SpencerEstimator(Estimator):
         ``f0``, and ``A`` is redundant with the scale of z (alpha, beta, gamma absorb it). When
         the electrical input does not switch within any record (each record's input spans at
         most 5 % of the training input range, so noise on a held current does not count),
-        ``eta`` cannot be identified and is also fixed (at ``start["eta"]`` or 100 1/s) unless ``fix_eta="never"``.
+        ``eta`` cannot be identified and is also fixed (at ``start["eta"]`` or 100 1/s) unless
+        ``fix_eta="never"``.
     bounds : mapping, optional
         ``name -> (low, high)`` overriding the default bounds (see :data:`DEFAULT_BOUNDS`).
     n_starts : int

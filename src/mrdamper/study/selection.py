@@ -29,8 +29,9 @@ validates beyond the envelope (beyond-envelope folds or the stress test); ``rank
 of the in-envelope mean ESR and the beyond-envelope mean ESR (the in-envelope mean alone when there
 is no beyond-envelope fold). Kinds within :data:`TIE` (5 %) of the lowest ``rank_esr`` tie (the
 difference is within what the folds can tell apart); among them the one with the lowest worst
-left-out record (``worst_esr``) is recommended, the one that fails least badly on a condition it
-was not trained on. The ``status`` column says
+left-out record (``worst_esr``) is recommended when that record is more than 5 % better than the
+first-ranked kind's (the one that fails least badly on a condition it was not trained on),
+otherwise the first-ranked kind. The ``status`` column says
 why a kind is not recommended; the reason states the envelope the recommendation was validated in.
 """
 
@@ -563,7 +564,11 @@ def _recommend(
     if ok.empty:
         return None, f"no model kind fitted, simulated and passed every check on {folds}"
     tied = ok[ok["rank_esr"] <= (1.0 + TIE) * ok["rank_esr"].iloc[0]]
-    best = str(tied["worst_esr"].idxmin()) if tied["worst_esr"].notna().any() else str(ok.index[0])
+    best = str(ok.index[0])
+    if tied["worst_esr"].notna().any():
+        safest = str(tied["worst_esr"].idxmin())
+        if tied.loc[safest, "worst_esr"] < (1.0 - TIE) * tied.loc[best, "worst_esr"]:
+            best = safest
     first = ok.loc[best]
     others = ok.drop(index=best)
     what = (
@@ -579,11 +584,22 @@ def _recommend(
     )
     if len(tied) > 1:
         rivals = tied.drop(index=best)
+        lead = (
+            f"{best} ties with {', '.join(rivals.index)} on the {what} (within {TIE:.0%} of the "
+            f"lowest, {ok['rank_esr'].iloc[0]:.3g}, which these folds cannot tell apart)"
+        )
+        if best != str(ok.index[0]):
+            lead += (
+                f" and has the lowest worst left-out record, {first['worst_esr']:.3g} against "
+                + ", ".join(f"{r['worst_esr']:.3g} ({k})" for k, r in rivals.iterrows())
+            )
+        else:
+            lead += (
+                ", has the lowest mean free-run ESR of them and a worst left-out record no "
+                f"more than {TIE:.0%} above theirs"
+            )
         reason = (
-            f"{best} and {', '.join(rivals.index)} tie (mean free-run ESR within {TIE:.0%} of the "
-            f"lowest, {ok['rank_esr'].iloc[0]:.3g}); {best} has the lowest worst left-out record, "
-            f"{first['worst_esr']:.3g} against "
-            + ", ".join(f"{r['worst_esr']:.3g} ({k})" for k, r in rivals.iterrows())
+            lead
             + f": {first['rank_esr']:.3g} over {folds} (inside {first['mean_esr']:.3g}"
             + (f"; beyond {first['beyond_esr']:.3g}" if n_beyond else "")
             + ")"
