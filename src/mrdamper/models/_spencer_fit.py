@@ -28,6 +28,7 @@ from mrdamper.models import _spencer_kernels as _k
 from mrdamper.models._spencer_kernels import PARAM_NAMES as PARAMETER_NAMES
 from mrdamper.models._spencer_kernels import auto_substeps
 from mrdamper.models.envelope import SWITCH_FRACTION
+from mrdamper.models.levels import held_within_records
 from mrdamper.progress import counted, report
 
 __all__ = ["COND_WARNING", "DEFAULT_BOUNDS", "FitSettings", "check_settings", "identify"]
@@ -290,13 +291,10 @@ class _Objective:
 
 
 def _constant_input(recs: list[_Record]) -> bool:
-    """The electrical input never switches within a record: each record's input spans at most
-    :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the training input range (or of its level,
-    for one level), so sensor noise on a held current does not count as a switch."""
-    lo = min(r.emin for r in recs)
-    hi = max(r.emax for r in recs)
-    scale = (hi - lo) if hi - lo > 1e-12 * max(1.0, abs(hi)) else max(abs(lo), abs(hi), 1e-300)
-    return all(r.emax - r.emin <= SWITCH_FRACTION * scale for r in recs)
+    """The electrical input never switches within a record (spans of at most
+    :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the training range; noise on a held
+    current does not count)."""
+    return held_within_records([(r.emin, r.emax) for r in recs], SWITCH_FRACTION)
 
 
 def identify(

@@ -1,10 +1,13 @@
-"""Whether an electrical input takes one level (shared by the fit template and the lag choice)."""
+"""Whether an electrical input takes one level (shared by the fit template and the lag choice),
+and whether it switches within a record."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
-__all__ = ["single_level"]
+__all__ = ["held_within_records", "single_level"]
 
 
 def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
@@ -23,3 +26,21 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
     if hi - lo <= rel_tol * max(1.0, abs(lo), abs(hi)):
         return 0.5 * (lo + hi)
     return None
+
+
+def held_within_records(extremes: Sequence[tuple[float, float]], fraction: float) -> bool:
+    """True when the electrical input does not switch within any record: each record's span is
+    at most ``fraction`` of the training input range (of its largest magnitude, for one level),
+    so sensor noise on a held current or voltage does not count as a switch.
+
+    Parameters
+    ----------
+    extremes : sequence of (float, float)
+        ``(min, max)`` of each record's electrical input [A] or [V].
+    fraction : float
+        Largest span of a held input, as a fraction of the training range [-].
+    """
+    lo = min(e[0] for e in extremes)
+    hi = max(e[1] for e in extremes)
+    scale = (hi - lo) if hi - lo > 1e-12 * max(1.0, abs(hi)) else max(abs(lo), abs(hi), 1e-300)
+    return all(e[1] - e[0] <= fraction * scale for e in extremes)

@@ -570,18 +570,12 @@ def _recommend(
         if tied.loc[safest, "worst_esr"] < (1.0 - TIE) * tied.loc[best, "worst_esr"]:
             best = safest
     first = ok.loc[best]
-    others = ok.drop(index=best)
     what = (
         "mean free-run ESR (inside and beyond the training envelope, averaged)"
         if n_beyond
         else "mean free-run ESR on the left-out data"
     )
-    reason = (
-        f"{best} has the lowest {what}, {first['rank_esr']:.3g} over {folds} (inside "
-        f"{first['mean_esr']:.3g}, worst left-out record {first['worst_esr']:.3g}"
-        + (f"; beyond {first['beyond_esr']:.3g}" if n_beyond else "")
-        + ")"
-    )
+    beyond = f"; beyond {first['beyond_esr']:.3g}" if n_beyond else ""
     if len(tied) > 1:
         rivals = tied.drop(index=best)
         lead = (
@@ -599,13 +593,15 @@ def _recommend(
                 f"more than {TIE:.0%} above theirs"
             )
         reason = (
-            lead
-            + f": {first['rank_esr']:.3g} over {folds} (inside {first['mean_esr']:.3g}"
-            + (f"; beyond {first['beyond_esr']:.3g}" if n_beyond else "")
-            + ")"
+            f"{lead}: {first['rank_esr']:.3g} over {folds} (inside {first['mean_esr']:.3g}{beyond})"
         )
-    elif len(others):
-        reason += f"; next: {others.index[0]} {others['rank_esr'].iloc[0]:.3g}"
+    else:
+        reason = (
+            f"{best} has the lowest {what}, {first['rank_esr']:.3g} over {folds} (inside "
+            f"{first['mean_esr']:.3g}, worst left-out record {first['worst_esr']:.3g}{beyond})"
+        )
+        if len(ok) > 1:
+            reason += f"; next: {ok.index[1]} {ok['rank_esr'].iloc[1]:.3g}"
     failing = table.index[table["status"].str.startswith("not recommended")].tolist()
     if failing:
         reason += f"; not recommended: {', '.join(failing)} (see status)"
