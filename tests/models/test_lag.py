@@ -81,6 +81,16 @@ def test_current_input_or_constant_voltage_fits_as_without_lag() -> None:
     assert get_estimator("sp3", input="voltage").fit(const).eta is None
 
 
+def test_noise_on_a_held_voltage_is_not_a_switch() -> None:
+    e = _record(2, "r")
+    noise = np.random.default_rng(7).normal(0.0, 2e-3, e.n)
+    held = [e.replace(voltage=level + noise, name=f"h{level}") for level in (0.2, 0.8)]
+    assert not lag_applies(held, "voltage")
+    assert get_estimator("sp3", input="voltage").fit(held).eta is None
+    moving = [held[0], e.replace(name="moving")]
+    assert lag_applies(moving, "voltage")
+
+
 @pytest.mark.slow
 def test_lag_identified_on_the_inner_split() -> None:
     train = [_record(3, "a"), _record(4, "b")]

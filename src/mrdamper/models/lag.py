@@ -6,8 +6,10 @@ the command through the drive's dynamics, modelled as a first-order lag
 SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) take ``eta="auto"`` by default, and
 :meth:`mrdamper.models.Estimator.fit` then calls :func:`fit_with_lag`:
 
-* input ``"i"`` (the current is measured), or a voltage that is constant within every record (a
-  lag of a constant is the constant): no lag (``eta=None``), the fit is the plain fit;
+* input ``"i"`` (the current is measured), or a voltage held within every record (a lag of a
+  constant is the constant; each record spans at most
+  :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the training range, so sensor noise on a
+  held voltage is not a command that moves): no lag (``eta=None``), the fit is the plain fit;
 * otherwise every training record is cut in time, the first :data:`INNER_FRACTION` fits and the
   rest validates; the family is fitted on the fit parts with candidates of :data:`ETA_GRID` and
   scored in free run on the validation parts (mean ESR, eq. 24, with ``range_policy="clip"``): the
@@ -35,7 +37,8 @@ import numpy as np
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
-from mrdamper.models.levels import single_level
+from mrdamper.models.envelope import SWITCH_FRACTION
+from mrdamper.models.levels import held_within_records
 from mrdamper.progress import report
 
 __all__ = [
@@ -92,7 +95,11 @@ def resolved(eta: float | str | None) -> float | None:
 
 
 def lag_applies(records: Iterable[Experiment], source: ElectricalSource) -> bool:
-    """True when the input is a voltage command that varies within at least one record.
+    """True when the input is a voltage command that switches within at least one record.
+
+    A record whose voltage spans at most :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the
+    training range holds its voltage (noise on a held command is not a switch), as in
+    :func:`~mrdamper.models.levels.held_within_records`.
 
     Parameters
     ----------
@@ -103,7 +110,11 @@ def lag_applies(records: Iterable[Experiment], source: ElectricalSource) -> bool
     """
     if source != "voltage":
         return False
-    return any(single_level(np.asarray(e.electrical(source))) is None for e in records)
+    extremes = []
+    for e in records:
+        u = np.asarray(e.electrical(source), dtype=float)
+        extremes.append((float(np.min(u)), float(np.max(u))))
+    return bool(extremes) and not held_within_records(extremes, SWITCH_FRACTION)
 
 
 def _split(records: ExperimentSet) -> tuple[list[Experiment], list[Experiment]]:
