@@ -92,7 +92,7 @@ def _lpv_model() -> LPVModel:
 
 
 # ----------------------------------------------------------------------------- documented commands
-def test_fit_on_records_of_different_rates_takes_the_lowest_rate_with_a_note(
+def test_fit_on_records_of_different_rates_takes_the_lowest_rate_or_the_kinds_minimum(
     tmp_path, capsys
 ) -> None:
     data = _folder(tmp_path / "mixed", currents=(0.0, 0.5, 1.0, 0.25), fs=(FS, FS, 1000.0, 1000.0))
@@ -113,9 +113,14 @@ def test_fit_on_records_of_different_rates_takes_the_lowest_rate_with_a_note(
         )
         assert code == 0, err
         notes = [ln for ln in err.splitlines() if ln.startswith("note: ")]
-        assert len(notes) == 1 and "model_fs = 200 Hz (the lowest" in notes[0], err
         saved = json.loads((tmp_path / f"{kind}.json").read_text())
-        assert saved["parameters"]["fs"] == FS
+        if kind == "narx":
+            assert len(notes) == 1 and "model_fs = 200 Hz (the lowest" in notes[0], err
+            assert saved["parameters"]["fs"] == FS
+        else:  # the LPV family runs at 500 Hz at least: the 200 Hz records are up-sampled
+            assert len(notes) == 1 and "model_fs = 500 Hz (the kind's lowest" in notes[0], err
+            assert "records at 200 Hz are up-sampled" in notes[0], err
+            assert saved["parameters"]["fs"] == 500.0
 
 
 def test_rounded_time_column_is_read_with_the_estimated_rate(tmp_path, capsys) -> None:

@@ -21,9 +21,10 @@ from mrdamper import (
 from mrdamper.analysis import ZoneLaws
 from mrdamper.errors import Note
 from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel, select_order
+from mrdamper.models.lpv.estimator import MIN_MODEL_FS
 from mrdamper.models.lpv import kernels as K
 
-FS = 200.0
+FS = 500.0  # at least the LPV family's lowest default model rate (MIN_MODEL_FS)
 ALPHA = np.array([[-1.2, 0.30, -0.10], [0.45, -0.10, 0.05]])  # a_j(rho), rho in [0, 1]
 BETA = np.array([[900.0, 1500.0, -400.0], [-500.0, -700.0, 300.0]])  # b_j(rho) [N s/m]
 
@@ -188,6 +189,21 @@ def test_bad_data() -> None:
         LPVEstimator(input_signal="v").fit([])
     with pytest.raises(DataValidationError, match="n_rho"):
         get_estimator("lti", n_rho=1)._validate()
+
+
+def test_records_below_the_lowest_default_rate_are_up_sampled_with_a_note() -> None:
+    slow = [r.replace(t=r.t * FS / 100.0) for r in _train()]  # the same samples at 100 Hz
+    assert slow[0].fs == pytest.approx(100.0)
+    with pytest.warns(Note, match=r"model_fs = 500 Hz \(the kind's lowest default rate\)"):
+        up = LPVEstimator(input_signal="v", refine=False, stability="warn").fit(slow)
+    assert up.fs == MIN_MODEL_FS == 500.0
+    assert up.predict(slow[0]).shape == (slow[0].n,)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        own = LPVEstimator(input_signal="v", refine=False, stability="warn", model_fs=100.0)
+        assert own.fit(slow).fs == 100.0
+    with pytest.warns(RuntimeWarning, match="above the record rate 100 Hz"):
+        LPVEstimator(input_signal="v", refine=False, stability="warn", model_fs=1000.0).fit(slow)
 
 
 def test_resampling_to_model_rate() -> None:

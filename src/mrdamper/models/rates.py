@@ -18,12 +18,19 @@ from mrdamper.errors import DataValidationError, Note
 __all__ = ["model_rate", "rename_setting", "to_model_rate", "to_record_rate"]
 
 
-def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> float:
+def model_rate(
+    rates: Sequence[float], model_fs: float | None, kind: str, minimum: float | None = None
+) -> float:
     """The model rate [Hz] of a discrete model, by one rule for every model kind that has one.
 
-    ``model_fs`` when set; otherwise the lowest sampling rate of the training records. When the
-    records have different rates and ``model_fs`` is not set, a one-line :class:`Note` says which
-    rate was taken (records at other rates are resampled to it, see :func:`to_model_rate`).
+    ``model_fs`` when set; otherwise the lowest sampling rate of the training records, raised to
+    ``minimum`` when the kind has one (the LPV family:
+    :data:`~mrdamper.models.lpv.estimator.MIN_MODEL_FS`). When the records have different rates
+    and ``model_fs`` is not set, a one-line :class:`Note` says which rate was taken (records at
+    other rates are resampled to it, see :func:`to_model_rate`). Records below the model rate are
+    up-sampled by linear interpolation, which one line says: a :class:`Note` when the kind's
+    minimum asked for it, a ``RuntimeWarning`` when ``model_fs`` did (the model then sees no
+    content above those records' Nyquist frequency).
 
     Parameters
     ----------
@@ -33,20 +40,40 @@ def model_rate(rates: Sequence[float], model_fs: float | None, kind: str) -> flo
         Model rate set by the user [Hz].
     kind : str
         Model kind (for the note).
+    minimum : float, optional
+        Lowest default model rate of the kind [Hz].
     """
-    if model_fs is not None:
-        return float(model_fs)
     distinct = sorted({float(r) for r in rates})
     if not distinct:
         raise DataValidationError("model_fs", "no training record to take the model rate from")
+    below = ", ".join(f"{r:g}" for r in distinct if model_fs is not None and r < model_fs)
+    if model_fs is not None:
+        if below:
+            warn_user(
+                f"{kind}: model rate model_fs = {model_fs:g} Hz is above the record rate "
+                f"{below} Hz: those records are up-sampled by linear interpolation",
+                RuntimeWarning,
+            )
+        return float(model_fs)
+    fs = distinct[0]
     if len(distinct) > 1:
         listed = ", ".join(f"{r:g}" for r in distinct)
-        warn_user(
+        note = (
             f"{kind}: training records are sampled at {listed} Hz; model rate model_fs = "
-            f"{distinct[0]:g} Hz (the lowest; the others are resampled; set model_fs to choose)",
+            f"{fs:g} Hz (the lowest; the others are resampled; set model_fs to choose)"
+        )
+        if minimum is None or fs >= minimum:
+            warn_user(note, Note)
+    if minimum is not None and fs < minimum:
+        slow = ", ".join(f"{r:g}" for r in distinct if r < minimum)
+        warn_user(
+            f"{kind}: model rate model_fs = {minimum:g} Hz (the kind's lowest default rate); "
+            f"training records at {slow} Hz are up-sampled by linear interpolation (set model_fs "
+            f"to choose)",
             Note,
         )
-    return distinct[0]
+        fs = float(minimum)
+    return fs
 
 
 def rename_setting(
@@ -97,8 +124,8 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     Integer down-sampling ratios use anti-aliased polyphase filtering
     (``scipy.signal.resample_poly`` with ``padtype="line"``); other ratios linear interpolation.
     Equal rates return ``x`` itself (as float64). A model rate above the record rate
-    (up-sampling) interpolates linearly and says so with a ``RuntimeWarning``: the model then
-    sees no content above the record's Nyquist frequency.
+    (up-sampling) interpolates linearly: the model then sees no content above the record's
+    Nyquist frequency (:func:`model_rate` says so once, at identification).
 
     Parameters
     ----------
@@ -109,12 +136,6 @@ def to_model_rate(x: np.ndarray, fs_in: float, fs_out: float) -> np.ndarray:
     """
     if abs(fs_in - fs_out) <= 1e-9 * fs_out:
         return np.asarray(x, dtype=np.float64)
-    if fs_out > fs_in:
-        warn_user(
-            f"model rate {fs_out:g} Hz is above the record rate {fs_in:g} Hz: the record is "
-            f"up-sampled by linear interpolation",
-            RuntimeWarning,
-        )
     q = fs_in / fs_out
     if abs(q - round(q)) < 1e-9 and round(q) >= 2:
         return np.asarray(sps.resample_poly(x, 1, round(q), padtype="line"), dtype=np.float64)

@@ -55,7 +55,14 @@ from mrdamper.models.rates import (
 )
 from mrdamper.progress import report
 
-__all__ = ["LPVEstimator", "LTIEstimator", "select_order"]
+__all__ = ["MIN_MODEL_FS", "LPVEstimator", "LTIEstimator", "select_order"]
+
+#: Lowest default model rate of the LPV family [Hz]. The paper's transfer function has no direct
+#: feed-through, so the force answers the input one model sample later: 10 ms at a 100 Hz record
+#: rate, 5 ms at 200 Hz. Records sampled slower are up-sampled to this rate (``model_fs`` sets any
+#: rate). Measured (``docs/models.md``, "Model rate"): Labcontrol (100 Hz) test ESR 0.0164 ->
+#: 0.0138, Quiroz up to 3 Hz -> 4 Hz 0.0147 -> 0.0118.
+MIN_MODEL_FS: float = 500.0
 
 
 # ----------------------------------------------------------------------------- estimators
@@ -107,8 +114,9 @@ class LPVEstimator(Estimator):
     n_bins : int
         Number of ``rho`` bins for ``laws_by="bins"``.
     model_fs : float, optional
-        Model rate [Hz]; default: the lowest sampling rate of the training records (records at
-        other rates are resampled, with a note). ``fs`` is its old name, still accepted.
+        Model rate [Hz]; default: the lowest sampling rate of the training records, at least
+        :data:`MIN_MODEL_FS` (records at other rates are resampled, with a note; slower records
+        are up-sampled by linear interpolation). ``fs`` is its old name, still accepted.
     offset : bool
         Estimate an output force offset ``F0``.
     weighting : {"esr", "sse"}
@@ -247,7 +255,7 @@ class LPVEstimator(Estimator):
         exps = data.records
         record_weights = options.get("record_weights")
         user_w = _record_weights(record_weights, len(exps))
-        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
+        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind, minimum=MIN_MODEL_FS)
         eta = resolved(self.eta)
         rhos = [
             K.first_order_lag(r, e.dt, eta) if eta is not None else r
