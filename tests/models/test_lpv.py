@@ -21,8 +21,8 @@ from mrdamper import (
 from mrdamper.analysis import ZoneLaws
 from mrdamper.errors import Note
 from mrdamper.models.lpv import LPVEstimator, LPVModel, LTIModel, select_order
-from mrdamper.models.lpv.estimator import MIN_MODEL_FS
 from mrdamper.models.lpv import kernels as K
+from mrdamper.models.lpv.estimator import MIN_MODEL_FS
 
 FS = 500.0  # at least the LPV family's lowest default model rate (MIN_MODEL_FS)
 ALPHA = np.array([[-1.2, 0.30, -0.10], [0.45, -0.10, 0.05]])  # a_j(rho), rho in [0, 1]
