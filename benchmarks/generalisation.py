@@ -19,12 +19,12 @@ Four scenarios, every registered model kind, one table of mean test ESR (eq. 24)
   voltages, 100 Hz): train on ``train/``, test on ``test/``.
 
 Nothing is chosen on test records. Every model uses its estimator defaults plus the data set's
-electrical input; the LPV/LTI model rate is 200 Hz on Quiroz (the lowest record rate) and the record
-rate (1 kHz) on the rig. The extra column ``lpv-val`` is the LPV model with its order ``n_m`` and
-model rate chosen on a validation split of the training data only (leave one training condition out
-for (a)-(c); last 20 % of the training part for (d)); on Quiroz the rates 200, 500 and 1000 Hz are
-candidates (the latter two up-sample the 200 Hz records); ``lpv-val`` uses the paper's static input
-``u`` (with the default hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
+electrical input; the LPV/LTI model rate is the estimator's default: 500 Hz on Quiroz (records at
+200 Hz and 1 kHz) and Labcontrol (100 Hz), the record rate on the rig (1 kHz) and Dyke. The extra
+column ``lpv-val`` is the LPV model with its order ``n_m`` and model rate chosen on a validation
+split of the training data only (leave one training condition out for (a)-(c); last 20 % of the
+training part for (d)); on Quiroz the rates 200, 500 and 1000 Hz are candidates (the latter two
+up-sample the 200 Hz records); ``lpv-val`` uses the paper's static input ``u`` (with the default hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
 model with the paper's static zone-law input (``input_signal="u"``, the default before the
 hysteretic input); the ``lpv`` column has the default hysteretic input, its stroke scale and
 pre-yield share chosen beyond the training envelope (the estimator's default
@@ -68,6 +68,8 @@ import scipy.signal as sps
 from mrdamper.data import ExperimentSet
 from mrdamper.data.readers import read_csv, read_directory
 from mrdamper.models import available_models, get_estimator
+from mrdamper.models.lpv.estimator import MIN_MODEL_FS
+from mrdamper.models.rates import model_rate
 from mrdamper.rig import VirtualRig, reference_damper
 from mrdamper.signals import aprbs, road_profile
 
@@ -173,7 +175,9 @@ def fit_augmented(
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            fs = settings.get("model_fs") or min(e.fs for e in sc.train)
+            fs = model_rate(
+                [e.fs for e in sc.train], settings.get("model_fs"), "lpv", minimum=MIN_MODEL_FS
+            )
             syn, _ = reference_records(
                 sc.train, reference=reference, input=settings.get("input", "i"), fs=fs, seed=0
             )
@@ -251,7 +255,7 @@ def _loco(train: ExperimentSet) -> list[tuple[ExperimentSet, ExperimentSet]]:
 
 
 def _quiroz_settings(kind: str) -> dict[str, Any]:
-    return {"model_fs": 200.0} if kind in ("lpv", "lti") else {}
+    return {}
 
 
 #: 500 Hz and 1 kHz up-sample the 200 Hz records (linear interpolation, with a warning).
