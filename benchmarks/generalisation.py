@@ -24,7 +24,8 @@ electrical input; the LPV/LTI model rate is the estimator's default: 500 Hz on Q
 column ``lpv-val`` is the LPV model with its order ``n_m`` and model rate chosen on a validation
 split of the training data only (leave one training condition out for (a)-(c); last 20 % of the
 training part for (d)); on Quiroz the rates 200, 500 and 1000 Hz are candidates (the latter two
-up-sample the 200 Hz records); ``lpv-val`` uses the paper's static input ``u`` (with the default hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
+up-sample the 200 Hz records); ``lpv-val`` uses the paper's static input ``u`` (with the default
+hysteretic input every candidate would fit six times). ``lpv-u`` is the LPV
 model with the paper's static zone-law input (``input_signal="u"``, the default before the
 hysteretic input); the ``lpv`` column has the default hysteretic input, its stroke scale and
 pre-yield share chosen beyond the training envelope (the estimator's default
