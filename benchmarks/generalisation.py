@@ -462,10 +462,10 @@ def to_markdown(tab: pd.DataFrame) -> str:
 
 
 def _with_lpv(
-    settings: Callable[[str], dict[str, Any]], choose_on: str
+    settings: Callable[[str], dict[str, Any]], name: str, value: Any
 ) -> Callable[[str], dict[str, Any]]:
-    """A scenario's settings with the LPV's ``choose_on`` given."""
-    return lambda kind: {**settings(kind), **({"choose_on": choose_on} if kind == "lpv" else {})}
+    """A scenario's settings with the LPV's setting ``name`` given."""
+    return lambda kind: {**settings(kind), **({name: value} if kind == "lpv" else {})}
 
 
 def main(argv: list[str] | None = None) -> pd.DataFrame:
@@ -489,6 +489,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         default=None,
         help="where the LPV input's stroke and blend are chosen (default: the estimator's)",
     )
+    ap.add_argument(
+        "--lpv-model-fs",
+        type=float,
+        default=None,
+        help="the LPV model rate [Hz] (default: the estimator's, at least 500 Hz)",
+    )
     args = ap.parse_args(argv)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
@@ -497,7 +503,13 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     for name in args.scenarios:
         sc = SCENARIOS[name](args.quick)
         if args.lpv_choose_on is not None:
-            sc = dataclasses.replace(sc, settings=_with_lpv(sc.settings, args.lpv_choose_on))
+            sc = dataclasses.replace(
+                sc, settings=_with_lpv(sc.settings, "choose_on", args.lpv_choose_on)
+            )
+        if args.lpv_model_fs is not None:
+            sc = dataclasses.replace(
+                sc, settings=_with_lpv(sc.settings, "model_fs", args.lpv_model_fs)
+            )
         print(
             f"{sc.name}: {len(sc.train)} training records; tests "
             f"{ {k: len(v) for k, v in sc.tests.items()} }",
