@@ -147,3 +147,15 @@ def test_a_tie_goes_to_the_kind_with_the_lowest_worst_record() -> None:
     close = tab.assign(worst_esr=[0.09, 0.0882, 0.1])
     best, reason = _recommend(close, "condition", 6, 0, "")
     assert best == "narx" and "ties with spencer" in reason and "no more than 5% above" in reason
+
+
+def test_the_model_rate_note_names_each_discrete_kinds_rate() -> None:
+    from mrdamper.study.selection import _model_rate_note
+
+    mixed = _model_rate_note(["lpv", "sp1", "narx"], [200.0, 1000.0], {})
+    assert mixed is not None
+    assert "narx at 200 Hz" in mixed and "lpv at 500 Hz" in mixed and "sp1" not in mixed
+    slow = _model_rate_note(["lti"], [100.0], {})
+    assert slow is not None and "lti at 500 Hz" in slow and "lti at least 500 Hz" in slow
+    assert _model_rate_note(["lpv", "sp1"], [1000.0], {}) is None
+    assert _model_rate_note(["lpv"], [100.0], {"lpv": {"model_fs": 100.0}}) is None

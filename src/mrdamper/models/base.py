@@ -433,6 +433,9 @@ class Estimator(abc.ABC):
     choice_options: ClassVar[tuple[str, ...]] = ()
     #: Old setting name -> current name. Old names are still accepted, with a note.
     renamed_settings: ClassVar[Mapping[str, str]] = {}
+    #: Lowest default model rate of a discrete family [Hz] (None: the lowest record rate);
+    #: :func:`mrdamper.models.rates.model_rate`.
+    min_model_fs: ClassVar[float | None] = None
 
     @classmethod
     def settings_names(cls) -> list[str]:

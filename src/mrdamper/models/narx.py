@@ -519,7 +519,7 @@ class NARXEstimator(Estimator):
         base, cand = candidate_structure(
             self.n_a, self.n_b, self.degree, self.output_degree, self.use_tanh
         )
-        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind)
+        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind, self.min_model_fs)
         v_max = max(float(np.max(np.abs(e.v))) for e in exps)
         v0 = float(self.v0) if self.v0 is not None else 0.05 * v_max
         F_max = max(float(np.max(np.abs(e.F))) for e in exps)

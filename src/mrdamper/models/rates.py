@@ -15,7 +15,7 @@ from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, Note
 
-__all__ = ["model_rate", "rename_setting", "to_model_rate", "to_record_rate"]
+__all__ = ["model_rate", "rate_rule", "rename_setting", "to_model_rate", "to_record_rate"]
 
 
 def model_rate(
@@ -24,7 +24,7 @@ def model_rate(
     """The model rate [Hz] of a discrete model, by one rule for every model kind that has one.
 
     ``model_fs`` when set; otherwise the lowest sampling rate of the training records, raised to
-    ``minimum`` when the kind has one (the LPV family:
+    ``minimum`` when the kind has one (the estimator's ``min_model_fs``; the LPV family:
     :data:`~mrdamper.models.lpv.estimator.MIN_MODEL_FS`). When the records have different rates
     and ``model_fs`` is not set, a one-line :class:`Note` says which rate was taken (records at
     other rates are resampled to it, see :func:`to_model_rate`). Records below the model rate are
@@ -46,34 +46,49 @@ def model_rate(
     distinct = sorted({float(r) for r in rates})
     if not distinct:
         raise DataValidationError("model_fs", "no training record to take the model rate from")
-    below = ", ".join(f"{r:g}" for r in distinct if model_fs is not None and r < model_fs)
+    fs = rate_rule(distinct, model_fs, minimum)
+    up = ", ".join(f"{r:g}" for r in distinct if r < fs)
     if model_fs is not None:
-        if below:
+        if up:
             warn_user(
-                f"{kind}: model rate model_fs = {model_fs:g} Hz is above the record rate "
-                f"{below} Hz: those records are up-sampled by linear interpolation",
+                f"{kind}: model rate model_fs = {fs:g} Hz is above the record rate {up} Hz: "
+                f"those records are up-sampled by linear interpolation",
                 RuntimeWarning,
             )
-        return float(model_fs)
-    fs = distinct[0]
-    if len(distinct) > 1:
-        listed = ", ".join(f"{r:g}" for r in distinct)
-        note = (
-            f"{kind}: training records are sampled at {listed} Hz; model rate model_fs = "
-            f"{fs:g} Hz (the lowest; the others are resampled; set model_fs to choose)"
-        )
-        if minimum is None or fs >= minimum:
-            warn_user(note, Note)
-    if minimum is not None and fs < minimum:
-        slow = ", ".join(f"{r:g}" for r in distinct if r < minimum)
+    elif up:
         warn_user(
-            f"{kind}: model rate model_fs = {minimum:g} Hz (the kind's lowest default rate); "
-            f"training records at {slow} Hz are up-sampled by linear interpolation (set model_fs "
+            f"{kind}: model rate model_fs = {fs:g} Hz (the kind's lowest default rate); "
+            f"training records at {up} Hz are up-sampled by linear interpolation (set model_fs "
             f"to choose)",
             Note,
         )
-        fs = float(minimum)
+    elif len(distinct) > 1:
+        listed = ", ".join(f"{r:g}" for r in distinct)
+        warn_user(
+            f"{kind}: training records are sampled at {listed} Hz; model rate model_fs = "
+            f"{fs:g} Hz (the lowest; the others are resampled; set model_fs to choose)",
+            Note,
+        )
     return fs
+
+
+def rate_rule(rates: Sequence[float], model_fs: float | None, minimum: float | None) -> float:
+    """The rule of :func:`model_rate` without its notes [Hz]: ``model_fs`` when set, else the
+    lowest of ``rates`` raised to ``minimum`` (when not None).
+
+    Parameters
+    ----------
+    rates : sequence of float
+        Sampling rates of the training records [Hz] (at least one).
+    model_fs : float or None
+        Model rate set by the user [Hz].
+    minimum : float or None
+        Lowest default model rate of the kind [Hz].
+    """
+    if model_fs is not None:
+        return float(model_fs)
+    lowest = float(min(rates))
+    return lowest if minimum is None else max(lowest, float(minimum))
 
 
 def rename_setting(

@@ -74,8 +74,6 @@ INTERPOLATION_ONLY = (
 )
 
 FoldKind = Literal["auto", "condition", "record", "time"]
-#: Discrete-time model kinds: they need one model rate when records have different rates.
-_DISCRETE = ("lpv", "lti", "narx")
 
 
 @dataclass(frozen=True)
@@ -213,6 +211,35 @@ def selection_folds(
     return "time", out
 
 
+def _model_rate_note(
+    kinds: Sequence[str], rates: Sequence[float], settings: Mapping[str, Mapping[str, Any]]
+) -> str | None:
+    """One line saying at which rate each discrete kind runs (by the rule of
+    :func:`mrdamper.models.rates.rate_rule`), when the records have several rates or a kind runs
+    above them; None otherwise."""
+    from mrdamper.models.rates import rate_rule
+    from mrdamper.models.registry import get_estimator
+
+    groups: dict[float, list[str]] = {}
+    floors: list[str] = []
+    for kind in kinds:
+        est = get_estimator(kind, **settings.get(kind, {}))
+        if "model_fs" in est.settings_names():
+            floor = type(est).min_model_fs
+            fs = rate_rule(rates, getattr(est, "model_fs", None), floor)
+            groups.setdefault(fs, []).append(kind)
+            if floor is not None:
+                floors.append(f"{kind} at least {floor:g} Hz")
+    if not groups or (len(rates) == 1 and set(groups) == {float(rates[0])}):
+        return None
+    runs = "; ".join(f"{', '.join(ks)} at {fs:g} Hz" for fs, ks in sorted(groups.items()))
+    rule = f" ({', '.join(floors)})" if floors else ""
+    return (
+        f"records have rates {[float(r) for r in rates]} Hz: discrete models run at the lowest "
+        f"record rate{rule} unless model_fs is set: {runs}"
+    )
+
+
 def _check_settings(kind: str, settings: Mapping[str, Any]) -> None:
     """Refuse an unknown kind, a setting ``kind`` does not take or a value it cannot use, in one
     line naming ``kind.setting`` (so that no fold runs with settings that cannot work)."""
@@ -289,12 +316,9 @@ def cross_validate(
     split, parts = selection_folds(exps, folds, n_folds)
     extra_parts = envelope_folds(exps) if beyond else []
     notes: list[str] = []
-    rates = sorted({e.fs for e in exps})
-    if len(rates) > 1:
-        notes.append(
-            f"records have rates {rates} Hz: discrete models ({', '.join(_DISCRETE)}) run at "
-            f"the lowest, {rates[0]:g} Hz"
-        )
+    rate_note = _model_rate_note(kinds, sorted({e.fs for e in exps}), extra)
+    if rate_note:
+        notes.append(rate_note)
     if beyond and not extra_parts:
         notes.append(
             "no fold leaves the training envelope (the records share one range, or the later "

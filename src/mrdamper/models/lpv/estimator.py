@@ -183,6 +183,7 @@ class LPVEstimator(Estimator):
     fs: InitVar[float | None] = None
 
     renamed_settings: ClassVar[Mapping[str, str]] = {"fs": "model_fs"}
+    min_model_fs: ClassVar[float | None] = MIN_MODEL_FS
 
     def __post_init__(self, fs: float | None) -> None:
         self.model_fs = cast(
@@ -255,7 +256,7 @@ class LPVEstimator(Estimator):
         exps = data.records
         record_weights = options.get("record_weights")
         user_w = _record_weights(record_weights, len(exps))
-        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind, minimum=MIN_MODEL_FS)
+        fs = model_rate([e.fs for e in exps], self.model_fs, self.kind, self.min_model_fs)
         eta = resolved(self.eta)
         rhos = [
             K.first_order_lag(r, e.dt, eta) if eta is not None else r
