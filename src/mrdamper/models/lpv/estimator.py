@@ -60,7 +60,8 @@ __all__ = ["MIN_MODEL_FS", "LPVEstimator", "LTIEstimator", "select_order"]
 #: Lowest default model rate of the LPV family [Hz]. The paper's transfer function has no direct
 #: feed-through, so the force answers the input one model sample later: 10 ms at a 100 Hz record
 #: rate, 5 ms at 200 Hz. Records sampled slower are up-sampled to this rate (``model_fs`` sets any
-#: rate). Measured (``docs/models.md``, "Model rate"): Labcontrol (100 Hz) test ESR 0.0164 ->
+#: rate). Measured (``docs/results.md``, "The LPV family's model rate"): Labcontrol (100 Hz)
+#: test ESR 0.0164 ->
 #: 0.0138, Quiroz up to 3 Hz -> 4 Hz 0.0147 -> 0.0118.
 MIN_MODEL_FS: float = 500.0
 
