@@ -53,9 +53,7 @@ def test_identical_runs_give_identical_files_but_the_timings(two_runs) -> None:
 
 
 @pytest.mark.slow
-def test_model_fits_run_twice_from_the_command_line_give_the_same_bytes(
-    two_runs, capsys
-) -> None:
+def test_model_fits_run_twice_from_the_command_line_give_the_same_bytes(two_runs, capsys) -> None:
     data = two_runs[0].parent / "sine"
     outs = [two_runs[0].parent / f"cli{k}.json" for k in (1, 2)]
     for o in outs:
