@@ -57,21 +57,20 @@ def test_bench_scale_quick(tmp_path: Path) -> None:
 @pytest.mark.parametrize("source", ["parquet-file", "csv-folder"])
 def test_bench_scale_reads_files_as_the_cli_does(tmp_path: Path, source: str) -> None:
     pytest.importorskip("pyarrow")
-    # short lengths: the reading path is checked, not the scaling (the --quick test above)
     _, rows = _run(
-        tmp_path, "--lengths", "4", "10", "--record", "6", "--kinds", "sp1", "--source", source
+        tmp_path, "--lengths", "12", "30", "--record", "20", "--kinds", "sp1", "--source", source
     )
     assert [(r["kind"], r["length_s"], r["source"]) for r in rows] == [
-        ("sp1", 4.0, source),
-        ("sp1", 10.0, source),
+        ("sp1", 12.0, source),
+        ("sp1", 30.0, source),
     ]
     for r in rows:
         assert r["status"] == "ok", r
         assert r["n"] == round(r["length_s"] * 1000)  # every sample came through the reader
         assert r["read_s"] > 0
-    folder = next((tmp_path / "cache").glob(f"*/{source}-10s"))
+    folder = next((tmp_path / "cache").glob(f"*/{source}-30s"))
     files = sorted(p.name for p in folder.rglob("*") if p.is_file() and p.name != "done")
-    # 10 s of 6 s records: one file for the whole length, or one file per record
+    # 30 s of 20 s records: one file for the whole length, or one file per record
     assert files == (
         ["campaign.parquet"] if source == "parquet-file" else ["rec00.csv", "rec01.csv"]
     )
