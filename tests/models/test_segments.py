@@ -18,8 +18,7 @@ from mrdamper.rig import reference_damper
 from tests.conftest import package_kinds
 
 KINDS = package_kinds()
-#: Smaller iteration budgets where a fit is slow: the test compares two fits, not their accuracy.
-FAST = {"spencer": {"n_starts": 1, "max_nfev": 20}, "p15": {"shoot_nfev": 5, "max_nfev": 5}}
+FAST = {"spencer": {"n_starts": 1, "max_nfev": 20}}
 FS = 500.0
 CAP = 1500
 
