@@ -30,8 +30,8 @@ def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFix
     bench = _load_benchmark()
     # a classical peer and the black-box peer on every scenario; the benchmark runs every kind,
     # here the table's shape is checked (the LPV columns, which add minutes of fits, are measured
-    # in docs/results.md). SP-2 is the classical peer: with SP-1 this test took 138 s of CPU with
-    # the compiled kernels cached, with SP-2 51 s (the same run outside pytest: 37 s with SP-1)
+    # in docs/results.md). SP-2 is the classical peer: SP-1's drive-lag search on the Dyke record
+    # alone took 100 s of the quick run, SP-2's 7 s
     models = ["sp2", "narx"]
     tab = bench.main(["--quick", "--models", *models])
     out = capsys.readouterr().out
