@@ -657,42 +657,6 @@ def test_implausible_units_warn_and_bounds_can_be_overridden(tmp_path, capsys) -
     assert "warning: F: largest magnitude" in err
 
 
-# ----------------------------------------------------------------------------- reproducibility
-@pytest.mark.slow
-def test_reruns_are_byte_identical(tmp_path, capsys) -> None:
-    data = _folder(tmp_path / "d", currents=(0.0, 0.5, 1.0, 0.25))
-    outs = [tmp_path / "o1", tmp_path / "o2"]
-    for o in outs:
-        code, _, err = _run(
-            [
-                "study",
-                str(data),
-                "--out",
-                str(o),
-                "--models",
-                "sp2,lti,narx",
-                "--workers",
-                "1",
-                "--no-progress",
-                "--seed",
-                "3",
-            ],
-            capsys,
-        )
-        assert code == 0, err
-    names = ["results.csv", "summary.csv", "fits.csv", "study.json"]
-    names += [str(p.relative_to(outs[0])) for p in (outs[0] / "models").rglob("*.json")]
-    assert len(names) > 4
-    for name in names:
-        assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
-    assert (outs[0] / "timings.csv").exists() and "wall_time_s" in (
-        outs[0] / "timings.json"
-    ).read_text()
-    for o in outs:  # model fits run twice from the command line too
-        assert _run(["fit", "narx", str(data), "--out", str(o / "cli.json")], capsys)[0] == 0
-    assert (outs[0] / "cli.json").read_bytes() == (outs[1] / "cli.json").read_bytes()
-
-
 # ----------------------------------------------------------------------------- Python version
 def test_requires_python_matches_the_standard_library_used() -> None:
     meta = tomllib.loads((REPO / "pyproject.toml").read_text())

@@ -18,9 +18,13 @@ from tests.test_bad_inputs import _folder, _run, _sine
 STUDY = ["--models", "sp2,sp3", "--workers", "1", "--no-progress"]
 
 
+#: The study run twice: a static map, a hysteretic map, the linear model and the seeded NARX peer.
+TWICE = ["--models", "sp2,sp3,lti,narx", "--seed", "3", "--workers", "1", "--no-progress"]
+
+
 @pytest.fixture(scope="module")
 def two_runs(tmp_path_factory):
-    """The same small study run twice into two folders."""
+    """The same small study run twice into two folders (``sine/`` beside them holds the data)."""
     from mrdamper.cli.main import main
 
     base = tmp_path_factory.mktemp("twice")
@@ -29,7 +33,7 @@ def two_runs(tmp_path_factory):
     outs = [base / "run1", base / "run2"]
     for out in outs:
         try:
-            main(["study", str(data), "--out", str(out), *STUDY])
+            main(["study", str(data), "--out", str(out), *TWICE])
         except SystemExit as exc:
             assert not exc.code
     return outs
@@ -42,7 +46,19 @@ def test_identical_runs_give_identical_files_but_the_timings(two_runs) -> None:
     assert files == sorted(p.relative_to(b) for p in b.rglob("*") if p.is_file())
     differ = [str(f) for f in files if (a / f).read_bytes() != (b / f).read_bytes()]
     assert set(differ) <= {"timings.csv", "timings.json"}, differ
-    assert "report.html" in {str(f) for f in files}
+    names = {str(f) for f in files}
+    assert {"report.html", "results.csv", "summary.csv", "fits.csv", "study.json"} <= names
+    assert len([f for f in files if f.parts[0] == "models" and f.suffix == ".json"]) >= 4
+    assert "timings.csv" in names and "wall_time_s" in (a / "timings.json").read_text()
+
+
+@pytest.mark.slow
+def test_model_fits_run_twice_from_the_command_line_give_the_same_bytes(two_runs, capsys) -> None:
+    data = two_runs[0].parent / "sine"
+    outs = [two_runs[0].parent / f"cli{k}.json" for k in (1, 2)]
+    for o in outs:
+        assert _run(["fit", "narx", str(data), "--out", str(o)], capsys)[0] == 0
+    assert outs[0].read_bytes() == outs[1].read_bytes()
 
 
 def test_report_and_study_json_carry_the_provenance(two_runs) -> None:
@@ -54,8 +70,8 @@ def test_report_and_study_json_carry_the_provenance(two_runs) -> None:
     assert prov["mrdamper_version"] == __version__
     assert prov["git_commit"] == git_commit()
     settings = prov["settings"]
-    assert settings["protocol"] == "quiroz-loco" and settings["seed"] == 0
-    assert set(settings["models"]) == {"sp2", "sp3"}
+    assert settings["protocol"] == "quiroz-loco" and settings["seed"] == 3
+    assert set(settings["models"]) == {"sp2", "sp3", "lti", "narx"}
     html = (out / "report.html").read_text()
     assert f"Provenance: mrdamper {__version__}, commit {(git_commit() or 'none')[:12]}" in html
     assert "quiroz-loco" in html
@@ -66,7 +82,7 @@ def test_report_and_study_json_carry_the_provenance(two_runs) -> None:
 def test_report_title_and_record_wording(two_runs) -> None:
     html = (two_runs[0] / "report.html").read_text()
     title = re.search(r"<title>(.*?)</title>", html).group(1)
-    assert title == "Which damper model? 2 models compared on 6 measured records"
+    assert title == "Which damper model? 4 models compared on 6 measured records"
     assert "comparison: " not in html
 
 

@@ -42,6 +42,15 @@ def result(doe):
     return run_study(doe, doe_protocol(), MODELS, workers=1, progress=False)
 
 
+@pytest.fixture(scope="module")
+def written(result, tmp_path_factory):
+    """The study folder of ``result`` (figures and report), written once for the tests that only
+    read it."""
+    out = write_study(result, tmp_path_factory.mktemp("report") / "out")
+    plt.close("all")
+    return out
+
+
 @pytest.fixture(autouse=True)
 def _close():
     yield
@@ -101,9 +110,8 @@ def test_tables_keep_failed_rows_with_status_units_and_comparisons(result) -> No
 
 
 @pytest.mark.slow
-def test_report_html_rows_rounding_and_failed_note(result, tmp_path) -> None:
-    out = write_study(result, tmp_path / "out")
-    html = (out / "report.html").read_text()
+def test_report_html_rows_rounding_and_failed_note(written) -> None:
+    html = (written / "report.html").read_text()
     assert "Drawn in panels of their own" in html and "wild (mean ESR" in html
     cells = re.findall(r"<td[^>]*>([^<]*)</td>", html)
     floats = [c for c in cells if re.fullmatch(r"-?\d*\.\d+(e[-+]\d+)?", c)]
@@ -181,12 +189,11 @@ def test_layout_probe_catches_an_overflowing_table(tmp_path) -> None:
 
 @pytest.mark.parametrize("width", [800, 1280])
 @pytest.mark.slow
-def test_report_tables_fit_the_browser_window(result, tmp_path, width) -> None:
+def test_report_tables_fit_the_browser_window(written, tmp_path, width) -> None:
     browser = find_browser()
     if browser is None:
         pytest.skip("no headless browser (chromium) installed: apt-get install chromium")
-    out = write_study(result, tmp_path / "out")
-    got = layout_problems(out / "report.html", width, browser, tmp_path)
+    got = layout_problems(written / "report.html", width, browser, tmp_path)
     assert got["tables"] >= 8
     assert got["problems"] == []
 

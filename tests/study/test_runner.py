@@ -24,6 +24,13 @@ def result(doe):
     return run_study(doe, doe_protocol(), MODELS, workers=1, progress=False)
 
 
+@pytest.fixture(scope="module")
+def written(result, tmp_path_factory):
+    """The study folder of ``result`` (figures and report), written once for the tests that only
+    read it."""
+    return write_study(result, tmp_path_factory.mktemp("study") / "out")
+
+
 def test_failed_models_stay_as_rows_with_their_error(result, doe) -> None:
     r = result.results
     n_scored = len(doe) - 6
@@ -90,8 +97,8 @@ def test_unknown_model_or_setting_is_refused_before_running(doe) -> None:
 
 
 @pytest.mark.slow
-def test_write_outputs_and_report(result, tmp_path) -> None:
-    out = write_study(result, tmp_path / "out")
+def test_write_outputs_and_report(result, written) -> None:
+    out = written
     names = {p.name for p in out.iterdir()}
     assert {
         "results.csv",
@@ -171,7 +178,7 @@ def test_interrupted_write_leaves_nothing_that_looks_complete(
 
 
 @pytest.mark.slow
-def test_report_renders_in_a_headless_browser(result, tmp_path) -> None:
+def test_report_renders_in_a_headless_browser(written, tmp_path) -> None:
     browser = next(
         (
             shutil.which(b)
@@ -182,7 +189,7 @@ def test_report_renders_in_a_headless_browser(result, tmp_path) -> None:
     )
     if browser is None:
         pytest.skip("no headless browser (chromium) installed to render report.html")
-    out = write_study(result, tmp_path / "out")
+    out = written
     shot = tmp_path / "shot.png"
     subprocess.run(
         [
