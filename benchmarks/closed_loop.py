@@ -76,6 +76,12 @@ def main() -> None:
         help="LPV model rate [Hz] (default: the record rate); records are up-sampled to it",
     )
     ap.add_argument(
+        "--lpv-outer-slopes",
+        choices=["auto", "post-yield", "zones"],
+        default=None,
+        help="the LPV zone laws' outer slopes (default: the estimator's)",
+    )
+    ap.add_argument(
         "--first",
         default="sp1",
         help="kind of the first model (fitted on Table II) whose loop gives the extension",
@@ -105,6 +111,8 @@ def main() -> None:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     lpv_settings = {"model_fs": a.lpv_fs} if kind == "lpv" and a.lpv_fs else {}
+                    if kind == "lpv" and a.lpv_outer_slopes:
+                        lpv_settings["outer_slopes"] = a.lpv_outer_slopes
                     if kind == "lpv" and held_out:  # stroke and blend scored on held_out
                         est = get_estimator(
                             kind, input=truth.input, choose_on="held-out", **lpv_settings

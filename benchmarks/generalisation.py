@@ -495,6 +495,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         default=None,
         help="the LPV model rate [Hz] (default: the estimator's, at least 500 Hz)",
     )
+    ap.add_argument(
+        "--lpv-outer-slopes",
+        choices=["auto", "post-yield", "zones"],
+        default=None,
+        help="the LPV zone laws' outer slopes (default: the estimator's)",
+    )
     args = ap.parse_args(argv)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
@@ -502,14 +508,13 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     t0 = time.perf_counter()
     for name in args.scenarios:
         sc = SCENARIOS[name](args.quick)
-        if args.lpv_choose_on is not None:
-            sc = dataclasses.replace(
-                sc, settings=_with_lpv(sc.settings, "choose_on", args.lpv_choose_on)
-            )
-        if args.lpv_model_fs is not None:
-            sc = dataclasses.replace(
-                sc, settings=_with_lpv(sc.settings, "model_fs", args.lpv_model_fs)
-            )
+        for setting, value in (
+            ("choose_on", args.lpv_choose_on),
+            ("model_fs", args.lpv_model_fs),
+            ("outer_slopes", args.lpv_outer_slopes),
+        ):
+            if value is not None:
+                sc = dataclasses.replace(sc, settings=_with_lpv(sc.settings, setting, value))
         print(
             f"{sc.name}: {len(sc.train)} training records; tests "
             f"{ {k: len(v) for k, v in sc.tests.items()} }",

@@ -1,6 +1,6 @@
-"""Force-velocity analysis: three-zone regression (eq. 17), records grouped into electrical
-levels, laws across current (eq. 18) and the LPV scheduling input ``u(v, i)`` (eqs. 19-22), and the
-energy dissipated per displacement cycle."""
+"""Force-velocity analysis: three-zone regression (eq. 17) and its outer slopes re-estimated on
+post-yield samples, records grouped into electrical levels, laws across current (eq. 18) and the
+LPV scheduling input ``u(v, i)`` (eqs. 19-22), and the energy dissipated per displacement cycle."""
 
 from mrdamper.analysis.energy import cycle_starts, energy_per_cycle
 from mrdamper.analysis.laws import (
@@ -12,7 +12,7 @@ from mrdamper.analysis.laws import (
 )
 from mrdamper.analysis.levels import GroupBy, level_grouping, plateau_tolerance, pool_by_level
 from mrdamper.analysis.scheduling import Reading, scheduling_input_arrays
-from mrdamper.analysis.zones import ZoneFit, fit_zones, segment_plateaus
+from mrdamper.analysis.zones import ZoneFit, fit_zones, post_yield_slopes, segment_plateaus
 
 __all__ = [
     "GroupBy",
@@ -27,6 +27,7 @@ __all__ = [
     "level_grouping",
     "plateau_tolerance",
     "pool_by_level",
+    "post_yield_slopes",
     "scheduling_input_arrays",
     "segment_plateaus",
     "zone_fits_binned",

@@ -19,7 +19,7 @@ import pandas as pd
 from mrdamper._warn import warn_user
 from mrdamper.analysis.levels import GroupBy, pool_by_level
 from mrdamper.analysis.scheduling import Reading, scheduling_input_arrays
-from mrdamper.analysis.zones import ZoneFit, fit_zones
+from mrdamper.analysis.zones import POST_YIELD_FACTOR, ZoneFit, fit_zones, post_yield_slopes
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, IdentificationError
 
@@ -37,6 +37,9 @@ __all__ = [
 class ZoneLawWarning(UserWarning):
     """Zone data break an assumption of the paper (e.g. ``m2`` is not the steepest slope)."""
 
+
+#: How the outer slopes of each level's zone fit are estimated (see :func:`zone_fits_by_level`).
+OuterSlopes = Literal["zones", "post-yield"]
 
 #: Samples per block of the elementwise zone-law evaluations on long records: the per-sample
 #: slopes, intercepts and limits of a block are formed at a time, not of the whole record.
@@ -300,6 +303,7 @@ def zone_fits_by_level(
     plateau_tolerance: float | None = None,
     min_duration: float = 1.0,
     settle: float = 0.2,
+    outer_slopes: OuterSlopes = "zones",
 ) -> list[ZoneFit]:
     """Three-zone fits, one per electrical level, sorted by level.
 
@@ -320,6 +324,9 @@ def zone_fits_by_level(
         Level tolerance for plateaus [A or V]; default 2 % of the input's span.
     min_duration, settle : float
         Shortest plateau kept and time skipped after each step [s].
+    outer_slopes : {"zones", "post-yield"}
+        ``"zones"``: the outer slopes of the three-zone regression (the paper's). ``"post-yield"``:
+        re-estimated on the samples beyond three zone limits (:func:`post_yield_slopes`).
     """
     pools = pool_by_level(
         data,
@@ -335,7 +342,7 @@ def zone_fits_by_level(
     for lev in sorted(pools):
         v = np.concatenate([p[0] for p in pools[lev]])
         F = np.concatenate([p[1] for p in pools[lev]])
-        fits.append(fit_zones(v, F, symmetric=symmetric, level=lev))
+        fits.append(_outer(fit_zones(v, F, symmetric=symmetric, level=lev), v, F, outer_slopes))
     return fits
 
 
@@ -346,6 +353,7 @@ def zone_fits_binned(
     *,
     n_bins: int = 5,
     symmetric: bool = True,
+    outer_slopes: OuterSlopes = "zones",
 ) -> list[ZoneFit]:
     """Three-zone fits on bins of a continuously varying level ``rho`` (equal-count bins).
 
@@ -360,6 +368,8 @@ def zone_fits_binned(
         Number of equal-count bins of ``rho``.
     symmetric : bool
         Fit the zones symmetric in velocity (see :func:`fit_zones`).
+    outer_slopes : {"zones", "post-yield"}
+        As in :func:`zone_fits_by_level`.
     """
     vv, FF, rr = (np.concatenate([np.asarray(a, float).ravel() for a in s]) for s in (v, F, rho))
     if not (vv.size == FF.size == rr.size):
@@ -373,8 +383,21 @@ def zone_fits_binned(
         sel = idx == b
         if np.count_nonzero(sel) < 50:
             continue
-        fits.append(fit_zones(vv[sel], FF[sel], symmetric=symmetric, level=float(rr[sel].mean())))
+        level = float(rr[sel].mean())
+        fit = fit_zones(vv[sel], FF[sel], symmetric=symmetric, level=level)
+        fits.append(_outer(fit, vv[sel], FF[sel], outer_slopes))
     return fits
+
+
+def _outer(fit: ZoneFit, v: np.ndarray, F: np.ndarray, outer_slopes: OuterSlopes) -> ZoneFit:
+    """The fit as it is (``"zones"``) or with its post-yield outer slopes (``"post-yield"``)."""
+    if outer_slopes == "zones":
+        return fit
+    if outer_slopes == "post-yield":
+        return post_yield_slopes(fit, v, F, factor=POST_YIELD_FACTOR)
+    raise DataValidationError(
+        "outer_slopes", f"expected 'zones' or 'post-yield', got {outer_slopes!r}"
+    )
 
 
 # ------------------------------------------------------------------------- laws

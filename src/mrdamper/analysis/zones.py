@@ -23,7 +23,10 @@ from scipy import optimize
 
 from mrdamper.errors import DataValidationError, IdentificationError
 
-__all__ = ["ZoneFit", "fit_zones", "segment_plateaus"]
+__all__ = ["POST_YIELD_FACTOR", "ZoneFit", "fit_zones", "post_yield_slopes", "segment_plateaus"]
+
+#: Post-yield samples are those beyond this many zone limits (``|v| > 3 v_high``) [-].
+POST_YIELD_FACTOR = 3.0
 
 
 @dataclass(frozen=True)
@@ -305,6 +308,90 @@ def fit_zones(
         n=int(v.size),
         symmetric=symmetric,
         level=None if level is None else float(level),
+    )
+
+
+def post_yield_slopes(
+    fit: ZoneFit,
+    v: Any,
+    F: Any,
+    *,
+    factor: float = POST_YIELD_FACTOR,
+    min_samples: int = 50,
+) -> ZoneFit:
+    """Re-estimate the outer slopes ``m1``, ``m3`` on the post-yield samples only.
+
+    The three-zone regression fits each outer line over every sample beyond its limit. Samples
+    just past the limit include motions that have not yielded yet (small strokes, the first
+    samples after a reversal), whose force lies below the post-yield line, so the fitted outer
+    slope is steeper than the damper's slope at high velocity, and a model built on it
+    over-predicts the force there (on the virtual rig's Table II: 1.2 to 1.7 times the reference
+    damper's slope). Here each outer slope is the least-squares slope of ``F = m v + c`` over
+    the samples beyond ``factor`` times the limit (``v > factor v_high``, ``v < factor v_low``).
+    The intercept is then the one that keeps the law continuous at the limit (the continuous
+    reading of eq. 22 only uses the slope ratio ``m_j / m2``).
+
+    A side keeps the zone fit's slope when it has fewer than ``min_samples`` such samples, when
+    their velocities span less than a factor 1.5 (the slope would be ill-determined), or when
+    the estimate is outside ``[0, m2]`` (the range eq. 20 needs).
+
+    Parameters
+    ----------
+    fit : ZoneFit
+        Three-zone fit of the same data.
+    v, F : array_like
+        Velocity [m/s] and force [N] of the data ``fit`` was fitted on.
+    factor : float
+        Post-yield samples are beyond ``factor`` times each zone limit [-].
+    min_samples : int
+        Fewest post-yield samples a side needs.
+
+    Returns
+    -------
+    ZoneFit
+        ``fit`` with the re-estimated slopes and continuous intercepts.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.linspace(-0.2, 0.2, 4001)
+    >>> F = np.sign(v) * np.minimum(2e4 * np.abs(v), 200 + 1e3 * np.abs(v))
+    >>> knee = np.abs(v) < 0.03
+    >>> F[knee] *= 0.8  # a rounded knee: the zone fit's outer lines get steeper
+    >>> zf = fit_zones(v, F)
+    >>> py = post_yield_slopes(zf, v, F)
+    >>> round(py.m[2]), round(zf.m[2]) > 1000
+    (1000, True)
+    """
+    v = np.asarray(v, dtype=float).ravel()
+    F = np.asarray(F, dtype=float).ravel()
+    if v.size != F.size:
+        raise DataValidationError("F", f"has {F.size} samples but 'v' has {v.size}")
+    m = list(fit.m)
+    c = list(fit.c)
+    for j, limit in ((0, fit.v_low), (2, fit.v_high)):
+        side = v < factor * limit if j == 0 else v > factor * limit
+        vs, Fs = v[side], F[side]
+        if vs.size < min_samples:
+            continue
+        span = np.abs(vs)
+        if span.max() < 1.5 * span.min():
+            continue
+        slope = float(np.polyfit(vs, Fs, 1)[0])
+        if not 0.0 <= slope <= fit.m[1]:
+            continue
+        m[j] = slope
+        c[j] = fit.m[1] * limit + fit.c[1] - slope * limit
+    return ZoneFit(
+        v_low=fit.v_low,
+        v_high=fit.v_high,
+        m=(m[0], m[1], m[2]),
+        c=(c[0], c[1], c[2]),
+        r2=fit.r2,
+        resid_std=fit.resid_std,
+        n=fit.n,
+        symmetric=fit.symmetric,
+        level=fit.level,
     )
 
 

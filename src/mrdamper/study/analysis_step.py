@@ -44,6 +44,10 @@ class AnalysisOutcome:
         Why the analysis (or the laws) failed; empty on success.
     notes : str
         Warnings raised by the analysis (e.g. a central slope that is not the steepest).
+    post_yield_laws : ZoneLaws or None
+        The same laws with each level's outer slopes re-estimated on its post-yield samples
+        (:func:`mrdamper.analysis.post_yield_slopes`), for the models whose setting
+        ``outer_slopes`` asks for them (the default LPV input); ``laws`` stay the paper's.
     """
 
     fits: tuple[Any, ...] = ()
@@ -52,6 +56,11 @@ class AnalysisOutcome:
     curves: dict[float, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     error: str = ""
     notes: str = ""
+    post_yield_laws: Any = None
+
+    def laws_for(self, outer_slopes: str) -> Any:
+        """The laws a model with the resolved setting ``outer_slopes`` is given [-]."""
+        return self.post_yield_laws if outer_slopes == "post-yield" else self.laws
 
     @property
     def ok(self) -> bool:
@@ -127,10 +136,18 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
             opts = plateau_options(records) if by == "plateaus" else {}
             fits = zone_fits_by_level(records, by=by, source=source, **opts)  # type: ignore[arg-type]
             laws = fit_zone_laws(fits, degree=degree, strict=False)
+            post = zone_fits_by_level(
+                records,
+                by=by,
+                source=source,  # type: ignore[arg-type]
+                outer_slopes="post-yield",
+                **opts,  # type: ignore[arg-type]
+            )
+            post_laws = fit_zone_laws(post, degree=degree, strict=False)
             error = ""
         except Exception as exc:
             if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
                 raise KeyboardInterrupt from exc
-            laws, error = None, f"{type(exc).__name__}: {exc}"
+            laws, post_laws, error = None, None, f"{type(exc).__name__}: {exc}"
     notes = " | ".join(dict.fromkeys(str(w.message).replace("\n", " ")[:200] for w in caught))
-    return AnalysisOutcome(tuple(fits), laws, by, curves, error, notes)
+    return AnalysisOutcome(tuple(fits), laws, by, curves, error, notes, post_laws)

@@ -24,7 +24,6 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from mrdamper import kinds
-from mrdamper.analysis import ZoneLaws
 from mrdamper.data import Experiment, ExperimentSet, SourceSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SchemaError, interrupt_in_chain
@@ -83,11 +82,12 @@ def _estimator_fields(est: Estimator) -> set[str]:
 
 
 def _settings(
-    spec: ModelSpec, protocol: Protocol, seed: int, laws: ZoneLaws | None
+    spec: ModelSpec, protocol: Protocol, seed: int, analysis: AnalysisOutcome
 ) -> dict[str, Any]:
     """Estimator settings of ``spec``.
 
-    With the protocol's input, the study seed and the fold's laws.
+    With the protocol's input, the study seed and the fold's laws: the paper's, or those with
+    post-yield outer slopes for an estimator whose ``outer_slopes`` resolves to them.
     """
     from mrdamper.models import get_estimator
 
@@ -101,6 +101,8 @@ def _settings(
         out["input"] = protocol.input
     if "seed" in fields and "seed" not in out:
         out["seed"] = seed
+    resolve = getattr(est, "resolved_outer_slopes", None)
+    laws = analysis.laws_for(resolve() if resolve is not None else "zones")
     if laws is not None:
         for key in _LAW_SETTINGS:
             if key in fields and key not in out:
@@ -242,7 +244,7 @@ def run_study(
         else:
             analyses[fold.name] = run_analysis(load_all(fold.analysis), protocol.input)
     settings = {
-        (fi, si): _settings(spec, protocol, int(seed), analyses[fold.name].laws)
+        (fi, si): _settings(spec, protocol, int(seed), analyses[fold.name])
         for fi, fold in enumerate(folds)
         for si, spec in enumerate(specs)
     }

@@ -19,6 +19,7 @@ import pandas as pd
 
 from mrdamper._warn import warn_user
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
+from mrdamper.analysis.laws import OuterSlopes
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
@@ -112,6 +113,13 @@ class LPVEstimator(Estimator):
         (name the method).
     laws_degree : int
         Degree of the slope/intercept laws (2 in the paper).
+    outer_slopes : {"auto", "post-yield", "zones"}
+        Outer (post-yield) slopes of each level's zone fit: ``"zones"`` as the three-zone
+        regression gives them (the paper's), ``"post-yield"`` re-estimated on the samples beyond
+        three zone limits (:func:`mrdamper.analysis.zones.post_yield_slopes`: samples just past
+        the limit that have not yielded make the regression's outer slopes too steep, and the
+        model over-predicts the force at high velocity). ``"auto"`` (default): ``"post-yield"``
+        for the hysteretic input, ``"zones"`` for the paper's static input.
     n_bins : int
         Number of ``rho`` bins for ``laws_by="bins"``.
     model_fs : float, optional
@@ -169,6 +177,7 @@ class LPVEstimator(Estimator):
     zone_laws: ZoneLaws | None = None
     laws_by: Literal["auto", "current", "plateaus", "bins"] = "auto"
     laws_degree: int = 2
+    outer_slopes: Literal["auto", "post-yield", "zones"] = "auto"
     n_bins: int = 5
     model_fs: float | None = None
     offset: bool = True
@@ -212,6 +221,8 @@ class LPVEstimator(Estimator):
             return None
         if self.zone_laws is not None:
             return self.zone_laws
+        outer = self.resolved_outer_slopes()
+        prov["outer_slopes"] = outer
         by = self.laws_by
         if by == "auto":
             lacking = [e.name for e in exps if "current" not in e.metadata]
@@ -232,11 +243,22 @@ class LPVEstimator(Estimator):
             v, F, r = _scale.strided(
                 [[e.v for e in exps], [e.F for e in exps], rhos]
             )  # long campaigns
-            fits = zone_fits_binned(v, F, r, n_bins=self.n_bins)
+            fits = zone_fits_binned(v, F, r, n_bins=self.n_bins, outer_slopes=outer)
             return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
         return fit_zone_laws(
-            exps, degree=0 if single else self.laws_degree, by=by, source=self.input
+            exps,
+            degree=0 if single else self.laws_degree,
+            by=by,
+            source=self.input,
+            outer_slopes=outer,
         )
+
+    def resolved_outer_slopes(self) -> OuterSlopes:
+        """The outer-slope estimate the zone laws use (``"auto"`` resolved by the input): the
+        laws a study's force-velocity analysis hands to this estimator."""
+        if self.outer_slopes == "auto":
+            return "post-yield" if self.input_signal == "hysteretic" else "zones"
+        return self.outer_slopes
 
     def _open_settings(self) -> bool:
         """True when the hysteretic input's ``stroke`` or ``blend`` is left None."""
