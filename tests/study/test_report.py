@@ -120,6 +120,9 @@ def test_report_html_rows_rounding_and_failed_note(written) -> None:
         zip(map(len, sig), floats)
     )  # 4 significant digits
     assert PAPER_HEADLINE["text"] in html and "51 %" in html and "36.8 %" in html
+    # the laws section says which laws each LPV uses, with the post-yield outer slopes
+    assert "the paper's LPV (static input) uses them" in html
+    assert "re-estimated on its post-yield samples" in html
     numbers = [int(n) for n in re.findall(r"<b>Figure (\d+)</b>", html)]
     assert numbers == list(range(1, len(numbers) + 1))  # consecutive, whatever the paper skips
     assert "(paper Fig. 6)" not in html or "Figure 5</b> (paper Fig. 6)" in html

@@ -367,6 +367,19 @@ def _analysis_section(res: StudyResult) -> str:
         body.append(
             "<p>Three-zone fit (eq. 17) at each level:</p>" + _table(analysis_table(an.laws, unit))
         )
+        post = getattr(an, "post_yield_laws", None)
+        if post is not None and hasattr(post, "m"):
+            lv = np.asarray(an.laws.levels, dtype=float)
+            body.append(
+                '<p class="small">These are the paper\'s laws; the paper\'s LPV (static input) '
+                "uses them. The default LPV and LTI (hysteretic input) use the same laws with "
+                "each level's outer slopes re-estimated on its post-yield samples (beyond three "
+                "zone limits, <code>outer_slopes=\"post-yield\"</code>): m3 "
+                + ", ".join(f"{a:.4g}" for a in post.m(lv)[:, 2])
+                + " N s/m at the levels above, against "
+                + ", ".join(f"{a:.4g}" for a in an.laws.m(lv)[:, 2])
+                + ".</p>"
+            )
         if an.notes:
             body.append(f'<p class="small">Warnings of the analysis: {_e(an.notes)}</p>')
         if shown == 0:
