@@ -371,10 +371,10 @@ def _analysis_section(res: StudyResult) -> str:
         if post is not None and hasattr(post, "m"):
             lv = np.asarray(an.laws.levels, dtype=float)
             body.append(
-                '<p class="small">These are the paper\'s laws; the paper\'s LPV (static input) '
+                "<p class=\"small\">These are the paper's laws; the paper's LPV (static input) "
                 "uses them. The default LPV and LTI (hysteretic input) use the same laws with "
                 "each level's outer slopes re-estimated on its post-yield samples (beyond three "
-                "zone limits, <code>outer_slopes=\"post-yield\"</code>): m3 "
+                'zone limits, <code>outer_slopes="post-yield"</code>): m3 '
                 + ", ".join(f"{a:.4g}" for a in post.m(lv)[:, 2])
                 + " N s/m at the levels above, against "
                 + ", ".join(f"{a:.4g}" for a in an.laws.m(lv)[:, 2])

@@ -220,6 +220,7 @@ class LPVEstimator(Estimator):
         if not self._input_class().needs_laws:
             return None
         if self.zone_laws is not None:
+            prov["outer_slopes"] = "given with the laws (zone_laws)"
             return self.zone_laws
         outer = self.resolved_outer_slopes()
         prov["outer_slopes"] = outer
