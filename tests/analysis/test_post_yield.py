@@ -82,3 +82,10 @@ def test_level_fits_take_the_outer_slope_option_and_refuse_an_unknown_one() -> N
     assert laws.m(0.5)[2] == pytest.approx(1500.0, rel=0.03)
     with pytest.raises(DataValidationError, match="outer_slopes"):
         zone_fits_by_level(exps, outer_slopes="steep")  # type: ignore[arg-type]
+
+
+def test_data_of_another_length_is_refused() -> None:
+    v, F = _unyielded_data()
+    zf = fit_zones(v, F)
+    with pytest.raises(DataValidationError, match="F: has 19999 samples but 'v' has 20000"):
+        post_yield_slopes(zf, v, F[:-1])
