@@ -194,6 +194,32 @@ def test_a_refused_run_keeps_its_rows_and_names_the_metric() -> None:
     assert all("refused" in r for r in res.runs)
 
 
+def test_a_diverged_run_keeps_its_rows_and_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a loop that diverges with the model as the damper is a finding about the model, not the end
+    # of the comparison: that run's rows are NaN with a "diverged" note, the other runs are kept
+    from mrdamper.control import fidelity
+    from mrdamper.errors import SimulationDivergedError
+
+    real = fidelity.simulate_closed_loop
+
+    def flaky(model, road, ctrl, car, *, plant=None, **kw):  # type: ignore[no-untyped-def]
+        if plant is None and ctrl.kind == "hard":
+            raise SimulationDivergedError("sp3", 7, "state left +-10")
+        return real(model, road, ctrl, car, plant=plant, **kw)
+
+    monkeypatch.setattr(fidelity, "simulate_closed_loop", flaky)
+    res = closed_loop_fidelity(_sp3(), "rig", controllers=["soft", "hard"], duration=1.0)
+    t = res.table()
+    hard, soft = t[t["controller"] == "hard"], t[t["controller"] == "soft"]
+    passive = ~t["metric"].isin(["rms_tracking", "mean_current"])  # defined for both sides
+    assert hard["predicted"].isna().all() and hard.loc[passive, "achieved"].notna().all()
+    assert soft.loc[passive, "error_pct"].notna().all()
+    why = "sp3: simulation diverged at sample 7: state left +-10"
+    diverged = [n for n in res.notes if "diverged" in n]
+    assert diverged == [f"hard, ISO C @ 20 m/s, predicted: diverged: {why}"]
+    assert [r["refused"] for r in res.runs if "refused" in r] == [f"diverged: {why}"]
+
+
 def test_a_sampled_loop_oscillation_is_detected_with_its_frequency() -> None:
     # a run whose body acceleration carries an 83 Hz limit cycle (as an LPV model at 1 kHz in
     # passive hard on a smooth road) against the same run without it

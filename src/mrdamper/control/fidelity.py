@@ -8,7 +8,8 @@ simulate_closed_loop`), and tabulates :data:`METRICS` for both with
 
 Every run is checked (:func:`checked_run`): the plant step is halved and the run repeated; when a
 metric moves by more than ``tol`` (0.5 %) the step is halved again, up to ``max_substeps`` plant
-steps per road sample, beyond which the run is refused with the figure. Each run also reports
+steps per road sample, beyond which the run is refused with the figure. A run whose loop diverges
+keeps NaN rows and a note too (``diverged: ...``); the other runs go on. Each run also reports
 the share of its body-acceleration power above the wheel-hop band (:func:`oscillation`; a
 sampled-loop oscillation concentrates it there) and, from the envelope the model carries
 (:mod:`mrdamper.models.envelope`), how far the loop's motion leaves the model's training data.
@@ -32,7 +33,7 @@ from mrdamper.control.quarter_car import (
     iso_road,
 )
 from mrdamper.control.quarter_car_study import default_rate
-from mrdamper.errors import DataValidationError, MrDamperError
+from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
 from mrdamper.models.envelope import envelope_of, excursions
 
 __all__ = [
@@ -292,9 +293,13 @@ def closed_loop_fidelity(
                     }
                     try:
                         r, s, change = checked_run(run, tol=tol, max_substeps=max_substeps)
-                    except NotConvergedError as exc_refused:  # this run only: the others go on
-                        runs.append({**info, "refused": str(exc_refused)})
-                        notes.append(f"{where}: refused: {exc_refused}")
+                    except (NotConvergedError, SimulationDivergedError) as exc_refused:
+                        # this run only: the others go on (a loop that diverges is a finding)
+                        what = (
+                            "refused" if isinstance(exc_refused, NotConvergedError) else "diverged"
+                        )
+                        runs.append({**info, "refused": f"{what}: {exc_refused}"})
+                        notes.append(f"{where}: {what}: {exc_refused}")
                         out[side] = dict.fromkeys(METRICS, float("nan"))
                         continue
                     share, f_hf = oscillation(r)

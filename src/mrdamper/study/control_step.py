@@ -281,7 +281,7 @@ def model_in_loop(
         for run in res.runs:  # one controller: a road and speed name the run
             if "refused" in run:
                 key = (run["road"], run["speed_m_s"])
-                why = f"{run['side']} run refused: {run['refused']}"
+                why = f"{run['side']} run {run['refused']}"  # "refused: ..." or "diverged: ..."
                 refused[key] = f"{refused[key]}; {why}" if key in refused else why
         for r in res.table().to_dict("records"):
             row = {"model": label, "kind": kind, "unit": res.unit(r["metric"]), **r}
