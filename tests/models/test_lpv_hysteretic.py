@@ -196,3 +196,26 @@ def test_post_yield_slopes_extrapolate_in_velocity(rig_data) -> None:
     e_post, e_zones = post.score(fast).esr, zones.score(fast).esr
     print(f"ESR at 0.3 m/s: post-yield {e_post:.4f}, zones {e_zones:.4f}")
     assert e_post < 0.7 * e_zones
+
+
+def test_post_yield_laws_that_break_eq_20_fall_back_to_the_regression(
+    rig_data, monkeypatch
+) -> None:
+    """Post-yield slopes whose laws break eq. (20) (here forced: an outer slope above the
+    central one) do not fail the fit: the regression's slopes are used, and the provenance says
+    so."""
+    import dataclasses
+
+    from mrdamper.analysis import laws as _laws_module
+
+    def steep(fit, v, F, **kw):  # type: ignore[no-untyped-def]
+        m = (fit.m[0], fit.m[1], 2.0 * fit.m[1])
+        return dataclasses.replace(fit, m=m)
+
+    train, _ = rig_data
+    monkeypatch.setattr(_laws_module, "post_yield_slopes", steep)
+    model = _fit(train, input_signal="hysteretic", stroke=X_Y, blend=0.5)
+    zones = _fit(train, input_signal="hysteretic", stroke=X_Y, blend=0.5, outer_slopes="zones")
+    assert model.provenance["outer_slopes"] == "zones"
+    assert "break eq. (20)" in model.provenance["outer_slopes_note"]
+    np.testing.assert_array_equal(model.zone_laws.gamma_m, zones.zone_laws.gamma_m)

@@ -57,3 +57,12 @@ def test_each_lpv_gets_the_laws_of_its_input() -> None:
     assert static["zone_laws"] is outcome.laws
     assert zones["zone_laws"] is outcome.laws
     assert _settings(ModelSpec("sp1"), protocol, 0, outcome).get("zone_laws") is None
+
+
+def test_without_post_yield_laws_every_lpv_gets_the_papers() -> None:
+    from mrdamper.study import AnalysisOutcome
+
+    paper, post = object(), object()
+    assert AnalysisOutcome(laws=paper, post_yield_laws=None).laws_for("post-yield") is paper
+    assert AnalysisOutcome(laws=paper, post_yield_laws=post).laws_for("post-yield") is post
+    assert AnalysisOutcome(laws=paper, post_yield_laws=post).laws_for("zones") is paper

@@ -47,7 +47,9 @@ class AnalysisOutcome:
     post_yield_laws : ZoneLaws or None
         The same laws with each level's outer slopes re-estimated on its post-yield samples
         (:func:`mrdamper.analysis.post_yield_slopes`), for the models whose setting
-        ``outer_slopes`` asks for them (the default LPV input); ``laws`` stay the paper's.
+        ``outer_slopes`` asks for them (the default LPV input); ``laws`` stay the paper's. None
+        when they break eq. (20) where the paper's laws do not (a note says so): such models
+        get the paper's laws.
     """
 
     fits: tuple[Any, ...] = ()
@@ -59,8 +61,11 @@ class AnalysisOutcome:
     post_yield_laws: Any = None
 
     def laws_for(self, outer_slopes: str) -> Any:
-        """The laws a model with the resolved setting ``outer_slopes`` is given [-]."""
-        return self.post_yield_laws if outer_slopes == "post-yield" else self.laws
+        """The laws a model with the resolved setting ``outer_slopes`` is given (the paper's when
+        there are no post-yield laws)."""
+        if outer_slopes == "post-yield" and self.post_yield_laws is not None:
+            return self.post_yield_laws
+        return self.laws
 
     @property
     def ok(self) -> bool:
@@ -143,7 +148,15 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
                 outer_slopes="post-yield",
                 **opts,  # type: ignore[arg-type]
             )
-            post_laws = fit_zone_laws(post, degree=degree, strict=False)
+            post_laws: Any = fit_zone_laws(post, degree=degree, strict=False)
+            if post_laws.problems() and not laws.problems():  # keep eq. (20): the paper's laws
+                warnings.warn(
+                    "post-yield outer slopes give laws that break eq. (20) "
+                    f"({post_laws.problems()[0]}); every LPV uses the paper's laws",
+                    UserWarning,
+                    stacklevel=1,
+                )
+                post_laws = None
             error = ""
         except Exception as exc:
             if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel

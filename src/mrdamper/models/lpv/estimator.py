@@ -222,8 +222,6 @@ class LPVEstimator(Estimator):
         if self.zone_laws is not None:
             prov["outer_slopes"] = "given with the laws (zone_laws)"
             return self.zone_laws
-        outer = self.resolved_outer_slopes()
-        prov["outer_slopes"] = outer
         by = self.laws_by
         if by == "auto":
             lacking = [e.name for e in exps if "current" not in e.metadata]
@@ -240,6 +238,31 @@ class LPVEstimator(Estimator):
                 prov["laws_note"] = (
                     "laws_by='auto': no record carries metadata 'current'; laws fitted on rho bins"
                 )
+        outer = self.resolved_outer_slopes()
+        prov["outer_slopes"] = outer
+        try:
+            return self._fit_laws(exps, rhos, by, outer, single)
+        except IdentificationError as exc:
+            if outer != "post-yield":
+                raise
+            # the regression's slopes keep eq. (20) where the post-yield ones may not (few
+            # levels, a law extrapolated between them): the model is fitted on those, and says so
+            prov["outer_slopes"] = "zones"
+            prov["outer_slopes_note"] = (
+                f"post-yield outer slopes gave laws that break eq. (20) ({exc}); the three-zone "
+                "regression's slopes are used"
+            )
+            return self._fit_laws(exps, rhos, by, "zones", single)
+
+    def _fit_laws(
+        self,
+        exps: Sequence[Experiment],
+        rhos: list[np.ndarray],
+        by: str,
+        outer: OuterSlopes,
+        single: bool,
+    ) -> ZoneLaws:
+        """Zone laws of the training records, grouped ``by`` level, with ``outer`` slopes."""
         if by == "bins":
             v, F, r = _scale.strided(
                 [[e.v for e in exps], [e.F for e in exps], rhos]
