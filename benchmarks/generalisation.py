@@ -69,8 +69,8 @@ import scipy.signal as sps
 from mrdamper.data import ExperimentSet
 from mrdamper.data.readers import read_csv, read_directory
 from mrdamper.models import available_models, get_estimator
-from mrdamper.models.lpv.estimator import MIN_MODEL_FS
-from mrdamper.models.rates import model_rate
+from mrdamper.models.lpv import LPVEstimator
+from mrdamper.models.rates import rate_rule
 from mrdamper.rig import VirtualRig, reference_damper
 from mrdamper.signals import aprbs, road_profile
 
@@ -176,8 +176,8 @@ def fit_augmented(
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            fs = model_rate(
-                [e.fs for e in sc.train], settings.get("model_fs"), "lpv", minimum=MIN_MODEL_FS
+            fs = rate_rule(
+                [e.fs for e in sc.train], settings.get("model_fs"), LPVEstimator.min_model_fs
             )
             syn, _ = reference_records(
                 sc.train, reference=reference, input=settings.get("input", "i"), fs=fs, seed=0
@@ -255,7 +255,8 @@ def _loco(train: ExperimentSet) -> list[tuple[ExperimentSet, ExperimentSet]]:
     return [(fit, val) for _, fit, val in train.leave_one_group_out("condition")]
 
 
-def _quiroz_settings(kind: str) -> dict[str, Any]:
+def _defaults(kind: str) -> dict[str, Any]:
+    """Settings of a scenario whose kinds all run with their estimator defaults (current input)."""
     return {}
 
 
@@ -269,7 +270,7 @@ def scenario_quiroz_frequency(quick: bool) -> Scenario:
     train = data.where(lambda e: e.metadata["frequency"] <= 3.0)
     tests = {c: data.filter(condition=c) for c in ("5mm_4Hz", "2mm_5Hz")}
     grid = [] if quick else QUIROZ_GRID
-    return Scenario("(a) quiroz-freq", train, tests, _quiroz_settings, _loco(train), grid)
+    return Scenario("(a) quiroz-freq", train, tests, _defaults, _loco(train), grid)
 
 
 def scenario_quiroz_cross(quick: bool) -> Scenario:
@@ -280,7 +281,7 @@ def scenario_quiroz_cross(quick: bool) -> Scenario:
     lacking = sorted({e.metadata["condition"] for e in filt} - seen)
     tests = {f"filtered {c}": filt.filter(condition=c) for c in lacking}
     grid = [] if quick else QUIROZ_GRID
-    return Scenario("(b) quiroz-cross", train, tests, _quiroz_settings, _loco(train), grid)
+    return Scenario("(b) quiroz-cross", train, tests, _defaults, _loco(train), grid)
 
 
 def _ramped_sine(fs: float, amplitude: float, frequency: float, cycles: float) -> np.ndarray:
@@ -343,7 +344,7 @@ def scenario_rig(quick: bool) -> Scenario:
         if quick
         else [{"n_m": n, "model_fs": r} for n in (2, 3, 4) for r in (200.0, 500.0, 1000.0)]
     )
-    return Scenario("(c) rig", train_set, tests, lambda k: {}, _loco(train_set), grid)
+    return Scenario("(c) rig", train_set, tests, _defaults, _loco(train_set), grid)
 
 
 def scenario_dyke(quick: bool) -> Scenario:

@@ -14,7 +14,7 @@ point with a bounded scalar (symmetric, ``v_low = -v_high`` as in eq. 18) or Nel
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -382,17 +382,7 @@ def post_yield_slopes(
             continue
         m[j] = slope
         c[j] = fit.m[1] * limit + fit.c[1] - slope * limit
-    return ZoneFit(
-        v_low=fit.v_low,
-        v_high=fit.v_high,
-        m=(m[0], m[1], m[2]),
-        c=(c[0], c[1], c[2]),
-        r2=fit.r2,
-        resid_std=fit.resid_std,
-        n=fit.n,
-        symmetric=fit.symmetric,
-        level=fit.level,
-    )
+    return replace(fit, m=(m[0], m[1], m[2]), c=(c[0], c[1], c[2]))
 
 
 def segment_plateaus(
