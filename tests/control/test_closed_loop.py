@@ -15,7 +15,7 @@ from numba import njit
 from mrdamper.cli.main import main
 from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.fidelity import checked_run, closed_loop_fidelity, loop_metrics
-from mrdamper.control.quarter_car import iso_road, simulate_quarter_car
+from mrdamper.control.quarter_car import QuarterCar, iso_road, simulate_quarter_car
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.models import _sp_kernels as SK
 from mrdamper.models.lpv import LTIModel
@@ -231,3 +231,61 @@ def test_a_sampled_loop_oscillation_is_detected_with_its_frequency() -> None:
     wobble = 3.0 * np.std(r.a_s) * np.sin(2 * np.pi * 83.0 * r.t)
     share, peak = oscillation(dataclasses.replace(r, a_s=r.a_s + wobble))
     assert share > HF_SHARE and abs(peak - 83.0) <= 1.0
+
+
+def test_the_oscillation_note_tells_a_sampled_loop_from_the_model_s_own_mode() -> None:
+    # a peak near a discrete model's Nyquist frequency asks for a higher rate; one far below it
+    # is the model's own loop mode, which a higher rate would not remove
+    from mrdamper.control.fidelity import oscillation_note
+
+    car = QuarterCar()
+    near = oscillation_note(0.5, 480.0, car, 1000.0)
+    below = oscillation_note(0.5, 55.0, car, 1000.0)
+    assert near.startswith("sampled-loop oscillation") and "higher rate" in near
+    assert below.startswith("loop oscillation of the model's own dynamics")
+    assert "does not remove it" in below and "500 Hz" in below
+    assert oscillation_note(0.5, 55.0, car).startswith("high-frequency loop oscillation")
+
+
+def _delayed_damper(c: float) -> LTIModel:
+    """``F[k] = c v[k-1]`` at 1 kHz: a linear damper [N s/m] one sample late (no feedthrough)."""
+    return LTIModel(
+        alpha=np.array([[0.0]]),
+        beta=np.array([[c]]),
+        fs=1000.0,
+        input_signal="v",
+        input_range=(0.0, 1.0),
+    )
+
+
+def test_a_discrete_plant_s_force_is_linear_between_its_samples() -> None:
+    # four plant steps per model sample: the recorded force at the steps in between lies on the
+    # line from one sample's force to the next (first-order hold), continuous at the samples
+    lti = _delayed_damper(1500.0)
+    r = simulate_closed_loop(lti, _road(1.0), "soft", plant=lti, substeps=4)
+    F = r.F[: (r.F.size // 4) * 4].reshape(-1, 4)
+    start, end = F[:-1, 0], F[1:, 0]
+    for s in range(1, 4):
+        np.testing.assert_allclose(F[:-1, s], start + (end - start) * s / 4, atol=1e-9)
+    assert np.ptp(F) > 100.0  # the force moves (the check is not on a constant)
+
+
+def test_a_fitted_lpv_filter_does_not_ring_in_the_loop() -> None:
+    # the frozen 0 A filter of the default LPV model fitted on the rig's Table II (1 kHz, rounded;
+    # a pole at -0.997, near the model's Nyquist frequency), driven by the velocity: with its
+    # force held over each sample (a zero-order hold, half a sample more delay) this loop diverged
+    # after 3.3 s on this road; linear between the samples it stays bounded and smooth
+    from mrdamper.control.fidelity import HF_SHARE, oscillation
+
+    lti = LTIModel(
+        alpha=np.array([[-0.51], [-0.95], [0.55]]),
+        beta=np.array([[3600.0], [2150.0], [-4600.0]]),
+        fs=1000.0,
+        input_signal="v",
+        input_range=(0.0, 1.0),
+    )
+    road = iso_road("B", speed=10.0, duration=4.0, fs=1000.0, seed=1)
+    r = simulate_closed_loop(lti, road, "soft", plant=lti, substeps=4)
+    share, _ = oscillation(r)
+    assert share < HF_SHARE
+    assert np.sqrt(np.mean(r.a_s**2)) < 2.0  # [m/s²]; the held loop left +-10 m

@@ -243,12 +243,13 @@ def quartercar(
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     from mrdamper.control.fidelity import HF_SHARE, oscillation, oscillation_note
 
+    fs_m = float(m.fs) if getattr(m.step(), "dt", None) is not None else None
     for (road, ctrl), res in cmp.results.items():
         share, peak = oscillation(res)
         if road.startswith("ISO") and share > HF_SHARE:
             typer.echo(
-                f"warning: {ctrl}, {road}: {oscillation_note(share, peak, qc)}: the metrics are "
-                "the model's sampled loop, not the damper's"
+                f"warning: {ctrl}, {road}: {oscillation_note(share, peak, qc, fs_m)}: the metrics "
+                "are the model's loop, not the damper's"
             )
     how = f" (inverse: {c_inverse.name})" if c_inverse is not None else ""
     typer.echo(f"{m.kind}{how}: wrote {', '.join(files)} in {out}")

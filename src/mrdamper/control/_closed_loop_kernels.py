@@ -27,7 +27,13 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from mrdamper.control._quarter_car_kernels import CTRL_PASSIVE, _deriv, _desired, control_sample
+from mrdamper.control._quarter_car_kernels import (
+    CTRL_PASSIVE,
+    _between,
+    _deriv,
+    _desired,
+    control_sample,
+)
 from mrdamper.models.step_dispatch import family_advance, family_force
 
 __all__ = ["compile_loop", "run_loop", "run_loop_packed"]
@@ -134,7 +140,9 @@ def _loop(  # type: ignore[no-untyped-def]
     p_every : int
         0: continuous-time plant, its force evaluated at every Runge-Kutta stage with its state
         held and its state advanced over every plant step; ``m > 0``: discrete-time plant of
-        sample ``m h``, its force taken at its sample instants and held.
+        sample ``m h``, its force linear in time between its value at the present sample and
+        the value its step gives for the next sample with the motion and input held (first-order
+        hold; see :mod:`mrdamper.control.closed_loop`).
 
     Returns
     -------
@@ -177,6 +185,8 @@ def _loop(  # type: ignore[no-untyped-def]
     e = prev
     xc, vc = 0.0, 0.0  # damper motion at the previous control sample
     Fh, xs, vs_, es = 0.0, 0.0, 0.0, 0.0
+    F0h, F1h = 0.0, 0.0
+    p_next = p_state.copy()
     for k in range(n_ctrl):
         x_d = st[0] - st[2]
         v_d = st[1] - st[3]
@@ -234,8 +244,13 @@ def _loop(  # type: ignore[no-untyped-def]
             x0 = st[0] - st[2]
             v0 = st[1] - st[3]
             if p_every > 0 and j % p_every == 0:
-                Fh = P_FORCE(p_form, p_state, x0, v0, e) - p_offset
+                # the force at this sample and at the next, the motion and the input held
+                F0h = P_FORCE(p_form, p_state, x0, v0, e) - p_offset
                 xs, vs_, es = x0, v0, e
+                p_next[:] = p_state
+                F1h = F0h
+                if P_ADVANCE(p_form, p_next, x0, v0, e, x0, v0, e, p_every * h) == 0:
+                    F1h = P_FORCE(p_form, p_next, x0, v0, e) - p_offset
             for q in range(4):
                 tmp[q] = st[q]
             for g in range(4):
@@ -245,6 +260,10 @@ def _loop(  # type: ignore[no-untyped-def]
                         tmp[q] = st[q] + c * kk[g - 1, q]
                 if p_every == 0:
                     Fh = P_FORCE(p_form, p_state, tmp[0] - tmp[2], tmp[1] - tmp[3], e) - p_offset
+                else:
+                    Fh = _between(
+                        F0h, F1h, j % p_every, 0.0 if g == 0 else (1.0 if g == 3 else 0.5), p_every
+                    )
                 zg = z0 if g == 0 else (z1 if g == 3 else zm)
                 _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zg, vr, Fh, m_s, m_u, k_s, k_t, c_t, kk[g])
                 if g == 0:

@@ -12,8 +12,9 @@ The damper is used through a per-sample step interface:
   Runge-Kutta stage with the current held over the control sample (with a drive lag, ``rho[k]``,
   the lagged command at the sample instant, is held);
 * LPV model: the force of control sample ``k`` is a polynomial in ``rho[k]`` fixed by the past
-  (``lpv_coefficients``); it is held over the sample (the model has no direct feedthrough), and
-  ``u[k]`` is built from the damper velocity at the sample instant.
+  (``lpv_coefficients``), and ``u[k]`` is built from the damper velocity at the sample instant;
+  the model has no direct feedthrough, so the force of sample ``k + 1`` (``rho`` held) is known
+  too, and the force is linear in time between the two (:func:`_between`).
 
 Controllers (desired damper force ``Fd``, damper velocity ``v_rel = v_s - v_u``, the force acting
 on the body is ``-F``): 0 passive (constant input ``i_const``), 1 skyhook
@@ -49,6 +50,13 @@ def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # type: ig
     out[1] = (-fs - F) / m_s
     out[2] = vu
     out[3] = (fs + F - k_t * (zu - zr) - c_t * (vu - vr)) / m_u
+
+
+@njit(cache=True)
+def _between(f0, f1, s, c, n_sub):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+    """Force of a discrete-time damper between its samples ``f0`` and ``f1`` [N]: linear in
+    time, at Runge-Kutta node ``c`` of plant step ``s`` of the ``n_sub`` in a sample."""
+    return f0 + (f1 - f0) * (s + c) / n_sub
 
 
 @njit(cache=True)
@@ -201,10 +209,11 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
     -------
     X : float64[:, :]
         ``(n_ctrl * n_sub, 5)``: ``z_s, v_s, z_u, v_u, a_s`` at the start of every plant step.
-    F, Fd, rho : float64[:]
-        Per control sample: damper force (preload removed) [N], desired force [N] (NaN for the
-        passive controller) and the scheduling value (the input, or the input through the drive
-        lag).
+    F : float64[:]
+        Damper force (preload removed) at the start of every plant step [N].
+    Fd, rho : float64[:]
+        Per control sample: desired force [N] (NaN for the passive controller) and the scheduling
+        value (the input, or the input through the drive lag).
     sat : bool[:]
         Desired force out of reach at that sample.
     bad : int
@@ -217,6 +226,7 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
     n_ctrl = (zr.size - 1) // n_sub
     X = np.zeros((n_ctrl * n_sub, 5))
     F = np.zeros(n_ctrl)
+    Fp = np.zeros(n_ctrl * n_sub)
     Fd = np.zeros(n_ctrl)
     rho = np.zeros(n_ctrl)
     sat = np.zeros(n_ctrl, dtype=np.bool_)
@@ -235,22 +245,29 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
     lo, hi = form.lo, form.hi
     prev = min(max(i_const, lo), hi) if form.ctrl == CTRL_PASSIVE else lo
     mem = np.array([prev, prev, 0.0, 0.0])  # prev, w_prev, Dahl state, previous velocity
+    cf_next = np.zeros(n_p)
+    F_next = 0.0
     for k in range(n_ctrl):
         r, ok, target, F[k] = control_sample(
             k, st[0], st[1], st[2], st[3], form, y, u, cf, yb, ub, rho, mem
         )
         Fd[k] = target
         sat[k] = not ok
+        if is_lpv:  # the next sample's force, fixed by now (b_0 = 0), with rho held
+            lpv_coefficients(cf_next, y, u, k + 1, inv.alpha, inv.beta, inv.offset)
+            F_next = _poly(cf_next, r) - inv.offset
         # --- plant over the control sample
         for s in range(n_sub):
             j = k * n_sub + s
             z0, z1 = zr[j], zr[j + 1]
             vr = (z1 - z0) / h
             zm = 0.5 * (z0 + z1)
-            Fh = F[k]
-            if not is_lpv:
+            if is_lpv:
+                Fh = _between(F[k], F_next, s, 0.0, n_sub)
+            else:
                 Fh = sp_force1(st[0] - st[2], st[1] - st[3], r, comp, power, theta, f0) - f0
             _deriv(st[0], st[1], st[2], st[3], z0, vr, Fh, m_s, m_u, k_s, k_t, c_t, k1)
+            Fp[j] = Fh
             X[j, 0] = st[0]
             X[j, 1] = st[1]
             X[j, 2] = st[2]
@@ -258,7 +275,9 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
             X[j, 4] = k1[1]
             for q in range(4):
                 tmp[q] = st[q] + 0.5 * h * k1[q]
-            if not is_lpv:
+            if is_lpv:
+                Fh = _between(F[k], F_next, s, 0.5, n_sub)
+            else:
                 Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
             _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zm, vr, Fh, m_s, m_u, k_s, k_t, c_t, k2)
             for q in range(4):
@@ -268,11 +287,13 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
             _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zm, vr, Fh, m_s, m_u, k_s, k_t, c_t, k3)
             for q in range(4):
                 tmp[q] = st[q] + h * k3[q]
-            if not is_lpv:
+            if is_lpv:
+                Fh = _between(F[k], F_next, s, 1.0, n_sub)
+            else:
                 Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
             _deriv(tmp[0], tmp[1], tmp[2], tmp[3], z1, vr, Fh, m_s, m_u, k_s, k_t, c_t, k4)
             for q in range(4):
                 st[q] += h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
                 if not (abs(st[q]) <= bound):
-                    return X, F, Fd, rho, sat, j
-    return X, F, Fd, rho, sat, -1
+                    return X, Fp, Fd, rho, sat, j
+    return X, Fp, Fd, rho, sat, -1

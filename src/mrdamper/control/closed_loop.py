@@ -19,7 +19,11 @@ Numerics of the generic loop (:mod:`mrdamper.control._closed_loop_kernels`):
   in the fused kernel (a static map as plant then gives the fused kernel's numbers); only the
   internal state lags by at most one step, which the halving check bounds;
 * a discrete-time plant (LPV, LTI, NARX: ``Step.dt`` set) runs at its own sample time (an integer
-  number of plant steps), its force taken at its sample instants and held in between;
+  number of plant steps); between two samples its force is linear in time from its value at the
+  present sample to the value its step gives for the next sample with the present motion and
+  input held (a first-order hold). For a model without direct feedthrough (LPV, LTI) that next
+  value is exact once the present motion is known; a held force (zero-order hold) would add half
+  a sample of delay, which makes a stiff damper ring at the model's Nyquist frequency;
 * the controller runs at the control sample (the road's sampling interval, or an LPV model's
   sample time) and its input is held in between (zero-order hold). A static map or LPV model is
   inverted by the quarter car's own inverse

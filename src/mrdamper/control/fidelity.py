@@ -74,6 +74,8 @@ HF_FACTOR = 3.0
 #: ISO 8608 roads A-D the true damper's loops put at most 2.2 % of the body-acceleration power
 #: there (every controller); an LPV model at 1 kHz in passive hard 8-81 %.
 HF_SHARE = 0.05
+#: A discrete-time model's oscillation peaked above this share of its rate is a sampled-loop one.
+NYQUIST_SHARE = 0.25
 
 
 def loop_metrics(r: QuarterCarResult) -> dict[str, float]:
@@ -109,12 +111,34 @@ class NotConvergedError(MrDamperError):
     figure and the metric)."""
 
 
-def oscillation_note(share: float, peak: float, car: QuarterCar) -> str:
-    """The one-line description of a sampled-loop oscillation (:func:`oscillation`'s ``share``
-    [-] and ``peak`` [Hz] on ``car``)."""
-    return (
-        f"sampled-loop oscillation: {100 * share:.0f} % of the body acceleration power above "
+def oscillation_note(
+    share: float, peak: float, car: QuarterCar, model_fs: float | None = None
+) -> str:
+    """The one-line description of a high-frequency loop oscillation (:func:`oscillation`'s
+    ``share`` [-] and ``peak`` [Hz] on ``car``).
+
+    For a discrete-time damper of rate ``model_fs`` [Hz] the note says which kind it is: a peak
+    above a quarter of the model rate (within a factor of two of its Nyquist frequency) is the
+    sampled loop's, and a higher model rate is the remedy; a peak below it is a mode of the
+    model's own dynamics in the loop (e.g. a stiff pre-yield branch on the wheel), which a higher
+    rate does not remove.
+    """
+    what = (
+        f"{100 * share:.0f} % of the body acceleration power above "
         f"{HF_FACTOR * car.wheel_hop_frequency():.0f} Hz, peak at {peak:.1f} Hz"
+    )
+    if model_fs is None:
+        return f"high-frequency loop oscillation: {what}"
+    if peak > NYQUIST_SHARE * model_fs:
+        return (
+            f"sampled-loop oscillation: {what}, near the model's Nyquist frequency "
+            f"({model_fs / 2:g} Hz): identify the model at a higher rate (LPV setting model_fs)"
+        )
+    return (
+        f"loop oscillation of the model's own dynamics: {what}, well below its Nyquist frequency "
+        f"({model_fs / 2:g} Hz; a higher rate does not remove it): the model is too stiff where "
+        f"the loop moves it (LPV: choose the hysteretic input's stroke and blend on loop-like "
+        f"records, mrdamper.control.doe_extension)"
     )
 
 
@@ -316,13 +340,8 @@ def closed_loop_fidelity(
                         info.update({f"excursion_{k}": v for k, v in exc.items()})
                     runs.append(info)
                     if share > HF_SHARE:
-                        advice = ""
-                        if side == "predicted" and discrete:
-                            advice = (
-                                f"; a discrete-time model: identify it at a higher rate (now "
-                                f"{float(model.fs):g} Hz; LPV setting model_fs)"
-                            )
-                        notes.append(f"{where}: {oscillation_note(share, f_hf, car)}{advice}")
+                        fs_m = float(model.fs) if side == "predicted" and discrete else None
+                        notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
                     if side == "achieved" and exc is not None and max(exc.values()) > 1.0:
                         notes.append(
                             f"{where}: the loop leaves the {model.kind} model's training envelope:"

@@ -16,9 +16,12 @@ Numerics: fixed-step RK4 (plant step ``h``, default 1 ms or finer) in a compiled
 (:mod:`mrdamper.control._quarter_car_kernels`), the controller and the damper's inverse run once per
 control sample, the input is held in between. A static damper map is evaluated at every
 Runge-Kutta stage; an LPV damper runs at its own rate ``fs`` (control sample = model sample, several
-plant steps per sample) and its force is held over the sample (the model has no direct
-feedthrough). The run stops with :class:`~mrdamper.errors.SimulationDivergedError` when a state
-leaves ``bound``.
+plant steps per sample). Its force between two samples is linear in time from the present sample's
+to the next one's (a first-order hold): the model has no direct feedthrough, so the next sample's
+force is fixed once the present sample's motion is known, and it is taken with the present
+scheduling value held. Holding the present force instead (a zero-order hold) adds half a sample of
+delay to a stiff force, which rings at the model's Nyquist frequency in the loop. The run stops
+with :class:`~mrdamper.errors.SimulationDivergedError` when a state leaves ``bound``.
 
 Controllers: passive soft (lowest input), passive hard (highest input), skyhook, groundhook and
 hybrid (see :class:`Controller`); the semi-active ones ask for a force and get the input from the
