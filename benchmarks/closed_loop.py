@@ -30,6 +30,7 @@ import pandas as pd
 from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.fidelity import closed_loop_fidelity
 from mrdamper.errors import MrDamperError
+from mrdamper.models.lpv.estimator import outer_slope_choices
 from mrdamper.models.registry import get_estimator, known_kinds
 from mrdamper.rig.doe import table_ii
 from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
@@ -77,7 +78,7 @@ def main() -> None:
     )
     ap.add_argument(
         "--lpv-outer-slopes",
-        choices=["auto", "post-yield", "zones"],
+        choices=outer_slope_choices(),
         default=None,
         help="the LPV zone laws' outer slopes (default: the estimator's)",
     )

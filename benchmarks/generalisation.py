@@ -70,6 +70,7 @@ from mrdamper.data import ExperimentSet
 from mrdamper.data.readers import read_csv, read_directory
 from mrdamper.models import available_models, get_estimator
 from mrdamper.models.lpv import LPVEstimator
+from mrdamper.models.lpv.estimator import outer_slope_choices
 from mrdamper.models.rates import rate_rule
 from mrdamper.rig import VirtualRig, reference_damper
 from mrdamper.signals import aprbs, road_profile
@@ -498,7 +499,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     )
     ap.add_argument(
         "--lpv-outer-slopes",
-        choices=["auto", "post-yield", "zones"],
+        choices=outer_slope_choices(),
         default=None,
         help="the LPV zone laws' outer slopes (default: the estimator's)",
     )

@@ -89,3 +89,54 @@ def test_data_of_another_length_is_refused() -> None:
     zf = fit_zones(v, F)
     with pytest.raises(DataValidationError, match="F: has 19999 samples but 'v' has 20000"):
         post_yield_slopes(zf, v, F[:-1])
+
+
+class _Laws:
+    """Stands for ZoneLaws in the rule below (it reads only ``problems()``)."""
+
+    def __init__(self, name: str, bad: bool) -> None:
+        self.name, self.bad = name, bad
+
+    def problems(self) -> list[str]:
+        return [f"{self.name}: m3/m2 at rho=1 is 1.2, expected in [0, 1]"] if self.bad else []
+
+
+def _fitter(post_bad: bool, zones_bad: bool, calls: list[str]):  # type: ignore[no-untyped-def]
+    import warnings
+
+    from mrdamper.errors import IdentificationError
+
+    def fit(outer: str, strict: bool) -> _Laws:
+        calls.append(outer)
+        laws = _Laws(outer, post_bad if outer == "post-yield" else zones_bad)
+        if laws.bad and strict:
+            raise IdentificationError("zone laws break the paper's assumptions")
+        warnings.warn(f"fitted {outer}", UserWarning, stacklevel=1)
+        return laws
+
+    return fit
+
+
+def test_the_eq_20_rule_takes_the_regression_only_where_it_alone_keeps_eq_20() -> None:
+    from mrdamper.analysis.laws import laws_keeping_eq_20
+    from mrdamper.errors import IdentificationError
+
+    calls: list[str] = []
+    with pytest.warns(UserWarning, match="fitted post-yield"):
+        laws, used, note = laws_keeping_eq_20(_fitter(False, False, calls), strict=True)
+    assert (laws.name, used, note, calls) == ("post-yield", "post-yield", "", ["post-yield"])
+
+    calls = []
+    with pytest.warns(UserWarning) as seen:  # the discarded post-yield fit's warnings are not shown
+        laws, used, note = laws_keeping_eq_20(_fitter(True, False, calls), strict=True)
+    assert [str(w.message) for w in seen] == ["fitted zones"]
+    assert (laws.name, used, calls) == ("zones", "zones", ["post-yield", "zones"])
+    assert note.startswith("post-yield outer slopes give laws that break eq. (20) (post-yield: m3")
+
+    # neither keeps eq. (20): not strict, the post-yield laws and their warnings; strict, an error
+    with pytest.warns(UserWarning) as seen:
+        laws, used, note = laws_keeping_eq_20(_fitter(True, True, []), strict=False)
+    assert "fitted post-yield" in [str(w.message) for w in seen]
+    assert (laws.name, used, note) == ("post-yield", "post-yield", "")
+    with pytest.raises(IdentificationError, match="break the paper's assumptions"):
+        laws_keeping_eq_20(_fitter(True, True, []), strict=True)

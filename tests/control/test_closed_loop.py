@@ -234,16 +234,18 @@ def test_a_sampled_loop_oscillation_is_detected_with_its_frequency() -> None:
 
 
 def test_the_oscillation_note_tells_a_sampled_loop_from_the_model_s_own_mode() -> None:
-    # a peak near a discrete model's Nyquist frequency asks for a higher rate; one far below it
-    # is the model's own loop mode, which a higher rate would not remove
+    # a peak near a discrete model's Nyquist frequency asks for a higher rate; below it the note
+    # weighs the one-sample delay at the peak (360 f / fs degrees)
     from mrdamper.control.fidelity import oscillation_note
 
     car = QuarterCar()
     near = oscillation_note(0.5, 480.0, car, 1000.0)
-    below = oscillation_note(0.5, 55.0, car, 1000.0)
-    assert near.startswith("sampled-loop oscillation") and "higher rate" in near
-    assert below.startswith("loop oscillation of the model's own dynamics")
-    assert "does not remove it" in below and "500 Hz" in below
+    delayed = oscillation_note(0.5, 37.0, car, 200.0)  # 67 deg
+    own = oscillation_note(0.5, 55.0, car, 1000.0)  # 20 deg
+    assert near.startswith("sampled-loop oscillation") and "(500 Hz)" in near
+    assert "lags by 67 deg" in delayed and "shortens that delay" in delayed
+    assert "lags by 20 deg" in own and "a higher rate barely changes it" in own
+    assert "doe_extension" in own
     assert oscillation_note(0.5, 55.0, car).startswith("high-frequency loop oscillation")
 
 

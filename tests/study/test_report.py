@@ -120,9 +120,8 @@ def test_report_html_rows_rounding_and_failed_note(written) -> None:
         zip(map(len, sig), floats)
     )  # 4 significant digits
     assert PAPER_HEADLINE["text"] in html and "51 %" in html and "36.8 %" in html
-    # the laws section says which laws each LPV uses, with the post-yield outer slopes
-    assert "the paper's LPV (static input) uses them" in html
-    assert "re-estimated on its post-yield samples" in html
+    # no model of this study takes zone laws: the laws section names no user
+    assert "use(s) them" not in html and "post-yield samples" not in html
     numbers = [int(n) for n in re.findall(r"<b>Figure (\d+)</b>", html)]
     assert numbers == list(range(1, len(numbers) + 1))  # consecutive, whatever the paper skips
     assert "(paper Fig. 6)" not in html or "Figure 5</b> (paper Fig. 6)" in html
@@ -241,3 +240,18 @@ def test_every_figure_is_drawn_for_print(result) -> None:
                 assert ax.get_xlabel() and ax.get_ylabel() or ax.get_title(), name
                 for label in (ax.get_xlabel(), ax.get_ylabel()):
                     assert not label or "[" in label, (name, label)  # units on every axis
+
+
+def test_the_laws_sentence_names_the_models_that_use_each_set(result) -> None:
+    from mrdamper.study.report import _laws_users_note
+    from mrdamper.study.runner import laws_users
+
+    assert laws_users(result.protocol) == {}  # the toy models take no zone laws
+    users = laws_users(doe_protocol())  # the default models and the paper's LPV
+    assert users["lpv"] == "post-yield" and users["lpv-paper"] == "zones"
+    assert "sp1" not in users and "spencer" not in users
+    an = next(iter(result.analyses.values()))
+    note = _laws_users_note(an, users)
+    assert "the paper's laws; lpv-paper use(s) them" in note
+    assert "lpv, " in note and "re-estimated on its post-yield samples" in note
+    assert _laws_users_note(an, {}) == ""

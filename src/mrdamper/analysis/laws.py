@@ -9,6 +9,7 @@ records, or from bins of a continuously varying scheduling signal.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -29,6 +30,7 @@ __all__ = [
     "ZoneLaws",
     "fit_zone_laws",
     "in_blocks",
+    "laws_keeping_eq_20",
     "zone_fits_binned",
     "zone_fits_by_level",
 ]
@@ -496,3 +498,49 @@ def fit_zone_laws(
             raise IdentificationError(msg + " (pass strict=False to continue with a warning)")
         warn_user(msg, ZoneLawWarning)
     return laws
+
+
+def laws_keeping_eq_20(
+    fit: Callable[[OuterSlopes, bool], ZoneLaws], *, strict: bool
+) -> tuple[ZoneLaws, OuterSlopes, str]:
+    """The post-yield laws, or the regression's where only those keep eq. (20).
+
+    The one rule of every user of post-yield outer slopes (the LPV estimator, the study's
+    analysis step): post-yield slopes fitted on few levels, or extrapolated between them, can give
+    an outer slope above ``m2``, which eq. (20) forbids; the three-zone regression's slopes then
+    often keep it.
+
+    Parameters
+    ----------
+    fit : callable
+        ``fit(outer_slopes, strict)`` fits the laws with those outer slopes (as
+        :func:`fit_zone_laws`, ``strict`` raising on laws that break the paper's assumptions).
+    strict : bool
+        Whether the regression's laws, when they are taken and break the assumptions too, raise.
+
+    Returns
+    -------
+    laws : ZoneLaws
+        The post-yield laws, unless they break eq. (20) and the regression's do not.
+    used : {"post-yield", "zones"}
+        Which they are.
+    note : str
+        Why the regression's laws were taken ("" when they were not).
+    """
+    with warnings.catch_warnings(record=True) as caught:  # kept back until the choice is made
+        warnings.simplefilter("always")
+        post = fit("post-yield", False)
+    bad = post.problems()
+    if bad:
+        regression = fit("zones", strict)
+        if not regression.problems():
+            note = (
+                f"post-yield outer slopes give laws that break eq. (20) ({bad[0]}); the "
+                "three-zone regression's slopes are used"
+            )
+            return regression, "zones", note
+        if strict:  # pragma: no cover - the strict regression above raised already
+            raise IdentificationError("zone laws break the paper's assumptions: " + bad[0])
+    for w in caught:
+        warn_user(str(w.message), w.category)
+    return post, "post-yield", ""

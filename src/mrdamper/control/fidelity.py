@@ -72,10 +72,13 @@ _FLOOR = {
 HF_FACTOR = 3.0
 #: A run whose high-frequency share exceeds this is reported as a sampled-loop oscillation. On
 #: ISO 8608 roads A-D the true damper's loops put at most 2.2 % of the body-acceleration power
-#: there (every controller); an LPV model at 1 kHz in passive hard 8-81 %.
+#: there (every controller); the default LPV model fitted on Table II at 1 kHz in passive hard up
+#: to 8 % (8-81 % while the loop held its force over each sample).
 HF_SHARE = 0.05
 #: A discrete-time model's oscillation peaked above this share of its rate is a sampled-loop one.
 NYQUIST_SHARE = 0.25
+#: Below that, a one-sample delay lagging by at least this much [deg] at the peak counts as a cause.
+DELAY_LAG_DEG = 30.0
 
 
 def loop_metrics(r: QuarterCarResult) -> dict[str, float]:
@@ -117,11 +120,13 @@ def oscillation_note(
     """The one-line description of a high-frequency loop oscillation (:func:`oscillation`'s
     ``share`` [-] and ``peak`` [Hz] on ``car``).
 
-    For a discrete-time damper of rate ``model_fs`` [Hz] the note says which kind it is: a peak
-    above a quarter of the model rate (within a factor of two of its Nyquist frequency) is the
-    sampled loop's, and a higher model rate is the remedy; a peak below it is a mode of the
-    model's own dynamics in the loop (e.g. a stiff pre-yield branch on the wheel), which a higher
-    rate does not remove.
+    For a discrete-time damper of rate ``model_fs`` [Hz] the note says what the model's rate has
+    to do with it: a peak above :data:`NYQUIST_SHARE` of the rate is the sampled loop's (a higher
+    rate is the remedy); below it the note gives the phase lag of the model's one-sample delay at
+    the peak (``360 peak / model_fs`` degrees): from :data:`DELAY_LAG_DEG` on, a higher rate
+    shortens a delay that matters there, below it the oscillation is the model's own dynamics in
+    the loop, and records of the loop's motions (:mod:`mrdamper.control.doe_extension`) are what
+    can change it.
     """
     what = (
         f"{100 * share:.0f} % of the body acceleration power above "
@@ -134,11 +139,16 @@ def oscillation_note(
             f"sampled-loop oscillation: {what}, near the model's Nyquist frequency "
             f"({model_fs / 2:g} Hz): identify the model at a higher rate (LPV setting model_fs)"
         )
+    lag = 360.0 * peak / model_fs
+    remedy = (
+        "a higher model rate (LPV setting model_fs) shortens that delay"
+        if lag >= DELAY_LAG_DEG
+        else "a higher rate barely changes it"
+    )
     return (
-        f"loop oscillation of the model's own dynamics: {what}, well below its Nyquist frequency "
-        f"({model_fs / 2:g} Hz; a higher rate does not remove it): the model is too stiff where "
-        f"the loop moves it (LPV: choose the hysteretic input's stroke and blend on loop-like "
-        f"records, mrdamper.control.doe_extension)"
+        f"loop oscillation: {what}, where the model's one-sample delay lags by {lag:.0f} deg: "
+        f"{remedy}; training records of the loop's motions (mrdamper.control.doe_extension) "
+        f"give the model the motions it meets here"
     )
 
 

@@ -128,7 +128,13 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
     if len(records) == 0:
         return AnalysisOutcome(error="no analysis records selected")
     try:
-        from mrdamper.analysis import fit_zone_laws, level_grouping, zone_fits_by_level
+        from mrdamper.analysis import (
+            ZoneLaws,
+            fit_zone_laws,
+            level_grouping,
+            zone_fits_by_level,
+        )
+        from mrdamper.analysis.laws import OuterSlopes, laws_keeping_eq_20
     except ImportError as exc:  # pragma: no cover - analysis ships with the package
         return AnalysisOutcome(error=f"analysis unavailable: {exc}")
     by = level_grouping(records)
@@ -141,21 +147,23 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
             opts = plateau_options(records) if by == "plateaus" else {}
             fits = zone_fits_by_level(records, by=by, source=source, **opts)  # type: ignore[arg-type]
             laws = fit_zone_laws(fits, degree=degree, strict=False)
-            post = zone_fits_by_level(
-                records,
-                by=by,
-                source=source,  # type: ignore[arg-type]
-                outer_slopes="post-yield",
-                **opts,  # type: ignore[arg-type]
-            )
-            post_laws: Any = fit_zone_laws(post, degree=degree, strict=False)
-            if post_laws.problems() and not laws.problems():  # keep eq. (20): the paper's laws
-                warnings.warn(
-                    "post-yield outer slopes give laws that break eq. (20) "
-                    f"({post_laws.problems()[0]}); every LPV uses the paper's laws",
-                    UserWarning,
-                    stacklevel=1,
+
+            def fit_laws(outer: OuterSlopes, strict: bool) -> ZoneLaws:
+                if outer == "zones":
+                    return laws  # the paper's, fitted above
+                post = zone_fits_by_level(
+                    records,
+                    by=by,
+                    source=source,  # type: ignore[arg-type]
+                    outer_slopes=outer,
+                    **opts,  # type: ignore[arg-type]
                 )
+                return fit_zone_laws(post, degree=degree, strict=strict)
+
+            post_laws: Any
+            post_laws, used, why = laws_keeping_eq_20(fit_laws, strict=False)
+            if used == "zones":  # every LPV uses the paper's laws
+                warnings.warn(why, UserWarning, stacklevel=1)
                 post_laws = None
             error = ""
         except Exception as exc:

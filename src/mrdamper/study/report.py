@@ -348,8 +348,36 @@ def _merged_notes(notes: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def _laws_users_note(an: Any, users: Mapping[str, str]) -> str:
+    """Which model of the study uses which laws of fold analysis ``an`` ("" when none does)."""
+    if not users:
+        return ""
+    post: Any = getattr(an, "post_yield_laws", None)
+    has_post = post is not None and hasattr(post, "m")
+    paper = [k for k, v in users.items() if v == "zones" or not has_post]
+    post_users = [k for k, v in users.items() if v == "post-yield" and has_post]
+    parts = []
+    if paper:
+        parts.append(f"These are the paper's laws; {_e(', '.join(paper))} use(s) them.")
+    if post_users:
+        lv = np.asarray(an.laws.levels, dtype=float)
+        parts.append(
+            f"{_e(', '.join(post_users))} use(s) the same laws with each level's outer slopes "
+            "re-estimated on its post-yield samples (beyond three zone limits, "
+            '<code>outer_slopes="post-yield"</code>): m3 '
+            + ", ".join(f"{a:.4g}" for a in post.m(lv)[:, 2])
+            + " N s/m at the levels above, against "
+            + ", ".join(f"{a:.4g}" for a in an.laws.m(lv)[:, 2])
+            + "."
+        )
+    return '<p class="small">' + " ".join(parts) + "</p>"
+
+
 def _analysis_section(res: StudyResult) -> str:
+    from mrdamper.study.runner import laws_users
+
     unit = _unit(res)
+    users = laws_users(res.protocol)
     out = []
     shown = 0
     for fold, an in res.analyses.items():
@@ -367,19 +395,8 @@ def _analysis_section(res: StudyResult) -> str:
         body.append(
             "<p>Three-zone fit (eq. 17) at each level:</p>" + _table(analysis_table(an.laws, unit))
         )
-        post = getattr(an, "post_yield_laws", None)
-        if post is not None and hasattr(post, "m"):
-            lv = np.asarray(an.laws.levels, dtype=float)
-            body.append(
-                "<p class=\"small\">These are the paper's laws; the paper's LPV (static input) "
-                "uses them. The default LPV and LTI (hysteretic input) use the same laws with "
-                "each level's outer slopes re-estimated on its post-yield samples (beyond three "
-                'zone limits, <code>outer_slopes="post-yield"</code>): m3 '
-                + ", ".join(f"{a:.4g}" for a in post.m(lv)[:, 2])
-                + " N s/m at the levels above, against "
-                + ", ".join(f"{a:.4g}" for a in an.laws.m(lv)[:, 2])
-                + ".</p>"
-            )
+        if users:
+            body.append(_laws_users_note(an, users))
         if an.notes:
             body.append(f'<p class="small">Warnings of the analysis: {_e(an.notes)}</p>')
         if shown == 0:

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from mrdamper import kinds
 from mrdamper.data import Experiment, ExperimentSet, SourceSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import DataValidationError, SchemaError, interrupt_in_chain
+from mrdamper.errors import DataValidationError, MrDamperError, SchemaError, interrupt_in_chain
 from mrdamper.models import Estimator, FittedModel
 from mrdamper.models.base import RangePolicy
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
@@ -47,7 +47,7 @@ from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_f
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
-__all__ = ["DEFAULT_CONTROL", "META_COLUMNS", "data_origin", "run_study"]
+__all__ = ["DEFAULT_CONTROL", "META_COLUMNS", "data_origin", "laws_users", "run_study"]
 
 #: The control-relevance step a study runs unless told otherwise (short roads, one class/speed).
 DEFAULT_CONTROL = ControlSettings()
@@ -64,6 +64,7 @@ META_COLUMNS: tuple[str, ...] = (
 )
 
 _LAW_SETTINGS = ("laws", "zone_laws")
+_LAW_SETTINGS_SET = frozenset(_LAW_SETTINGS)
 _O = TypeVar("_O", FitOutcome, SimOutcome)
 
 
@@ -107,6 +108,26 @@ def _settings(
         for key in _LAW_SETTINGS:
             if key in fields and key not in out:
                 out[key] = laws
+    return out
+
+
+def laws_users(protocol: Protocol) -> dict[str, str]:
+    """Label -> outer slopes (``"zones"``: the paper's laws, or ``"post-yield"``) of the zone laws
+    each model of ``protocol`` takes from the analysis step, as :func:`_settings` hands them out;
+    models that take no zone laws, or that give them themselves, are left out."""
+    from mrdamper.models import get_estimator
+
+    out: dict[str, str] = {}
+    for spec in protocol.resolved_models():
+        own = protocol.settings_for(spec)
+        try:
+            est = get_estimator(spec.kind, **own)
+        except (TypeError, MrDamperError):
+            continue  # refused when the study runs, naming the setting
+        if any(k in own for k in _LAW_SETTINGS) or not _LAW_SETTINGS_SET & _estimator_fields(est):
+            continue
+        resolve = getattr(est, "resolved_outer_slopes", None)
+        out[spec.label] = resolve() if resolve is not None else "zones"
     return out
 
 

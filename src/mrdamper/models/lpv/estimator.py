@@ -19,7 +19,7 @@ import pandas as pd
 
 from mrdamper._warn import warn_user
 from mrdamper.analysis import ZoneLaws, fit_zone_laws, zone_fits_binned
-from mrdamper.analysis.laws import OuterSlopes
+from mrdamper.analysis.laws import OuterSlopes, laws_keeping_eq_20
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
@@ -54,9 +54,16 @@ from mrdamper.models.rates import (
     rename_setting,
     to_model_rate,
 )
+from mrdamper.models.settings import literal_choices, type_hints
 from mrdamper.progress import report
 
-__all__ = ["MIN_MODEL_FS", "LPVEstimator", "LTIEstimator", "select_order"]
+__all__ = [
+    "MIN_MODEL_FS",
+    "LPVEstimator",
+    "LTIEstimator",
+    "outer_slope_choices",
+    "select_order",
+]
 
 #: Lowest default model rate of the LPV family [Hz]. The paper's transfer function has no direct
 #: feed-through, so the force answers the input one model sample later: 10 ms at a 100 Hz record
@@ -239,20 +246,17 @@ class LPVEstimator(Estimator):
                     "laws_by='auto': no record carries metadata 'current'; laws fitted on rho bins"
                 )
         outer = self.resolved_outer_slopes()
-        prov["outer_slopes"] = outer
-        try:
+        if outer != "post-yield":
+            prov["outer_slopes"] = outer
             return self._fit_laws(exps, rhos, by, outer, single)
-        except IdentificationError as exc:
-            if outer != "post-yield":
-                raise
-            # the regression's slopes keep eq. (20) where the post-yield ones may not (few
-            # levels, a law extrapolated between them): the model is fitted on those, and says so
-            prov["outer_slopes"] = "zones"
-            prov["outer_slopes_note"] = (
-                f"post-yield outer slopes gave laws that break eq. (20) ({exc}); the three-zone "
-                "regression's slopes are used"
-            )
-            return self._fit_laws(exps, rhos, by, "zones", single)
+        laws, used, note = laws_keeping_eq_20(
+            lambda o, strict: self._fit_laws(exps, rhos, by, o, single, strict=strict),
+            strict=True,
+        )
+        prov["outer_slopes"] = used
+        if note:
+            prov["outer_slopes_note"] = note
+        return laws
 
     def _fit_laws(
         self,
@@ -261,20 +265,24 @@ class LPVEstimator(Estimator):
         by: str,
         outer: OuterSlopes,
         single: bool,
+        strict: bool = True,
     ) -> ZoneLaws:
-        """Zone laws of the training records, grouped ``by`` level, with ``outer`` slopes."""
+        """Zone laws of the training records, grouped ``by`` level, with ``outer`` slopes
+        (``strict``: laws that break the paper's assumptions raise, see :func:`fit_zone_laws`)."""
         if by == "bins":
             v, F, r = _scale.strided(
                 [[e.v for e in exps], [e.F for e in exps], rhos]
             )  # long campaigns
             fits = zone_fits_binned(v, F, r, n_bins=self.n_bins, outer_slopes=outer)
-            return fit_zone_laws(fits, degree=min(self.laws_degree, max(len(fits) - 1, 0)))
+            degree = min(self.laws_degree, max(len(fits) - 1, 0))
+            return fit_zone_laws(fits, degree=degree, strict=strict)
         return fit_zone_laws(
             exps,
             degree=0 if single else self.laws_degree,
             by=by,
             source=self.input,
             outer_slopes=outer,
+            strict=strict,
         )
 
     def resolved_outer_slopes(self) -> OuterSlopes:
@@ -507,3 +515,9 @@ def select_order(
                 )
             rows.append(row)
     return pd.DataFrame(rows).sort_values("val_esr", na_position="last").reset_index(drop=True)
+
+
+def outer_slope_choices() -> tuple[str, ...]:
+    """The values :class:`LPVEstimator`'s ``outer_slopes`` setting takes (for command lines)."""
+    choices, _ = literal_choices(type_hints(LPVEstimator)["outer_slopes"]) or ((), False)
+    return tuple(choices)
