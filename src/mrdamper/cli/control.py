@@ -243,7 +243,8 @@ def quartercar(
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     from mrdamper.control.fidelity import HF_SHARE, oscillation, oscillation_note
 
-    fs_m = float(m.fs) if getattr(m.step(), "dt", None) is not None else None
+    dt_m = getattr(m.step(), "dt", None)  # a discrete-time model's sample time [s]
+    fs_m = 1.0 / float(dt_m) if dt_m else None
     for (road, ctrl), res in cmp.results.items():
         share, peak = oscillation(res)
         if road.startswith("ISO") and share > HF_SHARE:
