@@ -291,3 +291,11 @@ def test_a_fitted_lpv_filter_does_not_ring_in_the_loop() -> None:
     share, _ = oscillation(r)
     assert share < HF_SHARE
     assert np.sqrt(np.mean(r.a_s**2)) < 2.0  # [m/s²]; the held loop left +-10 m
+
+
+def test_the_envelope_note_names_only_the_dimensions_the_loop_leaves() -> None:
+    from mrdamper.control.fidelity import _excursion_text
+
+    exc = {"velocity": 0.71, "stroke": 1.3, "switching": 2.5}
+    assert _excursion_text(exc) == "switching-while-moving velocity x2.5, stroke x1.3"
+    assert _excursion_text({"velocity": 0.5, "stroke": 1.0, "switching": 0.0}) == ""

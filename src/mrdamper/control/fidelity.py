@@ -109,6 +109,21 @@ def oscillation(r: QuarterCarResult) -> tuple[float, float]:
     return float(np.sum(p[hf]) / total), float(f[hf][np.argmax(p[hf])])
 
 
+#: How :func:`_envelope_note`'s dimensions read in a note.
+_EXCURSION_NAMES = {
+    "velocity": "velocity",
+    "stroke": "stroke",
+    "switching": "switching-while-moving velocity",
+}
+
+
+def _excursion_text(exc: dict[str, float]) -> str:
+    """The dimensions the loop leaves (ratio to the training envelope above 1), largest first,
+    e.g. ``"stroke x1.3, velocity x1.1"``."""
+    out = sorted(((v, k) for k, v in exc.items() if v > 1.0), reverse=True)
+    return ", ".join(f"{_EXCURSION_NAMES.get(k, k)} x{v:.2g}" for v, k in out)
+
+
 class NotConvergedError(MrDamperError):
     """The halving check refused a run: the plant step is not converged (the message gives the
     figure and the metric)."""
@@ -355,8 +370,7 @@ def closed_loop_fidelity(
                     if side == "achieved" and exc is not None and max(exc.values()) > 1.0:
                         notes.append(
                             f"{where}: the loop leaves the {model.kind} model's training envelope:"
-                            f" velocity x{exc['velocity']:.2g}, stroke x{exc['stroke']:.2g}, "
-                            f"switching-while-moving velocity x{exc['switching']:.2g}"
+                            f" {_excursion_text(exc)}"
                         )
                     out[side] = loop_metrics(r)
                 for metric in METRICS:
