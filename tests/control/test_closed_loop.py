@@ -44,6 +44,20 @@ def test_model_as_its_own_plant_is_the_fused_kernel(ctrl: str) -> None:
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
 
 
+def test_a_static_map_s_force_is_recorded_at_every_plant_step() -> None:
+    # four plant steps per road sample: the fused kernel (the model as its own plant) and the
+    # generic loop (a copy as plant) record the same force at every plant step, and it moves
+    # within a sample (the map is evaluated at each step's motion)
+    import copy
+
+    m, road = _sp3(), _road(1.0)
+    a = simulate_quarter_car(m, road, "soft", substeps=4)
+    b = simulate_closed_loop(m, road, "soft", plant=copy.deepcopy(m), substeps=4)
+    assert a.F.size == a.t.size
+    np.testing.assert_allclose(a.F, b.F, rtol=1e-9, atol=1e-9)
+    assert np.ptp(a.F.reshape(-1, 4), axis=1).max() > 1.0  # [N]
+
+
 @njit(cache=False)
 def _wrapped_force(form, s, x, v, e):  # type: ignore[no-untyped-def]
     return SK.step_force(form, s, x, v, e)

@@ -229,3 +229,22 @@ def test_c_export_matches_python(rig, tmp_path: Path) -> None:
     rho_c, _ = _run(lib, "hys_lag_inverse_run", e.x, e.v, F, n_out=2)
     res = inverse_current(lagged, e, F, reg=50.0)
     assert _rel(rho_c, res.rho) < 1e-9
+
+
+@pytest.mark.parametrize("ctrl", ["soft", "skyhook"])
+def test_fused_kernel_and_generic_loop_agree_for_the_lpv_plant(rig, ctrl: str) -> None:
+    # the model as its own plant (fused kernel) and a copy of it as plant (generic loop through
+    # its step): the same force at every plant step, linear between the model's samples
+    import copy
+
+    from mrdamper.control.closed_loop import simulate_closed_loop
+
+    m, _ = rig
+    road = iso_road("C", speed=20.0, duration=1.0, fs=FS, seed=2)
+    a = simulate_quarter_car(m, road, ctrl, substeps=4)
+    b = simulate_closed_loop(m, road, ctrl, plant=copy.deepcopy(m), substeps=4)
+    np.testing.assert_allclose(a.F, b.F, rtol=1e-9, atol=1e-7)
+    np.testing.assert_allclose(a.a_s, b.a_s, rtol=1e-9, atol=1e-9)
+    if ctrl == "soft":  # the input held: the force is continuous at the samples
+        F = a.F[: (a.F.size // 4) * 4].reshape(-1, 4)
+        np.testing.assert_allclose(F[:-1, 2], 0.5 * (F[:-1, 0] + F[1:, 0]), atol=1e-7)
