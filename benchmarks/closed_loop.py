@@ -6,7 +6,9 @@ it, every model kind is identified with defaults on it, and
 roads at two speeds with the model as the damper (predicted) and with the reference damper as the
 damper (achieved), same controller and inverse. A kind that cannot be fitted, stepped or inverted
 keeps a row with its one-line reason. Writes ``OUT/closed_loop_<damper>.csv`` (all rows),
-``OUT/closed_loop_runs_<damper>.csv`` and prints the worst |error| [%] per kind and metric.
+``OUT/closed_loop_runs_<damper>.csv`` and ``OUT/closed_loop_summary_<damper>.csv``, and prints the
+worst |error| [%] per kind and metric, then per kind and controller in the layout of
+``docs/results.md`` (worst over the roads, class C in brackets, tracking and mean current).
 
 Run (the full benchmark takes hours on one core; ``--scale`` shortens the DoE records,
 ``--duration`` the roads)::
@@ -47,6 +49,41 @@ def _write(out: Path, name: str, tables: list, runs: list, failed: list) -> None
     pd.DataFrame(failed, columns=["kind", "reason"]).to_csv(
         out / f"closed_loop_failed_{name}.csv", index=False
     )
+
+
+#: The four loop metrics of the per-controller summary, in its order.
+SUMMARY_METRICS = ("a_w", "rms_acc", "rms_tyre_load", "rms_travel")
+
+
+def controller_summary(table: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
+    """Per kind and controller: the worst |error| [%] over the roads of ``a_w`` / RMS
+    acceleration / RMS tyre load / RMS travel (class C alone in brackets), the worst RMS
+    tracking and mean-current errors, and the runs the halving check refused or that diverged,
+    as ``docs/results.md`` tabulates them."""
+    t = table.assign(abs_err=table["error_pct"].abs())
+    refused = runs[runs["refused"].notna()] if "refused" in runs else runs.iloc[:0]
+    rows = []
+    for (kind, ctrl), d in t.groupby(["kind", "controller"], sort=False):
+        worst = d.groupby("metric")["abs_err"].max()
+        on_c = d[d["road"] == "C"].groupby("metric")["abs_err"].max()
+
+        def cells(s: pd.Series) -> str:
+            return " / ".join(f"{s.get(m, float('nan')):.1f}" for m in SUMMARY_METRICS)
+
+        text = f"{cells(worst)} ({cells(on_c)})"
+        if (
+            d["metric"].eq("rms_tracking").any()
+            and d.loc[d["metric"] == "rms_tracking", "error_pct"].notna().any()
+        ):
+            text += (
+                f"; tracking {worst.get('rms_tracking', float('nan')):.1f}, "
+                f"current {worst.get('mean_current', float('nan')):.1f}"
+            )
+        n_ref = int(((refused["kind"] == kind) & (refused["controller"] == ctrl)).sum())
+        if n_ref:
+            text += f"; {n_ref} run(s) refused or diverged"
+        rows.append({"kind": kind, "controller": ctrl, "worst [%]": text})
+    return pd.DataFrame(rows)
 
 
 def main() -> None:
@@ -160,6 +197,13 @@ def main() -> None:
         )
         print(f"\n{name}: worst |predicted - achieved| / achieved [%] over controllers and roads")
         print(worst.to_string())
+        summary = controller_summary(table, pd.concat(runs, ignore_index=True))
+        summary.to_csv(a.out / f"closed_loop_summary_{name}.csv", index=False)
+        print(
+            f"\n{name}: per controller, worst over the roads of a_w / RMS acc. / tyre load / "
+            "travel [%] (class C in brackets)"
+        )
+        print(summary.to_string(index=False))
 
 
 if __name__ == "__main__":
