@@ -54,8 +54,13 @@ def _with_envelope(model, records):
 
 
 def test_envelope_folds_hold_out_the_largest_amplitude_and_highest_frequency() -> None:
+    # 30 s records: several cycles of the slowest sine, so that its frequency band is its own
     recs = ExperimentSet(
-        [_sine(a, f, lev) for a, f in ((0.02, 0.5), (0.01, 1.0), (0.004, 3.0)) for lev in (0, 1)]
+        [
+            _sine(a, f, lev, n=15000)
+            for a, f in ((0.02, 0.5), (0.01, 1.0), (0.004, 3.0))
+            for lev in (0, 1)
+        ]
     )
     folds = envelope_folds(recs)
     assert [label.split(" held")[0] for label, _, _ in folds] == [
@@ -66,6 +71,13 @@ def test_envelope_folds_hold_out_the_largest_amplitude_and_highest_frequency() -
     assert set(te_a.names) == {"a20_f0.5_0", "a20_f0.5_1"}
     assert max(np.ptp(e.x) for e in tr_a) < min(np.ptp(e.x) for e in te_a)
     assert set(te_f.names) == {"a4_f3_0", "a4_f3_1"} and not set(tr_f.names) & set(te_f.names)
+    # the slowest records are the largest too: no second fold holds them out; slower ones of
+    # another amplitude get their own "lowest frequency" fold
+    slow = ExperimentSet([*recs, *(_sine(0.006, 0.2, lev, n=15000) for lev in (0, 1))])
+    labels = [label for label, _, _ in envelope_folds(slow)]
+    assert labels[-1].startswith("beyond: lowest frequency held out (0.2")
+    (_, tr_s, te_s) = envelope_folds(slow)[-1]
+    assert set(te_s.names) == {"a6_f0.2_0", "a6_f0.2_1"} and len(tr_s) == len(recs)
     # records that share one envelope: no fold leaves it
     same = ExperimentSet([_sine(0.01, 1.0, lev) for lev in (0.0, 0.5, 1.0)])
     assert envelope_folds(same) == []

@@ -7,7 +7,9 @@ models that interpolate. These folds hold out what lies beyond the rest of the d
 * several records: the records with the largest displacement range (``"largest amplitude held
   out"``), and those with the highest frequency content (the band of
   :func:`mrdamper.models.envelope.band_frequency`; ``"highest frequency held out"``), or, when the
-  frequency fold holds out the same records or none, those with the largest velocity. A group is
+  frequency fold holds out the same records or none, those with the largest velocity; then those
+  with the lowest frequency content (``"lowest frequency held out"``: a slower test than any
+  training record), unless an earlier fold holds out the same records. A group is
   the records within :data:`GROUP_TOLERANCE` of the largest value (all the currents of one sine
   condition); the fold exists only when the training records then stay below the held-out ones by
   more than that tolerance.
@@ -67,21 +69,52 @@ def _held_out(exps: ExperimentSet, measure: Callable[[Experiment], float]) -> se
     return held
 
 
+def _held_out_low(exps: ExperimentSet, measure: Callable[[Experiment], float]) -> set[str] | None:
+    """As :func:`_held_out` at the other end: the records of the smallest value."""
+    vals = {e.name: measure(e) for e in exps}
+    bottom = min(vals.values())
+    if bottom <= 0:
+        return None
+    held = {n for n, v in vals.items() if v <= bottom * (1 + GROUP_TOLERANCE)}
+    rest = [v for n, v in vals.items() if n not in held]
+    if not rest or min(rest) < max(vals[n] for n in held) * (1 + GROUP_TOLERANCE):
+        return None
+    return held
+
+
 def _record_folds(exps: ExperimentSet) -> list[Fold]:
     out: list[Fold] = []
     used: list[set[str]] = []
+
+    def add(
+        label: str,
+        held: set[str],
+        measure: Callable[[Experiment], float],
+        unit: str,
+        scale: float,
+        low: bool,
+    ) -> None:
+        used.append(held)
+        train = ExperimentSet([e for e in exps if e.name not in held], name=exps.name)
+        test = ExperimentSet([e for e in exps if e.name in held], name=exps.name)
+        if low:
+            a, b = max(measure(e) for e in test) * scale, min(measure(e) for e in train) * scale
+            out.append((f"beyond: {label} held out ({a:.3g} {unit} < {b:.3g})", train, test))
+        else:
+            a, b = min(measure(e) for e in test) * scale, max(measure(e) for e in train) * scale
+            out.append((f"beyond: {label} held out ({a:.3g} {unit} > {b:.3g})", train, test))
+
     for label, measure, unit, scale in _MEASURES:
         if label == "largest velocity" and len(out) >= 2:
             break
         held = _held_out(exps, measure)
         if held is None or held in used:
             continue
-        used.append(held)
-        train = ExperimentSet([e for e in exps if e.name not in held], name=exps.name)
-        test = ExperimentSet([e for e in exps if e.name in held], name=exps.name)
-        lo = min(measure(e) for e in test) * scale
-        hi = max(measure(e) for e in train) * scale
-        out.append((f"beyond: {label} held out ({lo:.3g} {unit} > {hi:.3g})", train, test))
+        add(label, held, measure, unit, scale, low=False)
+    # the other end of the frequency band: a slower test than any training record
+    held = _held_out_low(exps, _band)
+    if held is not None and held not in used:
+        add("lowest frequency", held, _band, "Hz", 1.0, low=True)
     return out
 
 

@@ -17,7 +17,8 @@ in the ``clipped`` column).
 
 Beyond the training envelope (``beyond=True``, default): every kind is also scored on the folds of
 :func:`mrdamper.models.envelope_folds.envelope_folds` (the largest amplitude, the highest frequency
-or velocity held out; for one record, a later block whose range exceeds the earlier one's), and
+or velocity, and the lowest frequency held out; for one record, a later block whose range exceeds
+the earlier one's), and
 (``stress=True``, default) fitted once on all the records and stress-tested
 (:func:`mrdamper.study.stress.stress_test`: motions beyond the envelope must stay bounded,
 dissipative and free of divergence; new motions inside it must be free of bursts).
