@@ -3,8 +3,11 @@ clear reason where it is absent (CI always has it)."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import sys
 from pathlib import Path
+from types import ModuleType
 
 import matplotlib
 import pytest
@@ -23,6 +26,23 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 BLAS_LIMIT = threadpool_limits(limits=1, user_api="blas")
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_benchmark(name: str) -> ModuleType:
+    """The script ``benchmarks/<name>.py`` imported as a module (its folder on ``sys.path``, for
+    the modules it imports beside it), registered as ``<name>_bench`` (dataclasses look their
+    module up)."""
+    path = REPO_ROOT / "benchmarks" / f"{name}.py"
+    if str(path.parent) not in sys.path:
+        sys.path.insert(0, str(path.parent))
+    spec = importlib.util.spec_from_file_location(f"{name}_bench", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 SHARED_DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO_ROOT.parent / "shared" / "data"))
 
 

@@ -2,28 +2,14 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 
-REPO = Path(__file__).resolve().parents[2]
-
-
-def _load_benchmark():  # type: ignore[no-untyped-def]
-    path = REPO / "benchmarks" / "closed_loop.py"
-    spec = importlib.util.spec_from_file_location("closed_loop_bench", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
+from tests.conftest import load_benchmark
 
 
 def test_summary_takes_the_worst_road_class_c_apart_and_counts_refused_runs() -> None:
-    bench = _load_benchmark()
+    bench = load_benchmark("closed_loop")
     rows = []
     errors = {"C": 2.0, "D": -7.5}  # signed: the summary reports |error|
     for road, err in errors.items():

@@ -3,31 +3,18 @@ one table with every scenario, test set and model kind."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-
-
-def _load_benchmark():
-    path = REPO / "benchmarks" / "generalisation.py"
-    sys.path.insert(0, str(path.parent))
-    spec = importlib.util.spec_from_file_location("generalisation_bench", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # dataclasses look their module up
-    spec.loader.exec_module(mod)
-    return mod
+from tests.conftest import load_benchmark
 
 
 @pytest.mark.realdata
 @pytest.mark.slow
 def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    bench = _load_benchmark()
+    bench = load_benchmark("generalisation")
     # a classical peer and the black-box peer on every scenario; the benchmark runs every kind,
     # here the table's shape is checked (the LPV columns, which add minutes of fits, are measured
     # in docs/results.md)
@@ -54,7 +41,7 @@ def test_quick_generalisation_table(shared_data: Path, capsys: pytest.CaptureFix
 
 
 def test_select_column_compares_the_recommendation_with_the_best_kind() -> None:
-    bench = _load_benchmark()
+    bench = load_benchmark("generalisation")
     rows = [
         {"scenario": "s", "test": t, "model": m, "esr": esr, "fit_s": 0.0, "error": ""}
         for t, vals in (("t1", (0.02, 0.04, 0.01)), ("t2", (0.03, 0.02, 0.01)))

@@ -28,8 +28,6 @@ values were measured again when their zone laws took post-yield outer slopes by 
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import warnings
 from pathlib import Path
 from types import ModuleType
@@ -40,8 +38,8 @@ import pytest
 
 from mrdamper.data import ExperimentSet
 from mrdamper.models import get_estimator
+from tests.conftest import load_benchmark
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "accuracy_real_data.py"
 FOLD = "10mm_2Hz"
 #: Dyke drive-lag rate [1/s] of the pinned values (the benchmark's former choice on the training
 #: part; the default ``eta="auto"`` now identifies the lag, ``tests/models/test_lag.py``).
@@ -89,15 +87,6 @@ DYKE: dict[str, float] = {
 SLOW = {"spencer", "p15", "sp1", "narx", "lpv", "lti"}
 
 
-def _bench() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("accuracy_real_data_bench", BENCH)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def _params(table: dict[str, float]) -> list[Any]:
     return [
         pytest.param(k, marks=[pytest.mark.slow] if k in SLOW else [], id=k) for k in sorted(table)
@@ -106,7 +95,7 @@ def _params(table: dict[str, float]) -> list[Any]:
 
 @pytest.fixture(scope="module")
 def bench() -> ModuleType:
-    return _bench()
+    return load_benchmark("accuracy_real_data")
 
 
 @pytest.fixture(scope="module")
