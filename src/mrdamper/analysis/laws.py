@@ -539,8 +539,6 @@ def laws_keeping_eq_20(
                 "three-zone regression's slopes are used"
             )
             return regression, "zones", note
-        if strict:  # pragma: no cover - the strict regression above raised already
-            raise IdentificationError("zone laws break the paper's assumptions: " + bad[0])
     for w in caught:
         warn_user(str(w.message), w.category)
     return post, "post-yield", ""

@@ -241,10 +241,9 @@ def quartercar(
         "mean_input",
     ]
     typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    from mrdamper.control.fidelity import HF_SHARE, oscillation, oscillation_note
+    from mrdamper.control.fidelity import HF_SHARE, discrete_rate, oscillation, oscillation_note
 
-    dt_m = getattr(m.step(), "dt", None)  # a discrete-time model's sample time [s]
-    fs_m = 1.0 / float(dt_m) if dt_m else None
+    fs_m = discrete_rate(m)
     for (road, ctrl), res in cmp.results.items():
         share, peak = oscillation(res)
         if road.startswith("ISO") and share > HF_SHARE:

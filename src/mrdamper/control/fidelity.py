@@ -42,6 +42,7 @@ __all__ = [
     "NotConvergedError",
     "checked_run",
     "closed_loop_fidelity",
+    "discrete_rate",
     "loop_metrics",
     "oscillation",
     "oscillation_note",
@@ -122,6 +123,12 @@ def _excursion_text(exc: dict[str, float]) -> str:
     e.g. ``"stroke x1.3, velocity x1.1"``."""
     out = sorted(((v, k) for k, v in exc.items() if v > 1.0), reverse=True)
     return ", ".join(f"{_EXCURSION_NAMES.get(k, k)} x{v:.2g}" for v, k in out)
+
+
+def discrete_rate(model: Any) -> float | None:
+    """The rate [Hz] of a discrete-time model (an LPV, LTI or NARX step, whose ``dt`` is set), None
+    for a continuous-time one: the ``model_fs`` of :func:`oscillation_note`."""
+    return float(model.fs) if getattr(model.step(), "dt", None) is not None else None
 
 
 class NotConvergedError(MrDamperError):
@@ -318,7 +325,7 @@ def closed_loop_fidelity(
     runs: list[dict[str, Any]] = []
     notes: list[str] = []
     fs = default_rate(model)
-    discrete = getattr(model.step(), "dt", None) is not None  # an LPV, LTI or NARX step
+    model_fs = discrete_rate(model)
     for cls in road_classes:
         for sp in speeds:
             road = iso_road(cls, speed=float(sp), duration=duration, fs=fs, seed=seed)
@@ -365,7 +372,7 @@ def closed_loop_fidelity(
                         info.update({f"excursion_{k}": v for k, v in exc.items()})
                     runs.append(info)
                     if share > HF_SHARE:
-                        fs_m = float(model.fs) if side == "predicted" and discrete else None
+                        fs_m = model_fs if side == "predicted" else None
                         notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
                     if side == "achieved" and exc is not None and max(exc.values()) > 1.0:
                         notes.append(

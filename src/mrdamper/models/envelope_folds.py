@@ -57,27 +57,23 @@ _MEASURES: tuple[tuple[str, Callable[[Experiment], float], str, float], ...] = (
 )
 
 
-def _held_out(exps: ExperimentSet, measure: Callable[[Experiment], float]) -> set[str] | None:
+def _held_out(
+    exps: ExperimentSet, measure: Callable[[Experiment], float], low: bool = False
+) -> set[str] | None:
+    """The group of records of the largest value of ``measure`` (of the smallest with ``low``,
+    taken as the largest of its reciprocal), or None when the others do not stay short of it by
+    more than :data:`GROUP_TOLERANCE`."""
     vals = {e.name: measure(e) for e in exps}
+    if low:
+        if min(vals.values()) <= 0:
+            return None
+        vals = {n: 1.0 / v for n, v in vals.items()}
     top = max(vals.values())
     if top <= 0:
         return None
     held = {n for n, v in vals.items() if v >= top / (1 + GROUP_TOLERANCE)}
     rest = [v for n, v in vals.items() if n not in held]
     if not rest or max(rest) * (1 + GROUP_TOLERANCE) > min(vals[n] for n in held):
-        return None
-    return held
-
-
-def _held_out_low(exps: ExperimentSet, measure: Callable[[Experiment], float]) -> set[str] | None:
-    """As :func:`_held_out` at the other end: the records of the smallest value."""
-    vals = {e.name: measure(e) for e in exps}
-    bottom = min(vals.values())
-    if bottom <= 0:
-        return None
-    held = {n for n, v in vals.items() if v <= bottom * (1 + GROUP_TOLERANCE)}
-    rest = [v for n, v in vals.items() if n not in held]
-    if not rest or min(rest) < max(vals[n] for n in held) * (1 + GROUP_TOLERANCE):
         return None
     return held
 
@@ -97,12 +93,10 @@ def _record_folds(exps: ExperimentSet) -> list[Fold]:
         used.append(held)
         train = ExperimentSet([e for e in exps if e.name not in held], name=exps.name)
         test = ExperimentSet([e for e in exps if e.name in held], name=exps.name)
-        if low:
-            a, b = max(measure(e) for e in test) * scale, min(measure(e) for e in train) * scale
-            out.append((f"beyond: {label} held out ({a:.3g} {unit} < {b:.3g})", train, test))
-        else:
-            a, b = min(measure(e) for e in test) * scale, max(measure(e) for e in train) * scale
-            out.append((f"beyond: {label} held out ({a:.3g} {unit} > {b:.3g})", train, test))
+        near, far, sign = (max, min, "<") if low else (min, max, ">")
+        a = near(measure(e) for e in test) * scale
+        b = far(measure(e) for e in train) * scale
+        out.append((f"beyond: {label} held out ({a:.3g} {unit} {sign} {b:.3g})", train, test))
 
     for label, measure, unit, scale in _MEASURES:
         if label == "largest velocity" and len(out) >= 2:
@@ -112,7 +106,7 @@ def _record_folds(exps: ExperimentSet) -> list[Fold]:
             continue
         add(label, held, measure, unit, scale, low=False)
     # the other end of the frequency band: a slower test than any training record
-    held = _held_out_low(exps, _band)
+    held = _held_out(exps, _band, low=True)
     if held is not None and held not in used:
         add("lowest frequency", held, _band, "Hz", 1.0, low=True)
     return out

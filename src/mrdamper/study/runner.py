@@ -64,7 +64,6 @@ META_COLUMNS: tuple[str, ...] = (
 )
 
 _LAW_SETTINGS = ("laws", "zone_laws")
-_LAW_SETTINGS_SET = frozenset(_LAW_SETTINGS)
 _O = TypeVar("_O", FitOutcome, SimOutcome)
 
 
@@ -80,6 +79,13 @@ def _estimator_fields(est: Estimator) -> set[str]:
     if dataclasses.is_dataclass(est):
         return {f.name for f in dataclasses.fields(est)}
     return set(inspect.signature(type(est)).parameters)
+
+
+def _outer_slopes_wanted(est: Estimator) -> str:
+    """The outer slopes of the laws ``est`` takes from the analysis step: those its
+    ``outer_slopes`` resolves to, the paper's (``"zones"``) for an estimator without the setting."""
+    resolve = getattr(est, "resolved_outer_slopes", None)
+    return str(resolve()) if resolve is not None else "zones"
 
 
 def _settings(
@@ -102,8 +108,7 @@ def _settings(
         out["input"] = protocol.input
     if "seed" in fields and "seed" not in out:
         out["seed"] = seed
-    resolve = getattr(est, "resolved_outer_slopes", None)
-    laws = analysis.laws_for(resolve() if resolve is not None else "zones")
+    laws = analysis.laws_for(_outer_slopes_wanted(est))
     if laws is not None:
         for key in _LAW_SETTINGS:
             if key in fields and key not in out:
@@ -124,10 +129,10 @@ def laws_users(protocol: Protocol) -> dict[str, str]:
             est = get_estimator(spec.kind, **own)
         except (TypeError, MrDamperError):
             continue  # refused when the study runs, naming the setting
-        if any(k in own for k in _LAW_SETTINGS) or not _LAW_SETTINGS_SET & _estimator_fields(est):
+        fields = _estimator_fields(est)
+        if any(k in own for k in _LAW_SETTINGS) or not any(k in fields for k in _LAW_SETTINGS):
             continue
-        resolve = getattr(est, "resolved_outer_slopes", None)
-        out[spec.label] = resolve() if resolve is not None else "zones"
+        out[spec.label] = _outer_slopes_wanted(est)
     return out
 
 
