@@ -96,6 +96,7 @@ def main() -> None:
     ap.add_argument("--controllers", default="soft,hard,skyhook,groundhook,hybrid")
     ap.add_argument("--scale", type=float, default=1.0, help="DoE duration factor [-]")
     ap.add_argument("--duration", type=float, default=20.0, help="road length [s]")
+    ap.add_argument("--seed", type=int, default=0, help="road profile seed")
     ap.add_argument(
         "--max-substeps", type=int, default=64, help="finest plant step [steps per road sample]"
     )
@@ -166,6 +167,7 @@ def main() -> None:
                         road_classes=a.roads.split(","),
                         speeds=speeds,
                         duration=a.duration,
+                        seed=a.seed,
                         max_substeps=a.max_substeps,
                     )
                     try:

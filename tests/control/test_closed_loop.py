@@ -313,3 +313,21 @@ def test_the_envelope_note_names_only_the_dimensions_the_loop_leaves() -> None:
     exc = {"velocity": 0.71, "stroke": 1.3, "switching": 2.5}
     assert _excursion_text(exc) == "switching-while-moving velocity x2.5, stroke x1.3"
     assert _excursion_text({"velocity": 0.5, "stroke": 1.0, "switching": 0.0}) == ""
+    assert _excursion_text({"velocity": 0.9, "frequency": 3.2}) == "frequency content x3.2"
+
+
+def test_the_loop_note_names_frequency_content_beyond_the_training_band() -> None:
+    # a model whose training records reach 2 Hz (f_band) and 5 m/s: the loop's motion, with its
+    # wheel hop near 12 Hz, leaves the band and nothing else; one band as wide as the loop's
+    # stays silent
+    env = {"v_max": 5.0, "x_range": [-0.5, 0.5], "e_range": [0.0, 1.0], "v_switch": 5.0}
+    low = dataclasses.replace(_sp3(), provenance={"envelope": {**env, "f_band": 2.0}})
+    res = closed_loop_fidelity(low, "rig", controllers=["soft"], duration=2.0)
+    notes = [n for n in res.notes if "training envelope" in n]
+    assert len(notes) == 1 and notes[0].endswith(
+        f"frequency content x{res.runs[1]['excursion_frequency']:.2g}"
+    )
+    assert res.runs[1]["excursion_frequency"] > 2.0  # the loop's band is above 4 Hz
+    wide = dataclasses.replace(_sp3(), provenance={"envelope": {**env, "f_band": 200.0}})
+    res = closed_loop_fidelity(wide, "rig", controllers=["soft"], duration=2.0)
+    assert not [n for n in res.notes if "training envelope" in n]

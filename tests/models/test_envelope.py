@@ -65,6 +65,16 @@ def test_leaves_names_each_dimension_and_by_how_much() -> None:
     assert "\n" not in note
 
 
+def test_excursions_carry_the_frequency_band_only_when_both_sides_have_one() -> None:
+    from mrdamper.models.envelope import excursions
+
+    trained = {"v_max": 0.1, "x_range": [-0.01, 0.01], "e_range": [0.0, 1.0], "v_switch": 0.0}
+    seen = {**trained, "v_max": 0.2, "f_band": 12.0}
+    assert set(excursions(trained, seen)) == {"velocity", "stroke", "switching"}
+    out = excursions({**trained, "f_band": 4.0}, seen)
+    assert out["frequency"] == pytest.approx(3.0) and out["velocity"] == pytest.approx(2.0)
+
+
 def test_one_trained_level_is_named_with_the_distance_not_a_share_of_no_range() -> None:
     trained = {"v_max": 0.1, "x_range": [-0.01, 0.01], "e_range": [0.5, 0.5], "f_band": 2.0}
     seen = {**trained, "e_range": [1.0, 1.0]}

@@ -115,6 +115,7 @@ _EXCURSION_NAMES = {
     "velocity": "velocity",
     "stroke": "stroke",
     "switching": "switching-while-moving velocity",
+    "frequency": "frequency content",
 }
 
 
@@ -268,7 +269,7 @@ def _envelope_note(model: Any, r: QuarterCarResult) -> dict[str, float] | None:
         return None
     x = r.travel * r.car.motion_ratio
     v = (r.v_s - r.v_u) * r.car.motion_ratio
-    return excursions(trained, envelope_of([x], [v], [r.i]))
+    return excursions(trained, envelope_of([x], [v], [r.i], dt=[1.0 / r.fs]))
 
 
 def closed_loop_fidelity(

@@ -143,7 +143,8 @@ def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float
     dict
         ``velocity`` seen / trained ``v_max``; ``stroke`` seen / trained displacement span;
         ``switching`` seen / trained ``v_switch`` (inf when training never switched while moving
-        and the run does).
+        and the run does); ``frequency`` seen / trained ``f_band`` when both carry it (the
+        frequency below which :data:`BAND_SHARE` of the velocity's power lies).
     """
 
     def ratio(a: float, b: float) -> float:
@@ -151,11 +152,14 @@ def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float
 
     span_t = trained["x_range"][1] - trained["x_range"][0]
     span_s = seen["x_range"][1] - seen["x_range"][0]
-    return {
+    out = {
         "velocity": ratio(seen["v_max"], trained["v_max"]),
         "stroke": ratio(span_s, span_t),
         "switching": ratio(seen["v_switch"], trained["v_switch"]),
     }
+    if trained.get("f_band") and seen.get("f_band") is not None:
+        out["frequency"] = ratio(float(seen["f_band"]), float(trained["f_band"]))
+    return out
 
 
 def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[float, str]]:
