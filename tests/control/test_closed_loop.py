@@ -314,6 +314,9 @@ def test_the_envelope_note_names_only_the_dimensions_the_loop_leaves() -> None:
     assert _excursion_text(exc) == "switching-while-moving velocity x2.5, stroke x1.3"
     assert _excursion_text({"velocity": 0.5, "stroke": 1.0, "switching": 0.0}) == ""
     assert _excursion_text({"velocity": 0.9, "frequency": 3.2}) == "frequency content x3.2"
+    # within the tolerance of a record's note (5 %) a dimension is not named: no "x1"
+    assert _excursion_text({"velocity": 1.04, "switching": 1.049}) == ""
+    assert _excursion_text({"velocity": 1.06}) == "velocity x1.1"
 
 
 def test_the_loop_note_names_frequency_content_beyond_the_training_band() -> None:

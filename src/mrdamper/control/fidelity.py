@@ -34,7 +34,7 @@ from mrdamper.control.quarter_car import (
 )
 from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
-from mrdamper.models.envelope import envelope_of, excursions
+from mrdamper.models.envelope import ENVELOPE_TOLERANCE, envelope_of, excursions
 
 __all__ = [
     "METRICS",
@@ -120,9 +120,10 @@ _EXCURSION_NAMES = {
 
 
 def _excursion_text(exc: dict[str, float]) -> str:
-    """The dimensions the loop leaves (ratio to the training envelope above 1), largest first,
-    e.g. ``"stroke x1.3, velocity x1.1"``."""
-    out = sorted(((v, k) for k, v in exc.items() if v > 1.0), reverse=True)
+    """The dimensions the loop leaves (ratio to the training envelope above 1 +
+    :data:`~mrdamper.models.envelope.ENVELOPE_TOLERANCE`, as for a record), largest first, e.g.
+    ``"stroke x1.3, velocity x1.1"``."""
+    out = sorted(((v, k) for k, v in exc.items() if v > 1.0 + ENVELOPE_TOLERANCE), reverse=True)
     return ", ".join(f"{_EXCURSION_NAMES.get(k, k)} x{v:.2g}" for v, k in out)
 
 
@@ -375,7 +376,7 @@ def closed_loop_fidelity(
                     if share > HF_SHARE:
                         fs_m = model_fs if side == "predicted" else None
                         notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
-                    if side == "achieved" and exc is not None and max(exc.values()) > 1.0:
+                    if side == "achieved" and exc is not None and _excursion_text(exc):
                         notes.append(
                             f"{where}: the loop leaves the {model.kind} model's training envelope:"
                             f" {_excursion_text(exc)}"
