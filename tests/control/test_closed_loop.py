@@ -325,12 +325,15 @@ def test_the_loop_note_names_frequency_content_beyond_the_training_band() -> Non
     # stays silent
     env = {"v_max": 5.0, "x_range": [-0.5, 0.5], "e_range": [0.0, 1.0], "v_switch": 5.0}
     low = dataclasses.replace(_sp3(), provenance={"envelope": {**env, "f_band": 2.0}})
-    res = closed_loop_fidelity(low, "rig", controllers=["soft"], duration=2.0)
+    res = closed_loop_fidelity(low, "rig", controllers=["soft", "hard"], duration=2.0)
     notes = [n for n in res.notes if "training envelope" in n]
-    assert len(notes) == 1 and notes[0].endswith(
+    assert len(notes) == 3 and notes[0].endswith(
         f"frequency content x{res.runs[1]['excursion_frequency']:.2g}"
     )
     assert res.runs[1]["excursion_frequency"] > 2.0  # the loop's band is above 4 Hz
+    # then once, the remedy: records of the loop's own motions
+    assert notes[2].startswith("2 of 2 loops leave the sp3 model's training envelope")
+    assert "mrdamper rig doe --extension control" in notes[2] and "\n" not in notes[2]
     wide = dataclasses.replace(_sp3(), provenance={"envelope": {**env, "f_band": 200.0}})
     res = closed_loop_fidelity(wide, "rig", controllers=["soft"], duration=2.0)
     assert not [n for n in res.notes if "training envelope" in n]

@@ -110,6 +110,14 @@ def oscillation(r: QuarterCarResult) -> tuple[float, float]:
     return float(np.sum(p[hf]) / total), float(f[hf][np.argmax(p[hf])])
 
 
+#: The words of a run's note when its loop leaves the model's training envelope.
+LEAVES = "the loop leaves the"
+#: Where the remedy for a loop beyond the training envelope is described.
+REMEDY = (
+    "on the virtual rig `mrdamper rig doe --extension control`; docs/control.md, "
+    "'A model meant for a loop'"
+)
+
 #: How :func:`_envelope_note`'s dimensions read in a note.
 _EXCURSION_NAMES = {
     "velocity": "velocity",
@@ -378,7 +386,7 @@ def closed_loop_fidelity(
                         notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
                     if side == "achieved" and exc is not None and _excursion_text(exc):
                         notes.append(
-                            f"{where}: the loop leaves the {model.kind} model's training envelope:"
+                            f"{where}: {LEAVES} {model.kind} model's training envelope:"
                             f" {_excursion_text(exc)}"
                         )
                     out[side] = loop_metrics(r)
@@ -400,5 +408,12 @@ def closed_loop_fidelity(
         notes.append(
             f"the {model.kind} model carries no training envelope (saved before it was recorded):"
             " refit it to see how far the loop leaves its training data"
+        )
+    left = sum(1 for n in notes if LEAVES in n)
+    if left:
+        notes.append(
+            f"{left} of {len(ctrls) * len(road_classes) * len(speeds)} loops leave the "
+            f"{model.kind} model's training envelope, where its predictions extrapolate: add "
+            f"records of the loop's own motions to its training set ({REMEDY})"
         )
     return FidelityResult(model.kind, plant_m.kind, unit, rows, runs, notes)
