@@ -120,6 +120,8 @@ def main() -> None:
         default=None,
         help="the LPV zone laws' outer slopes (default: the estimator's)",
     )
+    ap.add_argument("--lpv-stroke", type=float, default=None, help="LPV stroke scale [m] (fixed)")
+    ap.add_argument("--lpv-blend", type=float, default=None, help="LPV pre-yield share [-] (fixed)")
     ap.add_argument(
         "--first",
         default="sp1",
@@ -152,6 +154,10 @@ def main() -> None:
                     lpv_settings = {"model_fs": a.lpv_fs} if kind == "lpv" and a.lpv_fs else {}
                     if kind == "lpv" and a.lpv_outer_slopes:
                         lpv_settings["outer_slopes"] = a.lpv_outer_slopes
+                    if kind == "lpv" and a.lpv_stroke is not None:
+                        lpv_settings["stroke"] = a.lpv_stroke
+                    if kind == "lpv" and a.lpv_blend is not None:
+                        lpv_settings["blend"] = a.lpv_blend
                     if kind == "lpv" and held_out:  # stroke and blend scored on held_out
                         est = get_estimator(
                             kind, input=truth.input, choose_on="held-out", **lpv_settings
