@@ -110,8 +110,6 @@ def oscillation(r: QuarterCarResult) -> tuple[float, float]:
     return float(np.sum(p[hf]) / total), float(f[hf][np.argmax(p[hf])])
 
 
-#: The words of a run's note when its loop leaves the model's training envelope.
-LEAVES = "the loop leaves the"
 #: Where the remedy for a loop beyond the training envelope is described.
 REMEDY = (
     "on the virtual rig `mrdamper rig doe --extension control`; docs/control.md, "
@@ -334,6 +332,7 @@ def closed_loop_fidelity(
     rows: list[dict[str, Any]] = []
     runs: list[dict[str, Any]] = []
     notes: list[str] = []
+    n_left = 0  # loops (achieved side) that leave the model's training envelope
     fs = default_rate(model)
     model_fs = discrete_rate(model)
     for cls in road_classes:
@@ -385,8 +384,9 @@ def closed_loop_fidelity(
                         fs_m = model_fs if side == "predicted" else None
                         notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
                     if side == "achieved" and exc is not None and _excursion_text(exc):
+                        n_left += 1
                         notes.append(
-                            f"{where}: {LEAVES} {model.kind} model's training envelope:"
+                            f"{where}: the loop leaves the {model.kind} model's training envelope:"
                             f" {_excursion_text(exc)}"
                         )
                     out[side] = loop_metrics(r)
@@ -409,10 +409,9 @@ def closed_loop_fidelity(
             f"the {model.kind} model carries no training envelope (saved before it was recorded):"
             " refit it to see how far the loop leaves its training data"
         )
-    left = sum(1 for n in notes if LEAVES in n)
-    if left:
+    if n_left:
         notes.append(
-            f"{left} of {len(ctrls) * len(road_classes) * len(speeds)} loops leave the "
+            f"{n_left} of {len(ctrls) * len(road_classes) * len(speeds)} loops leave the "
             f"{model.kind} model's training envelope, where its predictions extrapolate: add "
             f"records of the loop's own motions to its training set ({REMEDY})"
         )
