@@ -75,35 +75,33 @@ def main(argv: list[str] | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:
     model, _, err = G.fit_model("lpv", {}, sc.train)
     if model is None:
         raise SystemExit(f"lpv: {err}")
-    rows = []
-    for condition, records in sc.tests.items():
-        for e in records:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                Fh = np.asarray(model.predict(e))
-            t, x, F = np.asarray(e.t), np.asarray(e.x), np.asarray(e.F)
-            s = steady(x, e.fs, e.metadata["frequency"])
-            rows.append(
-                {
-                    "condition": condition,
-                    "current_A": e.metadata["current"],
-                    "esr": esr(F, Fh),
-                    "esr_steady": esr(F[s], Fh[s]),
-                    "floor_steady": periodic_floor(t[s], x[s], F[s], e.metadata["frequency"]),
-                }
-            )
-    per_record = pd.DataFrame(rows)
+    tests = [(condition, e) for condition, records in sc.tests.items() for e in records]
     lowest = min(e.metadata["current"] for e in sc.train)
+    probed = [e for e in sc.train if e.metadata["current"] == lowest]
+    everything = probed + [e for _, e in tests]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        predicted = [np.asarray(model.predict(e)) for e in everything]  # each record once
+    rows = []
+    for (condition, e), Fh in zip(tests, predicted[len(probed) :]):
+        t, x, F = np.asarray(e.t), np.asarray(e.x), np.asarray(e.F)
+        s = steady(x, e.fs, e.metadata["frequency"])
+        rows.append(
+            {
+                "condition": condition,
+                "current_A": e.metadata["current"],
+                "esr": esr(F, Fh),
+                "esr_steady": esr(F[s], Fh[s]),
+                "floor_steady": periodic_floor(t[s], x[s], F[s], e.metadata["frequency"]),
+            }
+        )
+    per_record = pd.DataFrame(rows)
     trained = {e.metadata["condition"] for e in sc.train}
-    everything = list(sc.train) + [e for recs in sc.tests.values() for e in recs]
     probe = []
-    for e in everything:
+    for e, Fh in zip(everything, predicted):
         if e.metadata["current"] != lowest:
             continue
         v, F = np.asarray(e.v), np.asarray(e.F)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            Fh = np.asarray(model.predict(e))
         near = np.abs(np.abs(v) - PROBE_V) <= PROBE_BAND * PROBE_V
         accelerating = v * np.gradient(v, e.t) > 0
         if not near.any():

@@ -383,11 +383,12 @@ def closed_loop_fidelity(
                     if share > HF_SHARE:
                         fs_m = model_fs if side == "predicted" else None
                         notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
-                    if side == "achieved" and exc is not None and _excursion_text(exc):
+                    left = _excursion_text(exc) if side == "achieved" and exc is not None else ""
+                    if left:
                         n_left += 1
                         notes.append(
                             f"{where}: the loop leaves the {model.kind} model's training envelope:"
-                            f" {_excursion_text(exc)}"
+                            f" {left}"
                         )
                     out[side] = loop_metrics(r)
                 for metric in METRICS:
