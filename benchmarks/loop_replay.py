@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import time
 import warnings
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -56,14 +57,14 @@ def spectra(v: np.ndarray, F: np.ndarray, fs: float) -> list[tuple[float, float]
     return out
 
 
-def frozen_response(model: object, currents: tuple[float, ...]) -> pd.DataFrame:
+def frozen_response(model: Any, currents: tuple[float, ...]) -> pd.DataFrame:
     """Gain (over the DC gain) and phase [deg] of the LPV model's frozen transfer function."""
     rows = []
     for rho in currents:
-        a = np.asarray(model.a(rho)).ravel()  # type: ignore[attr-defined]
-        b = np.asarray(model.b(rho)).ravel()  # type: ignore[attr-defined]
+        a = np.asarray(model.a(rho)).ravel()
+        b = np.asarray(model.b(rho)).ravel()
         num, den = np.r_[0.0, b], np.r_[1.0, a]
-        _, h = sps.freqz(num, den, worN=[0.0, *FREQS], fs=model.fs)  # type: ignore[attr-defined]
+        _, h = sps.freqz(num, den, worN=[0.0, *FREQS], fs=model.fs)
         for f, hk in zip(FREQS, h[1:]):
             rows.append(
                 {
