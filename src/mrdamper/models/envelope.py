@@ -135,6 +135,19 @@ def training_envelope(records: Iterable[Any], electrical: Sequence[np.ndarray]) 
     return out
 
 
+def _ratio(seen: float, trained: float) -> float:
+    """``seen / trained`` (inf when nothing was trained and something is seen, 0 when neither)."""
+    return float(seen / trained) if trained > 0 else (float("inf") if seen > 0 else 0.0)
+
+
+def _frequency_ratio(trained: dict[str, Any], seen: dict[str, Any]) -> float | None:
+    """``f_band`` seen / trained, or None when either envelope lacks it."""
+    ft, fs = trained.get("f_band"), seen.get("f_band")
+    if not ft or fs is None:
+        return None
+    return _ratio(float(fs), float(ft))
+
+
 def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float]:
     """How far ``seen`` leaves ``trained`` (ratios > 1 leave it).
 
@@ -147,18 +160,16 @@ def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float
         frequency below which :data:`BAND_SHARE` of the velocity's power lies).
     """
 
-    def ratio(a: float, b: float) -> float:
-        return float(a / b) if b > 0 else (float("inf") if a > 0 else 0.0)
-
     span_t = trained["x_range"][1] - trained["x_range"][0]
     span_s = seen["x_range"][1] - seen["x_range"][0]
     out = {
-        "velocity": ratio(seen["v_max"], trained["v_max"]),
-        "stroke": ratio(span_s, span_t),
-        "switching": ratio(seen["v_switch"], trained["v_switch"]),
+        "velocity": _ratio(seen["v_max"], trained["v_max"]),
+        "stroke": _ratio(span_s, span_t),
+        "switching": _ratio(seen["v_switch"], trained["v_switch"]),
     }
-    if trained.get("f_band") and seen.get("f_band") is not None:
-        out["frequency"] = ratio(float(seen["f_band"]), float(trained["f_band"]))
+    frequency = _frequency_ratio(trained, seen)
+    if frequency is not None:
+        out["frequency"] = frequency
     return out
 
 
@@ -187,13 +198,13 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
                 f"{hi * 1e3:.3g}] mm ({reach / half:.2f} x the reach)"
             ),
         )
-    ft, fs = trained.get("f_band"), seen.get("f_band")
-    if ft and fs is not None and float(fs) > (1 + tol) * float(ft):
-        r = float(fs) / float(ft)
+    r = _frequency_ratio(trained, seen)
+    if r is not None and r > 1 + tol:
+        ft, fs = float(trained["f_band"]), float(seen["f_band"])
         out["frequency"] = (
             r,
             (
-                f"frequency content up to {float(fs):.3g} Hz against {float(ft):.3g} Hz "
+                f"frequency content up to {fs:.3g} Hz against {ft:.3g} Hz "
                 f"({r:.2f} x; {BAND_SHARE:.0%} of the velocity power)"
             ),
         )
