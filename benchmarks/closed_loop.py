@@ -31,6 +31,7 @@ import pandas as pd
 
 from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.fidelity import closed_loop_fidelity
+from mrdamper.control.fronts import gain_fronts
 from mrdamper.errors import MrDamperError
 from mrdamper.models.lpv.estimator import outer_slope_choices
 from mrdamper.models.registry import get_estimator, known_kinds
@@ -86,6 +87,51 @@ def controller_summary(table: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+#: What :func:`front_summary` prints.
+FRONT_HEADER = (
+    "worst |predicted - achieved| / achieved [%] of a_w / tyre load / travel / mean current, "
+    "over every gain and at the gain chosen on the model"
+)
+
+
+def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
+    """Per kind and controller (passive: the front of constant inputs), the worst |error| [%]
+    over the gain sweep of each metric, the gains where it is worst, and the worst |error| at
+    the gain chosen on the model (``FrontsResult.chosen``) of ``a_w``, tyre load and travel."""
+    metrics = ("a_w", "rms_tyre_load", "rms_travel", "mean_current")
+    rows = []
+    f = fronts.assign(abs_err=fronts["error_pct"].abs())
+    for (kind, ctrl), d in f.groupby(["kind", "controller"], sort=False):
+        worst = d.groupby("metric")["abs_err"].max()
+        at = d.loc[d["abs_err"].idxmax()] if d["abs_err"].notna().any() else None
+        where = (
+            "-"
+            if at is None
+            else ", ".join(
+                f"{k} {at[k]:g}" for k in ("level", "c_sky", "c_ground", "alpha") if pd.notna(at[k])
+            )
+        )
+        row = {
+            "kind": kind,
+            "controller": ctrl,
+            "over the sweep": " / ".join(f"{worst.get(m, float('nan')):.1f}" for m in metrics),
+            "worst at": where,
+        }
+        c = chosen[(chosen["kind"] == kind) & (chosen["controller"] == ctrl)]
+        if len(c):
+            errs = []
+            for m in metrics[:3]:
+                p, q = c[f"{m}_predicted"], c[f"{m}_achieved"]
+                errs.append(float((100 * (p - q) / q).abs().max()))
+            gains = c.iloc[0]
+            row["chosen gain"] = ", ".join(
+                f"{k} {gains[k]:g}" for k in ("c_sky", "c_ground", "alpha") if pd.notna(gains[k])
+            )
+            row["at the chosen gain"] = " / ".join(f"{e:.1f}" for e in errs)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -123,6 +169,13 @@ def main() -> None:
     ap.add_argument("--lpv-stroke", type=float, default=None, help="LPV stroke scale [m] (fixed)")
     ap.add_argument("--lpv-blend", type=float, default=None, help="LPV pre-yield share [-] (fixed)")
     ap.add_argument(
+        "--fronts",
+        action="store_true",
+        help="also sweep every controller's gains (control.fronts.gain_fronts) with each model "
+        "and with the true damper: fronts_<damper>.csv has predicted against achieved at every "
+        "gain, and the worst |error| over the sweep and at the gains chosen on the model print",
+    )
+    ap.add_argument(
         "--first",
         default="sp1",
         help="kind of the first model (fitted on Table II) whose loop gives the extension",
@@ -146,6 +199,8 @@ def main() -> None:
             doe = doe + ext
         print(f"{name}: DoE {time.perf_counter() - t0:.0f} s")
         tables, runs, failed = [], [], []
+        fronts: list[pd.DataFrame] = []
+        chosen: list[pd.DataFrame] = []
         for kind in a.kinds.split(","):
             t0 = time.perf_counter()
             try:
@@ -189,12 +244,32 @@ def main() -> None:
                 print(f"{name} {kind}: {failed[-1]['reason']}")
                 _write(a.out, name, tables, runs, failed)
                 continue
+            if a.fronts:
+                t1 = time.perf_counter()
+                sweep = gain_fronts(
+                    model,
+                    truth,
+                    road_classes=a.roads.split(","),
+                    speeds=speeds,
+                    duration=a.duration,
+                    seed=a.seed,
+                )
+                fronts.append(sweep.fidelity().assign(kind=kind))
+                chosen.append(sweep.chosen().assign(kind=kind))
+                print(f"{name} {kind}: gain sweep {time.perf_counter() - t1:.0f} s")
             tables.append(res.table().assign(kind=kind))
             runs.append(res.runs_frame().assign(kind=kind))
             for note in res.notes[:3]:
                 print(f"{name} {kind}: warning: {note}")
             print(f"{name} {kind}: {time.perf_counter() - t0:.0f} s")
             _write(a.out, name, tables, runs, failed)
+            if fronts:
+                pd.concat(fronts, ignore_index=True).to_csv(
+                    a.out / f"fronts_{name}.csv", index=False, float_format="%.6g"
+                )
+        if fronts:
+            print(f"\n{name}: over each controller's gain sweep, " + FRONT_HEADER)
+            print(front_summary(pd.concat(fronts), pd.concat(chosen)).to_string(index=False))
         if not tables:
             continue
         table = pd.concat(tables, ignore_index=True)

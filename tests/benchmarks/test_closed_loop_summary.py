@@ -57,3 +57,40 @@ def test_summary_takes_the_worst_road_class_c_apart_and_counts_refused_runs() ->
     )
     # a passive controller has no tracking error, and metrics it lacks read nan
     assert out.loc["soft", "worst [%]"] == "7.5 / nan / nan / nan (2.0 / nan / nan / nan)"
+
+
+def test_front_summary_takes_the_worst_gain_and_the_chosen_one() -> None:
+    bench = load_benchmark("closed_loop")
+    rows = []
+    for gain, err in ((2000.0, 1.0), (8000.0, -20.0)):
+        for metric in ("a_w", "rms_tyre_load", "rms_travel", "mean_current"):
+            rows.append(
+                {
+                    "kind": "lpv",
+                    "controller": "groundhook",
+                    "level": np.nan,
+                    "c_sky": np.nan,
+                    "c_ground": gain,
+                    "alpha": np.nan,
+                    "metric": metric,
+                    "error_pct": err if metric != "mean_current" else 2 * err,
+                }
+            )
+    chosen = pd.DataFrame(
+        [
+            {
+                "kind": "lpv",
+                "controller": "groundhook",
+                "c_sky": np.nan,
+                "c_ground": 2000.0,
+                "alpha": np.nan,
+                **{f"{m}_predicted": 1.01 for m in ("a_w", "rms_tyre_load", "rms_travel")},
+                **{f"{m}_achieved": 1.0 for m in ("a_w", "rms_tyre_load", "rms_travel")},
+            }
+        ]
+    )
+    out = bench.front_summary(pd.DataFrame(rows), chosen).iloc[0]
+    assert out["over the sweep"] == "20.0 / 20.0 / 20.0 / 40.0"
+    assert out["worst at"] == "c_ground 8000"
+    assert out["chosen gain"] == "c_ground 2000"
+    assert out["at the chosen gain"] == "1.0 / 1.0 / 1.0"

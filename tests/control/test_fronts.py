@@ -68,6 +68,23 @@ def test_gain_over_passive_at_equal_travel_and_the_chosen_gain() -> None:
     assert "hybrid" not in ch.index  # no hybrid point: nothing to choose
 
 
+def test_fidelity_pairs_every_point_of_the_sweep_with_the_plant() -> None:
+    fid = _known().fidelity()
+    assert len(fid) == 7 * 4  # every point x a_w, tyre load, travel, mean current
+    gh = fid[(fid["controller"] == "groundhook") & (fid["metric"] == "rms_tyre_load")].iloc[0]
+    assert (gh["predicted"], gh["achieved"]) == (675.0, 760.0)
+    assert gh["error_pct"] == pytest.approx(100 * (675 - 760) / 760)
+    aw = fid[fid["metric"] == "a_w"]
+    assert (aw["error_pct"] == 0.0).all()  # the same a_w on both sides
+    assert fid.loc[fid["metric"] == "mean_current", "error_pct"].isna().all()  # 0 A achieved
+    gaps = _known().widest_gaps().set_index("metric")
+    assert gaps.loc["rms_tyre_load", "controller"] == "groundhook"
+    assert gaps.loc["rms_tyre_load", "c_ground"] == 2000.0
+    # without a plant there is nothing to compare with
+    alone = FrontsResult("sp3", None, [r for r in _known().rows if r["side"] == "predicted"])
+    assert alone.fidelity().empty and alone.widest_gaps().empty
+
+
 def test_the_sweep_runs_the_model_and_the_plant_as_the_loop_does() -> None:
     model = SP3Model(S=S, input_range=(0.0, 1.0))
     plant = SP3Model(S=tuple(1.2 * s for s in S), input_range=(0.0, 1.0))
@@ -95,6 +112,14 @@ def test_the_sweep_runs_the_model_and_the_plant_as_the_loop_does() -> None:
             assert got["rms_tyre_load"] == pytest.approx(want["rms_tyre_load"], rel=1e-12)
     sky = t[(t["controller"] == "skyhook") & (t["side"] == "achieved")].iloc[0]
     assert sky["c_sky"] == 2000.0 and np.isnan(sky["c_ground"]) and sky["mean_current"] > 0
+    fid = res.fidelity()
+    hard = fid[(fid["level"] == 1.0) & (fid["metric"] == "rms_travel")].iloc[0]
+    pred, ach = (
+        t[(t["side"] == s) & (t["level"] == 1.0)].iloc[0] for s in ("predicted", "achieved")
+    )
+    assert hard["predicted"] == pred["rms_travel"] and hard["achieved"] == ach["rms_travel"]
+    assert hard["error_pct"] == pytest.approx(100 * (pred["rms_travel"] / ach["rms_travel"] - 1))
+    assert abs(hard["error_pct"]) > 1.0  # the plant's coefficients are 20 % larger
 
 
 def test_the_sweep_refuses_levels_outside_the_range() -> None:
@@ -121,3 +146,23 @@ def test_quartercar_tune_writes_the_fronts(tmp_path: Path, capsys: pytest.Captur
     assert info.value.code != 0
     assert "--force" in capsys.readouterr().err
     main([*args, "--force"])
+
+
+def test_quartercar_tune_with_a_plant_names_the_widest_gap(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    model, plant = tmp_path / "model.json", tmp_path / "plant.json"
+    SP3Model(S=S, input_range=(0.0, 1.0)).save(model)
+    SP3Model(S=tuple(1.2 * s for s in S), input_range=(0.0, 1.0)).save(plant)
+    out = tmp_path / "tune"
+    main(["quartercar", str(model), "--plant", str(plant), "--tune", "--roads", "C",
+          "--duration", "2", "--out", str(out)])  # fmt: skip
+    text = capsys.readouterr().out
+    line = next(t for t in text.splitlines() if t.startswith("widest model-plant gap"))
+    df = pd.read_csv(out / "fronts.csv")
+    keys = ["controller", "level", "c_sky", "c_ground", "alpha"]
+    p = df[df["side"] == "predicted"].set_index(keys)["rms_travel"]
+    a = df[df["side"] == "achieved"].set_index(keys)["rms_travel"]
+    worst = (100 * (p - a) / a).abs().max()
+    assert f"rms_travel {worst:+.1f} %" in line or f"rms_travel -{worst:.1f} %" in line
+    assert "ISO C" in line

@@ -27,6 +27,7 @@ chosen on the model, printed.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -322,7 +323,27 @@ def _tune(
         "_achieved", " ach.").replace("_pct", " [%]"))  # fmt: skip
     typer.echo("gains chosen on the model (gain over passive at equal travel, positive = better):")
     typer.echo(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    gaps = res.widest_gaps()
+    if len(gaps):
+        typer.echo(
+            "widest model-plant gap over the sweep, 100 (predicted - achieved) / achieved: "
+            + "; ".join(_gap_text(row) for _, row in gaps.iterrows())
+        )
     typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
+
+
+def _gap_text(row: Any) -> str:
+    """``a_w +29 % (hybrid, c_sky 8000, c_ground 8000, alpha 0.5)``: one point of the sweep."""
+    if row["controller"] == "passive":
+        where = f"passive at {row['level']:.0%} of the input range"
+    else:
+        gains = [
+            f"{name} {row[name]:g}"
+            for name in ("c_sky", "c_ground", "alpha")
+            if math.isfinite(float(row[name]))
+        ]
+        where = ", ".join([str(row["controller"]), *gains])
+    return f"{row['metric']} {row['error_pct']:+.1f} % ({where}, ISO {row['road']})"
 
 
 def _fidelity(

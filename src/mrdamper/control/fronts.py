@@ -205,6 +205,49 @@ class FrontsResult:
                 rows.append(row)
         return pd.DataFrame(rows)
 
+    def fidelity(self) -> pd.DataFrame:
+        """Predicted against achieved at every point of the sweep (empty without a plant).
+
+        Returns
+        -------
+        DataFrame
+            One row per road x speed x point x metric (``a_w`` [m/s²], ``rms_tyre_load`` [N],
+            ``rms_travel`` [m], ``mean_current`` [A or V]) with the columns ``road, speed_m_s,
+            controller, level, c_sky, c_ground, alpha, metric, predicted, achieved, error_pct``;
+            ``error_pct = 100 (predicted - achieved) / achieved`` (NaN where either run was
+            refused or the achieved value is 0).
+        """
+        keys = ["road", "speed_m_s", "controller", "level", "c_sky", "c_ground", "alpha"]
+        columns = [*keys, "metric", "predicted", "achieved", "error_pct"]
+        df = pd.DataFrame(self.rows)
+        if self.plant_kind is None or df.empty:
+            return pd.DataFrame(columns=columns)
+        pred = df[df["side"] == "predicted"].reset_index(drop=True)
+        ach = df[df["side"] == "achieved"].reset_index(drop=True)
+        # Both sides run the same points in the same order (gain_fronts).
+        same = pred[keys].fillna(-1.0).to_numpy(dtype=object) == ach[keys].fillna(-1.0).to_numpy(
+            dtype=object
+        )
+        if len(pred) != len(ach) or not same.all():
+            raise ValueError("the predicted and achieved sweeps do not run the same points")
+        parts = []
+        for metric in _METRICS:
+            p = pred[metric].to_numpy(dtype=float)
+            a = ach[metric].to_numpy(dtype=float)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                err = np.where(a != 0.0, 100.0 * (p - a) / a, np.nan)
+            parts.append(pred[keys].assign(metric=metric, predicted=p, achieved=a, error_pct=err))
+        return pd.concat(parts, ignore_index=True)[columns]
+
+    def widest_gaps(self) -> pd.DataFrame:
+        """Per metric, the point of the sweep where the model's prediction is furthest from the
+        plant's (largest ``|error_pct|`` of :meth:`fidelity`); empty without a plant."""
+        fid = self.fidelity().dropna(subset=["error_pct"])
+        if fid.empty:
+            return fid
+        idx = fid["error_pct"].abs().groupby(fid["metric"], sort=False).idxmax()
+        return fid.loc[idx.to_numpy()].reset_index(drop=True)
+
     def plot(self) -> Any:
         """Comfort against road holding (left) and against travel (right), predicted (open
         markers) and achieved (filled), the passive front as a line (dashed predicted, solid
