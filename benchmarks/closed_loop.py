@@ -96,8 +96,9 @@ FRONT_HEADER = (
 
 def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
     """Per kind and controller (passive: the front of constant inputs), the worst |error| [%]
-    over the gain sweep of each metric, the gains where it is worst, and the worst |error| at
-    the gain chosen on the model (``FrontsResult.chosen``) of ``a_w``, tyre load and travel."""
+    over the gain sweep of each metric, the gains where it is worst, how many points were
+    refused (by the halving check, on either side), and the worst |error| at the gain chosen on
+    the model (``FrontsResult.chosen``) of ``a_w``, tyre load and travel."""
     metrics = ("a_w", "rms_tyre_load", "rms_travel", "mean_current")
     rows = []
     f = fronts.assign(abs_err=fronts["error_pct"].abs())
@@ -111,11 +112,15 @@ def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
                 f"{k} {at[k]:g}" for k in ("level", "c_sky", "c_ground", "alpha") if pd.notna(at[k])
             )
         )
+        points = d[d["metric"] == "a_w"]
         row = {
             "kind": kind,
             "controller": ctrl,
             "over the sweep": " / ".join(f"{worst.get(m, float('nan')):.1f}" for m in metrics),
             "worst at": where,
+            "refused": int(points["error_pct"].isna().sum()),
+            "chosen gain": "-",
+            "at the chosen gain": "-",
         }
         c = chosen[(chosen["kind"] == kind) & (chosen["controller"] == ctrl)]
         if len(c):

@@ -62,7 +62,7 @@ def test_summary_takes_the_worst_road_class_c_apart_and_counts_refused_runs() ->
 def test_front_summary_takes_the_worst_gain_and_the_chosen_one() -> None:
     bench = load_benchmark("closed_loop")
     rows = []
-    for gain, err in ((2000.0, 1.0), (8000.0, -20.0)):
+    for gain, err in ((2000.0, 1.0), (8000.0, -20.0), (12000.0, np.nan)):  # 12000: refused
         for metric in ("a_w", "rms_tyre_load", "rms_travel", "mean_current"):
             rows.append(
                 {
@@ -94,3 +94,4 @@ def test_front_summary_takes_the_worst_gain_and_the_chosen_one() -> None:
     assert out["worst at"] == "c_ground 8000"
     assert out["chosen gain"] == "c_ground 2000"
     assert out["at the chosen gain"] == "1.0 / 1.0 / 1.0"
+    assert out["refused"] == 1
