@@ -96,7 +96,8 @@ FRONT_HEADER = (
 
 def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
     """Per kind and controller (passive: the front of constant inputs), the worst |error| [%]
-    over the gain sweep of each metric, the gains where it is worst, how many points were
+    over the gain sweep of each metric, the gains where ``a_w``, tyre load or travel is worst
+    (not the mean current, whose relative error is large where it is near 0), how many points were
     refused (by the halving check, on either side), and the worst |error| at the gain chosen on
     the model (``FrontsResult.chosen``) of ``a_w``, tyre load and travel."""
     metrics = ("a_w", "rms_tyre_load", "rms_travel", "mean_current")
@@ -104,7 +105,8 @@ def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
     f = fronts.assign(abs_err=fronts["error_pct"].abs())
     for (kind, ctrl), d in f.groupby(["kind", "controller"], sort=False):
         worst = d.groupby("metric")["abs_err"].max()
-        at = d.loc[d["abs_err"].idxmax()] if d["abs_err"].notna().any() else None
+        mech = d[d["metric"] != "mean_current"]["abs_err"]  # small means make large ratios
+        at = d.loc[mech.idxmax()] if mech.notna().any() else None
         where = (
             "-"
             if at is None
