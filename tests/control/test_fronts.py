@@ -74,12 +74,15 @@ def test_fidelity_pairs_every_point_of_the_sweep_with_the_plant() -> None:
     gh = fid[(fid["controller"] == "groundhook") & (fid["metric"] == "rms_tyre_load")].iloc[0]
     assert (gh["predicted"], gh["achieved"]) == (675.0, 760.0)
     assert gh["error_pct"] == pytest.approx(100 * (675 - 760) / 760)
+    assert gh["difference"] == 675.0 - 760.0
     aw = fid[fid["metric"] == "a_w"]
     assert (aw["error_pct"] == 0.0).all()  # the same a_w on both sides
     assert fid.loc[fid["metric"] == "mean_current", "error_pct"].isna().all()  # 0 A achieved
     gaps = _known().widest_gaps().set_index("metric")
     assert gaps.loc["rms_tyre_load", "controller"] == "groundhook"
     assert gaps.loc["rms_tyre_load", "c_ground"] == 2000.0
+    # the mean input is ranked by its difference [A], which its 0 A achieved value allows
+    assert gaps.loc["mean_current", "difference"] == 0.0
     # without a plant there is nothing to compare with
     alone = FrontsResult("sp3", None, [r for r in _known().rows if r["side"] == "predicted"])
     assert alone.fidelity().empty and alone.widest_gaps().empty
@@ -163,6 +166,10 @@ def test_quartercar_tune_with_a_plant_names_the_widest_gap(
     keys = ["controller", "level", "c_sky", "c_ground", "alpha"]
     p = df[df["side"] == "predicted"].set_index(keys)["rms_travel"]
     a = df[df["side"] == "achieved"].set_index(keys)["rms_travel"]
-    worst = (100 * (p - a) / a).abs().max()
-    assert f"rms_travel {worst:+.1f} %" in line or f"rms_travel -{worst:.1f} %" in line
+    err = 100 * (p - a) / a
+    assert f"rms_travel {err.loc[err.abs().idxmax()]:+.1f} %" in line
+    i_p = df[df["side"] == "predicted"].set_index(keys)["mean_current"]
+    i_a = df[df["side"] == "achieved"].set_index(keys)["mean_current"]
+    diff = i_p - i_a
+    assert f"mean_current {diff.loc[diff.abs().idxmax()]:+.3g} A" in line
     assert "ISO C" in line

@@ -326,14 +326,21 @@ def _tune(
     gaps = res.widest_gaps()
     if len(gaps):
         typer.echo(
-            "widest model-plant gap over the sweep, 100 (predicted - achieved) / achieved: "
-            + "; ".join(_gap_text(row) for _, row in gaps.iterrows())
+            "widest model-plant gap over the sweep, 100 (predicted - achieved) / achieved "
+            "(mean input: predicted - achieved): "
+            + "; ".join(_gap_text(row, _unit(m)) for _, row in gaps.iterrows())
         )
     typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
 
 
-def _gap_text(row: Any) -> str:
-    """``a_w +29 % (hybrid, c_sky 8000, c_ground 8000, alpha 0.5)``: one point of the sweep."""
+def _unit(model: Any) -> str:
+    """The unit of the model's electrical input."""
+    return "V" if getattr(model, "input", "i") == "voltage" else "A"
+
+
+def _gap_text(row: Any, unit: str) -> str:
+    """``a_w +29.0 % (hybrid, c_sky 8000, c_ground 8000, alpha 0.5, ISO C)``, or for the mean
+    input its difference ``mean_current +0.012 A (...)``: one point of the sweep."""
     if row["controller"] == "passive":
         where = f"passive at {row['level']:.0%} of the input range"
     else:
@@ -343,7 +350,11 @@ def _gap_text(row: Any) -> str:
             if math.isfinite(float(row[name]))
         ]
         where = ", ".join([str(row["controller"]), *gains])
-    return f"{row['metric']} {row['error_pct']:+.1f} % ({where}, ISO {row['road']})"
+    if row["metric"] == "mean_current":
+        size = f"{row['difference']:+.3g} {unit}"
+    else:
+        size = f"{row['error_pct']:+.1f} %"
+    return f"{row['metric']} {size} ({where}, ISO {row['road']})"
 
 
 def _fidelity(

@@ -213,12 +213,13 @@ class FrontsResult:
         DataFrame
             One row per road x speed x point x metric (``a_w`` [m/s²], ``rms_tyre_load`` [N],
             ``rms_travel`` [m], ``mean_current`` [A or V]) with the columns ``road, speed_m_s,
-            controller, level, c_sky, c_ground, alpha, metric, predicted, achieved, error_pct``;
+            controller, level, c_sky, c_ground, alpha, metric, predicted, achieved, difference,
+            error_pct``; ``difference = predicted - achieved`` (the metric's unit) and
             ``error_pct = 100 (predicted - achieved) / achieved`` (NaN where either run was
             refused or the achieved value is 0).
         """
         keys = ["road", "speed_m_s", "controller", "level", "c_sky", "c_ground", "alpha"]
-        columns = [*keys, "metric", "predicted", "achieved", "error_pct"]
+        columns = [*keys, "metric", "predicted", "achieved", "difference", "error_pct"]
         df = pd.DataFrame(self.rows)
         if self.plant_kind is None or df.empty:
             return pd.DataFrame(columns=columns)
@@ -236,16 +237,27 @@ class FrontsResult:
             a = ach[metric].to_numpy(dtype=float)
             with np.errstate(divide="ignore", invalid="ignore"):
                 err = np.where(a != 0.0, 100.0 * (p - a) / a, np.nan)
-            parts.append(pred[keys].assign(metric=metric, predicted=p, achieved=a, error_pct=err))
+            parts.append(
+                pred[keys].assign(
+                    metric=metric, predicted=p, achieved=a, difference=p - a, error_pct=err
+                )
+            )
         return pd.concat(parts, ignore_index=True)[columns]
 
     def widest_gaps(self) -> pd.DataFrame:
         """Per metric, the point of the sweep where the model's prediction is furthest from the
-        plant's (largest ``|error_pct|`` of :meth:`fidelity`); empty without a plant."""
-        fid = self.fidelity().dropna(subset=["error_pct"])
+        plant's (rows of :meth:`fidelity`); empty without a plant.
+
+        ``a_w``, tyre load and travel: the largest ``|error_pct|``. Mean input: the largest
+        ``|difference|`` [A or V], since at the soft gains the mean input is near 0 and its ratio
+        says nothing.
+        """
+        fid = self.fidelity().dropna(subset=["difference"])
         if fid.empty:
             return fid
-        idx = fid["error_pct"].abs().groupby(fid["metric"], sort=False).idxmax()
+        size = fid["error_pct"].abs().where(fid["metric"] != "mean_current")
+        size = size.fillna(fid["difference"].abs().where(fid["metric"] == "mean_current"))
+        idx = size.groupby(fid["metric"], sort=False).idxmax().dropna()
         return fid.loc[idx.to_numpy()].reset_index(drop=True)
 
     def plot(self) -> Any:
