@@ -260,6 +260,7 @@ def main() -> None:
                     speeds=speeds,
                     duration=a.duration,
                     seed=a.seed,
+                    max_substeps=a.max_substeps,
                 )
                 fronts.append(sweep.fidelity().assign(kind=kind))
                 chosen.append(sweep.chosen().assign(kind=kind))

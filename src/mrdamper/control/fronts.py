@@ -336,6 +336,7 @@ def _run_point(
     hi: float,
     check: bool,
     tol: float,
+    max_substeps: int,
 ) -> dict[str, Any]:
     i_range = (lo + level * (hi - lo), hi) if np.isfinite(level) else None
 
@@ -345,7 +346,7 @@ def _run_point(
         )
 
     try:
-        r = checked_run(run, tol=tol) if check else run(1)
+        r = checked_run(run, tol=tol, max_substeps=max_substeps) if check else run(1)
     except MrDamperError as exc:
         return {**dict.fromkeys(_METRICS, np.nan), "status": str(exc)}
     m = loop_metrics(r[0] if isinstance(r, tuple) else r)
@@ -366,6 +367,7 @@ def gain_fronts(
     levels: Sequence[float] = PASSIVE_LEVELS,
     check: bool = True,
     tol: float = 0.005,
+    max_substeps: int = 16,
 ) -> FrontsResult:
     """Sweep the passive levels and every semi-active controller's gains (module docstring).
 
@@ -398,6 +400,8 @@ def gain_fronts(
         reason in ``status``).
     tol : float
         Halving tolerance [-].
+    max_substeps : int
+        Finest plant step of the halving check [steps per road sample].
 
     Returns
     -------
@@ -420,7 +424,9 @@ def gain_fronts(
             road = iso_road(str(cls), speed=float(sp), duration=duration, fs=fs, seed=seed)
             for side, p in sides:
                 for label, level, ctrl in points:
-                    out = _run_point(model, p, road, ctrl, car, level, lo, hi, check, tol)
+                    out = _run_point(
+                        model, p, road, ctrl, car, level, lo, hi, check, tol, max_substeps
+                    )
                     rows.append(
                         {
                             "road": str(cls),
