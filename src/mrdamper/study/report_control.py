@@ -9,7 +9,7 @@ spread of the models' predictions about their median.
 from __future__ import annotations
 
 import html
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -126,6 +126,42 @@ def _chosen(cr: ControlRelevance) -> pd.DataFrame:
     )
 
 
+def _gaps(cr: ControlRelevance, unit: str) -> pd.DataFrame:
+    """Per model with a sweep, the point of the widest model-plant gap per metric
+    (:meth:`~mrdamper.control.fronts.FrontsResult.widest_gaps`)."""
+    rows = []
+    for label, fr in cr.fronts.items():
+        if isinstance(fr, str):
+            continue
+        row: dict[str, Any] = {"model": label}
+        for r in fr.widest_gaps().to_dict("records"):
+            if r["metric"] == "mean_current":
+                size = f"{r['difference']:+.3g} {unit}"
+            else:
+                size = f"{r['error_pct']:+.1f} %"
+            row[_GAP_NAMES[r["metric"]]] = f"{size} ({_point(r)})"
+        rows.append(row)
+    return pd.DataFrame(rows).reindex(columns=["model", *_GAP_NAMES.values()])
+
+
+#: Column of :func:`_gaps` per metric.
+_GAP_NAMES = {
+    "a_w": "a_w error",
+    "rms_tyre_load": "tyre load error",
+    "rms_travel": "travel error",
+    "mean_current": "mean input difference",
+}
+
+
+def _point(r: Mapping[str, Any]) -> str:
+    """``skyhook 8000 N s/m``, ``hybrid 3000 N s/m, alpha 0.5`` or ``passive 20 %``."""
+    if r["controller"] == "passive":
+        return f"passive {r['level']:.0%}"
+    gain = r["c_ground"] if r["controller"] == "groundhook" else r["c_sky"]
+    alpha = f", alpha {r['alpha']:g}" if r["controller"] == "hybrid" else ""
+    return f"{r['controller']} {gain:g} N s/m{alpha}"
+
+
 def _truth_text(truth: str) -> str:
     if truth == "rig":
         from mrdamper.rig.reference import DEFAULT_REFERENCE
@@ -181,6 +217,15 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
                 "with the reference damper:</p>"
             )
             out.append(table(_chosen(cr), cls="left", digits=3))
+            gaps = _gaps(cr, unit)
+            if len(gaps):
+                out.append(
+                    "<p>Where on its sweep each model is furthest from the reference damper "
+                    "(a_w, tyre load, travel: 100 (pred. &minus; ach.) / ach.; mean input: "
+                    "pred. &minus; ach.). A gain chosen on the model is worth what the model "
+                    "predicts only where this gap is small:</p>"
+                )
+                out.append(table(gaps, cls="left"))
     else:
         out.append(
             f"<p><b>No truth is available</b>: {_e(_no_truth(res))}, so the loop cannot say "
