@@ -44,7 +44,7 @@ def _record(seed: int, name: str, fs: float = 500.0, duration: float = 8.0) -> E
     return e.replace(F=TRUTH.predict(e))
 
 
-@pytest.mark.parametrize("value", [-1.0, 0.0, float("nan"), "fast", True])
+@pytest.mark.parametrize("value", [-1.0, 0.0, float("nan"), "fast", "Identify", True])
 def test_bad_lag_refused_naming_eta(value: object) -> None:
     with pytest.raises(DataValidationError, match="eta"):
         check_lag(value)
@@ -107,6 +107,28 @@ def test_lag_identified_on_the_inner_split() -> None:
     saved = json.loads(json.dumps(model.to_dict()))
     assert "lag_selection_s" not in saved["provenance"]
     assert saved["provenance"]["drive_lag"]["eta"] == chosen
+
+
+@pytest.mark.slow
+def test_identify_finds_the_lag_of_a_measured_current() -> None:
+    # the same damper, its electrical input read as a measured coil current: the force still
+    # follows it through the lag (the field's build-up), which "auto" leaves out for a current
+    as_current = [
+        e.replace(i=e.voltage) for e in (_record(3, "a"), _record(4, "b"), _record(5, "test"))
+    ]
+    train, test = as_current[:2], as_current[2]
+    assert not lag_applies(train, "i") and lag_applies(train, "i", "identify")
+    model = get_estimator("sp3", eta="identify").fit(train).with_range_policy("clip")
+    assert model.eta is not None and TRUE_ETA / 2**0.5 <= model.eta <= TRUE_ETA * 2**0.5
+    assert model.provenance["drive_lag"]["eta"] == model.eta
+    auto = get_estimator("sp3").fit(train).with_range_policy("clip")
+    assert auto.eta is None
+    assert model.score(test).esr < 0.5 * auto.score(test).esr
+    # a current held within every record has no lag to identify
+    held = [
+        e.replace(i=np.full(e.n, level), name=f"h{level}") for e, level in zip(train, (0.2, 0.8))
+    ]
+    assert get_estimator("sp3", eta="identify").fit(held).eta is None
 
 
 def test_lag_of_a_hysteresis_model_identified() -> None:

@@ -309,10 +309,12 @@ class HysteresisEstimator(Estimator):
         Tolerances of :func:`scipy.optimize.least_squares`.
     substeps : int
         RK4 sub-steps per sample (0 = automatic); kept by the fitted model.
-    eta : float, "auto" or None
+    eta : float, "auto", "identify" or None
         Rate [1/s] of the first-order drive lag from the electrical input to the laws.
         ``"auto"`` (default): identified on the training records when the input is a command
-        voltage that varies within a record, none otherwise (:mod:`mrdamper.models.lag`); a
+        voltage that varies within a record, none otherwise (:mod:`mrdamper.models.lag`);
+        ``"identify"``: identified whenever the input switches within a record, a measured
+        current included (the field's lag); a
         number: held at that rate; None: no lag.
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
@@ -337,7 +339,7 @@ class HysteresisEstimator(Estimator):
     xtol: float = 1e-8
     gtol: float = 1e-8
     substeps: int = 0
-    eta: float | Literal["auto"] | None = "auto"
+    eta: float | Literal["auto", "identify"] | None = "auto"
     range_policy: RangePolicy = "error"
     step_tolerance: float = 1e-4
 

@@ -403,8 +403,8 @@ class Estimator(abc.ABC):
        out of them (:meth:`_choose_settings`; per-fit options in :attr:`choice_options` serve
        only this step), fit the estimator with the chosen settings instead and add the choice
        to its provenance; otherwise, a family whose drive-lag setting ``eta`` is
-       ``"auto"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag` instead, which
-       identifies the lag on an inner split and then runs steps 3-6 with it;
+       ``"auto"`` or ``"identify"`` is fitted by :func:`mrdamper.models.lag.fit_with_lag`
+       instead, which identifies the lag on an inner split and then runs steps 3-6 with it;
     3. gather the records into an :class:`ExperimentSet` (refusing an empty set or a record
        without motion);
     4. read the electrical input of every record, its identified range and whether it takes a
@@ -508,7 +508,7 @@ class Estimator(abc.ABC):
             if segments:
                 provenance["segments"] = segments
             return dataclasses.replace(model, provenance=provenance)
-        if getattr(self, "eta", None) == lag.AUTO:
+        if getattr(self, "eta", None) in lag.LAG_SETTINGS:
             fitted: FittedModel = lag.fit_with_lag(self, data, options)  # the lag, identified
             return fitted
         report("preparing the training data")

@@ -18,6 +18,13 @@ SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) take ``eta="auto"`` by default, and
   fits on the inner split); the candidate with the lowest validation ESR is fitted on the whole
   training records.
 
+``eta="identify"`` identifies the lag the same way whenever the electrical input switches within
+a record, **measured current included**: the damper's force follows the coil current through the
+build-up of the field (magnetic circuit, eddy currents, the fluid's response), and the virtual
+rig's reference dampers have such a lag (``eta = 100 1/s``). A model meant for a switching
+controller needs it (``docs/results.md``, "Every gain of the sweep"); it is not the default for a
+measured current, whose tables were measured without it.
+
 The choice, every candidate's validation ESR and the time it took are in the model's provenance
 (``drive_lag``). The Spencer family identifies its own filter rate with its other parameters
 (output error), so it does not use this step. A fixed number (or None) skips it.
@@ -44,15 +51,22 @@ from mrdamper.progress import report
 __all__ = [
     "AUTO",
     "ETA_GRID",
+    "IDENTIFY",
     "INNER_FRACTION",
+    "LAG_SETTINGS",
     "check_lag",
     "fit_with_lag",
     "lag_applies",
     "resolved",
 ]
 
-#: The setting that asks for the drive lag to be identified.
+#: The setting that asks for the drive lag to be identified when the input is a voltage command.
 AUTO = "auto"
+#: The setting that asks for the lag to be identified whenever the electrical input switches
+#: within a record, current or voltage.
+IDENTIFY = "identify"
+#: The settings of ``eta`` that identify the lag on the training records.
+LAG_SETTINGS: tuple[str, ...] = (AUTO, IDENTIFY)
 #: Candidate drive-lag rates [1/s] (factor 2 apart, time constants 0.6-40 ms).
 ETA_GRID: tuple[float, ...] = (25.0, 50.0, 100.0, 200.0, 400.0, 800.0, 1600.0)
 #: Index in :data:`ETA_GRID` where the search starts.
@@ -62,19 +76,21 @@ INNER_FRACTION = 0.8
 
 
 def check_lag(value: Any) -> None:
-    """Refuse an ``eta`` setting other than ``"auto"``, None or a positive finite rate [1/s].
+    """Refuse an ``eta`` setting other than ``"auto"``, ``"identify"``, None or a positive finite
+    rate [1/s].
 
     Parameters
     ----------
     value : object
         The setting given.
     """
-    if value is None or (isinstance(value, str) and value == AUTO):
+    if value is None or (isinstance(value, str) and value in LAG_SETTINGS):
         return
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
     if not (ok and math.isfinite(float(value)) and float(value) > 0):
         raise DataValidationError(
-            "eta", f"expected 'auto', None or a positive drive-lag rate [1/s], got {value!r}"
+            "eta",
+            f"expected 'auto', 'identify', None or a positive drive-lag rate [1/s], got {value!r}",
         )
 
 
@@ -94,11 +110,14 @@ def resolved(eta: float | str | None) -> float | None:
     return None if eta is None else float(eta)
 
 
-def lag_applies(records: Iterable[Experiment], source: ElectricalSource) -> bool:
-    """True when the input is a voltage command that switches within at least one record.
+def lag_applies(
+    records: Iterable[Experiment], source: ElectricalSource, setting: str = AUTO
+) -> bool:
+    """True when the lag is to be identified: the electrical input switches within at least one
+    record and it is a voltage command (``setting="auto"``) or any input (``"identify"``).
 
-    A record whose voltage spans at most :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the
-    training range holds its voltage (noise on a held command is not a switch), as in
+    A record whose input spans at most :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the
+    training range holds it (noise on a held input is not a switch), as in
     :func:`~mrdamper.models.levels.held_within_records`.
 
     Parameters
@@ -107,8 +126,10 @@ def lag_applies(records: Iterable[Experiment], source: ElectricalSource) -> bool
         Training records.
     source : {"i", "voltage"}
         Electrical input channel of the estimator.
+    setting : {"auto", "identify"}
+        The estimator's ``eta``.
     """
-    if source != "voltage":
+    if source != "voltage" and setting != IDENTIFY:
         return False
     extremes = []
     for e in records:
@@ -154,7 +175,7 @@ def fit_with_lag(
     Parameters
     ----------
     est : mrdamper.models.Estimator
-        A family with an ``eta`` setting, set to ``"auto"``.
+        A family with an ``eta`` setting, set to ``"auto"`` or ``"identify"``.
     data : Experiment or iterable of Experiment
         Training records.
     options : mapping
@@ -168,7 +189,7 @@ def fit_with_lag(
     """
     records = as_experiment_set(data, name="training")
     source: ElectricalSource = getattr(est, "input", "i")
-    if not lag_applies(records, source):
+    if not lag_applies(records, source, est.eta):
         return dataclasses.replace(est, eta=None).fit(records, **options)
     t0 = time.perf_counter()
     parts = _split(records)

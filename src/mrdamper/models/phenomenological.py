@@ -427,10 +427,12 @@ class P15Estimator(Estimator):
         again; a warning names the model and the discrepancy if it still fails.
     step_refinements : int
         How many times the fit may halve the model's step to meet ``step_tolerance``.
-    eta : float, "auto" or None
+    eta : float, "auto", "identify" or None
         Drive-lag rate [1/s] of a first-order lag ``d rho/dt = -eta (rho - input)`` on the
         electrical input. ``"auto"`` (default): identified on the training records when the
-        input is a varying command voltage, none otherwise (:mod:`mrdamper.models.lag`); None: no
+        input is a varying command voltage, none otherwise (:mod:`mrdamper.models.lag`);
+        ``"identify"``: identified whenever the input switches within a record, a measured
+        current included (the field's lag); None: no
         lag.
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
@@ -453,7 +455,7 @@ class P15Estimator(Estimator):
     jacobian: Literal["sensitivity", "2-point", "3-point"] = "sensitivity"
     step_tolerance: float = 1e-4
     step_refinements: int = 3
-    eta: float | Literal["auto"] | None = "auto"
+    eta: float | Literal["auto", "identify"] | None = "auto"
     range_policy: RangePolicy = "error"
 
     kind: ClassVar[str] = "p15"

@@ -304,11 +304,13 @@ class _SPEstimator(Estimator):
         Samples (evenly spaced over the training data) used for screening and multi-start.
     fit_samples : int or None
         Samples (evenly spaced) used by the final polish; ``None`` uses every sample.
-    eta : float, "auto" or None
+    eta : float, "auto", "identify" or None
         Drive-lag rate [1/s]: the map is fitted to the electrical input passed through the lag
         (per record, see the module docstring). ``"auto"`` (default): identified on the training
         records when the input is a varying command voltage, none otherwise
-        (:mod:`mrdamper.models.lag`); None: no lag.
+        (:mod:`mrdamper.models.lag`);
+        ``"identify"``: identified whenever the input switches within a record, a measured
+        current included (the field's lag); None: no lag.
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
     """
@@ -321,7 +323,7 @@ class _SPEstimator(Estimator):
     max_nfev: int = 200
     screen_samples: int = 4000
     fit_samples: int | None = 20000
-    eta: float | Literal["auto"] | None = "auto"
+    eta: float | Literal["auto", "identify"] | None = "auto"
 
     range_policy: RangePolicy = "error"
 

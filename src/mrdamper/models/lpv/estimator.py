@@ -87,10 +87,12 @@ class LPVEstimator(Estimator):
         Polynomial degree of the coefficients in ``rho``.
     input : {"i", "voltage"}
         Electrical input used as scheduling variable.
-    eta : float, "auto" or None
+    eta : float, "auto", "identify" or None
         Drive-lag rate [1/s] of a first-order lag ``d rho/dt = -eta (rho - input)`` on the
         electrical input. ``"auto"`` (default): identified on the training records when the
-        input is a varying command voltage, none otherwise (:mod:`mrdamper.models.lag`); None: no
+        input is a varying command voltage, none otherwise (:mod:`mrdamper.models.lag`);
+        ``"identify"``: identified whenever the input switches within a record, a measured
+        current included (the field's lag); None: no
         lag.
     input_signal : {"hysteretic", "u", "v"}
         LPV input: the zone-law input with a hysteretic pre-yield state (default,
@@ -178,7 +180,7 @@ class LPVEstimator(Estimator):
     n_m: int = 3
     n_rho: int = 2
     input: ElectricalSource = "i"
-    eta: float | Literal["auto"] | None = "auto"
+    eta: float | Literal["auto", "identify"] | None = "auto"
     input_signal: InputSignal = "hysteretic"
     reading: Reading = "continuous"
     zone_laws: ZoneLaws | None = None
