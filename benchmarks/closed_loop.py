@@ -22,6 +22,7 @@ Run (the full benchmark takes hours on one core; ``--scale`` shortens the DoE re
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 import warnings
 from functools import partial
@@ -139,6 +140,11 @@ def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _has_lag(kind: str) -> bool:
+    """Whether the kind's estimator has a lag setting ``eta``."""
+    return "eta" in {f.name for f in dataclasses.fields(get_estimator(kind))}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -183,6 +189,12 @@ def main() -> None:
         "gain, and the worst |error| over the sweep and at the gains chosen on the model print",
     )
     ap.add_argument(
+        "--eta",
+        default=None,
+        help="lag setting of every kind that has one ('auto', 'identify' or a rate [1/s]; "
+        "default: the estimator's, 'auto')",
+    )
+    ap.add_argument(
         "--first",
         default="sp1",
         help="kind of the first model (fitted on Table II) whose loop gives the extension",
@@ -220,14 +232,19 @@ def main() -> None:
                         lpv_settings["stroke"] = a.lpv_stroke
                     if kind == "lpv" and a.lpv_blend is not None:
                         lpv_settings["blend"] = a.lpv_blend
+                    settings = dict(lpv_settings)
+                    if a.eta is not None and _has_lag(kind):
+                        settings["eta"] = a.eta if a.eta in ("auto", "identify") else float(a.eta)
                     if kind == "lpv" and held_out:  # stroke and blend scored on held_out
                         est = get_estimator(
-                            kind, input=truth.input, choose_on="held-out", **lpv_settings
+                            kind, input=truth.input, choose_on="held-out", **settings
                         )
                         model = est.fit(doe, choice_records=held_out)
                         print(f"{name} lpv: {model.provenance['hysteretic_note']}")
                     else:
-                        model = get_estimator(kind, input=truth.input, **lpv_settings).fit(doe)
+                        model = get_estimator(kind, input=truth.input, **settings).fit(doe)
+                    if "drive_lag" in model.provenance:
+                        print(f"{name} {kind}: lag eta = {model.eta:g} 1/s identified")
                     run = partial(
                         closed_loop_fidelity,
                         model,
