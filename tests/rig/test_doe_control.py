@@ -13,6 +13,7 @@ import pytest
 import mrdamper.cli.rig as cli_rig
 from mrdamper.cli.main import main
 from mrdamper.control.doe_extension import control_extension
+from mrdamper.data import read_records
 from mrdamper.errors import DataValidationError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.rig.doe import table_ii
@@ -80,6 +81,13 @@ def test_rig_doe_extension_control_on_the_command_line(
     assert "91 records" in capsys.readouterr().out
     names = pd.read_csv(out / "manifest.csv")["name"].tolist()
     assert len(names) == 91 and names[-1] == "ctrl30" and (out / "ctrl01.csv").exists()
+    # the folder reads back as the records a fit takes (the extension's manifest rows leave
+    # experiment, replicate and band empty)
+    back = read_records(out)
+    assert len(back) == 91
+    ctrl = next(r for r in back if r.name == "ctrl01")
+    assert "experiment" not in ctrl.metadata and ctrl.metadata["pattern"] == "loop current"
+    assert next(r for r in back if r.name.startswith("exp")).metadata["experiment"] >= 1
     with pytest.raises(SystemExit):
         main([*args[:3], str(tmp_path / "y"), *args[4:], "--loop-model", str(first)])
     err = capsys.readouterr().err

@@ -44,6 +44,9 @@ MANIFEST_COLUMNS: tuple[str, ...] = (
 #: ``"custom"``), so a study of the folder knows the truth behind the records.
 OPTIONAL_COLUMNS: tuple[str, ...] = ("damper", "reference_damper")
 
+#: Columns left empty by records outside Table II (the control extension has no experiment,
+#: replicate or band): an empty cell is left out of the record's metadata.
+_MAY_BE_EMPTY: tuple[str, ...] = ("experiment", "replicate", "max_frequency")
 _MANIFEST_TYPES: dict[str, type] = {
     "experiment": int,
     "replicate": int,
@@ -93,7 +96,9 @@ def manifest_rows(folder: str | os.PathLike[str]) -> list[tuple[Path, str, dict[
         ``(file, record name, metadata, samples)`` in manifest order; the metadata holds
         ``experiment``, ``replicate``, ``pattern``, ``displacement``, ``duration`` [s],
         ``max_frequency`` [Hz], ``seed``, ``source="virtual rig"`` and, when the manifest has
-        them (:data:`OPTIONAL_COLUMNS`), ``damper`` and ``reference_damper``.
+        them (:data:`OPTIONAL_COLUMNS`), ``damper`` and ``reference_damper``; a record of the
+        control extension has no ``experiment``, ``replicate`` or ``max_frequency`` (empty
+        cells).
 
     Raises
     ------
@@ -115,6 +120,8 @@ def manifest_rows(folder: str | os.PathLike[str]) -> list[tuple[Path, str, dict[
     for k, row in enumerate(rows):
         meta: dict[str, Any] = {"source": "virtual rig"}
         for col, typ in _MANIFEST_TYPES.items():
+            if col in _MAY_BE_EMPTY and row[col] == "":
+                continue
             try:
                 meta[col] = typ(row[col])
             except ValueError:
