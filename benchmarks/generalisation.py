@@ -470,6 +470,17 @@ def _with_lpv(
     return lambda kind: {**settings(kind), **({name: value} if kind == "lpv" else {})}
 
 
+def _with_lag(
+    settings: Callable[[str], dict[str, Any]], eta: Any
+) -> Callable[[str], dict[str, Any]]:
+    """A scenario's settings with ``eta`` given to every kind that has a lag setting."""
+
+    def has_lag(kind: str) -> bool:
+        return "eta" in {f.name for f in dataclasses.fields(get_estimator(kind))}
+
+    return lambda kind: {**settings(kind), **({"eta": eta} if has_lag(kind) else {})}
+
+
 def main(argv: list[str] | None = None) -> pd.DataFrame:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="short rig records, no validation grids")
@@ -503,6 +514,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         default=None,
         help="the LPV zone laws' outer slopes (default: the estimator's)",
     )
+    ap.add_argument(
+        "--eta",
+        default=None,
+        help="lag setting of every kind that has one ('auto', 'identify' or a rate [1/s]; "
+        "default: the estimator's)",
+    )
     args = ap.parse_args(argv)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
@@ -517,6 +534,9 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         ):
             if value is not None:
                 sc = dataclasses.replace(sc, settings=_with_lpv(sc.settings, setting, value))
+        if args.eta is not None:
+            eta = args.eta if args.eta in ("auto", "identify") else float(args.eta)
+            sc = dataclasses.replace(sc, settings=_with_lag(sc.settings, eta))
         print(
             f"{sc.name}: {len(sc.train)} training records; tests "
             f"{ {k: len(v) for k, v in sc.tests.items()} }",
