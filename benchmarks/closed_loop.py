@@ -22,7 +22,6 @@ Run (the full benchmark takes hours on one core; ``--scale`` shortens the DoE re
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import time
 import warnings
 from functools import partial
@@ -34,8 +33,9 @@ from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.fidelity import closed_loop_fidelity
 from mrdamper.control.fronts import gain_fronts
 from mrdamper.errors import MrDamperError
+from mrdamper.models.lag import lag_setting
 from mrdamper.models.lpv.estimator import outer_slope_choices
-from mrdamper.models.registry import get_estimator, known_kinds
+from mrdamper.models.registry import get_estimator, known_kinds, takes_lag
 from mrdamper.rig.doe import table_ii
 from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
 
@@ -140,11 +140,6 @@ def front_summary(fronts: pd.DataFrame, chosen: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _has_lag(kind: str) -> bool:
-    """Whether the kind's estimator has a lag setting ``eta``."""
-    return "eta" in {f.name for f in dataclasses.fields(get_estimator(kind))}
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -202,6 +197,14 @@ def main() -> None:
     a = ap.parse_args()
     a.out.mkdir(parents=True, exist_ok=True)
     speeds = [float(s) for s in a.speeds.split(",")]
+    # the roads and the halving check of every loop run: the fidelity runs and the gain sweep
+    loop = {
+        "road_classes": a.roads.split(","),
+        "speeds": speeds,
+        "duration": a.duration,
+        "seed": a.seed,
+        "max_substeps": a.max_substeps,
+    }
     for name in a.dampers.split(","):
         truth = reference_damper(name)
         t0 = time.perf_counter()
@@ -233,8 +236,8 @@ def main() -> None:
                     if kind == "lpv" and a.lpv_blend is not None:
                         lpv_settings["blend"] = a.lpv_blend
                     settings = dict(lpv_settings)
-                    if a.eta is not None and _has_lag(kind):
-                        settings["eta"] = a.eta if a.eta in ("auto", "identify") else float(a.eta)
+                    if a.eta is not None and takes_lag(kind):
+                        settings["eta"] = lag_setting(a.eta)
                     if kind == "lpv" and held_out:  # stroke and blend scored on held_out
                         est = get_estimator(
                             kind, input=truth.input, choose_on="held-out", **settings
@@ -245,16 +248,7 @@ def main() -> None:
                         model = get_estimator(kind, input=truth.input, **settings).fit(doe)
                     if "drive_lag" in model.provenance:
                         print(f"{name} {kind}: lag eta = {model.eta:g} 1/s identified")
-                    run = partial(
-                        closed_loop_fidelity,
-                        model,
-                        truth,
-                        road_classes=a.roads.split(","),
-                        speeds=speeds,
-                        duration=a.duration,
-                        seed=a.seed,
-                        max_substeps=a.max_substeps,
-                    )
+                    run = partial(closed_loop_fidelity, model, truth, **loop)
                     try:
                         res = run(controllers=a.controllers.split(","))
                     except MrDamperError as exc:  # no inverse: the passive controllers only
@@ -270,15 +264,7 @@ def main() -> None:
                 continue
             if a.fronts:
                 t1 = time.perf_counter()
-                sweep = gain_fronts(
-                    model,
-                    truth,
-                    road_classes=a.roads.split(","),
-                    speeds=speeds,
-                    duration=a.duration,
-                    seed=a.seed,
-                    max_substeps=a.max_substeps,
-                )
+                sweep = gain_fronts(model, truth, **loop)
                 fronts.append(sweep.fidelity().assign(kind=kind))
                 chosen.append(sweep.chosen().assign(kind=kind))
                 print(f"{name} {kind}: gain sweep {time.perf_counter() - t1:.0f} s")

@@ -69,9 +69,11 @@ import scipy.signal as sps
 from mrdamper.data import ExperimentSet
 from mrdamper.data.readers import read_csv, read_directory
 from mrdamper.models import available_models, get_estimator
+from mrdamper.models.lag import lag_setting
 from mrdamper.models.lpv import LPVEstimator
 from mrdamper.models.lpv.estimator import outer_slope_choices
 from mrdamper.models.rates import rate_rule
+from mrdamper.models.registry import takes_lag
 from mrdamper.rig import VirtualRig, reference_damper
 from mrdamper.signals import aprbs, road_profile
 
@@ -474,11 +476,7 @@ def _with_lag(
     settings: Callable[[str], dict[str, Any]], eta: Any
 ) -> Callable[[str], dict[str, Any]]:
     """A scenario's settings with ``eta`` given to every kind that has a lag setting."""
-
-    def has_lag(kind: str) -> bool:
-        return "eta" in {f.name for f in dataclasses.fields(get_estimator(kind))}
-
-    return lambda kind: {**settings(kind), **({"eta": eta} if has_lag(kind) else {})}
+    return lambda kind: {**settings(kind), **({"eta": eta} if takes_lag(kind) else {})}
 
 
 def main(argv: list[str] | None = None) -> pd.DataFrame:
@@ -535,8 +533,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
             if value is not None:
                 sc = dataclasses.replace(sc, settings=_with_lpv(sc.settings, setting, value))
         if args.eta is not None:
-            eta = args.eta if args.eta in ("auto", "identify") else float(args.eta)
-            sc = dataclasses.replace(sc, settings=_with_lag(sc.settings, eta))
+            sc = dataclasses.replace(sc, settings=_with_lag(sc.settings, lag_setting(args.eta)))
         print(
             f"{sc.name}: {len(sc.train)} training records; tests "
             f"{ {k: len(v) for k, v in sc.tests.items()} }",

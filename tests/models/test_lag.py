@@ -14,7 +14,8 @@ import pytest
 
 from mrdamper import DataValidationError, Experiment
 from mrdamper.models import get_estimator, model_class
-from mrdamper.models.lag import AUTO, check_lag, lag_applies
+from mrdamper.models.lag import AUTO, check_lag, lag_applies, lag_setting
+from mrdamper.models.registry import takes_lag
 from mrdamper.models.semiphenomenological import SP3Model
 from mrdamper.signals import aprbs
 from tests.models import hysteresis_cases as cases
@@ -50,6 +51,15 @@ def test_bad_lag_refused_naming_eta(value: object) -> None:
         check_lag(value)
     with pytest.raises(DataValidationError, match="eta"):
         get_estimator("sp1", input="voltage", eta=value).fit(_record(1, "r"))
+
+
+def test_a_lag_setting_read_from_text_and_the_kinds_that_take_one() -> None:
+    assert lag_setting("identify") == "identify" and lag_setting("auto") == AUTO
+    assert lag_setting("100") == 100.0
+    for bad in ("fast", "-5", "0"):
+        with pytest.raises(DataValidationError, match="eta"):
+            lag_setting(bad)
+    assert takes_lag("lpv") and takes_lag("sp1") and not takes_lag("spencer")
 
 
 def test_default_is_auto_for_every_family_with_a_lag() -> None:

@@ -291,6 +291,7 @@ def _tune(
     car: Any,
 ) -> None:
     from mrdamper._io import check_output, check_writable, write_files
+    from mrdamper.control.fidelity import input_unit
     from mrdamper.control.fronts import gain_fronts
     from mrdamper.models.registry import load_model
 
@@ -328,19 +329,16 @@ def _tune(
         typer.echo(
             "widest model-plant gap over the sweep, 100 (predicted - achieved) / achieved "
             "(mean input: predicted - achieved): "
-            + "; ".join(_gap_text(row, _unit(m)) for _, row in gaps.iterrows())
+            + "; ".join(_gap_text(row, input_unit(m)) for _, row in gaps.iterrows())
         )
     typer.echo(f"{m.kind}: wrote {', '.join(files)} in {out}")
-
-
-def _unit(model: Any) -> str:
-    """The unit of the model's electrical input."""
-    return "V" if getattr(model, "input", "i") == "voltage" else "A"
 
 
 def _gap_text(row: Any, unit: str) -> str:
     """``a_w +29.0 % (hybrid, c_sky 8000, c_ground 8000, alpha 0.5, ISO C)``, or for the mean
     input its difference ``mean_current +0.012 A (...)``: one point of the sweep."""
+    from mrdamper.control.fronts import gap_size
+
     if row["controller"] == "passive":
         where = f"passive at {row['level']:.0%} of the input range"
     else:
@@ -350,11 +348,7 @@ def _gap_text(row: Any, unit: str) -> str:
             if math.isfinite(float(row[name]))
         ]
         where = ", ".join([str(row["controller"]), *gains])
-    if row["metric"] == "mean_current":
-        size = f"{row['difference']:+.3g} {unit}"
-    else:
-        size = f"{row['error_pct']:+.1f} %"
-    return f"{row['metric']} {size} ({where}, ISO {row['road']})"
+    return f"{row['metric']} {gap_size(row, unit)} ({where}, ISO {row['road']})"
 
 
 def _fidelity(

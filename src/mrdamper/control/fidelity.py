@@ -43,6 +43,7 @@ __all__ = [
     "checked_run",
     "closed_loop_fidelity",
     "discrete_rate",
+    "input_unit",
     "loop_metrics",
     "oscillation",
     "oscillation_note",
@@ -57,6 +58,12 @@ METRICS: dict[str, str] = {
     "rms_tracking": "N",
     "mean_current": "A",
 }
+
+
+def input_unit(model: Any) -> str:
+    """The unit of ``model``'s electrical input: ``"V"`` for a voltage, else ``"A"``."""
+    return "V" if getattr(model, "input", "i") == "voltage" else "A"
+
 
 #: Smallest magnitude a metric is compared against in the halving check (below it, absolute).
 _FLOOR = {
@@ -328,7 +335,7 @@ def closed_loop_fidelity(
         if not (np.isfinite(sp) and sp > 0):
             raise DataValidationError("speed", f"expected a vehicle speed > 0 [m/s], got {sp!r}")
     ctrls = [Controller(c) if isinstance(c, str) else c for c in controllers]
-    unit = "V" if getattr(model, "input", "i") == "voltage" else "A"
+    unit = input_unit(model)
     rows: list[dict[str, Any]] = []
     runs: list[dict[str, Any]] = []
     notes: list[str] = []

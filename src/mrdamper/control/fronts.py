@@ -48,6 +48,7 @@ __all__ = [
     "PASSIVE_LEVELS",
     "FrontsResult",
     "gain_fronts",
+    "gap_size",
 ]
 
 #: Constant inputs of the passive front, as fractions of the input range [-].
@@ -86,6 +87,14 @@ FRONT_COLUMNS: tuple[str, ...] = (
     "status",
 )
 _METRICS = ("a_w", "rms_tyre_load", "rms_travel", "mean_current")
+
+
+def gap_size(row: Any, unit: str) -> str:
+    """How wide one gap of :meth:`FrontsResult.widest_gaps` is: ``"+29.0 %"``, or for the mean
+    input its difference in ``unit`` (``"+0.012 A"``)."""
+    if row["metric"] == "mean_current":
+        return f"{row['difference']:+.3g} {unit}"
+    return f"{row['error_pct']:+.1f} %"
 
 
 def _points(
@@ -255,8 +264,9 @@ class FrontsResult:
         fid = self.fidelity().dropna(subset=["difference"])
         if fid.empty:
             return fid
-        size = fid["error_pct"].abs().where(fid["metric"] != "mean_current")
-        size = size.fillna(fid["difference"].abs().where(fid["metric"] == "mean_current"))
+        size = (
+            fid["error_pct"].abs().where(fid["metric"] != "mean_current", fid["difference"].abs())
+        )
         idx = size.groupby(fid["metric"], sort=False).idxmax().dropna()
         return fid.loc[idx.to_numpy()].reset_index(drop=True)
 

@@ -57,6 +57,7 @@ __all__ = [
     "check_lag",
     "fit_with_lag",
     "lag_applies",
+    "lag_setting",
     "resolved",
 ]
 
@@ -92,6 +93,29 @@ def check_lag(value: Any) -> None:
             "eta",
             f"expected 'auto', 'identify', None or a positive drive-lag rate [1/s], got {value!r}",
         )
+
+
+def lag_setting(text: str) -> str | float:
+    """An ``eta`` setting read from text (a command-line value): ``"auto"``, ``"identify"`` or a
+    rate [1/s], checked as :func:`check_lag` does.
+
+    Parameters
+    ----------
+    text : str
+        The value as written.
+    """
+    value: str | float = text if text in LAG_SETTINGS else _rate(text)
+    check_lag(value)
+    return value
+
+
+def _rate(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise DataValidationError(
+            "eta", f"expected 'auto', 'identify' or a drive-lag rate [1/s], got {text!r}"
+        ) from None
 
 
 def resolved(eta: float | str | None) -> float | None:

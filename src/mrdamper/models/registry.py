@@ -26,6 +26,7 @@ __all__ = [
     "model_class",
     "model_from_dict",
     "register",
+    "takes_lag",
 ]
 
 _ESTIMATORS: dict[str, type[Estimator]] = {}
@@ -124,6 +125,18 @@ def get_estimator(kind: str, **settings: Any) -> Estimator:
     """
     _load(kind)
     return _ESTIMATORS[kind].from_settings(**settings)
+
+
+def takes_lag(kind: str) -> bool:
+    """Whether the estimator of ``kind`` has a lag setting ``eta`` (:mod:`mrdamper.models.lag`).
+
+    Parameters
+    ----------
+    kind : str
+        Model kind (see :func:`known_kinds`).
+    """
+    _load(kind)
+    return "eta" in _ESTIMATORS[kind].settings_names()
 
 
 def model_class(kind: str) -> type[FittedModel]:

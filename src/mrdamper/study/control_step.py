@@ -30,7 +30,13 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control.car import CONTROLLERS, Controller, QuarterCar
-from mrdamper.control.fidelity import METRICS, checked_run, closed_loop_fidelity, loop_metrics
+from mrdamper.control.fidelity import (
+    METRICS,
+    checked_run,
+    closed_loop_fidelity,
+    input_unit,
+    loop_metrics,
+)
 from mrdamper.control.fronts import FrontsResult, gain_fronts
 from mrdamper.errors import DataValidationError, interrupt_in_chain
 from mrdamper.models.protocols import InvertibleModel
@@ -199,7 +205,7 @@ def _predicted_rows(
     from mrdamper.control.quarter_car import iso_road
     from mrdamper.control.quarter_car_study import default_rate
 
-    unit = "V" if getattr(model, "input", "i") == "voltage" else "A"
+    unit = input_unit(model)
     rows = []
     for cls in s.road_classes:
         for sp in s.speeds:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.fronts import gap_size
 from mrdamper.study.control_step import STUDY_LEVELS, ControlRelevance
 from mrdamper.study.result import StudyResult
 
@@ -135,11 +136,7 @@ def _gaps(cr: ControlRelevance, unit: str) -> pd.DataFrame:
             continue
         row: dict[str, Any] = {"model": label}
         for r in fr.widest_gaps().to_dict("records"):
-            if r["metric"] == "mean_current":
-                size = f"{r['difference']:+.3g} {unit}"
-            else:
-                size = f"{r['error_pct']:+.1f} %"
-            row[_GAP_NAMES[r["metric"]]] = f"{size} ({_point(r)})"
+            row[_GAP_NAMES[r["metric"]]] = f"{gap_size(r, unit)} ({_point(r)})"
         rows.append(row)
     return pd.DataFrame(rows).reindex(columns=["model", *_GAP_NAMES.values()])
 
