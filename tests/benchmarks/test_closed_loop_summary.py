@@ -57,6 +57,12 @@ def test_summary_takes_the_worst_road_class_c_apart_and_counts_refused_runs() ->
     )
     # a passive controller has no tracking error, and metrics it lacks read nan
     assert out.loc["soft", "worst [%]"] == "7.5 / nan / nan / nan (2.0 / nan / nan / nan)"
+    # with the values, the worst mean-current gap is also given in mA against its mean
+    table = pd.DataFrame(rows)
+    table["achieved"] = np.where(table["road"] == "C", 0.020, 0.0132)
+    table["predicted"] = table["achieved"] * (1 + table["error_pct"] / 100)
+    out = bench.controller_summary(table, runs).set_index("controller")
+    assert "; tracking 22.5, current 7.5 (1.0 of 13.2 mA);" in out.loc["skyhook", "worst [%]"]
 
 
 def test_front_summary_takes_the_worst_gain_and_the_chosen_one() -> None:

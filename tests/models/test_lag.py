@@ -158,3 +158,40 @@ def test_lag_of_a_hysteresis_model_identified() -> None:
     held = get_estimator("dahl", input="voltage", eta=None, n_starts=1).fit(train)
     assert held.eta == 0.0 and "drive_lag" not in held.provenance
     assert model.provenance["mean_record_esr"] < 0.1 * held.provenance["mean_record_esr"]
+
+
+def _instant(e: Experiment) -> Experiment:
+    """The record's force with no lag: the SP-3 map answers the current at once."""
+    as_current = e.replace(i=e.voltage)
+    instant = SP3Model(**{**_sp3_settings(), "input": "i", "eta": None})
+    return as_current.replace(F=instant.predict(as_current))
+
+
+def _sp3_settings() -> dict:
+    return {"S": TRUTH.S, "f0": TRUTH.f0, "input_range": (0.0, 1.0), "rho_range": (0.0, 1.0)}
+
+
+@pytest.mark.slow
+def test_identify_keeps_no_lag_where_a_measured_current_has_none() -> None:
+    # a switching current whose force follows at once: no lag is a candidate, and it wins
+    train = [_instant(_record(3, "a")), _instant(_record(4, "b"))]
+    model = get_estimator("sp3", eta="identify").fit(train)
+    lag = model.provenance["drive_lag"]
+    assert model.eta is None and lag["eta"] is None
+    assert lag["candidates"][0] is None and len(lag["candidates"]) >= 4
+    assert min(lag["validation_esr"]) == lag["validation_esr"][0]
+    # the same records through the lag: a rate is chosen over no lag
+    lagged = get_estimator("sp3", eta="identify").fit(
+        [e.replace(i=e.voltage) for e in (_record(3, "a"), _record(4, "b"))]
+    )
+    scores = lagged.provenance["drive_lag"]["validation_esr"]
+    assert lagged.eta is not None and min(scores) < 0.5 * scores[0]
+    assert json.loads(json.dumps(model.to_dict()))["provenance"]["drive_lag"]["eta"] is None
+
+
+def test_lpv_settings_chosen_without_lag_for_a_measured_current_only() -> None:
+    from mrdamper.models.lag import settings_chosen_without_lag
+
+    assert settings_chosen_without_lag(get_estimator("lpv", eta="identify"))
+    assert not settings_chosen_without_lag(get_estimator("lpv", input="voltage"))
+    assert not settings_chosen_without_lag(get_estimator("lpv", eta=100.0))

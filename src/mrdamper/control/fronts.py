@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control.closed_loop import check_pair, resolve_plant, simulate_closed_loop
-from mrdamper.control.fidelity import checked_run, loop_metrics
+from mrdamper.control.fidelity import MAX_SUBSTEPS, checked_run, loop_metrics
 from mrdamper.control.inverse import model_input_limits
 from mrdamper.control.quarter_car import Controller, QuarterCar, QuarterCarResult, iso_road
 from mrdamper.control.quarter_car_study import default_rate
@@ -377,7 +377,7 @@ def gain_fronts(
     levels: Sequence[float] = PASSIVE_LEVELS,
     check: bool = True,
     tol: float = 0.005,
-    max_substeps: int = 16,
+    max_substeps: int = MAX_SUBSTEPS,
 ) -> FrontsResult:
     """Sweep the passive levels and every semi-active controller's gains (module docstring).
 

@@ -23,7 +23,13 @@ a record, **measured current included**: the damper's force follows the coil cur
 build-up of the field (magnetic circuit, eddy currents, the fluid's response), and the virtual
 rig's reference dampers have such a lag (``eta = 100 1/s``). A model meant for a switching
 controller needs it (``docs/results.md``, "Every gain of the sweep"); it is not the default for a
-measured current, whose tables were measured without it.
+measured current, whose tables were measured without it. For a measured current *no lag* is one
+more candidate, scored on the same split, so the lag is kept only where the records show it
+(records whose current switches while the damper moves fast do; on the virtual rig's Table II
+alone the LPV model's validation error is flat in ``eta`` and no lag is kept). A family that
+leaves settings open (the LPV hysteretic input's stroke and blend) chooses them without the lag
+first, and the lag's candidates are then fitted with those settings held
+(:func:`settings_chosen_without_lag`).
 
 The choice, every candidate's validation ESR and the time it took are in the model's provenance
 (``drive_lag``). The Spencer family identifies its own filter rate with its other parameters
@@ -59,6 +65,7 @@ __all__ = [
     "lag_applies",
     "lag_setting",
     "resolved",
+    "settings_chosen_without_lag",
 ]
 
 #: The setting that asks for the drive lag to be identified when the input is a voltage command.
@@ -162,6 +169,22 @@ def lag_applies(
     return bool(extremes) and not held_within_records(extremes, SWITCH_FRACTION)
 
 
+def settings_chosen_without_lag(est: Any) -> bool:
+    """True when a family's open settings (the LPV hysteretic input's stroke and blend) are
+    chosen with no lag, before the lag is identified with them held: a measured current, for
+    which no lag is itself a candidate of :func:`fit_with_lag`.
+
+    For a voltage command every candidate setting is fitted with its own lag search (the drive
+    always has a lag, and the settings that go with it differ).
+
+    Parameters
+    ----------
+    est : mrdamper.models.Estimator
+        A family with an ``eta`` setting.
+    """
+    return getattr(est, "input", "i") != "voltage" and getattr(est, "eta", None) in LAG_SETTINGS
+
+
 def _split(records: ExperimentSet) -> tuple[list[Experiment], list[Experiment]]:
     fit, val = [], []
     for e in records:
@@ -171,14 +194,20 @@ def _split(records: ExperimentSet) -> tuple[list[Experiment], list[Experiment]]:
     return fit, val
 
 
+def _setting(rate: float) -> float | None:
+    """The ``eta`` setting of a candidate rate [1/s]: None (no lag) for an infinite rate."""
+    return None if math.isinf(rate) else float(rate)
+
+
 def _validation_esr(
     est: Any,
-    eta: float,
+    eta: float | None,
     parts: tuple[list[Experiment], list[Experiment]],
     options: Mapping[str, Any],
     weights: Sequence[float] | None,
 ) -> float:
-    """Mean validation ESR of the family fitted with ``eta`` on the fit parts (inf on failure)."""
+    """Mean validation ESR of the family fitted with ``eta`` (None: no lag) on the fit parts
+    (inf on failure)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -218,12 +247,16 @@ def fit_with_lag(
     t0 = time.perf_counter()
     parts = _split(records)
     weights = options.get("record_weights")
+    # candidate rates [1/s]; an infinite rate is no lag (a candidate for a measured current)
     scores: dict[float, float] = {}
+    no_lag = source != "voltage"
 
     def trial(eta: float) -> None:
-        report("identifying the drive lag: candidate", len(scores) + 1, len(ETA_GRID) + 2)
-        scores[eta] = _validation_esr(est, eta, parts, options, weights)
+        report("identifying the lag: candidate", len(scores) + 1, len(ETA_GRID) + 2 + no_lag)
+        scores[eta] = _validation_esr(est, _setting(eta), parts, options, weights)
 
+    if no_lag:
+        trial(math.inf)
     k = START
     for eta in (ETA_GRID[k], ETA_GRID[k - 1], ETA_GRID[k + 1]):
         trial(eta)
@@ -245,15 +278,16 @@ def fit_with_lag(
             "eta", f"{est.kind}: no drive-lag candidate could be fitted on the inner split"
         )
     selection_s = time.perf_counter() - t0
-    model = dataclasses.replace(est, eta=chosen).fit(records, **options)
+    model = dataclasses.replace(est, eta=_setting(chosen)).fit(records, **options)
     prov = dict(model.provenance)
     prov["drive_lag"] = {
-        "eta": chosen,
+        "eta": _setting(chosen),
         "how": (
             f"chosen on an inner split of the training records (first {INNER_FRACTION:.0%} of "
-            "each fits, the rest validates; mean free-run ESR)"
+            "each fits, the rest validates; mean free-run ESR"
+            + ("; no lag (None) is a candidate for a measured current)" if no_lag else ")")
         ),
-        "candidates": [float(c) for c in scores],
+        "candidates": [_setting(c) for c in scores],
         "validation_esr": [float(v) for v in scores.values()],
     }
     prov["lag_selection_s"] = selection_s

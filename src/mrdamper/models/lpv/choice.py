@@ -46,6 +46,10 @@ trained up to 3 Hz and scored at 5 Hz 0.0178 -> 0.0163, the Quiroz leave-one-con
 records alone (``"held-out"``) miss the 5 Hz gain; the band's fold alone missed the full-length
 chirp (0.0188: its scores were within 5 % of one another).
 
+With ``eta="identify"`` on a measured current the candidates are fitted without a lag; the lag is
+then identified with the chosen settings held (:func:`mrdamper.models.lag.fit_with_lag`, where no
+lag is itself a candidate). For a voltage command every candidate identifies its own drive lag.
+
 On long campaigns (a part above :data:`CHOICE_THRESHOLD` samples) the candidates are fitted and
 scored on evenly spread 20 s windows of that part (:data:`CHOICE_BUDGET` samples in all;
 :func:`mrdamper.models._scale.plan_windows`); the chosen candidate is then fitted on every record.
@@ -67,6 +71,7 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
 from mrdamper.models.base import Choice
+from mrdamper.models.lag import settings_chosen_without_lag
 from mrdamper.models.envelope_folds import envelope_folds
 from mrdamper.models.levels import single_level
 from mrdamper.models.lpv import inputs as _inputs
@@ -376,8 +381,10 @@ def fit_choosing(
     best: tuple[float, float, float] | None = None
     first_error = ""
     cands = _candidates(est)
+    # a measured current's lag is identified after this choice, with its result held
+    held = {"eta": None} if settings_chosen_without_lag(est) else {}
     for k, (x_y, lam) in enumerate(cands, start=1):
-        cand = dataclasses.replace(est, stroke=x_y, blend=lam, max_nfev=nfev)
+        cand = dataclasses.replace(est, stroke=x_y, blend=lam, max_nfev=nfev, **held)
         report("hysteretic input: candidate", k - 1, len(cands))
         with warnings.catch_warnings(), section(f"hysteretic candidate {k} of {len(cands)}"):
             warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
