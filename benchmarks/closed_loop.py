@@ -37,6 +37,7 @@ from mrdamper.models.lag import lag_setting
 from mrdamper.models.lpv.estimator import outer_slope_choices
 from mrdamper.models.registry import get_estimator, known_kinds, takes_lag
 from mrdamper.rig.doe import table_ii
+from mrdamper.rig.doe_control import HIGHPASS
 from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
 
 
@@ -163,7 +164,10 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=20.0, help="road length [s]")
     ap.add_argument("--seed", type=int, default=0, help="road profile seed")
     ap.add_argument(
-        "--max-substeps", type=int, default=MAX_SUBSTEPS, help="finest plant step [steps per road sample]"
+        "--max-substeps",
+        type=int,
+        default=MAX_SUBSTEPS,
+        help="finest plant step [steps per road sample]",
     )
     ap.add_argument(
         "--extension",
@@ -201,6 +205,13 @@ def main() -> None:
         "default: the estimator's, 'auto')",
     )
     ap.add_argument(
+        "--highpass",
+        type=float,
+        default=HIGHPASS,
+        help="high-pass corner of the extension's replayed travel [Hz] (default: the "
+        "extension's, mrdamper.rig.doe_control.HIGHPASS)",
+    )
+    ap.add_argument(
         "--first",
         default="sp1",
         help="kind of the first model (fitted on Table II) whose loop gives the extension",
@@ -225,8 +236,11 @@ def main() -> None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 first = get_estimator(a.first, input=truth.input).fit(doe)
-            ext = list(control_extension(seed=1, scale=a.scale, damper=truth, model=first))
-            held_out = list(control_extension(seed=2, scale=a.scale, damper=truth, model=first))
+            extension = partial(
+                control_extension, scale=a.scale, damper=truth, model=first, highpass=a.highpass
+            )
+            ext = list(extension(seed=1))
+            held_out = list(extension(seed=2))
             rig_s = [sum(r.n for r in recs) * r0.dt for recs, r0 in ((doe, doe[0]), (ext, ext[0]))]
             print(f"{name}: rig time Table II {rig_s[0]:.0f} s + extension {rig_s[1]:.0f} s")
             doe = doe + ext

@@ -96,3 +96,43 @@ def test_rig_doe_extension_control_on_the_command_line(
         main([*args[:3], str(tmp_path / "x"), *args[4:], "--extension", "fast"])
     err = capsys.readouterr().err
     assert "--extension" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_higher_highpass_keeps_more_of_the_loops_velocity_within_the_stroke(damper) -> None:  # type: ignore[no-untyped-def]
+    from mrdamper.rig.doe import resolve_rig
+    from mrdamper.rig.doe_control import HIGHPASS, replay_loop_motion
+
+    rig = resolve_rig(None, _soft(damper), 1000.0)
+    t = np.arange(4000) / 1000.0
+    # a body mode (1.2 Hz, 40 mm: most of the stroke) and a wheel hop (10 Hz, 3 mm)
+    travel = 0.04 * np.sin(2 * np.pi * 1.2 * t) + 0.003 * np.sin(2 * np.pi * 10 * t)
+    current = np.zeros_like(t)
+
+    def replay(highpass: float) -> np.ndarray:
+        seeds = tuple(np.random.SeedSequence(3).spawn(3))
+        recs = replay_loop_motion(
+            rig,
+            travel,
+            current,
+            current_range=(0.0, 1.0),
+            seeds=seeds,  # type: ignore[arg-type]
+            names=("a", "b"),
+            metadata={},
+            seed_label=3,
+            highpass=highpass,
+        )
+        assert np.max(np.abs(recs[0].x)) <= 0.02 + 1e-9
+        return np.asarray(recs[0].v)
+
+    def wheel_hop(v: np.ndarray) -> float:  # the 10 Hz velocity amplitude [m/s]
+        mid = slice(1000, 3000)  # away from the fades
+        w = np.exp(-2j * np.pi * 10 * t[mid])
+        return float(2 * abs(np.mean(v[mid] * w)))
+
+    v1, v_default = replay(1.0), replay(HIGHPASS)
+    assert HIGHPASS > 1.0 and wheel_hop(v_default) > 1.5 * wheel_hop(v1)
+    assert wheel_hop(v_default) == pytest.approx(2 * np.pi * 10 * 0.003, rel=0.05)  # unscaled
+    for bad in (0.0, 500.0, float("nan")):
+        with pytest.raises(DataValidationError, match="highpass") as err:
+            replay(bad)
+        assert "\n" not in str(err.value)

@@ -28,7 +28,7 @@ from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 from mrdamper.rig.doe import current_range, record_seeds, resolve_rig
-from mrdamper.rig.doe_control import CONTROL_EXTENSION, ControlRow, replay_loop_motion
+from mrdamper.rig.doe_control import CONTROL_EXTENSION, HIGHPASS, ControlRow, replay_loop_motion
 from mrdamper.rig.virtual_rig import VirtualRig
 from mrdamper.signals.common import check_positive, child_seeds
 
@@ -69,6 +69,7 @@ def control_extension(
     model: Any = None,
     rows: tuple[ControlRow, ...] = CONTROL_EXTENSION,
     car: QuarterCar | None = None,
+    highpass: float = HIGHPASS,
 ) -> ExperimentSet:
     """Generate the control-oriented extension on the virtual rig (see the module docstring).
 
@@ -91,6 +92,9 @@ def control_extension(
         The loop runs (default :data:`~mrdamper.rig.doe_control.CONTROL_EXTENSION`).
     car : QuarterCar, optional
         The car of the loop runs (default :class:`~mrdamper.control.car.QuarterCar`).
+    highpass : float
+        High-pass corner of the replayed travel [Hz] (default
+        :data:`~mrdamper.rig.doe_control.HIGHPASS`).
 
     Returns
     -------
@@ -135,5 +139,6 @@ def control_extension(
             names=(f"ctrl{2 * k + 1:02d}", f"ctrl{2 * k + 2:02d}"),
             metadata=meta,
             seed_label=s,
+            highpass=highpass,
         )
     return ExperimentSet(out, name=f"control_extension_seed{seed}")
