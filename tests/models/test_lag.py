@@ -195,19 +195,3 @@ def test_lpv_settings_chosen_without_lag_for_a_measured_current_only() -> None:
     assert settings_chosen_without_lag(get_estimator("lpv", eta="identify"))
     assert not settings_chosen_without_lag(get_estimator("lpv", input="voltage"))
     assert not settings_chosen_without_lag(get_estimator("lpv", eta=100.0))
-
-
-def test_a_lag_is_kept_only_when_the_parts_show_it_consistently() -> None:
-    from mrdamper.models.lag import lag_is_shown
-
-    no_lag = np.array([0.020, 0.030, 0.025, 0.022])
-    kept, how = lag_is_shown(no_lag, no_lag - np.array([0.004, 0.005, 0.004, 0.006]))
-    assert kept and "4 validation parts" in how
-    # a lower mean carried by one part, the others worse: within the scatter, not kept
-    kept, _ = lag_is_shown(no_lag, no_lag - np.array([0.012, -0.002, -0.001, -0.002]))
-    assert not kept
-    # fewer than three parts: the means decide
-    assert lag_is_shown(no_lag[:2], no_lag[:2] - 0.001)[0]
-    assert not lag_is_shown(no_lag[:2], no_lag[:2] + 0.001)[0]
-    # no lag failed on a part: the lag is kept if it scored everywhere
-    assert lag_is_shown(np.array([np.inf, 0.02, 0.02]), np.array([0.03, 0.02, 0.02]))[0]

@@ -24,10 +24,9 @@ build-up of the field (magnetic circuit, eddy currents, the fluid's response), a
 rig's reference dampers have such a lag (``eta = 100 1/s``). A model meant for a switching
 controller needs it (``docs/results.md``, "Every gain of the sweep"); it is not the default for a
 measured current, whose tables were measured without it. For a measured current *no lag* is one
-more candidate, scored on the same split, and the best lag is kept only where the records show
-it: it must lower the validation ESR consistently over the validation parts
-(:func:`lag_is_shown`). Records whose current switches while the damper moves fast show it; on
-the virtual rig's Table II alone the LPV model's validation error is nearly flat in ``eta``. A family that
+more candidate, scored on the same split, so the lag is kept only where the records show it
+(records whose current switches while the damper moves fast do; on the virtual rig's Table II
+alone the LPV model's validation error is flat in ``eta`` and no lag is kept). A family that
 leaves settings open (the LPV hysteretic input's stroke and blend) chooses them without the lag
 first, and the lag's candidates are then fitted with those settings held
 (:func:`settings_chosen_without_lag`).
@@ -61,11 +60,9 @@ __all__ = [
     "IDENTIFY",
     "INNER_FRACTION",
     "LAG_SETTINGS",
-    "SHOWN_BY",
     "check_lag",
     "fit_with_lag",
     "lag_applies",
-    "lag_is_shown",
     "lag_setting",
     "resolved",
     "settings_chosen_without_lag",
@@ -84,9 +81,6 @@ ETA_GRID: tuple[float, ...] = (25.0, 50.0, 100.0, 200.0, 400.0, 800.0, 1600.0)
 START = 3
 #: Share of each training record (in time) that fits the candidates; the rest validates [-].
 INNER_FRACTION = 0.8
-#: A measured current's lag is kept when it lowers the validation ESR by more than this many
-#: standard errors of the paired differences over the validation parts (:func:`lag_is_shown`).
-SHOWN_BY = 2.0
 
 
 def check_lag(value: Any) -> None:
@@ -210,59 +204,20 @@ def _validation_esr(
     eta: float | None,
     parts: tuple[list[Experiment], list[Experiment]],
     options: Mapping[str, Any],
-) -> np.ndarray:
-    """Validation ESR of each validation part, the family fitted with ``eta`` (None: no lag) on
-    the fit parts (inf on failure)."""
+    weights: Sequence[float] | None,
+) -> float:
+    """Mean validation ESR of the family fitted with ``eta`` (None: no lag) on the fit parts
+    (inf on failure)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = dataclasses.replace(est, eta=eta).fit(parts[0], **options)
             model = model.with_range_policy("clip")
-            esr = np.array([model.score(e).esr for e in parts[1]], dtype=float)
+            esr = [model.score(e).esr for e in parts[1]]
     except (ValueError, RuntimeError, ArithmeticError):
-        return np.full(len(parts[1]), math.inf)
-    return np.where(np.isfinite(esr), esr, math.inf)
-
-
-def _mean(esr: np.ndarray, weights: Sequence[float] | None) -> float:
-    """Mean validation ESR (weighted by ``record_weights``; inf when a part failed)."""
-    if not np.all(np.isfinite(esr)):
         return math.inf
-    return float(np.average(esr, weights=weights))
-
-
-def lag_is_shown(no_lag: np.ndarray, lagged: np.ndarray) -> tuple[bool, str]:
-    """Whether the records show a lag: the lag lowers the validation ESR consistently over the
-    validation parts.
-
-    The paired differences ``no_lag - lagged`` (one per validation part) must have a mean above
-    :data:`SHOWN_BY` standard errors; with fewer than three parts the means decide. A lag within
-    the scatter of the parts is not kept (on the virtual rig's Table II alone the LPV model's
-    validation error is flat in ``eta``).
-
-    Parameters
-    ----------
-    no_lag, lagged : ndarray
-        Validation ESR of each part without a lag and with the best lag [-].
-
-    Returns
-    -------
-    shown : bool
-        True when the lag is kept.
-    how : str
-        The test's figures, for the provenance.
-    """
-    d = np.asarray(no_lag, dtype=float) - np.asarray(lagged, dtype=float)
-    if not np.all(np.isfinite(d)):
-        return bool(np.all(np.isfinite(lagged))), "no lag could not be scored on every part"
-    mean = float(d.mean())
-    if d.size < 3:
-        return mean > 0, f"mean ESR lowered by {mean:.3g} ({d.size} validation parts)"
-    se = float(d.std(ddof=1) / math.sqrt(d.size))
-    return mean > SHOWN_BY * se, (
-        f"ESR lowered by {mean:.3g} on average over {d.size} validation parts, standard error "
-        f"{se:.2g} (kept when above {SHOWN_BY:g} standard errors)"
-    )
+    value = float(np.average(esr, weights=weights))
+    return value if math.isfinite(value) else math.inf
 
 
 def fit_with_lag(
@@ -294,13 +249,11 @@ def fit_with_lag(
     weights = options.get("record_weights")
     # candidate rates [1/s]; an infinite rate is no lag (a candidate for a measured current)
     scores: dict[float, float] = {}
-    per_part: dict[float, np.ndarray] = {}
     no_lag = source != "voltage"
 
     def trial(eta: float) -> None:
         report("identifying the lag: candidate", len(scores) + 1, len(ETA_GRID) + 2 + no_lag)
-        per_part[eta] = _validation_esr(est, _setting(eta), parts, options)
-        scores[eta] = _mean(per_part[eta], weights)
+        scores[eta] = _validation_esr(est, _setting(eta), parts, options, weights)
 
     if no_lag:
         trial(math.inf)
@@ -324,10 +277,6 @@ def fit_with_lag(
         raise DataValidationError(
             "eta", f"{est.kind}: no drive-lag candidate could be fitted on the inner split"
         )
-    shown = ""
-    if no_lag and not math.isinf(chosen):
-        kept, shown = lag_is_shown(per_part[math.inf], per_part[chosen])
-        chosen = chosen if kept else math.inf
     selection_s = time.perf_counter() - t0
     model = dataclasses.replace(est, eta=_setting(chosen)).fit(records, **options)
     prov = dict(model.provenance)
@@ -341,8 +290,6 @@ def fit_with_lag(
         "candidates": [_setting(c) for c in scores],
         "validation_esr": [float(v) for v in scores.values()],
     }
-    if shown:
-        prov["drive_lag"]["against_no_lag"] = shown
     prov["lag_selection_s"] = selection_s
     prov["elapsed_s"] = float(prov.get("elapsed_s", 0.0)) + selection_s
     return dataclasses.replace(model, provenance=prov)
