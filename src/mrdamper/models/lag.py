@@ -24,9 +24,8 @@ build-up of the field (magnetic circuit, eddy currents, the fluid's response), a
 rig's reference dampers have such a lag (``eta = 100 1/s``). A model meant for a switching
 controller needs it (``docs/results.md``, "Every gain of the sweep"); it is not the default for a
 measured current, whose tables were measured without it. For a measured current *no lag* is one
-more candidate, scored on the same split, so the lag is kept only where the records show it
-(records whose current switches while the damper moves fast do; on the virtual rig's Table II
-alone the LPV model's validation error is flat in ``eta`` and no lag is kept). A family that
+more candidate, scored on the same split: a lag is kept only where it predicts the validation
+parts better than none. A family that
 leaves settings open (the LPV hysteretic input's stroke and blend) chooses them without the lag
 first, and the lag's candidates are then fitted with those settings held
 (:func:`settings_chosen_without_lag`).
