@@ -46,9 +46,9 @@ __all__ = [
 ]
 
 #: High-pass corner of the replayed travel [Hz]. At 1 Hz (the corner before) the body motion kept
-#: most of the stroke, so the replays were scaled to about half the loop's velocities and a
-#: model trained on them gave the soft damper 6-8 % too much force in the loop; at 2.5 Hz the
-#: wheel-hop band keeps its velocity (``docs/results.md``, "Full-length DoE").
+#: most of the stroke, the stroke limit scaled the rougher rows' replays down (0.11-0.17 m/s RMS
+#: velocity against 0.20-0.24 m/s at 2.5 Hz), and an LPV model trained on them gave the soft
+#: damper 6-8 % too much force in the loop (``docs/results.md``, "Full-length DoE").
 HIGHPASS = 2.5
 #: APRBS minimum hold of the current [s].
 HOLD = 0.05
