@@ -71,8 +71,8 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
 from mrdamper.models.base import Choice
-from mrdamper.models.lag import settings_chosen_without_lag
 from mrdamper.models.envelope_folds import envelope_folds
+from mrdamper.models.lag import settings_chosen_without_lag
 from mrdamper.models.levels import single_level
 from mrdamper.models.lpv import inputs as _inputs
 from mrdamper.progress import report, section
