@@ -30,7 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 from mrdamper.control.doe_extension import control_extension
-from mrdamper.control.fidelity import MAX_SUBSTEPS, closed_loop_fidelity
+from mrdamper.control.fidelity import MAX_SUBSTEPS, closed_loop_fidelity, input_unit
 from mrdamper.control.fronts import gain_fronts
 from mrdamper.errors import MrDamperError
 from mrdamper.models.lag import lag_setting
@@ -58,11 +58,12 @@ def _write(out: Path, name: str, tables: list, runs: list, failed: list) -> None
 SUMMARY_METRICS = ("a_w", "rms_acc", "rms_tyre_load", "rms_travel")
 
 
-def controller_summary(table: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
+def controller_summary(table: pd.DataFrame, runs: pd.DataFrame, unit: str = "A") -> pd.DataFrame:
     """Per kind and controller: the worst |error| [%] over the roads of ``a_w`` / RMS
     acceleration / RMS tyre load / RMS travel (class C alone in brackets), the worst RMS
-    tracking and mean-current errors, and the runs the halving check refused or that diverged,
-    as ``docs/results.md`` tabulates them."""
+    tracking and mean-current errors (with the worst mean-input gap in milli-``unit``, the
+    damper's input unit), and the runs the halving check refused or that diverged, as
+    ``docs/results.md`` tabulates them."""
     t = table.assign(abs_err=table["error_pct"].abs())
     refused = runs[runs["refused"].notna()] if "refused" in runs else runs.iloc[:0]
     rows = []
@@ -80,7 +81,7 @@ def controller_summary(table: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
         ):
             text += (
                 f"; tracking {worst.get('rms_tracking', float('nan')):.1f}, "
-                f"current {worst.get('mean_current', float('nan')):.1f}{_current_gap(d)}"
+                f"current {worst.get('mean_current', float('nan')):.1f}{_current_gap(d, unit)}"
             )
         n_ref = int(((refused["kind"] == kind) & (refused["controller"] == ctrl)).sum())
         if n_ref:
@@ -89,7 +90,7 @@ def controller_summary(table: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _current_gap(rows: pd.DataFrame) -> str:
+def _current_gap(rows: pd.DataFrame, unit: str) -> str:
     """Where the table has the values: the mean-current gap of the worst row in mA, against the
     achieved mean (a relative error on a mean of a few mA says little)."""
     cur = rows[(rows["metric"] == "mean_current") & rows["abs_err"].notna()]
@@ -97,7 +98,7 @@ def _current_gap(rows: pd.DataFrame) -> str:
         return ""
     at = cur.loc[cur["abs_err"].idxmax()]
     gap = 1e3 * abs(at["predicted"] - at["achieved"])
-    return f" ({gap:.1f} of {1e3 * at['achieved']:.1f} mA)"
+    return f" ({gap:.1f} of {1e3 * at['achieved']:.1f} m{unit})"
 
 
 #: What :func:`front_summary` prints.
@@ -316,7 +317,7 @@ def main() -> None:
         )
         print(f"\n{name}: worst |predicted - achieved| / achieved [%] over controllers and roads")
         print(worst.to_string())
-        summary = controller_summary(table, pd.concat(runs, ignore_index=True))
+        summary = controller_summary(table, pd.concat(runs, ignore_index=True), input_unit(truth))
         summary.to_csv(a.out / f"closed_loop_summary_{name}.csv", index=False)
         print(
             f"\n{name}: per controller, worst over the roads of a_w / RMS acc. / tyre load / "

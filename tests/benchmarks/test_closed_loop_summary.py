@@ -63,6 +63,8 @@ def test_summary_takes_the_worst_road_class_c_apart_and_counts_refused_runs() ->
     table["predicted"] = table["achieved"] * (1 + table["error_pct"] / 100)
     out = bench.controller_summary(table, runs).set_index("controller")
     assert "; tracking 22.5, current 7.5 (1.0 of 13.2 mA);" in out.loc["skyhook", "worst [%]"]
+    volts = bench.controller_summary(table, runs, "V").set_index("controller")
+    assert "current 7.5 (1.0 of 13.2 mV)" in volts.loc["skyhook", "worst [%]"]
 
 
 def test_front_summary_takes_the_worst_gain_and_the_chosen_one() -> None:
