@@ -25,10 +25,9 @@ rig's reference dampers have such a lag (``eta = 100 1/s``). A model meant for a
 controller needs it (``docs/results.md``, "Every gain of the sweep"); it is not the default for a
 measured current, whose tables were measured without it. For a measured current *no lag* is one
 more candidate, scored on the same split: a lag is kept only where it predicts the validation
-parts better than none. A family that
-leaves settings open (the LPV hysteretic input's stroke and blend) chooses them without the lag
-first, and the lag's candidates are then fitted with those settings held
-(:func:`settings_chosen_without_lag`).
+parts better than none. A family that leaves settings open (the LPV hysteretic input's stroke
+and blend) chooses them without the lag first, and the lag's candidates are then fitted with
+those settings held (:func:`settings_chosen_without_lag`).
 
 The choice, every candidate's validation ESR and the time it took are in the model's provenance
 (``drive_lag``). The Spencer family identifies its own filter rate with its other parameters
