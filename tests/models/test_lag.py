@@ -195,3 +195,27 @@ def test_lpv_settings_chosen_without_lag_for_a_measured_current_only() -> None:
     assert settings_chosen_without_lag(get_estimator("lpv", eta="identify"))
     assert not settings_chosen_without_lag(get_estimator("lpv", input="voltage"))
     assert not settings_chosen_without_lag(get_estimator("lpv", eta=100.0))
+
+
+def test_lpv_identify_on_a_current_runs_one_lag_search_after_the_choice(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import mrdamper.models.lag as lag_module
+
+    calls: list[object] = []
+    search = lag_module.fit_with_lag
+
+    def counted(est, data, options):  # type: ignore[no-untyped-def]
+        calls.append((est.stroke, est.blend))
+        return search(est, data, options)
+
+    monkeypatch.setattr(lag_module, "fit_with_lag", counted)
+    from mrdamper.rig.doe import table_ii
+
+    train = list(table_ii(seed=0, scale=0.1, experiments=[2]))[:6]  # APRBS current, rig damper
+    model = get_estimator("lpv", eta="identify", choose_on="training", max_nfev=5).fit(train)
+    # the six stroke / blend candidates were fitted without the lag; the chosen pair searched it
+    assert len(model.provenance["hysteretic_choice"]) > 1
+    assert calls == [(model.stroke, model.blend)]
+    lag = model.provenance["drive_lag"]
+    assert lag["candidates"][0] is None and lag["eta"] == model.eta
