@@ -91,8 +91,8 @@ def controller_summary(table: pd.DataFrame, runs: pd.DataFrame, unit: str = "A")
 
 
 def _current_gap(rows: pd.DataFrame, unit: str) -> str:
-    """Where the table has the values: the mean-current gap of the worst row in mA, against the
-    achieved mean (a relative error on a mean of a few mA says little)."""
+    """Where the table has the values: the mean-input gap of the worst row in milli-``unit``,
+    against the achieved mean (a relative error on a mean of a few mA says little)."""
     cur = rows[(rows["metric"] == "mean_current") & rows["abs_err"].notna()]
     if cur.empty or not {"predicted", "achieved"} <= set(cur.columns):
         return ""

@@ -245,9 +245,10 @@ def fit_with_lag(
     t0 = time.perf_counter()
     parts = _split(records)
     weights = options.get("record_weights")
-    # candidate rates [1/s]; an infinite rate is no lag (a candidate for a measured current)
+    # candidate rates [1/s]; an infinite rate is no lag, a candidate for a measured current
+    # (the case whose open settings were chosen without the lag)
     scores: dict[float, float] = {}
-    no_lag = source != "voltage"
+    no_lag = settings_chosen_without_lag(est)
 
     def trial(eta: float) -> None:
         report("identifying the lag: candidate", len(scores) + 1, len(ETA_GRID) + 2 + no_lag)
