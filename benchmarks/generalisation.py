@@ -66,6 +66,7 @@ import numpy as np
 import pandas as pd
 import scipy.signal as sps
 
+from mrdamper.cli.models import parse_settings
 from mrdamper.data import ExperimentSet
 from mrdamper.data.readers import read_csv, read_directory
 from mrdamper.models import available_models, get_estimator
@@ -518,7 +519,15 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         help="lag setting of every kind that has one ('auto', 'identify' or a rate [1/s]; "
         "default: the estimator's)",
     )
+    ap.add_argument(
+        "--lpv-set",
+        action="append",
+        default=None,
+        metavar="KEY=VALUE",
+        help="any other LPV setting, e.g. n_m=5 (repeatable; values read as JSON)",
+    )
     args = ap.parse_args(argv)
+    lpv_extra = parse_settings(args.lpv_set)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
     selected: dict[str, str | None] = {}
@@ -529,6 +538,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
             ("choose_on", args.lpv_choose_on),
             ("model_fs", args.lpv_model_fs),
             ("outer_slopes", args.lpv_outer_slopes),
+            *lpv_extra.items(),
         ):
             if value is not None:
                 sc = dataclasses.replace(sc, settings=_with_lpv(sc.settings, setting, value))

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mrdamper.errors import DataValidationError
 from tests.conftest import load_benchmark
 
 
@@ -53,3 +54,21 @@ def test_select_column_compares_the_recommendation_with_the_best_kind() -> None:
     # against the best registered kind (lpv-u is a variant select does not consider)
     assert list(tab["select/best"]) == pytest.approx([2.0, 1.0])
     assert "select" not in bench.table(rows).columns
+
+
+def test_lpv_set_needs_key_value() -> None:
+    bench = load_benchmark("generalisation")
+    with pytest.raises(DataValidationError, match="KEY=VALUE"):
+        bench.main(["--lpv-set", "n_m"])
+
+
+@pytest.mark.realdata
+def test_lpv_set_reaches_the_lpv_estimator(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bench = load_benchmark("generalisation")
+    args = ["--quick", "--models", "lpv", "--scenarios", "quiroz-freq", "--lpv-set", "n_mm=2"]
+    tab = bench.main(args)
+    out = capsys.readouterr().out
+    assert "Failures:" in out and "n_mm" in out  # the misspelt setting was given to the LPV fit
+    assert tab["lpv"].isna().all()
