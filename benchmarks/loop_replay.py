@@ -1,18 +1,21 @@
 """Why a model's loop differs from the true damper's: the loop's motion replayed open loop.
 
-The default LPV model is fitted on the virtual rig's Table II DoE (``quiroz2022``). The quarter
-car runs passive soft and passive hard with the true damper as the plant (ISO 8608 class C at
-20 m/s, 20 s, the default car); the damper motion of each run is then replayed open loop
-through the model at the run's constant current, and the model's force is compared with the true
-damper's, per frequency band (Welch cross-spectra against the velocity: the magnitude ``|F/v|``
-[N s/m] and the phase of the force to the velocity [deg]) and per velocity band (mean ``|F|``
-[N]). Last, the model's frozen transfer function at three currents: gain (relative to its DC
-gain) and phase at 1, 5, 10 and 20 Hz.
+The default LPV model is fitted on the virtual rig's Table II DoE (``quiroz2022``), or with
+``--extension`` on Table II and the control extension (stroke and blend chosen on a held-out
+extension, as ``closed_loop.py --extension`` does). The quarter car runs each controller (passive
+soft and passive hard by default) with the true damper as the plant (ISO 8608 class C at 20 m/s,
+20 s, the default car); the damper motion of each run is then replayed open loop through the
+model with the run's current, and the model's force is compared with the true damper's, per
+frequency band (Welch cross-spectra against the velocity: the magnitude ``|F/v|`` [N s/m] and the
+phase of the force to the velocity [deg]) and per velocity band (mean ``|F|`` [N]). Last, the
+model's frozen transfer function at three currents: gain (relative to its DC gain) and phase at
+1, 5, 10 and 20 Hz.
 
 Run::
 
     python benchmarks/loop_replay.py                 # full-length DoE
     python benchmarks/loop_replay.py --scale 0.1     # the tenth-length DoE of the tables
+    python benchmarks/loop_replay.py --extension --controllers soft,skyhook
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import pandas as pd
 import scipy.signal as sps
 
 from mrdamper.control.closed_loop import simulate_closed_loop
+from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.quarter_car import iso_road
 from mrdamper.data import Experiment
 from mrdamper.models.registry import get_estimator
@@ -81,24 +85,38 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     ap.add_argument("--scale", type=float, default=1.0, help="DoE duration factor [-]")
     ap.add_argument("--seed", type=int, default=0, help="road profile seed")
+    ap.add_argument(
+        "--extension", action="store_true", help="train on Table II and the control extension"
+    )
+    ap.add_argument(
+        "--controllers",
+        default="soft,hard",
+        help="comma-separated controllers (default: soft,hard)",
+    )
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     truth = reference_damper("quiroz2022")
     doe = list(table_ii(seed=0, scale=args.scale, damper=truth))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        model = get_estimator("lpv", input=truth.input).fit(doe)
+        if args.extension:
+            first = get_estimator("sp1", input=truth.input).fit(doe)
+            ext = [
+                control_extension(seed=s, scale=args.scale, damper=truth, model=first)
+                for s in (1, 2)
+            ]
+            est = get_estimator("lpv", input=truth.input, choose_on="held-out")
+            model = est.fit(doe + list(ext[0]), choice_records=list(ext[1]))
+        else:
+            model = get_estimator("lpv", input=truth.input).fit(doe)
     print(f"lpv: {model.provenance.get('hysteretic_note', '')}")
     road = iso_road("C", speed=20.0, duration=20.0, fs=1000.0, seed=args.seed)
     rows = []
-    for controller in ("soft", "hard"):
+    for controller in args.controllers.split(","):
         r = simulate_closed_loop(model, road, controller, plant=truth)
         t = np.arange(r.t.size) / r.fs
         x, v = r.z_s - r.z_u, r.v_s - r.v_u
-        current = float(np.median(r.i))
-        rec = Experiment(
-            t=t, x=x - x.mean(), v=v, F=r.F, i=np.full(t.size, current), name=controller
-        )
+        rec = Experiment(t=t, x=x - x.mean(), v=v, F=r.F, i=r.i, name=controller)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             F_model = np.asarray(model.with_range_policy("clip").predict(rec)) - model.offset

@@ -56,3 +56,13 @@ def test_the_summary_names_the_worst_other_cell() -> None:
     assert out["skyhook mean current [%]"] == -7.5
     assert out["worst other [%]"] == 3.0
     assert out["where"] == "['hard', 'rms_travel']"
+
+
+def test_the_stiffened_car_adds_to_the_spring_only() -> None:
+    bench = load_benchmark("skyhook_current")
+    from mrdamper.control.car import QuarterCar
+
+    car = QuarterCar()
+    stiff = bench.stiffened(car, 693.0)
+    assert stiff.k_s == car.k_s + 693.0
+    assert (stiff.m_s, stiff.m_u, stiff.k_t) == (car.m_s, car.m_u, car.k_t)
