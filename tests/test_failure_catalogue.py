@@ -432,6 +432,28 @@ def _running(pid: int) -> bool:
     return state != "Z"
 
 
+def test_a_stopped_pool_leaves_no_worker_and_no_management_thread() -> None:
+    """``stop_pool`` returns with the workers and the pool's management thread ended, so the
+    interpreter's exit hook cannot race the thread closing its wakeup pipe (a traceback after
+    ``terminated`` on Python 3.11)."""
+    import concurrent.futures as cf
+
+    from mrdamper._io.processes import init_worker, stop_pool
+
+    pool = cf.ProcessPoolExecutor(2, initializer=init_worker, initargs=(os.getpid(),))
+    futures = [pool.submit(time.sleep, 60) for _ in range(4)]
+    deadline = time.monotonic() + 30
+    while sum(f.running() for f in futures) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    workers = list(pool._processes.values())
+    manager = pool._executor_manager_thread
+    assert len(workers) == 2 and manager is not None and manager.is_alive()
+    stop_pool(pool)
+    assert not any(p.is_alive() for p in workers)
+    assert not manager.is_alive()
+    assert all(f.cancelled() or f.done() for f in futures)
+
+
 SLOW_STUDY = """
 import sys, time
 from mrdamper.models.semiphenomenological import _SPEstimator

@@ -50,11 +50,20 @@ def init_worker(parent: int | None = None) -> None:
 
 def stop_pool(pool: Any) -> None:
     """Stop a :class:`concurrent.futures.ProcessPoolExecutor` now: drop the queued tasks and end
-    the running ones instead of waiting for them (after an interruption)."""
+    the running ones instead of waiting for them (after an interruption).
+
+    Returns once the pool's management thread has ended too (at most 5 s): on Python 3.11 the
+    interpreter's exit hook wakes that thread through a pipe the thread closes when its workers
+    are gone, without a lock, and a thread still closing it then prints a traceback
+    (``OSError: [Errno 9] Bad file descriptor``) after the command's last line.
+    """
     procs = list((getattr(pool, "_processes", None) or {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for p in procs:
         if p.is_alive():
             p.terminate()
     for p in procs:
         p.join(timeout=5)
+    if manager is not None:
+        manager.join(timeout=5)
