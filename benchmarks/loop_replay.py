@@ -35,6 +35,7 @@ from mrdamper.control.quarter_car import iso_road
 from mrdamper.data import Experiment
 from mrdamper.models.registry import get_estimator
 from mrdamper.rig.doe import table_ii
+from mrdamper.rig.doe_control import HIGHPASS
 from mrdamper.rig.reference import reference_damper
 
 #: Frequency bands [Hz] of the cross-spectral comparison.
@@ -89,6 +90,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         "--extension", action="store_true", help="train on Table II and the control extension"
     )
     ap.add_argument(
+        "--highpass",
+        type=float,
+        default=HIGHPASS,
+        help="high-pass corner of the extension's replayed travel [Hz] (default: the extension's)",
+    )
+    ap.add_argument(
         "--controllers",
         default="soft,hard",
         help="comma-separated controllers (default: soft,hard)",
@@ -102,7 +109,9 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         if args.extension:
             first = get_estimator("sp1", input=truth.input).fit(doe)
             ext = [
-                control_extension(seed=s, scale=args.scale, damper=truth, model=first)
+                control_extension(
+                    seed=s, scale=args.scale, damper=truth, model=first, highpass=args.highpass
+                )
                 for s in (1, 2)
             ]
             est = get_estimator("lpv", input=truth.input, choose_on="held-out")
