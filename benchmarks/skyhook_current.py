@@ -21,6 +21,7 @@ Run::
 
     python benchmarks/skyhook_current.py                       # full length, every variant
     python benchmarks/skyhook_current.py --variants default    # the decomposition only
+    python benchmarks/skyhook_current.py --variants default --stiffness-seeds 0,1,2
 """
 
 from __future__ import annotations
@@ -38,8 +39,8 @@ import pandas as pd
 from mrdamper.control.car import QuarterCar
 from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.doe_extension import control_extension
-from mrdamper.control.fidelity import closed_loop_fidelity
-from mrdamper.control.quarter_car import iso_road
+from mrdamper.control.fidelity import closed_loop_fidelity, loop_metrics
+from mrdamper.control.quarter_car import CONTROLLERS, iso_road
 from mrdamper.models.registry import get_estimator
 from mrdamper.rig.doe import table_ii
 from mrdamper.rig.reference import reference_damper
@@ -86,6 +87,55 @@ def stiffened(car: QuarterCar, stiffness: float) -> QuarterCar:
     return dataclasses.replace(car, k_s=car.k_s + stiffness)
 
 
+def stiffness_table(
+    model: Any,
+    truth: Any,
+    stiffness: float,
+    seeds: list[int],
+    duration: float = 20.0,
+    substeps: int = 32,
+) -> pd.DataFrame:
+    """Every controller's metrics with ``model`` as the damper, in the default car and in a car
+    stiffer by ``stiffness`` [N/m], against ``truth`` as the damper in the default car.
+
+    One row per seed, controller and metric (:func:`~mrdamper.control.fidelity.loop_metrics`):
+    ``achieved``, ``error_pct`` (default car) and ``error_pct_stiffened`` [%]. ISO 8608 class C
+    at 20 m/s; ``substeps`` plant steps per road sample (no halving check).
+    """
+    rows = []
+    for seed in seeds:
+        road = iso_road("C", speed=20.0, duration=duration, fs=1000.0, seed=seed)
+        for controller in CONTROLLERS:
+            runs = [
+                loop_metrics(
+                    simulate_closed_loop(
+                        model, road, controller, car=car, plant=plant, substeps=substeps
+                    )
+                )
+                for plant, car in (
+                    (truth, QuarterCar()),
+                    (model, QuarterCar()),
+                    (model, stiffened(QuarterCar(), stiffness)),
+                )
+            ]
+            for metric, achieved in runs[0].items():
+                err = [
+                    100.0 * (r[metric] - achieved) / achieved if achieved else np.nan
+                    for r in runs[1:]
+                ]
+                rows.append(
+                    {
+                        "seed": seed,
+                        "controller": controller,
+                        "metric": metric,
+                        "achieved": achieved,
+                        "error_pct": err[0],
+                        "error_pct_stiffened": err[1],
+                    }
+                )
+    return pd.DataFrame(rows)
+
+
 def summary(table: pd.DataFrame) -> dict[str, float]:
     """Skyhook's mean-current error and the worst |error| [%] of everything else."""
     sky = (table.controller == "skyhook") & (table.metric == "mean_current")
@@ -105,6 +155,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         "--variants",
         default=",".join(VARIANTS),
         help=f"comma-separated variants of the fit (default: all of {', '.join(VARIANTS)})",
+    )
+    ap.add_argument(
+        "--stiffness-seeds",
+        default="",
+        help="comma-separated road seeds of the stiffened-car table over every controller "
+        "(first variant's model; default: none)",
     )
     args = ap.parse_args(argv)
     names = args.variants.split(",")
@@ -157,6 +213,23 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                     f"{name}, skyhook with the {plant_name} as plant: "
                     + ", ".join(f"{k} {v:.4g}" for k, v in seen.items())
                 )
+            if args.stiffness_seeds:
+                seeds = [int(s) for s in args.stiffness_seeds.split(",")]
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    stiff = stiffness_table(model, truth, k1, seeds)
+                worst = stiff.assign(
+                    default_car=stiff.error_pct.abs(), stiffened_car=stiff.error_pct_stiffened.abs()
+                ).pivot_table(
+                    index="controller",
+                    columns="metric",
+                    values=["default_car", "stiffened_car"],
+                    aggfunc="max",
+                )
+                print(
+                    f"worst |error| [%] over seeds {seeds}, model in the default / stiffened car:"
+                )
+                print(worst.round(1).to_string())
         rows.append({"variant": name, **summary(table), "fit+loop [s]": time.perf_counter() - t1})
         print(pd.DataFrame(rows[-1:]).to_string(index=False, float_format="{:.2f}".format))
     out = pd.DataFrame(rows)

@@ -66,3 +66,18 @@ def test_the_stiffened_car_adds_to_the_spring_only() -> None:
     stiff = bench.stiffened(car, 693.0)
     assert stiff.k_s == car.k_s + 693.0
     assert (stiff.m_s, stiff.m_u, stiff.k_t) == (car.m_s, car.m_u, car.k_t)
+
+
+def test_the_stiffness_table_pairs_each_run_with_the_plants() -> None:
+    """The true damper as its own model: the default car's errors are zero, and a stiffer car
+    moves them (the table compares the right runs)."""
+    bench = load_benchmark("skyhook_current")
+    from mrdamper.rig.reference import reference_damper
+
+    truth = reference_damper("quiroz2022")
+    table = bench.stiffness_table(truth, truth, 2000.0, [0], duration=2.0, substeps=8)
+    assert set(table.controller) == {"soft", "hard", "skyhook", "groundhook", "hybrid"}
+    errors = table.error_pct.dropna()
+    assert len(errors) >= 5 * 5 and np.all(errors == 0.0)
+    stiff = table[table.metric == "rms_travel"].error_pct_stiffened
+    assert np.all(stiff < 0.0)  # a stiffer spring: less travel on every controller
