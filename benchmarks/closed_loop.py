@@ -26,6 +26,7 @@ import time
 import warnings
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -52,6 +53,22 @@ def _write(out: Path, name: str, tables: list, runs: list, failed: list) -> None
     pd.DataFrame(failed, columns=["kind", "reason"]).to_csv(
         out / f"closed_loop_failed_{name}.csv", index=False
     )
+
+
+def training_records(
+    truth: Any, scale: float, *, highpass: float = HIGHPASS, first: str = "sp1"
+) -> tuple[list, list, list]:
+    """Table II on ``truth`` at ``scale`` and the control extension: ``(table_ii, extension,
+    held_out)``, the extension (seed 1) replaying the loops of a ``first`` model fitted on Table II
+    and the held-out extension (seed 2) on which the LPV model's stroke and blend are chosen."""
+    doe = list(table_ii(seed=0, scale=scale, damper=truth))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = get_estimator(first, input=truth.input).fit(doe)
+    extension = partial(
+        control_extension, scale=scale, damper=truth, model=model, highpass=highpass
+    )
+    return doe, list(extension(seed=1)), list(extension(seed=2))
 
 
 #: The four loop metrics of the per-controller summary, in its order.
@@ -231,17 +248,13 @@ def main() -> None:
     for name in a.dampers.split(","):
         truth = reference_damper(name)
         t0 = time.perf_counter()
-        doe = list(table_ii(seed=0, scale=a.scale, damper=truth))
         held_out: list = []
-        if a.extension:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                first = get_estimator(a.first, input=truth.input).fit(doe)
-            extension = partial(
-                control_extension, scale=a.scale, damper=truth, model=first, highpass=a.highpass
+        if not a.extension:
+            doe = list(table_ii(seed=0, scale=a.scale, damper=truth))
+        else:
+            doe, ext, held_out = training_records(
+                truth, a.scale, highpass=a.highpass, first=a.first
             )
-            ext = list(extension(seed=1))
-            held_out = list(extension(seed=2))
             rig_s = [sum(r.n for r in recs) * r0.dt for recs, r0 in ((doe, doe[0]), (ext, ext[0]))]
             print(f"{name}: rig time Table II {rig_s[0]:.0f} s + extension {rig_s[1]:.0f} s")
             doe = doe + ext

@@ -21,16 +21,20 @@ Run::
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 import scipy.signal as sps
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import closed_loop as CL
+
 from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.quarter_car import iso_road
 from mrdamper.data import Experiment
 from mrdamper.models.registry import get_estimator
@@ -103,20 +107,14 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     truth = reference_damper("quiroz2022")
-    doe = list(table_ii(seed=0, scale=args.scale, damper=truth))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if args.extension:
-            first = get_estimator("sp1", input=truth.input).fit(doe)
-            ext = [
-                control_extension(
-                    seed=s, scale=args.scale, damper=truth, model=first, highpass=args.highpass
-                )
-                for s in (1, 2)
-            ]
+            doe, ext, held_out = CL.training_records(truth, args.scale, highpass=args.highpass)
             est = get_estimator("lpv", input=truth.input, choose_on="held-out")
-            model = est.fit(doe + list(ext[0]), choice_records=list(ext[1]))
+            model = est.fit(doe + ext, choice_records=held_out)
         else:
+            doe = list(table_ii(seed=0, scale=args.scale, damper=truth))
             model = get_estimator("lpv", input=truth.input).fit(doe)
     print(f"lpv: {model.provenance.get('hysteretic_note', '')}")
     road = iso_road("C", speed=20.0, duration=20.0, fs=1000.0, seed=args.seed)

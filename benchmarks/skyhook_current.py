@@ -28,21 +28,23 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 import time
 import warnings
-from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import closed_loop as CL
+
 from mrdamper.control.car import QuarterCar
 from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.doe_extension import control_extension
 from mrdamper.control.fidelity import closed_loop_fidelity, loop_metrics
 from mrdamper.control.quarter_car import CONTROLLERS, iso_road
 from mrdamper.models.registry import get_estimator
-from mrdamper.rig.doe import table_ii
 from mrdamper.rig.reference import reference_damper
 
 #: Every variant of the fit: name -> (estimator settings, extension weight, slope scale).
@@ -169,12 +171,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         ap.error(f"--variants: unknown {unknown}; expected some of {list(VARIANTS)}")
     t0 = time.perf_counter()
     truth = reference_damper("quiroz2022")
-    doe = list(table_ii(seed=0, scale=args.scale, damper=truth))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        first = get_estimator("sp1", input=truth.input).fit(doe)
-    extension = partial(control_extension, scale=args.scale, damper=truth, model=first)
-    ext, held_out = list(extension(seed=1)), list(extension(seed=2))
+    doe, ext, held_out = CL.training_records(truth, args.scale)
     print(f"DoE and extension {time.perf_counter() - t0:.0f} s")
     road = iso_road("C", speed=20.0, duration=20.0, fs=1000.0, seed=args.seed)
     laws = None
