@@ -88,7 +88,7 @@ _LPV_MOD = "mrdamper.models.lpv"
 _SP_MOD = "mrdamper.models.semiphenomenological"
 
 _LPV_ITEMS: tuple[Item, ...] = (
-    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r F F F B", 1.2),
+    (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r f1r F F F F B B", 1.2),
     (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.5),
 )
 _SP_ITEMS: tuple[Item, ...] = (
@@ -270,8 +270,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant(
         "lpv-paper",
         "lpv",
-        (("input_signal", "u"),),
-        "the paper's LPV model: static zone-law input u",
+        (("input_signal", "u"), ("stiffness", 0.0)),
+        "the paper's LPV model: static zone-law input u, no stiffness term",
     ),
 )
 

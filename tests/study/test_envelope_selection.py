@@ -223,7 +223,7 @@ def test_the_default_model_set_has_the_papers_lpv_beside_the_default_one() -> No
     labels = [(s.label, s.kind, dict(s.settings)) for s in Protocol().resolved_models()]
     names = [lab for lab, _, _ in labels]
     assert names.index("lpv-paper") == names.index("lpv") + 1
-    assert labels[names.index("lpv-paper")][1:] == ("lpv", {"input_signal": "u"})
+    assert labels[names.index("lpv-paper")][1:] == ("lpv", {"input_signal": "u", "stiffness": 0.0})
     summary = pd.DataFrame(
         {
             "model": ["lpv", "lpv-paper", "sp1"],

@@ -55,6 +55,9 @@ class InverseForm(NamedTuple):
         Share of the Dahl state in the LPV input (0: static input).
     stroke : float
         Stroke scale of the Dahl state [m].
+    stiffness : float
+        LPV parallel stiffness ``k_x`` [N/m]: the force is the polynomial in ``rho`` plus
+        ``k_x x`` (the inverse takes it out of the target).
     horizon : int
         Lead horizon of the inverse with a drive lag [samples] (1: the present sample only).
     lam2 : float
@@ -79,6 +82,7 @@ class InverseForm(NamedTuple):
     mu_low: FloatArray
     blend: float
     stroke: float
+    stiffness: float
     horizon: int
     lam2: float
     n_grid: int
@@ -133,6 +137,7 @@ def inverse_form(
     mu_low: FloatArray | None = None,
     blend: float = 0.0,
     stroke: float = 0.0,
+    stiffness: float = 0.0,
 ) -> InverseForm:
     """An :class:`InverseForm` with the kernels' types (the parts not given are empty).
 
@@ -141,7 +146,7 @@ def inverse_form(
     lam : float
         Regularisation weight [N per input unit] (the form holds its square).
     n_grid, horizon, lag, is_lpv, comp, power, theta, f0, alpha, beta, offset, mode, gm, gc, \
-mu_high, mu_low, blend, stroke
+mu_high, mu_low, blend, stroke, stiffness
         As the attributes of :class:`InverseForm`.
     """
     empty2 = np.zeros((1, 1))
@@ -169,6 +174,7 @@ mu_high, mu_low, blend, stroke
         arr(mu_low, np.zeros(2)),
         float(blend),
         float(stroke),
+        float(stiffness),
         int(horizon),
         float(lam) * float(lam),
         int(n_grid),

@@ -198,7 +198,8 @@ def lpv_hysteresis(model: Any) -> tuple[float, float]:
 
 def lpv_inverse_fields(model: Any) -> dict[str, Any]:
     """The LPV part of an :class:`~mrdamper.control._forms.InverseForm` for ``model`` (an LPV or
-    LTI model): ``is_lpv``, the coefficients ``alpha``, ``beta``, ``offset`` [N] of its
+    LTI model): ``is_lpv``, the coefficients ``alpha``, ``beta``, ``offset`` [N], ``stiffness``
+    [N/m] of its
     scheduled form and its input's arrays (:func:`lpv_law_arrays`, :func:`lpv_hysteresis`), as
     keyword arguments of :func:`~mrdamper.control._forms.inverse_form`."""
     form = scheduled_form(model)
@@ -218,6 +219,7 @@ def lpv_inverse_fields(model: Any) -> dict[str, Any]:
         "mu_low": mu_l,
         "blend": blend,
         "stroke": stroke,
+        "stiffness": float(form.stiffness),
     }
 
 

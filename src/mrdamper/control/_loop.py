@@ -71,6 +71,7 @@ def damper_arrays(model: Any) -> dict[str, Any]:
         "mu_low": np.zeros(2),
         "blend": 0.0,
         "stroke": 0.0,
+        "stiffness": 0.0,
     }
     if model is None:  # no inverse arrays (a controller that steps the model instead)
         return out

@@ -14,7 +14,9 @@ The damper is used through a per-sample step interface:
 * LPV model: the force of control sample ``k`` is a polynomial in ``rho[k]`` fixed by the past
   (``lpv_coefficients``), and ``u[k]`` is built from the damper velocity at the sample instant;
   the model has no direct feedthrough, so the force of sample ``k + 1`` (``rho`` held) is known
-  too, and the force is linear in time between the two (:func:`_between`).
+  too, and the force is linear in time between the two (:func:`_between`); a parallel stiffness
+  ``k_x`` adds ``k_x x`` with the travel of the sample instant, held over the sample as the
+  motion is held for every discrete plant's step.
 
 Controllers (desired damper force ``Fd``, damper velocity ``v_rel = v_s - v_u``, the force acting
 on the body is ``-F``): 0 passive (constant input ``i_const``), 1 skyhook
@@ -76,17 +78,19 @@ def invert_model(form, k, x_d, v_d, target, a, b, prev, hold, cf, y, u, yb, ub, 
     """The damper model's regularised inverse at control sample ``k`` (the quarter car's own).
 
     ``target`` is the desired force with the model's rest force (LPV offset, static map ``f0``)
-    [N]; ``[a, b]`` the admissible inputs, ``prev`` the previous input and ``hold`` the input the
-    regularisation pulls towards; ``cf`` the LPV polynomial of the sample (:func:`control_sample`
-    computes it), ``y, u`` the LPV past outputs and inputs, ``yb, ub`` scratch, ``z_d`` the Dahl
+    [N]; an LPV model's stiffness force ``k_x x_d`` is taken out of it here. ``[a, b]`` are the
+    admissible inputs, ``prev`` the previous input and ``hold`` the input the regularisation
+    pulls towards; ``cf`` the LPV polynomial of the sample (:func:`control_sample` computes it),
+    ``y, u`` the LPV past outputs and inputs, ``yb, ub`` scratch, ``z_d`` the Dahl
     state. Returns ``(r, reachable)``.
     """
     inv = form.inverse
     if inv.is_lpv:
+        t_poly = target - inv.stiffness * x_d
         if inv.lag >= 0.0 and k >= 2 and inv.horizon > 1:
             valid = past_buffers(y, u, k, yb, ub)
-            return horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v_d, target, z_d)
-        return reg_solve_poly(cf, target, a, b, hold, inv.lam2, inv.n_grid)
+            return horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v_d, t_poly, z_d)
+        return reg_solve_poly(cf, t_poly, a, b, hold, inv.lam2, inv.n_grid)
     return reg_solve_static(
         x_d, v_d, inv.comp, inv.power, inv.theta, inv.f0, target, a, b, hold, inv.lam2, inv.n_grid
     )
@@ -162,7 +166,7 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
         Fk = _poly(cf, r)
         y[k] = Fk - offset
         u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
-        F_model = Fk - offset
+        F_model = Fk - offset + inv.stiffness * x_d
     else:
         if ctrl == CTRL_PASSIVE:
             r = min(max(i_const, a), b)
@@ -247,6 +251,7 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
     mem = np.array([prev, prev, 0.0, 0.0])  # prev, w_prev, Dahl state, previous velocity
     cf_next = np.zeros(n_p)
     F_next = 0.0
+    k_x = inv.stiffness  # LPV parallel stiffness [N/m] (0 for a static map)
     for k in range(n_ctrl):
         r, ok, target, F[k] = control_sample(
             k, st[0], st[1], st[2], st[3], form, y, u, cf, yb, ub, rho, mem
@@ -255,7 +260,8 @@ def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  #
         sat[k] = not ok
         if is_lpv:  # the next sample's force, fixed by now (b_0 = 0), with rho held
             lpv_coefficients(cf_next, y, u, k + 1, inv.alpha, inv.beta, inv.offset)
-            F_next = _poly(cf_next, r) - inv.offset
+            # with the motion held, as every discrete plant's step (k_x x at the sample instant)
+            F_next = _poly(cf_next, r) - inv.offset + k_x * (st[0] - st[2])
         # --- plant over the control sample
         for s in range(n_sub):
             j = k * n_sub + s

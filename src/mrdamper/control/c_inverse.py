@@ -103,6 +103,8 @@ def c_invert(form, k, x_d, v_d, target, a, b, prev, hold, cf, y, u, yb, ub, z_d)
     :func:`~mrdamper.control._quarter_car_kernels.invert_model`); ``(r, reachable)``."""
     r = form.c_step(form.c_state.ctypes, x_d, v_d, target, form.c_out.ctypes)
     inv = form.inverse
+    if inv.is_lpv:
+        target = target - inv.stiffness * x_d  # the polynomial's share (the C step does the same)
     ok = grid_reach(
         inv.is_lpv,
         cf,

@@ -16,6 +16,8 @@ name               shape                  meaning
 ``D``              (1, 1)                 0 (eq. 15, ``b_0 = 0``)
 ``Ts``             scalar                 sampling time [s]
 ``F0``             scalar                 force offset added to ``C z`` [N]
+``k_x``            scalar                 parallel stiffness [N/m]: ``k_x x`` (``x`` the
+                                          displacement [m]) is added to the force too
 ``rho_min``,       scalar                 scheduling range the model was identified on
 ``rho_max``
 ``rho_name``       string                 ``"i"`` (coil current [A]) or ``"voltage"`` [V]; with a
@@ -141,6 +143,7 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
         "D": mats[0].D.copy(),
         "Ts": 1.0 / model.fs,
         "F0": float(model.offset),
+        "k_x": float(model.stiffness),
         "rho_min": float(lo),
         "rho_max": float(hi),
         "rho_name": model.input,

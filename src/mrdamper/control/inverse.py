@@ -438,7 +438,8 @@ def inverse_current(
             )
         if sched is not None:
             n_h = horizon_samples(sched.eta, 1.0 / sched.fs, horizon)
-            rho, w, sat = _lpv_reg(model, t, v, Fd, lo, hi, int(n_grid), lam, step_rate, n_h)
+            Fd_poly = Fd - sched.stiffness * x  # the stiffness force is not the input's to give
+            rho, w, sat = _lpv_reg(model, t, v, Fd_poly, lo, hi, int(n_grid), lam, step_rate, n_h)
         else:
             comp, power, theta, f0 = static_map_arrays(model)
             dt = float(t[1] - t[0]) if t.size > 1 else 1.0
@@ -462,7 +463,8 @@ def inverse_current(
             )
             w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
     elif sched is not None:
-        rho, w, sat = _lpv_any_rate(model, t, v, Fd, lo, hi, int(n_grid), float(tol))
+        Fd_poly = Fd - sched.stiffness * x
+        rho, w, sat = _lpv_any_rate(model, t, v, Fd_poly, lo, hi, int(n_grid), float(tol))
     else:
         if getattr(model, "eta", None) is not None:
             raise DataValidationError(

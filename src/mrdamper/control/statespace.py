@@ -3,7 +3,7 @@
 Controllable canonical form with ``B = [0 ... 0 1]^T`` (eq. 13; reading notes item 3)::
 
     z[k+1] = A(rho) z[k] + B u[k]
-    f[k]   = C(rho) z[k] + D u[k] (+ F0)
+    f[k]   = C(rho) z[k] + D u[k] (+ F0 + k_x x[k])
 
     A(rho) = companion matrix, last row [-a_n(rho) ... -a_1(rho)]
     C(rho) = [b_n(rho) ... b_1(rho)]      (b0 = 0, so D = 0, eq. 15)
@@ -12,7 +12,8 @@ At a constant ``rho`` this realisation has exactly the transfer function of eqs.
 ``rho`` varies the input-output model identified in the paper (coefficients evaluated at ``rho[k]``
 for every lag) and the state-space model with ``A(rho[k])`` are different LPV systems; the
 state-space form is the one to use for LPV control design, and it agrees with the identified model
-whenever ``rho`` is constant (or slowly varying).
+whenever ``rho`` is constant (or slowly varying). The offset ``F0`` and a parallel stiffness
+``k_x`` [N/m] on the displacement ``x`` are static terms outside the linear system from ``u``.
 """
 
 from __future__ import annotations
@@ -61,6 +62,9 @@ class StateSpaceMatrices:
         Scheduling value the matrices were evaluated at.
     offset : float
         Output force offset ``F0`` [N] added to ``C z`` (not part of the linear system).
+    stiffness : float
+        Parallel stiffness ``k_x`` [N/m]: ``k_x x`` is added to the force too (not part of the
+        linear system from ``u``).
     """
 
     A: np.ndarray
@@ -70,6 +74,7 @@ class StateSpaceMatrices:
     dt: float
     rho: float
     offset: float
+    stiffness: float = 0.0
 
     @property
     def poles(self) -> np.ndarray:
@@ -122,7 +127,14 @@ def state_space(model: Any, rho: float) -> StateSpaceMatrices:
     C = b[::-1].reshape(1, n).copy()
     D = np.zeros((1, 1))
     return StateSpaceMatrices(
-        A=A, B=B, C=C, D=D, dt=1.0 / model.fs, rho=r, offset=float(model.offset)
+        A=A,
+        B=B,
+        C=C,
+        D=D,
+        dt=1.0 / model.fs,
+        rho=r,
+        offset=float(model.offset),
+        stiffness=float(model.stiffness),
     )
 
 
@@ -179,9 +191,11 @@ def frozen_stability(model: Any, n_grid: int = 51, rho: Any = None) -> pd.DataFr
     return pd.DataFrame({"rho": grid, "max_pole_modulus": mods, "stable": np.array(mods) < 1.0})
 
 
-def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = None) -> np.ndarray:
+def simulate_state_space(
+    model: Any, u: Any, rho: Any, *, bound: float | None = None, x: Any = None
+) -> np.ndarray:
     """Simulate the state-space LPV system ``z[k+1] = A(rho[k]) z[k] + B u[k]``,
-    ``f = C(rho[k]) z + F0``.
+    ``f = C(rho[k]) z + F0 + k_x x[k]``.
 
     Parameters
     ----------
@@ -192,6 +206,8 @@ def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = 
         Scheduling variable at the model rate (a scalar means constant).
     bound : float, optional
         Output magnitude regarded as divergence [N]; default the model's ``force_bound``.
+    x : array_like, optional
+        Displacement at the model rate [m]; needed when the model has a stiffness ``k_x``.
 
     Returns
     -------
@@ -200,6 +216,15 @@ def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = 
     """
     _check_model(model)
     u = np.asarray(u, dtype=float)
+    k_x = float(model.stiffness)
+    if k_x != 0.0:
+        if x is None:
+            raise DataValidationError(
+                "x", f"the model has a stiffness k_x = {k_x:.4g} N/m; give the displacement [m]"
+            )
+        xs = np.asarray(x, dtype=float)
+        if xs.shape != u.shape:
+            raise DataValidationError("x", f"expected shape {u.shape} (as u), got {xs.shape}")
     rho_a = np.broadcast_to(np.asarray(rho, dtype=float), u.shape)
     lim = model.force_bound if bound is None else bound
     n = model.n_m
@@ -216,7 +241,7 @@ def simulate_state_space(model: Any, u: Any, rho: Any, *, bound: float | None = 
         f = float(ss.C[0] @ z)
         if not abs(f) <= lim:
             raise SimulationDivergedError(model.kind, k, f"state-space output exceeded {lim:.3g} N")
-        out[k] = f + ss.offset
+        out[k] = f + ss.offset + (k_x * xs[k] if k_x != 0.0 else 0.0)
         z = ss.A @ z + ss.B[:, 0] * u[k]
     return out
 

@@ -200,7 +200,8 @@ def window_arrays(
 
 
 def window_records(rec: Any, fs: float, **kwargs: Any) -> tuple[Any, dict[str, Any] | None]:
-    """Windows of an LPV ``Records`` (fields ``F, u, rho`` per record, ``weights``); ``rec``
+    """Windows of an LPV ``Records`` (fields ``F, u, rho``, optionally ``x``, per record, and
+    ``weights``); ``rec``
     itself below the threshold. Each window keeps its parent record's weight.
 
     Defaults: :data:`WINDOW_BUDGET_LPV` samples in windows of :data:`WINDOW_SECONDS_LPV` (on a 1 h
@@ -208,12 +209,19 @@ def window_records(rec: Any, fs: float, **kwargs: Any) -> tuple[Any, dict[str, A
     900 000 in 60 s windows 0.6 %, at a quarter of the time)."""
     kwargs.setdefault("budget", WINDOW_BUDGET_LPV)
     kwargs.setdefault("seconds", WINDOW_SECONDS_LPV)
-    chans, parent, info = window_arrays([rec.F, rec.u, rec.rho], fs, **kwargs)
+    x = getattr(rec, "x", None)
+    channels = [rec.F, rec.u, rec.rho] + ([x] if x is not None else [])
+    chans, parent, info = window_arrays(channels, fs, **kwargs)
     if chans is None:
         return rec, None
-    F, u, rho = chans
+    F, u, rho = chans[:3]
     return dataclasses.replace(
-        rec, F=F, u=u, rho=rho, weights=np.asarray(rec.weights)[parent]
+        rec,
+        F=F,
+        u=u,
+        rho=rho,
+        **({"x": chans[3]} if x is not None else {}),
+        weights=np.asarray(rec.weights)[parent],
     ), info
 
 

@@ -98,6 +98,9 @@ class ScheduledForm:
         only on the motion (``z[k] = s + (z[k-1] - s) exp(-|dx| / x_y)``, ``dx`` the trapezoidal
         displacement step, ``s = sign(dx)``, ``z = 0`` at rest), so at each sample the input is
         still a static map of ``(v, z, rho)``.
+    stiffness : float
+        Parallel stiffness ``k_x`` [N/m]: the force is the filtered output plus
+        ``offset + k_x x`` (0: none).
     """
 
     alpha: np.ndarray
@@ -113,6 +116,7 @@ class ScheduledForm:
     mu_low: np.ndarray
     blend: float = 0.0
     stroke: float = 0.0
+    stiffness: float = 0.0
 
 
 @runtime_checkable

@@ -47,7 +47,7 @@ FAMILIES: tuple[tuple[type, Any, Any, Any], ...] = (
     (S.StaticStepForm, S.StaticStepForm(_I, _I, _F, 0.0, -1.0), S.step_force, S.step_advance),
     (
         L.LPVForm,
-        L.LPVForm(_F2, _F2, 0.0, 1.0, -1.0, 0, _F2, _F2, _F, _F, 0.0, 1.0),
+        L.LPVForm(_F2, _F2, 0.0, 1.0, -1.0, 0, _F2, _F2, _F, _F, 0.0, 1.0, 0.0),
         L.step_force,
         L.step_advance,
     ),

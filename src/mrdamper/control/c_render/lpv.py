@@ -39,6 +39,7 @@ LPV = (
 static const double {P}_ALPHA[{P}_N_M][{P}_N_P] = {alpha};
 static const double {P}_BETA[{P}_N_M][{P}_N_P] = {beta};
 static const double {P}_OFFSET = {offset};
+static const double {P}_STIFFNESS = {stiffness}; /* parallel stiffness k_x [N/m]: F += k_x x */
 static const double {P}_IN_LO = {in_lo}; /* identified input range: the forward step clips to it */
 static const double {P}_IN_HI = {in_hi};
 static const double {P}_LO = {lo}; /* lower input limit of the inverse, rest state */
@@ -142,14 +143,13 @@ double {p}_step({p}_state *s, double x, double v, double input)
     double cf[{P}_N_P];
     double w = {p}_dmin({p}_dmax(input, {P}_IN_LO), {P}_IN_HI);
     double r = w, F;
-    (void)x;
     if ({P}_LAG >= 0.0 && s->k > 0) r = {P}_LAG * s->rho + (1.0 - {P}_LAG) * s->w;
     s->w = w;
     {p}_advance(s, v);
     {p}_coefficients(s, cf);
     F = {p}_poly(cf, {P}_N_P, r);
     {p}_commit(s, F, v, r);
-    return F;
+    return F + {P}_STIFFNESS * x;
 }}
 """
 )
@@ -188,9 +188,8 @@ void {p}_step_init(double *s, double x0, double v0, double e0)
 double {p}_step_force(const double *s, double x, double v, double e)
 {{
     double r;
-    (void)x;
     (void)v;
-    return {p}_sforce(s, e, &r);
+    return {p}_sforce(s, e, &r) + {P}_STIFFNESS * x;
 }}
 
 int {p}_step_advance(double *s, double x0, double v0, double e0, double x1, double v1,"""
@@ -323,7 +322,7 @@ LPV_INVERSE = (
 {{
     double cf[{P}_N_P];
     double a = {P}_LO, b = {P}_HI, prev = s->rho, hold, r, F;
-    (void)x;
+    F_desired -= {P}_STIFFNESS * x; /* the stiffness force is not the input's to give */
     {p}_advance(s, v);
     {p}_coefficients(s, cf);
     if ({P}_LAG >= 0.0 && s->k >= 1) {{
@@ -355,7 +354,7 @@ LPV_INVERSE = (
     }}
     F = {p}_poly(cf, {P}_N_P, r);
     {p}_commit(s, F, v, r);
-    if (F_out) *F_out = F;
+    if (F_out) *F_out = F + {P}_STIFFNESS * x;
     return r;
 }}
 """
@@ -384,6 +383,7 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
         alpha=arr2(form.alpha),
         beta=arr2(form.beta),
         offset=lit(form.offset),
+        stiffness=lit(form.stiffness),
         bound=lit(form.bound),
         eta=lit(form.eta),
         lag=lit(lag),

@@ -9,6 +9,7 @@ orders in free run on validation records.
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import InitVar, dataclass
@@ -137,6 +138,12 @@ class LPVEstimator(Estimator):
         are up-sampled by linear interpolation). ``fs`` is its old name, still accepted.
     offset : bool
         Estimate an output force offset ``F0``.
+    stiffness : float or "identify"
+        Parallel stiffness ``k_x`` [N/m] of ``F = y + F0 + k_x x`` (``x`` the displacement [m]):
+        a damper's accumulator or gas spring, a force in phase with the travel that the filtered
+        velocity input cannot give. ``"identify"`` (LPV default): estimated by the output-error
+        refinement with the other unknowns; a number fixes it; ``0`` is the paper's structure
+        (the LTI default and the study's ``lpv-paper``).
     weighting : {"esr", "sse"}
         ``"esr"`` weights each record by ``1 / (n var F)`` so all records count equally (as in
         the mean ESR); ``"sse"`` weights every sample equally.
@@ -190,6 +197,7 @@ class LPVEstimator(Estimator):
     n_bins: int = 5
     model_fs: float | None = None
     offset: bool = True
+    stiffness: float | Literal["identify"] = "identify"
     weighting: Literal["esr", "sse"] = "esr"
     refine: bool = True
     max_nfev: int = 60
@@ -218,6 +226,13 @@ class LPVEstimator(Estimator):
             check_int(name, getattr(self, name), 0)
         check_lag(self.eta)
         check_number("model_fs", self.model_fs, allow_none=True, what="a positive model rate [Hz]")
+        if self.stiffness != "identify":
+            check_number(
+                "stiffness",
+                self.stiffness,
+                low=-math.inf,
+                what="'identify' or a finite stiffness [N/m]",
+            )
 
     def _laws(
         self,
@@ -325,13 +340,16 @@ class LPVEstimator(Estimator):
         lpv_input = _lpv_inputs.from_saved(
             self.input_signal, laws, self.reading, self.stroke, self.blend
         )
-        F, U, R, w = [], [], [], []
+        F, U, R, X, w = [], [], [], [], []
         for k, (e, el) in enumerate(zip(exps, data.electrical)):
             report("LPV input signals", k, len(exps))
             e.require_samples(self.n_m + 2, "LPV identification")
             u, rho = model_signals(e, el, fs=fs, eta=eta, lpv_input=lpv_input)
             Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
+            X.append(
+                np.ascontiguousarray(to_model_rate(np.asarray(e.x), e.fs, fs), dtype=np.float64)
+            )
             U.append(u)
             R.append(rho)
             var = float(np.var(Fr))
@@ -351,7 +369,7 @@ class LPVEstimator(Estimator):
                     f"degree n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current "
                     "levels or lower n_rho)"
                 )
-        rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights)
+        rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights, x=X)
         f_scale = max(max(float(np.max(np.abs(f))) for f in F), 1.0)
         bound = 1e3 * f_scale
         prov.update(
@@ -375,6 +393,7 @@ class LPVEstimator(Estimator):
             enforce_stability=self.stability == "enforce",
             rho_range=rho_range,
             windows=lambda r: _scale.window_records(r, fs),  # long campaigns
+            stiffness=None if self.stiffness == "identify" else float(self.stiffness),
         )
         prov.update(fit.provenance)
         pmax, rho_at, pole = fit.largest_pole
@@ -407,6 +426,7 @@ class LPVEstimator(Estimator):
                 "alpha": alpha,
                 "beta": beta,
                 "offset": fit.offset,
+                "stiffness": fit.stiffness,
                 "fs": fs,
                 "reading": self.reading,
                 "zone_laws": laws,
@@ -450,6 +470,7 @@ class LTIEstimator(LPVEstimator):
     kind: ClassVar[str] = "lti"
     model_class: ClassVar[type[FittedModel]] = LTIModel
     n_rho: int = 0
+    stiffness: float | Literal["identify"] = 0.0
 
     def _validate(self) -> None:
         super()._validate()

@@ -4,6 +4,7 @@ keeps its own initial conditions)."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -56,12 +57,31 @@ class Records:
         Measured force [N], LPV input [m/s] (or velocity), scheduling variable, per record.
     weights : ndarray
         Weight of each record's squared errors (``1 / (n var F)`` for ESR weighting).
+    x : list of ndarray, optional
+        Displacement [m] per record (needed by a parallel stiffness; None: zeros).
     """
 
     F: list[np.ndarray]
     u: list[np.ndarray]
     rho: list[np.ndarray]
     weights: np.ndarray
+    x: list[np.ndarray] | None = None
+
+    def displacement(self, r: int) -> np.ndarray:
+        """Displacement of record ``r`` [m] (zeros when the records carry none)."""
+        return self.x[r] if self.x is not None else np.zeros(self.F[r].size)
+
+    def without_stiffness(self, stiffness: float) -> Records:
+        """The records with ``stiffness * x`` taken out of the force (themselves for 0)."""
+        if stiffness == 0.0:
+            return self
+        return dataclasses.replace(
+            self,
+            F=[
+                np.ascontiguousarray(f - stiffness * self.displacement(r))
+                for r, f in enumerate(self.F)
+            ],
+        )
 
     def flat(self, y: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Concatenate ``y``, ``u``, ``rho`` and return record boundaries (for the Gram kernel)."""
@@ -184,8 +204,14 @@ def refine_output_error(
     max_nfev: int,
     solver: str = "gauss-newton",
     rho_grid: np.ndarray | None = None,
-) -> tuple[np.ndarray, float, optimize.OptimizeResult]:
+    stiffness: float = 0.0,
+    fit_stiffness: bool = False,
+) -> tuple[np.ndarray, float, float, optimize.OptimizeResult]:
     """Minimise the weighted free-run (simulation) error from a least-squares start.
+
+    The unknowns are ``theta``, the offset ``F0`` (with ``offset``) and the parallel stiffness
+    ``k_x`` [N/m] (with ``fit_stiffness``, from ``stiffness``; both enter the output linearly).
+    Returns ``(theta, F0, k_x, solution)``.
 
     ``solver="gauss-newton"`` (default): :func:`_levenberg_marquardt` on the Gauss-Newton normal
     equations ``J^T J``, ``J^T e`` accumulated by
@@ -201,18 +227,11 @@ def refine_output_error(
     frozen-stable start stays frozen-stable.
     """
     P = 2 * n_m * n_p
-    x0 = np.r_[theta0, F0] if offset else theta0.copy()
+    lin = _Linear(P, offset, fit_stiffness, F0, stiffness)
+    x0 = lin.pack(theta0)
     if solver == "gauss-newton":
         return _levenberg_marquardt(
-            rec,
-            x0,
-            n_m,
-            n_p,
-            offset=offset,
-            F0=F0,
-            bound=bound,
-            max_iter=max_nfev,
-            rho_grid=rho_grid,
+            rec, x0, n_m, n_p, lin=lin, bound=bound, max_iter=max_nfev, rho_grid=rho_grid
         )
     sw = np.sqrt(rec.weights)
     last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}  # residuals and Jacobian at one point
@@ -222,7 +241,7 @@ def refine_output_error(
         if key in last:
             return last[key]
         alpha, beta = split_theta(p, n_m, n_p)
-        f0 = float(p[P]) if offset else F0
+        f0, k_x = lin.values(p)
         res, jacs = [], []
         unstable = (
             rho_grid is not None and largest_frozen_pole(alpha, rho_grid)[0] >= STABILITY_LIMIT
@@ -234,10 +253,14 @@ def refine_output_error(
                 J = np.zeros_like(J)
             else:
                 e = yh + f0 - rec.F[r]
+                if k_x != 0.0:
+                    e = e + k_x * rec.displacement(r)
             res.append(sw[r] * e)
             Jr = sw[r] * J
             if offset:
                 Jr = np.column_stack((Jr, np.full(e.size, sw[r])))
+            if fit_stiffness:
+                Jr = np.column_stack((Jr, sw[r] * rec.displacement(r)))
             jacs.append(Jr)
         out = (np.concatenate(res), np.vstack(jacs))
         last.clear()
@@ -259,24 +282,61 @@ def refine_output_error(
         ftol=1e-10,
         gtol=1e-10,
     )
-    theta = sol.x[:P].copy()
-    f0 = float(sol.x[P]) if offset else F0
-    return theta, f0, sol
+    f0, k_x = lin.values(sol.x)
+    return sol.x[:P].copy(), f0, k_x, sol
+
+
+@dataclass(frozen=True)
+class _Linear:
+    """Where the output's linear unknowns sit in the refinement's vector
+    ``x = [theta, (F0), (k_x)]``, and their fixed values when they are not unknowns."""
+
+    P: int
+    offset: bool
+    stiffness: bool
+    F0: float
+    k_x: float
+
+    @property
+    def size(self) -> int:
+        """Length of the unknown vector."""
+        return self.P + int(self.offset) + int(self.stiffness)
+
+    def pack(self, theta: np.ndarray) -> np.ndarray:
+        """The unknown vector from ``theta`` and the start values."""
+        tail = ([self.F0] if self.offset else []) + ([self.k_x] if self.stiffness else [])
+        return np.concatenate([np.asarray(theta, dtype=np.float64), np.asarray(tail, dtype=float)])
+
+    def values(self, x: np.ndarray) -> tuple[float, float]:
+        """``(F0, k_x)`` at the unknown vector ``x``."""
+        f0 = float(x[self.P]) if self.offset else self.F0
+        k_x = float(x[self.size - 1]) if self.stiffness else self.k_x
+        return f0, k_x
 
 
 def _normal_eq(
-    rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
+    rec: Records, x: np.ndarray, n_m: int, n_p: int, lin: _Linear, bound: float
 ) -> tuple[float, np.ndarray, np.ndarray]:
-    P = 2 * n_m * n_p
     alpha, beta = split_theta(x, n_m, n_p)
-    f0 = float(x[P]) if offset else F0
-    Q = P + 1 if offset else P
+    f0, k_x = lin.values(x)
+    Q = lin.size
     H = np.zeros((Q, Q))
     g = np.zeros(Q)
     cost = 0.0
     for r in range(len(rec.u)):
         c, gr, Hr, bad = K.oe_normal_equations(
-            rec.u[r], rec.rho[r], alpha, beta, rec.F[r], f0, float(rec.weights[r]), bound, offset
+            rec.u[r],
+            rec.rho[r],
+            alpha,
+            beta,
+            rec.F[r],
+            rec.displacement(r),
+            f0,
+            k_x,
+            float(rec.weights[r]),
+            bound,
+            lin.offset,
+            lin.stiffness,
         )
         if bad >= 0:
             return np.inf, g, H
@@ -287,26 +347,33 @@ def _normal_eq(
 
 
 def free_run_cost(
-    rec: Records, alpha: np.ndarray, beta: np.ndarray, f0: float, bound: float
+    rec: Records,
+    alpha: np.ndarray,
+    beta: np.ndarray,
+    f0: float,
+    bound: float,
+    stiffness: float = 0.0,
 ) -> float:
-    """Weighted free-run squared error ``sum_r w_r |y_r + f0 - F_r|^2`` over the records [N^2]
-    (``inf`` when a record's free run leaves ``bound`` or becomes non-finite)."""
+    """Weighted free-run squared error ``sum_r w_r |y_r + f0 + k_x x_r - F_r|^2`` over the
+    records [N^2] (``k_x = stiffness`` [N/m]; ``inf`` when a record's free run leaves ``bound``
+    or becomes non-finite)."""
     total = 0.0
     for r in range(len(rec.u)):
         y, bad = K.simulate_record(rec.u[r], rec.rho[r], alpha, beta, bound)
         if bad >= 0:
             return float("inf")
         e = y + f0 - rec.F[r]
+        if stiffness != 0.0:
+            e = e + stiffness * rec.displacement(r)
         total += rec.weights[r] * float(e @ e)
     return total
 
 
-def _cost_of(
-    rec: Records, x: np.ndarray, n_m: int, n_p: int, offset: bool, F0: float, bound: float
-) -> float:
-    """:func:`free_run_cost` of the unknowns ``x = [theta, f0]`` (``f0 = F0`` without offset)."""
+def _cost_of(rec: Records, x: np.ndarray, n_m: int, n_p: int, lin: _Linear, bound: float) -> float:
+    """:func:`free_run_cost` of the unknown vector ``x`` (:class:`_Linear`)."""
     alpha, beta = split_theta(x, n_m, n_p)
-    return free_run_cost(rec, alpha, beta, float(x[2 * n_m * n_p]) if offset else F0, bound)
+    f0, k_x = lin.values(x)
+    return free_run_cost(rec, alpha, beta, f0, bound, k_x)
 
 
 #: Stage reported by :func:`_levenberg_marquardt` with the accepted iterations so far.
@@ -329,19 +396,18 @@ def _levenberg_marquardt(
     n_m: int,
     n_p: int,
     *,
-    offset: bool,
-    F0: float,
+    lin: _Linear,
     bound: float,
     max_iter: int,
     tol: float = LM_REL_TOL,
     rho_grid: np.ndarray | None = None,
-) -> tuple[np.ndarray, float, optimize.OptimizeResult]:
+) -> tuple[np.ndarray, float, float, optimize.OptimizeResult]:
     """Levenberg-Marquardt minimisation of the weighted free-run cost of the LPV model.
 
-    What is solved: ``min_x C(x)``, ``C(x) = sum_r w_r |y_r(x) + f0 - F_r|^2``, the weighted
-    squared free-run error over the records (:func:`free_run_cost`), over the unknowns
-    ``x = [alpha.ravel(), beta.ravel()]`` (plus ``f0`` with ``offset``). ``y_r(x)`` is the free
-    run of record ``r`` from rest.
+    What is solved: ``min_x C(x)``, ``C(x) = sum_r w_r |y_r(x) + f0 + k_x x_r - F_r|^2``, the
+    weighted squared free-run error over the records (:func:`free_run_cost`), over the unknowns
+    ``x = [alpha.ravel(), beta.ravel()]`` (plus ``f0`` and ``k_x`` where ``lin`` makes them
+    unknowns). ``y_r(x)`` is the free run of record ``r`` from rest.
 
     How: at the current ``x`` the kernel accumulates the Gauss-Newton normal equations
     ``H = J^T W J`` and ``g = J^T W e`` (``J`` the sensitivity of the free run, never stored).
@@ -366,6 +432,8 @@ def _levenberg_marquardt(
         ``[alpha.ravel(), beta.ravel()]`` at the minimum.
     f0 : float
         Offset [N] (``F0`` when not estimated).
+    k_x : float
+        Parallel stiffness [N/m] (the fixed value when not estimated).
     result : OptimizeResult
         ``x``, ``cost`` (the free-run cost), ``nfev`` (cost evaluations) and ``status``.
 
@@ -376,7 +444,7 @@ def _levenberg_marquardt(
     """
     P = 2 * n_m * n_p
     x = x0.copy()
-    cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
+    cost, g, H = _normal_eq(rec, x, n_m, n_p, lin, bound)
     if not np.isfinite(cost):
         raise IdentificationError(
             "lpv: the free run of the least-squares start diverges; cannot refine"
@@ -404,12 +472,12 @@ def _levenberg_marquardt(
             ):
                 cn = np.inf  # leaves the frozen-stable set over the identified range: rejected
             else:
-                cn = _cost_of(rec, xn, n_m, n_p, offset, F0, bound)
+                cn = _cost_of(rec, xn, n_m, n_p, lin, bound)
             nfev += 1
             if cn < cost:
                 rel = (cost - cn) / cost
                 x = xn
-                cost, g, H = _normal_eq(rec, x, n_m, n_p, offset, F0, bound)
+                cost, g, H = _normal_eq(rec, x, n_m, n_p, lin, bound)
                 lam = max(lam * LM_DAMPING_ACCEPT, LM_DAMPING_MIN)
                 step_ok = True
                 break
@@ -422,7 +490,8 @@ def _levenberg_marquardt(
             status = 1
             break
     sol = optimize.OptimizeResult(x=x, cost=cost, nfev=nfev, status=status)
-    return x[:P].copy(), (float(x[P]) if offset else F0), sol
+    f0, k_x = lin.values(x)
+    return x[:P].copy(), f0, k_x, sol
 
 
 # ----------------------------------------------------------------------------- whole identification
@@ -436,6 +505,8 @@ class LPVFit:
         ``[alpha.ravel(), beta.ravel()]`` with ``n_p`` powers of ``rho``.
     offset : float
         Output offset ``F0`` [N].
+    stiffness : float
+        Parallel stiffness ``k_x`` [N/m].
     largest_pole : (float, float, complex)
         Largest frozen-pole modulus over the stability grid, the ``rho`` where it occurs, the pole.
     provenance : dict
@@ -445,6 +516,7 @@ class LPVFit:
 
     theta: np.ndarray
     offset: float
+    stiffness: float
     largest_pole: tuple[float, float, complex]
     provenance: dict[str, Any]
 
@@ -462,6 +534,7 @@ def identify(
     enforce_stability: bool,
     rho_range: tuple[float, float],
     windows: Callable[[Records], tuple[Records, dict[str, Any] | None]],
+    stiffness: float | None = 0.0,
 ) -> LPVFit:
     """Least squares, then (with ``refine``) output-error refinement from a stable start.
 
@@ -470,24 +543,32 @@ def identify(
     gives the records the refinement runs on (evenly spread windows of long campaigns, with a
     provenance entry, or the records themselves and None).
 
+    ``stiffness``: the parallel stiffness ``k_x`` [N/m] of ``F = y + F0 + k_x x``, fixed at the
+    given value, or None to identify it. Least squares runs on ``F - k_x x`` with the fixed
+    value (0 when identified); the refinement then estimates ``k_x`` with the other unknowns
+    (``F`` is linear in it). Without ``refine`` an identified stiffness stays 0 (noted).
+
     Progress (:mod:`mrdamper.progress`): ``"least squares"``, the free runs, and the refinement's
     iterations (Gauss-Newton) or residual evaluations (``least_squares``) against their budget.
     """
     report("least squares")
-    ls = ls_identify(rec, n_m, n_p, offset)
+    k_x = 0.0 if stiffness is None else float(stiffness)
+    ls = ls_identify(rec.without_stiffness(k_x), n_m, n_p, offset)
     theta, F0 = ls.theta, ls.offset
     prov: dict[str, Any] = {"ls_solver": ls.solver, "ls_condition_number": ls.cond}
     grid = np.linspace(*rho_range, STABILITY_GRID)
     report("free run of the least-squares model")
-    ls_cost = free_run_cost(rec, *split_theta(theta, n_m, n_p), F0, bound)
+    ls_cost = free_run_cost(rec, *split_theta(theta, n_m, n_p), F0, bound, k_x)
     prov["ls_free_run_cost"] = ls_cost
+    if stiffness is None and not refine:
+        prov["stiffness_note"] = "stiffness is identified by the refinement; refine=False keeps 0"
     if refine:
         report("stable start of the refinement")
-        theta0, shrink = _stable_start(theta, n_m, n_p, grid, rec, F0, bound)
+        theta0, shrink = _stable_start(theta, n_m, n_p, grid, rec.without_stiffness(k_x), F0, bound)
         if shrink != 1.0:
             prov["oe_start_pole_scaling"] = shrink
         rec_oe, win = windows(rec)
-        th_r, f0_r, sol = refine_output_error(
+        th_r, f0_r, k_r, sol = refine_output_error(
             rec_oe,
             theta0,
             F0,
@@ -498,9 +579,11 @@ def identify(
             max_nfev=max_nfev,
             solver=solver,
             rho_grid=grid if enforce_stability else None,
+            stiffness=k_x,
+            fit_stiffness=stiffness is None,
         )
         report("free run of the refined model on all records")
-        oe_cost = free_run_cost(rec, *split_theta(th_r, n_m, n_p), f0_r, bound)
+        oe_cost = free_run_cost(rec, *split_theta(th_r, n_m, n_p), f0_r, bound, k_r)
         prov.update(oe_cost=oe_cost, oe_nfev=int(sol.nfev), oe_status=int(sol.status))
         if win is not None:
             prov.update(oe_windows=win, full_data_check={"ls_cost": ls_cost, "oe_cost": oe_cost})
@@ -509,7 +592,7 @@ def identify(
             or largest_frozen_pole(split_theta(theta, n_m, n_p)[0], grid)[0] < 1.0
         )
         if oe_cost < ls_cost or not ls_ok:
-            theta, F0 = th_r, f0_r
+            theta, F0, k_x = th_r, f0_r, k_r
             if oe_cost >= ls_cost:
                 prov["oe_note"] = (
                     "least-squares model has a lower free-run cost but is not frozen-stable; "
@@ -518,7 +601,7 @@ def identify(
         else:
             prov["oe_note"] = "refinement did not lower the free-run cost; least-squares model kept"
     pole = largest_frozen_pole(split_theta(theta, n_m, n_p)[0], grid)
-    return LPVFit(theta=theta, offset=F0, largest_pole=pole, provenance=prov)
+    return LPVFit(theta=theta, offset=F0, stiffness=k_x, largest_pole=pole, provenance=prov)
 
 
 #: Pole scaling of :func:`_stable_start`: target modulus of the largest frozen pole, and the

@@ -462,14 +462,20 @@ def oe_normal_equations(
     alpha: FloatArray,
     beta: FloatArray,
     F: FloatArray,
+    xd: FloatArray,
     offset: float,
+    stiffness: float,
     weight: float,
     bound: float,
     with_offset: bool,
+    with_stiffness: bool,
 ) -> tuple[float, FloatArray, FloatArray, int]:  # pragma: no cover
     """Weighted free-run cost, gradient and Gauss-Newton matrix of one record.
 
-    Residual ``e[k] = y_hat[k] + offset - F[k]``; the sensitivity rows are propagated with only
+    Residual ``e[k] = y_hat[k] + offset + stiffness xd[k] - F[k]`` (``xd`` the displacement [m],
+    used only when ``stiffness != 0`` or ``with_stiffness``); the unknowns are ``theta``, then
+    the offset (``with_offset``), then the stiffness (``with_stiffness``, Jacobian column
+    ``xd``). The sensitivity rows are propagated with only
     the last ``n_m`` kept (the Jacobian is never stored); each row is added to ``J^T J``
     (upper triangle, mirrored at the end) and ``J^T e`` as it is formed.
 
@@ -478,7 +484,8 @@ def oe_normal_equations(
     cost : float
         ``weight * sum(e^2)``.
     g : float64[:]
-        ``weight * J^T e`` (length ``2 n_m n_p`` plus one with the offset).
+        ``weight * J^T e`` (length ``2 n_m n_p``, plus one with the offset, plus one with the
+        stiffness).
     H : float64[:, :]
         ``weight * J^T J``.
     bad : int
@@ -487,7 +494,8 @@ def oe_normal_equations(
     n = u.size
     n_m, n_p = alpha.shape
     P = 2 * n_m * n_p
-    Q = P + 1 if with_offset else P
+    Q = P + (1 if with_offset else 0) + (1 if with_stiffness else 0)
+    use_x = with_stiffness or stiffness != 0.0
     H = np.zeros((Q, Q))
     g = np.zeros(Q)
     cost = 0.0
@@ -495,10 +503,12 @@ def oe_normal_equations(
     hist = np.zeros((n_m, P))  # hist[l] = J row of sample k-1-l
     a = np.zeros(n_m)
     pw = np.zeros(n_p)
-    row = np.zeros(Q)  # J row of sample k, with the offset's 1 last
+    row = np.zeros(Q)  # J row of sample k: theta, then the offset's 1, then the stiffness's x
     if with_offset:
         row[P] = 1.0
     for k in range(n):
+        if with_stiffness:
+            row[Q - 1] = xd[k]
         acc = _output_and_regressors(k, u, rho[k], alpha, beta, y, pw, a, row)
         if not (abs(acc) <= bound):
             return np.inf, g, H, k
@@ -513,6 +523,8 @@ def oe_normal_equations(
         for c in range(P):
             hist[0, c] = row[c]
         e = acc + offset - F[k]
+        if use_x:
+            e += stiffness * xd[k]
         cost += e * e
         # rank-one update of the upper triangle of J^T J and of J^T e
         for i in range(Q):

@@ -3,7 +3,7 @@
 Discrete transfer function of order ``n_m`` whose coefficients are polynomials of degree ``n_rho``
 in the scheduling variable ``rho`` (frozen-coefficient form, reading notes items 3-4)::
 
-    F[k] = y[k] + F0
+    F[k] = y[k] + F0 + k_x x[k]
     y[k] = -sum_{j=1..n_m} a_j(rho[k]) y[k-j] + sum_{j=1..n_m} b_j(rho[k]) u[k-j]     (b0 = 0)
     a_j(rho) = sum_p alpha[j-1, p] rho^p,   b_j(rho) = sum_p beta[j-1, p] rho^p
 
@@ -12,7 +12,9 @@ through a first-order drive lag ``d rho/dt = -eta (rho - input)``. ``u`` is the 
 :mod:`mrdamper.analysis` built from the model's :class:`~mrdamper.analysis.ZoneLaws`
 (``input_signal="u"``), or the raw velocity (``input_signal="v"``, ablation). The model works at
 its own sampling rate ``fs``; records at another rate are resampled on the way in and the force is
-interpolated back. Free run starts from rest (zero initial conditions) in every record.
+interpolated back. ``k_x`` [N/m] is a parallel stiffness on the displacement ``x`` [m] (an
+accumulator's gas spring; 0 in the paper's structure), outside the recursion. Free run starts from
+rest (zero initial conditions) in every record.
 
 The LTI model (kind ``"lti"``) is the same structure with ``n_rho = 0`` (no scheduling of the
 coefficients; paper Fig. 4).
@@ -137,6 +139,10 @@ class TransferFunctionModel(FittedModel):
         Range of ``rho`` seen in training.
     force_bound : float
         Free-run output magnitude regarded as divergence [N].
+    stiffness : float
+        Parallel stiffness ``k_x`` [N/m]: ``k_x x`` is added to the force (0: none, the paper's
+        structure). ``x`` is the record's displacement as given (its mean is absorbed by ``F0``
+        in training).
     """
 
     kind: ClassVar[str] = "abstract"
@@ -153,6 +159,7 @@ class TransferFunctionModel(FittedModel):
     force_bound: float = 1e9
     stroke: float | None = None
     blend: float | None = None
+    stiffness: float = 0.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -181,6 +188,11 @@ class TransferFunctionModel(FittedModel):
         if not self.fs > 0:
             raise DataValidationError("fs", f"expected a positive rate [Hz], got {self.fs}")
         set_(self, "offset", float(self.offset))
+        if not np.isfinite(float(self.stiffness)):
+            raise DataValidationError(
+                "stiffness", f"expected a finite stiffness [N/m], got {self.stiffness!r}"
+            )
+        set_(self, "stiffness", float(self.stiffness))
         set_(self, "fs", float(self.fs))
         set_(self, "rho_range", tuple(float(b) for b in self.rho_range))
         if self.eta is not None:
@@ -271,7 +283,10 @@ class TransferFunctionModel(FittedModel):
                 f"{experiment.name!r} (model rate {self.fs:g} Hz); frozen poles: "
                 f"max |z| = {self.max_pole_modulus():.4f} over rho in {self.rho_range}",
             )
-        return to_record_rate(y + self.offset, self.fs, experiment)
+        F = to_record_rate(y + self.offset, self.fs, experiment)
+        if self.stiffness != 0.0:
+            F = F + self.stiffness * np.asarray(experiment.x, dtype=np.float64)
+        return F
 
     def step(self, *, dt: float = 1e-3, vmax: float = 1.5) -> Step:
         """The model as a per-sample step at its own rate ``fs`` (:mod:`mrdamper.models.step`).
@@ -303,6 +318,7 @@ class TransferFunctionModel(FittedModel):
             a.mu_low,
             a.blend,
             a.stroke,
+            float(self.stiffness),
         )
         feedthrough = self.kind == "lpv" and self.eta is None
         return _lpv_step.make_step(self.kind, form, self.fs, feedthrough)
@@ -371,6 +387,7 @@ class LPVModel(TransferFunctionModel):
             mu_low=a.mu_low,
             blend=a.blend,
             stroke=a.stroke,
+            stiffness=float(self.stiffness),
         )
 
 

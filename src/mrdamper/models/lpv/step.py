@@ -5,8 +5,10 @@ model (its per-sample step :func:`step_force` / :func:`step_advance`, the causal
 quarter car of :mod:`mrdamper.control`) calls these functions. The fused free-run kernels of
 :mod:`mrdamper.models.lpv.kernels` are a fast path tested against this step sample by sample.
 
-* :func:`lpv_coefficients`: the force at sample ``k`` as a polynomial in the present scheduling
-  value ``rho[k]`` once the past outputs and inputs are fixed (``b_0 = 0``)::
+* the force is ``F[k] = y[k] + F0 + k_x x[k]``: the filtered output, the offset and the parallel
+  stiffness ``k_x`` [N/m] (0 for the paper's structure), which does not enter the recursion;
+* :func:`lpv_coefficients`: the force at sample ``k`` (without ``k_x x``) as a polynomial in the
+  present scheduling value ``rho[k]`` once the past outputs and inputs are fixed (``b_0 = 0``)::
 
       F(rho) = F0 + sum_p c_p rho^p,   c_p = sum_j beta[j-1, p] u[k-j] - alpha[j-1, p] y[k-j]
 
@@ -146,6 +148,9 @@ class LPVForm(NamedTuple):
         Share of the Dahl state in the pre-yield input (0: static input).
     stroke : float
         Stroke scale of the Dahl state [m] (unused when ``blend = 0``).
+    stiffness : float
+        Parallel stiffness ``k_x`` [N/m]: the force is the filtered output plus ``F0 + k_x x``
+        (0: none, the paper's structure).
     """
 
     alpha: FloatArray
@@ -160,6 +165,7 @@ class LPVForm(NamedTuple):
     mu_low: FloatArray
     blend: float
     stroke: float
+    stiffness: float
 
 
 @njit(cache=True)
@@ -178,7 +184,7 @@ def _force(form, s, e):  # type: ignore[no-untyped-def]  # pragma: no cover - nu
 def step_force(form, s, x, v, e):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
     """Force [N] at sample ``k`` (see :mod:`mrdamper.models.step`)."""
     F, _ = _force(form, s, e)
-    return F
+    return F + form.stiffness * x
 
 
 @njit(cache=True)

@@ -1,0 +1,106 @@
+"""The LPV model's parallel stiffness ``k_x`` (``F = y + F0 + k_x x``): identified with the other
+unknowns, carried by every tool that runs the model (prediction, step, inverse, state space,
+export), fixed or switched off by a setting."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mrdamper import DataValidationError, Experiment, load_model
+from mrdamper.control import inverse_current
+from mrdamper.control.export import lpv_export_data
+from mrdamper.control.statespace import simulate_state_space
+from mrdamper.models.lpv import LPVEstimator, LPVModel
+from mrdamper.models.lpv import kernels as K
+from mrdamper.models.step import run_step
+from tests.models.test_lpv import ALPHA, BETA, FS
+
+K_X = 850.0  # [N/m]
+OFFSET = -40.0  # [N]
+
+
+def _record(level: float, seed: int, varying: bool = False) -> Experiment:
+    """A record of the known LPV structure (``u = v``) plus ``F0 + K_X x``; the displacement
+    has a slow drift so that it is not a filtered copy of the velocity."""
+    rng = np.random.default_rng(seed)
+    n = 2000
+    t = np.arange(n) / FS
+    v = 0.1 * np.sin(2 * np.pi * 1.3 * t) + 0.03 * rng.standard_normal(n)
+    x = np.cumsum(v) / FS + 0.004 * np.sin(2 * np.pi * 0.21 * t + seed)
+    i = np.full(n, level)
+    if varying:
+        i = np.clip(0.5 + 0.5 * np.sin(2 * np.pi * 0.37 * t), 0.0, 1.0)
+    y, bad = K.simulate_record(v, i, ALPHA, BETA, 1e12)
+    assert bad == -1
+    return Experiment(t=t, x=x, v=v, F=y + OFFSET + K_X * x, i=i, name=f"s{seed}")
+
+
+def _train() -> list[Experiment]:
+    recs = [_record(lev, k) for k, lev in enumerate((0.0, 0.5, 1.0))]
+    return [*recs, _record(0.0, 9, varying=True)]
+
+
+@pytest.fixture(scope="module")
+def fitted() -> LPVModel:
+    return LPVEstimator(n_m=2, n_rho=2, input_signal="v").fit(_train())
+
+
+def test_the_stiffness_is_identified_with_the_other_unknowns(fitted: LPVModel) -> None:
+    assert fitted.stiffness == pytest.approx(K_X, rel=1e-4)
+    assert fitted.offset == pytest.approx(OFFSET, abs=0.05)
+    np.testing.assert_allclose(fitted.alpha, ALPHA, rtol=1e-4, atol=1e-5)
+    assert fitted.score(_record(0.3, 42)).esr < 1e-8
+    # the paper's structure (no stiffness) cannot explain the force in phase with x
+    paper = LPVEstimator(n_m=2, n_rho=2, input_signal="v", stiffness=0.0).fit(_train())
+    assert paper.stiffness == 0.0
+    assert paper.score(_record(0.3, 42)).esr > 100 * fitted.score(_record(0.3, 42)).esr
+    # a fixed value is kept as given
+    fixed = LPVEstimator(n_m=2, n_rho=2, input_signal="v", stiffness=K_X).fit(_train())
+    assert fixed.stiffness == K_X
+    # without the refinement the least-squares start (k_x = 0) stays, and says so
+    ls = LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(_train())
+    assert ls.stiffness == 0.0 and "stiffness_note" in ls.provenance
+
+
+def test_the_step_the_prediction_and_a_saved_copy_agree(fitted: LPVModel, tmp_path) -> None:
+    e = _record(0.6, 7, varying=True)
+    F = fitted.predict(e)
+    F_step, status, _ = run_step(fitted.step(), e.x, e.v, e.i, 1.0 / FS)
+    assert status == 0
+    np.testing.assert_allclose(F_step, F, rtol=1e-10, atol=1e-8)
+    again = load_model(fitted.save(tmp_path / "k.json"))
+    assert again.stiffness == fitted.stiffness
+    np.testing.assert_array_equal(again.predict(e), F)
+    # a file written before the stiffness existed loads as the paper's structure
+    old = dataclasses.replace(fitted, stiffness=0.0)
+    np.testing.assert_allclose(old.predict(e), F - fitted.stiffness * e.x, atol=1e-9)
+
+
+def test_the_inverse_takes_the_stiffness_force_out_of_the_target(fitted: LPVModel) -> None:
+    e = _record(0.5, 11, varying=True)
+    F = fitted.predict(e)
+    res = inverse_current(fitted, e, F, method="exact")
+    inside = ~res.saturated
+    assert inside.mean() > 0.9
+    np.testing.assert_allclose(res.F_achieved[inside], F[inside], atol=1e-6 * np.abs(F).max())
+    assert np.mean(np.abs(res.i - e.i) < 1e-3) > 0.9  # the current that made the force
+
+
+def test_state_space_and_export_carry_the_stiffness(fitted: LPVModel) -> None:
+    e = _record(0.5, 12)
+    u, rho = fitted.model_signals(e)
+    with pytest.raises(DataValidationError, match="x"):
+        simulate_state_space(fitted, u, rho)
+    F = simulate_state_space(fitted, u, rho, x=e.x)
+    np.testing.assert_allclose(F, fitted.predict(e), rtol=1e-9, atol=1e-7)
+    assert lpv_export_data(fitted)["k_x"] == fitted.stiffness
+
+
+@pytest.mark.parametrize("bad", ["auto", float("nan"), float("inf"), "1e3", None])
+def test_a_bad_stiffness_setting_is_refused_in_one_line(bad: object) -> None:
+    with pytest.raises(DataValidationError, match="stiffness") as info:
+        LPVEstimator(stiffness=bad).fit(_train())  # type: ignore[arg-type]
+    assert "\n" not in str(info.value)
