@@ -208,6 +208,11 @@ def main() -> None:
         help="the LPV zone laws' outer slopes (default: the estimator's)",
     )
     ap.add_argument("--lpv-stroke", type=float, default=None, help="LPV stroke scale [m] (fixed)")
+    ap.add_argument(
+        "--lpv-stiffness",
+        default=None,
+        help="LPV parallel stiffness: 'identify' (the default) or a fixed value [N/m], 0 for none",
+    )
     ap.add_argument("--lpv-blend", type=float, default=None, help="LPV pre-yield share [-] (fixed)")
     ap.add_argument(
         "--fronts",
@@ -274,6 +279,9 @@ def main() -> None:
                         lpv_settings["stroke"] = a.lpv_stroke
                     if kind == "lpv" and a.lpv_blend is not None:
                         lpv_settings["blend"] = a.lpv_blend
+                    if kind == "lpv" and a.lpv_stiffness is not None:
+                        k = a.lpv_stiffness
+                        lpv_settings["stiffness"] = k if k == "identify" else float(k)
                     settings = dict(lpv_settings)
                     if a.eta is not None and takes_lag(kind):
                         settings["eta"] = lag_setting(a.eta)
@@ -287,6 +295,8 @@ def main() -> None:
                         model = get_estimator(kind, input=truth.input, **settings).fit(doe)
                     if "drive_lag" in model.provenance:
                         print(f"{name} {kind}: lag eta = {model.eta:g} 1/s identified")
+                    if getattr(model, "stiffness", 0.0):
+                        print(f"{name} {kind}: stiffness k_x = {model.stiffness:.0f} N/m")
                     run = partial(closed_loop_fidelity, model, truth, **loop)
                     try:
                         res = run(controllers=a.controllers.split(","))
