@@ -270,8 +270,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant(
         "lpv-paper",
         "lpv",
-        (("input_signal", "u"), ("stiffness", 0.0)),
-        "the paper's LPV model: static zone-law input u, no stiffness term",
+        (("input_signal", "u"),),
+        "the paper's LPV model: static zone-law input u",
     ),
 )
 
@@ -291,11 +291,17 @@ def input_text(kind: str, settings: dict[str, object]) -> str:
     kind : str
         Model kind.
     settings : dict
-        Its estimator settings (``input_signal`` absent: the default).
+        Its estimator settings (``input_signal`` or ``stiffness`` absent: the default).
     """
     if kind != "lpv":
         return ""
-    return _LPV_INPUTS.get(str(settings.get("input_signal", "hysteretic")), "")
+    text = _LPV_INPUTS.get(str(settings.get("input_signal", "hysteretic")), "")
+    stiffness = settings.get("stiffness", 0.0)
+    if stiffness == "identify":
+        return text + "; parallel stiffness k_x identified"
+    if stiffness == 0:
+        return text
+    return text + f"; parallel stiffness k_x = {stiffness} N/m"
 
 
 _ADDED: dict[str, KindSpec] = {}

@@ -45,7 +45,7 @@ def _train() -> list[Experiment]:
 
 @pytest.fixture(scope="module")
 def fitted() -> LPVModel:
-    return LPVEstimator(n_m=2, n_rho=2, input_signal="v").fit(_train())
+    return LPVEstimator(n_m=2, n_rho=2, input_signal="v", stiffness="identify").fit(_train())
 
 
 def test_the_stiffness_is_identified_with_the_other_unknowns(fitted: LPVModel) -> None:
@@ -53,15 +53,17 @@ def test_the_stiffness_is_identified_with_the_other_unknowns(fitted: LPVModel) -
     assert fitted.offset == pytest.approx(OFFSET, abs=0.05)
     np.testing.assert_allclose(fitted.alpha, ALPHA, rtol=1e-4, atol=1e-5)
     assert fitted.score(_record(0.3, 42)).esr < 1e-8
-    # the paper's structure (no stiffness) cannot explain the force in phase with x
-    paper = LPVEstimator(n_m=2, n_rho=2, input_signal="v", stiffness=0.0).fit(_train())
+    # the paper's structure (no stiffness, the default) cannot explain the force in phase with x
+    paper = LPVEstimator(n_m=2, n_rho=2, input_signal="v").fit(_train())
     assert paper.stiffness == 0.0
     assert paper.score(_record(0.3, 42)).esr > 100 * fitted.score(_record(0.3, 42)).esr
     # a fixed value is kept as given
     fixed = LPVEstimator(n_m=2, n_rho=2, input_signal="v", stiffness=K_X).fit(_train())
     assert fixed.stiffness == K_X
     # without the refinement the least-squares start (k_x = 0) stays, and says so
-    ls = LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False).fit(_train())
+    ls = LPVEstimator(
+        n_m=2, n_rho=2, input_signal="v", refine=False, stiffness="identify"
+    ).fit(_train())
     assert ls.stiffness == 0.0 and "stiffness_note" in ls.provenance
 
 

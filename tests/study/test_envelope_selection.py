@@ -223,7 +223,7 @@ def test_the_default_model_set_has_the_papers_lpv_beside_the_default_one() -> No
     labels = [(s.label, s.kind, dict(s.settings)) for s in Protocol().resolved_models()]
     names = [lab for lab, _, _ in labels]
     assert names.index("lpv-paper") == names.index("lpv") + 1
-    assert labels[names.index("lpv-paper")][1:] == ("lpv", {"input_signal": "u", "stiffness": 0.0})
+    assert labels[names.index("lpv-paper")][1:] == ("lpv", {"input_signal": "u"})
     summary = pd.DataFrame(
         {
             "model": ["lpv", "lpv-paper", "sp1"],
@@ -247,4 +247,6 @@ def test_the_report_says_which_input_each_lpv_uses() -> None:
     default = _model_text(p, ModelSpec("lpv"))
     assert paper.startswith("lpv-paper (lpv, input_signal='u', input: static zone-law input u")
     assert default == "lpv (input: zone-law input with a hysteretic pre-yield state (default))"
+    stiff = _model_text(p, ModelSpec("lpv", {"stiffness": "identify"}))
+    assert stiff.endswith("; parallel stiffness k_x identified)")
     assert _model_text(p, ModelSpec("sp1")) == "sp1"

@@ -141,9 +141,11 @@ class LPVEstimator(Estimator):
     stiffness : float or "identify"
         Parallel stiffness ``k_x`` [N/m] of ``F = y + F0 + k_x x`` (``x`` the displacement [m]):
         a damper's accumulator or gas spring, a force in phase with the travel that the filtered
-        velocity input cannot give. ``"identify"`` (LPV default): estimated by the output-error
-        refinement with the other unknowns; a number fixes it; ``0`` is the paper's structure
-        (the LTI default and the study's ``lpv-paper``).
+        velocity input cannot give. ``0`` (default): none, the paper's structure.
+        ``"identify"``: estimated by the output-error refinement with the other unknowns
+        (:func:`mrdamper.models.lpv.fit.identify`); a number fixes it. Not the default: with the
+        hysteretic input it trades off against the pre-yield blend, and on the virtual rig's
+        sines it tripled the chirp's test ESR (``docs/results.md``, "Parallel stiffness").
     weighting : {"esr", "sse"}
         ``"esr"`` weights each record by ``1 / (n var F)`` so all records count equally (as in
         the mean ESR); ``"sse"`` weights every sample equally.
@@ -197,7 +199,7 @@ class LPVEstimator(Estimator):
     n_bins: int = 5
     model_fs: float | None = None
     offset: bool = True
-    stiffness: float | Literal["identify"] = "identify"
+    stiffness: float | Literal["identify"] = 0.0
     weighting: Literal["esr", "sse"] = "esr"
     refine: bool = True
     max_nfev: int = 60
@@ -470,7 +472,6 @@ class LTIEstimator(LPVEstimator):
     kind: ClassVar[str] = "lti"
     model_class: ClassVar[type[FittedModel]] = LTIModel
     n_rho: int = 0
-    stiffness: float | Literal["identify"] = 0.0
 
     def _validate(self) -> None:
         super()._validate()
