@@ -349,9 +349,10 @@ class LPVEstimator(Estimator):
             u, rho = model_signals(e, el, fs=fs, eta=eta, lpv_input=lpv_input)
             Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
-            X.append(
-                np.ascontiguousarray(to_model_rate(np.asarray(e.x), e.fs, fs), dtype=np.float64)
-            )
+            if self.stiffness != 0:  # the displacement only where a stiffness needs it
+                X.append(
+                    np.ascontiguousarray(to_model_rate(np.asarray(e.x), e.fs, fs), dtype=np.float64)
+                )
             U.append(u)
             R.append(rho)
             var = float(np.var(Fr))
@@ -371,7 +372,7 @@ class LPVEstimator(Estimator):
                     f"degree n_rho={self.n_rho} needs at least {self.n_rho + 1} (use more current "
                     "levels or lower n_rho)"
                 )
-        rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights, x=X)
+        rec = _lpv_fit.Records(F=F, u=U, rho=R, weights=weights, x=X or None)
         f_scale = max(max(float(np.max(np.abs(f))) for f in F), 1.0)
         bound = 1e3 * f_scale
         prov.update(

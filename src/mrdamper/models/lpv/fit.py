@@ -287,6 +287,11 @@ def refine_output_error(
     return sol.x[:P].copy(), f0, k_x, sol
 
 
+#: Placeholder displacement for the kernel when no stiffness is used (it is then never read).
+_NO_X = np.zeros(1)
+_NO_X.setflags(write=False)
+
+
 @dataclass(frozen=True)
 class _Linear:
     """Where the output's linear unknowns sit in the refinement's vector
@@ -324,6 +329,7 @@ def _normal_eq(
     H = np.zeros((Q, Q))
     g = np.zeros(Q)
     cost = 0.0
+    use_x = lin.stiffness or k_x != 0.0
     for r in range(len(rec.u)):
         c, gr, Hr, bad = K.oe_normal_equations(
             rec.u[r],
@@ -331,7 +337,7 @@ def _normal_eq(
             alpha,
             beta,
             rec.F[r],
-            rec.displacement(r),
+            rec.displacement(r) if use_x else _NO_X,
             f0,
             k_x,
             float(rec.weights[r]),
