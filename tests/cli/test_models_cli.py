@@ -180,3 +180,24 @@ def test_options_are_the_estimator_setting_names() -> None:
     assert "max_nfev" in estimator_settings("narx") and "refine_max_nfev" not in (
         estimator_settings("narx")
     )
+
+
+def test_an_lpv_stiffness_set_on_the_command_line_is_identified_and_reported(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tests.models.test_lpv_stiffness import K_X, _train
+
+    data = tmp_path / "data"
+    data.mkdir()
+    for e in _train():
+        write_csv(e, data / f"{e.name}.csv")
+    model = tmp_path / "k.json"
+    common = ["--n-m", "2", "--set", "input_signal=v", "--out"]
+    main(["fit", "lpv", str(data), *common, str(model), "--set", "stiffness=identify"])
+    said = capsys.readouterr().out
+    fitted = load_model(model)
+    assert fitted.stiffness == pytest.approx(K_X, rel=1e-3)
+    assert f"stiffness k_x = {fitted.stiffness:.4g} N/m" in said
+    main(["fit", "lpv", str(data), *common, str(tmp_path / "paper.json")])  # the default: none
+    assert load_model(tmp_path / "paper.json").stiffness == 0.0
+    assert "k_x" not in capsys.readouterr().out

@@ -61,9 +61,9 @@ def test_the_stiffness_is_identified_with_the_other_unknowns(fitted: LPVModel) -
     fixed = LPVEstimator(n_m=2, n_rho=2, input_signal="v", stiffness=K_X).fit(_train())
     assert fixed.stiffness == K_X
     # without the refinement the least-squares start (k_x = 0) stays, and says so
-    ls = LPVEstimator(
-        n_m=2, n_rho=2, input_signal="v", refine=False, stiffness="identify"
-    ).fit(_train())
+    ls = LPVEstimator(n_m=2, n_rho=2, input_signal="v", refine=False, stiffness="identify").fit(
+        _train()
+    )
     assert ls.stiffness == 0.0 and "stiffness_note" in ls.provenance
 
 

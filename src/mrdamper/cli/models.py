@@ -181,7 +181,9 @@ def fit(
         )
         fitted = get_estimator(model, **given).fit(records)
     path = fitted.save(out, force=force)
-    typer.echo(f"{model}: identified on {len(records)} record(s); wrote {path}")
+    stiffness = getattr(fitted, "stiffness", 0.0)
+    extra = f"; stiffness k_x = {stiffness:.4g} N/m" if stiffness else ""
+    typer.echo(f"{model}: identified on {len(records)} record(s){extra}; wrote {path}")
 
 
 def simulate(
