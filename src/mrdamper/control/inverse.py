@@ -405,6 +405,8 @@ def inverse_current(
     if not np.all(np.isfinite(Fd)):
         raise DataValidationError("F_desired", "contains non-finite values")
     lo, hi = _range(model, i_range)
+    # an LPV model's stiffness force is not the input's to give: its inverses solve for the rest
+    Fd_poly = Fd - sched.stiffness * x if sched is not None else Fd
     if tol is None:
         tol = 1e-6 * max(1.0, float(np.max(np.abs(Fd))) if Fd.size else 1.0)
     if (
@@ -438,7 +440,6 @@ def inverse_current(
             )
         if sched is not None:
             n_h = horizon_samples(sched.eta, 1.0 / sched.fs, horizon)
-            Fd_poly = Fd - sched.stiffness * x  # the stiffness force is not the input's to give
             rho, w, sat = _lpv_reg(model, t, v, Fd_poly, lo, hi, int(n_grid), lam, step_rate, n_h)
         else:
             comp, power, theta, f0 = static_map_arrays(model)
@@ -463,7 +464,6 @@ def inverse_current(
             )
             w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
     elif sched is not None:
-        Fd_poly = Fd - sched.stiffness * x
         rho, w, sat = _lpv_any_rate(model, t, v, Fd_poly, lo, hi, int(n_grid), float(tol))
     else:
         if getattr(model, "eta", None) is not None:

@@ -565,7 +565,8 @@ def identify(
     """
     report("least squares")
     k_x = 0.0 if stiffness is None else float(stiffness)
-    ls = ls_identify(rec.without_stiffness(k_x), n_m, n_p, offset)
+    rec_ls = rec.without_stiffness(k_x)  # a fixed stiffness's force taken out once
+    ls = ls_identify(rec_ls, n_m, n_p, offset)
     theta, F0 = ls.theta, ls.offset
     prov: dict[str, Any] = {"ls_solver": ls.solver, "ls_condition_number": ls.cond}
     grid = np.linspace(*rho_range, STABILITY_GRID)
@@ -576,7 +577,7 @@ def identify(
         prov["stiffness_note"] = "stiffness is identified by the refinement; refine=False keeps 0"
     if refine:
         report("stable start of the refinement")
-        theta0, shrink = _stable_start(theta, n_m, n_p, grid, rec.without_stiffness(k_x), F0, bound)
+        theta0, shrink = _stable_start(theta, n_m, n_p, grid, rec_ls, F0, bound)
         if shrink != 1.0:
             prov["oe_start_pole_scaling"] = shrink
         rec_oe, win = windows(rec)
