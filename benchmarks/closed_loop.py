@@ -211,7 +211,7 @@ def main() -> None:
     ap.add_argument(
         "--lpv-stiffness",
         default=None,
-        help="LPV parallel stiffness: 'identify' (the default) or a fixed value [N/m], 0 for none",
+        help="LPV parallel stiffness: 'identify' or a fixed value [N/m] (default: the estimator's)",
     )
     ap.add_argument("--lpv-blend", type=float, default=None, help="LPV pre-yield share [-] (fixed)")
     ap.add_argument(

@@ -291,15 +291,17 @@ def input_text(kind: str, settings: dict[str, object]) -> str:
     kind : str
         Model kind.
     settings : dict
-        Its estimator settings (``input_signal`` or ``stiffness`` absent: the default).
+        Its estimator settings (``input_signal`` or ``stiffness`` absent: the default). A
+        ``stiffness`` of ``"auto"`` reads as none: it identifies one only when the fit is given
+        records to choose on, which a study's fits are not.
     """
     if kind != "lpv":
         return ""
     text = _LPV_INPUTS.get(str(settings.get("input_signal", "hysteretic")), "")
-    stiffness = settings.get("stiffness", 0.0)
+    stiffness = settings.get("stiffness", "auto")
     if stiffness == "identify":
         return text + "; parallel stiffness k_x identified"
-    if stiffness == 0:
+    if stiffness in (0, "auto"):
         return text
     return text + f"; parallel stiffness k_x = {stiffness} N/m"
 

@@ -201,3 +201,60 @@ def test_an_lpv_stiffness_set_on_the_command_line_is_identified_and_reported(
     main(["fit", "lpv", str(data), *common, str(tmp_path / "paper.json")])  # the default: none
     assert load_model(tmp_path / "paper.json").stiffness == 0.0
     assert "k_x" not in capsys.readouterr().out
+
+
+def test_choice_records_on_the_command_line_decide_the_lpv_stiffness(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from mrdamper.rig import VirtualRig, reference_damper
+    from tests.models.test_lpv_stiffness import _stroke_test
+
+    rig = VirtualRig(damper=reference_damper("quiroz2022"), fs=1000.0)
+    t = np.arange(1250) / rig.fs
+    x = 0.005 * np.sin(2 * np.pi * 2.0 * t) * np.clip(2.0 * t, 0.0, 1.0)
+    train = [
+        rig.run(x, np.full(t.size, c), seed=k, name=f"s{k}") for k, c in enumerate((0, 0.5, 1))
+    ]
+    train += [_stroke_test(level, 40 + k) for k, level in enumerate((0.0, 1.0))]
+    data, held = tmp_path / "data", tmp_path / "held"
+    for folder, recs in (
+        (data, train),
+        (held, [_stroke_test(lv, 50 + k) for k, lv in enumerate((0.0, 1.0))]),
+    ):
+        folder.mkdir()
+        for e in recs:
+            write_csv(e, folder / f"{e.name}.csv")
+    model = tmp_path / "auto.json"
+    main(
+        [
+            "fit",
+            "lpv",
+            str(data),
+            "--set",
+            "stroke=1e-4",
+            "--choice-records",
+            str(held),
+            "--out",
+            str(model),
+        ]
+    )
+    fitted = load_model(model)
+    # the reference damper's accumulator is 693 N/m; five short records place it within ~2x
+    assert 300.0 < fitted.stiffness < 1500.0
+    assert f"stiffness k_x = {fitted.stiffness:.4g} N/m" in capsys.readouterr().out
+    assert fitted.provenance["hysteretic_held_out"]["held_out"] == ["stroke50", "stroke51"]
+    with pytest.raises(SystemExit):
+        main(
+            [
+                "fit",
+                "sp1",
+                str(data),
+                "--choice-records",
+                str(held),
+                "--out",
+                str(tmp_path / "s.json"),
+            ]
+        )
+    err = capsys.readouterr().err
+    assert "--choice-records" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "s.json").exists()

@@ -13,11 +13,11 @@ import pytest
 import mrdamper.cli.rig as cli_rig
 from mrdamper.cli.main import main
 from mrdamper.control.doe_extension import control_extension
-from mrdamper.data import read_records
+from mrdamper.data import ExperimentSet, read_records
 from mrdamper.errors import DataValidationError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.rig.doe import table_ii
-from mrdamper.rig.doe_control import CONTROL_EXTENSION
+from mrdamper.rig.doe_control import CONTROL_EXTENSION, STROKE_TEST
 
 
 def _soft(damper):  # type: ignore[no-untyped-def]
@@ -35,7 +35,10 @@ def test_extension_moves_fast_switches_fast_and_stays_in_the_stroke(damper) -> N
     ext = control_extension(seed=1, scale=0.1, damper=damper, model=_first_model())
     doe = table_ii(seed=0, scale=0.07, damper=damper, experiments=[2])
     n = 2 * len(CONTROL_EXTENSION)
-    assert [r.name for r in ext] == [f"ctrl{k:02d}" for k in range(1, n + 1)]
+    assert [r.name for r in ext] == [f"ctrl{k:02d}" for k in range(1, n + 1)] + [
+        f"stroke{k:02d}" for k in range(1, len(STROKE_TEST) + 1)
+    ]
+    stroke, ext = ext[n:], ExperimentSet(ext[:n])
     assert [r.metadata["pattern"] for r in ext[:2]] == ["loop current", "APRBS"]
     v_ext = max(float(np.max(np.abs(r.v))) for r in ext)
     v_doe = max(float(np.max(np.abs(r.v))) for r in doe)
@@ -58,6 +61,13 @@ def test_extension_moves_fast_switches_fast_and_stays_in_the_stroke(damper) -> N
         assert np.ptp(r.i) > 0.5 and np.sum(np.abs(np.diff(r.i[::10])) > 0.05) >= 5
     again = control_extension(seed=1, scale=0.1, damper=damper, model=_first_model())
     np.testing.assert_array_equal(ext[4].F, again[4].F)
+    np.testing.assert_array_equal(stroke[4].F, again[n + 4].F)
+    # the stroke test does not change the rows' records (its seeds come after theirs)
+    rows_only = control_extension(
+        seed=1, scale=0.1, damper=damper, model=_first_model(), stroke_rows=()
+    )
+    assert len(rows_only) == n
+    np.testing.assert_array_equal(ext[n - 1].F, rows_only[n - 1].F)
     other = control_extension(seed=2, scale=0.1, damper=damper, model=_first_model())
     assert not np.array_equal(ext[0].x, other[0].x)
     with pytest.raises(DataValidationError, match="scale") as err:
@@ -78,13 +88,14 @@ def test_rig_doe_extension_control_on_the_command_line(
     out = tmp_path / "doe"
     args = ["rig", "doe", "--out", str(out), "--scale", "0.07", "--fs", "200"]
     main([*args, "--extension", "control", "--loop-model", str(first)])
-    assert "91 records" in capsys.readouterr().out
+    assert "100 records" in capsys.readouterr().out
     names = pd.read_csv(out / "manifest.csv")["name"].tolist()
-    assert len(names) == 91 and names[-1] == "ctrl30" and (out / "ctrl01.csv").exists()
+    assert len(names) == 100 and names[-1] == "stroke09" and (out / "ctrl01.csv").exists()
     # the folder reads back as the records a fit takes (the extension's manifest rows leave
     # experiment, replicate and band empty)
     back = read_records(out)
-    assert len(back) == 91
+    assert len(back) == 100
+    assert next(r for r in back if r.name == "stroke01").metadata["pattern"] == "stroke test"
     ctrl = next(r for r in back if r.name == "ctrl01")
     assert "experiment" not in ctrl.metadata and ctrl.metadata["pattern"] == "loop current"
     assert next(r for r in back if r.name.startswith("exp")).metadata["experiment"] >= 1
@@ -136,3 +147,24 @@ def test_a_higher_highpass_keeps_more_of_the_loops_velocity_within_the_stroke(da
         with pytest.raises(DataValidationError, match="highpass") as err:
             replay(bad)
         assert "\n" not in str(err.value)
+
+
+def test_the_stroke_test_sweeps_the_stroke_slowly_at_constant_currents(damper) -> None:  # type: ignore[no-untyped-def]
+    from mrdamper.rig.doe import resolve_rig
+    from mrdamper.rig.doe_control import stroke_test
+
+    rig = resolve_rig(None, _soft(damper), 1000.0)
+    seeds = list(range(10, 10 + len(STROKE_TEST)))
+    recs = stroke_test(rig, current_range=(0.0, 1.0), seeds=seeds)
+    assert [r.metadata["pattern"] for r in recs] == ["stroke test"] * len(STROKE_TEST)
+    for row, r in zip(STROKE_TEST, recs, strict=True):
+        # 90 % of half the 40 mm stroke, at the row's body-band frequency and constant current
+        assert np.max(np.abs(r.x)) == pytest.approx(0.018, rel=0.02)
+        assert np.max(np.abs(r.v)) == pytest.approx(2 * np.pi * row.frequency * 0.018, rel=0.05)
+        assert np.mean(r.i) == pytest.approx(row.level, abs=0.02) and np.ptp(r.i) < 0.05
+        assert r.n / r.fs == pytest.approx((row.cycles + 1) / row.frequency, abs=2e-3)
+    short = stroke_test(rig, current_range=(0.0, 1.0), seeds=seeds, scale=0.1)
+    assert short[0].n / short[0].fs == pytest.approx(3 / STROKE_TEST[0].frequency, abs=2e-3)
+    with pytest.raises(DataValidationError, match="seeds") as err:
+        stroke_test(rig, current_range=(0.0, 1.0), seeds=seeds[:2])
+    assert "\n" not in str(err.value)

@@ -3,7 +3,10 @@
 * ``fit MODEL DATA... --out model.json`` identifies any registered model kind on the records in
   the given files / folders and saves it as JSON (never overwriting without ``--force``).
   Options given on the command line become estimator settings; a setting the model does not
-  take is an error that lists the settings it does take. On a terminal a live line on standard
+  take is an error that lists the settings it does take. ``--choice-records PATH`` (repeatable;
+  LPV and LTI) gives records the open settings are chosen on instead of the inner folds
+  (``choice_records``; with the default ``stiffness="auto"`` they also decide the LPV model's
+  parallel stiffness). On a terminal a live line on standard
   error shows the stage (reading records, then the fit's stages with ``k/N`` where they count)
   and the elapsed time, then ``...: done in X s``; ``--no-progress`` turns it off.
 * ``simulate model.json DATA --out predicted.csv`` writes ``t``, measured ``F`` and predicted
@@ -138,6 +141,15 @@ def fit(
     pattern: Annotated[
         str | None, typer.Option("--pattern", help="File-name regex for folders.")
     ] = None,
+    choice_records: Annotated[
+        list[Path] | None,
+        typer.Option(
+            "--choice-records",
+            help="Held-out records (files or folders, repeatable) on which the open settings "
+            "are chosen instead of inner folds of DATA (LPV / LTI: the hysteretic input's stroke "
+            "and blend, and with the default stiffness=auto the parallel stiffness).",
+        ),
+    ] = None,
     no_progress: Annotated[
         bool,
         typer.Option(
@@ -153,9 +165,18 @@ def fit(
     from mrdamper.cli._status import working
 
     accepted = estimator_settings(model)  # unknown kind: SchemaError naming the known kinds
-    check_writable(out, force, inputs=list(data), kind=MODEL_FILE)  # fail before a long fit
+    inputs = [*data, *(choice_records or [])]
+    check_writable(out, force, inputs=inputs, kind=MODEL_FILE)  # fail before a long fit
+    estimator_type = type(get_estimator(model))
+    if choice_records and "choice_records" not in getattr(estimator_type, "fit_options", ()):
+        raise DataValidationError(
+            "--choice-records", f"model {model!r} chooses no setting on given records (LPV, LTI do)"
+        )
     with working(f"fitting {model}", show=not no_progress) as status:
         records = read_records(list(data), pattern, read_kw)
+        options: dict[str, Any] = {}
+        if choice_records:
+            options["choice_records"] = read_records(list(choice_records), pattern, read_kw)
         given: dict[str, Any] = {
             "input": input_ or _choose_input(records),
             "n_m": n_m,
@@ -167,7 +188,7 @@ def fit(
         }
         given = {k: v for k, v in given.items() if v is not None}
         given.update(parse_settings(settings))
-        renamed = getattr(type(get_estimator(model)), "renamed_settings", {})
+        renamed = getattr(estimator_type, "renamed_settings", {})
         unknown = [k for k in given if k not in accepted and k not in renamed]
         if unknown:
             flag = unknown[0].replace("_", "-")
@@ -179,7 +200,7 @@ def fit(
         status.message = (
             f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"
         )
-        fitted = get_estimator(model, **given).fit(records)
+        fitted = get_estimator(model, **given).fit(records, **options)
     path = fitted.save(out, force=force)
     stiffness = getattr(fitted, "stiffness", 0.0)
     extra = f"; stiffness k_x = {stiffness:.4g} N/m" if stiffness else ""

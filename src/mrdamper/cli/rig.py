@@ -104,10 +104,10 @@ def doe(
     from mrdamper.control.doe_extension import control_extension
     from mrdamper.data import ExperimentSet
     from mrdamper.models.registry import load_model
-    from mrdamper.rig.doe_control import CONTROL_EXTENSION
+    from mrdamper.rig.doe_control import CONTROL_EXTENSION, STROKE_TEST
 
     first = None if loop_model is None else load_model(loop_model)
-    n_ext = 2 * len(CONTROL_EXTENSION) if extension == "control" else 0
+    n_ext = 2 * len(CONTROL_EXTENSION) + len(STROKE_TEST) if extension == "control" else 0
     n_rec = sum(s.replicates for s in TABLE_II) + n_ext
     written: list[int] = []
     with _bar(not no_progress) as bar:

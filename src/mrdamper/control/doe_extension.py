@@ -6,13 +6,16 @@ where the loop goes: it runs the quarter car (:func:`~mrdamper.control.closed_lo
 simulate_closed_loop`) with a first model of the damper as controller model and damper, one run
 per row of :data:`~mrdamper.rig.doe_control.CONTROL_EXTENSION` (ISO 8608 roads B, C, D, the five
 controllers), and replays each run's damper travel on the rig with the run's current and with an
-APRBS current (:func:`~mrdamper.rig.doe_control.replay_loop_motion`). On a physical rig the first
+APRBS current (:func:`~mrdamper.rig.doe_control.replay_loop_motion`), and adds the stroke test
+(:func:`~mrdamper.rig.doe_control.stroke_test`: slow sines over the rig's stroke, where a
+damper's stiffness shows). On a physical rig the first
 model is one fitted on Table II (any kind that can be the quarter car's damper and controller
 model; a static map fits in seconds); on the virtual rig it defaults to the rig's own damper.
 
 Seeds: ``numpy.random.SeedSequence(seed)`` split into one child per row (as
 :func:`~mrdamper.rig.doe.table_ii` does), each split into the road, the APRBS current and the two
-rig runs; a different root seed gives held-out records.
+rig runs; the stroke test's records take the children after the rows' (a row's records do not
+depend on whether the stroke test is run); a different root seed gives held-out records.
 """
 
 from __future__ import annotations
@@ -28,7 +31,15 @@ from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 from mrdamper.rig.doe import current_range, record_seeds, resolve_rig
-from mrdamper.rig.doe_control import CONTROL_EXTENSION, HIGHPASS, ControlRow, replay_loop_motion
+from mrdamper.rig.doe_control import (
+    CONTROL_EXTENSION,
+    HIGHPASS,
+    STROKE_TEST,
+    ControlRow,
+    StrokeRow,
+    replay_loop_motion,
+    stroke_test,
+)
 from mrdamper.rig.virtual_rig import VirtualRig
 from mrdamper.signals.common import check_positive, child_seeds
 
@@ -70,6 +81,7 @@ def control_extension(
     rows: tuple[ControlRow, ...] = CONTROL_EXTENSION,
     car: QuarterCar | None = None,
     highpass: float = HIGHPASS,
+    stroke_rows: tuple[StrokeRow, ...] = STROKE_TEST,
 ) -> ExperimentSet:
     """Generate the control-oriented extension on the virtual rig (see the module docstring).
 
@@ -95,12 +107,16 @@ def control_extension(
     highpass : float
         High-pass corner of the replayed travel [Hz] (default
         :data:`~mrdamper.rig.doe_control.HIGHPASS`).
+    stroke_rows : tuple of StrokeRow
+        The stroke test's records (default :data:`~mrdamper.rig.doe_control.STROKE_TEST`; an
+        empty tuple leaves it out).
 
     Returns
     -------
     ExperimentSet
         Records ``ctrl{k:02d}``, two per row (loop current, then APRBS current), with metadata
-        ``pattern``, ``displacement`` (road, controller, loop model), ``duration``, ``seed``.
+        ``pattern``, ``displacement`` (road, controller, loop model), ``duration``, ``seed``;
+        then the stroke test's ``stroke{k:02d}``.
     """
     scale = check_positive("scale", scale, "-")
     rig = resolve_rig(rig, damper, fs)
@@ -114,7 +130,8 @@ def control_extension(
     car = QuarterCar() if car is None else car
     lo, hi = current_range(rig.model, rig)
     out = []
-    for k, (row, s) in enumerate(zip(rows, record_seeds(seed, len(rows)), strict=True)):
+    seeds = record_seeds(seed, len(rows) + len(stroke_rows))
+    for k, (row, s) in enumerate(zip(rows, seeds[: len(rows)], strict=True)):
         duration = row.duration * scale
         if duration < 2.0:
             raise DataValidationError(
@@ -141,4 +158,7 @@ def control_extension(
             seed_label=s,
             highpass=highpass,
         )
+    out += stroke_test(
+        rig, current_range=(lo, hi), seeds=seeds[len(rows) :], scale=scale, rows=stroke_rows
+    )
     return ExperimentSet(out, name=f"control_extension_seed{seed}")

@@ -20,7 +20,16 @@ speed, one controller), and this module replays each run's damper travel on the 
   the DoE range with a minimum hold of :data:`HOLD` (50 ms: switching as fast as a skyhook
   controller at 1 kHz does, uncorrelated with the motion).
 
-Rig time: 2 x 15 rows x 30 s = 900 s at ``scale=1`` (15 % of Table II's 5820 s).
+The high-pass takes the body band out of the replays, and with it most of the stroke. The
+extension therefore also puts a *stroke test* on the rig (:func:`stroke_test`, rows
+:data:`STROKE_TEST`): slow sines over 90 % of half the stroke at body-band frequencies (0.5, 1
+and 1.5 Hz) at three constant currents. There a force in phase with the travel (a gas
+accumulator's stiffness, ``k1 (x - x0)`` in the Spencer model) is a visible share of the
+force; in the replays and in Table II it is under 2 %, and a model identified on them cannot tell
+a damper with the stiffness from one without (``docs/results.md``, "Parallel stiffness").
+
+Rig time: 2 x 15 rows x 30 s = 900 s at ``scale=1`` (15 % of Table II's 5820 s), plus the stroke
+test's 55 s (33 s at ``scale=0.1``).
 """
 
 from __future__ import annotations
@@ -41,8 +50,11 @@ __all__ = [
     "CONTROL_EXTENSION",
     "HIGHPASS",
     "HOLD",
+    "STROKE_TEST",
     "ControlRow",
+    "StrokeRow",
     "replay_loop_motion",
+    "stroke_test",
 ]
 
 #: High-pass corner of the replayed travel [Hz]. At 1 Hz (the corner before) the body motion kept
@@ -80,6 +92,89 @@ CONTROL_EXTENSION: tuple[ControlRow, ...] = tuple(
     for cls, speed in (("B", 25.0), ("C", 20.0), ("D", 10.0))
     for c in CONTROLLERS
 )
+
+
+@dataclass(frozen=True)
+class StrokeRow:
+    """One record of the stroke test: sine frequency [Hz], constant current as a share of the
+    DoE's range [-] (0: its lower end, 1: its upper end), cycles at full amplitude (before
+    ``scale``)."""
+
+    frequency: float
+    level: float
+    cycles: int = 4
+
+
+#: The stroke test's rows: the body band (0.5, 1, 1.5 Hz) x the soft end, a quarter and the hard
+#: end of the current range.
+STROKE_TEST: tuple[StrokeRow, ...] = tuple(
+    StrokeRow(f, level) for f in (0.5, 1.0, 1.5) for level in (0.0, 0.25, 1.0)
+)
+
+
+def _stroke_sine(fs: float, amplitude: float, frequency: float, cycles: int) -> np.ndarray:
+    """``cycles`` sine periods at ``amplitude`` [m] between half-period raised-cosine ramps."""
+    half = 0.5 / frequency
+    t = np.arange(round((cycles / frequency + 2 * half) * fs)) / fs
+    ramp = np.clip(np.minimum(t, t[-1] - t) / half, 0.0, 1.0)
+    return amplitude * np.sin(2 * np.pi * frequency * t) * (0.5 - 0.5 * np.cos(np.pi * ramp))
+
+
+def stroke_test(
+    rig: VirtualRig,
+    *,
+    current_range: tuple[float, float],
+    seeds: list[int],
+    scale: float = 1.0,
+    rows: tuple[StrokeRow, ...] = STROKE_TEST,
+    first: int = 1,
+) -> list[Experiment]:
+    """The stroke test: one slow sine over 90 % of half the rig's stroke per row.
+
+    Parameters
+    ----------
+    rig : VirtualRig
+        The rig.
+    current_range : tuple of float
+        DoE current range [A or V]; a row's constant current is ``lo + level (hi - lo)``.
+    seeds : list of int
+        One rig-run seed per row.
+    scale : float
+        Duration factor [-]: ``max(2, round(cycles * scale))`` cycles per record.
+    rows : tuple of StrokeRow
+        The records (default :data:`STROKE_TEST`).
+    first : int
+        Number of the first record's name, ``stroke{first:02d}``.
+
+    Returns
+    -------
+    list of Experiment
+        One record per row, metadata ``pattern`` ("stroke test"), ``displacement``,
+        ``frequency`` [Hz] and ``current_range`` (no ``current`` key: Table II's records and the
+        replays carry none, and the LPV zone laws group records by it only when every record
+        has it); each scaled down, if needed, to the load cell's range as the replays are.
+    """
+    if len(seeds) != len(rows):
+        raise DataValidationError("seeds", f"expected {len(rows)} seeds, got {len(seeds)}")
+    lo, hi = current_range
+    amplitude = FILL * rig.actuator.stroke / 2.0
+    out = []
+    for k, (row, s) in enumerate(zip(rows, seeds, strict=True)):
+        cycles = max(2, round(row.cycles * scale))
+        x = _stroke_sine(rig.fs, amplitude, row.frequency, cycles)
+        e = np.full(x.size, lo + row.level * (hi - lo))
+        x = _within_load_cell(x, rig, e)
+        meta = {
+            "pattern": "stroke test",
+            "displacement": f"sine {1e3 * np.max(np.abs(x)):.1f} mm @ {row.frequency:g} Hz",
+            "frequency": row.frequency,
+            "current_range": (lo, hi),
+            "duration": x.size / rig.fs,
+        }
+        out.append(
+            rig.run(x, e, seed=s, name=f"stroke{first + k:02d}", metadata=meta, seed_label=s)
+        )
+    return out
 
 
 def _fade(x: np.ndarray, fs: float) -> np.ndarray:

@@ -46,6 +46,15 @@ trained up to 3 Hz and scored at 5 Hz 0.0178 -> 0.0163, the Quiroz leave-one-con
 records alone (``"held-out"``) miss the 5 Hz gain; the band's fold alone missed the full-length
 chirp (0.0188: its scores were within 5 % of one another).
 
+With ``stiffness="auto"`` (the default) and records given to the fit (``choice_records``), the
+best candidate is fitted once more with the parallel stiffness identified
+(:func:`mrdamper.models.lpv.fit.identify`), and the given records keep it where it predicts them
+better; every grid candidate is fitted without it. Given records are the user's statement of
+where the model will be used (e.g. held-out loop records: in a quarter car the stiffness acts in
+the body band, where the skyhook loop's current is decided); on the inner or beyond-envelope
+folds the stiffness is left out (0), because there it trades off against the pre-yield blend
+(``docs/results.md``, "Parallel stiffness").
+
 With ``eta="identify"`` on a measured current the candidates are fitted without a lag; the lag is
 then identified with the chosen settings held (:func:`mrdamper.models.lag.fit_with_lag`, where no
 lag is itself a candidate). For a voltage command every candidate identifies its own drive lag.
@@ -382,7 +391,9 @@ def fit_choosing(
     first_error = ""
     cands = _candidates(est)
     # a measured current's lag is identified after this choice, with its result held
-    held = {"eta": None} if settings_chosen_without_lag(est) else {}
+    held: dict[str, Any] = {"eta": None} if settings_chosen_without_lag(est) else {}
+    if est.stiffness == "auto":
+        held["stiffness"] = 0.0
     for k, (x_y, lam) in enumerate(cands, start=1):
         cand = dataclasses.replace(est, stroke=x_y, blend=lam, max_nfev=nfev, **held)
         report("hysteretic input: candidate", k - 1, len(cands))
@@ -413,10 +424,39 @@ def fit_choosing(
     report("hysteretic input: candidate", len(cands), len(cands))
     chosen = dataclasses.replace(est, stroke=best[1], blend=best[2])
     note = _note(best, len(rows), nfev, [f.split for f in folds])
+    if est.stiffness == "auto" and how == "given":
+        stiff = dataclasses.replace(chosen, max_nfev=nfev, **{**held, "stiffness": "identify"})
+        with warnings.catch_warnings(), section("hysteretic candidate with a stiffness"):
+            warnings.simplefilter("ignore")
+            try:
+                scores = [fold.score(stiff) for fold in folds]
+                score, error = float(np.mean([sc for sc, _ in scores])), ""
+            except IdentificationError as exc:
+                score, error = float("inf"), str(exc)
+        rows.append(
+            {
+                "stroke": best[1],
+                "blend": best[2],
+                "stiffness": "identify",
+                key: score,
+                "error": error,
+            }
+        )
+        keep = score < best[0]
+        chosen = dataclasses.replace(chosen, stiffness="identify" if keep else 0.0)
+        note += (
+            f"; the parallel stiffness identified scores {score:.4g} against {best[0]:.4g} "
+            f"without it on the given records: {'identified' if keep else 'none'}"
+        )
 
     def provenance(prov: dict[str, Any]) -> dict[str, Any]:
         prov = {**prov, "hysteretic_choice": rows, "hysteretic_note": note}
-        prov["settings"] = {**prov.get("settings", {}), "stroke": est.stroke, "blend": est.blend}
+        prov["settings"] = {
+            **prov.get("settings", {}),
+            "stroke": est.stroke,
+            "blend": est.blend,
+            "stiffness": est.stiffness,
+        }
         if how != "training":
             records = [f.split.record() for f in folds]
             prov["hysteretic_held_out"] = (

@@ -138,14 +138,18 @@ class LPVEstimator(Estimator):
         are up-sampled by linear interpolation). ``fs`` is its old name, still accepted.
     offset : bool
         Estimate an output force offset ``F0``.
-    stiffness : float or "identify"
+    stiffness : float, "auto" or "identify"
         Parallel stiffness ``k_x`` [N/m] of ``F = y + F0 + k_x x`` (``x`` the displacement [m]):
         a damper's accumulator or gas spring, a force in phase with the travel that the filtered
-        velocity input cannot give. ``0`` (default): none, the paper's structure.
+        velocity input cannot give. ``"auto"`` (default): when the hysteretic input's settings
+        are chosen on records given to the fit (``choice_records``, e.g. held-out loop records),
+        those records also decide between no stiffness and an identified one
+        (:mod:`mrdamper.models.lpv.choice`); otherwise none, the paper's structure.
         ``"identify"``: estimated by the output-error refinement with the other unknowns
-        (:func:`mrdamper.models.lpv.fit.identify`); a number fixes it. Not the default: with the
-        hysteretic input it trades off against the pre-yield blend, and on the virtual rig's
-        sines it tripled the chirp's test ESR (``docs/results.md``, "Parallel stiffness").
+        (:func:`mrdamper.models.lpv.fit.identify`); a number fixes it (``0``: none). Not
+        identified by default otherwise: on the beyond-envelope folds it trades off against the
+        pre-yield blend, and on the virtual rig's sines it tripled the chirp's test ESR
+        (``docs/results.md``, "Parallel stiffness").
     weighting : {"esr", "sse"}
         ``"esr"`` weights each record by ``1 / (n var F)`` so all records count equally (as in
         the mean ESR); ``"sse"`` weights every sample equally.
@@ -199,7 +203,7 @@ class LPVEstimator(Estimator):
     n_bins: int = 5
     model_fs: float | None = None
     offset: bool = True
-    stiffness: float | Literal["identify"] = 0.0
+    stiffness: float | Literal["auto", "identify"] = "auto"
     weighting: Literal["esr", "sse"] = "esr"
     refine: bool = True
     max_nfev: int = 60
@@ -228,12 +232,12 @@ class LPVEstimator(Estimator):
             check_int(name, getattr(self, name), 0)
         check_lag(self.eta)
         check_number("model_fs", self.model_fs, allow_none=True, what="a positive model rate [Hz]")
-        if self.stiffness != "identify":
+        if self.stiffness not in ("auto", "identify"):
             check_number(
                 "stiffness",
                 self.stiffness,
                 low=-math.inf,
-                what="'identify' or a finite stiffness [N/m]",
+                what="'auto', 'identify' or a finite stiffness [N/m]",
             )
 
     def _laws(
@@ -311,6 +315,11 @@ class LPVEstimator(Estimator):
             return "post-yield" if self.input_signal == "hysteretic" else "zones"
         return self.outer_slopes
 
+    def resolved_stiffness(self) -> float | Literal["identify"]:
+        """The stiffness the identification uses: ``"auto"`` left unresolved by a choice on given
+        records is none (0)."""
+        return 0.0 if self.stiffness == "auto" else self.stiffness
+
     def _open_settings(self) -> bool:
         """True when the hysteretic input's ``stroke`` or ``blend`` is left None."""
         return bool(self._input_class().open_settings(self.reading, self.stroke, self.blend))
@@ -349,7 +358,7 @@ class LPVEstimator(Estimator):
             u, rho = model_signals(e, el, fs=fs, eta=eta, lpv_input=lpv_input)
             Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
-            if self.stiffness != 0:  # the displacement only where a stiffness needs it
+            if self.resolved_stiffness() != 0:  # the displacement only where a stiffness needs it
                 X.append(
                     np.ascontiguousarray(to_model_rate(np.asarray(e.x), e.fs, fs), dtype=np.float64)
                 )
@@ -396,7 +405,9 @@ class LPVEstimator(Estimator):
             enforce_stability=self.stability == "enforce",
             rho_range=rho_range,
             windows=lambda r: _scale.window_records(r, fs),  # long campaigns
-            stiffness=None if self.stiffness == "identify" else float(self.stiffness),
+            stiffness=None
+            if self.resolved_stiffness() == "identify"
+            else float(self.resolved_stiffness()),
         )
         prov.update(fit.provenance)
         pmax, rho_at, pole = fit.largest_pole
