@@ -76,7 +76,7 @@ from mrdamper.models.lpv.estimator import outer_slope_choices
 from mrdamper.models.rates import rate_rule
 from mrdamper.models.registry import takes_lag
 from mrdamper.rig import VirtualRig, reference_damper
-from mrdamper.signals import aprbs, road_profile
+from mrdamper.signals import aprbs, ramped_sine, road_profile
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = Path(os.environ.get("MRDAMPER_SHARED_DATA", REPO.parent / "shared" / "data"))
@@ -288,14 +288,6 @@ def scenario_quiroz_cross(quick: bool) -> Scenario:
     return Scenario("(b) quiroz-cross", train, tests, _defaults, _loco(train), grid)
 
 
-def _ramped_sine(fs: float, amplitude: float, frequency: float, cycles: float) -> np.ndarray:
-    """Sine with a half-period raised-cosine ramp up and down (like Quiroz's cut records)."""
-    half = 0.5 / frequency
-    t = np.arange(round((cycles / frequency + 2 * half) * fs)) / fs
-    env = np.clip(np.minimum(t, t[-1] - t) / half, 0.0, 1.0)
-    return amplitude * np.sin(2 * np.pi * frequency * t) * (0.5 - 0.5 * np.cos(np.pi * env))
-
-
 def scenario_rig(quick: bool) -> Scenario:
     """(c) virtual rig, reference damper calibrated on Quiroz."""
     fs = 1000.0
@@ -306,7 +298,7 @@ def scenario_rig(quick: bool) -> Scenario:
     train = []
     for amp, f in RIG_CONDITIONS:
         for cur in currents:
-            x = _ramped_sine(fs, amp, f, cycles)
+            x = ramped_sine(fs, amplitude=amp, frequency=f, cycles=cycles)
             seed += 1
             cond = f"{amp * 1e3:g}mm_{f:g}Hz"
             train.append(

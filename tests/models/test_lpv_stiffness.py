@@ -112,10 +112,10 @@ def _stroke_test(level: float, seed: int) -> Experiment:
     """A slow sine over most of the rig's stroke (the extension's stroke test): there the
     reference damper's accumulator force ``k1 x`` (693 N/m) is a visible share of the force."""
     from mrdamper.rig import VirtualRig, reference_damper
-    from mrdamper.rig.doe_control import _stroke_sine
+    from mrdamper.signals import ramped_sine
 
     rig = VirtualRig(damper=reference_damper("quiroz2022"), fs=1000.0)
-    x = _stroke_sine(rig.fs, 0.018, 0.5, 2)
+    x = ramped_sine(rig.fs, amplitude=0.018, frequency=0.5, cycles=2)
     meta = {"current": level}
     return rig.run(x, np.full(x.size, level), seed=seed, name=f"stroke{seed}", metadata=meta)
 

@@ -8,7 +8,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mrdamper.errors import DataValidationError
-from mrdamper.signals import aprbs, constant, icps, n_samples, sine, stepped_current, time_grid
+from mrdamper.signals import (
+    aprbs,
+    constant,
+    icps,
+    n_samples,
+    ramped_sine,
+    sine,
+    stepped_current,
+    time_grid,
+)
 from mrdamper.signals.aprbs import run_starts
 
 
@@ -109,3 +118,18 @@ def test_constant_and_sine() -> None:
         sine(100.0, 1.0, amplitude=-1.0, frequency=1.0)
     with pytest.raises(DataValidationError, match="value"):
         constant(100.0, 1.0, value=float("inf"))
+
+
+def test_ramped_sine_rests_at_both_ends_and_holds_full_amplitude_between() -> None:
+    fs, f, a = 1000.0, 2.0, 0.018
+    x = ramped_sine(fs, amplitude=a, frequency=f, cycles=3)
+    assert x.size == round(4 / f * fs) and x[0] == 0.0 and abs(x[-1]) < 1e-3 * a
+    t = np.arange(x.size) / fs
+    steady = (t >= 0.5 / f) & (t <= t[-1] - 0.5 / f)  # between the half-period ramps
+    np.testing.assert_allclose(x[steady], a * np.sin(2 * np.pi * f * t[steady]), atol=1e-12)
+    assert np.max(np.abs(x[t < 0.25 / f])) < 0.5 * a  # the ramp: well below full amplitude
+    for bad in ({"cycles": 0}, {"cycles": 2.5}, {"frequency": 600.0}, {"amplitude": -1.0}):
+        kw = {"amplitude": a, "frequency": f, "cycles": 2, **bad}
+        with pytest.raises(DataValidationError, match=next(iter(bad))) as err:
+            ramped_sine(fs, **kw)  # type: ignore[arg-type]
+        assert "\n" not in str(err.value)

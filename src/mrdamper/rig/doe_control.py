@@ -43,7 +43,7 @@ from scipy.signal import butter, sosfiltfilt
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError
 from mrdamper.rig.virtual_rig import VirtualRig
-from mrdamper.signals import aprbs
+from mrdamper.signals import aprbs, ramped_sine
 
 __all__ = [
     "CONTROLLERS",
@@ -112,14 +112,6 @@ STROKE_TEST: tuple[StrokeRow, ...] = tuple(
 )
 
 
-def _stroke_sine(fs: float, amplitude: float, frequency: float, cycles: int) -> np.ndarray:
-    """``cycles`` sine periods at ``amplitude`` [m] between half-period raised-cosine ramps."""
-    half = 0.5 / frequency
-    t = np.arange(round((cycles / frequency + 2 * half) * fs)) / fs
-    ramp = np.clip(np.minimum(t, t[-1] - t) / half, 0.0, 1.0)
-    return amplitude * np.sin(2 * np.pi * frequency * t) * (0.5 - 0.5 * np.cos(np.pi * ramp))
-
-
 def stroke_test(
     rig: VirtualRig,
     *,
@@ -161,7 +153,7 @@ def stroke_test(
     out = []
     for k, (row, s) in enumerate(zip(rows, seeds, strict=True)):
         cycles = max(2, round(row.cycles * scale))
-        x = _stroke_sine(rig.fs, amplitude, row.frequency, cycles)
+        x = ramped_sine(rig.fs, amplitude=amplitude, frequency=row.frequency, cycles=cycles)
         e = np.full(x.size, lo + row.level * (hi - lo))
         x = _within_load_cell(x, rig, e)
         meta = {

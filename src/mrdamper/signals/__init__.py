@@ -8,12 +8,12 @@ same seed always gives the same bytes.
 * :func:`icps`: pseudo-random current with an increased clock period (the project's reading of
   the paper's "ICPS", ``paper/READING-NOTES.md`` item 8).
 * :func:`stepped_current`: SC, stepped increments of constant current.
-* :func:`constant`, :func:`sine`: deterministic basics.
+* :func:`constant`, :func:`sine`, :func:`ramped_sine`: deterministic basics.
 * :func:`road_profile`, :func:`long_road_profile`: ISO 8608 road displacement scaled to the stroke.
 """
 
 from mrdamper.signals.aprbs import aprbs
-from mrdamper.signals.basic import constant, n_samples, sine, time_grid
+from mrdamper.signals.basic import constant, n_samples, ramped_sine, sine, time_grid
 from mrdamper.signals.icps import icps
 from mrdamper.signals.prbs import PRIMITIVE_TAPS, mls, prbs
 from mrdamper.signals.road import (
@@ -37,6 +37,7 @@ __all__ = [
     "mls",
     "n_samples",
     "prbs",
+    "ramped_sine",
     "road_profile",
     "sine",
     "spatial_psd",

@@ -1,4 +1,4 @@
-"""Deterministic basic signals: constant and sine, plus the uniform time grid."""
+"""Deterministic basic signals: constant, sine and ramped sine, plus the uniform time grid."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 from mrdamper.errors import DataValidationError
 from mrdamper.signals.common import check_positive, n_samples, time_grid
 
-__all__ = ["constant", "n_samples", "sine", "time_grid"]
+__all__ = ["constant", "n_samples", "ramped_sine", "sine", "time_grid"]
 
 
 def constant(fs: float, duration: float, *, value: float) -> np.ndarray:
@@ -92,3 +92,47 @@ def sine(
         )
     t = time_grid(fs, duration)
     return off + a * np.sin(2.0 * np.pi * f * t + ph)
+
+
+def ramped_sine(fs: float, *, amplitude: float, frequency: float, cycles: int) -> np.ndarray:
+    """``cycles`` sine periods at full amplitude between half-period raised-cosine ramps.
+
+    The displacement of a rig's sine test (as in Quiroz's records, which start and end with a
+    ramp): the record lasts ``cycles + 1`` periods, starts and ends at rest at zero.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    amplitude : float
+        Amplitude (>= 0) [m].
+    frequency : float
+        Frequency [Hz], below the Nyquist rate ``fs / 2``.
+    cycles : int
+        Periods at full amplitude (>= 1).
+
+    Returns
+    -------
+    ndarray
+        ``round((cycles + 1) fs / frequency)`` samples.
+
+    Examples
+    --------
+    >>> x = ramped_sine(1000.0, amplitude=0.01, frequency=1.0, cycles=2)
+    >>> x.size, round(float(abs(x).max()), 4), float(x[0])
+    (3000, 0.01, 0.0)
+    """
+    f = check_positive("frequency", frequency, "Hz")
+    if f >= check_positive("fs", fs, "Hz") / 2:
+        raise DataValidationError(
+            "frequency", f"{f:g} Hz is not below the Nyquist frequency fs/2 = {fs / 2:g} Hz"
+        )
+    if isinstance(cycles, bool) or not isinstance(cycles, int | np.integer) or cycles < 1:
+        raise DataValidationError("cycles", f"expected an integer >= 1, got {cycles!r}")
+    a = float(amplitude)
+    if not (math.isfinite(a) and a >= 0):
+        raise DataValidationError("amplitude", f"expected a finite value >= 0, got {amplitude!r}")
+    half = 0.5 / f
+    t = np.arange(round((cycles / f + 2 * half) * fs)) / fs
+    ramp = np.clip(np.minimum(t, t[-1] - t) / half, 0.0, 1.0)
+    return a * np.sin(2 * np.pi * f * t) * (0.5 - 0.5 * np.cos(np.pi * ramp))
