@@ -430,7 +430,8 @@ def fit_choosing(
             warnings.simplefilter("ignore")
             try:
                 scores = [fold.score(stiff) for fold in folds]
-                score, error = float(np.mean([sc for sc, _ in scores])), ""
+                score = float(np.mean([sc for sc, _ in scores]))
+                error = "; ".join(e for _, e in scores if e)  # a free run that diverged
             except IdentificationError as exc:
                 score, error = float("inf"), str(exc)
         rows.append(
