@@ -40,6 +40,21 @@ def constant(fs: float, duration: float, *, value: float) -> np.ndarray:
     return np.full(n_samples(fs, duration), v)
 
 
+def _sine_arguments(fs: float, frequency: float, amplitude: float) -> tuple[float, float, float]:
+    """A sine's sampling rate and frequency [Hz] (positive, the frequency below ``fs / 2``) and
+    amplitude (finite, >= 0)."""
+    fs = check_positive("fs", fs, "Hz")
+    f = check_positive("frequency", frequency, "Hz")
+    if f >= fs / 2:
+        raise DataValidationError(
+            "frequency", f"{f:g} Hz is not below the Nyquist frequency fs/2 = {fs / 2:g} Hz"
+        )
+    a = float(amplitude)
+    if not (math.isfinite(a) and a >= 0):
+        raise DataValidationError("amplitude", f"expected a finite value >= 0, got {amplitude!r}")
+    return fs, f, a
+
+
 def sine(
     fs: float,
     duration: float,
@@ -77,15 +92,8 @@ def sine(
     >>> round(float(x.max()), 6)
     0.005
     """
-    fs = check_positive("fs", fs, "Hz")
-    f = check_positive("frequency", frequency, "Hz")
-    if f >= fs / 2:
-        raise DataValidationError(
-            "frequency", f"{f:g} Hz is not below the Nyquist frequency fs/2 = {fs / 2:g} Hz"
-        )
-    a, off, ph = float(amplitude), float(offset), float(phase)
-    if not (math.isfinite(a) and a >= 0):
-        raise DataValidationError("amplitude", f"expected a finite value >= 0, got {amplitude!r}")
+    fs, f, a = _sine_arguments(fs, frequency, amplitude)
+    off, ph = float(offset), float(phase)
     if not (math.isfinite(off) and math.isfinite(ph)):
         raise DataValidationError(
             "offset/phase", f"expected finite values, got {offset!r}, {phase!r}"
@@ -122,16 +130,9 @@ def ramped_sine(fs: float, *, amplitude: float, frequency: float, cycles: int) -
     >>> x.size, round(float(abs(x).max()), 4), float(x[0])
     (3000, 0.01, 0.0)
     """
-    f = check_positive("frequency", frequency, "Hz")
-    if f >= check_positive("fs", fs, "Hz") / 2:
-        raise DataValidationError(
-            "frequency", f"{f:g} Hz is not below the Nyquist frequency fs/2 = {fs / 2:g} Hz"
-        )
+    fs, f, a = _sine_arguments(fs, frequency, amplitude)
     if isinstance(cycles, bool) or not isinstance(cycles, int | np.integer) or cycles < 1:
         raise DataValidationError("cycles", f"expected an integer >= 1, got {cycles!r}")
-    a = float(amplitude)
-    if not (math.isfinite(a) and a >= 0):
-        raise DataValidationError("amplitude", f"expected a finite value >= 0, got {amplitude!r}")
     half = 0.5 / f
     t = np.arange(round((cycles / f + 2 * half) * fs)) / fs
     ramp = np.clip(np.minimum(t, t[-1] - t) / half, 0.0, 1.0)

@@ -397,23 +397,15 @@ def fit_choosing(
     for k, (x_y, lam) in enumerate(cands, start=1):
         cand = dataclasses.replace(est, stroke=x_y, blend=lam, max_nfev=nfev, **held)
         report("hysteretic input: candidate", k - 1, len(cands))
-        with warnings.catch_warnings(), section(f"hysteretic candidate {k} of {len(cands)}"):
-            warnings.simplefilter("ignore")  # the chosen fit below speaks for itself
-            try:
-                scores = [fold.score(cand) for fold in folds]
-            except IdentificationError as exc:
-                first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {exc}"
-                rows.append({"stroke": x_y, "blend": lam, key: None, "error": str(exc)})
-                continue
-        score = float(np.mean([sc for sc, _ in scores]))
-        row = {
-            "stroke": x_y,
-            "blend": lam,
-            key: score,
-            "error": "; ".join(e for _, e in scores if e),
-        }
+        fold_esr, error = _scored(cand, folds, f"hysteretic candidate {k} of {len(cands)}")
+        if fold_esr is None:
+            first_error = first_error or f"stroke={x_y:g} m, blend={lam:g}: {error}"
+            rows.append({"stroke": x_y, "blend": lam, key: None, "error": error})
+            continue
+        score = float(np.mean(fold_esr))
+        row = {"stroke": x_y, "blend": lam, key: score, "error": error}
         if len(folds) > 1:
-            row["fold_esr"] = [sc for sc, _ in scores]
+            row["fold_esr"] = fold_esr
         rows.append(row)
         if best is None or score < best[0]:
             best = (score, x_y, lam)
@@ -426,14 +418,8 @@ def fit_choosing(
     note = _note(best, len(rows), nfev, [f.split for f in folds])
     if est.stiffness == "auto" and how == "given":
         stiff = dataclasses.replace(chosen, max_nfev=nfev, **{**held, "stiffness": "identify"})
-        with warnings.catch_warnings(), section("hysteretic candidate with a stiffness"):
-            warnings.simplefilter("ignore")
-            try:
-                scores = [fold.score(stiff) for fold in folds]
-                score = float(np.mean([sc for sc, _ in scores]))
-                error = "; ".join(e for _, e in scores if e)  # a free run that diverged
-            except IdentificationError as exc:
-                score, error = float("inf"), str(exc)
+        fold_esr, error = _scored(stiff, folds, "hysteretic candidate with a stiffness")
+        score = float("inf") if fold_esr is None else float(np.mean(fold_esr))
         rows.append(
             {
                 "stroke": best[1],
@@ -474,6 +460,18 @@ def fit_choosing(
         return prov
 
     return Choice(chosen, provenance)
+
+
+def _scored(cand: Any, folds: Sequence[_Fold], label: str) -> tuple[list[float] | None, str]:
+    """``cand`` fitted and scored on every fold: its free-run ESR per fold and the reasons of the
+    folds whose free run diverged; None and the reason when a fit failed."""
+    with warnings.catch_warnings(), section(label):
+        warnings.simplefilter("ignore")  # the chosen fit speaks for itself
+        try:
+            scores = [fold.score(cand) for fold in folds]
+        except IdentificationError as exc:
+            return None, str(exc)
+    return [sc for sc, _ in scores], "; ".join(e for _, e in scores if e)
 
 
 class _Fold:

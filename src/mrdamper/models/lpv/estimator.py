@@ -351,6 +351,7 @@ class LPVEstimator(Estimator):
         lpv_input = _lpv_inputs.from_saved(
             self.input_signal, laws, self.reading, self.stroke, self.blend
         )
+        stiffness = self.resolved_stiffness()
         F, U, R, X, w = [], [], [], [], []
         for k, (e, el) in enumerate(zip(exps, data.electrical)):
             report("LPV input signals", k, len(exps))
@@ -358,7 +359,7 @@ class LPVEstimator(Estimator):
             u, rho = model_signals(e, el, fs=fs, eta=eta, lpv_input=lpv_input)
             Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
             F.append(Fr)
-            if self.resolved_stiffness() != 0:  # the displacement only where a stiffness needs it
+            if stiffness != 0:  # the displacement only where a stiffness needs it
                 X.append(
                     np.ascontiguousarray(to_model_rate(np.asarray(e.x), e.fs, fs), dtype=np.float64)
                 )
@@ -405,9 +406,7 @@ class LPVEstimator(Estimator):
             enforce_stability=self.stability == "enforce",
             rho_range=rho_range,
             windows=lambda r: _scale.window_records(r, fs),  # long campaigns
-            stiffness=None
-            if self.resolved_stiffness() == "identify"
-            else float(self.resolved_stiffness()),
+            stiffness=None if stiffness == "identify" else float(stiffness),
         )
         prov.update(fit.provenance)
         pmax, rho_at, pole = fit.largest_pole
