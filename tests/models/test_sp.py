@@ -212,7 +212,15 @@ def test_zero_current_sp2() -> None:
 
 @pytest.mark.parametrize(
     ("setting", "value"),
-    [("input", "current"), ("n_starts", 0), ("seed", 1.5), ("offset", "yes"), ("fit_samples", 5)],
+    [
+        ("input", "current"),
+        ("n_starts", 0),
+        ("seed", 1.5),
+        ("offset", "yes"),
+        ("fit_samples", 5),
+        ("monotone", "yes"),
+        ("monotone", 1),
+    ],
 )
 def test_bad_settings_name_the_field(setting: str, value: object) -> None:
     with pytest.raises(DataValidationError, match=f"^{setting}:"):
@@ -301,3 +309,96 @@ def test_sp3_dissipates_energy_over_a_cycle(amp: float, freq: float, i: float) -
     F = TRUE["sp3"].force(x, v, np.full_like(t, i))
     work = np.trapezoid(F * v, t)
     assert work > 0
+
+
+# ----------------------------------------------------------------------------- monotone in velocity
+#: An SP-1 whose viscous slope 3000 - 5000 i^2 N s/m turns negative above 0.77 A: past the tanh's
+#: yield its force falls with velocity at high current.
+FALLING = SP1Model(
+    S=(300.0, 700.0, -150.0, 40.0, 30.0, -10.0, 0.0, 0.0, 0.0, 3000.0, 0.0, -5000.0, 1000.0, 0, 0),
+    f0=0.0,
+    input_range=(0.0, 1.0),
+)
+
+
+def _slope_floor(model: SP1Model, lo: float, hi: float) -> float:
+    """Smallest finite-difference dF/dv [N s/m] over a grid of motions and inputs in range."""
+    v = np.linspace(-1.5, 1.5, 601)
+    out = np.inf
+    for i in np.linspace(lo, hi, 21):
+        for x in (-0.01, 0.0, 0.01):
+            F = model.force(np.full_like(v, x), v, np.full_like(v, i))
+            out = min(out, float(np.min(np.diff(F) / np.diff(v))))
+    return out
+
+
+def _falling_records() -> list[Experiment]:
+    out = []
+    for seed in (1, 2):
+        e = _excitation(seed=seed)
+        e = e.replace(x=4 * e.x, v=4 * e.v)  # up to 0.3 m/s: past the yield
+        out.append(e.replace(F=FALLING.predict(e)))
+    return out
+
+
+def test_monotone_auto_refits_a_map_whose_force_falls_with_velocity() -> None:
+    data = _falling_records()
+    free = SP1Estimator(seed=0, n_starts=2, monotone=False).fit(data)
+    # the free fit finds the falling map, and says how far it falls
+    np.testing.assert_allclose(free.S, FALLING.S, atol=1e-3)
+    assert free.provenance["monotone"]["constrained"] is False
+    assert free.provenance["monotone"]["slope_floor"] < -1000.0
+    assert _slope_floor(free, *free.input_range) < -1000.0
+    with pytest.warns(UserWarning, match=r"^sp1: the free fit's force falls with velocity"):
+        auto = SP1Estimator(seed=0, n_starts=2).fit(data)
+    check = auto.provenance["monotone"]
+    assert check["constrained"] is True
+    assert check["slope_floor"] == pytest.approx(free.provenance["monotone"]["slope_floor"])
+    assert "training ESR" in check["note"]
+    # the constrained map never falls with velocity over the input range, at a cost in fit
+    assert _slope_floor(auto, *auto.input_range) >= -1e-6
+    assert auto.provenance["training_esr"] > free.provenance["training_esr"]
+    assert check["free_training_esr"] == pytest.approx(free.provenance["training_esr"])
+
+
+def test_monotone_auto_leaves_a_monotone_fit_as_it_is() -> None:
+    data = [_synthetic("sp1", seed=1), _synthetic("sp1", seed=2)]
+    free = SP1Estimator(seed=0, n_starts=2, monotone=False).fit(data)
+    auto = SP1Estimator(seed=0, n_starts=2).fit(data)
+    assert auto.S == free.S and auto.f0 == free.f0
+    assert auto.provenance["monotone"]["constrained"] is False
+    assert auto.provenance["monotone"]["slope_floor"] > 0
+
+
+@pytest.mark.parametrize("kind", sorted(TRUE))
+def test_monotone_true_still_finds_a_monotone_truth(kind: str) -> None:
+    """The Bernstein coordinates of the constrained fit reach every map whose amplitude, tanh
+    slope and viscous slope have non-negative Bernstein coefficients, as the test maps do."""
+    true = TRUE[kind]
+    data = [_synthetic(kind, seed=1), _synthetic(kind, seed=2)]
+    fitted = ESTIMATORS[kind](seed=0, n_starts=2, monotone=True).fit(data)
+    assert fitted.provenance["monotone"]["constrained"] is True
+    np.testing.assert_allclose(fitted.S, true.S, rtol=1e-5, atol=1e-5 * np.max(np.abs(true.S)))
+
+
+@pytest.mark.slow
+def test_monotone_sp1_keeps_the_quarter_car_bounded() -> None:
+    """SP-1 fitted freely on the virtual rig's Table II of the Spencer (1997) damper falls with
+    velocity at the top voltage (its viscous slope near -2200 N s/m): with it as the damper the
+    passive-hard quarter car diverges. The default fit keeps the loop bounded."""
+    from mrdamper.control.car import iso_road
+    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.errors import SimulationDivergedError
+    from mrdamper.rig.doe import table_ii
+    from mrdamper.rig.reference import reference_damper
+
+    truth = reference_damper("spencer1997")
+    doe = list(table_ii(seed=0, scale=0.3, damper=truth))
+    road = iso_road("C", speed=20.0, duration=3.0, seed=0)
+    free = SP1Estimator(input="voltage", monotone=False).fit(doe)
+    with pytest.raises(SimulationDivergedError, match="quarter-car state left"):
+        simulate_closed_loop(free, road, "hard", substeps=2)
+    with pytest.warns(UserWarning, match="falls with velocity"):
+        auto = SP1Estimator(input="voltage").fit(doe)
+    r = simulate_closed_loop(auto, road, "hard", substeps=2)
+    assert np.all(np.isfinite(r.travel)) and np.max(np.abs(r.travel)) < 0.05

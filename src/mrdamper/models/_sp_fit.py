@@ -6,6 +6,7 @@ docstring for the method: scaling, linear starts, multi-start, bounds, identifia
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from typing import Any
 
@@ -20,7 +21,7 @@ from mrdamper.models._lag import first_order_lag
 from mrdamper.models._sp_kernels import COMPONENTS, N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.progress import counted
 
-__all__ = ["identify", "single_level_terms", "stack"]
+__all__ = ["identify", "single_level_terms", "stack", "velocity_slope_floor"]
 
 #: Upper bound of the normalised tanh velocity coefficient (see module docstring).
 _TANH_SLOPE_MAX = 1e3
@@ -28,6 +29,11 @@ _TANH_SLOPE_MAX = 1e3
 _MAX_INPUT_COND = 1e6
 #: Samples required per coefficient.
 _SAMPLES_PER_PARAMETER = 10
+#: Components kept non-negative by the monotone fit: A (tanh amplitude), a (tanh velocity
+#: coefficient), c (viscous slope); with them ``dF/dv = A a sech^2(.) + c >= 0`` everywhere.
+_MONOTONE_COMPONENTS = (0, 1, 3)
+#: Input grid points of :func:`velocity_slope_floor`.
+_SLOPE_GRID = 257
 
 
 def identify(
@@ -47,6 +53,7 @@ def identify(
     max_nfev: int,
     screen_samples: int,
     fit_samples: int | None,
+    monotone: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, float, dict[str, Any]]:
     """Fit the coefficients ``(comp, power)`` of an SP map to ``F`` [N] on the stacked samples.
 
@@ -62,6 +69,11 @@ def identify(
         Displacement [m], velocity [m/s], electrical input [A or V], force [N] of every sample.
     offset, seed, n_starts, n_candidates, max_nfev, screen_samples, fit_samples
         The estimator's settings.
+    monotone : (float, float), optional
+        Input range ``(low, high)`` [A or V] over which the force must not fall with velocity:
+        the components A, a and c are then written in the Bernstein basis of that range with
+        non-negative coefficients (:func:`_monotone_basis`), so ``dF/dv >= 0`` at every
+        displacement, velocity and input of the range. None: the free fit.
 
     Returns
     -------
@@ -87,22 +99,32 @@ def identify(
     sub = _even_subset(F.size, screen_samples)
     _check_identifiable(kind, comp, power, inn[sub], source)
 
-    lb, ub = _bounds(comp, power, offset)
+    if monotone is None:
+        T = np.eye(comp.size + int(offset))
+        lb, ub = _bounds(comp, power, offset)
+    else:
+        T, lb, ub = _monotone_basis(comp, power, offset, monotone[0] / i_s, monotone[1] / i_s)
+    T_inv = np.linalg.inv(T)
     rng = np.random.default_rng(seed)
     starts = _linear_starts(
         comp, power, xn[sub], vn[sub], inn[sub], Fn[sub], offset, n_candidates, n_starts, rng
     )
 
     def solve(theta0: np.ndarray, idx: np.ndarray | slice, nfev: int, stage: str) -> Any:
+        """Least squares in the fit's coordinates ``th`` (the power-basis coefficients are
+        ``T @ th``)."""
         xa, va, ia, Fa = (np.ascontiguousarray(a[idx]) for a in (xn, vn, inn, Fn))
 
         def fun(th: np.ndarray) -> np.ndarray:
-            f0 = th[-1] if offset else 0.0
-            return sp_force(xa, va, ia, comp, power, th[: comp.size], f0) - Fa
+            tp = th if monotone is None else T @ th
+            f0 = tp[-1] if offset else 0.0
+            return sp_force(xa, va, ia, comp, power, tp[: comp.size], f0) - Fa
 
         def jac(th: np.ndarray) -> np.ndarray:
-            f0 = th[-1] if offset else 0.0
-            return sp_force_jacobian(xa, va, ia, comp, power, th[: comp.size], f0, offset)[1]
+            tp = th if monotone is None else T @ th
+            f0 = tp[-1] if offset else 0.0
+            J = sp_force_jacobian(xa, va, ia, comp, power, tp[: comp.size], f0, offset)[1]
+            return J if monotone is None else J @ T
 
         return least_squares(
             counted(fun, stage, nfev),
@@ -118,7 +140,12 @@ def identify(
     for k, theta0 in enumerate(starts):
         stage = f"start {k + 1} of {len(starts)}: least squares: evaluation"
         try:
-            res = solve(np.clip(theta0, lb, ub), sub, max_nfev, stage)
+            res = solve(
+                np.clip(theta0 if monotone is None else T_inv @ theta0, lb, ub),
+                sub,
+                max_nfev,
+                stage,
+            )
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             continue
         if np.isfinite(res.cost) and np.all(np.isfinite(res.x)):
@@ -135,7 +162,8 @@ def identify(
             f"{kind}: least squares stopped at max_nfev={max_nfev} before converging",
             RuntimeWarning,
         )
-    S_kept, f0 = _to_physical(final.x, comp, power, offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
+    theta = final.x if monotone is None else T @ final.x
+    S_kept, f0 = _to_physical(theta, comp, power, offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
     rms = float(np.sqrt(2.0 * final.cost / final.fun.size) * Fs)
     provenance = {
         "n_samples_stacked": int(F.size),
@@ -245,6 +273,71 @@ def _bounds(comp: np.ndarray, power: np.ndarray, offset: bool) -> tuple[np.ndarr
     k = np.flatnonzero((comp == 1) & (power == 0))
     lb[k], ub[k] = 0.0, _TANH_SLOPE_MAX
     return lb, ub
+
+
+def _monotone_basis(
+    comp: np.ndarray, power: np.ndarray, offset: bool, low: float, high: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Coordinates of the monotone fit: ``theta = T @ th`` with bounds on ``th``.
+
+    A component of :data:`_MONOTONE_COMPONENTS` whose powers are ``0 .. k`` is written in the
+    degree-``k`` Bernstein basis of ``[low, high]`` (normalised input); its Bernstein
+    coefficients are bounded below by 0 (for ``a`` also above by the tanh slope bound), which
+    keeps the polynomial non-negative over the range. A component with a single power ``p >= 1``
+    is non-negative on ``[low, high]`` when its coefficient is, provided ``low >= 0``. Every other
+    coefficient is free (bounds of :func:`_bounds`).
+    """
+    n = comp.size + int(offset)
+    T = np.eye(n)
+    lb, ub = _bounds(comp, power, offset)
+    width = high - low
+    for m in _MONOTONE_COMPONENTS:
+        idx = np.flatnonzero(comp == m)
+        if idx.size == 0:
+            continue
+        pw = power[idx]
+        top = np.inf if m != 1 else _TANH_SLOPE_MAX
+        if set(pw.tolist()) == set(range(pw.size)) and width > 0:
+            k = pw.size - 1
+            # power coefficients = V_power^-1 V_bernstein (Bernstein coefficients), on k+1 nodes
+            nodes = low + width * (np.arange(k + 1) + 0.5) / (k + 1)
+            s_nodes = (nodes - low) / width
+            V_power = nodes[:, None] ** pw[None, :].astype(float)
+            V_bern = np.stack(
+                [math.comb(k, j) * s_nodes**j * (1 - s_nodes) ** (k - j) for j in range(k + 1)],
+                axis=1,
+            )
+            T[np.ix_(idx, idx)] = np.linalg.solve(V_power, V_bern)
+            lb[idx], ub[idx] = 0.0, top
+        elif pw.size == 1 and (pw[0] == 0 or low >= 0):
+            lb[idx], ub[idx] = 0.0, top
+    return T, lb, ub
+
+
+def velocity_slope_floor(
+    S: np.ndarray, comp: np.ndarray, power: np.ndarray, low: float, high: float
+) -> tuple[float, float]:
+    """Smallest slope ``dF/dv`` [N s/m] of an SP map over the inputs ``[low, high]``.
+
+    ``dF/dv = A(i) a(i) sech^2(a v + b x) + c(i)`` takes every value between ``c(i)`` and
+    ``A(i) a(i) + c(i)``, so its floor is the smaller of the two, minimised over an even grid of
+    :data:`_SLOPE_GRID` inputs (the ends included).
+
+    Returns
+    -------
+    slope : float
+        The floor [N s/m]; negative means the force falls with velocity somewhere.
+    at : float
+        The input [A or V] where it is reached.
+    """
+    grid = np.linspace(low, high, _SLOPE_GRID)
+    val = {m: np.zeros_like(grid) for m in (0, 1, 3)}
+    for s, m, p in zip(S, comp, power):
+        if int(m) in val:
+            val[int(m)] = val[int(m)] + s * grid ** int(p)
+    floor = np.minimum(val[3], val[0] * val[1] + val[3])
+    k = int(np.argmin(floor))
+    return float(floor[k]), float(grid[k])
 
 
 def _linear_columns(

@@ -71,12 +71,13 @@ from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.models import _scale
 from mrdamper.models._lag import first_order_lag
-from mrdamper.models._sp_fit import identify, single_level_terms, stack
+from mrdamper.models._sp_fit import identify, single_level_terms, stack, velocity_slope_floor
 from mrdamper.models._sp_kernels import COMPONENTS, make_static_step, sp_force
 from mrdamper.models.base import (
     Estimator,
@@ -311,6 +312,15 @@ class _SPEstimator(Estimator):
         (:mod:`mrdamper.models.lag`);
         ``"identify"``: identified whenever the input switches within a record, a measured
         current included (the field's lag); None: no lag.
+    monotone : bool or "auto"
+        Keep the force from falling with velocity: the tanh amplitude, the tanh velocity
+        coefficient and the viscous slope are kept non-negative over the identified input range
+        (Bernstein coefficients, module docstring), so ``dF/dv >= 0`` for every motion. A map
+        whose force falls with velocity pushes a quarter car at speeds beyond its training data
+        and the loop can diverge. ``"auto"`` (default): the free fit, and when its slope
+        ``dF/dv`` is negative anywhere on the input range (at any velocity) the constrained fit
+        replaces it, with a warning that gives both training errors; ``True``: always
+        constrained; ``False``: the free fit (the paper's).
     range_policy : {"error", "warn", "clip", "ignore"}
         Range policy of the fitted model.
     """
@@ -324,6 +334,7 @@ class _SPEstimator(Estimator):
     screen_samples: int = 4000
     fit_samples: int | None = 20000
     eta: float | Literal["auto", "identify"] | None = "auto"
+    monotone: bool | Literal["auto"] = "auto"
 
     range_policy: RangePolicy = "error"
 
@@ -349,23 +360,50 @@ class _SPEstimator(Estimator):
         keep = (
             single_level_terms(comp_all, power_all) if data.single else np.ones(comp_all.size, bool)
         )
-        S_kept, f0, provenance = identify(
-            cls.kind,
-            self.input,
-            comp_all[keep],
-            power_all[keep],
-            x,
-            v,
-            i,
-            F,
-            offset=self.offset,
-            seed=self.seed,
-            n_starts=self.n_starts,
-            n_candidates=self.n_candidates,
-            max_nfev=self.max_nfev,
-            screen_samples=self.screen_samples,
-            fit_samples=self.fit_samples,
-        )
+        comp, power = comp_all[keep], power_all[keep]
+        span = (float(np.min(i)), float(np.max(i)))
+
+        def fit(monotone: bool) -> tuple[np.ndarray, float, dict[str, Any]]:
+            return identify(
+                cls.kind,
+                self.input,
+                comp,
+                power,
+                x,
+                v,
+                i,
+                F,
+                offset=self.offset,
+                seed=self.seed,
+                n_starts=self.n_starts,
+                n_candidates=self.n_candidates,
+                max_nfev=self.max_nfev,
+                screen_samples=self.screen_samples,
+                fit_samples=self.fit_samples,
+                monotone=span if monotone else None,
+            )
+
+        S_kept, f0, provenance = fit(self.monotone is True)
+        slope, at = velocity_slope_floor(S_kept, comp, power, *span)
+        check: dict[str, Any] = {
+            "setting": self.monotone,
+            "constrained": self.monotone is True,
+            "slope_floor": slope,
+            "slope_floor_at": at,
+        }
+        if self.monotone == "auto" and slope < 0:
+            free_esr = provenance["training_esr"]
+            S_kept, f0, provenance = fit(True)
+            unit = "A" if self.input == "i" else "V"
+            check.update(constrained=True, free_training_esr=free_esr)
+            check["note"] = (
+                f"{cls.kind}: the free fit's force falls with velocity (dF/dv down to "
+                f"{slope:.4g} N s/m at {at:.4g} {unit}), so a loop faster than the training "
+                f"motions could diverge; fitted again with dF/dv >= 0 over {span[0]:.4g}-"
+                f"{span[1]:.4g} {unit}: training ESR {provenance['training_esr']:.4g} against "
+                f"{free_esr:.4g} free (setting monotone)"
+            )
+            warn_user(check["note"], UserWarning)
         S = np.zeros(comp_all.size)
         S[keep] = S_kept
         provenance = {
@@ -374,6 +412,7 @@ class _SPEstimator(Estimator):
             "training_records": list(data.records.names),
             "n_samples": int(sum(e.n for e in data.records)),
             **provenance,
+            "monotone": check,
         }
         return Identified(
             parameters={
@@ -397,6 +436,10 @@ class _SPEstimator(Estimator):
         check_int("fit_samples", self.fit_samples, 100, allow_none=True)
         check_int("seed", self.seed, None)
         check_lag(self.eta)
+        if not (isinstance(self.monotone, bool) or self.monotone == "auto"):
+            raise DataValidationError(
+                "monotone", f"expected true, false or 'auto', got {self.monotone!r}"
+            )
 
 
 @dataclass
