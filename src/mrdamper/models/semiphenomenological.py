@@ -40,7 +40,15 @@ force error, with the analytic Jacobian of :mod:`mrdamper.models._sp_kernels`:
    polished on every 5th sample; the number used is stored in ``provenance["n_fit_samples"]``.
 4. Bounds: the constant term of the tanh velocity coefficient lies in ``[0, 1000]`` (normalised;
    this removes the sign symmetry ``(A, a, b) -> (-A, -a, -b)`` and keeps the solver away from a
-   sign function whose Jacobian vanishes). Everything else is free.
+   sign function whose Jacobian vanishes). Everything else is free in the free fit.
+5. Monotone in velocity (``monotone``): ``dF/dv = A a sech^2(a v + b x) + c`` takes every value
+   between ``c`` and ``A a + c``. After the free fit its floor over the input range is
+   evaluated (:func:`~mrdamper.models._sp_fit.velocity_slope_floor`); when it is negative (and
+   by default only then) the fit is repeated with ``A``, ``a`` and ``c`` written in the
+   Bernstein basis of the input range with non-negative coefficients, which keeps each of them,
+   and so ``dF/dv``, non-negative at every input of the range. A free fit can fall with
+   velocity past its records (a large tanh amplitude and a negative viscous slope fit slow
+   records as well), and a quarter car with such a damper diverges.
 
 Identifiability is checked before fitting: each component polynomial needs as many distinct
 input levels as it has coefficients (SP-1 and SP-4 need three, SP-3 two, SP-2 a non-zero input);
