@@ -381,6 +381,25 @@ def test_monotone_true_still_finds_a_monotone_truth(kind: str) -> None:
     np.testing.assert_allclose(fitted.S, true.S, rtol=1e-5, atol=1e-5 * np.max(np.abs(true.S)))
 
 
+def test_a_loop_diverging_on_a_falling_map_says_why() -> None:
+    """A saved map that falls with velocity (a free fit, or one made before ``monotone``) drives
+    the passive-hard quarter car away, as its own plant and as another model's plant; the error
+    names the slope and the remedy."""
+    from mrdamper.control.car import iso_road
+    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.errors import SimulationDivergedError
+    from mrdamper.rig.reference import reference_damper
+
+    assert FALLING.velocity_slope_floor() == (-2000.0, 1.0)
+    assert TRUE["sp1"].velocity_slope_floor()[0] > 0
+    road = iso_road("C", speed=20.0, duration=3.0, seed=0)
+    hint = r"force falls with velocity \(dF/dv down to -2000 N s/m at 1 A\).*monotone"
+    with pytest.raises(SimulationDivergedError, match="quarter-car state left.*" + hint):
+        simulate_closed_loop(FALLING, road, "hard")
+    with pytest.raises(SimulationDivergedError, match="a car state left.*" + hint):
+        simulate_closed_loop(reference_damper("quiroz2022"), road, "hard", plant=FALLING)
+
+
 @pytest.mark.slow
 def test_monotone_sp1_keeps_the_quarter_car_bounded() -> None:
     """SP-1 fitted freely on the virtual rig's Table II of the Spencer (1997) damper falls with
@@ -396,7 +415,9 @@ def test_monotone_sp1_keeps_the_quarter_car_bounded() -> None:
     doe = list(table_ii(seed=0, scale=0.3, damper=truth))
     road = iso_road("C", speed=20.0, duration=3.0, seed=0)
     free = SP1Estimator(input="voltage", monotone=False).fit(doe)
-    with pytest.raises(SimulationDivergedError, match="quarter-car state left"):
+    with pytest.raises(
+        SimulationDivergedError, match="quarter-car state left.*falls with velocity"
+    ):
         simulate_closed_loop(free, road, "hard", substeps=2)
     with pytest.warns(UserWarning, match="falls with velocity"):
         auto = SP1Estimator(input="voltage").fit(doe)

@@ -34,6 +34,7 @@ __all__ = [
     "LoopSetup",
     "controller_form",
     "damper_arrays",
+    "divergence_hint",
     "loop_result",
     "loop_setup",
     "positive",
@@ -260,4 +261,21 @@ def loop_result(
         i=rep(cmd, s.n_sub),
         saturated=rep(sat, s.n_sub),
         car=s.car,
+    )
+
+
+def divergence_hint(damper: Any) -> str:
+    """What a diverged loop's message adds about its damper: for a static map whose force falls
+    with velocity somewhere on its input range (a free SP fit past its records), the slope and
+    the remedy; otherwise nothing."""
+    floor = getattr(damper, "velocity_slope_floor", None)
+    if floor is None:
+        return ""
+    slope, at = floor()
+    if slope >= 0:
+        return ""
+    unit = "V" if getattr(damper, "input", "i") == "voltage" else "A"
+    return (
+        f"; the {damper.kind} damper's force falls with velocity (dF/dv down to {slope:.4g} N s/m "
+        f"at {at:.4g} {unit}): fit it again with the setting monotone (the default since 0.2)"
     )

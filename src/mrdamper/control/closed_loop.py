@@ -53,6 +53,7 @@ from mrdamper.control._loop import (
     LoopSetup,
     controller_form,
     damper_arrays,
+    divergence_hint,
     loop_result,
     loop_setup,
 )
@@ -352,5 +353,8 @@ def _run(
         what = {-1: f"a car state left +-{bound:g}", -2: "the controller's model failed"}.get(
             int(status), f"the {plant.kind} plant's step failed (status {int(status)})"
         )
-        raise SimulationDivergedError(plant.kind, int(bad), f"{what} at t = {bad * s.h:.4g} s")
+        hint = divergence_hint(plant) if int(status) == -1 else ""
+        raise SimulationDivergedError(
+            plant.kind, int(bad), f"{what} at t = {bad * s.h:.4g} s{hint}"
+        )
     return loop_result(s, plant.kind, X, F, Fd, E, sat)

@@ -39,7 +39,13 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control import _quarter_car_kernels as QK
-from mrdamper.control._loop import LoopSetup, controller_form, loop_result, loop_setup
+from mrdamper.control._loop import (
+    LoopSetup,
+    controller_form,
+    divergence_hint,
+    loop_result,
+    loop_setup,
+)
 from mrdamper.control.c_inverse import c_inverse_form, c_kernels
 from mrdamper.control.car import (
     CONTROLLERS,
@@ -158,7 +164,7 @@ def simulate_quarter_car(
         raise SimulationDivergedError(
             getattr(model, "kind", "damper"),
             int(bad),
-            f"quarter-car state left +-{bound:g} at t = {bad * s.h:.4g} s",
+            f"quarter-car state left +-{bound:g} at t = {bad * s.h:.4g} s{divergence_hint(model)}",
         )
     cmd = command_of(model, rho, s)
     return loop_result(s, getattr(model, "kind", "damper"), X, F, Fd, cmd, sat)

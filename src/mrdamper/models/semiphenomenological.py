@@ -193,6 +193,14 @@ class SPModel(FittedModel):
             out[COMPONENTS[m]] = out[COMPONENTS[m]] + s * ii**p
         return out
 
+    def velocity_slope_floor(self) -> tuple[float, float]:
+        """Smallest ``dF/dv`` [N s/m] of the map over its identified input range (the lagged
+        input's with ``eta``) and the input [A or V] where it is reached; negative: the force
+        falls with velocity there (see the estimator's ``monotone``)."""
+        comp, power = self.layout_arrays()
+        lo, hi = self.rho_range if self.rho_range is not None else self.input_range
+        return velocity_slope_floor(np.asarray(self.S, dtype=np.float64), comp, power, lo, hi)
+
     def force(self, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
         """Evaluate the map on plain arrays (no range policy) [N].
 
