@@ -377,7 +377,8 @@ class _SPEstimator(Estimator):
             single_level_terms(comp_all, power_all) if data.single else np.ones(comp_all.size, bool)
         )
         comp, power = comp_all[keep], power_all[keep]
-        span = (float(np.min(i)), float(np.max(i)))
+        # the inputs the map sees: the lagged ones (its rho_range) or the records' own range
+        span = (float(np.min(i)), float(np.max(i))) if eta is not None else data.input_range
 
         def fit(monotone: bool) -> tuple[np.ndarray, float, dict[str, Any]]:
             return identify(
