@@ -35,6 +35,7 @@ __all__ = [
     "controller_form",
     "damper_arrays",
     "divergence_hint",
+    "input_unit",
     "loop_result",
     "loop_setup",
     "positive",
@@ -264,6 +265,11 @@ def loop_result(
     )
 
 
+def input_unit(model: Any) -> str:
+    """The unit of ``model``'s electrical input: ``"V"`` for a voltage, else ``"A"``."""
+    return "V" if getattr(model, "input", "i") == "voltage" else "A"
+
+
 def divergence_hint(damper: Any) -> str:
     """What a diverged loop's message adds about its damper: for a static map whose force falls
     with velocity somewhere on its input range (a free SP fit past its records), the slope and
@@ -274,8 +280,8 @@ def divergence_hint(damper: Any) -> str:
     slope, at = floor()
     if slope >= 0:
         return ""
-    unit = "V" if getattr(damper, "input", "i") == "voltage" else "A"
     return (
         f"; the {damper.kind} damper's force falls with velocity (dF/dv down to {slope:.4g} N s/m "
-        f"at {at:.4g} {unit}): fit it again with the setting monotone (the default since 0.2)"
+        f"at {at:.4g} {input_unit(damper)}): fit it again with the setting monotone "
+        "(the default since 0.2)"
     )

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control._loop import input_unit
 from mrdamper.control.closed_loop import check_pair, resolve_plant, simulate_closed_loop
 from mrdamper.control.quarter_car import (
     CONTROLLERS,
@@ -65,11 +66,6 @@ METRICS: dict[str, str] = {
 #: refused 5 of the 37 points of P-15's gain sweep (``docs/results.md``, "Every gain of the
 #: sweep"); the check stops at the first step that converges, so converged runs cost no more.
 MAX_SUBSTEPS = 64
-
-
-def input_unit(model: Any) -> str:
-    """The unit of ``model``'s electrical input: ``"V"`` for a voltage, else ``"A"``."""
-    return "V" if getattr(model, "input", "i") == "voltage" else "A"
 
 
 #: Smallest magnitude a metric is compared against in the halving check (below it, absolute).

@@ -21,7 +21,7 @@ from mrdamper.models._lag import first_order_lag
 from mrdamper.models._sp_kernels import COMPONENTS, N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.progress import counted
 
-__all__ = ["identify", "single_level_terms", "stack", "velocity_slope_floor"]
+__all__ = ["component_values", "identify", "single_level_terms", "stack", "velocity_slope_floor"]
 
 #: Upper bound of the normalised tanh velocity coefficient (see module docstring).
 _TANH_SLOPE_MAX = 1e3
@@ -99,12 +99,19 @@ def identify(
     sub = _even_subset(F.size, screen_samples)
     _check_identifiable(kind, comp, power, inn[sub], source)
 
+    # the free fit's coordinates are the coefficients themselves (T None)
+    T: np.ndarray | None = None
+    T_inv: np.ndarray | None = None
     if monotone is None:
-        T = np.eye(comp.size + int(offset))
         lb, ub = _bounds(comp, power, offset)
     else:
         T, lb, ub = _monotone_basis(comp, power, offset, monotone[0] / i_s, monotone[1] / i_s)
-    T_inv = np.linalg.inv(T)
+        T_inv = np.linalg.inv(T)
+
+    def coefficients(th: np.ndarray) -> np.ndarray:
+        """Power-basis coefficients (and offset) of the fit's coordinates ``th``."""
+        return th if T is None else T @ th
+
     rng = np.random.default_rng(seed)
     starts = _linear_starts(
         comp, power, xn[sub], vn[sub], inn[sub], Fn[sub], offset, n_candidates, n_starts, rng
@@ -116,15 +123,15 @@ def identify(
         xa, va, ia, Fa = (np.ascontiguousarray(a[idx]) for a in (xn, vn, inn, Fn))
 
         def fun(th: np.ndarray) -> np.ndarray:
-            tp = th if monotone is None else T @ th
+            tp = coefficients(th)
             f0 = tp[-1] if offset else 0.0
             return sp_force(xa, va, ia, comp, power, tp[: comp.size], f0) - Fa
 
         def jac(th: np.ndarray) -> np.ndarray:
-            tp = th if monotone is None else T @ th
+            tp = coefficients(th)
             f0 = tp[-1] if offset else 0.0
             J = sp_force_jacobian(xa, va, ia, comp, power, tp[: comp.size], f0, offset)[1]
-            return J if monotone is None else J @ T
+            return J if T is None else J @ T
 
         return least_squares(
             counted(fun, stage, nfev),
@@ -141,7 +148,7 @@ def identify(
         stage = f"start {k + 1} of {len(starts)}: least squares: evaluation"
         try:
             res = solve(
-                np.clip(theta0 if monotone is None else T_inv @ theta0, lb, ub),
+                np.clip(theta0 if T_inv is None else T_inv @ theta0, lb, ub),
                 sub,
                 max_nfev,
                 stage,
@@ -162,8 +169,9 @@ def identify(
             f"{kind}: least squares stopped at max_nfev={max_nfev} before converging",
             RuntimeWarning,
         )
-    theta = final.x if monotone is None else T @ final.x
-    S_kept, f0 = _to_physical(theta, comp, power, offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs)
+    S_kept, f0 = _to_physical(
+        coefficients(final.x), comp, power, offset, xs=xs, vs=vs, i_s=i_s, Fs=Fs
+    )
     rms = float(np.sqrt(2.0 * final.cost / final.fun.size) * Fs)
     provenance = {
         "n_samples_stacked": int(F.size),
@@ -314,6 +322,25 @@ def _monotone_basis(
     return T, lb, ub
 
 
+def component_values(
+    S: Iterable[float], comp: Iterable[int], power: Iterable[int], i: np.ndarray | float
+) -> np.ndarray:
+    """The five components ``A, a, b, c, d`` of an SP map at input ``i`` [A or V].
+
+    Returns
+    -------
+    ndarray
+        Shape ``(5,) + shape(i)``, in the order of
+        :data:`~mrdamper.models._sp_kernels.COMPONENTS` (units in
+        :meth:`~mrdamper.models.semiphenomenological.SPModel.components`).
+    """
+    ii = np.asarray(i, dtype=float)
+    out = np.zeros((N_COMPONENTS, *ii.shape))
+    for s, m, p in zip(S, comp, power):
+        out[int(m)] = out[int(m)] + s * ii ** int(p)
+    return out
+
+
 def velocity_slope_floor(
     S: np.ndarray, comp: np.ndarray, power: np.ndarray, low: float, high: float
 ) -> tuple[float, float]:
@@ -331,11 +358,8 @@ def velocity_slope_floor(
         The input [A or V] where it is reached.
     """
     grid = np.linspace(low, high, _SLOPE_GRID)
-    val = {m: np.zeros_like(grid) for m in (0, 1, 3)}
-    for s, m, p in zip(S, comp, power):
-        if int(m) in val:
-            val[int(m)] = val[int(m)] + s * grid ** int(p)
-    floor = np.minimum(val[3], val[0] * val[1] + val[3])
+    A, a, _, c, _ = component_values(S, comp, power, grid)
+    floor = np.minimum(c, A * a + c)
     k = int(np.argmin(floor))
     return float(floor[k]), float(grid[k])
 

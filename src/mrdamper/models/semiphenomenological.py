@@ -85,7 +85,13 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.models import _scale
 from mrdamper.models._lag import first_order_lag
-from mrdamper.models._sp_fit import identify, single_level_terms, stack, velocity_slope_floor
+from mrdamper.models._sp_fit import (
+    component_values,
+    identify,
+    single_level_terms,
+    stack,
+    velocity_slope_floor,
+)
 from mrdamper.models._sp_kernels import COMPONENTS, make_static_step, sp_force
 from mrdamper.models.base import (
     Estimator,
@@ -187,11 +193,9 @@ class SPModel(FittedModel):
             ``A`` [N], ``a`` [s/m], ``b`` [1/m], ``c`` [N s/m], ``d`` [N/m] as arrays shaped like
             ``i``.
         """
-        ii = np.asarray(i, dtype=float)
-        out = {name: np.zeros_like(ii) for name in COMPONENTS}
-        for s, (m, p) in zip(self.S, self.LAYOUT):
-            out[COMPONENTS[m]] = out[COMPONENTS[m]] + s * ii**p
-        return out
+        comp, power = self.layout_arrays()
+        values = component_values(self.S, comp, power, i)
+        return {name: values[m] for m, name in enumerate(COMPONENTS)}
 
     def velocity_slope_floor(self) -> tuple[float, float]:
         """Smallest ``dF/dv`` [N s/m] of the map over its identified input range (the lagged
