@@ -30,7 +30,7 @@ from typing import Any
 
 import pandas as pd
 
-from mrdamper.control.doe_extension import control_extension
+from mrdamper.control.doe_extension import control_extension, first_model
 from mrdamper.control.fidelity import MAX_SUBSTEPS, closed_loop_fidelity, input_unit
 from mrdamper.control.fronts import gain_fronts
 from mrdamper.errors import MrDamperError
@@ -64,7 +64,7 @@ def training_records(
     doe = list(table_ii(seed=0, scale=scale, damper=truth))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        model = get_estimator(first, input=truth.input).fit(doe)
+        model = first_model(doe, first, input=truth.input)
     extension = partial(
         control_extension, scale=scale, damper=truth, model=model, highpass=highpass
     )

@@ -1,12 +1,15 @@
 """``mrdamper rig``: the virtual test rig from the command line.
 
 ``mrdamper rig doe --out DIR [--seed N] [--scale S] [--fs HZ] [--damper NAME|FILE] [--workers W]
-[--format csv|parquet] [--extension none|control] [--loop-model FILE] [--no-progress] [--force]``
-generates the paper's Table II design of experiments (with ``--extension control`` also the
-control-oriented extension, :mod:`mrdamper.control.doe_extension`: the quarter-car loop's damper
-motions and currents replayed on the rig, the loop run with ``--loop-model`` or the rig's damper)
-and writes one file per record (CSV or Parquet) plus ``manifest.csv``; on a terminal it shows a
-progress bar, and it says how much it wrote.
+[--format csv|parquet] [--extension none|control] [--loop-model FILE|KIND|rig] [--plan-only]
+[--stroke M] [--max-velocity M/S] [--no-progress] [--force]`` generates the paper's Table II
+design of experiments (with ``--extension control`` also the control-oriented extension,
+:mod:`mrdamper.control.doe_extension`: the quarter-car loop's damper motions and currents
+replayed on the rig, the loop run with a first model: by default SP-1 fitted on the Table II
+records just generated) and writes one file per record (CSV or Parquet) plus ``manifest.csv``;
+with ``--plan-only`` it writes the commands of every record for a physical rig and their check
+against the rig's limits (:mod:`mrdamper.rig.plan`) instead. On a terminal it shows a progress
+bar, and it says how much it wrote.
 """
 
 from __future__ import annotations
@@ -73,11 +76,35 @@ def doe(
         ),
     ] = "none",
     loop_model: Annotated[
-        Path | None,
+        str | None,
         typer.Option(
             "--loop-model",
-            help="Saved model (JSON) whose quarter-car loop gives the extension's motions "
-            "(default: the rig's damper).",
+            help="First model whose quarter-car loop gives the extension's motions: a saved "
+            "model (JSON), a kind name fitted with its defaults on the Table II records just "
+            "generated, or 'rig' (the virtual rig's own damper, which a physical rig does not "
+            "have). Default: sp1 fitted on Table II (with --plan-only: a model file of your "
+            "damper).",
+        ),
+    ] = None,
+    plan_only: Annotated[
+        bool,
+        typer.Option(
+            "--plan-only",
+            help="Write the rig test plan (displacement and current commands per record, and "
+            "plan.csv: each record against the rig's stroke, velocity, current and load-cell "
+            "limits) instead of running the virtual rig.",
+        ),
+    ] = False,
+    stroke: Annotated[
+        float | None,
+        typer.Option("--stroke", help="Total actuator stroke [m] (default 0.04)."),
+    ] = None,
+    max_velocity: Annotated[
+        float | None,
+        typer.Option(
+            "--max-velocity",
+            help="Largest actuator velocity [m/s], checked by --plan-only (default: reported, "
+            "not checked).",
         ),
     ] = None,
 ) -> None:
@@ -97,34 +124,50 @@ def doe(
         )
     if loop_model is not None and extension != "control":
         raise DataValidationError("--loop-model", "expected only with --extension control")
+    if max_velocity is not None and not plan_only:
+        raise DataValidationError("--max-velocity", "expected only with --plan-only")
+    loop_file = _loop_model_file(loop_model)
+    if plan_only and extension == "control" and loop_file is None:
+        raise DataValidationError(
+            "--loop-model",
+            "expected a model file of your damper (fitted on its Table II records) with "
+            "--plan-only --extension control: the loop's motions depend on the damper",
+        )
     inputs = [Path(damper)] if damper and Path(damper).exists() else []
     check_output(
-        out, force=force, folder=True, inputs=[*inputs, *([loop_model] if loop_model else [])]
+        out, force=force, folder=True, inputs=[*inputs, *([loop_file] if loop_file else [])]
     )
-    from mrdamper.control.doe_extension import control_extension
+    from mrdamper.control.doe_extension import FIRST_KIND, control_extension, first_model
     from mrdamper.data import ExperimentSet
     from mrdamper.models.registry import load_model
     from mrdamper.rig.doe_control import CONTROL_EXTENSION, STROKE_TEST
 
-    first = None if loop_model is None else load_model(loop_model)
+    first = None if loop_file is None else load_model(loop_file)
+    rig = _rig(damper, fs, stroke, plan_only, first)
     n_ext = 2 * len(CONTROL_EXTENSION) + len(STROKE_TEST) if extension == "control" else 0
     n_rec = sum(s.replicates for s in TABLE_II) + n_ext
     written: list[int] = []
+    loop_note = ""
     with _bar(not no_progress) as bar:
-        gen = bar.add_task("generating", total=n_rec)
+        gen = bar.add_task("generating" if not plan_only else "planning", total=n_rec)
         t0 = time.perf_counter()
         records = table_ii(
             seed=seed,
             scale=scale,
-            fs=fs,
-            damper=_damper(damper),
+            rig=rig,
             workers=workers,
             progress=lambda _rec: bar.advance(gen),
         )
         if n_ext:
-            ext = control_extension(
-                seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper), model=first
-            )
+            if loop_model == "rig":
+                first, loop_note = rig.model, "the rig's own damper"
+            elif first is None:
+                kind = loop_model or FIRST_KIND
+                first = first_model(records, kind, input=rig.model.input)
+                loop_note = f"{kind} fitted on the {len(records)} Table II records"
+            else:
+                loop_note = f"{first.kind} from {loop_file}"
+            ext = control_extension(seed=seed + 1, scale=scale, rig=rig, model=first)
             for _ in range(n_ext):
                 bar.advance(gen)
             records = ExperimentSet([*records, *ext], name=records.name + "+control")
@@ -135,15 +178,76 @@ def doe(
             written.append(path.stat().st_size)
             bar.advance(wri)
 
-        manifest = write_records(records, out, force=force, format=format, progress=wrote)  # type: ignore[arg-type]
+        if plan_only:
+            from mrdamper.rig.plan import RigLimits, plan_limits, write_plan
+
+            table = plan_limits(records, RigLimits.of(rig, max_velocity))
+            manifest = write_plan(records, table, out, force=force, progress=wrote)
+        else:
+            manifest = write_records(records, out, force=force, format=format, progress=wrote)  # type: ignore[arg-type]
         t2 = time.perf_counter()
     samples = sum(r.n for r in records)
+    what = "planned" if plan_only else "generated"
     typer.echo(
         f"{len(records)} records, {samples} samples ({samples / fs:g} s at {fs:g} Hz), "
-        f"seed {seed}, scale {scale:g}: generated in {t1 - t0:.1f} s, written in {t2 - t1:.1f} s"
+        f"seed {seed}, scale {scale:g}: {what} in {t1 - t0:.1f} s, written in {t2 - t1:.1f} s"
     )
-    typer.echo(f"wrote {len(written)} {format} files, {sum(written) / 1e6:.1f} MB, to {out}")
-    typer.echo(f"manifest: {manifest}")
+    if loop_note:
+        typer.echo(f"extension loops run with {loop_note}")
+    typer.echo(
+        f"wrote {len(written)} {'csv' if plan_only else format} files, "
+        f"{sum(written) / 1e6:.1f} MB, to {out}"
+    )
+    if plan_only:
+        over = table[table["exceeds"] != ""]
+        typer.echo(f"plan: {manifest} ({len(over)} of {len(table)} records exceed a rig limit)")
+        for limit, names in _exceeding(over).items():
+            shown = ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
+            typer.echo(
+                f"warning: {len(names)} of {len(table)} records exceed the rig's {limit} limit "
+                f"({shown}; see {manifest.name})",
+                err=True,
+            )
+    else:
+        typer.echo(f"manifest: {manifest}")
+
+
+def _exceeding(table) -> dict[str, list[str]]:  # type: ignore[no-untyped-def]
+    """``{limit: [record, ...]}`` of a plan table's ``exceeds`` column."""
+    out: dict[str, list[str]] = {}
+    for record, exceeds in zip(table["record"], table["exceeds"], strict=True):
+        for limit in filter(None, str(exceeds).split(", ")):
+            out.setdefault(limit, []).append(str(record))
+    return out
+
+
+def _loop_model_file(spec: str | None) -> Path | None:
+    """The ``--loop-model`` file, or None for a kind name, ``rig`` or no value."""
+    from mrdamper.kinds import rows
+    from mrdamper.kinds import spec as kind_spec
+
+    if spec is None or spec == "rig" or kind_spec(spec) is not None:
+        return None
+    path = Path(spec)
+    if not path.is_file():
+        kinds = ", ".join(row.kind for row in rows())
+        raise DataValidationError(
+            "--loop-model", f"expected a model file, a kind ({kinds}) or 'rig', got {spec!r}"
+        )
+    return path
+
+
+def _rig(damper: str | None, fs: float, stroke: float | None, plan: bool, first):  # type: ignore[no-untyped-def]
+    """The rig of ``rig doe``: the virtual rig, or with ``plan`` the plan rig whose damper
+    estimate is ``--damper`` or else the loop model file's model."""
+    from mrdamper.rig.actuator import ServoActuator
+    from mrdamper.rig.plan import PlanRig
+    from mrdamper.rig.virtual_rig import VirtualRig
+
+    model = _damper(damper) if damper or not (plan and first is not None) else first
+    actuator = ServoActuator() if stroke is None else ServoActuator(stroke=stroke)
+    cls = PlanRig if plan else VirtualRig
+    return cls(damper=model, fs=fs, actuator=actuator)
 
 
 class _NoBar:

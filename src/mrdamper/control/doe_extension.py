@@ -10,7 +10,8 @@ APRBS current (:func:`~mrdamper.rig.doe_control.replay_loop_motion`), and adds t
 (:func:`~mrdamper.rig.doe_control.stroke_test`: slow sines over the rig's stroke, where a
 damper's stiffness shows). On a physical rig the first
 model is one fitted on Table II (any kind that can be the quarter car's damper and controller
-model; a static map fits in seconds); on the virtual rig it defaults to the rig's own damper.
+model; a static map fits in seconds: :func:`first_model`, the command line's default); the
+library function defaults to the rig's own damper, which only the virtual rig has.
 
 Seeds: ``numpy.random.SeedSequence(seed)`` split into one child per row (as
 :func:`~mrdamper.rig.doe.table_ii` does), each split into the road, the APRBS current and the two
@@ -20,6 +21,7 @@ depend on whether the stroke test is run); a different root seed gives held-out 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -27,7 +29,7 @@ import numpy as np
 from mrdamper.control.car import QuarterCar, iso_road
 from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.quarter_car_study import default_rate
-from mrdamper.data import ExperimentSet
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 from mrdamper.rig.doe import current_range, record_seeds, resolve_rig
@@ -43,10 +45,38 @@ from mrdamper.rig.doe_control import (
 from mrdamper.rig.virtual_rig import VirtualRig
 from mrdamper.signals.common import check_positive, child_seeds
 
-__all__ = ["control_extension", "loop_motion"]
+__all__ = ["FIRST_KIND", "control_extension", "first_model", "loop_motion"]
 
 #: Plant steps per control sample of the loop runs (the motion only has to be the loop's).
 SUBSTEPS = 2
+#: Kind of the default first model: fitted on Table II in seconds, monotone in velocity by
+#: default, and the first model of the closed-loop results (``docs/results.md``).
+FIRST_KIND = "sp1"
+
+
+def first_model(records: Sequence[Experiment], kind: str = FIRST_KIND, input: str = "i") -> Any:
+    """The extension's first model: ``kind`` fitted with its defaults on ``records``.
+
+    This is what a physical rig's user has before the extension: a model identified on the
+    damper's Table II records (the rig's own damper is known only on the virtual rig).
+
+    Parameters
+    ----------
+    records : sequence of Experiment
+        The Table II records of the damper.
+    kind : str
+        Model kind (default :data:`FIRST_KIND`).
+    input : {"i", "voltage"}
+        The rig's electrical input.
+
+    Returns
+    -------
+    FittedModel
+        The fitted first model.
+    """
+    from mrdamper.models.registry import get_estimator
+
+    return get_estimator(kind, input=input).fit(list(records))
 
 
 def loop_motion(
