@@ -135,3 +135,13 @@ def test_the_extension_loop_model_defaults_to_a_fit_on_table_ii(
         )
     err = capsys.readouterr().err
     assert "--loop-model" in err and "'rig'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_rig_of_rig_doe_takes_the_stroke_and_the_damper_estimate(damper) -> None:  # type: ignore[no-untyped-def]
+    first = BinghamModel(fc=(80.0, 980.0), c0=(800.0, 1400.0), input_range=(0.0, 1.0))
+    plan = cli_rig._rig(None, 200.0, 0.03, True, first)
+    assert isinstance(plan, PlanRig) and plan.actuator.stroke == 0.03 and plan.model is first
+    assert RigLimits.of(plan).stroke == 0.03
+    virtual = cli_rig._rig(None, 200.0, 0.05, False, first)
+    assert type(virtual) is VirtualRig and virtual.actuator.stroke == 0.05
+    assert virtual.model is not first  # the virtual rig keeps its reference damper
