@@ -185,6 +185,40 @@ def test_fit_help_lists_every_kind_of_the_registry(capsys, monkeypatch) -> None:
     assert "narx" in known_kinds()
 
 
+@pytest.mark.parametrize(
+    ("command", "after"), [("quartercar", "any kind:"), ("export", "any kind (")]
+)
+def test_model_file_help_lists_the_kind_table(command, after, capsys, monkeypatch) -> None:
+    # every kind runs in the quarter car and exports as C and FMU: the help says so from the
+    # kind table, not from a list typed once ("lpv, sp1..sp4, bingham")
+    monkeypatch.setenv("COLUMNS", "250")
+    from mrdamper.cli.export import FORMATS
+    from mrdamper.kinds import KINDS
+
+    text = " ".join(_help([command], capsys).split())
+    listed = text.split(after, 1)[1].split(")", 1)[0]
+    assert [k.strip() for k in listed.split(",")][: len(KINDS)] == [row.kind for row in KINDS]
+    assert "sp1..sp4" not in text and "LPV or LTI model file" not in text
+    if command == "export":
+        assert " | ".join(FORMATS) in text
+
+
+def test_the_fmu_extra_installs_fmpy_and_all_includes_it() -> None:
+    import tomllib
+
+    from tests.conftest import REPO_ROOT
+
+    extras = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"
+    ]
+    assert any(req.startswith("fmpy") for req in extras["fmu"])
+    [everything] = extras["all"]
+    inside = everything.split("[", 1)[1].rstrip("]").split(",")
+    assert set(inside) == set(extras) - {"all", "dev"}  # every other extra, fmu among them
+    readme = (REPO_ROOT / "README.md").read_text()
+    assert "--format fmu" in readme and "`[fmu]`" in readme
+
+
 # ----------------------------------------------------------------------------- notes once
 def _rounded_time_folder(path):
     """Records whose time column is rounded to 0.1 ms: each read gives the time-column note."""

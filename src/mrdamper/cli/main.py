@@ -72,9 +72,9 @@ app = typer.Typer(
 
 def _version(value: bool) -> None:
     if value:
-        from mrdamper import __version__
+        from mrdamper.version import version_text
 
-        typer.echo(f"mrdamper {__version__}")
+        typer.echo(version_text())
         raise typer.Exit()
 
 
@@ -82,7 +82,7 @@ def _version(value: bool) -> None:
 def _root(
     debug: bool = typer.Option(False, "--debug", help="Show full tracebacks on errors."),
     version: bool = typer.Option(
-        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        False, "--version", callback=_version, is_eager=True, help="Print the version and commit."
     ),
 ) -> None:
     """Identify, compare and export control-oriented models of MR dampers."""
