@@ -232,10 +232,8 @@ def test_a_diverged_run_keeps_its_rows_and_says_so(monkeypatch: pytest.MonkeyPat
     assert soft.loc[passive, "error_pct"].notna().all()
     why = "sp3: simulation diverged at sample 7: state left +-10"
     diverged = [n for n in res.notes if "diverged" in n]
-    assert diverged == [
-        f"1 run(s) diverged, their metrics left empty (hard ISO C @ 20 m/s predicted); the "
-        f"first: {why}"
-    ]
+    said = "1 run(s) diverged, their metrics left empty (hard ISO C @ 20 m/s predicted)"
+    assert diverged == [f"{said}; the first: {why}"]
     assert [r["refused"] for r in res.runs if "refused" in r] == [f"diverged: {why}"]
 
 
