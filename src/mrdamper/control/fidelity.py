@@ -45,6 +45,7 @@ __all__ = [
     "checked_run",
     "closed_loop_fidelity",
     "discrete_rate",
+    "grouped_notes",
     "input_unit",
     "loop_metrics",
     "oscillation",
@@ -416,7 +417,7 @@ def closed_loop_fidelity(
                         }
                     )
     n_loops = len(ctrls) * len(road_classes) * len(speeds)
-    notes = _grouped_notes(model, runs, n_loops, car, model_fs)
+    notes = grouped_notes(model, runs, n_loops, car, model_fs)
     return FidelityResult(model.kind, plant_m.kind, unit, rows, runs, notes)
 
 
@@ -435,11 +436,29 @@ def _named(runs: list[dict[str, Any]]) -> str:
     return shown + (f" and {more} more" if more > 0 else "")
 
 
-def _grouped_notes(
+def grouped_notes(
     model: Any, runs: list[dict[str, Any]], n_loops: int, car: QuarterCar, model_fs: float | None
 ) -> list[str]:
     """One line per finding over every run (refused, diverged, oscillating, beyond the training
-    envelope), naming the runs; each run's figures stay in :meth:`FidelityResult.runs_frame`."""
+    envelope), naming the runs; each run's figures stay in :meth:`FidelityResult.runs_frame`.
+
+    Parameters
+    ----------
+    model : FittedModel
+        The controller's model.
+    runs : list of dict
+        :attr:`FidelityResult.runs` (of one or several calls, e.g. one per controller).
+    n_loops : int
+        Controller x road x speed loops the runs cover.
+    car : QuarterCar
+        The car (the oscillation's band).
+    model_fs : float or None
+        :func:`discrete_rate` of ``model``.
+
+    Returns
+    -------
+    list of str
+    """
     notes: list[str] = []
     for what in ("refused", "diverged"):
         hit = [r for r in runs if str(r.get("refused", "")).startswith(what)]
