@@ -238,8 +238,8 @@ def test_a_reading_note_appears_once_in_a_study(tmp_path, capsys) -> None:
         capsys,
     )
     assert code == 0, err
-    for k in range(3):
-        lines = [ln for ln in err.splitlines() if ln.startswith(f"note: time column of {data}")]
+    lines = [ln for ln in err.splitlines() if "time column of" in ln]
+    for k in range(3):  # the first note in full, the others named in one line that counts them
         assert sum(f"r{k}.csv" in ln for ln in lines) == 1, err
 
 
@@ -249,6 +249,19 @@ def test_info_prints_a_note_once_and_points_to_it(tmp_path, capsys) -> None:
     assert code == 0, err
     assert err.count("note: time column of") == 1
     assert "time column of" not in out and "repaired: see the note above" in out
+
+
+def test_notes_that_differ_in_a_name_and_figures_print_once_then_counted(tmp_path, capsys) -> None:
+    # one note per record would be one line per record: the first prints in full, then one
+    # line counts the others and names them
+    data = _rounded_time_folder(tmp_path / "rounded")
+    code, _out, err = _run(["info", str(data)], capsys)
+    assert code == 0, err
+    notes = [ln for ln in err.splitlines() if ln.startswith("note: ")]
+    assert len(notes) == 2, err
+    assert notes[0].startswith(f"note: time column of {data / 'r0.csv'} is not uniform")
+    assert notes[1].startswith("note: 2 more like 'time column of ... is not uniform")
+    assert notes[1].endswith(f"with other figures: {data / 'r1.csv'}, {data / 'r2.csv'}")
 
 
 def test_an_unchanged_folder_reads_without_notes(tmp_path, capsys) -> None:
