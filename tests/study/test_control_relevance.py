@@ -52,7 +52,7 @@ def test_a_rig_study_gets_predicted_against_achieved(rig_study) -> None:  # type
     sec = html[html.index("<h2>Control relevance</h2>") :]
     sec = sec[: sec.index("<h2>", 10)]
     assert "The truth is known" in sec and "quiroz2022" in sec
-    assert "no inverse" in sec and "fit failed" in sec and "Gain fronts" in sec
+    assert "no inverse" in sec and "Fit failed" in sec and "Gain fronts" in sec
     # the widest model-plant gap of SP-1's sweep, as FrontsResult.widest_gaps finds it
     gap = cr.fronts["sp1"].widest_gaps().set_index("metric").loc["a_w", "error_pct"]
     assert "furthest from the reference damper" in sec and f"{gap:+.1f} %" in sec
