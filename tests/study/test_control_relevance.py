@@ -187,3 +187,23 @@ def test_the_section_fits_a_1280_px_page(tmp_path) -> None:  # type: ignore[no-u
     )
     got = layout_problems(page, 1280, browser, tmp_path)
     assert got["tables"] >= 2 and got["problems"] == [] and got["scrolled"] == []
+
+
+def test_the_loop_has_its_own_progress_bar(doe, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # the quarter-car loop runs after the simulations: its own bar, advanced once per model
+    from rich.progress import Progress
+
+    from mrdamper.study import runner
+
+    shown: list[Progress] = []
+
+    def bars(enabled: bool) -> Progress:
+        shown.append(Progress(disable=True))
+        return shown[-1]
+
+    monkeypatch.setattr(runner, "progress_bars", bars)
+    run_study(doe, doe_protocol(), ["toy", "toyfail"], workers=1, progress=True, control=QUICK)
+    tasks = {t.description: t for bar in shown for t in bar.tasks}
+    assert set(tasks) == {"fitting", "simulating", "quarter car"}
+    loop = tasks["quarter car"]
+    assert loop.total == 1 and loop.completed == 1  # toy fitted (and ran), toyfail did not

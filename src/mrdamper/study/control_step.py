@@ -342,6 +342,7 @@ def control_relevance(
     fit_errors: Mapping[str, str] | None = None,
     car: QuarterCar | None = None,
     submit: Callable[..., Any] | None = None,
+    advance: Callable[[], None] | None = None,
 ) -> ControlRelevance:
     """Every model in the loop (module docstring).
 
@@ -365,6 +366,8 @@ def control_relevance(
     submit : callable, optional
         ``submit(fn, *args)`` returning a future (a study executor's): each model runs as a task
         there; default: one after the other here.
+    advance : callable, optional
+        Called once per model that ran in the loop, when its result is in (a progress bar).
     """
     s = ControlSettings() if settings is None else settings
     pending: dict[str, Any] = {}
@@ -393,6 +396,8 @@ def control_relevance(
             )
         rows += got
         notes += n
+        if advance is not None:
+            advance()
         if fr is not None:
             fronts[label] = fr
     table = pd.DataFrame(rows, columns=list(CONTROL_COLUMNS))
