@@ -166,7 +166,9 @@ def test_the_section_flags_implausible_rows_and_says_why_in_words(truth) -> None
     )
     assert "Error" not in page and "MODEL:" not in page and "+763 %" in page
     headline = page.split("</p>", 1)[0]
-    assert len(headline) < 300 and "2 prediction(s) are off by more than a factor 2" in headline
+    assert (
+        len(headline) < 300 and "2 row(s) hold a prediction off by more than a factor 2" in headline
+    )
     assert in_words("fit failed: IdentificationError: singular") == "Fit failed: singular"
 
 

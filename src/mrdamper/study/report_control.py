@@ -273,8 +273,8 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
     wide = wide_table(cr, unit)
     n_flag = _flagged(wide)
     flags = (
-        f" {n_flag} prediction(s) are off by more than a factor {IMPLAUSIBLE_FACTOR:g} and "
-        "flagged <i>implausible</i> in their row."
+        f" {n_flag} row(s) hold a prediction off by more than a factor "
+        f"{IMPLAUSIBLE_FACTOR:g}, flagged <i>implausible</i> in their note."
         if n_flag
         else ""
     )
