@@ -191,7 +191,7 @@ def test_the_section_fits_a_1280_px_page(tmp_path) -> None:  # type: ignore[no-u
     assert got["tables"] >= 2 and got["problems"] == [] and got["scrolled"] == []
 
 
-def test_the_loop_has_its_own_progress_bar(doe, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+def test_the_loop_and_the_writing_have_their_own_progress(doe, monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
     # the quarter-car loop runs after the simulations: its own bar, advanced once per model
     from rich.progress import Progress
 
@@ -204,8 +204,19 @@ def test_the_loop_has_its_own_progress_bar(doe, monkeypatch) -> None:  # type: i
         return shown[-1]
 
     monkeypatch.setattr(runner, "progress_bars", bars)
-    run_study(doe, doe_protocol(), ["toy", "toyfail"], workers=1, progress=True, control=QUICK)
+    res = run_study(
+        doe, doe_protocol(), ["toy", "toyfail"], workers=1, progress=True, control=QUICK
+    )
     tasks = {t.description: t for bar in shown for t in bar.tasks}
     assert set(tasks) == {"fitting", "simulating", "quarter car"}
     loop = tasks["quarter car"]
     assert loop.total == 1 and loop.completed == 1  # toy fitted (and ran), toyfail did not
+    # then the command line's last stage: the figures and the report being written
+    import mrdamper.study
+    from mrdamper.cli.study import write_or_fail
+
+    written: list[object] = []
+    monkeypatch.setattr(mrdamper.study, "write_study", lambda *a, **k: written.append(a))
+    write_or_fail(res, tmp_path / "out", False, show=True)
+    writing = shown[-1].tasks[0]
+    assert writing.description == "writing" and writing.finished and len(written) == 1
