@@ -356,3 +356,23 @@ def test_a_page_splits_into_folders(tmp_path: Path) -> None:
     got = {name: [b.line for b in blocks] for name, blocks in folders_of(page).items()}
     assert got == {"main": [1, 9], "b": [5]}
     assert len(PARTS) > len(PAGES)  # the long pages are split
+
+
+def test_outputs_must_be_ignored_and_warnings_counted(tmp_path: Path) -> None:
+    if not (REPO_ROOT / ".git").exists():
+        pytest.skip("not a git checkout: .gitignore is not checked")
+    (tmp_path / "my-rig").mkdir()
+    (tmp_path / "my-rig" / "run.csv").write_text("t\n")
+    (tmp_path / "m.json").write_text("{}")
+    _check_ignored(tmp_path)  # the README's and the tutorial's outputs
+    (tmp_path / "stray.txt").write_text("")
+    with pytest.raises(AssertionError, match="stray.txt"):
+        _check_ignored(tmp_path)
+    readme = Block("README.md", 1, "bash", "ls\n", None)
+    once = f"{_TRACE}mrdamper score m.json\nnote: a\n{_TRACE}mrdamper inverse m.json\nnote: a\n"
+    _check_warning_lines(readme, once)  # the same note from two commands
+    with pytest.raises(AssertionError, match="repeats a line"):
+        _check_warning_lines(readme, f"{_TRACE}mrdamper score m.json\nnote: a\nnote: a\n")
+    many = "".join(f"note: n{k}\n" for k in range(MAX_WARNING_LINES + 1))
+    with pytest.raises(AssertionError, match="warning lines from mrdamper score"):
+        _check_warning_lines(readme, f"{_TRACE}mrdamper score m.json\n{many}")
