@@ -135,7 +135,9 @@ def wide_table(cr: ControlRelevance, unit: str) -> pd.DataFrame:
             rows.append(row)
     df = pd.DataFrame(rows)
     cols = [c for c in df.columns if c not in ("model", "controller", "road", "note")]
-    return df.reindex(columns=["model", "controller", "road", *cols, "note"]).fillna("")
+    return (
+        df.reindex(columns=["model", "controller", "road", *cols, "note"]).astype(object).fillna("")
+    )
 
 
 def _worst(cr: ControlRelevance, column: str) -> pd.DataFrame:
