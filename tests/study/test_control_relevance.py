@@ -170,6 +170,7 @@ def test_the_section_flags_implausible_rows_and_says_why_in_words(truth) -> None
         len(headline) < 300 and "2 row(s) hold a prediction off by more than a factor 2" in headline
     )
     assert in_words("fit failed: IdentificationError: singular") == "Fit failed: singular"
+    assert in_words("lpv: 2 of 2 loops leave", capital=False) == "lpv: 2 of 2 loops leave"
 
 
 def test_the_section_fits_a_1280_px_page(tmp_path) -> None:  # type: ignore[no-untyped-def]

@@ -52,12 +52,13 @@ _CLASS_NAME = re.compile(r"\b[A-Z][A-Za-z]*(?:Error|Exception|Warning): ")
 _FIELD = re.compile(r"(^|: )[A-Z][A-Z_]+: ")
 
 
-def in_words(reason: str) -> str:
+def in_words(reason: str, capital: bool = True) -> str:
     """A stored one-line reason as the user reads it: no exception class names
-    (``DataValidationError: MODEL: kind 'lti' has no inverse`` reads ``kind 'lti' has no
-    inverse``), starting with a capital letter."""
+    (``DataValidationError: MODEL: kind 'lti' has no inverse`` reads ``Kind 'lti' has no
+    inverse``), starting with a capital letter unless ``capital`` is False (a note that starts
+    with a model's label)."""
     text = _FIELD.sub(r"\1", _CLASS_NAME.sub("", str(reason))).strip()
-    return text[:1].upper() + text[1:]
+    return text[:1].upper() + text[1:] if capital else text
 
 
 def _num(v: float) -> str:
@@ -338,7 +339,7 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
         out.append("<p>Largest |deviation from the median| per model:</p>")
         out.append(table(_worst(cr, "vs_median_pct"), digits=3))
     if cr.notes:
-        uniq = list(dict.fromkeys(in_words(n) for n in cr.notes))
+        uniq = list(dict.fromkeys(in_words(n, capital=False) for n in cr.notes))
         out.append(
             f"<details><summary>{len(uniq)} warning(s) of the loop runs</summary><ul>"
             + "".join(f"<li>{_e(n)}</li>" for n in uniq)
