@@ -348,7 +348,11 @@ def test_usage_errors_are_one_line_with_exit_2(path: list[str], capsys) -> None:
 def test_unknown_command_version_and_bare_group(capsys) -> None:
     assert "nope" in _one_line_error(*_run(["nope"], capsys)[::2])
     code, out, _ = _run(["--version"], capsys)
-    assert code == 0 and re.fullmatch(r"mrdamper \d+\.\d+\.\d+\S*\n", out)
+    from mrdamper.version import git_commit
+
+    assert code == 0 and re.fullmatch(r"mrdamper \d+\.\d+\.\d+\S* \(.+\)\n", out)
+    commit = git_commit()  # the report's commit, the same 12 characters
+    assert (f"commit {commit[:12]}" if commit else "not run from a git checkout") in out
     code, out, _err = _run(["rig"], capsys)
     assert code == 0 and "doe" in out
 

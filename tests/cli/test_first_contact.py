@@ -185,6 +185,40 @@ def test_fit_help_lists_every_kind_of_the_registry(capsys, monkeypatch) -> None:
     assert "narx" in known_kinds()
 
 
+@pytest.mark.parametrize(
+    ("command", "after"), [("quartercar", "any kind:"), ("export", "any kind (")]
+)
+def test_model_file_help_lists_the_kind_table(command, after, capsys, monkeypatch) -> None:
+    # every kind runs in the quarter car and exports as C and FMU: the help says so from the
+    # kind table, not from a list typed once ("lpv, sp1..sp4, bingham")
+    monkeypatch.setenv("COLUMNS", "250")
+    from mrdamper.cli.export import FORMATS
+    from mrdamper.kinds import KINDS
+
+    text = " ".join(_help([command], capsys).split())
+    listed = text.split(after, 1)[1].split(")", 1)[0]
+    assert [k.strip() for k in listed.split(",")][: len(KINDS)] == [row.kind for row in KINDS]
+    assert "sp1..sp4" not in text and "LPV or LTI model file" not in text
+    if command == "export":
+        assert " | ".join(FORMATS) in text
+
+
+def test_the_fmu_extra_installs_fmpy_and_all_includes_it() -> None:
+    import tomllib
+
+    from tests.conftest import REPO_ROOT
+
+    extras = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"
+    ]
+    assert any(req.startswith("fmpy") for req in extras["fmu"])
+    [everything] = extras["all"]
+    inside = everything.split("[", 1)[1].rstrip("]").split(",")
+    assert set(inside) == set(extras) - {"all", "dev"}  # every other extra, fmu among them
+    readme = (REPO_ROOT / "README.md").read_text()
+    assert "--format fmu" in readme and "`[fmu]`" in readme
+
+
 # ----------------------------------------------------------------------------- notes once
 def _rounded_time_folder(path):
     """Records whose time column is rounded to 0.1 ms: each read gives the time-column note."""
@@ -204,8 +238,8 @@ def test_a_reading_note_appears_once_in_a_study(tmp_path, capsys) -> None:
         capsys,
     )
     assert code == 0, err
-    for k in range(3):
-        lines = [ln for ln in err.splitlines() if ln.startswith(f"note: time column of {data}")]
+    lines = [ln for ln in err.splitlines() if "time column of" in ln]
+    for k in range(3):  # the first note in full, the others named in one line that counts them
         assert sum(f"r{k}.csv" in ln for ln in lines) == 1, err
 
 
@@ -215,6 +249,19 @@ def test_info_prints_a_note_once_and_points_to_it(tmp_path, capsys) -> None:
     assert code == 0, err
     assert err.count("note: time column of") == 1
     assert "time column of" not in out and "repaired: see the note above" in out
+
+
+def test_notes_that_differ_in_a_name_and_figures_print_once_then_counted(tmp_path, capsys) -> None:
+    # one note per record would be one line per record: the first prints in full, then one
+    # line counts the others and names them
+    data = _rounded_time_folder(tmp_path / "rounded")
+    code, _out, err = _run(["info", str(data)], capsys)
+    assert code == 0, err
+    notes = [ln for ln in err.splitlines() if ln.startswith("note: ")]
+    assert len(notes) == 2, err
+    assert notes[0].startswith(f"note: time column of {data / 'r0.csv'} is not uniform")
+    assert notes[1].startswith("note: 2 more like 'time column of ... is not uniform")
+    assert notes[1].endswith(f"with other figures: {data / 'r1.csv'}, {data / 'r2.csv'}")
 
 
 def test_an_unchanged_folder_reads_without_notes(tmp_path, capsys) -> None:

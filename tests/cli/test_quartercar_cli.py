@@ -38,6 +38,9 @@ def test_quartercar_writes_table_and_figures(
     )
     printed = capsys.readouterr().out
     assert "skyhook" in printed and "wrote quartercar.csv" in printed
+    header = printed.splitlines()[0]  # every column with its unit
+    for col in ("rms_acc [m/s²]", "rms_tyre_load [N]", "rms_travel [m]", "mean_input [A]"):
+        assert col in header, header
     table = pd.read_csv(out / "quartercar.csv")
     assert len(table) == 3 * 5  # two ISO roads and the bump, five controllers
     assert set(table["controller"]) == {"soft", "hard", "skyhook", "groundhook", "hybrid"}

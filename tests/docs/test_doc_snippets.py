@@ -30,7 +30,10 @@ How the blocks run:
 * the package is already installed where this test runs, so a ``pip install ... && COMMAND``
   line runs only ``COMMAND`` (the part after ``&&``), and a line that only installs is left out.
 
-Pages that use ``../shared`` skip, with the reason, when the shared data are absent. With the
+Pages that use ``../shared`` skip, with the reason, when the shared data are absent. Every file
+the README's and the tutorial's blocks write is in ``.gitignore`` (:data:`CLEAN_PAGES`), and each
+command of the README prints at most :data:`MAX_WARNING_LINES` distinct warning or note lines,
+each once. With the
 environment variable ``MRDAMPER_DOC_TIMES`` set to a file, every block run appends one line
 ``page<TAB>line<TAB>run<TAB>seconds`` to it (where the suite's time goes).
 """
@@ -182,6 +185,52 @@ def test_page_blocks_run(page: Path, blocks: list[Block], tmp_path: Path) -> Non
     (tmp_path / "shared").symlink_to(SHARED_DATA.parent, target_is_directory=True)
     (work / "benchmarks").symlink_to(REPO_ROOT / "benchmarks", target_is_directory=True)
     _run_folder(runnable, work, _env())
+    if blocks[0].page in CLEAN_PAGES:
+        _check_ignored(work)
+
+
+#: Pages whose commands, run from the repository root, must leave ``git status`` clean: what
+#: they write is in ``.gitignore``.
+CLEAN_PAGES = ("README.md", "docs/tutorial.md")
+#: Most distinct warning and note lines one command of the README may print.
+MAX_WARNING_LINES = 5
+#: The trace prefix that marks where each command of a README ``bash`` block starts on stderr.
+_TRACE = "+mrdamper-doc-test> "
+
+
+def _check_ignored(work: Path) -> None:
+    """Every file the blocks wrote in ``work`` is ignored by the repository's ``.gitignore`` (a
+    user who runs them at the repository root keeps a clean ``git status``)."""
+    if not (REPO_ROOT / ".git").exists():
+        return
+    written = sorted(_snapshot(work))
+    proc = subprocess.run(
+        ["git", "-C", str(REPO_ROOT), "check-ignore", "--no-index", "--stdin"],
+        input="\n".join(written) + "\n",
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    ignored = set(proc.stdout.splitlines())
+    left = [f for f in written if f not in ignored]
+    assert not left, f"written by the page's commands but not in .gitignore: {left[:10]}"
+
+
+def _check_warning_lines(b: Block, stderr: str) -> None:
+    """Each command of a README block prints at most :data:`MAX_WARNING_LINES` distinct warning
+    or note lines, each once."""
+    commands = stderr.split(_TRACE) if b.lang == "bash" else [stderr]
+    for text in commands:
+        said = [
+            ln
+            for ln in text.splitlines()
+            if ln.startswith(("warning: ", "note: ")) or re.match(r"^\S+:\d+: \w+: ", ln)
+        ]
+        command = text.splitlines()[0] if b.lang == "bash" and text else b.page
+        assert len(said) == len(set(said)), f"{b.page}:{b.line} repeats a line: {command}"
+        assert len(said) <= MAX_WARNING_LINES, (
+            f"{b.page}:{b.line}: {len(said)} warning lines from {command}: {said}"
+        )
 
 
 def _run_folder(blocks: list[Block], work: Path, env: dict[str, str]) -> list[tuple[int, int]]:
@@ -204,6 +253,8 @@ def _run_folder(blocks: list[Block], work: Path, env: dict[str, str]) -> list[tu
 def _run_block(b: Block, run: int, work: Path, env: dict[str, str]) -> bool:
     """Run one block in ``work`` (failing the test if it fails); True if it wrote a file there."""
     code = as_run(b)
+    if b.page == "README.md" and b.lang == "bash":  # mark each command's start on stderr
+        code = f"PS4='{_TRACE}'\nset -x\n{code}"
     before = _snapshot(work)
     t0 = time.perf_counter()
     cmd = ["bash", "-e", "-c", code] if b.lang == "bash" else [sys.executable, "-c", code]
@@ -232,6 +283,8 @@ def _run_block(b: Block, run: int, work: Path, env: dict[str, str]) -> bool:
         )
     if b.expected is not None:
         _check_output(b, proc.stdout, run)
+    if b.page == "README.md":
+        _check_warning_lines(b, proc.stderr)
     return _snapshot(work) != before
 
 
@@ -303,3 +356,23 @@ def test_a_page_splits_into_folders(tmp_path: Path) -> None:
     got = {name: [b.line for b in blocks] for name, blocks in folders_of(page).items()}
     assert got == {"main": [1, 9], "b": [5]}
     assert len(PARTS) > len(PAGES)  # the long pages are split
+
+
+def test_outputs_must_be_ignored_and_warnings_counted(tmp_path: Path) -> None:
+    if not (REPO_ROOT / ".git").exists():
+        pytest.skip("not a git checkout: .gitignore is not checked")
+    (tmp_path / "my-rig").mkdir()
+    (tmp_path / "my-rig" / "run.csv").write_text("t\n")
+    (tmp_path / "m.json").write_text("{}")
+    _check_ignored(tmp_path)  # the README's and the tutorial's outputs
+    (tmp_path / "stray.txt").write_text("")
+    with pytest.raises(AssertionError, match="stray.txt"):
+        _check_ignored(tmp_path)
+    readme = Block("README.md", 1, "bash", "ls\n", None)
+    once = f"{_TRACE}mrdamper score m.json\nnote: a\n{_TRACE}mrdamper inverse m.json\nnote: a\n"
+    _check_warning_lines(readme, once)  # the same note from two commands
+    with pytest.raises(AssertionError, match="repeats a line"):
+        _check_warning_lines(readme, f"{_TRACE}mrdamper score m.json\nnote: a\nnote: a\n")
+    many = "".join(f"note: n{k}\n" for k in range(MAX_WARNING_LINES + 1))
+    with pytest.raises(AssertionError, match="warning lines from mrdamper score"):
+        _check_warning_lines(readme, f"{_TRACE}mrdamper score m.json\n{many}")

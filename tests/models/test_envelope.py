@@ -106,6 +106,16 @@ def test_predict_simulate_and_score_say_once_when_a_record_leaves(tmp_path: Path
     assert back.envelope_note(_sine(0.02, 3.0, 0.5)) == m.envelope_note(_sine(0.02, 3.0, 0.5))
 
 
+def test_the_note_points_at_the_user_s_line() -> None:
+    # not at the line of mrdamper that predicted (models/base.py): the user's call
+    m = _model_with_envelope()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m.score(_sine(0.02, 3.0, 0.5))
+    [note] = [w for w in caught if issubclass(w.category, Note)]
+    assert Path(note.filename) == Path(__file__), note.filename
+
+
 def test_a_model_without_envelope_says_nothing() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error", Note)

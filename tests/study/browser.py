@@ -3,7 +3,9 @@
 The page is copied with a small script added that, after loading, opens every ``<details>``,
 then lists every table that is wider than the page's content box without sitting in a box that
 scrolls sideways, every image wider than the window, and whether the page itself scrolls
-sideways. Chromium prints the resulting DOM (``--dump-dom``) and the list is read back from it.
+sideways (``problems``), and, with the section it is in, every table whose box does scroll
+sideways (``scrolled``). Chromium prints the resulting DOM (``--dump-dom``) and the list is
+read back from it.
 """
 
 from __future__ import annotations
@@ -45,10 +47,23 @@ window.addEventListener("load", () => {
       bad.push(`image ${k} is wider than the window`);
     }
   });
+  // tables whose box scrolls sideways, with the section (the h2 above) they are in
+  const scrolled = [];
+  const heads = [...document.querySelectorAll("h2")];
+  document.querySelectorAll("table").forEach((t, k) => {
+    const p = t.parentElement;
+    if (p && p !== document.body && scrolls(p) && p.scrollWidth > p.clientWidth + 1) {
+      const before = Node.DOCUMENT_POSITION_FOLLOWING;
+      const above = heads.filter(h => h.compareDocumentPosition(t) & before);
+      const section = above.length ? above[above.length - 1].textContent : "";
+      const size = `${p.scrollWidth} px in ${p.clientWidth} px`;
+      scrolled.push(`${section}: table ${k} scrolls sideways (${size})`);
+    }
+  });
   const out = document.createElement("pre");
   out.id = "layout-probe";
   const tables = document.querySelectorAll("table").length;
-  out.textContent = JSON.stringify({tables: tables, problems: bad});
+  out.textContent = JSON.stringify({tables: tables, problems: bad, scrolled: scrolled});
   document.body.appendChild(out);
 });
 </script>
@@ -63,7 +78,8 @@ def find_browser() -> str | None:
 def layout_problems(html_file: Path, width: int, browser: str, workdir: Path) -> dict:
     """Render ``html_file`` in a window ``width`` px wide.
 
-    Returns ``{"tables": n, "problems": [...]}``.
+    Returns ``{"tables": n, "problems": [...], "scrolled": ["<section>: table k scrolls ...",
+    ...]}``.
     """
     text = html_file.read_text(encoding="utf-8")
     probe = workdir / f"probe-{width}-{html_file.name}"

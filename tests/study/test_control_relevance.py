@@ -52,7 +52,7 @@ def test_a_rig_study_gets_predicted_against_achieved(rig_study) -> None:  # type
     sec = html[html.index("<h2>Control relevance</h2>") :]
     sec = sec[: sec.index("<h2>", 10)]
     assert "The truth is known" in sec and "quiroz2022" in sec
-    assert "no inverse" in sec and "fit failed" in sec and "Gain fronts" in sec
+    assert "no inverse" in sec and "Fit failed" in sec and "Gain fronts" in sec
     # the widest model-plant gap of SP-1's sweep, as FrontsResult.widest_gaps finds it
     gap = cr.fronts["sp1"].widest_gaps().set_index("metric").loc["a_w", "error_pct"]
     assert "furthest from the reference damper" in sec and f"{gap:+.1f} %" in sec
@@ -120,3 +120,104 @@ def test_command_line_settings() -> None:
     assert s.road_classes == ("C", "D") and s.duration == 6.0
     with pytest.raises(DataValidationError, match="--control-roads"):
         control_settings(False, "C,Z", 3.0)
+
+
+def _section_of(truth: str | None):  # type: ignore[no-untyped-def]
+    """A control section with an implausible row, a refused run and a pair that did not run."""
+    import types
+
+    from mrdamper.study import report
+    from mrdamper.study.control_step import ControlRelevance
+    from mrdamper.study.report_control import control_section
+
+    values = {"a_w": (27.2, 3.15), "rms_tyre_load": (640.0, 610.0), "rms_travel": (0.005, 0.0051)}
+    rows = []
+    for ctrl in ("hard", "skyhook"):
+        for metric, (pred, ach) in values.items():
+            rows.append(
+                {"model": "lpv-paper", "kind": "lpv", "controller": ctrl, "road": "C",
+                 "speed_m_s": 20.0, "metric": metric, "predicted": pred, "achieved": ach,
+                 "error_pct": 100 * (pred - ach) / ach, "unit": "", "reason": None,
+                 "vs_median_pct": 100 * (pred - ach) / ach}
+            )  # fmt: skip
+    rows[-1]["reason"] = "predicted run refused: the plant step is not converged"
+    rows.append(
+        {"model": "lti", "kind": "lti", "controller": "skyhook",
+         "reason": "DataValidationError: MODEL: kind 'lti' has no inverse; passive soft/hard work"}
+    )  # fmt: skip
+    cr = ControlRelevance(truth, "all", ControlSettings(), pd.DataFrame(rows))
+    res = types.SimpleNamespace(control=cr, info={"data_origin": "measured"})
+    page = control_section(res, report._table, "A")  # type: ignore[arg-type]
+    return cr, page
+
+
+@pytest.mark.parametrize("truth", ["rig", None])
+def test_the_section_flags_implausible_rows_and_says_why_in_words(truth) -> None:  # type: ignore[no-untyped-def]
+    from mrdamper.study.report_control import in_words, wide_table
+
+    cr, page = _section_of(truth)
+    wide = wide_table(cr, "A").set_index(["model", "controller"])
+    against = "achieved" if truth else "the models' median"
+    flag = f"implausible: a_w predicted 27.2 m/s² against 3.15 m/s² {against} (+763 %)"
+    assert wide.loc[("lpv-paper", "hard"), "note"] == flag
+    assert wide.loc[("lpv-paper", "skyhook"), "note"].startswith("Predicted run refused")
+    assert (
+        wide.loc[("lti", "skyhook"), "note"] == "Kind 'lti' has no inverse; passive soft/hard work"
+    )
+    assert "Error" not in page and "MODEL:" not in page and "+763 %" in page
+    headline = page.split("</p>", 1)[0]
+    assert (
+        len(headline) < 300 and "2 row(s) hold a prediction off by more than a factor 2" in headline
+    )
+    assert in_words("fit failed: IdentificationError: singular") == "Fit failed: singular"
+    assert in_words("lpv: 2 of 2 loops leave", capital=False) == "lpv: 2 of 2 loops leave"
+
+
+def test_the_section_fits_a_1280_px_page(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from mrdamper.study import report
+
+    from .browser import find_browser, layout_problems
+
+    browser = find_browser()
+    if browser is None:
+        pytest.skip("no headless browser (chromium) installed: apt-get install chromium")
+    page = tmp_path / "section.html"
+    body = _section_of("rig")[1]
+    page.write_text(
+        f"<html><head><style>{report._CSS}</style></head><body><h2>Control relevance</h2>"
+        f"{body}</body></html>",
+        encoding="utf-8",
+    )
+    got = layout_problems(page, 1280, browser, tmp_path)
+    assert got["tables"] >= 2 and got["problems"] == [] and got["scrolled"] == []
+
+
+def test_the_loop_and_the_writing_have_their_own_progress(doe, monkeypatch, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # the quarter-car loop runs after the simulations: its own bar, advanced once per model
+    from rich.progress import Progress
+
+    from mrdamper.study import runner
+
+    shown: list[Progress] = []
+
+    def bars(enabled: bool) -> Progress:
+        shown.append(Progress(disable=True))
+        return shown[-1]
+
+    monkeypatch.setattr(runner, "progress_bars", bars)
+    res = run_study(
+        doe, doe_protocol(), ["toy", "toyfail"], workers=1, progress=True, control=QUICK
+    )
+    tasks = {t.description: t for bar in shown for t in bar.tasks}
+    assert set(tasks) == {"fitting", "simulating", "quarter car"}
+    loop = tasks["quarter car"]
+    assert loop.total == 1 and loop.completed == 1  # toy fitted (and ran), toyfail did not
+    # then the command line's last stage: the figures and the report being written
+    import mrdamper.study
+    from mrdamper.cli.study import write_or_fail
+
+    written: list[object] = []
+    monkeypatch.setattr(mrdamper.study, "write_study", lambda *a, **k: written.append(a))
+    write_or_fail(res, tmp_path / "out", False, show=True)
+    writing = shown[-1].tasks[0]
+    assert writing.description == "writing" and writing.finished and len(written) == 1

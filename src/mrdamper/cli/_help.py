@@ -12,7 +12,16 @@ from __future__ import annotations
 import re
 from typing import Any
 
-__all__ = ["readable_help"]
+__all__ = ["kinds_text", "readable_help"]
+
+
+def kinds_text() -> str:
+    """The model kinds of the kind table (:mod:`mrdamper.kinds`), comma-separated, for help texts
+    that list them (``"lpv, p15, sp1, ..."``)."""
+    from mrdamper import kinds
+
+    return ", ".join(row.kind for row in kinds.rows())
+
 
 #: Click type name -> the label shown (as the other options show theirs).
 _LABELS = {"text": "str", "integer": "int", "float": "float", "path": "path", "boolean": "bool"}

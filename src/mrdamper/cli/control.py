@@ -17,7 +17,8 @@ With ``--plant PLANT`` (a model file, ``rig`` for the virtual rig's reference da
 damper: ``DIR/closed_loop.csv`` gets the metrics predicted (MODEL as damper) against those achieved
 (PLANT as damper) per controller, road and speed (:mod:`mrdamper.control.fidelity`) and
 ``DIR/closed_loop_runs.csv`` the numerics of every run (plant sub-steps, halving change,
-high-frequency share, training-envelope excursions); warnings are printed one a line.
+high-frequency share, training-envelope excursions); warnings go to standard error, one line
+per finding over every run.
 
 With ``--tune`` the passive inputs and the semi-active gains are swept on each ISO road
 (:mod:`mrdamper.control.fronts`), with MODEL as the damper and, with ``--plant``, with PLANT:
@@ -36,6 +37,7 @@ from typing import Annotated, Any
 import typer
 
 from mrdamper._io import FileKind, csv_kind, png_kind
+from mrdamper.cli._help import kinds_text
 from mrdamper.errors import DataValidationError
 
 __all__ = ["QUARTERCAR_CSV", "register"]
@@ -81,7 +83,12 @@ def _png_writer(fig: Any) -> Callable[[Path], object]:
 
 
 def quartercar(
-    model_file: Annotated[Path, typer.Argument(help="Damper model file (lpv, sp1..sp4, bingham).")],
+    model_file: Annotated[
+        Path,
+        typer.Argument(
+            help=f"Damper model file written by 'mrdamper fit' (any kind: {kinds_text()})."
+        ),
+    ],
     out: Annotated[
         Path, typer.Option("--out", "-o", help="Output folder for the table and figures.")
     ],
@@ -230,28 +237,41 @@ def quartercar(
         import matplotlib.pyplot as plt
 
         plt.close("all")
-    cols = [
-        "road",
-        "controller",
-        "rms_acc",
-        "rms_acc_wk",
-        "rms_tyre_load",
-        "rms_travel",
-        "max_travel",
-        "travel_over_limit",
-        "mean_input",
-    ]
-    typer.echo(table[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    from mrdamper.control.fidelity import HF_SHARE, discrete_rate, oscillation, oscillation_note
+    from mrdamper.control.fidelity import HF_SHARE, discrete_rate, input_unit, oscillation
 
-    fs_m = discrete_rate(m)
-    for (road, ctrl), res in cmp.results.items():
-        share, peak = oscillation(res)
-        if road.startswith("ISO") and share > HF_SHARE:
-            typer.echo(
-                f"warning: {ctrl}, {road}: {oscillation_note(share, peak, qc, fs_m)}: the metrics "
-                "are the model's loop, not the damper's"
-            )
+    shown = {  # the printed table: every column with its unit
+        "road": "road",
+        "controller": "controller",
+        "rms_acc": "rms_acc [m/s²]",
+        "rms_acc_wk": "rms_acc_wk [m/s²]",
+        "rms_tyre_load": "rms_tyre_load [N]",
+        "rms_travel": "rms_travel [m]",
+        "max_travel": "max_travel [m]",
+        "travel_over_limit": "time over travel limit [-]",
+        "mean_input": f"mean_input [{input_unit(m)}]",
+    }
+    typer.echo(
+        table[list(shown)]
+        .rename(columns=shown)
+        .to_string(index=False, float_format=lambda v: f"{v:.4g}")
+    )
+    osc = [
+        (road, ctrl, *oscillation(res))
+        for (road, ctrl), res in cmp.results.items()
+        if road.startswith("ISO")
+    ]
+    osc = [o for o in osc if o[2] > HF_SHARE]
+    if osc:
+        from mrdamper.control.fidelity import oscillation_note
+
+        road, ctrl, share, peak = max(osc, key=lambda o: o[2])
+        runs = ", ".join(f"{c} {r}" for r, c, _s, _p in osc)
+        typer.echo(
+            f"warning: {len(osc)} loop(s) oscillate ({runs}), their metrics are the model's "
+            f"loop, not the damper's; the strongest, {ctrl} {road}: "
+            f"{oscillation_note(share, peak, qc, discrete_rate(m))}",
+            err=True,
+        )
     how = f" (inverse: {c_inverse.name})" if c_inverse is not None else ""
     typer.echo(f"{m.kind}{how}: wrote {', '.join(files)} in {out}")
 
@@ -397,7 +417,7 @@ def _fidelity(
     )
     typer.echo(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     for note in res.notes:
-        typer.echo(f"warning: {note}")
+        typer.echo(f"warning: {note}", err=True)
     typer.echo(
         f"{m.kind} controller, {res.plant_kind} plant: wrote {', '.join(_FIDELITY_FILES)} in {out}"
     )

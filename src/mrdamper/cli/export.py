@@ -19,6 +19,7 @@ from typing import Annotated, Any
 import typer
 
 from mrdamper._io import csv_kind
+from mrdamper.cli._help import kinds_text
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
@@ -28,11 +29,19 @@ __all__ = ["INVERSE_CSV", "register"]
 INVERSE_CSV = csv_kind(
     "table written by 'mrdamper inverse' (t, F_desired, ...)", ("t", "F_desired")
 )
+#: The formats of ``export`` (the first two: the state-space matrices of :data:`STATE_SPACE`).
+FORMATS = ("mat", "json", "c", "fmu")
+#: The kinds whose matrices ``--format mat|json`` writes.
+STATE_SPACE = ("lpv", "lti")
 
 
 def export(
     model_file: Annotated[
-        Path, typer.Argument(help="LPV or LTI model file written by 'mrdamper fit'.")
+        Path,
+        typer.Argument(
+            help=f"Model file written by 'mrdamper fit': any kind ({kinds_text()}) for --format "
+            f"c and fmu; {' or '.join(STATE_SPACE)} for {' and '.join(FORMATS[:2])}."
+        ),
     ],
     out: Annotated[
         Path,
@@ -43,7 +52,7 @@ def export(
     fmt: Annotated[
         str | None,
         typer.Option(
-            "--format", help="mat | json | c | fmu (default: from the --out suffix, else mat)."
+            "--format", help=f"{' | '.join(FORMATS)} (default: from the --out suffix, else mat)."
         ),
     ] = None,
     name: Annotated[
@@ -88,8 +97,8 @@ def export(
 
     if fmt is None:
         fmt = {".json": "json", ".fmu": "fmu"}.get(out.suffix.lower(), "mat")
-    if fmt not in ("mat", "json", "c", "fmu"):
-        raise DataValidationError("--format", f"expected 'mat', 'json', 'c' or 'fmu', got {fmt!r}")
+    if fmt not in FORMATS:
+        raise DataValidationError("--format", f"expected one of {list(FORMATS)}, got {fmt!r}")
     if inverse and fmt != "fmu":
         raise DataValidationError("--inverse", "only with --format fmu (the C export has both)")
     if fmt == "fmu":
@@ -115,11 +124,11 @@ def export(
         return
     check_writable(out, force, inputs=[model_file], kind=EXPORT_FILE)
     m = load_model(model_file)
-    if m.kind not in ("lpv", "lti"):
+    if m.kind not in STATE_SPACE:
         raise DataValidationError(
             "MODEL",
-            f"{model_file} holds a {m.kind!r} model; export handles the state-space models 'lpv' "
-            "and 'lti'",
+            f"{model_file} holds a {m.kind!r} model; --format {fmt} writes the state-space "
+            f"models {' and '.join(map(repr, STATE_SPACE))} (--format c and fmu take every kind)",
         )
     path = export_lpv(m, out, format="json" if fmt == "json" else "mat", force=force)
     typer.echo(f"{m.kind}: wrote {path} ({fmt})")
@@ -128,7 +137,10 @@ def export(
 def inverse(
     model_file: Annotated[
         Path,
-        typer.Argument(help="Model file (lpv, sp1..sp4, bingham, tanh, boucwen, dahl, lugre)."),
+        typer.Argument(
+            help="Model file written by 'mrdamper fit' (a kind with an inverse; another kind is "
+            "refused with the list of those that have one)."
+        ),
     ],
     data: Annotated[
         Path, typer.Argument(help="One record file; its force column F is the desired force.")

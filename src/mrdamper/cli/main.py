@@ -13,7 +13,9 @@ Each command module exposes ``register(app)``. Exits, for every command:
 * SIGTERM (``kill``, a batch system ending the job): handled like Ctrl-C (temporary files and
   partial folders removed, worker processes stopped), one line ``terminated``, status 143;
 * warnings print as one ``warning: ...`` line, notes (:class:`~mrdamper.errors.Note`) as
-  ``note: ...``; each text once per command, however often it is raised.
+  ``note: ...``, on standard error; each text once per command, however often it is raised, and
+  of several that differ only in a quoted name and figures (one note per record) the first,
+  then at the end one line counting the others.
 
 ``--debug`` shows tracebacks instead of the one-line messages.
 """
@@ -22,10 +24,12 @@ from __future__ import annotations
 
 import errno
 import importlib
+import re
 import signal
 import sys
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import typer
@@ -72,9 +76,9 @@ app = typer.Typer(
 
 def _version(value: bool) -> None:
     if value:
-        from mrdamper import __version__
+        from mrdamper.version import version_text
 
-        typer.echo(f"mrdamper {__version__}")
+        typer.echo(version_text())
         raise typer.Exit()
 
 
@@ -82,7 +86,7 @@ def _version(value: bool) -> None:
 def _root(
     debug: bool = typer.Option(False, "--debug", help="Show full tracebacks on errors."),
     version: bool = typer.Option(
-        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        False, "--version", callback=_version, is_eager=True, help="Print the version and commit."
     ),
 ) -> None:
     """Identify, compare and export control-oriented models of MR dampers."""
@@ -106,13 +110,69 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+@dataclass
+class _Held:
+    """Notes of one kind (:func:`_template`): the label, the words of the one shown, which of
+    its words the others change and the first changed word of each other one."""
+
+    label: str
+    words: list[str]
+    changed: set[int] = field(default_factory=set)
+    names: list[str] = field(default_factory=list)
+
+    def add(self, text: str) -> None:
+        words = text.split()
+        diff = [k for k, (a, b) in enumerate(zip(self.words, words)) if a != b]
+        self.changed.update(diff)
+        self.names.append(words[diff[0]].strip("'\",;:()") if diff else "")
+
+    def line(self) -> str:
+        """``note: 4 more like 'lpv: record ... leaves ...', with other figures: a, b, ...``."""
+        words = ["..." if k in self.changed else w for k, w in enumerate(self.words)]
+        head = " ".join(w for k, w in enumerate(words) if w != "..." or words[k - 1] != "...")
+        head = head if len(head) <= _HEAD else head[:_HEAD].rsplit(" ", 1)[0] + " ..."
+        named = [n for n in self.names if n]
+        which = ", ".join(named[:_NAMES_SHOWN]) + (", ..." if len(named) > _NAMES_SHOWN else "")
+        return f"{self.label}: {len(self.names)} more like '{head}', with other figures" + (
+            f": {which}" if which else ""
+        )
+
+
+#: Notes of one kind (:func:`_template`) -> the one shown and the others held back (a note about
+#: each of 30 records prints once, then one line counts and names the others).
+_LIKE: dict[str, _Held] = {}
+#: Names listed in the line that counts the held-back notes.
+_NAMES_SHOWN = 4
+#: Characters of the shown text that line repeats (changed words as ``...``).
+_HEAD = 90
+
+
+def _template(text: str) -> str:
+    """``text`` with quoted names and figures left out: the notes of one kind about different
+    records (``record 'a' ... 1.38 x``, ``record 'b' ... 1.37 x``) share it."""
+    return re.sub(r"\d+(?:\.\d+)?", "#", re.sub(r"'[^']*'", "''", text))
+
+
 def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:
     label = "note" if issubclass(category, Note) else "warning"
     text = _one_line(str(message))
     if text in SHOWN:
         return
     SHOWN.add(text)
+    key = f"{label}: {_template(text)}"
+    if key in _LIKE:
+        _LIKE[key].add(text)
+        return
+    _LIKE[key] = _Held(label, text.split())
     typer.echo(f"{label}: {text}", err=True)
+
+
+def _show_held_back() -> None:
+    """One line per kind of note held back by :func:`_show_warning`: how many, and which."""
+    for held in _LIKE.values():
+        if held.names:
+            typer.echo(held.line(), err=True)
+    _LIKE.clear()
 
 
 def _usage_error(exc: BaseException) -> str | None:
@@ -166,6 +226,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     debug = "--debug" in args
     saved_show = warnings.showwarning
     SHOWN.clear()
+    _LIKE.clear()
     if not debug:
         warnings.showwarning = _show_warning
     _terminated.clear()
@@ -209,6 +270,7 @@ def main(argv: Sequence[str] | None = None) -> None:
             sys.exit(USAGE_EXIT if exc.errno in _PATH_ERRNOS else FAILURE_EXIT)
         raise
     finally:
+        _show_held_back()
         warnings.showwarning = saved_show
         if saved_term is not None:
             signal.signal(signal.SIGTERM, saved_term)

@@ -144,7 +144,7 @@ def select(
     for fold in dict.fromkeys(res.scores.loc[res.scores["beyond"], "fold"]):
         typer.echo(f"  {fold}")
     for note in res.notes:
-        typer.echo(f"note: {note}")
+        typer.echo(f"note: {note}", err=True)
     typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")
     if not (tab["folds_ok"] > 0).any():
         typer.echo(

@@ -61,10 +61,12 @@ def _models(models: str | None) -> list[str] | None:
     return kinds
 
 
-def write_or_fail(res: Any, out: Path, force: bool) -> None:
+def write_or_fail(res: Any, out: Path, force: bool, show: bool = False) -> None:
     """Write the study to ``out`` and print its summary; when every fit failed, print the
-    failures and one ``error:`` line instead, write nothing and exit with status 1."""
+    failures and one ``error:`` line instead, write nothing and exit with status 1. ``show``:
+    a progress line while the figures and the report are written."""
     from mrdamper.study import write_study
+    from mrdamper.study.runner import progress_bars
 
     ok = res.fits["status"] == "ok"
     if not ok.any():
@@ -75,7 +77,10 @@ def write_or_fail(res: Any, out: Path, force: bool) -> None:
             err=True,
         )
         raise typer.Exit(1)
-    write_study(res, out, force=force)
+    with progress_bars(show) as bar:
+        task = bar.add_task("writing", total=None)  # figures (PNG and SVG) and the report
+        write_study(res, out, force=force)
+        bar.update(task, total=1, completed=1)
     print_summary(res, out)
 
 
@@ -225,7 +230,7 @@ def study(
         progress=not no_progress,
         control=control,
     )
-    write_or_fail(res, out, force)
+    write_or_fail(res, out, force, show=not no_progress)
 
 
 def control_settings(
@@ -359,7 +364,7 @@ def demo(
         )
     finally:
         compiled.finish_ahead(cancel=True)  # no-op: the study waited for it
-    write_or_fail(res, out, force)
+    write_or_fail(res, out, force, show=not no_progress)
     console.print(
         f"Done in {time.perf_counter() - t0:.0f} s. Open {out / 'report.html'} in a browser.",
         highlight=False,

@@ -45,6 +45,7 @@ __all__ = [
     "checked_run",
     "closed_loop_fidelity",
     "discrete_rate",
+    "grouped_notes",
     "input_unit",
     "loop_metrics",
     "oscillation",
@@ -135,12 +136,23 @@ _EXCURSION_NAMES = {
 }
 
 
+#: The switching dimension when the training records never switch the input while moving.
+_NEW_SWITCHING = "the input switches while the damper moves, which no training record does"
+
+
 def _excursion_text(exc: dict[str, float]) -> str:
     """The dimensions the loop leaves (ratio to the training envelope above 1 +
     :data:`~mrdamper.models.envelope.ENVELOPE_TOLERANCE`, as for a record), largest first, e.g.
-    ``"stroke x1.3, velocity x1.1"``."""
-    out = sorted(((v, k) for k, v in exc.items() if v > 1.0 + ENVELOPE_TOLERANCE), reverse=True)
-    return ", ".join(f"{_EXCURSION_NAMES.get(k, k)} x{v:.2g}" for v, k in out)
+    ``"stroke x1.3, velocity x1.1"``; switching while moving, when the training records never
+    do, in words, last."""
+    out = sorted(
+        ((v, k) for k, v in exc.items() if v > 1.0 + ENVELOPE_TOLERANCE and np.isfinite(v)),
+        reverse=True,
+    )
+    text = [f"{_EXCURSION_NAMES.get(k, k)} x{v:.2g}" for v, k in out]
+    if exc.get("switching") == np.inf:
+        text.append(_NEW_SWITCHING)
+    return ", ".join(text)
 
 
 def discrete_rate(model: Any) -> float | None:
@@ -187,8 +199,8 @@ def oscillation_note(
     )
     return (
         f"loop oscillation: {what}, where the model's one-sample delay lags by {lag:.0f} deg: "
-        f"{remedy}; training records of the loop's motions (mrdamper.control.doe_extension) "
-        f"give the model the motions it meets here"
+        f"{remedy}; training records of the loop's motions ({REMEDY}) give the model the "
+        "motions it meets here"
     )
 
 
@@ -344,8 +356,6 @@ def closed_loop_fidelity(
     unit = input_unit(model)
     rows: list[dict[str, Any]] = []
     runs: list[dict[str, Any]] = []
-    notes: list[str] = []
-    n_left = 0  # loops (achieved side) that leave the model's training envelope
     fs = default_rate(model)
     model_fs = discrete_rate(model)
     for cls in road_classes:
@@ -362,7 +372,6 @@ def closed_loop_fidelity(
                             model, road, c, car, plant=p, substeps=s, reg=reg, rate=rate
                         )
 
-                    where = f"{c.kind}, ISO {cls} @ {sp:g} m/s, {side}"
                     info: dict[str, Any] = {
                         "controller": c.kind,
                         "road": cls,
@@ -377,7 +386,6 @@ def closed_loop_fidelity(
                             "refused" if isinstance(exc_refused, NotConvergedError) else "diverged"
                         )
                         runs.append({**info, "refused": f"{what}: {exc_refused}"})
-                        notes.append(f"{where}: {what}: {exc_refused}")
                         out[side] = dict.fromkeys(METRICS, float("nan"))
                         continue
                     share, f_hf = oscillation(r)
@@ -393,16 +401,6 @@ def closed_loop_fidelity(
                     if exc is not None:
                         info.update({f"excursion_{k}": v for k, v in exc.items()})
                     runs.append(info)
-                    if share > HF_SHARE:
-                        fs_m = model_fs if side == "predicted" else None
-                        notes.append(f"{where}: {oscillation_note(share, f_hf, car, fs_m)}")
-                    left = _excursion_text(exc) if side == "achieved" and exc is not None else ""
-                    if left:
-                        n_left += 1
-                        notes.append(
-                            f"{where}: the loop leaves the {model.kind} model's training envelope:"
-                            f" {left}"
-                        )
                     out[side] = loop_metrics(r)
                 for metric in METRICS:
                     pr, ac = out["predicted"][metric], out["achieved"][metric]
@@ -418,15 +416,87 @@ def closed_loop_fidelity(
                             "error_pct": err,
                         }
                     )
+    n_loops = len(ctrls) * len(road_classes) * len(speeds)
+    notes = grouped_notes(model, runs, n_loops, car, model_fs)
+    return FidelityResult(model.kind, plant_m.kind, unit, rows, runs, notes)
+
+
+#: Runs named in full in a grouped note; the others are counted (all are in ``runs_frame``).
+_NAMED_RUNS = 4
+
+
+def _where(run: dict[str, Any]) -> str:
+    return f"{run['controller']} ISO {run['road']} @ {run['speed_m_s']:g} m/s {run['side']}"
+
+
+def _named(runs: list[dict[str, Any]]) -> str:
+    """``"hard ISO A @ 20 m/s predicted, ... and 3 more"``."""
+    shown = ", ".join(_where(r) for r in runs[:_NAMED_RUNS])
+    more = len(runs) - _NAMED_RUNS
+    return shown + (f" and {more} more" if more > 0 else "")
+
+
+def grouped_notes(
+    model: Any, runs: list[dict[str, Any]], n_loops: int, car: QuarterCar, model_fs: float | None
+) -> list[str]:
+    """One line per finding over every run (refused, diverged, oscillating, beyond the training
+    envelope), naming the runs; each run's figures stay in :meth:`FidelityResult.runs_frame`.
+
+    Parameters
+    ----------
+    model : FittedModel
+        The controller's model.
+    runs : list of dict
+        :attr:`FidelityResult.runs` (of one or several calls, e.g. one per controller).
+    n_loops : int
+        Controller x road x speed loops the runs cover.
+    car : QuarterCar
+        The car (the oscillation's band).
+    model_fs : float or None
+        :func:`discrete_rate` of ``model``.
+
+    Returns
+    -------
+    list of str
+    """
+    notes: list[str] = []
+    for what in ("refused", "diverged"):
+        hit = [r for r in runs if str(r.get("refused", "")).startswith(what)]
+        if hit:
+            why = str(hit[0]["refused"]).removeprefix(f"{what}: ").removeprefix("substeps: ")
+            notes.append(
+                f"{len(hit)} run(s) {what}, their metrics left empty ({_named(hit)}); the "
+                f"first: {why}"
+            )
+    osc = [r for r in runs if r.get("hf_share", 0.0) > HF_SHARE]
+    if osc:
+        worst = max(osc, key=lambda r: float(r["hf_share"]))
+        fs_m = model_fs if worst["side"] == "predicted" else None
+        what = oscillation_note(worst["hf_share"], worst["hf_peak_hz"], car, fs_m)
+        notes.append(
+            f"{len(osc)} run(s) oscillate ({_named(osc)}); the strongest, {_where(worst)}: {what}"
+        )
     if not dict(getattr(model, "provenance", {}) or {}).get("envelope"):
         notes.append(
             f"the {model.kind} model carries no training envelope (saved before it was recorded):"
             " refit it to see how far the loop leaves its training data"
         )
+    largest: dict[str, float] = {}
+    n_left = 0  # loops (achieved side) that leave the model's training envelope
+    for r in runs:
+        exc = {
+            k.removeprefix("excursion_"): float(v)
+            for k, v in r.items()
+            if k.startswith("excursion_")
+        }
+        if r["side"] == "achieved" and _excursion_text(exc):
+            n_left += 1
+            for k, v in exc.items():
+                largest[k] = max(largest.get(k, 0.0), v)
     if n_left:
         notes.append(
-            f"{n_left} of {len(ctrls) * len(road_classes) * len(speeds)} loops leave the "
-            f"{model.kind} model's training envelope, where its predictions extrapolate: add "
-            f"records of the loop's own motions to its training set ({REMEDY})"
+            f"{n_left} of {n_loops} loops leave the {model.kind} model's training envelope (at "
+            f"most: {_excursion_text(largest)}), where its predictions extrapolate: add records "
+            f"of the loop's own motions to its training set ({REMEDY})"
         )
-    return FidelityResult(model.kind, plant_m.kind, unit, rows, runs, notes)
+    return notes

@@ -20,7 +20,6 @@ Shared by ``tanh``, ``boucwen``, ``dahl`` and ``lugre`` (:mod:`._hysteresis_kern
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,6 +27,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from mrdamper._warn import warn_user
 from mrdamper.data import ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
@@ -408,17 +408,15 @@ def identify(
     cond = float((sv[0] / sv[-1]) ** 2) if sv[-1] > 0 else math.inf
     converged = bool(final.status > 0)
     if not cond < COND_WARNING:
-        warnings.warn(
+        warn_user(
             f"{kind}: identification is ill-conditioned (cond(J^T J) = {cond:.3g} in scaled "
             "unknowns); some parameters are not determined by these records",
             RuntimeWarning,
-            stacklevel=4,
         )
     if not converged:
-        warnings.warn(
+        warn_user(
             f"{kind}: optimiser stopped before convergence ({final.message}); raise max_nfev",
             RuntimeWarning,
-            stacklevel=4,
         )
     report("residuals of the fit")
     resid = obj.residuals(final.x)

@@ -23,7 +23,6 @@ import functools
 import json
 import time
 import typing
-import warnings
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,6 +31,7 @@ from typing import Any, ClassVar, Literal, NamedTuple, cast
 import numpy as np
 
 from mrdamper._io import atomic_write_text, json_kind
+from mrdamper._warn import warn_user
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
@@ -140,7 +140,7 @@ def check_input_range(
     if policy == "error":
         raise OutOfRangeError(msg + "; pass range_policy='clip', 'warn' or 'ignore' to proceed")
     if policy == "warn":
-        warnings.warn(msg + " (extrapolating)", RuntimeWarning, stacklevel=3)
+        warn_user(msg + " (extrapolating)", RuntimeWarning)
         return values
     if policy == "clip":
         return np.asarray(np.clip(values, lo, hi))
@@ -187,7 +187,7 @@ def _with_envelope_check(predict: Any) -> Any:
         try:
             note = self.envelope_note(experiment)
             if note:
-                warnings.warn(note, Note, stacklevel=2)
+                warn_user(note, Note)
             return cast(np.ndarray, predict(self, experiment))
         finally:
             _IN_PREDICT.reset(token)
@@ -523,7 +523,7 @@ class Estimator(abc.ABC):
         if prepared.level is not None:
             note = single_level_note(self.kind, prepared.input, prepared.level)
             provenance["note"] = note
-            warnings.warn(note, UserWarning, stacklevel=2)
+            warn_user(note, UserWarning)
         # the records' sampling intervals [s] (the default step of the model's exports)
         provenance["record_dt"] = sorted({float(e.dt) for e in prepared.records})
         provenance["elapsed_s"] = time.perf_counter() - t0
@@ -624,12 +624,11 @@ SEGMENT_SAMPLES` cut into consecutive segments (bounded work arrays; a note says
             if parts < 2:
                 continue
             counts[e.name] = parts
-            warnings.warn(
+            warn_user(
                 f"{self.kind}: record {e.name!r} ({e.n} samples) is identified as {parts} "
                 f"consecutive segments of at most {_scale.SEGMENT_SAMPLES} samples (bounded "
                 "memory), each a record of its own to the fit (free runs start at rest)",
                 Note,
-                stacklevel=3,
             )
         return records, out, counts
 

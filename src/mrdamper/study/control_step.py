@@ -34,6 +34,8 @@ from mrdamper.control.fidelity import (
     METRICS,
     checked_run,
     closed_loop_fidelity,
+    discrete_rate,
+    grouped_notes,
     input_unit,
     loop_metrics,
 )
@@ -190,8 +192,8 @@ def truth_damper(records: Iterable[Any], plant: str | None = None) -> str | None
 def _reason(exc: BaseException) -> str:
     if interrupt_in_chain(exc):
         raise KeyboardInterrupt from exc
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0] if text else ''}"
+    text = str(exc).strip().splitlines()  # the message only: no class name in the report
+    return text[0] if text else f"failed without a message ({type(exc).__name__})"
 
 
 def _failed_row(label: str, kind: str, ctrl: str, reason: str) -> dict[str, Any]:
@@ -265,7 +267,8 @@ def model_in_loop(
         model = model_from_dict(dict(model))
     plant = None if truth is None else resolve_plant(truth)
     rows: list[dict[str, Any]] = []
-    notes: list[str] = []
+    runs: list[dict[str, Any]] = []  # of every controller: their notes are grouped once
+    n_loops = 0
     for ctrl in s.controllers:
         try:
             if plant is None:
@@ -295,7 +298,13 @@ def model_in_loop(
             if said is not None:  # its NaN cells say why
                 row["reason"] = said
             rows.append(row)
-        notes += [f"{label}: {n}" for n in res.notes if "carries no training envelope" not in n]
+        runs += res.runs
+        n_loops += len(s.road_classes) * len(s.speeds)
+    notes = [
+        f"{label}: {n}"
+        for n in (grouped_notes(model, runs, n_loops, car, discrete_rate(model)) if runs else [])
+        if "carries no training envelope" not in n
+    ]
     fronts: FrontsResult | str | None = None
     if plant is not None and s.fronts and not isinstance(model, InvertibleModel):
         fronts = (
@@ -333,6 +342,7 @@ def control_relevance(
     fit_errors: Mapping[str, str] | None = None,
     car: QuarterCar | None = None,
     submit: Callable[..., Any] | None = None,
+    advance: Callable[[], None] | None = None,
 ) -> ControlRelevance:
     """Every model in the loop (module docstring).
 
@@ -356,6 +366,8 @@ def control_relevance(
     submit : callable, optional
         ``submit(fn, *args)`` returning a future (a study executor's): each model runs as a task
         there; default: one after the other here.
+    advance : callable, optional
+        Called once per model that ran in the loop, when its result is in (a progress bar).
     """
     s = ControlSettings() if settings is None else settings
     pending: dict[str, Any] = {}
@@ -384,6 +396,8 @@ def control_relevance(
             )
         rows += got
         notes += n
+        if advance is not None:
+            advance()
         if fr is not None:
             fronts[label] = fr
     table = pd.DataFrame(rows, columns=list(CONTROL_COLUMNS))

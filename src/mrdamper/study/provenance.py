@@ -8,52 +8,13 @@ identical runs give the same provenance, byte for byte.
 
 from __future__ import annotations
 
-import functools
-import subprocess
 import sys
-from pathlib import Path
 from typing import Any
 
 from mrdamper.study.protocol import ModelSpec, Protocol
+from mrdamper.version import git_commit
 
 __all__ = ["git_commit", "provenance", "records_text"]
-
-
-@functools.cache
-def git_commit() -> str | None:
-    """The commit of the mrdamper source this process runs, or None when it is not a git checkout.
-
-    The commit is that of the checkout holding this very package (``<root>/src/mrdamper``), never
-    of another repository the installation happens to sit in. ``+dirty`` is appended when tracked
-    files differ from the commit.
-
-    Returns
-    -------
-    str or None
-    """
-    package = Path(__file__).resolve().parents[1]
-
-    def git(*args: str) -> str | None:
-        try:
-            proc = subprocess.run(
-                ["git", "-C", str(package), *args],
-                capture_output=True,
-                text=True,
-                timeout=10,
-                check=False,
-            )
-        except (OSError, subprocess.SubprocessError):
-            return None
-        return proc.stdout.strip() if proc.returncode == 0 else None
-
-    top = git("rev-parse", "--show-toplevel")
-    if top is None or Path(top).resolve() / "src" / "mrdamper" != package:
-        return None
-    head = git("rev-parse", "HEAD")
-    if not head:
-        return None
-    dirty = git("status", "--porcelain", "--untracked-files=no")
-    return head + ("+dirty" if dirty else "")
 
 
 def provenance(protocol: Protocol, specs: tuple[ModelSpec, ...], seed: int) -> dict[str, Any]:

@@ -74,7 +74,9 @@ figure{break-inside:avoid}details{display:block}}
 """
 
 #: Columns whose cells are free text (wrapped, left-aligned).
-_TEXT_COLUMNS = frozenset({"error", "note", "first_error", "example", "status", "reason"})
+_TEXT_COLUMNS = frozenset(
+    {"error", "note", "first_error", "example", "status", "reason", "failure"}
+)
 
 
 def _e(x: Any) -> str:

@@ -9,6 +9,7 @@ spread of the models' predictions about their median.
 from __future__ import annotations
 
 import html
+import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -19,7 +20,7 @@ from mrdamper.control.fronts import gap_size
 from mrdamper.study.control_step import STUDY_LEVELS, ControlRelevance
 from mrdamper.study.result import StudyResult
 
-__all__ = ["control_section", "wide_table"]
+__all__ = ["IMPLAUSIBLE_FACTOR", "control_section", "in_words", "wide_table"]
 
 #: Metrics shown in the report's wide tables (all of them are in ``control.csv``), with a scale
 #: and the unit shown.
@@ -41,44 +42,103 @@ def _e(x: Any) -> str:
     return html.escape(str(x), quote=True)
 
 
+#: A prediction off by more than this factor (either way) from what was achieved, or from the
+#: models' median without a truth, is flagged in its row as implausible.
+IMPLAUSIBLE_FACTOR = 2.0
+#: Metrics whose size is compared (the mean input may be near zero, so only its difference counts).
+_FLAGGED = ("a_w", "rms_tyre_load", "rms_travel")
+#: ``SomeError: `` and an upper-case field (``MODEL: ``) at the start of a stored reason.
+_CLASS_NAME = re.compile(r"\b[A-Z][A-Za-z]*(?:Error|Exception|Warning): ")
+_FIELD = re.compile(r"(^|: )[A-Z][A-Z_]+: ")
+
+
+def in_words(reason: str, capital: bool = True) -> str:
+    """A stored one-line reason as the user reads it: no exception class names
+    (``DataValidationError: MODEL: kind 'lti' has no inverse`` reads ``Kind 'lti' has no
+    inverse``), starting with a capital letter unless ``capital`` is False (a note that starts
+    with a model's label)."""
+    text = _FIELD.sub(r"\1", _CLASS_NAME.sub("", str(reason))).strip()
+    return text[:1].upper() + text[1:] if capital else text
+
+
+def _num(v: float) -> str:
+    if not np.isfinite(v):
+        return "-"
+    return f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}"
+
+
+def _pct(v: float) -> str:
+    return f"{v:+.1f} %" if abs(v) < 10 else f"{v:+.0f} %"
+
+
+def _implausible(name: str, u: str, pred: float, ref: float, truth: bool) -> str:
+    """Why ``pred`` is implausible against ``ref`` (achieved, or the median), or ``""``."""
+    if not (np.isfinite(pred) and np.isfinite(ref) and ref > 0):
+        return ""
+    if max(pred / ref, ref / pred if pred > 0 else np.inf) <= IMPLAUSIBLE_FACTOR:
+        return ""
+    against = "achieved" if truth else "the models' median"
+    return (
+        f"implausible: {name} predicted {_num(pred)} {u} against {_num(ref)} {u} {against} "
+        f"({_pct(100 * (pred - ref) / ref)})"
+    )
+
+
 def wide_table(cr: ControlRelevance, unit: str) -> pd.DataFrame:
-    """One row per model, controller, road and speed; per shown metric the predicted value and,
-    with a truth, the achieved one and the error [%], else the deviation from the median [%]."""
+    """One row per model, controller, road and speed; per shown metric one cell, ``predicted /
+    achieved (error)`` with a truth, else ``predicted (deviation from the median)``; ``note``:
+    why the row has no numbers, or which prediction is implausible (off by more than
+    :data:`IMPLAUSIBLE_FACTOR`)."""
     t = cr.table
-    keys = ["model", "controller", "road", "speed_m_s"]
-    ok = t[t["metric"].notna()]
+    truth = cr.truth is not None
     rows: list[dict[str, Any]] = []
     order = list(dict.fromkeys(zip(t["model"], t["controller"])))
     for model, ctrl in order:
         part = t[(t["model"] == model) & (t["controller"] == ctrl)]
-        reasons = part["reason"].dropna()
-        if len(reasons):
-            rows.append({"model": model, "controller": ctrl, "reason": str(reasons.iloc[0])})
+        if part["metric"].isna().all():  # the pair did not run: one row, its reason
+            reasons = part["reason"].dropna() if "reason" in part else pd.Series(dtype=str)
+            why = in_words(reasons.iloc[0]) if len(reasons) else "Did not run"
+            rows.append({"model": model, "controller": ctrl, "note": why})
             continue
-        sub = ok[(ok["model"] == model) & (ok["controller"] == ctrl)]
-        for (road, sp), g in sub.groupby(["road", "speed_m_s"], sort=False):
+        for (road, sp), g in part[part["metric"].notna()].groupby(
+            ["road", "speed_m_s"], sort=False
+        ):
             row: dict[str, Any] = {
                 "model": model,
                 "controller": ctrl,
-                "road": road,
-                "speed_m_s": sp,
+                "road": f"ISO {road}, {sp:g} m/s",
             }
+            notes: list[str] = []
+            said = g["reason"].dropna() if "reason" in g else pd.Series(dtype=str)
+            if len(said):  # a refused or diverged run of this road
+                notes.append(in_words(said.iloc[0]))
             for metric, (scale, u) in _SHOWN.items():
                 m = g[g["metric"] == metric]
                 if m.empty:
                     continue
-                name = f"{_NAMES[metric]} [{u or unit}]"
-                row[f"{name} pred."] = scale * m["predicted"].iloc[0]
-                if cr.truth is not None:
-                    row[f"{name} ach."] = scale * m["achieved"].iloc[0]
-                    row[f"{_NAMES[metric]} error [%]"] = m["error_pct"].iloc[0]
+                u = u or unit
+                pred = scale * float(m["predicted"].iloc[0])
+                if truth:
+                    ach, err = scale * float(m["achieved"].iloc[0]), float(m["error_pct"].iloc[0])
+                    cell = f"{_num(pred)} / {_num(ach)}"
+                    ref = ach
                 else:
-                    row[f"{_NAMES[metric]} vs median [%]"] = m["vs_median_pct"].iloc[0]
-            row["reason"] = ""
+                    err = float(m["vs_median_pct"].iloc[0])
+                    cell = _num(pred)
+                    ref = pred / (1 + err / 100) if np.isfinite(err) and err > -100 else np.nan
+                if np.isfinite(err):
+                    cell += f" ({_pct(err)})"
+                row[f"{_NAMES[metric]} [{u}]"] = cell
+                flag = _implausible(_NAMES[metric], u, pred, ref, truth)
+                if metric in _FLAGGED and flag:
+                    notes.append(flag)
+            row["note"] = "; ".join(notes)
             rows.append(row)
     df = pd.DataFrame(rows)
-    cols = [c for c in df.columns if c not in ("reason", *keys)]
-    return df.reindex(columns=[*keys, *cols, "reason"]).rename(columns={"speed_m_s": "speed [m/s]"})
+    cols = [c for c in df.columns if c not in ("model", "controller", "road", "note")]
+    return (
+        df.reindex(columns=["model", "controller", "road", *cols, "note"]).astype(object).fillna("")
+    )
 
 
 def _worst(cr: ControlRelevance, column: str) -> pd.DataFrame:
@@ -95,7 +155,7 @@ def _chosen(cr: ControlRelevance) -> pd.DataFrame:
     rows = []
     for label, fr in cr.fronts.items():
         if isinstance(fr, str):
-            rows.append({"model": label, "reason": fr})
+            rows.append({"model": label, "note": in_words(fr)})
             continue
         for r in fr.chosen().to_dict("records"):
             gain = r["c_ground"] if r["controller"] == "groundhook" else r["c_sky"]
@@ -109,7 +169,7 @@ def _chosen(cr: ControlRelevance) -> pd.DataFrame:
                     "a_w gain ach. [%]": r["aw_gain_pct_achieved"],
                     "tyre gain pred. [%]": r["tyre_gain_pct_predicted"],
                     "tyre gain ach. [%]": r["tyre_gain_pct_achieved"],
-                    "reason": "",
+                    "note": "",
                 }
             )
     return pd.DataFrame(rows).reindex(
@@ -122,23 +182,29 @@ def _chosen(cr: ControlRelevance) -> pd.DataFrame:
             "a_w gain ach. [%]",
             "tyre gain pred. [%]",
             "tyre gain ach. [%]",
-            "reason",
+            "note",
         ]
     )
 
 
 def _gaps(cr: ControlRelevance, unit: str) -> pd.DataFrame:
-    """Per model with a sweep, the point of the widest model-plant gap per metric
-    (:meth:`~mrdamper.control.fronts.FrontsResult.widest_gaps`)."""
+    """Per model with a sweep and metric, the point of the widest model-plant gap
+    (:meth:`~mrdamper.control.fronts.FrontsResult.widest_gaps`): one row each, so the table stays
+    narrow."""
     rows = []
     for label, fr in cr.fronts.items():
         if isinstance(fr, str):
             continue
-        row: dict[str, Any] = {"model": label}
         for r in fr.widest_gaps().to_dict("records"):
-            row[_GAP_NAMES[r["metric"]]] = f"{gap_size(r, unit)} ({_point(r)})"
-        rows.append(row)
-    return pd.DataFrame(rows).reindex(columns=["model", *_GAP_NAMES.values()])
+            rows.append(
+                {
+                    "model": label,
+                    "metric": _GAP_NAMES[r["metric"]],
+                    "widest gap": gap_size(r, unit),
+                    "where": _point(r),
+                }
+            )
+    return pd.DataFrame(rows).reindex(columns=["model", "metric", "widest gap", "where"])
 
 
 #: Column of :func:`_gaps` per metric.
@@ -173,6 +239,32 @@ def _no_truth(res: StudyResult) -> str:
     return "the records are measured and no model is the real damper"
 
 
+def _wide_html(wide: pd.DataFrame) -> str:
+    """The wide table as HTML that fits the page: each metric cell's error on a line of its own
+    under ``predicted / achieved``, the note wrapped (no sideways scrolling at 1280 px)."""
+    head = "".join(f"<th>{_e(c)}</th>" for c in wide.columns)
+    body = []
+    for row in wide.itertuples(index=False):
+        cells = []
+        for col, v in zip(wide.columns, row):
+            text = str(v)
+            if col == "note":
+                cells.append(f'<td style="white-space:normal;min-width:12em">{_e(text)}</td>')
+                continue
+            value, _, err = text.partition(" (")
+            tail = f'<br><span class="small">{_e(err.rstrip(")"))}</span>' if err else ""
+            cells.append(f"<td>{_e(value)}{tail}</td>")
+        body.append("<tr>" + "".join(cells) + "</tr>")
+    return (
+        f'<div class="tablewrap"><table class="left"><thead><tr>{head}</tr></thead>'
+        f"<tbody>{''.join(body)}</tbody></table></div>"
+    )
+
+
+def _flagged(wide: pd.DataFrame) -> int:
+    return int(wide["note"].astype(str).str.contains("implausible: ").sum()) if len(wide) else 0
+
+
 def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> str:
     """HTML of the section; ``table`` renders a DataFrame (the report's table helper)."""
     cr = res.control
@@ -181,6 +273,14 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
             "<p>The control-relevance step was switched off for this study "
             "(<code>run_study(..., control=None)</code>, <code>--no-control</code>).</p>"
         )
+    wide = wide_table(cr, unit)
+    n_flag = _flagged(wide)
+    flags = (
+        f" {n_flag} row(s) hold a prediction off by more than a factor "
+        f"{IMPLAUSIBLE_FACTOR:g}, flagged <i>implausible</i> in their note."
+        if n_flag
+        else ""
+    )
     how = (
         f"Each model of fold <code>{_e(cr.fold)}</code> is the controller's model (the "
         "semi-active controllers ask its inverse for the input) on the quarter car "
@@ -189,17 +289,18 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
         f"dynamic tyre load and suspension travel; mean input [{_e(unit)}]. Every metric, "
         "with RMS acceleration and RMS force tracking, is in <code>control.csv</code>."
     )
-    wide = wide_table(cr, unit)
     out = []
     if cr.truth is not None:
         out.append(
-            f"<p><b>The truth is known</b>: the records come from the virtual rig, whose damper "
-            f"(<code>{_e(_truth_text(cr.truth))}</code>) each controller also drives in the car. "
-            "<i>pred.</i>: the model as the damper (what the model promises); "
-            "<i>ach.</i>: the reference damper (what the controller achieves); error = 100 "
-            f"(pred. &minus; ach.) / ach. {how}</p>"
+            "<p><b>The truth is known</b>: what each model promises in the loop against what "
+            f"the rig's damper (<code>{_e(_truth_text(cr.truth))}</code>) achieves.{flags}</p>"
         )
-        out.append(table(wide, cls="left"))
+        out.append(_wide_html(wide))
+        out.append(
+            '<p class="small">Each cell: predicted / achieved (error), predicted with the model '
+            "as the damper, achieved with the rig's damper driven by the same controller; error "
+            f"= 100 (pred. &minus; ach.) / ach. {how}</p>"
+        )
         out.append("<p>Largest |error| per model over the controllers and roads:</p>")
         out.append(table(_worst(cr, "error_pct"), digits=3))
         if cr.fronts:
@@ -225,26 +326,29 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
                 out.append(table(gaps, cls="left"))
     else:
         out.append(
-            f"<p><b>No truth is available</b>: {_e(_no_truth(res))}, so the loop cannot say "
-            "which model's prediction is right. What it shows is "
-            "how much the models disagree with one another in the loop: each model's predicted "
-            "metric against the median of the models on the same controller and road, "
-            f"<i>vs median</i> = 100 (model &minus; median) / median. {how}</p>"
+            f"<p><b>No truth is available</b>: {_e(_no_truth(res))}; how much the models "
+            f"disagree in the loop.{flags}</p>"
         )
-        out.append(table(wide, cls="left"))
+        out.append(_wide_html(wide))
+        out.append(
+            '<p class="small">Without the real damper in the loop, which model is right cannot '
+            "be said. Each cell: the model's predicted metric (its deviation from the median of "
+            "the models on the same controller and road, 100 (model &minus; median) / median). "
+            f"{how}</p>"
+        )
         out.append("<p>Largest |deviation from the median| per model:</p>")
         out.append(table(_worst(cr, "vs_median_pct"), digits=3))
     if cr.notes:
-        uniq = list(dict.fromkeys(cr.notes))
+        uniq = list(dict.fromkeys(in_words(n, capital=False) for n in cr.notes))
         out.append(
             f"<details><summary>{len(uniq)} warning(s) of the loop runs</summary><ul>"
             + "".join(f"<li>{_e(n)}</li>" for n in uniq)
             + "</ul></details>"
         )
-    n_failed = int(np.sum(wide["reason"].astype(str) != "")) if "reason" in wide else 0
+    n_failed = int(np.sum(wide["road"].astype(str) == "")) if "road" in wide else 0
     if n_failed:
         out.append(
             f'<p class="small">{n_failed} model/controller pair(s) could not run; their rows '
-            "give the reason.</p>"
+            "say why.</p>"
         )
     return "\n".join(out)

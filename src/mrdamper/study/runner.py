@@ -16,7 +16,7 @@ import platform
 import shutil
 import tempfile
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeVar, cast
 
 import numpy as np
@@ -47,7 +47,14 @@ from mrdamper.study.selection import SCORE_COLUMNS, SelectionResult, selection_f
 from mrdamper.study.splits import Fold, make_folds, roles_frame
 from mrdamper.study.tables import RESULT_COLUMNS
 
-__all__ = ["DEFAULT_CONTROL", "META_COLUMNS", "data_origin", "laws_users", "run_study"]
+__all__ = [
+    "DEFAULT_CONTROL",
+    "META_COLUMNS",
+    "data_origin",
+    "laws_users",
+    "progress_bars",
+    "run_study",
+]
 
 #: The control-relevance step a study runs unless told otherwise (short roads, one class/speed).
 DEFAULT_CONTROL = ControlSettings()
@@ -185,7 +192,10 @@ def _predict_all(
     return out
 
 
-def _progress(enabled: bool) -> Any:
+def progress_bars(enabled: bool) -> Any:
+    """The study's progress display on standard error (rich; ``enabled=False``: nothing shown):
+    one bar per stage (fitting, simulating, the quarter-car loop), and the writing of a report
+    by the command line."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -281,8 +291,13 @@ def run_study(
         _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
         t_control = time.perf_counter()
         control_res = None
-        if control is not None:
-            control_res = _control(executor, folds, specs, fit_out, records, control)
+        if control is not None:  # its own bar: the loop runs after the simulations
+            with progress_bars(progress) as bar:
+                n_loop = sum(fit_out[(0, si)].ok for si in range(len(specs)))
+                task = bar.add_task("quarter car", total=n_loop)
+                control_res = _control(
+                    executor, folds, specs, fit_out, records, control, lambda: bar.advance(task)
+                )
         t_control = time.perf_counter() - t_control
     except BaseException:
         executor.close(cancel=True)
@@ -328,9 +343,11 @@ def _control(
     fit_out: Mapping[tuple[int, int], FitOutcome],
     records: Records,
     settings: ControlSettings,
+    advance: Callable[[], None] | None = None,
 ) -> ControlRelevance:
     """The first fold's models in the quarter-car loop, one task per model on the executor (the
-    truth is the rig's damper when every record comes from it)."""
+    truth is the rig's damper when every record comes from it); ``advance()`` after each
+    model."""
     done = {s.label: fit_out[(0, si)] for si, s in enumerate(specs)}
     order = sorted(specs, key=lambda s: _cost_rank(s.kind))  # the longest task starts first
     return control_relevance(
@@ -342,6 +359,7 @@ def _control(
         settings,
         fit_errors={k: str(v.error) for k, v in done.items()},
         submit=ex.submit,
+        advance=advance,
     )
 
 
@@ -404,7 +422,7 @@ def _execute(
     _compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
         fits[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
-    with _progress(show) as bar:
+    with progress_bars(show) as bar:
         t_fit = bar.add_task("fitting", total=len(folds) * len(specs))
         t_sim = bar.add_task("simulating", total=n_sims)
         while fits or sims:
