@@ -38,6 +38,7 @@ __all__ = [
     "add",
     "default_kinds",
     "input_text",
+    "kind_list",
     "plugin_errors",
     "rows",
     "spec",
@@ -397,6 +398,11 @@ def spec(kind: str) -> KindSpec | None:
         if row.kind == kind:
             return row
     return None
+
+
+def kind_list() -> str:
+    """Every kind, comma-separated in display order (for help texts)."""
+    return ", ".join(row.kind for row in rows())
 
 
 def default_kinds() -> tuple[str, ...]:
