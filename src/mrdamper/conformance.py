@@ -273,8 +273,8 @@ def check_discrete_step(model: FittedModel, probe: Experiment) -> None:
     raise _fail(kind, "discrete_step", "ran at twice its own sample time")
 
 
-#: The checks of :func:`check_family`, in order: name -> what it takes (``"estimator"``, or
-#: ``"model"`` for the fitted model and the probe record).
+#: The checks of :func:`check_family`, in order: name -> check. The first three take the
+#: estimator; the others the fitted model and the probe record (``round_trip`` also a folder).
 CHECKS: dict[str, Callable[..., None]] = {
     "registered": check_registered,
     "unknown_setting": check_unknown_setting,
