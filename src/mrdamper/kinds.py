@@ -36,6 +36,7 @@ __all__ = [
     "KindSpec",
     "Variant",
     "add",
+    "added",
     "default_kinds",
     "input_text",
     "kind_list",
@@ -376,6 +377,13 @@ def _load_plugins() -> dict[str, KindSpec]:
             warnings.warn(text, stacklevel=3)
     _PLUGINS = found
     return found
+
+
+def added() -> tuple[KindSpec, ...]:
+    """The rows added at run time with :func:`add` (by :func:`mrdamper.models.register`), which
+    a process hands to the worker processes it starts (:func:`mrdamper._io.processes.init_worker`):
+    a worker started by spawn sees the kind if its module imports there."""
+    return tuple(_ADDED.values())
 
 
 def plugin_errors() -> dict[str, str]:

@@ -181,17 +181,19 @@ def test_plugin_c_and_fmu_equal_its_step(plugin: None, tmp_path: Path) -> None:
 def test_spawned_study_workers_fit_the_plugin(
     plugin: None, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # workers started by spawn import everything afresh: they find the family through its
-    # entry point (as Dask workers do), and score it as forked workers do
+    # workers started by spawn import everything afresh: they find the plug-in through its
+    # entry point (as Dask workers do) and are handed the rows that register() added here (the
+    # toy kinds of the study tests); they score both as forked workers do
     from mrdamper.study import ModelSpec, doe_protocol, run_study
     from tests.study.conftest import small_doe
 
     doe = small_doe(reps=2)
+    models = [ModelSpec("viscous"), ModelSpec("toy")]
     kw = {"workers": 2, "seed": 0, "progress": False, "control": None}
-    forked = run_study(doe, doe_protocol(), [ModelSpec("viscous")], **kw)
+    forked = run_study(doe, doe_protocol(), models, **kw)
     monkeypatch.setattr(multiprocessing, "get_all_start_methods", lambda: ["spawn"])
-    spawned = run_study(doe, doe_protocol(), [ModelSpec("viscous")], **kw)
-    assert list(spawned.fits["error"]) == [""]
+    spawned = run_study(doe, doe_protocol(), models, **kw)
+    assert list(spawned.fits["error"]) == ["", ""]
     cols = ["model", "record", "esr"]
-    assert len(spawned.results) > 0
+    assert set(spawned.results["model"]) == {"viscous", "toy"}
     assert spawned.results[cols].equals(forked.results[cols])
