@@ -197,3 +197,24 @@ def test_spawned_study_workers_fit_the_plugin(
     cols = ["model", "record", "esr"]
     assert set(spawned.results["model"]) == {"viscous", "toy"}
     assert spawned.results[cols].equals(forked.results[cols])
+
+
+def _page_file(page: str, path: str) -> str:
+    """The text a bash block of ``page`` writes to ``path`` with ``cat > path <<'EOF'``."""
+    text = (REPO_ROOT / page).read_text(encoding="utf-8")
+    start = text.index(f"cat > {path} <<'EOF'\n") + len(f"cat > {path} <<'EOF'\n")
+    return text[start : text.index("\nEOF\n", start) + 1]
+
+
+def test_the_documented_package_is_the_tested_one() -> None:
+    # docs/adding-a-model.md installs the package that these tests put on the path
+    page = "docs/adding-a-model.md"
+    for name in ("__init__.py", "family.py"):
+        documented = _page_file(page, f"mrd-viscous/mrd_viscous/{name}")
+        tested = (PLUGIN_SITE / "mrd_viscous" / name).read_text(encoding="utf-8")
+        if name == "__init__.py":  # the tests' copy says where it is installed from
+            documented, tested = documented.split('"""')[-1], tested.split('"""')[-1]
+        assert documented == tested, name
+    entry = (PLUGIN_SITE / "mrd_viscous-0.1.dist-info" / "entry_points.txt").read_text()
+    name, value = entry.splitlines()[1].split(" = ")
+    assert f'{name} = "{value}"' in _page_file(page, "mrd-viscous/pyproject.toml")
