@@ -10,8 +10,8 @@ listed here: they are methods of the model, asked of the model.
 The table is plain data (no imports), so the console script reads it before anything heavy is
 imported. The registry (:mod:`mrdamper.models.registry`) imports a kind's module when the kind is
 first used; a family added at run time with :func:`mrdamper.models.register` adds its row with
-:func:`add`, and then appears in :func:`mrdamper.known_kinds`, the study, ``select``, the command
-line's help and the report like any other.
+:func:`add`, and then appears in :func:`mrdamper.known_kinds`, the study, ``select`` and the
+report like any other, in that process (and the study's local workers, :func:`added`).
 
 A family in another package joins every process (the command line, a study's workers under any
 start method, Dask workers) through an entry point of the group ``mrdamper.kinds`` that names its

@@ -47,7 +47,10 @@ def register(
     """Add a model family defined outside this package under ``fitted.kind``.
 
     The kind gets a row in the kind table (:mod:`mrdamper.kinds`), so it appears in
-    :func:`known_kinds`, the study, ``select`` and the command line like the built-in kinds.
+    :func:`known_kinds`, the study (its local workers are handed the row), ``select`` and the
+    closed loop like the built-in kinds, in this process. For every process (the command line,
+    Dask workers) a package gives the row through an entry point of the group
+    ``mrdamper.kinds`` instead (``docs/adding-a-model.md``).
 
     Parameters
     ----------
