@@ -368,14 +368,24 @@ def _load_plugins() -> dict[str, KindSpec]:
     from importlib.metadata import entry_points
 
     found: dict[str, KindSpec] = {}
-    for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
+    _PLUGINS = found  # a plug-in that reads the table while it loads sees the rows so far
+    try:
+        eps = sorted(entry_points(group=GROUP), key=lambda e: e.name)
+    except Exception as exc:  # noqa: BLE001 - unreadable metadata of an installed distribution
+        reason = " ".join(str(exc).split())
+        warnings.warn(
+            f"plug-ins: the entry points of the group {GROUP} cannot be read "
+            f"({type(exc).__name__}: {reason}); no plug-in kinds",
+            stacklevel=3,
+        )
+        return found
+    for ep in eps:
         try:
             found[ep.name] = _plugin_row(ep, found)
         except (TypeError, ValueError) as exc:
             text = f"{_entry_text(ep)}: {exc}; the entry point is ignored"
             _BROKEN[ep.name] = text
             warnings.warn(text, stacklevel=3)
-    _PLUGINS = found
     return found
 
 

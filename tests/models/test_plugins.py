@@ -15,6 +15,7 @@ import multiprocessing
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -218,3 +219,19 @@ def test_the_documented_package_is_the_tested_one() -> None:
     entry = (PLUGIN_SITE / "mrd_viscous-0.1.dist-info" / "entry_points.txt").read_text()
     name, value = entry.splitlines()[1].split(" = ")
     assert f'{name} = "{value}"' in _page_file(page, "mrd-viscous/pyproject.toml")
+
+
+def test_unreadable_entry_points_leave_the_built_in_kinds(monkeypatch: pytest.MonkeyPatch) -> None:
+    import importlib.metadata
+
+    def unreadable(**_: object) -> None:
+        raise OSError("metadata of some distribution cannot be read")
+
+    _fresh_table(monkeypatch)
+    monkeypatch.setattr(importlib.metadata, "entry_points", unreadable)
+    with pytest.warns(UserWarning, match=r"^plug-ins: .* \(OSError: metadata of some") as record:
+        assert kinds.rows() == kinds.KINDS + kinds.added()
+    assert len(record) == 1
+    with warnings.catch_warnings():  # read once: no second warning
+        warnings.simplefilter("error")
+        assert kinds.rows() == kinds.KINDS + kinds.added()
