@@ -148,7 +148,8 @@ def model_step(model: FittedModel, record: Experiment) -> tuple[FittedModel, Ste
     record's interval where the step takes one."""
     substeps_for = getattr(model, "substeps_for", None)
     if substeps_for is not None:
-        model = dataclasses.replace(model, substeps=substeps_for(record))  # type: ignore[call-arg]
+        pinned: dict[str, Any] = {"substeps": substeps_for(record)}
+        model = dataclasses.replace(model, **pinned)
     if "dt" in inspect.signature(model.step).parameters:
         return model, model.step(dt=record.dt)
     return model, model.step()

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mrdamper._io import c_code_kind, check_output, write_files
 from mrdamper.control.c_render import RENDERERS, Context, Rendered, renderer_of
@@ -64,6 +64,9 @@ from mrdamper.control.c_render._common import (
 from mrdamper.control.export import warn_if_unstable
 from mrdamper.errors import DataValidationError
 
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.models import FittedModel
+
 __all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "needs_dt", "render"]
 
 #: Model kinds :func:`export_c` handles.
@@ -72,7 +75,7 @@ C_KINDS = tuple(RENDERERS)
 NEEDS_DT = ("spencer", "p15", "tanh", "boucwen", "dahl", "lugre")
 
 
-def needs_dt(model: Any) -> bool:
+def needs_dt(model: FittedModel) -> bool:
     """Whether the C step of ``model`` needs the sample time ``dt`` given at export: a kind of
     :data:`NEEDS_DT`, or a plug-in's model without a rate ``fs`` of its own."""
     return model.kind in NEEDS_DT or (model.kind not in RENDERERS and not hasattr(model, "fs"))

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mrdamper.control.c_render._common import Context, Rendered
 from mrdamper.control.c_render.hysteresis import render_hysteresis
@@ -26,6 +26,9 @@ from mrdamper.control.c_render.narx import render_narx
 from mrdamper.control.c_render.p15 import render_p15
 from mrdamper.control.c_render.spencer import render_spencer, render_spencer_form
 from mrdamper.control.c_render.static import render_static
+
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.models import FittedModel
 
 __all__ = ["RENDERERS", "Context", "Rendered", "render_spencer_form", "renderer_of"]
 
@@ -48,7 +51,7 @@ RENDERERS: dict[str, Callable[[Any, Context], Rendered]] = {
 }
 
 
-def renderer_of(model: Any) -> Callable[[Context], Rendered] | None:
+def renderer_of(model: FittedModel) -> Callable[[Context], Rendered] | None:
     """The C rendering of ``model``: its kind's renderer in :data:`RENDERERS`, else the model's own
     ``render_c`` method (a plug-in family's), else None (no C export).
 
