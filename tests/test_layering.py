@@ -210,6 +210,7 @@ LAYERS: dict[str, int] = {
     "mrdamper.rig": 5,
     "mrdamper.control": 6,
     "mrdamper.compiled": 6,
+    "mrdamper.conformance": 6,
     "mrdamper.study": 7,
     "mrdamper": 8,
     "mrdamper.cli": 9,

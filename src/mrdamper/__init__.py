@@ -30,6 +30,7 @@ from mrdamper.errors import (
 
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.analysis import ZoneFit, ZoneLaws, fit_zone_laws, fit_zones
+    from mrdamper.conformance import check_family
     from mrdamper.control import state_space, to_control
     from mrdamper.data import (
         Experiment,
@@ -81,6 +82,7 @@ _LAZY: dict[str, str] = {
     "VirtualRig": "mrdamper.rig",
     "reference_damper": "mrdamper.rig",
     "table_ii": "mrdamper.rig.doe",
+    "check_family": "mrdamper.conformance",
     "state_space": "mrdamper.control",
     "to_control": "mrdamper.control",
 }
@@ -120,6 +122,7 @@ __all__ = [
     "ZoneLaws",
     "__version__",
     "available_models",
+    "check_family",
     "esr",
     "fit_percent",
     "fit_zone_laws",

@@ -7,6 +7,7 @@ user can fix the input without reading the source.
 from __future__ import annotations
 
 __all__ = [
+    "ConformanceError",
     "DataValidationError",
     "IdentificationError",
     "MrDamperError",
@@ -15,6 +16,7 @@ __all__ = [
     "OutputError",
     "OutputExistsError",
     "PlausibilityWarning",
+    "PluginError",
     "SchemaError",
     "SimulationDivergedError",
     "UnitError",
@@ -48,6 +50,15 @@ class UnitError(DataValidationError):
 
 class SchemaError(MrDamperError, ValueError):
     """A saved file does not follow the expected schema or schema version."""
+
+
+class PluginError(MrDamperError, RuntimeError):
+    """A model family of another package (a plug-in) cannot be loaded: its module or classes are
+    missing or are not what its kind-table row says."""
+
+
+class ConformanceError(MrDamperError, AssertionError):
+    """A model family fails the conformance checks (:func:`mrdamper.check_family`)."""
 
 
 class OutOfRangeError(MrDamperError, ValueError):

@@ -10,23 +10,37 @@ listed here: they are methods of the model, asked of the model.
 The table is plain data (no imports), so the console script reads it before anything heavy is
 imported. The registry (:mod:`mrdamper.models.registry`) imports a kind's module when the kind is
 first used; a family added at run time with :func:`mrdamper.models.register` adds its row with
-:func:`add`, and then appears in :func:`mrdamper.known_kinds`, the study, ``select``, the command
-line's help and the report like any other.
+:func:`add`, and then appears in :func:`mrdamper.known_kinds`, the study, ``select`` and the
+report like any other, in that process (and the study's local workers, :func:`added`).
+
+A family in another package joins every process (the command line, a study's workers under any
+start method, Dask workers) through an entry point of the group ``mrdamper.kinds`` that names its
+row: ``viscous = "mrd_viscous:KIND"``, where ``KIND`` is a :class:`KindSpec` in a module that
+imports nothing heavy. The entry points are read on the first call of :func:`rows` (or :func:`spec`,
+:func:`default_kinds`), once per process; the family's own module is imported only when the kind is
+used. A plug-in that cannot be loaded is left out with one warning naming its entry point
+(:func:`plugin_errors`), so the other kinds and commands work as before.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = [
+    "GROUP",
     "KINDS",
     "VARIANTS",
     "Item",
     "KindSpec",
     "Variant",
     "add",
+    "added",
     "default_kinds",
     "input_text",
+    "kind_list",
+    "plugin_errors",
     "rows",
     "spec",
 ]
@@ -308,10 +322,92 @@ def input_text(kind: str, settings: dict[str, object]) -> str:
 
 _ADDED: dict[str, KindSpec] = {}
 
+#: Entry-point group of the plug-in families.
+GROUP = "mrdamper.kinds"
+#: Rows of the plug-ins, by kind (None until the entry points are read).
+_PLUGINS: dict[str, KindSpec] | None = None
+#: Kind (the entry point's name) -> why its plug-in was left out.
+_BROKEN: dict[str, str] = {}
+
+
+def _entry_text(ep: Any) -> str:
+    dist = getattr(ep, "dist", None)
+    where = f" of {dist.name} {dist.version}" if dist is not None else ""
+    return f"plug-in entry point '{ep.name} = {ep.value}' (group {GROUP}{where})"
+
+
+def _plugin_row(ep: Any, seen: dict[str, KindSpec]) -> KindSpec:
+    """The row an entry point names, checked (raises TypeError or ValueError with the reason)."""
+    if any(k.kind == ep.name for k in KINDS):
+        raise ValueError(f"{ep.name!r} is a kind of this version and cannot be replaced")
+    try:
+        row = ep.load()
+    except Exception as exc:  # whatever the plug-in's import raises
+        reason = " ".join(str(exc).split())
+        raise ValueError(f"cannot be loaded ({type(exc).__name__}: {reason})") from exc
+    if not isinstance(row, KindSpec):
+        raise TypeError(
+            f"names a {type(row).__name__}; expected a mrdamper.kinds.KindSpec (the family's row)"
+        )
+    if row.kind != ep.name:
+        raise ValueError(f"its row is of kind {row.kind!r}; expected the entry point's name")
+    if row.kind in seen:
+        raise ValueError(f"kind {row.kind!r} is already given by module {seen[row.kind].module}")
+    for field in ("module", "estimator", "model"):
+        value = getattr(row, field)
+        if not (isinstance(value, str) and value):
+            raise ValueError(f"row field {field!r}: expected a non-empty name, got {value!r}")
+    return row
+
+
+def _load_plugins() -> dict[str, KindSpec]:
+    """Read the entry points of :data:`GROUP` once; warn (one line each) about broken ones."""
+    global _PLUGINS
+    if _PLUGINS is not None:
+        return _PLUGINS
+    from importlib.metadata import entry_points
+
+    found: dict[str, KindSpec] = {}
+    _PLUGINS = found  # a plug-in that reads the table while it loads sees the rows so far
+    try:
+        eps = sorted(entry_points(group=GROUP), key=lambda e: e.name)
+    except Exception as exc:  # noqa: BLE001 - unreadable metadata of an installed distribution
+        reason = " ".join(str(exc).split())
+        warnings.warn(
+            f"plug-ins: the entry points of the group {GROUP} cannot be read "
+            f"({type(exc).__name__}: {reason}); no plug-in kinds",
+            stacklevel=3,
+        )
+        return found
+    for ep in eps:
+        try:
+            found[ep.name] = _plugin_row(ep, found)
+        except (TypeError, ValueError) as exc:
+            text = f"{_entry_text(ep)}: {exc}; the entry point is ignored"
+            _BROKEN[ep.name] = text
+            warnings.warn(text, stacklevel=3)
+    return found
+
+
+def added() -> tuple[KindSpec, ...]:
+    """The rows added at run time with :func:`add` (by :func:`mrdamper.models.register`), which
+    a process hands to the worker processes it starts (:func:`mrdamper._io.processes.init_worker`):
+    a worker started by spawn sees the kind if its module imports there."""
+    return tuple(_ADDED.values())
+
+
+def plugin_errors() -> dict[str, str]:
+    """Plug-ins left out because their entry point could not be loaded: kind -> the reason (one
+    line naming the entry point)."""
+    _load_plugins()
+    return dict(_BROKEN)
+
 
 def rows() -> tuple[KindSpec, ...]:
-    """Every row: this version's kinds, then those added at run time, in display order."""
-    return KINDS + tuple(_ADDED.values())
+    """Every row: this version's kinds, then the plug-ins' (entry points, by kind), then those
+    added at run time, in display order."""
+    plugins = tuple(r for k, r in _load_plugins().items() if k not in _ADDED)
+    return KINDS + plugins + tuple(_ADDED.values())
 
 
 def spec(kind: str) -> KindSpec | None:
@@ -320,6 +416,11 @@ def spec(kind: str) -> KindSpec | None:
         if row.kind == kind:
             return row
     return None
+
+
+def kind_list() -> str:
+    """Every kind, comma-separated in display order (for help texts)."""
+    return ", ".join(row.kind for row in rows())
 
 
 def default_kinds() -> tuple[str, ...]:
@@ -333,7 +434,7 @@ def add(row: KindSpec) -> None:
     Parameters
     ----------
     row : KindSpec
-        The kind's row; a kind of this version cannot be replaced.
+        The kind's row; a kind of this version cannot be replaced (a plug-in's can).
     """
     if any(k.kind == row.kind for k in KINDS):
         raise ValueError(f"kind: {row.kind!r} is a kind of this version and cannot be replaced")

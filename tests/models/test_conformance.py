@@ -1,40 +1,41 @@
 """Conformance of every model kind (in the spirit of scikit-learn's ``check_estimator``).
 
-For each kind of this version (the rows of :data:`mrdamper.kinds.KINDS`), fitted once on a small
-synthetic record set (sines at three current levels through the reference damper, with noise):
-
-* the saved model loads back and predicts bit for bit the same force;
-* the saved file holds no wall-clock or CPU time;
-* a fit on one current level works, or is refused in one line;
-* an unknown setting is refused in one line that names it;
-* the per-sample step (:meth:`FittedModel.step`, driven by :func:`mrdamper.models.step.run_step`)
-  gives the force of ``predict`` sample by sample, to 1e-9 of the force scale, on a record with
-  a stepped current;
-* a discrete-time step refuses to run at another sample time than its own.
+For each kind of this version (the rows of :data:`mrdamper.kinds.KINDS`), fitted once on the small
+synthetic record set of :mod:`mrdamper.conformance` (sines at three current levels through the
+reference damper, with noise), every check of :data:`mrdamper.conformance.CHECKS` (the checks
+that :func:`mrdamper.check_family` runs on any family, a plug-in's included): registration, an
+unknown setting refused in one line, a fit on one current level, the save / load round trip, the
+per-sample step against ``predict``, a discrete-time step's own interval. Here each check is one
+test per kind (the fits shared), plus the packing of every built-in step for the disk-cached
+dispatch.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
-import json
-import re
-import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from mrdamper import DataValidationError, Experiment, get_estimator, load_model
-from mrdamper.errors import IdentificationError
-from mrdamper.models.base import TIMING_PROVENANCE, FittedModel
-from mrdamper.models.step import run_step
-from mrdamper.rig import reference_damper
+from mrdamper import check_family, get_estimator
+from mrdamper.conformance import (
+    CHECKS,
+    check_discrete_step,
+    check_round_trip,
+    check_single_level,
+    check_step_equals_predict,
+    fit_quietly,
+    model_step,
+    probe_record,
+    training_records,
+)
+from mrdamper.data import Experiment
+from mrdamper.errors import ConformanceError
+from mrdamper.models.base import Estimator, FittedModel
 from tests.conftest import package_kinds
 
-FS = 500.0
-LEVELS = (0.2, 0.5, 0.8)
 #: Settings that keep each fit short (the hysteretic LPV input with its stroke and share given,
 #: so no candidate grid runs; one Spencer start).
 FAST: dict[str, dict[str, Any]] = {
@@ -43,39 +44,15 @@ FAST: dict[str, dict[str, Any]] = {
     "spencer": {"n_starts": 1, "max_nfev": 20},
     "p15": {"max_nfev": 10},
 }
-#: Largest step-vs-predict difference, relative to the largest predicted force.
-STEP_RTOL = 1e-9
 
 
-def _record(
-    amp: float, freq: float, levels: tuple[float, ...], name: str, cycles: float
-) -> Experiment:
-    """Sine displacement, current stepping through ``levels``, force of the reference damper."""
-    t = np.arange(round(cycles / freq * FS)) / FS
-    x = amp * np.sin(2 * np.pi * freq * t)
-    v = amp * 2 * np.pi * freq * np.cos(2 * np.pi * freq * t)
-    i = np.asarray(levels)[(np.arange(t.size) * len(levels)) // t.size]
-    meta = {"current": levels[0]} if len(levels) == 1 else {}
-    e = Experiment(t=t, x=x, v=v, F=np.zeros_like(t), i=i, name=name, metadata=meta)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        F = reference_damper().predict(e)
-    return e.replace(F=F + np.random.default_rng(len(name)).normal(0.0, 5.0, t.size))
-
-
-def _fit(kind: str, records: list[Experiment]) -> FittedModel:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return get_estimator(kind, **FAST.get(kind, {})).fit(records)
+def _estimator(kind: str) -> Estimator:
+    return get_estimator(kind, **FAST.get(kind, {}))
 
 
 @pytest.fixture(scope="module")
 def training() -> list[Experiment]:
-    out = []
-    for lev in LEVELS:
-        out.append(_record(0.01, 1.0, (lev,), f"slow{lev}", 2.0))
-        out.append(_record(0.004, 4.0, (lev,), f"fast{lev}", 4.0))
-    return out
+    return training_records()
 
 
 @pytest.fixture(scope="module")
@@ -86,37 +63,22 @@ def fitted(training: list[Experiment]) -> dict[str, FittedModel]:
 
 def _model(kind: str, fitted: dict[str, FittedModel], training: list[Experiment]) -> FittedModel:
     if kind not in fitted:
-        fitted[kind] = _fit(kind, training)
+        fitted[kind] = fit_quietly(_estimator(kind), training)
     return fitted[kind]
 
 
 @pytest.fixture(scope="module")
 def probe() -> Experiment:
-    """A record with a stepped current inside the training range; its first forces are zero (the
-    NARX free run takes them as initial conditions, the step starts from rest)."""
-    e = _record(0.008, 2.0, (0.3, 0.7, 0.4, 0.6), "probe", 3.0)
-    F = e.F.copy()
-    F[:20] = 0.0
-    return e.replace(F=F)
-
-
-def _pinned(model: FittedModel, record: Experiment) -> FittedModel:
-    """The model with its integration sub-steps fixed to those its ``predict`` takes on
-    ``record`` (Spencer chooses them per record; its step per interval and velocity bound)."""
-    substeps_for = getattr(model, "substeps_for", None)
-    if substeps_for is None:
-        return model
-    return dataclasses.replace(model, substeps=substeps_for(record))  # type: ignore[type-var]
-
-
-def _step(model: FittedModel, record: Experiment) -> Any:
-    """The model's step, with the record's interval where the step takes one (Spencer)."""
-    if "dt" in inspect.signature(model.step).parameters:
-        return model.step(dt=record.dt)
-    return model.step()
+    return probe_record()
 
 
 KINDS = package_kinds()
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_registered_and_unknown_setting_refused(kind: str) -> None:
+    CHECKS["registered"](_estimator(kind))
+    CHECKS["unknown_setting"](_estimator(kind))
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -127,72 +89,58 @@ def test_save_load_round_trip(
     probe: Experiment,
     tmp_path: Path,
 ) -> None:
-    model = _model(kind, fitted, training)
-    path = model.save(tmp_path / f"{kind}.json")
-    back = load_model(path)
-    assert type(back) is type(model)
-    np.testing.assert_array_equal(back.predict(probe), model.predict(probe))
-    text = path.read_text(encoding="utf-8")
-    found = set(re.findall(r'"(\w+)"\s*:', text)) & TIMING_PROVENANCE
-    assert not found, f"{kind}: timing entries in the model file: {sorted(found)}"
-    # no date or clock time either (ISO 8601 stamps)
-    assert not re.search(r"\d{4}-\d{2}-\d{2}T\d{2}:\d{2}", text), kind
-    json.loads(text)
+    check_round_trip(_model(kind, fitted, training), probe, tmp_path)
 
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_step_equals_predict(
     kind: str, fitted: dict[str, FittedModel], training: list[Experiment], probe: Experiment
 ) -> None:
-    model = _pinned(_model(kind, fitted, training), probe)
-    expected = model.predict(probe)
-    step = _step(model, probe)
-    assert step.kind == kind
-    F, status, sample = run_step(step, probe.x, probe.v, model.electrical_input(probe), probe.dt)
-    assert status == 0 and sample == -1, (kind, status, sample)
-    scale = float(np.max(np.abs(expected)))
-    worst = float(np.max(np.abs(F - expected))) / scale
-    assert worst <= STEP_RTOL, (
-        f"{kind}: step differs from predict by {worst:.3g} of the force scale"
-    )
+    check_step_equals_predict(_model(kind, fitted, training), probe)
 
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_discrete_step_refuses_another_interval(
     kind: str, fitted: dict[str, FittedModel], training: list[Experiment], probe: Experiment
 ) -> None:
-    model = _model(kind, fitted, training)
-    step = _step(model, probe)
-    if step.dt is None:  # continuous-time or static: any interval is allowed
-        _, status, _ = run_step(step, probe.x, probe.v, model.electrical_input(probe), 2 * probe.dt)
-        assert status == 0
-        return
-    assert step.dt == pytest.approx(probe.dt)
-    with pytest.raises(ValueError, match=r"^dt: the \w+ step runs at its own sample time") as err:
-        run_step(step, probe.x, probe.v, model.electrical_input(probe), 2 * probe.dt)
-    assert "\n" not in str(err.value)
-
-
-@pytest.mark.parametrize("kind", KINDS)
-def test_unknown_setting_refused_in_one_line(kind: str) -> None:
-    with pytest.raises(DataValidationError, match="no_such_setting") as err:
-        get_estimator(kind, no_such_setting=1)
-    assert "\n" not in str(err.value)
+    check_discrete_step(_model(kind, fitted, training), probe)
 
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_single_level_fit_works_or_refuses_in_one_line(kind: str) -> None:
-    records = [
-        _record(0.01, 1.0, (0.5,), "one", 2.0),
-        _record(0.004, 4.0, (0.5,), "two", 4.0),
-    ]
-    try:
-        model = _fit(kind, records)
-    except (DataValidationError, IdentificationError) as exc:
-        assert "\n" not in str(exc), f"{kind}: refusal over several lines"
-        return
-    assert model.input_range == (0.5, 0.5)
-    assert np.all(np.isfinite(model.predict(records[0])))
+    check_single_level(_estimator(kind))
+
+
+def test_a_check_that_fails_says_so(
+    fitted: dict[str, FittedModel], training: list[Experiment], probe: Experiment
+) -> None:
+    # a predict that drifts from the step is caught; check_family names every failed check in
+    # one line (a lax estimator that takes any setting is not the registered one either)
+    model = _model("bingham", fitted, training)
+
+    class Off(type(model)):  # type: ignore[misc]
+        def predict(self, experiment: Experiment) -> np.ndarray:
+            return super().predict(experiment) + 1.0
+
+    bad = Off(**{f.name: getattr(model, f.name) for f in dataclasses.fields(model) if f.init})
+    with pytest.raises(ConformanceError, match=r"^bingham: step_equals_predict: the step differs"):
+        check_step_equals_predict(bad, probe)
+
+    class Lax(type(_estimator("bingham"))):  # type: ignore[misc]
+        @classmethod
+        def from_settings(cls, **settings: Any) -> Estimator:
+            return cls()
+
+    failed = r"^bingham: registered: .*; unknown_setting: "
+    with pytest.raises(ConformanceError, match=failed) as err:
+        check_family(Lax)
+    assert "\n" not in str(err.value)
+
+
+def test_check_family_on_a_built_in_kind() -> None:
+    report = check_family(_estimator("bingham"))
+    assert report.kind == "bingham" and report.passed == tuple(CHECKS)
+    assert list(report.to_frame()["status"]) == ["passed"] * len(CHECKS)
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -204,7 +152,7 @@ def test_step_packs_for_the_cached_dispatch(
     from mrdamper.models.step_dispatch import family_advance, family_force, pack
 
     model = _model(kind, fitted, training)
-    step = _step(model, probe)
+    model, step = model_step(model, probe)
     pk = pack(step)
     assert pk is not None, kind
     e = model.electrical_input(probe)

@@ -6,7 +6,10 @@ virtual rig's generators). In a worker it
 * restores the default action of SIGTERM (a forked worker inherits the command line's handler,
   which turns SIGTERM into an interruption; a worker must simply end when it is stopped);
 * on Linux, asks the kernel to send it SIGTERM when its parent ends (``PR_SET_PDEATHSIG``), so
-  no worker outlives a command that was killed outright (SIGKILL) before it could stop them.
+  no worker outlives a command that was killed outright (SIGKILL) before it could stop them;
+* adds the kind-table rows that the parent added at run time (families registered with
+  :func:`mrdamper.models.register`), so a worker started by spawn knows them too (plug-ins with
+  an entry point it finds by itself).
 """
 
 from __future__ import annotations
@@ -14,7 +17,11 @@ from __future__ import annotations
 import os
 import signal
 import sys
+from collections.abc import Sequence
 from typing import Any
+
+from mrdamper import kinds
+from mrdamper.kinds import KindSpec
 
 __all__ = ["init_worker", "stop_pool"]
 
@@ -36,16 +43,20 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
-def init_worker(parent: int | None = None) -> None:
+def init_worker(parent: int | None = None, rows: Sequence[KindSpec] = ()) -> None:
     """Initializer of a local worker process (see the module docstring).
 
     Parameters
     ----------
     parent : int, optional
         Process id of the process that starts the pool (default: this worker's parent).
+    rows : sequence of KindSpec
+        Kind-table rows the parent added at run time (:func:`mrdamper.kinds.added`).
     """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _die_with_parent(parent if parent is not None else os.getppid())
+    for row in rows:
+        kinds.add(row)
 
 
 def stop_pool(pool: Any) -> None:

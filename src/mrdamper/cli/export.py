@@ -113,12 +113,12 @@ def export(
         )
         return
     if fmt == "c":
-        from mrdamper.control.c_export import NEEDS_DT, export_c
+        from mrdamper.control.c_export import export_c, needs_dt
         from mrdamper.control.fmu import training_dt
 
         check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
         m = load_model(model_file)
-        c_dt = dt if dt is not None or m.kind not in NEEDS_DT else training_dt(m)
+        c_dt = dt if dt is not None or not needs_dt(m) else training_dt(m)
         h, c = export_c(m, out, name=name or "mrd_damper", reg=reg, dt=c_dt, force=force)
         typer.echo(f"{m.kind}: wrote {h} and {c} (C99)")
         return

@@ -103,7 +103,9 @@ def _build() -> None:
         module.register(app)
 
 
-_build()
+with warnings.catch_warnings(record=True) as _EARLY:  # a broken plug-in's line, read while the
+    warnings.simplefilter("always")  # help texts list the kinds: shown by every command
+    _build()
 
 
 def _one_line(text: str) -> str:
@@ -229,6 +231,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     _LIKE.clear()
     if not debug:
         warnings.showwarning = _show_warning
+    for early in _EARLY:
+        warnings.showwarning(early.message, early.category, early.filename, early.lineno)
     _terminated.clear()
     saved_term = _handle_sigterm()
     try:

@@ -22,6 +22,7 @@ from mrdamper._io import csv_kind
 from mrdamper.cli._records import reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.errors import DataValidationError
+from mrdamper.kinds import kind_list
 
 __all__ = ["SELECTION_CSV", "register", "select"]
 
@@ -56,7 +57,11 @@ def select(
     data: Annotated[list[Path], typer.Argument(help="Data files or folders (the user's records).")],
     models: Annotated[
         list[str] | None,
-        typer.Option("--model", "-m", help="Model kind to include (repeatable; default: all)."),
+        typer.Option(
+            "--model",
+            "-m",
+            help=f"Model kind to include, one of {kind_list()} (repeatable; default: all).",
+        ),
     ] = None,
     folds: Annotated[
         str,

@@ -15,6 +15,7 @@ import typer
 
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError, SchemaError
+from mrdamper.kinds import kind_list
 
 __all__ = [
     "DEMO_OUT",
@@ -162,7 +163,7 @@ def study(
     models: str = typer.Option(
         None,
         "--models",
-        help="Comma-separated model kinds, e.g. lpv,sp1,p15 (default: the protocol's).",
+        help=f"Comma-separated model kinds among {kind_list()} (default: the protocol's).",
     ),
     workers: int = typer.Option(
         None, "--workers", help="Local worker processes (default min(2, CPUs); 1 = in-process)."
@@ -282,7 +283,9 @@ def demo(
     ),
     force: bool = typer.Option(False, "--force", help="Replace a non-empty output folder."),
     models: str = typer.Option(
-        None, "--models", help="Comma-separated model kinds (default: all installed)."
+        None,
+        "--models",
+        help=f"Comma-separated model kinds among {kind_list()} (default: all installed).",
     ),
     workers: int = typer.Option(
         None, "--workers", help="Local worker processes (default min(2, CPUs))."

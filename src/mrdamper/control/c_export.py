@@ -39,16 +39,21 @@ model's ``float64`` values. The arithmetic follows the compiled Python kernels o
 operation (the forward LPV recursion sums in another order than the record kernel), so the two
 agree to rounding: a test compiles the pair with ``gcc -std=c99 -Wall -Werror`` and compares it with
 the Python simulation on a real record.
+
+A family of another package (a plug-in, :mod:`mrdamper.kinds`) is exported when its fitted model
+renders itself (a method ``render_c``, :func:`mrdamper.control.c_render.renderer_of`); without
+its own rate (an attribute ``fs``) it takes the sample time ``dt`` as the families of
+:data:`NEEDS_DT` do.
 """
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mrdamper._io import c_code_kind, check_output, write_files
-from mrdamper.control.c_render import RENDERERS, Context, Rendered
+from mrdamper.control.c_render import RENDERERS, Context, Rendered, renderer_of
 from mrdamper.control.c_render._common import (
     IDENTITY,
     INVERSE_RUN,
@@ -59,12 +64,21 @@ from mrdamper.control.c_render._common import (
 from mrdamper.control.export import warn_if_unstable
 from mrdamper.errors import DataValidationError
 
-__all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "render"]
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.models import FittedModel
+
+__all__ = ["C_KINDS", "NEEDS_DT", "assemble", "c_source", "export_c", "needs_dt", "render"]
 
 #: Model kinds :func:`export_c` handles.
 C_KINDS = tuple(RENDERERS)
 #: Kinds whose C step needs the sample time ``dt`` given at export (no rate of their own).
 NEEDS_DT = ("spencer", "p15", "tanh", "boucwen", "dahl", "lugre")
+
+
+def needs_dt(model: FittedModel) -> bool:
+    """Whether the C step of ``model`` needs the sample time ``dt`` given at export: a kind of
+    :data:`NEEDS_DT`, or a plug-in's model without a rate ``fs`` of its own."""
+    return model.kind in NEEDS_DT or (model.kind not in RENDERERS and not hasattr(model, "fs"))
 
 
 def render(
@@ -85,8 +99,13 @@ def render(
         A kind without a C rendering, a name that is not a C identifier, or a bad option.
     """
     kind = getattr(model, "kind", type(model).__name__)
-    if kind not in RENDERERS:
-        raise DataValidationError("model", f"C export handles kinds {list(C_KINDS)}, got {kind!r}")
+    own = renderer_of(model)
+    if own is None:
+        raise DataValidationError(
+            "model",
+            f"C export handles kinds {list(C_KINDS)} and plug-in models with a render_c method, "
+            f"got {kind!r}",
+        )
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise DataValidationError("name", f"expected a C identifier, got {name!r}")
     if n_grid is None:
@@ -94,7 +113,7 @@ def render(
     if isinstance(n_grid, bool) or not isinstance(n_grid, int) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     ctx = Context(name, reg=reg, v_ref=v_ref, rate=rate, n_grid=n_grid, dt=dt)
-    return RENDERERS[kind](model, ctx)
+    return own(ctx)
 
 
 def c_source(

@@ -47,6 +47,7 @@ from typing import Any
 from mrdamper._io import FileKind, atomic_write_with, check_writable
 from mrdamper.control._fmi2_c import FMI2_TYPES, WRAPPER
 from mrdamper.control.c_export import C_KINDS, assemble, render
+from mrdamper.control.c_render import renderer_of
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.version import __version__
 
@@ -247,9 +248,11 @@ def fmu_sources(
         A kind without a C step, an unknown sample time, an inverse the kind has not, bad options.
     """
     kind = getattr(model, "kind", type(model).__name__)
-    if kind not in FMU_KINDS:
+    if renderer_of(model) is None:
         raise DataValidationError(
-            "model", f"kind {kind!r} has no C step to export; FMU export handles {list(FMU_KINDS)}"
+            "model",
+            f"kind {kind!r} has no C step to export; FMU export handles {list(FMU_KINDS)} and "
+            "plug-in models with a render_c method",
         )
     _check_dt(dt)
     own = 1.0 / model.fs if hasattr(model, "fs") else None

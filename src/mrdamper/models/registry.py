@@ -2,7 +2,10 @@
 
 The kind table (:mod:`mrdamper.kinds`) says which module defines which kind and the names of its
 classes, so ``get_estimator("lpv")`` imports only ``mrdamper.models.lpv``; family modules do not
-import the registry. A family defined elsewhere joins with :func:`register`.
+import the registry. A family defined elsewhere joins with :func:`register` (this process) or
+with an entry point of the group ``mrdamper.kinds`` naming its row (every process; see
+:mod:`mrdamper.kinds`); a plug-in whose module or classes cannot be loaded is refused in one line
+naming them (:class:`~mrdamper.errors.PluginError`) when its kind is used.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from mrdamper import kinds
-from mrdamper.errors import SchemaError
+from mrdamper.errors import PluginError, SchemaError
 from mrdamper.models._schema import check_header
 from mrdamper.models.base import Estimator, FittedModel
 
@@ -44,7 +47,10 @@ def register(
     """Add a model family defined outside this package under ``fitted.kind``.
 
     The kind gets a row in the kind table (:mod:`mrdamper.kinds`), so it appears in
-    :func:`known_kinds`, the study, ``select`` and the command line like the built-in kinds.
+    :func:`known_kinds`, the study (its local workers are handed the row), ``select`` and the
+    closed loop like the built-in kinds, in this process. For every process (the command line,
+    Dask workers) a package gives the row through an entry point of the group
+    ``mrdamper.kinds`` instead (``docs/adding-a-model.md``).
 
     Parameters
     ----------
@@ -82,10 +88,35 @@ def _load(kind: str) -> None:
         return
     row = kinds.spec(kind)
     if row is None:
+        broken = kinds.plugin_errors().get(kind)
+        if broken is not None:
+            raise SchemaError(f"model: kind {kind!r}: {broken}")
         raise SchemaError(f"model: unknown kind {kind!r}; expected one of {known_kinds()}")
-    module = importlib.import_module(row.module)
-    _ESTIMATORS[kind] = getattr(module, row.estimator)
-    _FITTED[kind] = getattr(module, row.model)
+    if any(k.kind == kind for k in kinds.KINDS):
+        module = importlib.import_module(row.module)
+        _ESTIMATORS[kind] = getattr(module, row.estimator)
+        _FITTED[kind] = getattr(module, row.model)
+        return
+    try:  # a plug-in's module: a failure names the kind's row, not a traceback
+        module = importlib.import_module(row.module)
+        estimator, fitted = getattr(module, row.estimator), getattr(module, row.model)
+    except Exception as exc:  # any error of another package's code
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise PluginError(
+            f"model: kind {kind!r}: its row names {row.module}.{row.estimator} and "
+            f"{row.model}, which cannot be loaded ({type(exc).__name__}: {reason})"
+        ) from exc
+    if not (isinstance(estimator, type) and issubclass(estimator, Estimator)):
+        raise PluginError(f"model: kind {kind!r}: {row.estimator} is not an Estimator class")
+    if not (isinstance(fitted, type) and issubclass(fitted, FittedModel)):
+        raise PluginError(f"model: kind {kind!r}: {row.model} is not a FittedModel class")
+    if estimator.kind != kind or fitted.kind != kind:
+        raise PluginError(
+            f"model: kind {kind!r}: its classes say {estimator.kind!r} (estimator) and "
+            f"{fitted.kind!r} (model); expected {kind!r}"
+        )
+    _ESTIMATORS[kind] = estimator
+    _FITTED[kind] = fitted
 
 
 def known_kinds() -> list[str]:
@@ -100,7 +131,7 @@ def available_models() -> list[str]:
     for kind in known_kinds():
         try:
             _load(kind)
-        except (ImportError, SchemaError):
+        except (ImportError, SchemaError, PluginError):
             continue
         out.append(kind)
     return out

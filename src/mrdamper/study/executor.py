@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper import kinds
 from mrdamper._io.processes import init_worker, stop_pool
 from mrdamper._warn import warn_user
 from mrdamper.data import Experiment, RecordSource
@@ -222,7 +223,10 @@ class ProcessExecutor(StudyExecutor):
         methods = multiprocessing.get_all_start_methods()
         ctx = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
         self._pool = cf.ProcessPoolExecutor(
-            max_workers=workers, mp_context=ctx, initializer=init_worker, initargs=(os.getpid(),)
+            max_workers=workers,
+            mp_context=ctx,
+            initializer=init_worker,
+            initargs=(os.getpid(), kinds.added()),
         )
         # start the workers now, before any progress-display thread exists in this process
         list(self._pool.map(_ping, range(workers)))

@@ -4,8 +4,10 @@ A renderer takes the fitted model and the export's :class:`Context` and returns 
 :class:`Rendered`: the state struct, the constants and functions up to ``<name>_step`` (and
 ``<name>_inverse_step`` where the family has an inverse), header notes and the sample time the C
 step must be called at. :func:`mrdamper.control.c_export.c_source` assembles the files and the
-FMU export (:mod:`mrdamper.control.fmu`) wraps the same code. Another kind is added by writing its
-renderer and adding it to :data:`RENDERERS`.
+FMU export (:mod:`mrdamper.control.fmu`) wraps the same code. Another kind of this package is
+added by writing its renderer and adding it to :data:`RENDERERS`; a family of another package (a
+plug-in) renders itself: its fitted model's method ``render_c(ctx: Context) -> Rendered``
+(:func:`renderer_of` asks the model).
 
 Every rendering has the same C interface: ``<name>_init(<name>_state *)`` and
 ``double <name>_step(<name>_state *, double x, double v, double input)``, one call per sample.
@@ -13,8 +15,9 @@ Every rendering has the same C interface: ``<name>_init(<name>_state *)`` and
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mrdamper.control.c_render._common import Context, Rendered
 from mrdamper.control.c_render.hysteresis import render_hysteresis
@@ -24,7 +27,10 @@ from mrdamper.control.c_render.p15 import render_p15
 from mrdamper.control.c_render.spencer import render_spencer, render_spencer_form
 from mrdamper.control.c_render.static import render_static
 
-__all__ = ["RENDERERS", "Context", "Rendered", "render_spencer_form"]
+if TYPE_CHECKING:  # pragma: no cover
+    from mrdamper.models import FittedModel
+
+__all__ = ["RENDERERS", "Context", "Rendered", "render_spencer_form", "renderer_of"]
 
 #: Model kind -> renderer ``(model, Context) -> Rendered``.
 RENDERERS: dict[str, Callable[[Any, Context], Rendered]] = {
@@ -43,3 +49,19 @@ RENDERERS: dict[str, Callable[[Any, Context], Rendered]] = {
     "dahl": render_hysteresis,
     "lugre": render_hysteresis,
 }
+
+
+def renderer_of(model: FittedModel) -> Callable[[Context], Rendered] | None:
+    """The C rendering of ``model``: its kind's renderer in :data:`RENDERERS`, else the model's own
+    ``render_c`` method (a plug-in family's), else None (no C export).
+
+    Parameters
+    ----------
+    model : FittedModel
+        The model to export.
+    """
+    kind = getattr(model, "kind", type(model).__name__)
+    if kind in RENDERERS:
+        return functools.partial(RENDERERS[kind], model)
+    own = getattr(model, "render_c", None)
+    return own if callable(own) else None
