@@ -137,11 +137,11 @@ def test_fmu_refusals_write_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     toy = dataclasses.make_dataclass("Toy", [("kind", str)])("toy")
     with pytest.raises(DataValidationError, match="kind 'toy' has no C step"):
         export_fmu(toy, out)
-    with pytest.raises(DataValidationError, match="does not record one training sample time"):
+    with pytest.raises(DataValidationError, match="records no sample time it was fitted at"):
         export_fmu(P15Model(input_range=(0.0, 1.0)), out)
     with pytest.raises(DataValidationError, match="inverse: the C export of a spencer"):
         export_fmu(spencer1997(), out, dt=1e-3, inverse=True)
-    with pytest.raises(DataValidationError, match="does not record one training sample time"):
+    with pytest.raises(DataValidationError, match="records no sample time it was fitted at"):
         export_fmu(spencer1997(), out)
     bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
     monkeypatch.setattr(shutil, "which", lambda name: None)
@@ -185,7 +185,7 @@ def test_fmu_of_every_kind_validates_and_matches_run_step(
     model, rec = kind_models[kind], kind_probe.slice(0, 300)
     e = model.electrical_input(rec)
     fmu = _validated(model, tmp_path / f"{kind}.fmu", name=f"f_{kind}", dt=rec.dt)
-    step = model.step(dt=rec.dt)
+    step = model.step(dt=rec.dt, vmax=model.step_vmax())
     F_py, status, _ = run_step(step, rec.x, rec.v, e, rec.dt)
     assert status == 0
     assert _rel(run_fmu(fmu, rec.x, rec.v, e)[:, 0], F_py) < 1e-9

@@ -81,14 +81,27 @@ GCC_FLAGS = ("-shared", "-fPIC", "-std=c99", "-O2")
 
 
 def training_dt(model: Any) -> float | None:
-    """The training records' sampling interval [s] recorded by the fit, or None.
+    """The sampling interval [s] the model was fitted at, or None.
 
-    None when the model file does not record it or the records had several intervals.
+    The model's ``sample_time`` (recorded by the fit); for a model file written before it was
+    recorded, the training records' interval when they had one (``provenance["record_dt"]``);
+    None otherwise (a model built by hand).
     """
+    recorded = getattr(model, "sample_time", None)
+    if recorded is not None:
+        return float(recorded)
     values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
     if isinstance(values, (list, tuple)) and len(values) == 1:
         return float(values[0])
     return None
+
+
+def _rates_hint(model: Any) -> str:
+    """`` (training records at 200, 1000 Hz)`` when the provenance lists several intervals."""
+    values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
+    if not isinstance(values, (list, tuple)) or len(values) < 2:
+        return ""
+    return " (training records at " + ", ".join(f"{1.0 / float(d):g}" for d in values) + " Hz)"
 
 
 def _check_dt(dt: float | None) -> None:
@@ -261,8 +274,8 @@ def fmu_sources(
     if step is None:
         raise DataValidationError(
             "dt",
-            f"the {kind} model file does not record one training sample time; give the FMU's "
-            "communication step dt [s]",
+            f"the {kind} model records no sample time it was fitted at{_rates_hint(model)}; give "
+            "the FMU's communication step dt [s] (--dt)",
         )
     r = render(model, name, reg=reg, dt=step)
     if inverse and not r.has_inverse:

@@ -42,6 +42,7 @@ __all__ = [
     "lit",
     "quarter_car_defaults",
     "require_dt",
+    "sampled_step",
     "solver",
     "step_state",
 ]
@@ -327,6 +328,17 @@ def require_dt(model: Any, ctx: Context) -> float:
     if not (ctx.dt > 0 and ctx.dt < math.inf):
         raise DataValidationError("dt", f"expected a positive sample time [s], got {ctx.dt!r}")
     return float(ctx.dt)
+
+
+def sampled_step(model: Any, ctx: Context) -> tuple[Any, float]:
+    """The model's step at the export's sample time (:func:`require_dt`) and the time [s].
+
+    The step's velocity bound is the model's :meth:`~mrdamper.models.base.FittedModel.step_vmax`
+    (its training velocity): the sub-steps of ``predict`` on every record at that rate inside it,
+    so the exported damper is the validated one.
+    """
+    dt = require_dt(model, ctx)
+    return model.step(dt=dt, vmax=model.step_vmax()), dt
 
 
 def step_state(p: str, n: int, what: str) -> str:
