@@ -1,5 +1,6 @@
-"""C99 export: compiled with ``gcc -std=c99 -Wall -Werror`` and compared with the Python simulation
-and the Python inverse on real records (skipped without gcc or without the shared data)."""
+"""C99 export: compiled with ``gcc -std=c99 -Wall -Wextra -pedantic -Werror`` and compared with
+the Python simulation and the Python inverse on real records (skipped without gcc or without the
+shared data)."""
 
 from __future__ import annotations
 
@@ -24,6 +25,8 @@ from tests.control.conftest import toy_lti
 
 GCC = shutil.which("gcc")
 needs_gcc = pytest.mark.skipif(GCC is None, reason="gcc not found")
+#: Warnings every C export compiles clean of (issue: a user's ``-Wextra -pedantic -Werror``).
+STRICT = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror")
 _P = ctypes.POINTER(ctypes.c_double)
 
 
@@ -33,9 +36,7 @@ def _build(model: Any, folder: Path, name: str, **kw: Any) -> ctypes.CDLL:
     subprocess.run(
         [
             str(GCC),
-            "-std=c99",
-            "-Wall",
-            "-Werror",
+            *STRICT,
             "-O2",
             "-shared",
             "-fPIC",
