@@ -81,13 +81,21 @@ def test_c_and_fmu_equal_predict(
     own = hasattr(model, "fs")
     fmu = export_fmu(model, tmp_path / "d.fmu", name="d", dt=None if own else rec.dt)
     assert _rel_rms(run_fmu(fmu, rec.x, rec.v, e)[:, 0], expected) <= 1e-9
-    if fs == RATES[-1]:  # fmpy's validation, and the step's feedthrough recorded in the FMU
+    if fs == RATES[-1]:
+        # fmpy's validation, and the step's feedthrough recorded in the FMU
         from fmpy.validation import validate_fmu
 
         from mrdamper.control.fmu_plant import FMUPlant
 
         assert validate_fmu(str(fmu)) == []
         assert FMUPlant(fmu).step().feedthrough == model.step(dt=rec.dt).feedthrough
+        # a current 5 % beyond the identified range: the input as given, not clipped (as the
+        # step; predict with range_policy="ignore")
+        beyond = rec.replace(i=rec.i * 1.2)
+        assert np.max(beyond.i) > model.input_range[1] * 1.04
+        loose = model.with_range_policy("ignore")
+        F = run_fmu(fmu, beyond.x, beyond.v, beyond.i)[:, 0]
+        assert _rel_rms(F, loose.predict(beyond)) <= 1e-9
     # the C code inside the FMU: <name>_run, one call of <name>_step a sample
     with zipfile.ZipFile(fmu) as z:
         (tmp_path / "d.so").write_bytes(z.read("binaries/linux64/d.so"))

@@ -7,15 +7,15 @@ synthetic record set (sines at three current levels through the reference damper
 * the saved file holds no wall-clock or CPU time;
 * a fit on one current level works, or is refused in one line;
 * an unknown setting is refused in one line that names it;
-* the per-sample step (:meth:`FittedModel.step`, driven by :func:`mrdamper.models.step.run_step`)
-  gives the force of ``predict`` sample by sample, to 1e-9 of the force scale, on a record with
-  a stepped current;
+* the per-sample step (:meth:`FittedModel.step` with the record's interval and the velocity
+  bound :meth:`FittedModel.step_vmax`, driven by :func:`mrdamper.models.step.run_step`) gives the
+  force of ``predict`` sample by sample, to 1e-9 of the force scale, on a record with a stepped
+  current (one rule for the integration sub-steps of both);
 * a discrete-time step refuses to run at another sample time than its own.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import inspect
 import json
 import re
@@ -100,19 +100,12 @@ def probe() -> Experiment:
     return e.replace(F=F)
 
 
-def _pinned(model: FittedModel, record: Experiment) -> FittedModel:
-    """The model with its integration sub-steps fixed to those its ``predict`` takes on
-    ``record`` (Spencer chooses them per record; its step per interval and velocity bound)."""
-    substeps_for = getattr(model, "substeps_for", None)
-    if substeps_for is None:
-        return model
-    return dataclasses.replace(model, substeps=substeps_for(record))  # type: ignore[type-var]
-
-
 def _step(model: FittedModel, record: Experiment) -> Any:
-    """The model's step, with the record's interval where the step takes one (Spencer)."""
-    if "dt" in inspect.signature(model.step).parameters:
-        return model.step(dt=record.dt)
+    """The model's step for the record's interval and velocity, where the step takes them
+    (the continuous-time families): ``predict`` takes the sub-steps of this step."""
+    params = inspect.signature(model.step).parameters
+    if "dt" in params:
+        return model.step(dt=record.dt, vmax=model.step_vmax(record.v))
     return model.step()
 
 
@@ -128,9 +121,12 @@ def test_save_load_round_trip(
     tmp_path: Path,
 ) -> None:
     model = _model(kind, fitted, training)
+    # the interval it was fitted at: a discrete model's own, else the records'
+    assert model.sample_time == (1.0 / model.fs if hasattr(model, "fs") else 1.0 / FS)
     path = model.save(tmp_path / f"{kind}.json")
     back = load_model(path)
     assert type(back) is type(model)
+    assert back.sample_time == model.sample_time
     np.testing.assert_array_equal(back.predict(probe), model.predict(probe))
     text = path.read_text(encoding="utf-8")
     found = set(re.findall(r'"(\w+)"\s*:', text)) & TIMING_PROVENANCE
@@ -144,7 +140,7 @@ def test_save_load_round_trip(
 def test_step_equals_predict(
     kind: str, fitted: dict[str, FittedModel], training: list[Experiment], probe: Experiment
 ) -> None:
-    model = _pinned(_model(kind, fitted, training), probe)
+    model = _model(kind, fitted, training)
     expected = model.predict(probe)
     step = _step(model, probe)
     assert step.kind == kind

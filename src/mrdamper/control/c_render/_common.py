@@ -36,8 +36,8 @@ __all__ = [
     "Rendered",
     "arr1",
     "arr2",
-    "clip_note",
     "fmt_base",
+    "input_note",
     "inverse_settings",
     "lit",
     "quarter_car_defaults",
@@ -141,8 +141,6 @@ def fmt_base(
         "P": ctx.P,
         "lo": lit(lo),
         "hi": lit(hi),
-        "in_lo": lit(model.input_range[0]),
-        "in_hi": lit(model.input_range[1]),
         "lam2": lit(lam * lam),
         "rate_step": lit(rate_step),
         "n_grid": ctx.n_grid,
@@ -150,10 +148,11 @@ def fmt_base(
     }
 
 
-def clip_note(model: Any) -> str:
-    """Header line of a family whose forward step clips the input and whose inverse is limited."""
+def input_note(model: Any) -> str:
+    """Header line of a family with an inverse: the forward step takes the input as given (as
+    the model's step: no range policy), the inverse is limited."""
     lo, hi = model_input_limits(model)
-    return f"The forward step clips the input to the identified range; inverse on [{lo!r}, {hi!r}]."
+    return f"The forward step takes the input as given (not clipped); inverse on [{lo!r}, {hi!r}]."
 
 
 def lit(x: float) -> str:
