@@ -25,8 +25,11 @@ of these tools.
 Call order per communication point ``t_k``: set the inputs at ``t_k``, read the outputs at
 ``t_k`` (the force has direct feedthrough: it depends on the inputs just set), then
 ``fmi2DoStep(t_k, dt)``. Reading the outputs does not change the model's state; ``fmi2DoStep``
-takes the sample at the inputs set at ``t_k``. Driven this way the FMU gives the C step's values,
-which equal the model's per-sample step (:func:`mrdamper.models.step.run_step`) and ``predict``.
+takes the sample at the inputs set at ``t_k``. Driven this way the FMU of every kind gives the C
+step's values, which equal the model's per-sample step (:func:`mrdamper.models.step.run_step`)
+and ``predict`` on a record at the FMU's rate. Read before the inputs of ``t_(k+1)`` are set
+(right after ``fmi2DoStep``, as fmpy's ``simulate_fmu`` does), the outputs are those of sample
+``k``: one communication step late, the same for every kind.
 """
 
 from __future__ import annotations
