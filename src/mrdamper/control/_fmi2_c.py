@@ -13,9 +13,9 @@ before they are set (right after ``fmi2DoStep``), the outputs of the sample that
 ``fmi2DoStep`` commits that copy (computing it if the outputs were not read) and moves time on by
 ``DT``. So a master that sets the inputs, reads the outputs, then steps gets every sample's force
 as sampled; a master that reads the outputs right after ``fmi2DoStep`` (fmpy's ``simulate_fmu``)
-gets, at every kind, the force of the previous sample: one communication step late. A communication step other than ``DT`` is refused
-(``canHandleVariableCommunicationStepSize`` is false); a non-finite output makes ``fmi2DoStep``
-return ``fmi2Error``.
+gets, at every kind, the force of the previous sample: one communication step late. A
+communication step other than ``DT`` is refused (``canHandleVariableCommunicationStepSize`` is
+false); a non-finite output makes ``fmi2DoStep`` return ``fmi2Error``.
 """
 
 from __future__ import annotations
