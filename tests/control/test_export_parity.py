@@ -152,3 +152,22 @@ def test_every_c_export_compiles_clean(
     )
     assert done.returncode == 0, f"{kind}: {done.stderr}"
     assert len(list(tmp_path.glob("*.o"))) == len(sources) >= 2
+
+
+def test_export_step_defaults_to_the_fitted_sample_time() -> None:
+    """The model's ``sample_time``; for a model file without it (version 1), the training
+    records' interval when they had one, else a one-line refusal naming their rates."""
+    from mrdamper.control.c_export import c_source
+    from mrdamper.errors import DataValidationError
+    from mrdamper.models.bingham import BinghamModel
+    from mrdamper.models.spencer import spencer1997
+
+    bing = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 2000.0), input_range=(0.0, 1.0))
+    assert fmu_sources(dataclasses.replace(bing, sample_time=0.005), "b")[1] == 0.005
+    one = dataclasses.replace(bing, provenance={"record_dt": [0.002]})
+    assert fmu_sources(one, "b")[1] == 0.002  # a file written before sample_time
+    mixed = dataclasses.replace(spencer1997(), provenance={"record_dt": [0.001, 0.005]})
+    for call in (lambda: fmu_sources(mixed, "s"), lambda: c_source(mixed, "s")):
+        with pytest.raises(DataValidationError, match=r"training records at 1000, 200 Hz\)") as e:
+            call()
+        assert "\n" not in str(e.value) and "--dt" in str(e.value)

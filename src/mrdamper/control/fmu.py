@@ -50,6 +50,7 @@ from typing import Any
 from mrdamper._io import FileKind, atomic_write_with, check_writable
 from mrdamper.control._fmi2_c import FMI2_TYPES, WRAPPER
 from mrdamper.control.c_export import C_KINDS, assemble, render
+from mrdamper.control.c_render._common import rates_hint
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.version import __version__
 
@@ -97,14 +98,6 @@ def training_dt(model: Any) -> float | None:
     if isinstance(values, (list, tuple)) and len(values) == 1:
         return float(values[0])
     return None
-
-
-def _rates_hint(model: Any) -> str:
-    """`` (training records at 200, 1000 Hz)`` when the provenance lists several intervals."""
-    values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
-    if not isinstance(values, (list, tuple)) or len(values) < 2:
-        return ""
-    return " (training records at " + ", ".join(f"{1.0 / float(d):g}" for d in values) + " Hz)"
 
 
 def _check_dt(dt: float | None) -> None:
@@ -277,7 +270,7 @@ def fmu_sources(
     if step is None:
         raise DataValidationError(
             "dt",
-            f"the {kind} model records no sample time it was fitted at{_rates_hint(model)}; give "
+            f"the {kind} model records no sample time it was fitted at{rates_hint(model)}; give "
             "the FMU's communication step dt [s] (--dt)",
         )
     r = render(model, name, reg=reg, dt=step)

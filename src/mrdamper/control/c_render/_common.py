@@ -41,6 +41,7 @@ __all__ = [
     "inverse_settings",
     "lit",
     "quarter_car_defaults",
+    "rates_hint",
     "require_dt",
     "sampled_step",
     "solver",
@@ -322,11 +323,21 @@ def require_dt(model: Any, ctx: Context) -> float:
     if ctx.dt is None:
         raise DataValidationError(
             "dt",
-            f"the {model.kind} C step integrates fixed intervals: give its sample time dt [s]",
+            f"the {model.kind} C step integrates fixed intervals and the model records no sample "
+            f"time it was fitted at{rates_hint(model)}: give its sample time dt [s] (--dt)",
         )
     if not (ctx.dt > 0 and ctx.dt < math.inf):
         raise DataValidationError("dt", f"expected a positive sample time [s], got {ctx.dt!r}")
     return float(ctx.dt)
+
+
+def rates_hint(model: Any) -> str:
+    """`` (training records at 1000, 200 Hz)`` when the model's provenance lists several training
+    intervals (``record_dt``), else ``""``."""
+    values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
+    if not isinstance(values, (list, tuple)) or len(values) < 2:
+        return ""
+    return " (training records at " + ", ".join(f"{1.0 / float(d):g}" for d in values) + " Hz)"
 
 
 def sampled_step(model: Any, ctx: Context) -> tuple[Any, float]:
