@@ -254,7 +254,7 @@ def test_c_step_of_every_kind_matches_run_step(
 
     model, rec = kind_models[kind], kind_probe
     e = np.ascontiguousarray(model.electrical_input(rec))
-    step = model.step(dt=rec.dt, vmax=model.step_vmax())
+    step = model.step(dt=rec.dt)
     F_py, status, _ = run_step(step, rec.x, rec.v, e, rec.dt)
     assert status == 0
     lib = _step_lib(model, tmp_path, f"k_{kind}", rec.dt)

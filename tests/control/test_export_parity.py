@@ -5,8 +5,8 @@ and the FMU (driven by fmpy) equal the model's ``predict`` on a short record at 
 
 Models: each kind fitted once on the conformance records (``kind_models``); a discrete-time
 kind (LPV, LTI, NARX) runs at the record's rate (its model rate set to it), a continuous-time or
-static kind is exported at the record's interval. The record stays inside the training
-velocity, where ``predict`` and the exported step take the same integration sub-steps
+static kind is exported at the record's interval. The record stays within the step's
+velocity bound, where ``predict`` and the exported step take the same integration sub-steps
 (:meth:`mrdamper.models.base.FittedModel.step_vmax`).
 """
 
@@ -42,7 +42,7 @@ _P = ctypes.POINTER(ctypes.c_double)
 
 
 def _probe(fs: float) -> Experiment:
-    """0.5 s of a 3 Hz sine (peak 57 mm/s, inside the training velocity) with the current
+    """0.5 s of a 3 Hz sine (peak 57 mm/s, within the step's velocity bound) with the current
     stepping through four levels inside the training range."""
     t = np.arange(round(0.5 * fs)) / fs
     x = 0.003 * np.sin(2 * np.pi * 3.0 * t)
@@ -71,7 +71,7 @@ def _rel_rms(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean((a - b) ** 2) / np.mean(b**2)))
 
 
-def test_probe_is_inside_the_training_velocity(kind_models: dict[str, Any]) -> None:
+def test_probe_is_within_the_velocity_bound(kind_models: dict[str, Any]) -> None:
     for fs in RATES:
         assert np.max(np.abs(_probe(fs).v)) < kind_models["sp1"].step_vmax()
 

@@ -147,7 +147,7 @@ class HysteresisModel(FittedModel):
             )
         return np.asarray(F)
 
-    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float | None = None) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         The state is ``(z, u)``, at rest ``(0, e[0])``. Without a drive lag the force reads the
@@ -155,17 +155,20 @@ class HysteresisModel(FittedModel):
         ``advance`` integrates an interval with the RK4 sub-steps of :meth:`predict` (the same
         compiled interval), no longer than ``max_h``: the automatic choice for an interval of
         ``dt`` [s] and velocities up to ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is
-        set); with ``vmax = model.step_vmax()`` and the record's interval, the sub-steps of
-        :meth:`predict` on every record inside the training velocity.
+        set); with the default ``vmax`` and the record's interval, the sub-steps of
+        :meth:`predict` on every record within that velocity.
 
         Parameters
         ----------
         dt : float
             Reference interval [s] for the sub-step choice (default 1 ms).
-        vmax : float
-            Largest damper velocity [m/s] the step must resolve (default 1.5 m/s).
+        vmax : float, optional
+            Largest damper velocity [m/s] the step must resolve (default
+            :meth:`~mrdamper.models.base.FittedModel.step_vmax`: 1.5 m/s or the training peak
+            velocity when larger).
         """
         p = np.ascontiguousarray(self.parameter_vector())
+        vmax = self.step_vmax() if vmax is None else vmax
         nsub = self._substeps(dt, vmax)
         form = _k.HysteresisForm(_k.FAMILIES[self.family], p, dt / nsub)
 

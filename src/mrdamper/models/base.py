@@ -265,11 +265,12 @@ class FittedModel(abc.ABC):
     def step_vmax(self, v: np.ndarray | None = None) -> float:
         """Velocity bound [m/s] that sets a continuous-time family's integration sub-steps.
 
-        One rule for :meth:`predict` and the exported step: the peak ``|v|`` of the training
-        records (the envelope's ``v_max``), raised to the peak of ``v`` when a record faster than
-        that is given. So the step built with ``step(dt=..., vmax=model.step_vmax())`` (what the
-        C and FMU exports run) integrates exactly the sub-steps of ``predict`` on every record at
-        the interval ``dt`` inside the training velocity. A model without an envelope (built by
+        One rule for :meth:`predict`, the step and its exports: :data:`STEP_VMAX` (beyond a car
+        suspension's velocities) or the training records' peak ``|v|`` (the envelope's
+        ``v_max``) when larger, raised to the peak of ``v`` when a record faster than that is
+        given. The step (:meth:`step`, whose default bound this is; what the C and FMU exports
+        and the quarter car run) so integrates exactly the sub-steps of ``predict`` on every
+        record at the step's interval within that bound. A model without an envelope (built by
         hand) takes the record's peak ``|v|``, or :data:`STEP_VMAX` without a record.
 
         Parameters
@@ -278,11 +279,11 @@ class FittedModel(abc.ABC):
             The record's velocity [m/s].
         """
         env = self.envelope
-        ref = float(env["v_max"]) if env and env.get("v_max") is not None else None
         peak = float(np.max(np.abs(v))) if v is not None and np.size(v) else None
-        if ref is None:
+        if not env or env.get("v_max") is None:
             return STEP_VMAX if peak is None else peak
-        return ref if peak is None else max(ref, peak)
+        bound = max(STEP_VMAX, float(env["v_max"]))
+        return bound if peak is None else max(bound, peak)
 
     def envelope_note(self, experiment: Experiment) -> str:
         """One line saying how ``experiment`` leaves the training envelope (velocity,

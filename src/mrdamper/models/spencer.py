@@ -47,7 +47,6 @@ from mrdamper.models._spencer_kernels import (
 )
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import (
-    STEP_VMAX,
     Estimator,
     FittedModel,
     Identified,
@@ -262,25 +261,27 @@ class SpencerModel(FittedModel):
         _raise_on_status(status, sample, nsub, experiment.name)
         return np.asarray(F)
 
-    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float | None = None) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         The state is ``(y, z, u)``, at rest ``(x[0], 0, e[0])``; ``advance`` integrates an
         interval with classical RK4 sub-steps no longer than ``max_h``, chosen by the rule of
         :meth:`substeps_for` for an interval of ``dt`` [s] and velocities up to ``vmax`` [m/s]
         over the identified input range (or ``dt / substeps`` when ``substeps`` is set): with
-        ``vmax = model.step_vmax()`` and the record's interval it takes the sub-steps of
-        :meth:`predict` on every record inside the training velocity. The force reads the
+        the default ``vmax`` and the record's interval it takes the sub-steps of :meth:`predict`
+        on every record within that velocity. The force reads the
         filtered input ``u``, a state: ``feedthrough`` is False.
 
         Parameters
         ----------
         dt : float
             Reference interval [s] for the sub-step choice (default 1 ms).
-        vmax : float
-            Largest damper velocity [m/s] the step must resolve (default 1.5 m/s, beyond the
-            velocities of a car suspension).
+        vmax : float, optional
+            Largest damper velocity [m/s] the step must resolve (default
+            :meth:`~mrdamper.models.base.FittedModel.step_vmax`: 1.5 m/s, beyond the velocities
+            of a car suspension, or the training peak velocity when larger).
         """
+        vmax = self.step_vmax() if vmax is None else vmax
         nsub = self._substeps(dt, vmax, self.input_range[0], self.input_range[1])
         form = _k.SpencerForm(np.ascontiguousarray(self.parameter_vector()), dt / nsub)
 

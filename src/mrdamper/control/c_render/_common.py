@@ -343,12 +343,12 @@ def rates_hint(model: Any) -> str:
 def sampled_step(model: Any, ctx: Context) -> tuple[Any, float]:
     """The model's step at the export's sample time (:func:`require_dt`) and the time [s].
 
-    The step's velocity bound is the model's :meth:`~mrdamper.models.base.FittedModel.step_vmax`
-    (its training velocity): the sub-steps of ``predict`` on every record at that rate inside it,
-    so the exported damper is the validated one.
+    The step's default velocity bound (:meth:`~mrdamper.models.base.FittedModel.step_vmax`):
+    the sub-steps of ``predict`` on every record at that rate within it, and the step the
+    quarter car runs, so the exported damper is the validated one.
     """
     dt = require_dt(model, ctx)
-    return model.step(dt=dt, vmax=model.step_vmax()), dt
+    return model.step(dt=dt), dt
 
 
 def step_state(p: str, n: int, what: str) -> str:
