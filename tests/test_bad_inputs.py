@@ -603,6 +603,7 @@ def test_model_file_with_nan_coefficients_is_refused_at_load(tmp_path, capsys) -
     _lpv_model().save(path)
     d = json.loads(path.read_text())
     d["parameters"]["alpha"]["__ndarray__"][0] = None
+    d["sample_time"] = 0.001  # the one null (turned into NaN below) is the coefficient
     text = json.dumps(d).replace("null", "NaN")
     path.write_text(text)
     rec = write_csv(_sine("r", 0.5), tmp_path / "r.csv")

@@ -7,11 +7,13 @@ relies on:
 * ``registered``: the kind is known to the registry with these classes (so model files load);
 * ``unknown_setting``: an unknown setting is refused in one line that names it;
 * ``single_level``: a fit on one current level works, or is refused in one line;
-* ``round_trip``: the saved model loads back and predicts bit for bit the same force, and the file
-  holds no wall-clock or CPU time and no date;
-* ``step_equals_predict``: the per-sample step (:meth:`~mrdamper.models.FittedModel.step`, run by
+* ``round_trip``: the saved model loads back with its sample time and predicts bit for bit the
+  same force, and the file holds no wall-clock or CPU time and no date;
+* ``step_equals_predict``: the per-sample step (:meth:`~mrdamper.models.FittedModel.step` with the
+  record's interval and the velocity bound :meth:`~mrdamper.models.FittedModel.step_vmax`, run by
   :func:`mrdamper.models.step.run_step`) gives the force of ``predict`` sample by sample, to
-  :data:`STEP_RTOL` of the force scale, on a record with a stepped current;
+  :data:`STEP_RTOL` of the force scale, on a record with a stepped current (one rule for the
+  integration sub-steps of both);
 * ``discrete_step``: a discrete-time step refuses to run at another sample time than its own (a
   continuous-time or static step runs at any).
 
@@ -22,7 +24,6 @@ over every kind of the kind table; a family without a per-sample step skips the 
 
 from __future__ import annotations
 
-import dataclasses
 import inspect
 import json
 import re
@@ -143,15 +144,12 @@ def has_step(model: FittedModel) -> bool:
 
 
 def model_step(model: FittedModel, record: Experiment) -> tuple[FittedModel, Step]:
-    """The model with its integration sub-steps pinned to those its ``predict`` takes on
-    ``record`` (a family with ``substeps_for`` chooses them per record), and its step with the
-    record's interval where the step takes one."""
-    substeps_for = getattr(model, "substeps_for", None)
-    if substeps_for is not None:
-        pinned: dict[str, Any] = {"substeps": substeps_for(record)}
-        model = dataclasses.replace(model, **pinned)
-    if "dt" in inspect.signature(model.step).parameters:
-        return model, model.step(dt=record.dt)
+    """The model and its step for ``record``: with the record's interval and the velocity bound
+    :meth:`~mrdamper.models.FittedModel.step_vmax` of its motion where the step takes them (the
+    continuous-time families; ``predict`` takes the sub-steps of this step)."""
+    params = inspect.signature(model.step).parameters
+    if "dt" in params:
+        return model, model.step(dt=record.dt, vmax=model.step_vmax(record.v))
     return model, model.step()
 
 
@@ -217,6 +215,10 @@ def check_round_trip(model: FittedModel, probe: Experiment, folder: str | Path) 
     back = load_model(path)
     if type(back) is not type(model):
         raise _fail(kind, "round_trip", f"loads back as {type(back).__name__}")
+    if back.sample_time != model.sample_time:
+        raise _fail(
+            kind, "round_trip", f"sample_time {model.sample_time!r} loads as {back.sample_time!r}"
+        )
     if not np.array_equal(back.predict(probe), model.predict(probe)):
         raise _fail(kind, "round_trip", "the loaded model predicts another force")
     text = path.read_text(encoding="utf-8")

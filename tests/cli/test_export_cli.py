@@ -207,6 +207,6 @@ def test_export_fmu(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     p15 = P15Model(input_range=(0.0, 1.0)).save(tmp_path / "p15.json")
     assert _exit_code(["export", str(p15), "--out", str(tmp_path / "p.fmu")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "does not record one training sample time" in err
+    assert err.count("\n") == 1 and "records no sample time it was fitted at" in err
     assert sorted(p.name for p in tmp_path.glob("*.fmu")) == ["damper.fmu", "inv.fmu"]
     assert not list(tmp_path.glob(".*part"))

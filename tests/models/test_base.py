@@ -116,3 +116,38 @@ def test_known_kinds_lists_every_family() -> None:
         "lugre",
     ]
     assert known_kinds()[: len(KINDS)] == [row.kind for row in KINDS]
+
+
+def test_sample_time_is_saved_and_old_files_still_load(tmp_path) -> None:
+    m = _Viscous(input_range=(0.0, 1.0), sample_time=0.005)
+    d = json.loads(json.dumps(m.to_dict()))
+    assert d["schema_version"] == 2 and d["sample_time"] == 0.005
+    assert _Viscous.from_dict(d).sample_time == 0.005
+    old = {k: v for k, v in d.items() if k != "sample_time"} | {"schema_version": 1}
+    back = _Viscous.from_dict(old)  # written before the field existed
+    assert back.sample_time is None
+    assert np.array_equal(back.predict(_record()), m.predict(_record()))
+    for bad in (0.0, -1.0, "5 ms", True):
+        with pytest.raises(SchemaError, match="^sample_time: expected a positive interval"):
+            _Viscous.from_dict({**d, "sample_time": bad})
+    with pytest.raises(ValueError, match="^sample_time: "):
+        _Viscous(input_range=(0.0, 1.0), sample_time=float("nan"))
+
+
+def test_fit_records_its_sample_time() -> None:
+    """The largest training interval (records at 200 Hz and 1 kHz: 5 ms), the default step of
+    the exports (a discrete model's own sample time: ``tests/models/test_conformance.py``)."""
+    import warnings
+
+    from mrdamper import get_estimator
+    from mrdamper.control.fmu import fmu_sources
+
+    fast = _record()
+    slow = fast.replace(
+        t=fast.t[::5], x=fast.x[::5], v=fast.v[::5], F=fast.F[::5], i=fast.i[::5], name="slow"
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        bingham = get_estimator("bingham").fit([fast, slow])
+    assert bingham.sample_time == 0.005
+    assert fmu_sources(bingham, "b")[1] == 0.005  # the FMU's default communication step

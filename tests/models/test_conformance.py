@@ -22,6 +22,7 @@ import pytest
 from mrdamper import check_family, get_estimator
 from mrdamper.conformance import (
     CHECKS,
+    FS,
     check_discrete_step,
     check_round_trip,
     check_single_level,
@@ -90,6 +91,15 @@ def test_save_load_round_trip(
     tmp_path: Path,
 ) -> None:
     check_round_trip(_model(kind, fitted, training), probe, tmp_path)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_the_model_records_the_interval_it_was_fitted_at(
+    kind: str, fitted: dict[str, FittedModel], training: list[Experiment]
+) -> None:
+    # a discrete model's own interval, else the training records' (export's default --dt)
+    model = _model(kind, fitted, training)
+    assert model.sample_time == (1.0 / model.fs if hasattr(model, "fs") else 1.0 / FS)
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -78,8 +78,9 @@ def export(
             "--dt",
             help=(
                 "Sample time [s] of a Spencer, P-15, tanh, Bouc-Wen, Dahl or LuGre model's C "
-                "step and of their or a static map's FMU (default: the training records' "
-                "sampling interval)."
+                "step and of their or a static map's FMU (default: the sample time the model "
+                "was fitted at, recorded in the model file; LPV, LTI and NARX models run at "
+                "their own rate)."
             ),
         ),
     ] = None,

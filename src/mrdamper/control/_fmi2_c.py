@@ -6,12 +6,16 @@ without the standard's header files. :data:`WRAPPER` implements every function o
 co-simulation interface over ``<name>_init`` / ``<name>_step`` (or ``<name>_inverse_step``).
 
 Semantics of one instance (fixed communication step ``DT``): the state ``s`` holds the model
-after the samples already taken. The outputs at a communication point are the step applied to a
-copy of ``s`` with the inputs set there (the force has direct feedthrough), so reading them never
-changes the state; ``fmi2DoStep`` commits that copy (computing it if the outputs were not read)
-and moves time on by ``DT``. A communication step other than ``DT`` is refused
-(``canHandleVariableCommunicationStepSize`` is false); a non-finite output makes ``fmi2DoStep``
-return ``fmi2Error``.
+after the samples already taken. The outputs are those of the last sample, for every kind the
+same rule: once the inputs of a communication point are set, the step applied to a copy of ``s``
+with those inputs (the force has direct feedthrough), so reading them never changes the state;
+before they are set (right after ``fmi2DoStep``), the outputs of the sample that step took.
+``fmi2DoStep`` commits that copy (computing it if the outputs were not read) and moves time on by
+``DT``. So a master that sets the inputs, reads the outputs, then steps gets every sample's force
+as sampled; a master that reads the outputs right after ``fmi2DoStep`` (fmpy's ``simulate_fmu``)
+gets, at every kind, the force of the previous sample: one communication step late. A
+communication step other than ``DT`` is refused (``canHandleVariableCommunicationStepSize`` is
+false); a non-finite output makes ``fmi2DoStep`` return ``fmi2Error``.
 """
 
 from __future__ import annotations
@@ -82,6 +86,7 @@ typedef struct {{
     {p}_state s; /* after the samples taken */
     {p}_state next; /* s after the sample at the present inputs (valid when cached) */
     int cached;
+    int fresh; /* inputs set since the last fmi2DoStep (or no step taken yet) */
 }} {p}_instance;
 
 static void {p}_log({p}_instance *c, fmi2Status status, const char *msg)
@@ -97,6 +102,7 @@ static void {p}_reset({p}_instance *c)
     for (j = 0; j < {P}_N_OUT; ++j) c->out[j] = 0.0;
     {p}_init(&c->s);
     c->cached = 0;
+    c->fresh = 1;
 }}
 
 /* outputs at the present inputs, from a copy of the state */
@@ -199,7 +205,7 @@ fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
     for (j = 0; j < nvr; ++j) {{
         if (vr[j] < {P}_N_IN) value[j] = c->in[vr[j]];
         else if (vr[j] < {P}_N_IN + {P}_N_OUT) {{
-            {p}_evaluate(c);
+            if (c->fresh) {p}_evaluate(c); /* else: the outputs of the sample last taken */
             value[j] = c->out[vr[j] - {P}_N_IN];
         }} else {{
             {p}_log(c, fmi2Error, "fmi2GetReal: unknown value reference");
@@ -222,6 +228,7 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
         }}
         if (c->in[vr[j]] != value[j]) c->cached = 0;
         c->in[vr[j]] = value[j];
+        c->fresh = 1;
     }}
     return fmi2OK;
 }}
@@ -247,6 +254,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
     }}
     c->s = c->next;
     c->cached = 0;
+    c->fresh = 0;
     c->time += communicationStepSize;
     return fmi2OK;
 }}

@@ -6,7 +6,7 @@ dynamic allocation, no globals that change: all state lives in a caller-owned st
 * ``<name>_init(<name>_state *s)``: reset to rest;
 * ``double <name>_step(<name>_state *s, double x, double v, double input)``: forward model, one
   sample: the damper force [N] for displacement ``x`` [m], velocity ``v`` [m/s] and the electrical
-  input [A] or [V] at this sample (clipped to the identified input range);
+  input [A] or [V] at this sample (as given, as the model's step: not clipped);
 * ``double <name>_inverse_step(<name>_state *s, double x, double v, double F_desired,
   double *F_out)``: the regularised inverse (:func:`mrdamper.control.inverse_current`, method
   ``"regularised"``), one sample: returns the input (for a model with a drive lag, the lagged
@@ -37,8 +37,8 @@ inverse are the quarter car's (grid, reference velocity, regularisation at its c
 All constants are written as C99 hexadecimal floating literals, so the C code uses exactly the
 model's ``float64`` values. The arithmetic follows the compiled Python kernels operation by
 operation (the forward LPV recursion sums in another order than the record kernel), so the two
-agree to rounding: a test compiles the pair with ``gcc -std=c99 -Wall -Werror`` and compares it with
-the Python simulation on a real record.
+agree to rounding: tests compile the pair with ``gcc -std=c99 -Wall -Wextra -pedantic -Werror``
+and compare it with ``predict`` for every kind (``tests/control/test_export_parity.py``).
 
 A family of another package (a plug-in, :mod:`mrdamper.kinds`) is exported when its fitted model
 renders itself (a method ``render_c``, :func:`mrdamper.control.c_render.renderer_of`); without

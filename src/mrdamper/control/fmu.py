@@ -25,8 +25,11 @@ of these tools.
 Call order per communication point ``t_k``: set the inputs at ``t_k``, read the outputs at
 ``t_k`` (the force has direct feedthrough: it depends on the inputs just set), then
 ``fmi2DoStep(t_k, dt)``. Reading the outputs does not change the model's state; ``fmi2DoStep``
-takes the sample at the inputs set at ``t_k``. Driven this way the FMU gives the C step's values,
-which equal the model's per-sample step (:func:`mrdamper.models.step.run_step`) and ``predict``.
+takes the sample at the inputs set at ``t_k``. Driven this way the FMU of every kind gives the C
+step's values, which equal the model's per-sample step (:func:`mrdamper.models.step.run_step`)
+and ``predict`` on a record at the FMU's rate. Read before the inputs of ``t_(k+1)`` are set
+(right after ``fmi2DoStep``, as fmpy's ``simulate_fmu`` does), the outputs are those of sample
+``k``: one communication step late, the same for every kind.
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ from mrdamper._io import FileKind, atomic_write_with, check_writable
 from mrdamper.control._fmi2_c import FMI2_TYPES, WRAPPER
 from mrdamper.control.c_export import C_KINDS, assemble, render
 from mrdamper.control.c_render import renderer_of
+from mrdamper.control.c_render._common import rates_hint
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.version import __version__
 
@@ -82,10 +86,15 @@ GCC_FLAGS = ("-shared", "-fPIC", "-std=c99", "-O2")
 
 
 def training_dt(model: Any) -> float | None:
-    """The training records' sampling interval [s] recorded by the fit, or None.
+    """The sampling interval [s] the model was fitted at, or None.
 
-    None when the model file does not record it or the records had several intervals.
+    The model's ``sample_time`` (recorded by the fit); for a model file written before it was
+    recorded, the training records' interval when they had one (``provenance["record_dt"]``);
+    None otherwise (a model built by hand).
     """
+    recorded = getattr(model, "sample_time", None)
+    if recorded is not None:
+        return float(recorded)
     values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
     if isinstance(values, (list, tuple)) and len(values) == 1:
         return float(values[0])
@@ -264,8 +273,8 @@ def fmu_sources(
     if step is None:
         raise DataValidationError(
             "dt",
-            f"the {kind} model file does not record one training sample time; give the FMU's "
-            "communication step dt [s]",
+            f"the {kind} model records no sample time it was fitted at{rates_hint(model)}; give "
+            "the FMU's communication step dt [s] (--dt)",
         )
     r = render(model, name, reg=reg, dt=step)
     if inverse and not r.has_inverse:

@@ -25,6 +25,7 @@ from mrdamper.models import _scale
 from mrdamper.models._oe_fit import FitSettings, FitSpec, check_mappings, identify
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import (
+    STEP_VMAX,
     Estimator,
     FittedModel,
     Identified,
@@ -38,9 +39,6 @@ from mrdamper.models.step import Step
 from mrdamper.progress import report
 
 __all__ = ["STEP_VMAX", "HysteresisEstimator", "HysteresisModel"]
-
-#: Largest damper velocity [m/s] the per-sample step resolves by default.
-STEP_VMAX = 1.5
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -101,12 +99,17 @@ class HysteresisModel(FittedModel):
 
     def substeps_for(self, experiment: Experiment) -> int:
         """RK4 sub-steps per sampling interval used for ``experiment`` (``substeps``, or the
-        automatic choice of :func:`~._hysteresis_kernels.auto_substeps` for its interval and
-        largest |velocity|)."""
+        automatic choice of :func:`~._hysteresis_kernels.auto_substeps` for its interval and the
+        velocity bound :meth:`~mrdamper.models.base.FittedModel.step_vmax`): those of the step
+        built for its interval, one rule for both."""
+        return self._substeps(experiment.dt, self.step_vmax(experiment.v))
+
+    def _substeps(self, dt: float, vmax: float) -> int:
+        """``substeps``, or the automatic count for an interval of ``dt`` [s] and velocities up
+        to ``vmax`` [m/s]."""
         if self.substeps > 0:
             return self.substeps
-        vmax = float(np.max(np.abs(experiment.v)))
-        return _k.auto_substeps(self.family, self.parameter_vector(), experiment.dt, vmax)
+        return _k.auto_substeps(self.family, self.parameter_vector(), dt, vmax)
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N] of one record from its x, v and electrical input, from rest.
@@ -144,7 +147,7 @@ class HysteresisModel(FittedModel):
             )
         return np.asarray(F)
 
-    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float | None = None) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         The state is ``(z, u)``, at rest ``(0, e[0])``. Without a drive lag the force reads the
@@ -152,17 +155,21 @@ class HysteresisModel(FittedModel):
         ``advance`` integrates an interval with the RK4 sub-steps of :meth:`predict` (the same
         compiled interval), no longer than ``max_h``: the automatic choice for an interval of
         ``dt`` [s] and velocities up to ``vmax`` [m/s] (or ``dt / substeps`` when ``substeps`` is
-        set).
+        set); with the default ``vmax`` and the record's interval, the sub-steps of
+        :meth:`predict` on every record within that velocity.
 
         Parameters
         ----------
         dt : float
             Reference interval [s] for the sub-step choice (default 1 ms).
-        vmax : float
-            Largest damper velocity [m/s] the step must resolve (default 1.5 m/s).
+        vmax : float, optional
+            Largest damper velocity [m/s] the step must resolve (default
+            :meth:`~mrdamper.models.base.FittedModel.step_vmax`: 1.5 m/s or the training peak
+            velocity when larger).
         """
         p = np.ascontiguousarray(self.parameter_vector())
-        nsub = self.substeps or _k.auto_substeps(self.family, p, dt, vmax)
+        vmax = self.step_vmax() if vmax is None else vmax
+        nsub = self._substeps(dt, vmax)
         form = _k.HysteresisForm(_k.FAMILIES[self.family], p, dt / nsub)
 
         def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:
@@ -236,8 +243,7 @@ class HysteresisModel(FittedModel):
             )
         x = np.ascontiguousarray(x, dtype=np.float64)
         v = np.ascontiguousarray(v, dtype=np.float64)
-        vmax = float(np.max(np.abs(v))) if v.size else 0.0
-        form = self.step(dt=dt, vmax=vmax).form
+        form = self.step(dt=dt, vmax=self.step_vmax(v)).form
         e, sat, status, sample = _k.inverse_run(
             form,
             x,

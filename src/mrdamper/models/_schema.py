@@ -2,8 +2,14 @@
 
 A model file is a JSON object written by :meth:`mrdamper.models.FittedModel.save`::
 
-    {"schema": "mrdamper.model", "schema_version": 1, "kind": "lpv", "input": "i",
-     "input_range": [lo, hi], "range_policy": "error", "parameters": {...}, "provenance": {...}}
+    {"schema": "mrdamper.model", "schema_version": 2, "kind": "lpv", "input": "i",
+     "input_range": [lo, hi], "range_policy": "error", "sample_time": 0.005,
+     "parameters": {...}, "provenance": {...}}
+
+``sample_time`` [s] is the sampling interval the model was fitted at (a discrete model's own
+sample time ``1 / fs``; else that of the training records, the largest when they differ), the
+default step of its C and FMU exports; ``null`` for a model built by hand. Version 1 files (before
+``sample_time``) still load, without it.
 
 Arrays are ``{"__ndarray__": [flat values], "dtype": "float64", "shape": [...]}`` and non-finite
 floats ``{"__float__": "inf"}``. :func:`check_model_dict` checks a loaded file against this
@@ -26,6 +32,7 @@ import numpy as np
 from mrdamper.errors import SchemaError
 
 __all__ = [
+    "READABLE_VERSIONS",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
     "check_header",
@@ -36,7 +43,9 @@ __all__ = [
 ]
 
 SCHEMA_NAME = "mrdamper.model"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: Versions this release reads (1: before ``sample_time``).
+READABLE_VERSIONS: tuple[int, ...] = (1, 2)
 
 #: Array element types a model file may hold.
 _DTYPES: frozenset[str] = frozenset({"float64", "float32", "int64", "int32", "bool", "complex128"})
@@ -164,8 +173,11 @@ def check_header(data: Any) -> None:
     if data.get("schema") != SCHEMA_NAME:
         raise SchemaError(f"schema: expected {SCHEMA_NAME!r}, got {data.get('schema')!r}")
     ver = data.get("schema_version")
-    if ver != SCHEMA_VERSION:
-        raise SchemaError(f"schema_version: expected {SCHEMA_VERSION}, got {ver!r}")
+    if ver not in READABLE_VERSIONS or isinstance(ver, bool):
+        raise SchemaError(f"schema_version: expected one of {list(READABLE_VERSIONS)}, got {ver!r}")
+    dt = data.get("sample_time")
+    if dt is not None and not (_is_number(dt) and math.isfinite(dt) and dt > 0):
+        raise SchemaError(f"sample_time: expected a positive interval [s] or null, got {dt!r}")
     for key in _REQUIRED:
         if key not in data:
             raise SchemaError(f"{key}: missing from model file")

@@ -64,6 +64,7 @@ __all__ = [
     "MODEL_FILE",
     "SCHEMA_NAME",
     "SCHEMA_VERSION",
+    "STEP_VMAX",
     "TIMING_PROVENANCE",
     "Choice",
     "Estimator",
@@ -93,6 +94,10 @@ TIMING_PROVENANCE: frozenset[str] = frozenset(
 )
 
 RangePolicy = Literal["error", "warn", "clip", "ignore"]
+
+#: Largest damper velocity [m/s] a continuous-time family's per-sample step resolves when no
+#: other bound is given (beyond the velocities of a car suspension).
+STEP_VMAX = 1.5
 
 #: Smallest peak velocity of a training record [m/s]: below it the record has no motion (a rig at
 #: rest records velocity noise only) and the fit is refused.
@@ -215,6 +220,11 @@ class FittedModel(abc.ABC):
         What :meth:`predict` does when a record leaves ``input_range``.
     provenance : mapping
         Facts about the identification: training record names, settings, cost, time, version.
+    sample_time : float or None
+        Sampling interval [s] the model was fitted at: a discrete model's own ``1 / fs``, else
+        the training records' (the largest when they differ); the default step of the C and FMU
+        exports. None for a model built by hand (or read from a file written before it was
+        recorded).
     """
 
     kind: ClassVar[str] = "abstract"
@@ -223,9 +233,17 @@ class FittedModel(abc.ABC):
     input_range: tuple[float, float] = (0.0, 0.0)
     range_policy: RangePolicy = "error"
     provenance: Mapping[str, Any] = field(default_factory=dict, compare=False)
+    sample_time: float | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "input_range", tuple(float(b) for b in self.input_range))
+        if self.sample_time is not None:
+            dt = self.sample_time
+            if isinstance(dt, bool) or not isinstance(dt, (int, float)) or not 0 < dt < np.inf:
+                raise DataValidationError(
+                    "sample_time", f"expected a positive interval [s] or None, got {dt!r}"
+                )
+            object.__setattr__(self, "sample_time", float(dt))
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -243,6 +261,29 @@ class FittedModel(abc.ABC):
         envelopes were recorded, or built by hand)."""
         env = dict(self.provenance or {}).get("envelope")
         return dict(env) if env else None
+
+    def step_vmax(self, v: np.ndarray | None = None) -> float:
+        """Velocity bound [m/s] that sets a continuous-time family's integration sub-steps.
+
+        One rule for :meth:`predict`, the step and its exports: :data:`STEP_VMAX` (beyond a car
+        suspension's velocities) or the training records' peak ``|v|`` (the envelope's
+        ``v_max``) when larger, raised to the peak of ``v`` when a record faster than that is
+        given. The step (:meth:`step`, whose default bound this is; what the C and FMU exports
+        and the quarter car run) so integrates exactly the sub-steps of ``predict`` on every
+        record at the step's interval within that bound. A model without an envelope (built by
+        hand) takes the record's peak ``|v|``, or :data:`STEP_VMAX` without a record.
+
+        Parameters
+        ----------
+        v : ndarray, optional
+            The record's velocity [m/s].
+        """
+        env = self.envelope
+        peak = float(np.max(np.abs(v))) if v is not None and np.size(v) else None
+        if not env or env.get("v_max") is None:
+            return STEP_VMAX if peak is None else peak
+        bound = max(STEP_VMAX, float(env["v_max"]))
+        return bound if peak is None else max(bound, peak)
 
     def envelope_note(self, experiment: Experiment) -> str:
         """One line saying how ``experiment`` leaves the training envelope (velocity,
@@ -330,6 +371,7 @@ class FittedModel(abc.ABC):
             "input": self.input,
             "input_range": list(self.input_range),
             "range_policy": self.range_policy,
+            "sample_time": self.sample_time,
             "parameters": encode_value(self.parameters),
             "provenance": encode_value(
                 {k: v for k, v in self.provenance.items() if k not in TIMING_PROVENANCE}
@@ -356,6 +398,7 @@ class FittedModel(abc.ABC):
                 input_range=tuple(data["input_range"]),
                 range_policy=policy,
                 provenance=decode_value(data.get("provenance", {}), "provenance"),
+                sample_time=data.get("sample_time"),
                 **params,
             )
         except (TypeError, ValueError, KeyError, IndexError) as exc:
@@ -412,7 +455,8 @@ class Estimator(abc.ABC):
     5. call :meth:`_identify`;
     6. build ``model_class`` with the parameters, ``input``, ``input_range``, ``range_policy``
        and provenance (the single-level note, the training records' sampling intervals
-       ``record_dt`` [s], wall-clock and CPU time: :data:`TIMING_PROVENANCE`).
+       ``record_dt`` [s], wall-clock and CPU time: :data:`TIMING_PROVENANCE`) and the
+       ``sample_time`` it was fitted at (:class:`FittedModel`).
 
     Progress (:mod:`mrdamper.progress`) is reported as the stages ``"preparing the training
     data"``, ``"identifying"`` (the family reports its own stages within it) and ``"done"``.
@@ -528,12 +572,14 @@ class Estimator(abc.ABC):
         provenance["record_dt"] = sorted({float(e.dt) for e in prepared.records})
         provenance["elapsed_s"] = time.perf_counter() - t0
         provenance["cpu_s"] = time.process_time() - c0
+        fs = result.parameters.get("fs")  # a discrete model's own rate [Hz]
         model = self.model_class(
             **result.parameters,
             input=prepared.input,
             input_range=prepared.input_range,
             range_policy=getattr(self, "range_policy", "error"),
             provenance=provenance,
+            sample_time=1.0 / float(fs) if fs else provenance["record_dt"][-1],
         )
         report("done")
         return model

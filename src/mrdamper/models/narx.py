@@ -323,7 +323,8 @@ class NARXModel(FittedModel):
         return to_record_rate(f * self.scales[0], self.fs, experiment)
 
     def predict(self, experiment: Experiment) -> np.ndarray:
-        """Free-run force [N]: the measured force sets only the first ``max_lag`` samples.
+        """Free-run force [N] from rest: the first ``max_lag`` forces are 0 N, as in the
+        per-sample step (:meth:`step` with ``f_initial = 0``); the measured force is never read.
 
         Raises
         ------
@@ -333,6 +334,7 @@ class NARXModel(FittedModel):
             If the record lacks the model's electrical input or is too short.
         """
         S = self.scaled_signals(experiment)
+        S[0, : self.max_lag] = 0.0  # from rest, as the step
         bound = self.force_bound / self.scales[0]
         bad = K.free_run(S, self.base, self.terms, self.theta, self.max_lag, bound)
         if bad >= 0:
@@ -348,8 +350,8 @@ class NARXModel(FittedModel):
         """The model as a per-sample step at its own rate ``fs`` (:mod:`mrdamper.models.step`).
 
         The state holds the last :attr:`max_lag` scaled samples of every signal; the first
-        ``max_lag`` forces are the initial conditions, ``f_initial`` [N] (the free run of
-        :meth:`predict` takes the measured ones instead). The input is used as given (no range
+        ``max_lag`` forces are the initial conditions, ``f_initial`` [N] (0 N, from rest, is the
+        free run of :meth:`predict`). The input is used as given (no range
         policy).
 
         Parameters

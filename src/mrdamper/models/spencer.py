@@ -70,9 +70,6 @@ __all__ = [
     "spencer1997",
 ]
 
-#: Largest damper velocity [m/s] the per-sample step resolves by default.
-STEP_VMAX = 1.5
-
 #: Parameter names in kernel order.
 PARAMETER_NAMES: tuple[str, ...] = _k.PARAM_NAMES
 
@@ -206,23 +203,30 @@ class SpencerModel(FittedModel):
 
     # ------------------------------------------------------------------ simulation
     def substeps_for(self, experiment: Experiment, electrical: np.ndarray | None = None) -> int:
-        """RK4 sub-steps per sampling interval used for ``experiment``.
+        """RK4 sub-steps per sampling interval used for ``experiment``: those of the step built
+        for its interval (:meth:`step`), one rule for both.
 
         With ``substeps == 0`` the count follows from an upper estimate of the fastest rate of
-        the linearised model over the record (filter rate, stiffness over damping, Bouc-Wen rate
-        ``n (|beta| + |gamma|) |z|**(n-1) |v|`` at the saturated ``z``), so that the product of
-        the sub-step and that rate stays below :data:`SUBSTEP_RATE_PRODUCT`.
+        the linearised model (filter rate, stiffness over damping, Bouc-Wen rate
+        ``n (|beta| + |gamma|) |z|**(n-1) |v|`` at the saturated ``z``) at the velocity bound
+        :meth:`~mrdamper.models.base.FittedModel.step_vmax` and over the identified input range
+        (widened to the record's input when it leaves it; a model without a training envelope
+        takes the record's input range), so that the product of the sub-step and that rate stays
+        below :data:`SUBSTEP_RATE_PRODUCT`.
         """
+        e = experiment.electrical(self.input) if electrical is None else electrical
+        emin, emax = float(np.min(e)), float(np.max(e))
+        if self.envelope is not None:
+            emin = min(emin, self.input_range[0])
+            emax = max(emax, self.input_range[1])
+        return self._substeps(experiment.dt, self.step_vmax(experiment.v), emin, emax)
+
+    def _substeps(self, dt: float, vmax: float, emin: float, emax: float) -> int:
+        """``substeps``, or the automatic count for an interval of ``dt`` [s], velocities up to
+        ``vmax`` [m/s] and the input in ``[emin, emax]``."""
         if self.substeps > 0:
             return self.substeps
-        e = experiment.electrical(self.input) if electrical is None else electrical
-        return auto_substeps(
-            self.parameter_vector(),
-            experiment.dt,
-            float(np.max(np.abs(experiment.v))),
-            float(np.min(e)),
-            float(np.max(e)),
-        )
+        return auto_substeps(self.parameter_vector(), dt, vmax, emin, emax)
 
     def predict(self, experiment: Experiment) -> np.ndarray:
         """Free-run force [N] of one record from its x, v and electrical input.
@@ -257,26 +261,28 @@ class SpencerModel(FittedModel):
         _raise_on_status(status, sample, nsub, experiment.name)
         return np.asarray(F)
 
-    def step(self, *, dt: float = 1e-3, vmax: float = STEP_VMAX) -> Step:
+    def step(self, *, dt: float = 1e-3, vmax: float | None = None) -> Step:
         """The model as a per-sample step (:mod:`mrdamper.models.step`).
 
         The state is ``(y, z, u)``, at rest ``(x[0], 0, e[0])``; ``advance`` integrates an
-        interval with classical RK4 sub-steps no longer than ``max_h``, chosen like
+        interval with classical RK4 sub-steps no longer than ``max_h``, chosen by the rule of
         :meth:`substeps_for` for an interval of ``dt`` [s] and velocities up to ``vmax`` [m/s]
-        over the identified input range (or ``dt / substeps`` when ``substeps`` is set). The
-        force reads the filtered input ``u``, a state: ``feedthrough`` is False.
+        over the identified input range (or ``dt / substeps`` when ``substeps`` is set): with
+        the default ``vmax`` and the record's interval it takes the sub-steps of :meth:`predict`
+        on every record within that velocity. The force reads the
+        filtered input ``u``, a state: ``feedthrough`` is False.
 
         Parameters
         ----------
         dt : float
             Reference interval [s] for the sub-step choice (default 1 ms).
-        vmax : float
-            Largest damper velocity [m/s] the step must resolve (default 1.5 m/s, beyond the
-            velocities of a car suspension).
+        vmax : float, optional
+            Largest damper velocity [m/s] the step must resolve (default
+            :meth:`~mrdamper.models.base.FittedModel.step_vmax`: 1.5 m/s, beyond the velocities
+            of a car suspension, or the training peak velocity when larger).
         """
-        nsub = self.substeps or auto_substeps(
-            self.parameter_vector(), dt, vmax, self.input_range[0], self.input_range[1]
-        )
+        vmax = self.step_vmax() if vmax is None else vmax
+        nsub = self._substeps(dt, vmax, self.input_range[0], self.input_range[1])
         form = _k.SpencerForm(np.ascontiguousarray(self.parameter_vector()), dt / nsub)
 
         def initial_state(x0: float, v0: float, e0: float) -> np.ndarray:

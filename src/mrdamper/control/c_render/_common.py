@@ -36,12 +36,14 @@ __all__ = [
     "Rendered",
     "arr1",
     "arr2",
-    "clip_note",
     "fmt_base",
+    "input_note",
     "inverse_settings",
     "lit",
     "quarter_car_defaults",
+    "rates_hint",
     "require_dt",
+    "sampled_step",
     "solver",
     "step_state",
 ]
@@ -140,8 +142,6 @@ def fmt_base(
         "P": ctx.P,
         "lo": lit(lo),
         "hi": lit(hi),
-        "in_lo": lit(model.input_range[0]),
-        "in_hi": lit(model.input_range[1]),
         "lam2": lit(lam * lam),
         "rate_step": lit(rate_step),
         "n_grid": ctx.n_grid,
@@ -149,10 +149,11 @@ def fmt_base(
     }
 
 
-def clip_note(model: Any) -> str:
-    """Header line of a family whose forward step clips the input and whose inverse is limited."""
+def input_note(model: Any) -> str:
+    """Header line of a family with an inverse: the forward step takes the input as given (as
+    the model's step: no range policy), the inverse is limited."""
     lo, hi = model_input_limits(model)
-    return f"The forward step clips the input to the identified range; inverse on [{lo!r}, {hi!r}]."
+    return f"The forward step takes the input as given (not clipped); inverse on [{lo!r}, {hi!r}]."
 
 
 def lit(x: float) -> str:
@@ -322,11 +323,32 @@ def require_dt(model: Any, ctx: Context) -> float:
     if ctx.dt is None:
         raise DataValidationError(
             "dt",
-            f"the {model.kind} C step integrates fixed intervals: give its sample time dt [s]",
+            f"the {model.kind} C step integrates fixed intervals and the model records no sample "
+            f"time it was fitted at{rates_hint(model)}: give its sample time dt [s] (--dt)",
         )
     if not (ctx.dt > 0 and ctx.dt < math.inf):
         raise DataValidationError("dt", f"expected a positive sample time [s], got {ctx.dt!r}")
     return float(ctx.dt)
+
+
+def rates_hint(model: Any) -> str:
+    """`` (training records at 1000, 200 Hz)`` when the model's provenance lists several training
+    intervals (``record_dt``), else ``""``."""
+    values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
+    if not isinstance(values, (list, tuple)) or len(values) < 2:
+        return ""
+    return " (training records at " + ", ".join(f"{1.0 / float(d):g}" for d in values) + " Hz)"
+
+
+def sampled_step(model: Any, ctx: Context) -> tuple[Any, float]:
+    """The model's step at the export's sample time (:func:`require_dt`) and the time [s].
+
+    The step's default velocity bound (:meth:`~mrdamper.models.base.FittedModel.step_vmax`):
+    the sub-steps of ``predict`` on every record at that rate within it, and the step the
+    quarter car runs, so the exported damper is the validated one.
+    """
+    dt = require_dt(model, ctx)
+    return model.step(dt=dt), dt
 
 
 def step_state(p: str, n: int, what: str) -> str:

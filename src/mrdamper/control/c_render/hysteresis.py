@@ -39,7 +39,7 @@ from mrdamper.control.c_render._common import (
     fmt_base,
     inverse_settings,
     lit,
-    require_dt,
+    sampled_step,
     step_state,
 )
 from mrdamper.models import kernels as HK
@@ -310,7 +310,11 @@ def render_hysteresis_form(
     if family in _ZDOT:
         pieces.append(_ZDOT[family].format(**fmt))
     pieces.append(_FORCE[family].format(**fmt))
-    z_loop = _Z_LOOP.format(**fmt) if family in _ZDOT else "    /* no z: a static map of u */"
+    z_loop = (
+        _Z_LOOP.format(**fmt)
+        if family in _ZDOT
+        else "    /* no z: a static map of u */\n    (void)v0;\n    (void)v1;"
+    )
     pieces.append(_STEP.format(z_loop=z_loop, **fmt))
     pieces.append(STEP_WRAPPER.format(p=p, P=P, n=2))
     if inverse is not None:
@@ -331,10 +335,10 @@ def render_hysteresis_form(
 
 
 def render_hysteresis(model: Any, ctx: Context) -> Rendered:
-    """C of ``model.step(dt=ctx.dt)`` (the sample time is required) and of its inverse
-    (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``; ``ctx.rate``)."""
-    dt = require_dt(model, ctx)
-    step = model.step(dt=dt)
+    """C of the model's step at ``ctx.dt`` (:func:`sampled_step`; the sample time is required)
+    and of its inverse (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``;
+    ``ctx.rate``)."""
+    step, dt = sampled_step(model, ctx)
     lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt)
     base = fmt_base(model, ctx, lam, rate_step)
     lo, hi = model.input_range

@@ -20,8 +20,8 @@ from mrdamper.control.c_render._common import (
     Rendered,
     arr1,
     arr2,
-    clip_note,
     fmt_base,
+    input_note,
     inverse_settings,
     lit,
     solver,
@@ -40,8 +40,6 @@ static const double {P}_ALPHA[{P}_N_M][{P}_N_P] = {alpha};
 static const double {P}_BETA[{P}_N_M][{P}_N_P] = {beta};
 static const double {P}_OFFSET = {offset};
 static const double {P}_STIFFNESS = {stiffness}; /* parallel stiffness k_x [N/m]: F += k_x x */
-static const double {P}_IN_LO = {in_lo}; /* identified input range: the forward step clips to it */
-static const double {P}_IN_HI = {in_hi};
 static const double {P}_LO = {lo}; /* lower input limit of the inverse, rest state */
 static const double {P}_LAG = {lag}; /* exp(-eta / fs), or -1: no drive lag */
 static const int {P}_MODE = {mode}; /* 0: u = v; 1: continuous, 2: literal reading of eq. 22 */
@@ -141,7 +139,7 @@ void {p}_init({p}_state *s)
 double {p}_step({p}_state *s, double x, double v, double input)
 {{
     double cf[{P}_N_P];
-    double w = {p}_dmin({p}_dmax(input, {P}_IN_LO), {P}_IN_HI);
+    double w = input; /* as given, as the model's step */
     double r = w, F;
     if ({P}_LAG >= 0.0 && s->k > 0) r = {P}_LAG * s->rho + (1.0 - {P}_LAG) * s->w;
     s->w = w;
@@ -431,7 +429,7 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
         state,
         body,
         has_inverse,
-        [clip_note(model), f"Sample rate: {model.fs!r} Hz (one call per model sample)."]
+        [input_note(model), f"Sample rate: {model.fs!r} Hz (one call per model sample)."]
         + ([f"Inverse: regularisation weight {lam!r}, grid {ctx.n_grid}."] if has_inverse else []),
         sample_time=dt,
         step_n=N_HEAD + 2 * n_m,

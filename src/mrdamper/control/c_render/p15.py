@@ -24,7 +24,7 @@ from mrdamper.control.c_render._common import (
     Rendered,
     arr2,
     lit,
-    require_dt,
+    sampled_step,
     step_state,
 )
 from mrdamper.models import kernels as PK
@@ -299,6 +299,7 @@ def render_p15_form(form: PK.P15Form, dt: float, ctx: Context) -> Rendered:
 
 
 def render_p15(model: Any, ctx: Context) -> Rendered:
-    """C of ``model.step()``; ``ctx.dt`` [s] sets the sample time of ``<name>_step``."""
-    dt = require_dt(model, ctx)
-    return render_p15_form(model.step(dt=dt).form, dt, ctx)
+    """C of the model's step at ``ctx.dt`` [s] (:func:`sampled_step`), the sample time of
+    ``<name>_step``."""
+    step, dt = sampled_step(model, ctx)
+    return render_p15_form(step.form, dt, ctx)

@@ -20,7 +20,7 @@ from mrdamper.control.c_render._common import (
     Context,
     Rendered,
     lit,
-    require_dt,
+    sampled_step,
     step_state,
 )
 from mrdamper.models import kernels as SK
@@ -169,6 +169,7 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
 
 
 def render_spencer(model: Any, ctx: Context) -> Rendered:
-    """C of ``model.step(dt=ctx.dt)`` (the sample time is required)."""
-    dt = require_dt(model, ctx)
-    return render_spencer_form(model.step(dt=dt).form, dt, ctx)
+    """C of the model's step at ``ctx.dt`` (:func:`sampled_step`; the sample time is
+    required)."""
+    step, dt = sampled_step(model, ctx)
+    return render_spencer_form(step.form, dt, ctx)

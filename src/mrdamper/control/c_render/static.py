@@ -11,8 +11,8 @@ from mrdamper.control.c_render._common import (
     Context,
     Rendered,
     arr1,
-    clip_note,
     fmt_base,
+    input_note,
     inverse_settings,
     lit,
     quarter_car_defaults,
@@ -28,8 +28,6 @@ static const int {P}_COMP[{P}_N_THETA] = {comp};
 static const int {P}_POWER[{P}_N_THETA] = {power};
 static const double {P}_THETA[{P}_N_THETA] = {theta};
 static const double {P}_F0 = {f0};
-static const double {P}_IN_LO = {in_lo}; /* identified input range: the forward step clips to it */
-static const double {P}_IN_HI = {in_hi};
 static const double {P}_LO = {lo}; /* input limits of the inverse */
 static const double {P}_HI = {hi};
 
@@ -59,7 +57,7 @@ void {p}_init({p}_state *s)
 double {p}_step({p}_state *s, double x, double v, double input)
 {{
     (void)s;
-    return {p}_force(x, v, {p}_dmin({p}_dmax(input, {P}_IN_LO), {P}_IN_HI));
+    return {p}_force(x, v, input); /* the input as given, as the model's step */
 }}
 
 double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
@@ -175,7 +173,7 @@ def render_static(model: Any, ctx: Context) -> Rendered:
         body,
         True,
         [
-            clip_note(model),
+            input_note(model),
             "Sample rate: any (static map).",
             f"Inverse: regularisation weight {lam!r}, grid {ctx.n_grid}.",
         ],
