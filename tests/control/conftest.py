@@ -59,15 +59,12 @@ class _LazyFits(dict):  # type: ignore[type-arg]
         self._training: list[Any] | None = None
 
     def __missing__(self, kind: str) -> Any:
-        from tests.models.test_conformance import LEVELS, _fit, _record
+        from mrdamper.conformance import fit_quietly, training_records
+        from tests.models.test_conformance import _estimator
 
         if self._training is None:
-            self._training = [
-                _record(a, f, (lev,), f"{name}{lev}", c)
-                for lev in LEVELS
-                for a, f, name, c in ((0.01, 1.0, "slow", 2.0), (0.004, 4.0, "fast", 4.0))
-            ]
-        model = _fit(kind, self._training)
+            self._training = training_records()
+        model = fit_quietly(_estimator(kind), self._training)
         self[kind] = model
         return model
 
@@ -81,9 +78,9 @@ def kind_models() -> dict[str, Any]:
 @pytest.fixture(scope="session")
 def kind_probe() -> Any:
     """A short record (500 Hz, 1.5 s) with a stepped current inside the training range."""
-    from tests.models.test_conformance import _record
+    from mrdamper.conformance import synthetic_record
 
-    return _record(0.008, 2.0, (0.3, 0.7, 0.4, 0.6), "probe", 3.0)
+    return synthetic_record(0.008, 2.0, (0.3, 0.7, 0.4, 0.6), "probe", 3.0)
 
 
 def toy_lti() -> Any:
