@@ -58,7 +58,7 @@ def test_folder_replace_and_merge(tmp_path) -> None:
     write_folder(out, _build({"a.txt": "2"}), force=True, mode="merge")
     files = {p.name: p.read_text() for p in out.iterdir() if p.name != MARK_NAME}
     assert files == {"a.txt": "2", "b.txt": "1"}
-    assert json.loads((out / MARK_NAME).read_text())["entries"] == ["a.txt", "b.txt"]
+    assert sorted(json.loads((out / MARK_NAME).read_text())["entries"]) == ["a.txt", "b.txt"]
     write_folder(out, _build({"c.txt": "3"}), force=True, mode="replace")
     assert sorted(p.name for p in out.iterdir()) == [MARK_NAME, "c.txt"]
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary left

@@ -5,17 +5,28 @@ Every temporary a writer makes beside its target carries the id of the process t
 A process that ends normally, fails, is interrupted (Ctrl-C) or terminated (SIGTERM) removes its
 own; one killed outright (SIGKILL, power loss) cannot. :func:`remove_stale` removes, before a new
 write of the same target, the temporaries of that target whose process no longer runs, so a
-rerun never leaves a hidden partial folder behind. Temporaries of a running process (another
-mrdamper writing the same target) are left alone.
+rerun never leaves a hidden partial folder behind. A folder is a temporary only when it carries
+the temporary mark of a write of that target by that process (:mod:`mrdamper._io.mark`): a folder
+that merely has such a name is the user's and is left alone, as are the temporaries of a running
+process (another mrdamper writing the same target).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from pathlib import Path
 
+from mrdamper._io.mark import read_temporary_mark
+
 __all__ = ["missing_parents", "owner_alive", "remove_created", "remove_stale", "temp_prefix"]
+
+
+#: A temporary's name: ``.NAME.partial-<pid>-<random>`` / ``.NAME.old-<pid>-<random>`` (folders,
+#: random part by :func:`tempfile.mkdtemp`) or ``.NAME.<pid>-<12 hex>.part`` (files).
+_TEMP_FOLDER = re.compile(r"\.(?P<name>.+)\.(?P<tag>partial-|old-)(?P<pid>\d+)-[A-Za-z0-9_]+")
+_TEMP_FILE = re.compile(r"\.(?P<name>.+)\.(?P<pid>\d+)-[0-9a-f]{12}\.part")
 
 
 def temp_prefix(target: Path, tag: str) -> str:
@@ -41,6 +52,12 @@ def owner_alive(pid: int) -> bool:
 def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", "")) -> list[Path]:
     """Remove the temporaries of ``target`` left by processes that no longer run.
 
+    A folder is removed only when it carries the temporary mark of a write of ``target``
+    (:func:`mrdamper._io.mark.read_temporary_mark`: its own name, the target's path and the id of
+    the process, the one in its name) and that process is gone; a ``.part`` file only when its
+    name is exactly the form this module makes (``.NAME.<pid>-<12 hex digits>.part``) and it is a
+    regular file. Anything else, whatever its name, is left alone.
+
     Parameters
     ----------
     target : Path
@@ -60,31 +77,29 @@ def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", ""))
         entries = list(os.scandir(parent))
     except OSError:
         return removed
-    base = f".{target.name}."
     for entry in entries:
-        name = entry.name
-        if not name.startswith(base):
-            continue
-        rest = name[len(base) :]
-        for tag in tags:
-            if not rest.startswith(tag):
-                continue
-            pid_text = rest[len(tag) :].split("-", 1)[0]
-            if not pid_text.isdigit() or "-" not in rest[len(tag) :]:
-                continue
-            if tag == "" and not name.endswith(".part"):
-                continue
-            if owner_alive(int(pid_text)):
-                break
-            path = Path(entry.path)
-            if entry.is_dir(follow_symlinks=False):
+        path = Path(entry.path)
+        m = _TEMP_FOLDER.fullmatch(entry.name)
+        if m is not None and m["name"] == target.name and m["tag"] in tags:
+            pid = int(m["pid"])
+            if (
+                entry.is_dir(follow_symlinks=False)
+                and read_temporary_mark(path, target) == pid
+                and not owner_alive(pid)
+            ):
                 shutil.rmtree(path, ignore_errors=True)
-            elif tag == "":
-                path.unlink(missing_ok=True)
-            else:
-                break
+                removed.append(path)
+            continue
+        m = _TEMP_FILE.fullmatch(entry.name)
+        if (
+            m is not None
+            and m["name"] == target.name
+            and "" in tags
+            and entry.is_file(follow_symlinks=False)
+            and not owner_alive(int(m["pid"]))
+        ):
+            path.unlink(missing_ok=True)
             removed.append(path)
-            break
     return removed
 
 
