@@ -19,6 +19,7 @@ from typing import Annotated, Any
 import typer
 
 from mrdamper._io import csv_kind
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
@@ -31,6 +32,7 @@ INVERSE_CSV = csv_kind(
 
 
 def export(
+    ctx: typer.Context,
     model_file: Annotated[
         Path, typer.Argument(help="LPV or LTI model file written by 'mrdamper fit'.")
     ],
@@ -90,8 +92,7 @@ def export(
         fmt = {".json": "json", ".fmu": "fmu"}.get(out.suffix.lower(), "mat")
     if fmt not in ("mat", "json", "c", "fmu"):
         raise DataValidationError("--format", f"expected 'mat', 'json', 'c' or 'fmu', got {fmt!r}")
-    if inverse and fmt != "fmu":
-        raise DataValidationError("--inverse", "only with --format fmu (the C export has both)")
+    refuse_unused(ctx, "export", {f"--format {fmt}"})
     if fmt == "fmu":
         from mrdamper.control.fmu import FMU_FILE, export_fmu
 
@@ -126,6 +127,7 @@ def export(
 
 
 def inverse(
+    ctx: typer.Context,
     model_file: Annotated[
         Path,
         typer.Argument(help="Model file (lpv, sp1..sp4, bingham, tanh, boucwen, dahl, lugre)."),
@@ -163,6 +165,7 @@ def inverse(
     from mrdamper.control.inverse import inverse_current
     from mrdamper.models.registry import load_model
 
+    refuse_unused(ctx, "inverse", {f"--method {method}"})
     check_writable(out, force, inputs=[model_file, data], kind=INVERSE_CSV)
     m = load_model(model_file)
     if data.is_dir():

@@ -17,6 +17,7 @@ from typing import Annotated
 
 import typer
 
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.errors import DataValidationError
 
 __all__ = ["register", "rig_app"]
@@ -34,6 +35,7 @@ def _damper(spec: str | None):  # type: ignore[no-untyped-def]
 
 @rig_app.command("doe")
 def doe(
+    ctx: typer.Context,
     out: Annotated[
         Path, typer.Option("--out", help="Output folder (must be absent or empty unless --force).")
     ],
@@ -95,8 +97,7 @@ def doe(
         raise DataValidationError(
             "--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}"
         )
-    if loop_model is not None and extension != "control":
-        raise DataValidationError("--loop-model", "expected only with --extension control")
+    refuse_unused(ctx, "rig doe", {f"--extension {extension}"})
     inputs = [Path(damper)] if damper and Path(damper).exists() else []
     check_output(
         out, force=force, folder=True, inputs=[*inputs, *([loop_model] if loop_model else [])]

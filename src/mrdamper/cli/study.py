@@ -13,6 +13,7 @@ from typing import Any
 
 import typer
 
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError, SchemaError
 
@@ -141,6 +142,7 @@ def print_summary(res: Any, out: Path | None = None) -> None:
 
 
 def study(
+    ctx: typer.Context,
     data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),
     out: Path = typer.Option(
         ..., "--out", help="Output folder (must not exist or be empty, unless --force)."
@@ -201,8 +203,7 @@ def study(
     """
     from mrdamper.study import choose_protocol, run_study, study_records
 
-    if workers is not None and scheduler is not None:
-        raise DataValidationError("workers", "give either --workers or --scheduler, not both")
+    refuse_unused(ctx, "study", _modes(no_control=no_control, scheduler=scheduler))
     if scheduler is not None:
         from mrdamper.study.executor import check_scheduler_address
 
@@ -226,6 +227,11 @@ def study(
         control=control,
     )
     write_or_fail(res, out, force)
+
+
+def _modes(*, no_control: bool, scheduler: str | None = None) -> set[str]:
+    """The modes of ``study`` / ``demo`` the options given select (:mod:`mrdamper.cli._modes`)."""
+    return {m for m, on in (("--no-control", no_control), ("--scheduler", scheduler)) if on}
 
 
 def control_settings(
@@ -265,6 +271,7 @@ def control_settings(
 
 
 def demo(
+    ctx: typer.Context,
     out: Path = typer.Option(
         DEMO_OUT,
         "--out",
@@ -311,6 +318,7 @@ def demo(
     from mrdamper import compiled
     from mrdamper.study import doe_protocol, run_study
 
+    refuse_unused(ctx, "demo", _modes(no_control=no_control))
     _check_out(out, force)
     _headless()
     kinds = _models(models)

@@ -33,7 +33,7 @@ from mrdamper.control.quarter_car import (
     QuarterCarResult,
     iso_road,
 )
-from mrdamper.control.quarter_car_study import default_rate
+from mrdamper.control.quarter_car_study import _check_authority, default_rate
 from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
 from mrdamper.models.envelope import ENVELOPE_TOLERANCE, envelope_of, excursions
 
@@ -45,6 +45,7 @@ __all__ = [
     "checked_run",
     "closed_loop_fidelity",
     "discrete_rate",
+    "failed_runs",
     "input_unit",
     "loop_metrics",
     "oscillation",
@@ -292,6 +293,32 @@ def _envelope_note(model: Any, r: QuarterCarResult) -> dict[str, float] | None:
     return excursions(trained, envelope_of([x], [v], [r.i], dt=[1.0 / r.fs]))
 
 
+def failed_runs(res: FidelityResult) -> int:
+    """Number of runs of ``res`` that diverged or were refused.
+
+    Raises
+    ------
+    DataValidationError
+        Every run of one side failed: the model (``"model"``, predicted side) or the plant
+        (``"plant"``, achieved side) cannot drive the quarter car at all (unstable, or its step
+        fails); one line with the first run's reason.
+    """
+    for side, who, kind in (
+        ("predicted", "model", res.model_kind),
+        ("achieved", "plant", res.plant_kind),
+    ):
+        runs = [r for r in res.runs if r.get("side") == side]
+        bad = [r for r in runs if "refused" in r]
+        if runs and len(bad) == len(runs):
+            raise DataValidationError(
+                who,
+                f"every loop with the {kind} {who} as damper failed ({len(bad)} runs; first: "
+                f"{bad[0]['refused']}); it cannot drive the quarter car (is it stable over its "
+                "input range?)",
+            )
+    return sum("refused" in r for r in res.runs)
+
+
 def closed_loop_fidelity(
     model: Any,
     plant: Any,
@@ -336,6 +363,11 @@ def closed_loop_fidelity(
     """
     plant_m = resolve_plant(plant)
     check_pair(model, plant_m)
+    _check_authority(model)  # one level trained: every controller would give the same numbers
+    try:
+        _check_authority(plant_m)
+    except DataValidationError as one_level:
+        raise DataValidationError("plant", str(one_level).split(": ", 1)[1]) from None
     car = QuarterCar() if car is None else car
     for sp in speeds:
         if not (np.isfinite(sp) and sp > 0):
