@@ -104,10 +104,9 @@ def doe(
     )
     from mrdamper.control.doe_extension import control_extension
     from mrdamper.data import ExperimentSet
-    from mrdamper.models.registry import load_model
     from mrdamper.rig.doe_control import CONTROL_EXTENSION, STROKE_TEST
 
-    first = None if loop_model is None else load_model(loop_model)
+    first = None if loop_model is None else _loop_model(loop_model)
     n_ext = 2 * len(CONTROL_EXTENSION) + len(STROKE_TEST) if extension == "control" else 0
     n_rec = sum(s.replicates for s in TABLE_II) + n_ext
     written: list[int] = []
@@ -123,9 +122,14 @@ def doe(
             progress=lambda _rec: bar.advance(gen),
         )
         if n_ext:
-            ext = control_extension(
-                seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper), model=first
-            )
+            try:
+                ext = control_extension(
+                    seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper), model=first
+                )
+            except DataValidationError as exc:
+                if first is None or exc.field not in ("model", "MODEL"):
+                    raise
+                raise DataValidationError("--loop-model", str(exc).split(": ", 1)[1]) from None
             for _ in range(n_ext):
                 bar.advance(gen)
             records = ExperimentSet([*records, *ext], name=records.name + "+control")
@@ -145,6 +149,20 @@ def doe(
     )
     typer.echo(f"wrote {len(written)} {format} files, {sum(written) / 1e6:.1f} MB, to {out}")
     typer.echo(f"manifest: {manifest}")
+
+
+def _loop_model(path: Path):  # type: ignore[no-untyped-def]
+    """The ``--loop-model``, refused at once when trained at one level (its loop never switches
+    the current)."""
+    from mrdamper.control.quarter_car_study import _check_authority
+    from mrdamper.models.registry import load_model
+
+    model = load_model(path)
+    try:
+        _check_authority(model)
+    except DataValidationError as exc:
+        raise DataValidationError("--loop-model", str(exc).split(": ", 1)[1]) from None
+    return model
 
 
 class _NoBar:

@@ -26,7 +26,7 @@ import numpy as np
 
 from mrdamper.control.car import QuarterCar, iso_road
 from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.quarter_car_study import default_rate
+from mrdamper.control.quarter_car_study import _check_authority, default_rate
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
@@ -99,7 +99,8 @@ def control_extension(
         A configured rig instead of ``fs`` and ``damper``.
     model : FittedModel, optional
         The first model whose loop gives the motions (default: the rig's damper itself). Its
-        input must be the rig's (current or voltage).
+        input must be the rig's (current or voltage), and it must have been identified at more
+        than one level of it (else its loop never switches the input).
     rows : tuple of ControlRow
         The loop runs (default :data:`~mrdamper.rig.doe_control.CONTROL_EXTENSION`).
     car : QuarterCar, optional
@@ -121,6 +122,8 @@ def control_extension(
     scale = check_positive("scale", scale, "-")
     rig = resolve_rig(rig, damper, fs)
     loop_model = rig.model if model is None else model
+    if model is not None:  # one level trained: the loop's current would not switch
+        _check_authority(model)
     if str(getattr(loop_model, "input", rig.model.input)) != str(rig.model.input):
         raise DataValidationError(
             "model",
