@@ -18,7 +18,7 @@ from typing import Annotated
 import typer
 
 from mrdamper.cli._modes import refuse_unused
-from mrdamper.errors import DataValidationError
+from mrdamper.errors import DataValidationError, SimulationDivergedError
 
 __all__ = ["register", "rig_app"]
 
@@ -126,10 +126,8 @@ def doe(
                 ext = control_extension(
                     seed=seed + 1, scale=scale, fs=fs, damper=_damper(damper), model=first
                 )
-            except DataValidationError as exc:
-                if first is None or exc.field not in ("model", "MODEL"):
-                    raise
-                raise DataValidationError("--loop-model", str(exc).split(": ", 1)[1]) from None
+            except (DataValidationError, SimulationDivergedError) as exc:
+                _loop_model_failed(exc, loop_model)
             for _ in range(n_ext):
                 bar.advance(gen)
             records = ExperimentSet([*records, *ext], name=records.name + "+control")
@@ -163,6 +161,17 @@ def _loop_model(path: Path):  # type: ignore[no-untyped-def]
     except DataValidationError as exc:
         raise DataValidationError("--loop-model", str(exc).split(": ", 1)[1]) from None
     return model
+
+
+def _loop_model_failed(exc: Exception, path: Path | None) -> None:
+    """Re-raise a failure of the control extension, naming ``--loop-model`` when its loop (the
+    model given) failed rather than another setting."""
+    if path is None or getattr(exc, "field", "model") not in ("model", "MODEL"):
+        raise exc
+    text = str(exc).split(": ", 1)[1] if isinstance(exc, DataValidationError) else str(exc)
+    raise DataValidationError(
+        "--loop-model", f"the quarter-car loop of {path.name} failed: {text}"
+    ) from None
 
 
 class _NoBar:

@@ -19,7 +19,6 @@ is checked against the Python step by :func:`mrdamper.control.fmu.run_fmu`.
 from __future__ import annotations
 
 import ctypes
-import keyword
 import os
 import shutil
 import struct
@@ -68,14 +67,55 @@ def _read(path: Path) -> tuple[str, dict[str, str], bytes]:
     return ident, dict(ann.attrib), binary
 
 
+#: Reserved words of C99 (not identifiers).
+_C_KEYWORDS = frozenset(
+    [
+        "auto",
+        "break",
+        "case",
+        "char",
+        "const",
+        "continue",
+        "default",
+        "do",
+        "double",
+        "else",
+        "enum",
+        "extern",
+        "float",
+        "for",
+        "goto",
+        "if",
+        "inline",
+        "int",
+        "long",
+        "register",
+        "restrict",
+        "return",
+        "short",
+        "signed",
+        "sizeof",
+        "static",
+        "struct",
+        "switch",
+        "typedef",
+        "union",
+        "unsigned",
+        "void",
+        "volatile",
+        "while",
+        "_Bool",
+        "_Complex",
+        "_Imaginary",
+    ]
+)
+
+
 def _identifier(ident: str, path: Path) -> str:
     """``modelIdentifier`` checked against FMI 2.0's rule (a C identifier: it names the binary
     ``binaries/linux64/<id>.so`` and prefixes its functions), so it can never name a path."""
     if not (
-        ident.isascii()
-        and ident.isidentifier()
-        and not keyword.iskeyword(ident)
-        and len(ident) <= 200
+        ident.isascii() and ident.isidentifier() and ident not in _C_KEYWORDS and len(ident) <= 200
     ):
         raise DataValidationError(
             "--plant",
@@ -181,7 +221,12 @@ class FMUPlant:
         tmp = Path(tempfile.mkdtemp(prefix="mrdamper-fmu-plant-"))
         self._finalizer = weakref.finalize(self, shutil.rmtree, tmp, True)
         so = _private_binary(tmp, ident, binary)
-        self._lib = ctypes.CDLL(str(so))
+        try:
+            self._lib = ctypes.CDLL(str(so))
+        except OSError as exc:
+            raise DataValidationError(
+                "--plant", f"{self.path.name}: its linux64 binary cannot be loaded ({exc})"
+            ) from None
         self._init, cforce, cadvance, self._n = _functions(self._lib, ident, self.path)
         self._form = FMUForm(cforce, cadvance)
 
