@@ -243,6 +243,10 @@ def test_a_fit_that_explains_nothing_warns(tmp_path, capsys) -> None:
     assert "warning: bingham: the fit explains almost nothing of its training force" in err
     saved = json.loads((tmp_path / "m.json").read_text())["provenance"]["training_fit"]
     assert saved["training_esr"] >= 0.9
+    # every command that uses the model says so again, on standard error
+    _code, out, err = _run(["score", str(tmp_path / "m.json"), str(data / "q0.csv")], capsys)
+    assert "warning: m.json: bingham: the fit explains almost nothing" in err
+    assert "warning" not in out
     with warnings.catch_warnings():  # a fit on moving records says nothing of the kind
         warnings.simplefilter("error")
         from mrdamper.models import get_estimator
@@ -261,6 +265,10 @@ def test_an_unstable_plant_is_an_error_and_plant_warnings_go_to_stderr(tmp_path,
     )
     assert line.startswith("error: plant: every loop with the lpv plant as damper failed")
     assert not (tmp_path / "u").exists()
+    tune = ["quartercar", str(bad), "--tune", "--roads", "B", "--duration", "2"]
+    line = _one_line_error(*_run([*tune, "--out", str(tmp_path / "t")], capsys)[::2])
+    assert line.startswith("error: model: every loop with the lpv model as damper failed")
+    assert not (tmp_path / "t").exists()
     code, out, err = _run([*base, "--plant", "rig", "--out", str(tmp_path / "ok")], capsys)
     assert code == 0 and "warning: the sp3 model carries no training envelope" in err
     assert "warning" not in out

@@ -286,7 +286,7 @@ def _tune(
     car: Any,
 ) -> None:
     from mrdamper._io import check_output, check_writable, write_files
-    from mrdamper.control.fidelity import input_unit
+    from mrdamper.control.fidelity import check_sides, input_unit
     from mrdamper.control.fronts import gain_fronts
     from mrdamper.models.registry import load_model
 
@@ -303,6 +303,12 @@ def _tune(
         duration=duration,
         seed=seed,
         car=car,
+    )
+    check_sides(  # a side whose every point failed: an error, nothing written
+        res.rows,
+        lambda r: None if r.get("status") == "ok" else str(r.get("status")),
+        res.model_kind,
+        res.plant_kind,
     )
     text = res.table().to_csv(index=False, float_format="%.6g")
     files: dict[str, tuple[FileKind, Callable[[Path], object]]] = {

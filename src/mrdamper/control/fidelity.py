@@ -17,7 +17,7 @@ sampled-loop oscillation concentrates it there) and, from the envelope the model
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -42,6 +42,7 @@ __all__ = [
     "METRICS",
     "FidelityResult",
     "NotConvergedError",
+    "check_sides",
     "checked_run",
     "closed_loop_fidelity",
     "discrete_rate",
@@ -294,7 +295,17 @@ def _envelope_note(model: Any, r: QuarterCarResult) -> dict[str, float] | None:
 
 
 def failed_runs(res: FidelityResult) -> int:
-    """Number of runs of ``res`` that diverged or were refused.
+    """Number of runs of ``res`` that diverged or were refused (:func:`check_sides`)."""
+    return check_sides(res.runs, lambda r: r.get("refused"), res.model_kind, res.plant_kind)
+
+
+def check_sides(
+    rows: Sequence[Mapping[str, Any]],
+    reason: Callable[[Mapping[str, Any]], str | None],
+    model_kind: str,
+    plant_kind: str | None,
+) -> int:
+    """Number of ``rows`` (runs with a ``side``) that failed, by ``reason(row)`` (None: ran).
 
     Raises
     ------
@@ -303,20 +314,18 @@ def failed_runs(res: FidelityResult) -> int:
         (``"plant"``, achieved side) cannot drive the quarter car at all (unstable, or its step
         fails); one line with the first run's reason.
     """
-    for side, who, kind in (
-        ("predicted", "model", res.model_kind),
-        ("achieved", "plant", res.plant_kind),
-    ):
-        runs = [r for r in res.runs if r.get("side") == side]
-        bad = [r for r in runs if "refused" in r]
-        if runs and len(bad) == len(runs):
+    failed = 0
+    for side, who, kind in (("predicted", "model", model_kind), ("achieved", "plant", plant_kind)):
+        why = [reason(r) for r in rows if r.get("side") == side]
+        bad = [w for w in why if w]
+        failed += len(bad)
+        if why and len(bad) == len(why):
             raise DataValidationError(
                 who,
                 f"every loop with the {kind} {who} as damper failed ({len(bad)} runs; first: "
-                f"{bad[0]['refused']}); it cannot drive the quarter car (is it stable over its "
-                "input range?)",
+                f"{bad[0]}); it cannot drive the quarter car (is it stable over its input range?)",
             )
-    return sum("refused" in r for r in res.runs)
+    return failed
 
 
 def closed_loop_fidelity(

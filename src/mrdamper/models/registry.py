@@ -170,6 +170,9 @@ def load_model(path: str | Path) -> FittedModel:
     ----------
     path : str or Path
         Model file (JSON).
+
+    A model whose fit explained nothing of its training force (provenance ``training_fit``,
+    :mod:`mrdamper.models.fit_check`) is loaded with that note as a warning.
     """
     p = Path(path)
     if os.path.lexists(p) and not p.exists():
@@ -183,6 +186,12 @@ def load_model(path: str | Path) -> FittedModel:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SchemaError(f"{p}: not valid JSON ({exc})") from None
     try:
-        return model_from_dict(data)
+        model = model_from_dict(data)
     except SchemaError as exc:
         raise SchemaError(f"{p}: {exc}") from None
+    check = dict(model.provenance or {}).get("training_fit")
+    if isinstance(check, dict) and isinstance(check.get("note"), str):
+        from mrdamper._warn import warn_user
+
+        warn_user(f"{p.name}: {check['note']}")  # every command that uses it says so
+    return model
