@@ -17,6 +17,7 @@ The commands run in-process on tiny synthetic records and models (helpers of
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import shutil
@@ -32,22 +33,15 @@ import pytest
 from mrdamper._io import MARK_NAME, atomic_write_text, check_output, write_files, write_folder
 from mrdamper.data import Experiment, write_csv
 from mrdamper.errors import DataValidationError, OutputError
-from mrdamper.models.lpv.model import LPVModel
 from mrdamper.models.semiphenomenological import SP3Model
-from tests.test_bad_inputs import FS, _folder, _one_line_error, _run, _sine
+from tests.test_bad_inputs import FS, _folder, _lpv_model, _one_line_error, _run, _sine
 from tests.test_failure_catalogue import SP3
 
 #: SP3 trained at one current: its force does not depend on the current.
 ONE_LEVEL = SP3Model(S=SP3.S, f0=SP3.f0, input_range=(0.5, 0.5))
 #: An LPV model whose frozen poles leave the unit circle (largest modulus 1.85).
-UNSTABLE = LPVModel(
-    alpha=np.array([[-2.5, 0.1, -0.02], [1.2, -0.05, 0.01]]),
-    beta=np.array([[300.0, 500.0, -40.0], [-200.0, -300.0, 30.0]]),
-    offset=5.0,
-    fs=FS,
-    input_signal="v",
-    rho_range=(0.0, 1.0),
-    input_range=(0.0, 1.0),
+UNSTABLE = dataclasses.replace(
+    _lpv_model(), alpha=np.array([[-2.5, 0.1, -0.02], [1.2, -0.05, 0.01]])
 )
 
 
@@ -201,7 +195,7 @@ def test_a_model_trained_at_one_current_is_refused_with_plant_and_as_loop_model(
     data = _folder(tmp_path / "d")
     args = ["inverse", str(one), str(data / "rec_a.csv"), "--out", str(tmp_path / "i.csv")]
     line = _one_line_error(*_run(args, capsys)[::2])
-    assert "the sp3 model was fitted at one i level (0.5 A)" in line
+    assert "model: the sp3 model was identified at one i level (0.5 A)" in line
     assert not out.exists() and not (tmp_path / "i.csv").exists()
 
 

@@ -152,14 +152,11 @@ def doe(
 def _loop_model(path: Path):  # type: ignore[no-untyped-def]
     """The ``--loop-model``, refused at once when trained at one level (its loop never switches
     the current)."""
-    from mrdamper.control.quarter_car_study import _check_authority
+    from mrdamper.models.levels import check_levels
     from mrdamper.models.registry import load_model
 
     model = load_model(path)
-    try:
-        _check_authority(model)
-    except DataValidationError as exc:
-        raise DataValidationError("--loop-model", str(exc).split(": ", 1)[1]) from None
+    check_levels(model, "its loop never switches the current", field="--loop-model")
     return model
 
 

@@ -26,10 +26,11 @@ import numpy as np
 
 from mrdamper.control.car import QuarterCar, iso_road
 from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.quarter_car_study import _check_authority, default_rate
+from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.data import ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
+from mrdamper.models.levels import check_levels
 from mrdamper.rig.doe import current_range, record_seeds, resolve_rig
 from mrdamper.rig.doe_control import (
     CONTROL_EXTENSION,
@@ -122,8 +123,8 @@ def control_extension(
     scale = check_positive("scale", scale, "-")
     rig = resolve_rig(rig, damper, fs)
     loop_model = rig.model if model is None else model
-    if model is not None:  # one level trained: the loop's current would not switch
-        _check_authority(model)
+    if model is not None:
+        check_levels(model, "its loop never switches the input")
     if str(getattr(loop_model, "input", rig.model.input)) != str(rig.model.input):
         raise DataValidationError(
             "model",

@@ -33,9 +33,10 @@ from mrdamper.control.quarter_car import (
     QuarterCarResult,
     iso_road,
 )
-from mrdamper.control.quarter_car_study import _check_authority, default_rate
+from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
 from mrdamper.models.envelope import ENVELOPE_TOLERANCE, envelope_of, excursions
+from mrdamper.models.levels import check_levels
 
 __all__ = [
     "MAX_SUBSTEPS",
@@ -372,11 +373,9 @@ def closed_loop_fidelity(
     """
     plant_m = resolve_plant(plant)
     check_pair(model, plant_m)
-    _check_authority(model)  # one level trained: every controller would give the same numbers
-    try:
-        _check_authority(plant_m)
-    except DataValidationError as one_level:
-        raise DataValidationError("plant", str(one_level).split(": ", 1)[1]) from None
+    same = "every controller gives the same numbers"  # one level trained: no authority
+    check_levels(model, same)
+    check_levels(plant_m, same, field="plant")
     car = QuarterCar() if car is None else car
     for sp in speeds:
         if not (np.isfinite(sp) and sp > 0):

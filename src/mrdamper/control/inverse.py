@@ -98,6 +98,7 @@ from mrdamper.control._inverse_setup import (
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
+from mrdamper.models.levels import check_levels
 from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel, scheduled_form
 
 __all__ = [
@@ -300,16 +301,7 @@ def _range(model: FittedModel, i_range: Any) -> tuple[float, float]:
                 f"i_range: {(lo, hi)} leaves the range the {model.kind} model was identified on "
                 f"{(lo_m, hi_m)}; the inverse only uses inputs inside it"
             )
-    level = [float(b) for b in model.input_range]
-    if not level[1] > level[0]:  # trained at one level
-        source = getattr(model, "input", "i")
-        unit = "A" if source == "i" else "V"
-        raise DataValidationError(
-            "model",
-            f"the {model.kind} model was fitted at one {source} level ({level[0]:g} {unit}): its "
-            f"force does not depend on {source}, so no {source} can be chosen to give a force; "
-            "identify it on records at two or more levels",
-        )
+    check_levels(model, f"no {getattr(model, 'input', 'i')} can be chosen to give a force")
     if not hi > lo:
         raise DataValidationError("i_range", f"expected a non-empty input range, got {(lo, hi)}")
     return lo, hi
