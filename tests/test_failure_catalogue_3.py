@@ -281,3 +281,9 @@ def test_an_absurd_sample_is_one_line_without_numpy_warnings(tmp_path, capsys) -
         line = _one_line_error(*_run(args, capsys)[::2])
         assert "x: sample 100 of " in line and "absurd.csv is 1e+300 m, beyond any damper" in line
         assert not re.search(r"\d{20}", line)  # no 300-digit factor
+    with warnings.catch_warnings(record=True) as caught:  # from Python: no reader in between
+        warnings.simplefilter("always")
+        with pytest.raises(DataValidationError, match="beyond any force that can be scored"):
+            SP3.score(rec.replace(x=x))
+    assert all(not re.search(r"\d{20}", str(w.message)) for w in caught)
+    assert not [w for w in caught if "overflow" in str(w.message)]
