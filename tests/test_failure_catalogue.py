@@ -326,8 +326,8 @@ def test_rerun_removes_partial_folders_of_dead_runs_only(tmp_path, capsys) -> No
     (dead / "models").mkdir(parents=True)
     (dead / "results.csv").write_text("half")
     dead_old = _killed_run_folder(tmp_path, "o", "old-", _dead_pid())
-    dead_file = tmp_path / f".o.{_dead_pid()}-abcdef012345.part"
-    dead_file.write_text("half")
+    dead_file = _killed_run_folder(tmp_path, "o", "partial-", _dead_pid())  # a file's
+    (dead_file / "o.part").write_text("half")
     alive = _killed_run_folder(tmp_path, "o", "partial-", os.getpid())  # a running writer
     mine = tmp_path / ".o.partial-notes"  # not a name mrdamper makes: left alone
     mine.mkdir()

@@ -1,7 +1,8 @@
 """Leftovers of an earlier run that died: private temporaries whose owner process is gone.
 
-Every temporary a writer makes beside its target carries the id of the process that made it
-(``.NAME.partial-<pid>-<random>``, ``.NAME.old-<pid>-<random>``, ``.NAME.<pid>-<random>.part``).
+Every temporary a writer makes beside its target is a folder named with the id of the process
+that made it (``.NAME.partial-<pid>-<random>``: a folder being built, or holding the ``NAME.part``
+of a file being written; ``.NAME.old-<pid>-<random>``: a folder being replaced).
 A process that ends normally, fails, is interrupted (Ctrl-C) or terminated (SIGTERM) removes its
 own; one killed outright (SIGKILL, power loss) cannot. :func:`remove_stale` removes, before a new
 write of the same target, the temporaries of that target whose process no longer runs, so a
@@ -23,10 +24,9 @@ from mrdamper._io.mark import read_temporary_mark
 __all__ = ["missing_parents", "owner_alive", "remove_created", "remove_stale", "temp_prefix"]
 
 
-#: A temporary's name: ``.NAME.partial-<pid>-<random>`` / ``.NAME.old-<pid>-<random>`` (folders,
-#: random part by :func:`tempfile.mkdtemp`) or ``.NAME.<pid>-<12 hex>.part`` (files).
+#: A temporary's name: ``.NAME.partial-<pid>-<random>`` / ``.NAME.old-<pid>-<random>`` (random
+#: part by :func:`tempfile.mkdtemp`).
 _TEMP_FOLDER = re.compile(r"\.(?P<name>.+)\.(?P<tag>partial-|old-)(?P<pid>\d+)-[A-Za-z0-9_]+")
-_TEMP_FILE = re.compile(r"\.(?P<name>.+)\.(?P<pid>\d+)-[0-9a-f]{12}\.part")
 
 
 def temp_prefix(target: Path, tag: str) -> str:
@@ -49,22 +49,21 @@ def owner_alive(pid: int) -> bool:
     return True
 
 
-def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", "")) -> list[Path]:
+def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-")) -> list[Path]:
     """Remove the temporaries of ``target`` left by processes that no longer run.
 
     A folder is removed only when it carries the temporary mark of a write of ``target``
     (:func:`mrdamper._io.mark.read_temporary_mark`: its own name, the target's path and the id of
-    the process, the one in its name) and that process is gone; a ``.part`` file only when its
-    name is exactly the form this module makes (``.NAME.<pid>-<12 hex digits>.part``) and it is a
-    regular file. Anything else, whatever its name, is left alone.
+    the process, the one in its name) and that process is gone. Anything else, whatever its name,
+    is left alone.
 
     Parameters
     ----------
     target : Path
         The output (file or folder) whose temporaries are looked for in its parent folder.
     tags : tuple of str
-        Kinds of temporaries: ``"partial-"`` (folders being built), ``"old-"`` (folders being
-        replaced) and ``""`` (``.part`` files).
+        Kinds of temporaries: ``"partial-"`` (folders being built, or holding a file being
+        written) and ``"old-"`` (folders being replaced).
 
     Returns
     -------
@@ -80,25 +79,15 @@ def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", ""))
     for entry in entries:
         path = Path(entry.path)
         m = _TEMP_FOLDER.fullmatch(entry.name)
-        if m is not None and m["name"] == target.name and m["tag"] in tags:
-            pid = int(m["pid"])
-            if (
-                entry.is_dir(follow_symlinks=False)
-                and read_temporary_mark(path, target) == pid
-                and not owner_alive(pid)
-            ):
-                shutil.rmtree(path, ignore_errors=True)
-                removed.append(path)
+        if m is None or m["name"] != target.name or m["tag"] not in tags:
             continue
-        m = _TEMP_FILE.fullmatch(entry.name)
+        pid = int(m["pid"])
         if (
-            m is not None
-            and m["name"] == target.name
-            and "" in tags
-            and entry.is_file(follow_symlinks=False)
-            and not owner_alive(int(m["pid"]))
+            entry.is_dir(follow_symlinks=False)
+            and read_temporary_mark(path, target) == pid
+            and not owner_alive(pid)
         ):
-            path.unlink(missing_ok=True)
+            shutil.rmtree(path, ignore_errors=True)
             removed.append(path)
     return removed
 
