@@ -125,3 +125,12 @@ def test_an_option_a_mode_cannot_use_is_refused_in_one_line(
     line = _one_line_error(*_run(args, capsys)[::2])
     assert line.startswith(f"error: {flag}: not with {mode}: "), line
     assert not (files / "out").exists()  # refused before anything was written
+
+
+def test_an_option_the_model_cannot_use_is_refused_in_one_line(files: Path, capsys) -> None:
+    """``inverse --horizon`` applies to an LPV model with a drive lag only, whatever the mode."""
+    rec = str(files / "d" / "rec_a.csv")
+    args = ["inverse", str(files / "sp3.json"), rec, "--out", str(files / "i.csv")]
+    line = _one_line_error(*_run([*args, "--horizon", "0.01"], capsys)[::2])
+    assert line.startswith("error: horizon: a lead horizon is a setting of the regularised")
+    assert not (files / "i.csv").exists()

@@ -396,6 +396,12 @@ def inverse_current(
             )
         )
     sched = scheduled_form(model)
+    if horizon is not None and (sched is None or sched.eta is None or method != "regularised"):
+        raise DataValidationError(
+            "horizon",
+            f"a lead horizon is a setting of the regularised inverse of an LPV model with a drive "
+            f"lag; this {model.kind} model's {method} inverse has none (drop it)",
+        )
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     t, x, v = _motion(experiment_or_arrays)
