@@ -134,3 +134,11 @@ def test_an_option_the_model_cannot_use_is_refused_in_one_line(files: Path, caps
     line = _one_line_error(*_run([*args, "--horizon", "0.01"], capsys)[::2])
     assert line.startswith("error: horizon: a lead horizon is a setting of the regularised")
     assert not (files / "i.csv").exists()
+
+
+def test_a_plant_for_measured_records_is_refused_in_one_line(files: Path, capsys) -> None:
+    """``study --control-plant`` is the truth of virtual-rig records; measured ones have none."""
+    args = ["study", str(files / "d"), "--out", str(files / "out"), "--models", "sp2"]
+    line = _one_line_error(*_run([*args, "--control-plant", "rig"], capsys)[::2])
+    assert line.startswith("error: --control-plant: the records are not all from the virtual rig")
+    assert not (files / "out").exists()

@@ -214,6 +214,15 @@ def study(
     kinds = _models(models)
     control = control_settings(no_control, control_roads, control_duration, plant=control_plant)
     records = study_records(data, pattern, load=load, **(read_kw or {}))  # type: ignore[arg-type]
+    if control is not None and control_plant is not None:
+        from mrdamper.study.control_step import truth_damper
+
+        if truth_damper(records, control_plant) is None:
+            raise DataValidationError(
+                "--control-plant",
+                "the records are not all from the virtual rig with one damper (measured data): "
+                "no loop compares a model with them, so a plant has no use here (drop it)",
+            )
     proto, why = choose_protocol(records, protocol)
     typer.echo(f"{len(records)} records from {data}; {why}", err=True)
     res = run_study(
