@@ -17,7 +17,13 @@ With ``--plant PLANT`` (a model file, ``rig`` for the virtual rig's reference da
 damper: ``DIR/closed_loop.csv`` gets the metrics predicted (MODEL as damper) against those achieved
 (PLANT as damper) per controller, road and speed (:mod:`mrdamper.control.fidelity`) and
 ``DIR/closed_loop_runs.csv`` the numerics of every run (plant sub-steps, halving change,
-high-frequency share, training-envelope excursions); warnings are printed one a line.
+high-frequency share, training-envelope excursions); warnings go to standard error, one a line.
+The car (``--car``), the gains (``--c-sky``, ``--c-ground``, ``--alpha``) and the inverse's
+settings (``--reg``, ``--rate``) are those of both sides, checked as without ``--plant``; the bump
+options are refused (the comparison runs the ISO roads), as is a model or plant identified at one
+level. When every loop with the model (or the plant) as damper fails the command stops with one
+line and writes nothing; when some fail, the tables are written and the exit status is 1.
+Which option each mode refuses is one table, :mod:`mrdamper.cli._modes`.
 
 With ``--tune`` the passive inputs and the semi-active gains are swept on each ISO road
 (:mod:`mrdamper.control.fronts`), with MODEL as the damper and, with ``--plant``, with PLANT:
