@@ -30,6 +30,8 @@ import stat
 from pathlib import Path
 from typing import Any
 
+from mrdamper._io.paths import resolved
+
 __all__ = [
     "FOLDER",
     "MARK_FORMAT",
@@ -94,8 +96,6 @@ def _plain(entry: Any) -> bool:
 
 
 def _target(folder: Path) -> str:
-    from mrdamper._io.safety import resolved
-
     return str(resolved(folder))
 
 

@@ -33,6 +33,7 @@ from typing import Literal
 
 from mrdamper._io.kinds import FileKind
 from mrdamper._io.mark import MARK_NAME, foreign_entries
+from mrdamper._io.paths import resolved
 from mrdamper.errors import OutputError, OutputExistsError
 
 __all__ = [
@@ -47,22 +48,6 @@ __all__ = [
 #: new files into it, or ``"add"`` named files to a folder whose other contents are kept (and
 #: may be anything: only the files written are checked).
 FolderMode = Literal["replace", "merge", "add"]
-
-
-def resolved(p: str | os.PathLike[str], option: str = "path") -> Path:
-    """Absolute, resolved form of ``p`` (``~`` expanded); one-line error for a link loop.
-
-    Raises
-    ------
-    OutputError
-        ``p`` is, or goes through, a symbolic link loop.
-    """
-    try:
-        return Path(os.path.abspath(Path(p).expanduser())).resolve(strict=False)
-    except (RuntimeError, OSError):  # Python < 3.13: RuntimeError("Symlink loop from ...")
-        raise OutputError(
-            f"{option}: {p} is a symbolic link loop (or goes through one); choose another path"
-        ) from None
 
 
 def protected_paths(inputs: Iterable[str | os.PathLike[str]] = ()) -> list[Path]:
