@@ -24,7 +24,7 @@ from tests.test_bad_inputs import _folder, _lpv_model, _one_line_error, _run
 from tests.test_failure_catalogue import SP3
 
 #: Commands with one mode: every option is honoured (nothing to refuse).
-ONE_MODE = {"info", "fit", "simulate", "score", "select"}
+ONE_MODE = {"fit", "simulate", "score", "select"}
 
 #: A value for each option a mode refuses (None: a flag).
 VALUES: dict[str, str | None] = {
@@ -48,6 +48,18 @@ VALUES: dict[str, str | None] = {
     "--control-plant": "rig",
     "--workers": "1",
     "--loop-model": "sp3.json",
+    "--pattern": "rec_.*",
+    "--fs": "200",
+    "--resample-fs": "200",
+    "--nan-policy": "drop-edges",
+    "--max-gap": "3",
+    "--decimal": ",",
+    "--sep": ";",
+    "--column": "F=force",
+    "--units": "x=mm",
+    "--struct": "data",
+    "--plausible-max": "stroke=2",
+    "--derive-velocity": None,
 }
 
 
@@ -84,6 +96,7 @@ def _entering(command: str, mode: str, tmp: Path) -> list[str]:
     model, data = tmp / "sp3.json", tmp / "d"
     out = str(tmp / "out")
     base = {
+        "info": ["info"],
         "quartercar": ["quartercar", str(model), "--out", out],
         "export": ["export", str(tmp / "lpv.json"), "--out", str(tmp / "m.mat")],
         "inverse": ["inverse", str(model), str(data / "rec_a.csv"), "--out", str(tmp / "i.csv")],

@@ -1,12 +1,12 @@
 """Which options of a command have no meaning in which of its modes: the one table.
 
 A command with modes (``quartercar`` with ``--plant``, ``--tune`` or ``--c-inverse``, ``export``
-with its ``--format``, ``inverse --method exact``, ``study`` / ``demo`` with ``--no-control``,
-``rig doe`` without the control extension) honours every option in every mode except those this
-table lists for the mode, which are refused in one line (:func:`refuse_unused`) when given on the
-command line: an option is never silently dropped. Every other command has one mode and honours
-all its options. ``tests/cli/test_option_modes.py`` walks every command's options against this
-table.
+with its ``--format``, ``info --example``, ``inverse --method exact``, ``study`` / ``demo`` with
+``--no-control``, ``rig doe`` without the control extension) honours every option in every mode
+except those this table lists for the mode, which are refused in one line
+(:func:`refuse_unused`) when given on the command line: an option is never silently dropped.
+Every other command has one mode and honours all its options. ``tests/cli/test_option_modes.py``
+walks every command's options against this table.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from mrdamper.cli._records import READER_OPTIONS
 from mrdamper.errors import DataValidationError
 
 __all__ = ["MODES", "Mode", "refuse_unused"]
@@ -40,9 +41,18 @@ class Mode:
 
 _BUMP = ("--bump", "--bump-height", "--bump-length")
 _CONTROL = ("--control-roads", "--control-duration")
+#: The reader options (:data:`mrdamper.cli._records.READER_OPTIONS`) as typed.
+_READER = tuple("--" + name.replace("_", "-") for name in READER_OPTIONS)
 
 #: Command (as typed: ``"rig doe"``) -> its modes; commands not listed have one mode.
 MODES: dict[str, tuple[Mode, ...]] = {
+    "info": (
+        Mode(
+            "--example",
+            ("--pattern", *_READER),
+            "the built-in example is generated on the virtual rig, not read from files",
+        ),
+    ),
     "quartercar": (
         Mode(
             "--c-inverse",
