@@ -84,6 +84,11 @@ MODES: dict[str, tuple[Mode, ...]] = {
             "the JSON file holds the state-space matrices only (C code and FMUs take them)",
         ),
         Mode("--format c", ("--inverse",), "the C export always holds the model and its inverse"),
+        Mode(
+            "--format fmu",
+            ("--reg",),
+            "the FMU of the model has no inverse to regularise (the inverse's FMU: add --inverse)",
+        ),
     ),
     "inverse": (
         Mode(

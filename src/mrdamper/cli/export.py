@@ -92,7 +92,8 @@ def export(
         fmt = {".json": "json", ".fmu": "fmu"}.get(out.suffix.lower(), "mat")
     if fmt not in ("mat", "json", "c", "fmu"):
         raise DataValidationError("--format", f"expected 'mat', 'json', 'c' or 'fmu', got {fmt!r}")
-    refuse_unused(ctx, "export", {f"--format {fmt}"})
+    forward_fmu = fmt == "fmu" and not inverse  # the mode "--format fmu": no inverse in it
+    refuse_unused(ctx, "export", {f"--format {fmt}"} if fmt != "fmu" or forward_fmu else set())
     if fmt == "fmu":
         from mrdamper.control.fmu import FMU_FILE, export_fmu
 
