@@ -121,6 +121,9 @@ def test_force_refuses_an_edited_file_and_a_copied_or_forged_mark(tmp_path) -> N
     (forged / MARK_NAME).write_text(json.dumps(mark))
     with pytest.raises(OutputError, match="mark is not valid"):
         check_output(forged, force=True, folder=True)
+    with pytest.raises(OutputError, match="mark is not valid"):  # merging: checked again
+        write_folder(forged, lambda tmp: (tmp / "b.txt").write_text("b"), force=True, mode="merge")
+    assert not (forged / "b.txt").exists()
     # adding files to it keeps the forged entries out of any mark mrdamper writes
     write_files(forged, {"c.txt": (None, lambda p: p.write_text("c"))})
     assert json.loads((forged / MARK_NAME).read_text()) == mark
