@@ -166,13 +166,13 @@ def model_from_dict(data: dict[str, Any]) -> FittedModel:
 def load_model(path: str | Path) -> FittedModel:
     """Load a model saved with :meth:`FittedModel.save`.
 
+    A model whose fit explained nothing of its training force (provenance ``training_fit``,
+    :mod:`mrdamper.models.fit_check`) is loaded with that note as a warning.
+
     Parameters
     ----------
     path : str or Path
         Model file (JSON).
-
-    A model whose fit explained nothing of its training force (provenance ``training_fit``,
-    :mod:`mrdamper.models.fit_check`) is loaded with that note as a warning.
     """
     p = Path(path)
     if os.path.lexists(p) and not p.exists():
