@@ -307,24 +307,43 @@ def _dead_pid() -> int:
     return proc.pid
 
 
+def _killed_run_folder(parent: Path, target: str, tag: str, pid: int) -> Path:
+    """The temporary folder a run of mrdamper killed outright leaves: its temporary mark."""
+    from mrdamper._io.mark import write_temporary_mark
+
+    folder = parent / f".{target}.{tag}{pid}-abc123"
+    folder.mkdir()
+    write_temporary_mark(folder, parent / target)
+    mark = json.loads((folder / MARK_NAME).read_text())
+    (folder / MARK_NAME).write_text(json.dumps({**mark, "pid": pid}))
+    return folder
+
+
 @pytest.mark.slow
 def test_rerun_removes_partial_folders_of_dead_runs_only(tmp_path, capsys) -> None:
     data = _folder(tmp_path / "d")
-    dead = tmp_path / f".o.partial-{_dead_pid()}-abc123"
+    dead = _killed_run_folder(tmp_path, "o", "partial-", _dead_pid())
     (dead / "models").mkdir(parents=True)
     (dead / "results.csv").write_text("half")
-    dead_file = tmp_path / f".o.{_dead_pid()}-abcdef.part"
-    dead_file.write_text("half")
-    alive = tmp_path / f".o.partial-{os.getpid()}-def456"  # a running writer: left alone
-    alive.mkdir()
+    dead_old = _killed_run_folder(tmp_path, "o", "old-", _dead_pid())
+    dead_file = _killed_run_folder(tmp_path, "o", "partial-", _dead_pid())  # a file's
+    (dead_file / "o.part").write_text("half")
+    alive = _killed_run_folder(tmp_path, "o", "partial-", os.getpid())  # a running writer
     mine = tmp_path / ".o.partial-notes"  # not a name mrdamper makes: left alone
     mine.mkdir()
+    # named like a dead run's temporaries but without its mark: the user's, left alone
+    look = [tmp_path / f".o.{tag}{_dead_pid()}-keep" for tag in ("partial-", "old-")]
+    for folder in look:
+        folder.mkdir()
+        (folder / "mine.txt").write_text("precious")
     args = ["study", str(data), "--out", str(tmp_path / "o"), "--models", "sp2"]
     code, _, err = _run([*args, "--workers", "1", "--no-progress"], capsys)
     assert code == 0, err
-    assert not dead.exists() and alive.is_dir() and mine.is_dir()
+    assert not dead.exists() and not dead_old.exists() and not dead_file.exists()
+    assert alive.is_dir() and mine.is_dir()
+    assert all((f / "mine.txt").read_text() == "precious" for f in look)
     hidden = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("."))
-    assert hidden == [alive.name, mine.name]
+    assert hidden == sorted([alive.name, mine.name, *(f.name for f in look)])
 
 
 @pytest.mark.slow

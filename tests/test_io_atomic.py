@@ -58,7 +58,7 @@ def test_folder_replace_and_merge(tmp_path) -> None:
     write_folder(out, _build({"a.txt": "2"}), force=True, mode="merge")
     files = {p.name: p.read_text() for p in out.iterdir() if p.name != MARK_NAME}
     assert files == {"a.txt": "2", "b.txt": "1"}
-    assert json.loads((out / MARK_NAME).read_text())["entries"] == ["a.txt", "b.txt"]
+    assert sorted(json.loads((out / MARK_NAME).read_text())["entries"]) == ["a.txt", "b.txt"]
     write_folder(out, _build({"c.txt": "3"}), force=True, mode="replace")
     assert sorted(p.name for p in out.iterdir()) == [MARK_NAME, "c.txt"]
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no temporary left
@@ -92,3 +92,20 @@ def test_folder_gets_the_mode_of_an_ordinary_folder(tmp_path) -> None:
         os.umask(umask)
     assert (out.stat().st_mode & 0o777) == 0o750
     assert ((out / "a.txt").stat().st_mode & 0o777) == 0o640
+
+
+def test_a_file_is_written_in_a_private_folder_carrying_its_temporary_mark(tmp_path) -> None:
+    import os
+
+    from mrdamper._io.mark import read_temporary_mark
+
+    target = tmp_path / "a.txt"
+    seen: list[int | None] = []
+
+    def writer(tmp) -> None:
+        seen.append(read_temporary_mark(tmp.parent, target))
+        tmp.write_text("x")
+
+    atomic_write_with(target, writer)
+    assert seen == [os.getpid()] and target.read_text() == "x"
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]

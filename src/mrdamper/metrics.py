@@ -22,6 +22,10 @@ MIN_SCORED_SAMPLES = 10
 _CONSTANT_FORCE = 1e-9
 
 
+#: Largest force magnitude [N] scored: squares and sums of larger values overflow.
+MAX_FORCE = 1e150
+
+
 def _pair(measured: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     F = np.asarray(measured, dtype=float)
     Fh = np.asarray(predicted, dtype=float)
@@ -33,6 +37,12 @@ def _pair(measured: ArrayLike, predicted: ArrayLike) -> tuple[np.ndarray, np.nda
         raise DataValidationError("measured", "empty array")
     if not np.all(np.isfinite(Fh)):
         raise DataValidationError("predicted", "contains non-finite values")
+    for name, a in (("measured", F), ("predicted", Fh)):
+        peak = float(np.max(np.abs(a)))
+        if peak > MAX_FORCE:  # its square would overflow: a corrupt value, not a force
+            raise DataValidationError(
+                name, f"reaches {peak:.3g} N, beyond any force that can be scored ({MAX_FORCE:g} N)"
+            )
     return F, Fh
 
 

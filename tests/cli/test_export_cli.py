@@ -177,8 +177,12 @@ def test_inverse_horizon_option(tmp_path: Path, capsys: pytest.CaptureFixture[st
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "horizon" in err
     assert not (tmp_path / "o.csv").exists()
-    main(["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "0.01"])
-    assert "(regularised)" in capsys.readouterr().out  # no drive lag: the horizon does not apply
+    # no drive lag: the horizon has no use, and is refused rather than dropped
+    args = ["inverse", str(model), str(rec), "--out", str(tmp_path / "o.csv"), "--horizon", "0.01"]
+    assert _exit_code(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "horizon: a lead horizon is a setting" in err
+    assert not (tmp_path / "o.csv").exists()
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found")

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from mrdamper._io import MARK_NAME
 from mrdamper.data import write_csv
 from mrdamper.models import known_kinds
 from tests.cli.test_study_cli import _write_sine_folder
@@ -45,7 +46,12 @@ def test_identical_runs_give_identical_files_but_the_timings(two_runs) -> None:
     files = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
     assert files == sorted(p.relative_to(b) for p in b.rglob("*") if p.is_file())
     differ = [str(f) for f in files if (a / f).read_bytes() != (b / f).read_bytes()]
-    assert set(differ) <= {"timings.csv", "timings.json"}, differ
+    timings = {"timings.csv", "timings.json"}
+    assert set(differ) <= {*timings, MARK_NAME}, differ
+    # the mark lists the same files with the same checksums, but the timings', for its own path
+    marks = [json.loads((d / MARK_NAME).read_text()) for d in (a, b)]
+    entries = [{k: v for k, v in m["entries"].items() if k not in timings} for m in marks]
+    assert entries[0] == entries[1] and [m["path"] for m in marks] == [str(a), str(b)]
     names = {str(f) for f in files}
     assert {"report.html", "results.csv", "summary.csv", "fits.csv", "study.json"} <= names
     assert len([f for f in files if f.parts[0] == "models" and f.suffix == ".json"]) >= 4

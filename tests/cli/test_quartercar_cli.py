@@ -105,4 +105,4 @@ def test_quartercar_with_the_exported_c_inverse(
             )
         assert info.value.code == 2
         err = capsys.readouterr().err
-        assert f"--c-inverse: not with {extra[0]}" in err and len(err.strip().splitlines()) == 1
+        assert f"{extra[0]}: not with --c-inverse" in err and len(err.strip().splitlines()) == 1

@@ -97,7 +97,7 @@ def test_study_refuses_non_empty_out_before_computing(tmp_path, capsys) -> None:
         (["--protocol", "nope"], "protocol file not found"),
         (
             ["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"],
-            "give either --workers or --scheduler",
+            "--workers: not with --scheduler",
         ),
         (["--control-plant", "rig:nope"], "--control-plant: expected rig, rig:NAME"),
         (["--control-plant", "missing.json"], "or a model file, got 'missing.json'"),

@@ -146,11 +146,14 @@ def test_write_outputs_and_report(result, written) -> None:
 def test_write_refuses_non_empty_folder_and_force_replaces(result, tmp_path) -> None:
     out = tmp_path / "o"
     write_study(result, out, figures=False)
-    (out / "results.csv").write_text("stale")
     with pytest.raises(OutputExistsError, match="not empty; pass --force"):
         write_study(result, out, figures=False)
     write_study(result, out, force=True, figures=False)
-    assert (out / "results.csv").read_text() != "stale" and (out / "report.html").exists()
+    assert (out / "report.html").exists()
+    (out / "results.csv").write_text("edited")  # an edited file is the user's: never replaced
+    with pytest.raises(OutputError, match=r"changed since \(results.csv\)"):
+        write_study(result, out, force=True, figures=False)
+    assert (out / "results.csv").read_text() == "edited"
     mine = tmp_path / "mine"  # a folder mrdamper did not write is never replaced
     mine.mkdir()
     (mine / "keep.txt").write_text("x")

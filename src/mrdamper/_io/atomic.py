@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
-import secrets
+import shutil
+import tempfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from mrdamper._io.kinds import FileKind
+from mrdamper._io.mark import write_temporary_mark
 from mrdamper._io.safety import check_output
 from mrdamper._io.stale import missing_parents, remove_created, remove_stale, temp_prefix
 from mrdamper.errors import OutputExistsError
@@ -41,14 +43,17 @@ def atomic_write_with(
 ) -> Path:
     """Call ``writer(tmp_path)`` then atomically move ``tmp_path`` to ``path``.
 
-    A failure or interruption leaves no partial file at ``path`` (and removes the temporary, and
+    ``tmp_path`` (``NAME.part``) lies in a private folder beside ``path`` that carries the
+    temporary mark of this write (:func:`~mrdamper._io.mark.write_temporary_mark`), so a run
+    killed outright leaves only a folder the next write of ``path`` recognises and removes. A
+    failure or interruption leaves no partial file at ``path`` (and removes the temporary, and
     the folders created for it). With ``force`` an existing file is replaced only if it is of
     ``kind`` (when given; see :func:`~mrdamper._io.safety.check_output`).
     """
     p = check_writable(path, force, kind=kind)
     created = missing_parents(p)
     p.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale(p, ("",))
+    remove_stale(p, ("partial-",))
     tmp_path = _new_temp_file(p)
     try:
         writer(tmp_path)
@@ -56,36 +61,38 @@ def atomic_write_with(
             raise OutputExistsError(f"{p}: appeared while writing; pass force=True to overwrite")
         os.replace(tmp_path, p)
     except OSError as exc:
-        tmp_path.unlink(missing_ok=True)
-        if isinstance(exc, OutputExistsError) or exc.errno is None:
-            remove_created(created)
-            raise
+        shutil.rmtree(tmp_path.parent, ignore_errors=True)
         remove_created(created)
+        if isinstance(exc, OutputExistsError) or exc.errno is None:
+            raise
         raise OSError(
             exc.errno, exc.strerror, str(p)
         ) from exc  # name the output, not the temporary
     except BaseException:
-        tmp_path.unlink(missing_ok=True)
+        shutil.rmtree(tmp_path.parent, ignore_errors=True)
         remove_created(created)
         raise
+    shutil.rmtree(tmp_path.parent, ignore_errors=True)
     return p
 
 
 def _new_temp_file(target: Path) -> Path:
-    """Create an empty, unused ``.<name>.<pid>-<random>.part`` file beside ``target``.
+    """Create an empty ``NAME.part`` in a new private folder ``.NAME.partial-<pid>-<random>``
+    beside ``target``, the folder carrying the temporary mark of this write.
 
-    It is created like a plain ``open`` would create it (mode 0666 filtered by the umask, by the
-    operating system), so the finished file has ordinary permissions without reading the umask.
+    The file is created like a plain ``open`` would create it (mode 0666 filtered by the umask,
+    by the operating system), so the finished file has ordinary permissions without reading the
+    umask.
     """
-    for _ in range(100):
-        tmp = target.parent / f"{temp_prefix(target, '')}{secrets.token_hex(6)}.part"
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-        except FileExistsError:
-            continue
-        os.close(fd)
-        return tmp
-    raise FileExistsError(f"{target.parent}: no free temporary name")  # pragma: no cover
+    folder = Path(tempfile.mkdtemp(prefix=temp_prefix(target, "partial-"), dir=target.parent))
+    try:
+        write_temporary_mark(folder, target)
+        tmp = folder / f"{target.name}.part"
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return tmp
 
 
 def atomic_write_bytes(

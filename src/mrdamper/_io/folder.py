@@ -16,10 +16,12 @@ mrdamper's mark), and then ``mode`` says what happens to it:
 * ``"add"``: as ``"merge"``, into a folder that may hold anything else (quarter-car figures, C
   code): the caller checked each file it writes, and a folder mrdamper did not write gets no mark.
 
-Every folder written gets the mark file :data:`~mrdamper._io.safety.MARK_NAME` (JSON: written by
-mrdamper, the version, the entries it wrote), which later lets ``force`` replace it and nothing
-else. The private folder is named ``.NAME.partial-<pid>-<random>``; a run that was killed leaves
-it behind, and the next write of the same target removes it (:mod:`mrdamper._io.stale`).
+Every folder written gets the mark file :data:`~mrdamper._io.mark.MARK_NAME` (JSON: written by
+mrdamper, the path it was written for, every file and folder it wrote at every depth with each
+file's checksum, :mod:`mrdamper._io.mark`), which later lets ``force`` replace those and nothing
+else. The private folder is named ``.NAME.partial-<pid>-<random>`` and carries a temporary mark
+(the target, the process) from its creation; a run that was killed leaves it behind, and the next
+write of the same target removes it when its mark says so (:mod:`mrdamper._io.stale`).
 
 Permissions are obtained portably, without reading the process umask: the mode an ordinary new
 folder gets is read from a probe folder created with :func:`os.mkdir` inside the private folder.
@@ -27,7 +29,6 @@ folder gets is read from a probe folder created with :func:`os.mkdir` inside the
 
 from __future__ import annotations
 
-import json
 import os
 import secrets
 import shutil
@@ -37,9 +38,17 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from mrdamper._io.kinds import FileKind
-from mrdamper._io.safety import MARK_NAME, FolderMode, mark_entries
+from mrdamper._io.mark import (
+    MARK_NAME,
+    foreign_entries,
+    read_mark,
+    scan,
+    write_mark,
+    write_temporary_mark,
+)
+from mrdamper._io.safety import FolderMode, resolved
 from mrdamper._io.stale import missing_parents, remove_created, remove_stale, temp_prefix
-from mrdamper.errors import OutputExistsError
+from mrdamper.errors import OutputError, OutputExistsError
 
 __all__ = [
     "FolderMode",
@@ -97,37 +106,32 @@ def _merge(src: Path, dst: Path, force: bool) -> None:
             os.replace(entry, target)
 
 
-def write_mark(folder: Path, entries: set[str]) -> Path:
-    """Write the mark file of an output folder listing ``entries`` (its top-level names)."""
-    data = {
-        "written_by": "mrdamper",
-        "version": _version(),
-        "entries": sorted(entries - {MARK_NAME}),
-    }
-    path = folder / MARK_NAME
-    path.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
-    return path
-
-
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("mrdamper")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        return "unknown"
-
-
 def _mark(tmp: Path, out: Path, mode: FolderMode) -> None:
-    """Mark the built folder ``tmp``: the entries it holds, plus (merge / add) those of a marked
-    ``out``; no mark when adding to a folder mrdamper did not write."""
-    new = {e.name for e in tmp.iterdir()}
+    """Mark the built folder ``tmp`` (to become ``out``): every entry it holds with its checksum,
+    plus (merge / add) the entries of ``out``'s valid mark that are still as written; no mark
+    when adding to a folder mrdamper did not write."""
+    new = scan(tmp)
     if mode == "replace" or not out.is_dir() or not any(out.iterdir()):
-        write_mark(tmp, new)
+        write_mark(tmp, out, new)
         return
-    old = mark_entries(out)
-    if old is not None:
-        write_mark(tmp, old | new)
+    old = read_mark(out)
+    if old is None or old["path"] != str(resolved(out)):
+        (tmp / MARK_NAME).unlink(missing_ok=True)  # the temporary mark: not carried into out
+        return
+    found = scan(out)
+    kept = {k: v for k, v in old["entries"].items() if found.get(k) == v}
+    write_mark(tmp, out, kept | new)
+
+
+def _recheck(out: Path) -> None:
+    """Refuse to replace / merge into ``out`` if something not mrdamper's appeared in it while
+    the new folder was built (checked again just before the swap)."""
+    why, foreign = foreign_entries(out)
+    if why is not None or foreign:
+        raise OutputError(
+            f"--out: {out} changed while writing ({why or ', '.join(foreign[:3])}); it is never "
+            "replaced, even with --force; nothing was written"
+        )
 
 
 def _swap(tmp: Path, out: Path, force: bool, mode: FolderMode) -> None:
@@ -143,10 +147,12 @@ def _swap(tmp: Path, out: Path, force: bool, mode: FolderMode) -> None:
         return
     if not force:  # re-check: the folder may have been filled while this one was built
         raise OutputExistsError(f"{out}: folder filled while writing; pass force=True to write it")
+    _recheck(out)
     if mode == "merge":
         _merge(tmp, out, force)
         return
     trash = Path(tempfile.mkdtemp(prefix=temp_prefix(out, "old-"), dir=out.parent))
+    write_temporary_mark(trash, out)
     os.replace(out, trash / out.name)
     os.replace(tmp, out)
     shutil.rmtree(trash, ignore_errors=True)
@@ -199,6 +205,7 @@ def write_folder(
     tmp = Path(tempfile.mkdtemp(prefix=temp_prefix(target, "partial-"), dir=target.parent))
     done = False
     try:
+        write_temporary_mark(tmp, target)
         build(tmp)
         _mark(tmp, target, mode)
         tmp.chmod(ordinary_folder_mode(tmp))

@@ -14,7 +14,8 @@ it and nothing is lost:
   columns, ...);
 * an existing non-empty folder needs ``force``, and is then replaced (or merged into) only when
   mrdamper wrote it: it carries the mark file :data:`MARK_NAME` (written by
-  :func:`mrdamper._io.write_folder`) and holds nothing the mark does not list;
+  :func:`mrdamper._io.write_folder`) for this very path, and holds nothing, at any depth, that the
+  mark does not list with the same content (:mod:`mrdamper._io.mark`);
 * the nearest existing ancestor folder must accept a new file (checked by creating and removing
   an empty temporary file, which also detects read-only file systems).
 
@@ -23,50 +24,30 @@ Paths that cannot be resolved (a symbolic link loop, a dangling link) are one-li
 
 from __future__ import annotations
 
-import json
 import os
 import stat
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 from mrdamper._io.kinds import FileKind
+from mrdamper._io.mark import MARK_NAME, foreign_entries
+from mrdamper._io.paths import resolved
 from mrdamper.errors import OutputError, OutputExistsError
 
 __all__ = [
     "MARK_NAME",
     "FolderMode",
     "check_output",
-    "mark_entries",
     "protected_paths",
     "resolved",
 ]
-
-#: Name of the mark file every output folder mrdamper writes carries (JSON: who wrote it and the
-#: entries it wrote).
-MARK_NAME = ".mrdamper-output"
 
 #: What ``force`` does to an existing non-empty target folder: ``"replace"`` it, ``"merge"`` the
 #: new files into it, or ``"add"`` named files to a folder whose other contents are kept (and
 #: may be anything: only the files written are checked).
 FolderMode = Literal["replace", "merge", "add"]
-
-
-def resolved(p: str | os.PathLike[str], option: str = "path") -> Path:
-    """Absolute, resolved form of ``p`` (``~`` expanded); one-line error for a link loop.
-
-    Raises
-    ------
-    OutputError
-        ``p`` is, or goes through, a symbolic link loop.
-    """
-    try:
-        return Path(os.path.abspath(Path(p).expanduser())).resolve(strict=False)
-    except (RuntimeError, OSError):  # Python < 3.13: RuntimeError("Symlink loop from ...")
-        raise OutputError(
-            f"{option}: {p} is a symbolic link loop (or goes through one); choose another path"
-        ) from None
 
 
 def protected_paths(inputs: Iterable[str | os.PathLike[str]] = ()) -> list[Path]:
@@ -107,34 +88,20 @@ def _nearest_existing(p: Path) -> Path:
     return cur
 
 
-def mark_entries(folder: Path) -> set[str] | None:
-    """Entries listed by the mark of ``folder``, or None when it has no valid mark."""
-    try:
-        data: Any = json.loads((folder / MARK_NAME).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    if not (isinstance(data, dict) and data.get("written_by") == "mrdamper"):
-        return None
-    entries = data.get("entries")
-    if not (isinstance(entries, list) and all(isinstance(e, str) for e in entries)):
-        return None
-    return set(entries)
-
-
 def _check_replaceable_folder(p: Path, option: str) -> None:
-    """Raise unless the non-empty folder ``p`` was written by mrdamper (mark, nothing else)."""
-    listed = mark_entries(p)
-    if listed is None:
+    """Raise unless everything in the non-empty folder ``p``, at every depth, is what mrdamper
+    wrote for this path (:func:`mrdamper._io.mark.foreign_entries`)."""
+    why, foreign = foreign_entries(p)
+    if why is not None:
         raise OutputError(
-            f"{option}: {p} is a non-empty folder mrdamper did not write (it has no {MARK_NAME} "
-            "mark); it is never replaced, even with --force; choose another output location"
+            f"{option}: {p} is a non-empty folder mrdamper did not write ({why}); it is never "
+            "replaced, even with --force; choose another output location"
         )
-    foreign = sorted(e.name for e in p.iterdir() if e.name != MARK_NAME and e.name not in listed)
     if foreign:
         shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
         raise OutputError(
-            f"{option}: {p} holds files mrdamper did not write ({shown}); it is never replaced, "
-            "even with --force; choose another output location"
+            f"{option}: {p} holds files mrdamper did not write or that changed since ({shown}); "
+            "it is never replaced, even with --force; choose another output location"
         )
 
 
@@ -156,6 +123,34 @@ def _check_existing_file(
             f"{option}: {p} is not a {kind.what}; it is never replaced, even with --force; "
             "choose another output location"
         )
+    changed = _changed_in_marked_folder(p)
+    if changed:
+        raise OutputError(
+            f"{option}: {p} {changed}; it is never replaced, even with --force; choose another "
+            "output location"
+        )
+
+
+def _changed_in_marked_folder(p: Path) -> str | None:
+    """Why the existing file ``p`` inside a folder mrdamper marked (the nearest ancestor with a
+    mark) is not the file it wrote there (not listed, or another content), or None (listed
+    unchanged, or no marked folder around it)."""
+    from mrdamper._io.mark import read_mark, scan_file
+
+    target = resolved(p)
+    for folder in target.parents:
+        if not os.path.lexists(folder / MARK_NAME):
+            continue
+        mark = read_mark(folder)
+        if mark is None or mark["path"] != str(folder):
+            return None
+        listed = mark["entries"].get(target.relative_to(folder).as_posix())
+        if listed is None:
+            return f"is not a file mrdamper wrote in {folder} (its {MARK_NAME} does not list it)"
+        if listed != scan_file(p):
+            return "changed since mrdamper wrote it"
+        return None
+    return None
 
 
 def check_output(

@@ -1,21 +1,32 @@
 """Leftovers of an earlier run that died: private temporaries whose owner process is gone.
 
-Every temporary a writer makes beside its target carries the id of the process that made it
-(``.NAME.partial-<pid>-<random>``, ``.NAME.old-<pid>-<random>``, ``.NAME.<pid>-<random>.part``).
+Every temporary a writer makes beside its target is a folder named with the id of the process
+that made it (``.NAME.partial-<pid>-<random>``: a folder being built, or holding the ``NAME.part``
+of a file being written; ``.NAME.old-<pid>-<random>``: a folder being replaced).
 A process that ends normally, fails, is interrupted (Ctrl-C) or terminated (SIGTERM) removes its
 own; one killed outright (SIGKILL, power loss) cannot. :func:`remove_stale` removes, before a new
 write of the same target, the temporaries of that target whose process no longer runs, so a
-rerun never leaves a hidden partial folder behind. Temporaries of a running process (another
-mrdamper writing the same target) are left alone.
+rerun never leaves a hidden partial folder behind. A folder is a temporary only when it carries
+the temporary mark of a write of that target by that process (:mod:`mrdamper._io.mark`): a folder
+that merely has such a name is the user's and is left alone, as are the temporaries of a running
+process (another mrdamper writing the same target).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from pathlib import Path
 
+from mrdamper._io.mark import read_temporary_mark
+
 __all__ = ["missing_parents", "owner_alive", "remove_created", "remove_stale", "temp_prefix"]
+
+
+#: A temporary's name: ``.NAME.partial-<pid>-<random>`` / ``.NAME.old-<pid>-<random>`` (random
+#: part by :func:`tempfile.mkdtemp`).
+_TEMP_FOLDER = re.compile(r"\.(?P<name>.+)\.(?P<tag>partial-|old-)(?P<pid>\d+)-[A-Za-z0-9_]+")
 
 
 def temp_prefix(target: Path, tag: str) -> str:
@@ -38,16 +49,21 @@ def owner_alive(pid: int) -> bool:
     return True
 
 
-def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", "")) -> list[Path]:
+def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-")) -> list[Path]:
     """Remove the temporaries of ``target`` left by processes that no longer run.
+
+    A folder is removed only when it carries the temporary mark of a write of ``target``
+    (:func:`mrdamper._io.mark.read_temporary_mark`: its own name, the target's path and the id of
+    the process, the one in its name) and that process is gone. Anything else, whatever its name,
+    is left alone.
 
     Parameters
     ----------
     target : Path
         The output (file or folder) whose temporaries are looked for in its parent folder.
     tags : tuple of str
-        Kinds of temporaries: ``"partial-"`` (folders being built), ``"old-"`` (folders being
-        replaced) and ``""`` (``.part`` files).
+        Kinds of temporaries: ``"partial-"`` (folders being built, or holding a file being
+        written) and ``"old-"`` (folders being replaced).
 
     Returns
     -------
@@ -60,31 +76,19 @@ def remove_stale(target: Path, tags: tuple[str, ...] = ("partial-", "old-", ""))
         entries = list(os.scandir(parent))
     except OSError:
         return removed
-    base = f".{target.name}."
     for entry in entries:
-        name = entry.name
-        if not name.startswith(base):
+        path = Path(entry.path)
+        m = _TEMP_FOLDER.fullmatch(entry.name)
+        if m is None or m["name"] != target.name or m["tag"] not in tags:
             continue
-        rest = name[len(base) :]
-        for tag in tags:
-            if not rest.startswith(tag):
-                continue
-            pid_text = rest[len(tag) :].split("-", 1)[0]
-            if not pid_text.isdigit() or "-" not in rest[len(tag) :]:
-                continue
-            if tag == "" and not name.endswith(".part"):
-                continue
-            if owner_alive(int(pid_text)):
-                break
-            path = Path(entry.path)
-            if entry.is_dir(follow_symlinks=False):
-                shutil.rmtree(path, ignore_errors=True)
-            elif tag == "":
-                path.unlink(missing_ok=True)
-            else:
-                break
+        pid = int(m["pid"])
+        if (
+            entry.is_dir(follow_symlinks=False)
+            and read_temporary_mark(path, target) == pid
+            and not owner_alive(pid)
+        ):
+            shutil.rmtree(path, ignore_errors=True)
             removed.append(path)
-            break
     return removed
 
 

@@ -19,6 +19,12 @@ damper: ``DIR/closed_loop.csv`` gets the metrics predicted (MODEL as damper) aga
 ``DIR/closed_loop_runs.csv`` the numerics of every run (plant sub-steps, halving change,
 high-frequency share, training-envelope excursions); warnings go to standard error, one line
 per finding over every run.
+The car (``--car``), the gains (``--c-sky``, ``--c-ground``, ``--alpha``) and the inverse's
+settings (``--reg``, ``--rate``) are those of both sides, checked as without ``--plant``; the bump
+options are refused (the comparison runs the ISO roads), as is a model or plant identified at one
+level. When every loop with the model (or the plant) as damper fails the command stops with one
+line and writes nothing; when some fail, the tables are written and the exit status is 1.
+Which option each mode refuses is one table, :mod:`mrdamper.cli._modes`.
 
 With ``--tune`` the passive inputs and the semi-active gains are swept on each ISO road
 (:mod:`mrdamper.control.fronts`), with MODEL as the damper and, with ``--plant``, with PLANT:
@@ -38,6 +44,7 @@ import typer
 
 from mrdamper._io import FileKind, csv_kind, png_kind
 from mrdamper.cli._help import kinds_text
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.errors import DataValidationError
 
 __all__ = ["QUARTERCAR_CSV", "register"]
@@ -83,6 +90,7 @@ def _png_writer(fig: Any) -> Callable[[Path], object]:
 
 
 def quartercar(
+    ctx: typer.Context,
     model_file: Annotated[
         Path,
         typer.Argument(
@@ -167,37 +175,29 @@ def quartercar(
         raise DataValidationError("--out", f"{out} exists and is not a folder")
     if not (speed > 0):
         raise DataValidationError("--speed", f"expected a vehicle speed > 0 [m/s], got {speed:g}")
-    if c_inverse is not None:
-        for flag, given in (("--plant", plant), ("--reg", reg), ("--rate", rate)):
-            if given is not None:
-                raise DataValidationError(
-                    "--c-inverse",
-                    f"not with {flag}: the C inverse drives the model as its own damper with the "
-                    "settings of its export",
-                )
-        if tune:
-            raise DataValidationError("--c-inverse", "not with --tune (a sweep of gains)")
+    modes = (("--c-inverse", c_inverse), ("--plant", plant), ("--tune", tune))
+    refuse_unused(ctx, "quartercar", {m for m, on in modes if on})
+    qc = _car(car)  # checked in every mode, as are the gains
+    ctrls = [
+        Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha)
+        for c in controllers.split(",")
+        if c.strip()
+    ]
     if tune:
-        _tune(model_file, plant, out, roads, speed, duration, seed, force, _car(car))
+        _tune(model_file, plant, out, roads, speed, duration, seed, force, qc)
         return
     if plant is not None:
-        _fidelity(model_file, plant, out, roads, controllers, speed, duration, seed, force)
+        _fidelity(model_file, plant, out, roads, ctrls, speed, duration, seed, force, qc, reg, rate)
         return
     inputs = [model_file] + ([c_inverse] if c_inverse is not None else [])
     check_output(out, force=force, folder=True, mode="add", inputs=inputs)
     check_writable(out / "quartercar.csv", force, inputs=inputs, kind=QUARTERCAR_CSV)
-    qc = _car(car)
     m = load_model(model_file)
     extra: dict[str, Any] = {}
     if c_inverse is not None:
         from mrdamper.control.c_inverse import load_c_inverse
 
         extra["c_inverse"] = load_c_inverse(m, c_inverse)
-    ctrls = [
-        Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha)
-        for c in controllers.split(",")
-        if c.strip()
-    ]
     classes = [r.strip().upper() for r in roads.split(",") if r.strip()]
     try:
         cmp = compare_controllers(
@@ -311,7 +311,7 @@ def _tune(
     car: Any,
 ) -> None:
     from mrdamper._io import check_output, check_writable, write_files
-    from mrdamper.control.fidelity import input_unit
+    from mrdamper.control.fidelity import check_sides, input_unit
     from mrdamper.control.fronts import gain_fronts
     from mrdamper.models.registry import load_model
 
@@ -328,6 +328,12 @@ def _tune(
         duration=duration,
         seed=seed,
         car=car,
+    )
+    check_sides(  # a side whose every point failed: an error, nothing written
+        res.rows,
+        lambda r: None if r.get("status") == "ok" else str(r.get("status")),
+        res.model_kind,
+        res.plant_kind,
     )
     text = res.table().to_csv(index=False, float_format="%.6g")
     files: dict[str, tuple[FileKind, Callable[[Path], object]]] = {
@@ -376,15 +382,18 @@ def _fidelity(
     plant: str,
     out: Path,
     roads: str,
-    controllers: str,
+    controllers: list[Any],
     speed: float,
     duration: float,
     seed: int,
     force: bool,
+    car: Any,
+    reg: float | None,
+    rate: float | None,
 ) -> None:
     from mrdamper._io import check_output, check_writable, write_files
     from mrdamper.control.closed_loop import resolve_plant
-    from mrdamper.control.fidelity import closed_loop_fidelity
+    from mrdamper.control.fidelity import closed_loop_fidelity, failed_runs
     from mrdamper.models.registry import load_model
 
     inputs = _inputs(model_file, plant)
@@ -397,10 +406,14 @@ def _fidelity(
         resolve_plant(plant),
         road_classes=[r.strip().upper() for r in roads.split(",") if r.strip()],
         speeds=[speed],
-        controllers=[c.strip() for c in controllers.split(",") if c.strip()],
+        controllers=controllers,
         duration=duration,
         seed=seed,
+        car=car,
+        reg=reg,
+        rate=rate,
     )
+    failed = failed_runs(res)  # a side whose every loop failed: an error, nothing written
     table = res.table()
     texts = {
         "closed_loop.csv": table.to_csv(index=False, float_format="%.6g"),
@@ -421,6 +434,13 @@ def _fidelity(
     typer.echo(
         f"{m.kind} controller, {res.plant_kind} plant: wrote {', '.join(_FIDELITY_FILES)} in {out}"
     )
+    if failed:
+        typer.echo(
+            f"error: {failed} loop run(s) diverged or were refused (see the warnings and "
+            "closed_loop_runs.csv)",
+            err=True,
+        )
+        raise typer.Exit(1)
 
 
 def register(app: typer.Typer) -> None:

@@ -20,6 +20,7 @@ import typer
 
 from mrdamper._io import csv_kind
 from mrdamper.cli._help import kinds_text
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
@@ -36,6 +37,7 @@ STATE_SPACE = ("lpv", "lti")
 
 
 def export(
+    ctx: typer.Context,
     model_file: Annotated[
         Path,
         typer.Argument(
@@ -100,8 +102,8 @@ def export(
         fmt = {".json": "json", ".fmu": "fmu"}.get(out.suffix.lower(), "mat")
     if fmt not in FORMATS:
         raise DataValidationError("--format", f"expected one of {list(FORMATS)}, got {fmt!r}")
-    if inverse and fmt != "fmu":
-        raise DataValidationError("--inverse", "only with --format fmu (the C export has both)")
+    forward_fmu = fmt == "fmu" and not inverse  # the mode "--format fmu": no inverse in it
+    refuse_unused(ctx, "export", {f"--format {fmt}"} if fmt != "fmu" or forward_fmu else set())
     if fmt == "fmu":
         from mrdamper.control.fmu import FMU_FILE, export_fmu
 
@@ -136,6 +138,7 @@ def export(
 
 
 def inverse(
+    ctx: typer.Context,
     model_file: Annotated[
         Path,
         typer.Argument(
@@ -176,6 +179,7 @@ def inverse(
     from mrdamper.control.inverse import inverse_current
     from mrdamper.models.registry import load_model
 
+    refuse_unused(ctx, "inverse", {f"--method {method}"})
     check_writable(out, force, inputs=[model_file, data], kind=INVERSE_CSV)
     m = load_model(model_file)
     if data.is_dir():

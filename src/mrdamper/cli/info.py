@@ -13,6 +13,7 @@ from typing import Annotated, Any
 
 import typer
 
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.data.experiment import Experiment
 from mrdamper.data.inspection import record_summary
@@ -83,6 +84,7 @@ def _print_table(rows: list[dict[str, Any]], title: str) -> None:
 
 
 def info(
+    ctx: typer.Context,
     paths: Annotated[
         list[Path] | None, typer.Argument(help="Data files or folders (CSV, Parquet, MAT).")
     ] = None,
@@ -103,6 +105,9 @@ def info(
 ) -> None:
     """Describe records: size, rate, ranges, current levels and detected problems."""
     if example:
+        refuse_unused(ctx, "info", {"--example"})
+        if paths:
+            raise DataValidationError("PATH", "not with --example: the example is not read")
         records = _example()
         title = "built-in example: virtual rig, Table II design (scale 0.1, seed 0)"
     else:

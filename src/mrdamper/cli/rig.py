@@ -20,7 +20,8 @@ from typing import Annotated
 
 import typer
 
-from mrdamper.errors import DataValidationError
+from mrdamper.cli._modes import refuse_unused
+from mrdamper.errors import DataValidationError, SimulationDivergedError
 
 __all__ = ["register", "rig_app"]
 
@@ -37,6 +38,7 @@ def _damper(spec: str | None):  # type: ignore[no-untyped-def]
 
 @rig_app.command("doe")
 def doe(
+    ctx: typer.Context,
     out: Annotated[
         Path, typer.Option("--out", help="Output folder (must be absent or empty unless --force).")
     ],
@@ -122,8 +124,9 @@ def doe(
         raise DataValidationError(
             "--format", f"expected one of {list(RECORD_FORMATS)}, got {format!r}"
         )
-    if loop_model is not None and extension != "control":
-        raise DataValidationError("--loop-model", "expected only with --extension control")
+    refuse_unused(
+        ctx, "rig doe", {f"--extension {extension}", *(["--plan-only"] if plan_only else [])}
+    )
     if max_velocity is not None and not plan_only:
         raise DataValidationError("--max-velocity", "expected only with --plan-only")
     loop_file = _loop_model_file(loop_model)
@@ -139,10 +142,9 @@ def doe(
     )
     from mrdamper.control.doe_extension import FIRST_KIND, control_extension, first_model
     from mrdamper.data import ExperimentSet
-    from mrdamper.models.registry import load_model
     from mrdamper.rig.doe_control import CONTROL_EXTENSION, STROKE_TEST
 
-    first = None if loop_file is None else load_model(loop_file)
+    first = None if loop_file is None else _loop_model(loop_file)
     rig = _rig(damper, fs, stroke, plan_only, first)
     n_ext = 2 * len(CONTROL_EXTENSION) + len(STROKE_TEST) if extension == "control" else 0
     n_rec = sum(s.replicates for s in TABLE_II) + n_ext
@@ -167,7 +169,10 @@ def doe(
                 loop_note = f"{kind} fitted on the {len(records)} Table II records"
             else:
                 loop_note = f"{first.kind} from {loop_file}"
-            ext = control_extension(seed=seed + 1, scale=scale, rig=rig, model=first)
+            try:
+                ext = control_extension(seed=seed + 1, scale=scale, rig=rig, model=first)
+            except (DataValidationError, SimulationDivergedError) as exc:
+                _loop_model_failed(exc, loop_file)
             for _ in range(n_ext):
                 bar.advance(gen)
             records = ExperimentSet([*records, *ext], name=records.name + "+control")
@@ -248,6 +253,28 @@ def _rig(damper: str | None, fs: float, stroke: float | None, plan: bool, first)
     actuator = ServoActuator() if stroke is None else ServoActuator(stroke=stroke)
     cls = PlanRig if plan else VirtualRig
     return cls(damper=model, fs=fs, actuator=actuator)
+
+
+def _loop_model(path: Path):  # type: ignore[no-untyped-def]
+    """The ``--loop-model``, refused at once when trained at one level (its loop never switches
+    the current)."""
+    from mrdamper.models.levels import check_levels
+    from mrdamper.models.registry import load_model
+
+    model = load_model(path)
+    check_levels(model, "its loop never switches the current", field="--loop-model")
+    return model
+
+
+def _loop_model_failed(exc: Exception, path: Path | None) -> None:
+    """Re-raise a failure of the control extension, naming ``--loop-model`` when its loop (the
+    model given) failed rather than another setting."""
+    if path is None or getattr(exc, "field", "model") not in ("model", "MODEL"):
+        raise exc
+    text = str(exc).split(": ", 1)[1] if isinstance(exc, DataValidationError) else str(exc)
+    raise DataValidationError(
+        "--loop-model", f"the quarter-car loop of {path.name} failed: {text}"
+    ) from None
 
 
 class _NoBar:

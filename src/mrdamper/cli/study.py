@@ -13,6 +13,7 @@ from typing import Any
 
 import typer
 
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError, SchemaError
 from mrdamper.kinds import kind_list
@@ -147,6 +148,7 @@ def print_summary(res: Any, out: Path | None = None) -> None:
 
 
 def study(
+    ctx: typer.Context,
     data: Path = typer.Argument(..., help="Data file or folder (CSV, Parquet, MAT)."),
     out: Path = typer.Option(
         ..., "--out", help="Output folder (must not exist or be empty, unless --force)."
@@ -207,8 +209,7 @@ def study(
     """
     from mrdamper.study import choose_protocol, run_study, study_records
 
-    if workers is not None and scheduler is not None:
-        raise DataValidationError("workers", "give either --workers or --scheduler, not both")
+    refuse_unused(ctx, "study", _modes(no_control=no_control, scheduler=scheduler))
     if scheduler is not None:
         from mrdamper.study.executor import check_scheduler_address
 
@@ -219,6 +220,15 @@ def study(
     kinds = _models(models)
     control = control_settings(no_control, control_roads, control_duration, plant=control_plant)
     records = study_records(data, pattern, load=load, **(read_kw or {}))  # type: ignore[arg-type]
+    if control is not None and control_plant is not None:
+        from mrdamper.study.control_step import truth_damper
+
+        if truth_damper(records, control_plant) is None:
+            raise DataValidationError(
+                "--control-plant",
+                "the records are not all from the virtual rig with one damper (measured data): "
+                "no loop compares a model with them, so a plant has no use here (drop it)",
+            )
     proto, why = choose_protocol(records, protocol)
     typer.echo(f"{len(records)} records from {data}; {why}", err=True)
     res = run_study(
@@ -232,6 +242,11 @@ def study(
         control=control,
     )
     write_or_fail(res, out, force, show=not no_progress)
+
+
+def _modes(*, no_control: bool, scheduler: str | None = None) -> set[str]:
+    """The modes of ``study`` / ``demo`` the options given select (:mod:`mrdamper.cli._modes`)."""
+    return {m for m, on in (("--no-control", no_control), ("--scheduler", scheduler)) if on}
 
 
 def control_settings(
@@ -271,6 +286,7 @@ def control_settings(
 
 
 def demo(
+    ctx: typer.Context,
     out: Path = typer.Option(
         DEMO_OUT,
         "--out",
@@ -319,6 +335,7 @@ def demo(
     from mrdamper import compiled
     from mrdamper.study import doe_protocol, run_study
 
+    refuse_unused(ctx, "demo", _modes(no_control=no_control))
     _check_out(out, force)
     _headless()
     kinds = _models(models)

@@ -32,6 +32,7 @@ from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
+from mrdamper.models.levels import check_levels
 from mrdamper.rig.doe import current_range, record_seeds, resolve_rig
 from mrdamper.rig.doe_control import (
     CONTROL_EXTENSION,
@@ -129,7 +130,8 @@ def control_extension(
         A configured rig instead of ``fs`` and ``damper``.
     model : FittedModel, optional
         The first model whose loop gives the motions (default: the rig's damper itself). Its
-        input must be the rig's (current or voltage).
+        input must be the rig's (current or voltage), and it must have been identified at more
+        than one level of it (else its loop never switches the input).
     rows : tuple of ControlRow
         The loop runs (default :data:`~mrdamper.rig.doe_control.CONTROL_EXTENSION`).
     car : QuarterCar, optional
@@ -151,6 +153,8 @@ def control_extension(
     scale = check_positive("scale", scale, "-")
     rig = resolve_rig(rig, damper, fs)
     loop_model = rig.model if model is None else model
+    if model is not None:
+        check_levels(model, "its loop never switches the input")
     if str(getattr(loop_model, "input", rig.model.input)) != str(rig.model.input):
         raise DataValidationError(
             "model",

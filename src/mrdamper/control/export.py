@@ -184,10 +184,11 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
 
 
 def warn_if_unstable(model: Any) -> None:
-    """Warn (one line) when ``model`` is not frozen-stable over its scheduling range.
+    """Warn (one line) when ``model`` is not frozen-stable over its scheduling range, or (a P-15
+    model) fails its sufficient conditions for stability on its input range.
 
-    Every export (``.mat``, ``.json``, C) says so the same way; models without frozen poles
-    (static maps) are never warned about.
+    Every export (``.mat``, ``.json``, C, FMU) says so the same way; models without frozen poles
+    or a stability certificate (static maps) are never warned about.
 
     Parameters
     ----------
@@ -200,6 +201,16 @@ def warn_if_unstable(model: Any) -> None:
             f"{model.kind}: model is not frozen-stable over its scheduling range (largest frozen "
             f"pole modulus {pmax:.4f} >= 1); exporting it anyway, check the poles before control "
             "design",
+            RuntimeWarning,
+        )
+    cert = model.stability_certificate() if hasattr(model, "stability_certificate") else None
+    if cert is not None and not cert["stable_by_construction"]:
+        worst = min(("c", "m", "a", "b"), key=cert["min_bernstein"].get)
+        warn_user(
+            f"{model.kind}: model is not stable by construction on its input range (coefficient "
+            f"{worst} not positive there: relative Bernstein minimum "
+            f"{cert['min_bernstein'][worst]:.3g}); its free run may diverge; exporting it "
+            "anyway, check it before control design",
             RuntimeWarning,
         )
 

@@ -17,7 +17,7 @@ sampled-loop oscillation concentrates it there) and, from the envelope the model
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,15 +36,18 @@ from mrdamper.control.quarter_car import (
 from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
 from mrdamper.models.envelope import ENVELOPE_TOLERANCE, envelope_of, excursions
+from mrdamper.models.levels import check_levels
 
 __all__ = [
     "MAX_SUBSTEPS",
     "METRICS",
     "FidelityResult",
     "NotConvergedError",
+    "check_sides",
     "checked_run",
     "closed_loop_fidelity",
     "discrete_rate",
+    "failed_runs",
     "grouped_notes",
     "input_unit",
     "loop_metrics",
@@ -304,6 +307,40 @@ def _envelope_note(model: Any, r: QuarterCarResult) -> dict[str, float] | None:
     return excursions(trained, envelope_of([x], [v], [r.i], dt=[1.0 / r.fs]))
 
 
+def failed_runs(res: FidelityResult) -> int:
+    """Number of runs of ``res`` that diverged or were refused (:func:`check_sides`)."""
+    return check_sides(res.runs, lambda r: r.get("refused"), res.model_kind, res.plant_kind)
+
+
+def check_sides(
+    rows: Sequence[Mapping[str, Any]],
+    reason: Callable[[Mapping[str, Any]], str | None],
+    model_kind: str,
+    plant_kind: str | None,
+) -> int:
+    """Number of ``rows`` (runs with a ``side``) that failed, by ``reason(row)`` (None: ran).
+
+    Raises
+    ------
+    DataValidationError
+        Every run of one side failed: the model (``"model"``, predicted side) or the plant
+        (``"plant"``, achieved side) cannot drive the quarter car at all (unstable, or its step
+        fails); one line with the first run's reason.
+    """
+    failed = 0
+    for side, who, kind in (("predicted", "model", model_kind), ("achieved", "plant", plant_kind)):
+        why = [reason(r) for r in rows if r.get("side") == side]
+        bad = [w for w in why if w]
+        failed += len(bad)
+        if why and len(bad) == len(why):
+            raise DataValidationError(
+                who,
+                f"every loop with the {kind} {who} as damper failed ({len(bad)} runs; first: "
+                f"{bad[0]}); it cannot drive the quarter car (is it stable over its input range?)",
+            )
+    return failed
+
+
 def closed_loop_fidelity(
     model: Any,
     plant: Any,
@@ -348,6 +385,9 @@ def closed_loop_fidelity(
     """
     plant_m = resolve_plant(plant)
     check_pair(model, plant_m)
+    same = "every controller gives the same numbers"  # one level trained: no authority
+    check_levels(model, same)
+    check_levels(plant_m, same, field="plant")
     car = QuarterCar() if car is None else car
     for sp in speeds:
         if not (np.isfinite(sp) and sp > 0):

@@ -358,8 +358,11 @@ def export_fmu(
     MrDamperError
         gcc is not found or fails, or the platform is not 64-bit Linux.
     """
+    from mrdamper.control.export import warn_if_unstable
+
     path = check_writable(out, force, kind=FMU_FILE)
     files, _ = fmu_sources(model, name, inverse=inverse, dt=dt, reg=reg)
+    warn_if_unstable(model)  # as the .mat, JSON and C exports say it
     if not sys.platform.startswith("linux") or struct.calcsize("P") != 8:
         raise MrDamperError(
             f"FMU export builds a linux64 binary; this platform is {sys.platform} "

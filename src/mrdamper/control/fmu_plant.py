@@ -19,6 +19,7 @@ is checked against the Python step by :func:`mrdamper.control.fmu.run_fmu`.
 from __future__ import annotations
 
 import ctypes
+import os
 import shutil
 import struct
 import sys
@@ -54,7 +55,7 @@ def _read(path: Path) -> tuple[str, dict[str, str], bytes]:
             cs = root.find("CoSimulation")
             if cs is None:
                 raise DataValidationError("--plant", f"{path.name}: not a co-simulation FMU")
-            ident = cs.attrib["modelIdentifier"]
+            ident = _identifier(cs.attrib["modelIdentifier"], path)
             ann = root.find("VendorAnnotations/Tool[@name='mrdamper']/Model")
             if ann is None:
                 raise DataValidationError(
@@ -64,6 +65,43 @@ def _read(path: Path) -> tuple[str, dict[str, str], bytes]:
     except (zipfile.BadZipFile, KeyError, ET.ParseError) as exc:
         raise DataValidationError("--plant", f"{path.name}: not a readable FMU ({exc})") from None
     return ident, dict(ann.attrib), binary
+
+
+#: Reserved words of C99 (not identifiers).
+# fmt: off
+_C_KEYWORDS = frozenset((
+    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else",
+    "enum", "extern", "float", "for", "goto", "if", "inline", "int", "long", "register",
+    "restrict", "return", "short", "signed", "sizeof", "static", "struct", "switch", "typedef",
+    "union", "unsigned", "void", "volatile", "while", "_Bool", "_Complex", "_Imaginary",
+))
+# fmt: on
+
+
+def _identifier(ident: str, path: Path) -> str:
+    """``modelIdentifier`` checked against FMI 2.0's rule (a C identifier: it names the binary
+    ``binaries/linux64/<id>.so`` and prefixes its functions), so it can never name a path."""
+    if not (
+        ident.isascii() and ident.isidentifier() and ident not in _C_KEYWORDS and len(ident) <= 200
+    ):
+        raise DataValidationError(
+            "--plant",
+            f"{path.name}: modelIdentifier {ident[:80]!r} is not a C identifier (FMI 2.0: letters, "
+            "digits and '_', not starting with a digit); the FMU is refused",
+        )
+    return ident
+
+
+def _private_binary(folder: Path, ident: str, binary: bytes) -> Path:
+    """Write ``binary`` as ``folder/<ident>.so``, a new file that must resolve inside ``folder``
+    (created exclusively: nothing existing is ever written through)."""
+    so = (folder / f"{ident}.so").resolve()
+    if so.parent != folder.resolve():  # pragma: no cover - excluded by _identifier
+        raise DataValidationError("--plant", f"modelIdentifier {ident!r} leaves the FMU's folder")
+    fd = os.open(so, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+    with os.fdopen(fd, "wb") as f:
+        f.write(binary)
+    return so
 
 
 def _functions(lib: ctypes.CDLL, ident: str, path: Path) -> tuple[Any, Any, Any, int]:
@@ -149,9 +187,13 @@ class FMUPlant:
         )
         tmp = Path(tempfile.mkdtemp(prefix="mrdamper-fmu-plant-"))
         self._finalizer = weakref.finalize(self, shutil.rmtree, tmp, True)
-        so = tmp / f"{ident}.so"
-        so.write_bytes(binary)
-        self._lib = ctypes.CDLL(str(so))
+        so = _private_binary(tmp, ident, binary)
+        try:
+            self._lib = ctypes.CDLL(str(so))
+        except OSError as exc:
+            raise DataValidationError(
+                "--plant", f"{self.path.name}: its linux64 binary cannot be loaded ({exc})"
+            ) from None
         self._init, cforce, cadvance, self._n = _functions(self._lib, ident, self.path)
         self._form = FMUForm(cforce, cadvance)
 

@@ -98,6 +98,7 @@ from mrdamper.control._inverse_setup import (
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
+from mrdamper.models.levels import check_levels
 from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel, scheduled_form
 
 __all__ = [
@@ -300,6 +301,7 @@ def _range(model: FittedModel, i_range: Any) -> tuple[float, float]:
                 f"i_range: {(lo, hi)} leaves the range the {model.kind} model was identified on "
                 f"{(lo_m, hi_m)}; the inverse only uses inputs inside it"
             )
+    check_levels(model, f"no {getattr(model, 'input', 'i')} can be chosen to give a force")
     if not hi > lo:
         raise DataValidationError("i_range", f"expected a non-empty input range, got {(lo, hi)}")
     return lo, hi
@@ -394,6 +396,12 @@ def inverse_current(
             )
         )
     sched = scheduled_form(model)
+    if horizon is not None and (sched is None or sched.eta is None or method != "regularised"):
+        raise DataValidationError(
+            "horizon",
+            f"a lead horizon is a setting of the regularised inverse of an LPV model with a drive "
+            f"lag; this {model.kind} model's {method} inverse has none (drop it)",
+        )
     if isinstance(n_grid, bool) or not isinstance(n_grid, (int, np.integer)) or n_grid < 1:
         raise DataValidationError("n_grid", f"expected a positive integer, got {n_grid!r}")
     t, x, v = _motion(experiment_or_arrays)

@@ -150,23 +150,9 @@ class ControllerComparison:
 def _check_authority(model: Any) -> None:
     """Refuse a model identified at one electrical level: its force does not depend on the
     input, so every controller would give the same numbers (no control authority)."""
-    from mrdamper.models.base import single_level
+    from mrdamper.models.levels import check_levels
 
-    bounds = getattr(model, "input_range", None)
-    if bounds is None:  # a LinearDamper or another model without an identified input range
-        return
-    level = single_level(np.asarray(bounds, dtype=float))
-    if level is None:
-        return
-    source = getattr(model, "input", "i")
-    unit = "A" if source == "i" else "V"
-    raise DataValidationError(
-        "model",
-        f"the {getattr(model, 'kind', 'damper')} model was identified at one {source} level "
-        f"(input range [{bounds[0]:g}, {bounds[1]:g}] {unit}): its force does not depend on "
-        f"{source}, so every controller gives the same numbers; identify it on records at two "
-        "or more levels to compare controllers",
-    )
+    check_levels(model, "every controller gives the same numbers")
 
 
 def compare_controllers(

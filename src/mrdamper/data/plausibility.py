@@ -3,8 +3,10 @@
 A record whose values exceed these bounds was almost always read in the wrong units (millimetres
 declared as metres: a 4.6 m stroke at 88 m/s; a current in mA read as A: 1000 A). Readers check
 every record and warn, one line per channel, naming the channel, the value and the bound; the
-record is still returned (nothing is changed). Override a bound with ``plausible_max=`` of any
-reader (command line: ``--plausible-max KEY=VALUE``), e.g. for a large seismic damper.
+record is still returned (nothing is changed). A value beyond a bound by more than
+:data:`ABSURD_FACTOR` is no unit mistake but a corrupt sample (``x = 1e300`` m): the record is
+refused in one line naming the channel and the sample. Override a bound with ``plausible_max=``
+of any reader (command line: ``--plausible-max KEY=VALUE``), e.g. for a large seismic damper.
 
 =========  ==========================================  ========
 key        quantity                                    default
@@ -28,12 +30,15 @@ import numpy as np
 from mrdamper._warn import warn_user
 from mrdamper.errors import DataValidationError, PlausibilityWarning
 
-__all__ = ["PLAUSIBLE_MAX", "check_plausibility", "plausibility_bounds"]
+__all__ = ["ABSURD_FACTOR", "PLAUSIBLE_MAX", "check_plausibility", "plausibility_bounds"]
 
 #: Default plausibility bounds, SI units: stroke [m], v [m/s], F [N], i [A], voltage [V].
 PLAUSIBLE_MAX: Mapping[str, float] = MappingProxyType(
     {"stroke": 1.0, "v": 10.0, "F": 2.0e6, "i": 20.0, "voltage": 100.0}
 )
+#: Factor beyond a bound from which a value cannot be a unit mistake (nanometres read as metres
+#: are 1e9): the record is refused, not warned about.
+ABSURD_FACTOR = 1e12
 _UNITS = {"stroke": "m", "v": "m/s", "F": "N", "i": "A", "voltage": "V"}
 
 
@@ -84,11 +89,22 @@ def check_plausibility(
     values: dict[str, float] = {}
     x = channels.get("x")
     if x is not None and np.size(x):
-        values["stroke"] = float(np.nanmax(x) - np.nanmin(x))
+        values["stroke"] = float(np.nanmax(x)) - float(np.nanmin(x))  # Python floats: no overflow
     for ch in ("v", "F", "i", "voltage"):
         a = channels.get(ch)
         if a is not None and np.size(a):
             values[ch] = max(abs(float(np.nanmax(a))), abs(float(np.nanmin(a))))  # no |a| copy
+    for key, val in values.items():
+        if val > bounds[key] * ABSURD_FACTOR:
+            ch = "x" if key == "stroke" else key
+            a = np.asarray(channels[ch], dtype=np.float64)
+            k = int(np.nanargmax(np.abs(a)))
+            raise DataValidationError(
+                ch,
+                f"sample {k} of {source} is {float(a[k]):.3g} {_UNITS[key]}, beyond any damper "
+                f"(more than {ABSURD_FACTOR:g} times the plausible {bounds[key]:g} {_UNITS[key]}: "
+                "not a unit mistake but a corrupt value); fix or remove that sample",
+            )
     msgs = []
     for key, val in values.items():
         if val > bounds[key]:

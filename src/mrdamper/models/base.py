@@ -177,6 +177,8 @@ def single_level_note(kind: str, source: str, level: float) -> str:
 
 
 # ----------------------------------------------------------------------------- envelope check
+#: True while an outer :meth:`Estimator.fit` runs (inner fits of candidates skip its final check).
+_IN_FIT: contextvars.ContextVar[bool] = contextvars.ContextVar("_IN_FIT", default=False)
 #: True while a ``predict`` that already checked the envelope runs (inner calls do not repeat it).
 _IN_PREDICT: contextvars.ContextVar[bool] = contextvars.ContextVar("_IN_PREDICT", default=False)
 
@@ -521,6 +523,10 @@ class Estimator(abc.ABC):
     def fit(self, data: Experiment | Iterable[Experiment], **options: Any) -> FittedModel:
         """Identify the model from one record or a collection of records.
 
+        The outermost fit ends by measuring the model's free-run training ESR: a fit that
+        explains (almost) nothing of its training force (:mod:`mrdamper.models.fit_check`) gets
+        a warning and the note in its provenance (``training_fit``).
+
         Parameters
         ----------
         data : Experiment or iterable of Experiment
@@ -533,6 +539,26 @@ class Estimator(abc.ABC):
         FittedModel
             The identified model, an immutable value.
         """
+        if _IN_FIT.get():  # a candidate of a choice or of a drive lag: checked by the caller
+            return self._fit(data, **options)
+        records = self._as_set(data)
+        token = _IN_FIT.set(True)
+        try:
+            model = self._fit(records, **options)
+        finally:
+            _IN_FIT.reset(token)
+        from mrdamper.models.fit_check import training_fit_note
+
+        value, note = training_fit_note(model, records)
+        if note is None:
+            return model
+        warn_user(note, UserWarning)
+        check = {"training_esr": value, "note": note}
+        return dataclasses.replace(model, provenance={**model.provenance, "training_fit": check})
+
+    def _fit(self, data: Experiment | Iterable[Experiment], **options: Any) -> FittedModel:
+        """:meth:`fit` without the final check (the family's identification, with its choice of
+        open settings or drive lag)."""
         t0, c0 = time.perf_counter(), time.process_time()
         self._check_fit_options(options)
         self._validate()

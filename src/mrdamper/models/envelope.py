@@ -173,6 +173,11 @@ def excursions(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, float
     return out
 
 
+def _times(ratio: float) -> str:
+    """A ratio as ``1.07`` (or ``3.2e+302`` when absurdly large: never hundreds of digits)."""
+    return f"{ratio:.2f}" if ratio < 1e4 else f"{ratio:.3g}"
+
+
 def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[float, str]]:
     """The dimensions in which ``seen`` leaves ``trained`` by more than
     :data:`ENVELOPE_TOLERANCE`: dimension -> (ratio, one-phrase description).
@@ -185,7 +190,8 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
     tol = ENVELOPE_TOLERANCE
     vt, vs = float(trained["v_max"]), float(seen["v_max"])
     if vt > 0 and vs > (1 + tol) * vt:
-        out["velocity"] = (vs / vt, f"velocity {vs:.3g} m/s against {vt:.3g} m/s ({vs / vt:.2f} x)")
+        text = f"velocity {vs:.3g} m/s against {vt:.3g} m/s ({_times(vs / vt)} x)"
+        out["velocity"] = (vs / vt, text)
     lo, hi = (float(b) for b in trained["x_range"])
     slo, shi = (float(b) for b in seen["x_range"])
     half, mid = 0.5 * (hi - lo), 0.5 * (hi + lo)
@@ -195,7 +201,7 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
             reach / half,
             (
                 f"displacement [{slo * 1e3:.3g}, {shi * 1e3:.3g}] mm against [{lo * 1e3:.3g}, "
-                f"{hi * 1e3:.3g}] mm ({reach / half:.2f} x the reach)"
+                f"{hi * 1e3:.3g}] mm ({_times(reach / half)} x the reach)"
             ),
         )
     r = _frequency_ratio(trained, seen)
@@ -205,7 +211,7 @@ def leaves(trained: dict[str, Any], seen: dict[str, Any]) -> dict[str, tuple[flo
             r,
             (
                 f"frequency content up to {fs:.3g} Hz against {ft:.3g} Hz "
-                f"({r:.2f} x; {BAND_SHARE:.0%} of the velocity power)"
+                f"({_times(r)} x; {BAND_SHARE:.0%} of the velocity power)"
             ),
         )
     elo, ehi = (float(b) for b in trained["e_range"])

@@ -4,10 +4,13 @@ and whether it switches within a record."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-__all__ = ["held_within_records", "single_level"]
+from mrdamper.errors import DataValidationError
+
+__all__ = ["check_levels", "held_within_records", "single_level"]
 
 
 def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
@@ -26,6 +29,38 @@ def single_level(values: np.ndarray, rel_tol: float = 1e-9) -> float | None:
     if hi - lo <= rel_tol * max(1.0, abs(lo), abs(hi)):
         return 0.5 * (lo + hi)
     return None
+
+
+def check_levels(model: Any, consequence: str, field: str = "model") -> None:
+    """Refuse, in one line, a model identified at one electrical level for a use that needs its
+    force to depend on the input (a controller, an inverse, a loop that switches the input).
+
+    Parameters
+    ----------
+    model : FittedModel
+        The model (one without an ``input_range`` passes).
+    consequence : str
+        What goes wrong, ending the message (``"every controller gives the same numbers"``).
+    field : str
+        Name of the model in the message (``"model"``, ``"plant"``, ``"--loop-model"``).
+
+    Raises
+    ------
+    DataValidationError
+        The model's identified input range is one level.
+    """
+    bounds = getattr(model, "input_range", None)
+    level = None if bounds is None else single_level(np.asarray(bounds, dtype=float))
+    if level is None:
+        return
+    source = getattr(model, "input", "i")
+    unit = "A" if source == "i" else "V"
+    raise DataValidationError(
+        field,
+        f"the {getattr(model, 'kind', 'damper')} model was identified at one {source} level "
+        f"({level:g} {unit}): its force does not depend on {source}, so {consequence}; identify "
+        "it on records at two or more levels",
+    )
 
 
 def held_within_records(extremes: Sequence[tuple[float, float]], fraction: float) -> bool:

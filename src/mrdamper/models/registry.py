@@ -197,6 +197,9 @@ def model_from_dict(data: dict[str, Any]) -> FittedModel:
 def load_model(path: str | Path) -> FittedModel:
     """Load a model saved with :meth:`FittedModel.save`.
 
+    A model whose fit explained nothing of its training force (provenance ``training_fit``,
+    :mod:`mrdamper.models.fit_check`) is loaded with that note as a warning.
+
     Parameters
     ----------
     path : str or Path
@@ -214,6 +217,12 @@ def load_model(path: str | Path) -> FittedModel:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SchemaError(f"{p}: not valid JSON ({exc})") from None
     try:
-        return model_from_dict(data)
+        model = model_from_dict(data)
     except SchemaError as exc:
         raise SchemaError(f"{p}: {exc}") from None
+    check = dict(model.provenance or {}).get("training_fit")
+    if isinstance(check, dict) and isinstance(check.get("note"), str):
+        from mrdamper._warn import warn_user
+
+        warn_user(f"{p.name}: {check['note']}")  # every command that uses it says so
+    return model
