@@ -102,7 +102,7 @@ def model_signals(
     if eta is not None:
         rho = K.first_order_lag(rho, experiment.dt, eta)
     rho = to_model_rate(np.asarray(rho, dtype=np.float64), experiment.fs, fs)
-    v = to_model_rate(np.asarray(experiment.v), experiment.fs, fs)
+    v = readonly(to_model_rate(np.asarray(experiment.v), experiment.fs, fs))
     u = lpv_input.signal(np.asarray(v, dtype=np.float64), rho, 1.0 / fs)
     return np.ascontiguousarray(u, dtype=np.float64), readonly(rho)
 
