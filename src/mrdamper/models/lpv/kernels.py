@@ -371,25 +371,30 @@ def _simulate_generic(
     return y, -1
 
 
+@njit(cache=True)
+def _padded(u: FloatArray, n_m: int) -> FloatArray:  # pragma: no cover - numba
+    """``u`` after ``n_m`` zeros (zero initial conditions): sample ``k`` at ``k + n_m``."""
+    up = np.zeros(u.size + n_m)
+    for k in range(u.size):
+        up[k + n_m] = u[k]
+    return up
+
+
 @njit(cache=True, inline="always")
-def _output_and_regressors(
+def _sample(
     k: int,
-    u: FloatArray,
+    up: FloatArray,
+    yp: FloatArray,
     r: float,
     alpha: FloatArray,
     beta: FloatArray,
-    y: FloatArray,
     pw: FloatArray,
     a: FloatArray,
-    row: FloatArray,
 ) -> float:  # pragma: no cover - numba
-    """One sample of the free run and its regressors (:func:`simulate_sensitivity`).
-
-    Fills ``pw`` with the powers of ``r = rho[k]``, ``a`` with the denominator coefficients
-    ``a_j(r)`` and the first ``2 n_m n_p`` entries of ``row`` with the regressors
-    ``[-y[k-1-j] r^p ..., u[k-1-j] r^p ...]``; returns the output ``y[k]`` (from the outputs
-    ``y[:k]`` already computed; zero initial conditions).
-    """
+    """One sample of the free run, shared by the sensitivity kernels: fills ``pw`` with the
+    powers of ``r = rho[k]`` and ``a`` with the denominator coefficients ``a_j(r)``, and returns
+    the output ``y[k] = sum_j b_j(r) u[k-1-j] - a_j(r) y[k-1-j]`` from the zero-padded input and
+    outputs ``up``, ``yp`` (sample ``k`` at ``k + n_m``, :func:`_padded`)."""
     n_m, n_p = alpha.shape
     pw[0] = 1.0
     for p in range(1, n_p):
@@ -402,20 +407,30 @@ def _output_and_regressors(
             aj += alpha[j, p] * pw[p]
             bj += beta[j, p] * pw[p]
         a[j] = aj
-        if k - 1 - j >= 0:
-            acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
-    c = 0
-    for j in range(n_m):
-        yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
-        for p in range(n_p):
-            row[c] = yv * pw[p]
-            c += 1
-    for j in range(n_m):
-        uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
-        for p in range(n_p):
-            row[c] = uv * pw[p]
-            c += 1
+        acc += bj * up[k + n_m - 1 - j] - aj * yp[k + n_m - 1 - j]
     return acc
+
+
+@njit(cache=True, inline="always")
+def _sensitivity_row(
+    J: FloatArray, q: int, k: int, up: FloatArray, yp: FloatArray, pw: FloatArray, a: FloatArray
+) -> None:  # pragma: no cover - numba
+    """Row ``q`` of ``J``: the sensitivity of ``y[k]`` to ``theta``, the regressors
+    ``[-y[k-1-j] r^p ..., u[k-1-j] r^p ...]`` minus ``sum_l a_l(r) J[q-1-l]`` (rows ``q-1-l``
+    hold the previous samples' sensitivities, zeros before the first)."""
+    n_m = a.size
+    n_p = pw.size
+    h = n_m * n_p
+    for j in range(n_m):
+        yv = -yp[k + n_m - 1 - j]
+        uv = up[k + n_m - 1 - j]
+        for p in range(n_p):
+            J[q, j * n_p + p] = yv * pw[p]
+            J[q, h + j * n_p + p] = uv * pw[p]
+    for ll in range(n_m):
+        al = a[ll]
+        for c in range(2 * h):
+            J[q, c] -= al * J[q - 1 - ll, c]
 
 
 @njit(cache=True)
@@ -439,22 +454,26 @@ def simulate_sensitivity(
     n = u.size
     n_m, n_p = alpha.shape
     P = 2 * n_m * n_p
-    y = np.zeros(n)
-    J = np.zeros((n, P))
+    yp = np.zeros(n + n_m)
+    up = _padded(u, n_m)
+    Jp = np.zeros((n + n_m, P))  # sample k at row k + n_m, zero rows before the first
     a = np.empty(n_m)
     pw = np.empty(n_p)
+    bad = -1
     for k in range(n):
-        acc = _output_and_regressors(k, u, rho[k], alpha, beta, y, pw, a, J[k])
+        acc = _sample(k, up, yp, rho[k], alpha, beta, pw, a)
         if not (abs(acc) <= bound):
-            return y, J, k
-        y[k] = acc
-        for ll in range(n_m):
-            if k - 1 - ll < 0:
-                break
-            al = a[ll]
-            for c in range(P):
-                J[k, c] -= al * J[k - 1 - ll, c]
-    return y, J, -1
+            bad = k
+            break
+        yp[k + n_m] = acc
+        _sensitivity_row(Jp, k + n_m, k, up, yp, pw, a)
+    y = np.zeros(n)
+    J = np.zeros((n, P))
+    for k in range(n):
+        y[k] = yp[k + n_m]
+        for c in range(P):
+            J[k, c] = Jp[k + n_m, c]
+    return y, J, bad
 
 
 #: Samples per block of :func:`oe_normal_equations` whose Jacobian rows are added to ``J^T J``
@@ -495,10 +514,11 @@ def oe_normal_equations(
     Residual ``e[k] = y_hat[k] + offset + stiffness xd[k] - F[k]`` (``xd`` the displacement [m],
     used only when ``stiffness != 0`` or ``with_stiffness``); the unknowns are ``theta``, then
     the offset (``with_offset``), then the stiffness (``with_stiffness``, Jacobian column
-    ``xd``). The free run is that of :func:`_output_and_regressors` (same operations, same
-    order); its sensitivity rows ``J[k] = phi_k(y_hat) - sum_l a_l(rho[k]) J[k-1-l]`` are formed
-    in blocks of :data:`_OE_BLOCK` samples (the Jacobian is never stored whole): each row is added
-    to ``J^T e`` as it is formed, and each block to the upper triangle of ``J^T J``
+    ``xd``). The free run and its sensitivity rows
+    ``J[k] = phi_k(y_hat) - sum_l a_l(rho[k]) J[k-1-l]`` (:func:`_sample`,
+    :func:`_sensitivity_row`, as in :func:`simulate_sensitivity`) are formed in blocks of
+    :data:`_OE_BLOCK` samples (the Jacobian is never stored whole): each row is added to
+    ``J^T e`` as it is formed, and each block to the upper triangle of ``J^T J``
     (:func:`_add_gram_block`), mirrored at the end.
 
     Returns
@@ -524,9 +544,7 @@ def oe_normal_equations(
     cost = 0.0
     # output and input with n_m leading zeros (zero initial conditions): sample k at k + n_m
     yp = np.zeros(n + n_m)
-    up = np.zeros(n + n_m)
-    for k in range(n):
-        up[k + n_m] = u[k]
+    up = _padded(u, n_m)
     # Jacobian rows of the block at rows n_m.., the previous block's last n_m rows above them
     Jb = np.zeros((n_m + _OE_BLOCK, Q))
     T = np.empty((Q, _OE_BLOCK))  # the block's rows again, transposed
@@ -538,32 +556,11 @@ def oe_normal_equations(
     L = 0
     for k in range(n):
         q = n_m + L
-        r = rho[k]
-        pw[0] = 1.0
-        for p in range(1, n_p):
-            pw[p] = pw[p - 1] * r
-        acc = 0.0
-        for j in range(n_m):
-            aj = 0.0
-            bj = 0.0
-            for p in range(n_p):
-                aj += alpha[j, p] * pw[p]
-                bj += beta[j, p] * pw[p]
-            a[j] = aj
-            acc += bj * up[k + n_m - 1 - j] - aj * yp[k + n_m - 1 - j]
+        acc = _sample(k, up, yp, rho[k], alpha, beta, pw, a)
         if not (abs(acc) <= bound):
             return np.inf, g, H, k
         yp[k + n_m] = acc
-        for j in range(n_m):
-            yv = -yp[k + n_m - 1 - j]
-            uv = up[k + n_m - 1 - j]
-            for p in range(n_p):
-                Jb[q, j * n_p + p] = yv * pw[p]
-                Jb[q, h + j * n_p + p] = uv * pw[p]
-        for ll in range(n_m):
-            al = a[ll]
-            for c in range(P):
-                Jb[q, c] -= al * Jb[q - 1 - ll, c]
+        _sensitivity_row(Jb, q, k, up, yp, pw, a)
         if with_stiffness:
             Jb[q, Q - 1] = xd[k]
         e = acc + offset - F[k]
