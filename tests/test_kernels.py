@@ -126,3 +126,44 @@ def test_launcher_starts_early_only_for_a_demo(args: list[str], kinds: list[str]
     from mrdamper.cli.launch import demo_kinds
 
     assert demo_kinds(args) == kinds
+
+
+@pytest.mark.parametrize("fs", [500.0, 200.0])  # the model rate, and records up-sampled to it
+def test_lpv_fit_passes_the_listed_argument_types(
+    fs: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The default LPV fit and prediction call each listed kernel with its listed signature only,
+    on records at the model rate and on slower, up-sampled ones (one compilation per kernel)."""
+    import warnings
+
+    from mrdamper import Experiment
+    from mrdamper.analysis import hysteretic
+    from mrdamper.models.lpv import LPVEstimator
+    from mrdamper.models.lpv import kernels as K
+
+    listed = {it[1]: (it[0], compiled._types(it[2])) for it in compiled.KERNELS["lpv"]}
+    seen: dict[str, set[tuple[object, ...]]] = {name: set() for name in listed}
+    for name, (module, _) in listed.items():
+        owner = hysteretic if module == hysteretic.__name__ else K
+        kernel = getattr(owner, name)
+
+        def spy(*args: object, _k: object = kernel, _n: str = name) -> object:
+            seen[_n].add(tuple(typeof(a) for a in args))
+            return _k(*args)  # type: ignore[operator]
+
+        monkeypatch.setattr(owner, name, spy)
+    rng = np.random.default_rng(0)
+    records = []
+    for k, level in enumerate((0.0, 0.5, 1.0)):
+        t = np.arange(600) / fs
+        v = 0.1 * np.sin(2 * np.pi * 1.5 * t) + 0.01 * rng.standard_normal(t.size)
+        F = (300 + 900 * level) * np.tanh(v / 0.01) + 50 * v
+        records.append(
+            Experiment(t=t, x=np.cumsum(v) / fs, v=v, F=F, i=np.full(t.size, level), name=f"r{k}")
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = LPVEstimator(stroke=2e-4, blend=0.5, max_nfev=2).fit(records)
+        model.predict(records[0])
+    for name, (_, types) in listed.items():
+        assert seen[name] == {types}, name

@@ -104,6 +104,8 @@ _SP_MOD = "mrdamper.models.semiphenomenological"
 _LPV_ITEMS: tuple[Item, ...] = (
     (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r f1r F F F F B B", 1.2),
     (_LPV, "_simulate_fused43", "f1 f1r f2 f2 F", 0.5),
+    (_LPV, "residual_sse", "f1 f1r F f1r F", 0.1),
+    ("mrdamper.analysis.hysteretic", "_dahl", "f1r F F F", 0.3),  # the hysteretic input
 )
 _SP_ITEMS: tuple[Item, ...] = (
     (_SP, "_sp_force", "f1r f1r f1r i1r i1r f1r F", 0.4),

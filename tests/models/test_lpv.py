@@ -286,3 +286,42 @@ def test_gram_pass_matches_the_regression_matrix() -> None:
         np.testing.assert_allclose(G, X.T @ X, rtol=1e-12, atol=1e-12 * np.abs(G).max())
         np.testing.assert_allclose(g, X.T @ t, rtol=1e-12, atol=1e-12 * np.abs(g).max())
         assert yy == pytest.approx(float(t @ t), rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("n", "with_offset", "with_stiffness"), [(700, True, True), (5, False, False)]
+)
+def test_oe_normal_equations_match_the_stored_jacobian(n, with_offset, with_stiffness) -> None:
+    """The blockwise normal equations (a record across block boundaries, and one shorter than the
+    order's start-up) equal ``J^T J``, ``J^T e`` and ``e^T e`` of the stored sensitivity Jacobian
+    of :func:`simulate_sensitivity` (itself checked against central differences of the fused
+    free-run kernel), and the cost equals the free-run residual's ``residual_sse``."""
+    rng = np.random.default_rng(3)
+    u, rho = rng.standard_normal(n), rng.uniform(0.0, 1.0, n)
+    F, xd = rng.standard_normal(n), rng.standard_normal(n)
+    f0, k_x, w = 0.3, (1.7 if with_stiffness else 0.0), 0.8
+    y, J, bad = K.simulate_sensitivity(u, rho, ALPHA, BETA, 1e12)
+    assert bad == -1
+    # the stored sensitivities against central differences of the fused free-run kernel
+    theta, h = np.r_[ALPHA.ravel(), BETA.ravel()], 1e-6
+    for c in range(theta.size):
+        step = np.zeros(theta.size)
+        step[c] = h * max(1.0, abs(theta[c]))
+        ya = K.simulate_record(u, rho, *K.split_theta(theta + step, 2, 3), 1e12)[0]
+        yb = K.simulate_record(u, rho, *K.split_theta(theta - step, 2, 3), 1e12)[0]
+        fd = (ya - yb) / (2 * step[c])
+        np.testing.assert_allclose(J[:, c], fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max() + 1e-12)
+    e = y + f0 + k_x * xd - F
+    cols = (
+        [J] + ([np.ones((n, 1))] if with_offset else []) + ([xd[:, None]] if with_stiffness else [])
+    )
+    Jx = np.hstack(cols)
+    cost, g, H, bad = K.oe_normal_equations(
+        u, rho, ALPHA, BETA, F, xd, f0, k_x, w, 1e12, with_offset, with_stiffness
+    )
+    assert bad == -1
+    assert cost == pytest.approx(w * float(e @ e), rel=1e-12)
+    assert K.residual_sse(y, F, f0, xd, k_x) == pytest.approx(float(e @ e), rel=1e-12)
+    np.testing.assert_allclose(g, w * Jx.T @ e, rtol=1e-10, atol=1e-12 * np.abs(g).max())
+    np.testing.assert_allclose(H, w * Jx.T @ Jx, rtol=1e-10, atol=1e-12 * np.abs(H).max())
+    assert np.array_equal(H, H.T)

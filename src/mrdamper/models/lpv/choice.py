@@ -81,7 +81,7 @@ from mrdamper.errors import DataValidationError, IdentificationError, Simulation
 from mrdamper.models import _scale
 from mrdamper.models.base import Choice
 from mrdamper.models.envelope_folds import envelope_folds
-from mrdamper.models.lag import settings_chosen_without_lag
+from mrdamper.models.lag import LAG_SETTINGS, settings_chosen_without_lag
 from mrdamper.models.levels import single_level
 from mrdamper.models.lpv import inputs as _inputs
 from mrdamper.progress import report, section
@@ -485,6 +485,8 @@ class _Fold:
         else:
             self.score_set, score_w, score_win = _windowed(split.held_out, split.held_out_weights)
         self.w = np.ones(len(self.score_set)) if score_w is None else np.asarray(score_w, float)
+        #: Zone laws of the fit part, once a candidate has fitted them (see :meth:`score`).
+        self.laws: Any = None
         self.windows: dict[str, Any] | None = None
         if fit_win is not None or score_win is not None:
             self.windows = {
@@ -497,8 +499,18 @@ class _Fold:
 
     def score(self, cand: Any) -> tuple[float, str]:
         """The candidate fitted on the fold's fit part: its mean free-run ESR on the scored part
-        (inf, with the reason, when a free run diverges)."""
+        (inf, with the reason, when a free run diverges).
+
+        The zone laws depend on the fit part alone, not on the stroke and blend: the first
+        candidate that fits them leaves them to the fold's next candidates (given as
+        ``zone_laws``), unless a drive lag is identified per candidate (the laws then follow
+        each candidate's lag)."""
+        shared = cand.zone_laws is None and cand.eta not in LAG_SETTINGS
+        if shared and self.laws is not None:
+            cand = dataclasses.replace(cand, zone_laws=self.laws)
         model = cand.fit(self.fit_set, record_weights=self.fit_w)
+        if shared and self.laws is None:
+            self.laws = model.zone_laws
         report(f"free-run ESR on the {self.split.held_out.name} records")
         try:
             esr = [model.with_range_policy("ignore").score(e).esr for e in self.score_set]

@@ -26,6 +26,7 @@ from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
+from mrdamper.models._arrays import readonly
 from mrdamper.models.base import (
     Choice,
     Estimator,
@@ -357,12 +358,11 @@ class LPVEstimator(Estimator):
             report("LPV input signals", k, len(exps))
             e.require_samples(self.n_m + 2, "LPV identification")
             u, rho = model_signals(e, el, fs=fs, eta=eta, lpv_input=lpv_input)
-            Fr = np.ascontiguousarray(to_model_rate(np.asarray(e.F), e.fs, fs), dtype=np.float64)
+            # read-only whether resampled or not: one argument type for the kernels
+            Fr = readonly(to_model_rate(np.asarray(e.F), e.fs, fs))
             F.append(Fr)
             if stiffness != 0:  # the displacement only where a stiffness needs it
-                X.append(
-                    np.ascontiguousarray(to_model_rate(np.asarray(e.x), e.fs, fs), dtype=np.float64)
-                )
+                X.append(readonly(to_model_rate(np.asarray(e.x), e.fs, fs)))
             U.append(u)
             R.append(rho)
             var = float(np.var(Fr))

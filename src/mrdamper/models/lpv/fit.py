@@ -17,6 +17,7 @@ from scipy import optimize
 from mrdamper._warn import warn_user
 from mrdamper.errors import IdentificationError
 from mrdamper.models import _scale
+from mrdamper.models._arrays import readonly
 from mrdamper.models.lpv import kernels as K
 from mrdamper.models.lpv.kernels import frozen_poles, largest_frozen_pole, split_theta
 from mrdamper.progress import counted, report
@@ -78,10 +79,7 @@ class Records:
             return self
         return dataclasses.replace(
             self,
-            F=[
-                np.ascontiguousarray(f - stiffness * self.displacement(r))
-                for r, f in enumerate(self.F)
-            ],
+            F=[readonly(f - stiffness * self.displacement(r)) for r, f in enumerate(self.F)],
         )
 
     def flat(self, y: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -369,10 +367,8 @@ def free_run_cost(
         y, bad = K.simulate_record(rec.u[r], rec.rho[r], alpha, beta, bound)
         if bad >= 0:
             return float("inf")
-        e = y + f0 - rec.F[r]
-        if stiffness != 0.0:
-            e = e + stiffness * rec.displacement(r)
-        total += rec.weights[r] * float(e @ e)
+        xd = rec.displacement(r) if stiffness != 0.0 else _NO_X
+        total += rec.weights[r] * K.residual_sse(y, rec.F[r], f0, xd, stiffness)
     return total
 
 

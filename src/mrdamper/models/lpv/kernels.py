@@ -25,6 +25,8 @@ __all__ = [
     "frozen_poles",
     "gram_pass",
     "largest_frozen_pole",
+    "oe_normal_equations",
+    "residual_sse",
     "simulate_record",
     "simulate_sensitivity",
     "split_theta",
@@ -369,25 +371,30 @@ def _simulate_generic(
     return y, -1
 
 
+@njit(cache=True)
+def _padded(u: FloatArray, n_m: int) -> FloatArray:  # pragma: no cover - numba
+    """``u`` after ``n_m`` zeros (zero initial conditions): sample ``k`` at ``k + n_m``."""
+    up = np.zeros(u.size + n_m)
+    for k in range(u.size):
+        up[k + n_m] = u[k]
+    return up
+
+
 @njit(cache=True, inline="always")
-def _output_and_regressors(
+def _sample(
     k: int,
-    u: FloatArray,
+    up: FloatArray,
+    yp: FloatArray,
     r: float,
     alpha: FloatArray,
     beta: FloatArray,
-    y: FloatArray,
     pw: FloatArray,
     a: FloatArray,
-    row: FloatArray,
 ) -> float:  # pragma: no cover - numba
-    """One sample of the free run and its regressors, shared by the sensitivity kernels.
-
-    Fills ``pw`` with the powers of ``r = rho[k]``, ``a`` with the denominator coefficients
-    ``a_j(r)`` and the first ``2 n_m n_p`` entries of ``row`` with the regressors
-    ``[-y[k-1-j] r^p ..., u[k-1-j] r^p ...]``; returns the output ``y[k]`` (from the outputs
-    ``y[:k]`` already computed; zero initial conditions).
-    """
+    """One sample of the free run, shared by the sensitivity kernels: fills ``pw`` with the
+    powers of ``r = rho[k]`` and ``a`` with the denominator coefficients ``a_j(r)``, and returns
+    the output ``y[k] = sum_j b_j(r) u[k-1-j] - a_j(r) y[k-1-j]`` from the zero-padded input and
+    outputs ``up``, ``yp`` (sample ``k`` at ``k + n_m``, :func:`_padded`)."""
     n_m, n_p = alpha.shape
     pw[0] = 1.0
     for p in range(1, n_p):
@@ -400,20 +407,30 @@ def _output_and_regressors(
             aj += alpha[j, p] * pw[p]
             bj += beta[j, p] * pw[p]
         a[j] = aj
-        if k - 1 - j >= 0:
-            acc += bj * u[k - 1 - j] - aj * y[k - 1 - j]
-    c = 0
-    for j in range(n_m):
-        yv = -y[k - 1 - j] if k - 1 - j >= 0 else 0.0
-        for p in range(n_p):
-            row[c] = yv * pw[p]
-            c += 1
-    for j in range(n_m):
-        uv = u[k - 1 - j] if k - 1 - j >= 0 else 0.0
-        for p in range(n_p):
-            row[c] = uv * pw[p]
-            c += 1
+        acc += bj * up[k + n_m - 1 - j] - aj * yp[k + n_m - 1 - j]
     return acc
+
+
+@njit(cache=True, inline="always")
+def _sensitivity_row(
+    J: FloatArray, q: int, k: int, up: FloatArray, yp: FloatArray, pw: FloatArray, a: FloatArray
+) -> None:  # pragma: no cover - numba
+    """Row ``q`` of ``J``: the sensitivity of ``y[k]`` to ``theta``, the regressors
+    ``[-y[k-1-j] r^p ..., u[k-1-j] r^p ...]`` minus ``sum_l a_l(r) J[q-1-l]`` (rows ``q-1-l``
+    hold the previous samples' sensitivities, zeros before the first)."""
+    n_m = a.size
+    n_p = pw.size
+    h = n_m * n_p
+    for j in range(n_m):
+        yv = -yp[k + n_m - 1 - j]
+        uv = up[k + n_m - 1 - j]
+        for p in range(n_p):
+            J[q, j * n_p + p] = yv * pw[p]
+            J[q, h + j * n_p + p] = uv * pw[p]
+    for ll in range(n_m):
+        al = a[ll]
+        for c in range(2 * h):
+            J[q, c] -= al * J[q - 1 - ll, c]
 
 
 @njit(cache=True)
@@ -437,22 +454,44 @@ def simulate_sensitivity(
     n = u.size
     n_m, n_p = alpha.shape
     P = 2 * n_m * n_p
-    y = np.zeros(n)
-    J = np.zeros((n, P))
+    yp = np.zeros(n + n_m)
+    up = _padded(u, n_m)
+    Jp = np.zeros((n + n_m, P))  # sample k at row k + n_m, zero rows before the first
     a = np.empty(n_m)
     pw = np.empty(n_p)
+    bad = -1
     for k in range(n):
-        acc = _output_and_regressors(k, u, rho[k], alpha, beta, y, pw, a, J[k])
+        acc = _sample(k, up, yp, rho[k], alpha, beta, pw, a)
         if not (abs(acc) <= bound):
-            return y, J, k
-        y[k] = acc
-        for ll in range(n_m):
-            if k - 1 - ll < 0:
-                break
-            al = a[ll]
-            for c in range(P):
-                J[k, c] -= al * J[k - 1 - ll, c]
-    return y, J, -1
+            bad = k
+            break
+        yp[k + n_m] = acc
+        _sensitivity_row(Jp, k + n_m, k, up, yp, pw, a)
+    y = np.zeros(n)
+    J = np.zeros((n, P))
+    for k in range(n):
+        y[k] = yp[k + n_m]
+        for c in range(P):
+            J[k, c] = Jp[k + n_m, c]
+    return y, J, bad
+
+
+#: Samples per block of :func:`oe_normal_equations` whose Jacobian rows are added to ``J^T J``
+#: together.
+_OE_BLOCK = 256
+
+
+@njit(cache=True, fastmath={"reassoc", "contract"})
+def _add_gram_block(H: FloatArray, T: FloatArray, L: int) -> None:  # pragma: no cover - numba
+    """``H += T[:, :L] T[:, :L]^T`` on the upper triangle (``T`` holds one Jacobian column per
+    row; the sums over the block may be reordered, so that they vectorise)."""
+    Q = T.shape[0]
+    for i in range(Q):
+        for j in range(i, Q):
+            s = 0.0
+            for r in range(L):
+                s += T[i, r] * T[j, r]
+            H[i, j] += s
 
 
 @njit(cache=True)
@@ -475,14 +514,17 @@ def oe_normal_equations(
     Residual ``e[k] = y_hat[k] + offset + stiffness xd[k] - F[k]`` (``xd`` the displacement [m],
     used only when ``stiffness != 0`` or ``with_stiffness``); the unknowns are ``theta``, then
     the offset (``with_offset``), then the stiffness (``with_stiffness``, Jacobian column
-    ``xd``). The sensitivity rows are propagated with only
-    the last ``n_m`` kept (the Jacobian is never stored); each row is added to ``J^T J``
-    (upper triangle, mirrored at the end) and ``J^T e`` as it is formed.
+    ``xd``). The free run and its sensitivity rows
+    ``J[k] = phi_k(y_hat) - sum_l a_l(rho[k]) J[k-1-l]`` (:func:`_sample`,
+    :func:`_sensitivity_row`, as in :func:`simulate_sensitivity`) are formed in blocks of
+    :data:`_OE_BLOCK` samples (the Jacobian is never stored whole): each row is added to
+    ``J^T e`` as it is formed, and each block to the upper triangle of ``J^T J``
+    (:func:`_add_gram_block`), mirrored at the end.
 
     Returns
     -------
     cost : float
-        ``weight * sum(e^2)``.
+        ``weight * sum(e^2)`` [N^2].
     g : float64[:]
         ``weight * J^T e`` (length ``2 n_m n_p``, plus one with the offset, plus one with the
         stiffness).
@@ -493,51 +535,69 @@ def oe_normal_equations(
     """
     n = u.size
     n_m, n_p = alpha.shape
-    P = 2 * n_m * n_p
+    h = n_m * n_p
+    P = 2 * h
     Q = P + (1 if with_offset else 0) + (1 if with_stiffness else 0)
     use_x = with_stiffness or stiffness != 0.0
     H = np.zeros((Q, Q))
     g = np.zeros(Q)
     cost = 0.0
-    y = np.zeros(n)
-    hist = np.zeros((n_m, P))  # hist[l] = J row of sample k-1-l
+    # output and input with n_m leading zeros (zero initial conditions): sample k at k + n_m
+    yp = np.zeros(n + n_m)
+    up = _padded(u, n_m)
+    # Jacobian rows of the block at rows n_m.., the previous block's last n_m rows above them
+    Jb = np.zeros((n_m + _OE_BLOCK, Q))
+    T = np.empty((Q, _OE_BLOCK))  # the block's rows again, transposed
+    if with_offset:
+        for q in range(n_m + _OE_BLOCK):
+            Jb[q, P] = 1.0
     a = np.zeros(n_m)
     pw = np.zeros(n_p)
-    row = np.zeros(Q)  # J row of sample k: theta, then the offset's 1, then the stiffness's x
-    if with_offset:
-        row[P] = 1.0
+    L = 0
     for k in range(n):
-        if with_stiffness:
-            row[Q - 1] = xd[k]
-        acc = _output_and_regressors(k, u, rho[k], alpha, beta, y, pw, a, row)
+        q = n_m + L
+        acc = _sample(k, up, yp, rho[k], alpha, beta, pw, a)
         if not (abs(acc) <= bound):
             return np.inf, g, H, k
-        y[k] = acc
-        for ll in range(n_m):
-            al = a[ll]
-            for c in range(P):
-                row[c] -= al * hist[ll, c]
-        for ll in range(n_m - 1, 0, -1):
-            for c in range(P):
-                hist[ll, c] = hist[ll - 1, c]
-        for c in range(P):
-            hist[0, c] = row[c]
+        yp[k + n_m] = acc
+        _sensitivity_row(Jb, q, k, up, yp, pw, a)
+        if with_stiffness:
+            Jb[q, Q - 1] = xd[k]
         e = acc + offset - F[k]
         if use_x:
             e += stiffness * xd[k]
         cost += e * e
-        # rank-one update of the upper triangle of J^T J and of J^T e
         for i in range(Q):
-            ri = row[i]
-            g[i] += ri * e
-            for j in range(i, Q):
-                H[i, j] += ri * row[j]
+            g[i] += Jb[q, i] * e
+            T[i, L] = Jb[q, i]
+        L += 1
+        if L == _OE_BLOCK or k == n - 1:
+            _add_gram_block(H, T, L)
+            for ll in range(n_m):  # the block's last n_m rows start the next block's recursion
+                for c in range(Q):
+                    Jb[ll, c] = Jb[L + ll, c]
+            L = 0
     for i in range(Q):
         g[i] *= weight
-        for j in range(i, Q):
+        for j in range(i, Q):  # the upper triangle, mirrored (exactly symmetric)
             H[i, j] *= weight
             H[j, i] = H[i, j]
     return weight * cost, g, H, -1
+
+
+@njit(cache=True)
+def residual_sse(
+    y: FloatArray, F: FloatArray, offset: float, xd: FloatArray, stiffness: float
+) -> float:  # pragma: no cover - numba
+    """``sum_k (y[k] + offset + stiffness xd[k] - F[k])^2`` [N^2], in sample order, without
+    allocating the residual (``xd`` is read only when ``stiffness != 0``)."""
+    total = 0.0
+    for k in range(y.size):
+        e = y[k] + offset - F[k]
+        if stiffness != 0.0:
+            e += stiffness * xd[k]
+        total += e * e
+    return total
 
 
 # ----------------------------------------------------------------------------- coefficients, poles

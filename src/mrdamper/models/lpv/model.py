@@ -33,6 +33,7 @@ from mrdamper.analysis import ZoneLaws
 from mrdamper.analysis.scheduling import Reading
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models._arrays import readonly
 from mrdamper.models.base import (
     FittedModel,
 )
@@ -94,15 +95,16 @@ def model_signals(
     Returns
     -------
     u, rho : ndarray
-        Contiguous float64 arrays at the model rate: ``u`` [m/s], ``rho`` [A] or [V].
+        Contiguous float64 arrays at the model rate: ``u`` [m/s], ``rho`` [A] or [V] (read-only,
+        whether resampled or not: one argument type for the kernels, :mod:`mrdamper.compiled`).
     """
     rho = np.ascontiguousarray(electrical, dtype=np.float64)
     if eta is not None:
         rho = K.first_order_lag(rho, experiment.dt, eta)
     rho = to_model_rate(np.asarray(rho, dtype=np.float64), experiment.fs, fs)
-    v = to_model_rate(np.asarray(experiment.v), experiment.fs, fs)
+    v = readonly(to_model_rate(np.asarray(experiment.v), experiment.fs, fs))
     u = lpv_input.signal(np.asarray(v, dtype=np.float64), rho, 1.0 / fs)
-    return np.ascontiguousarray(u, dtype=np.float64), np.ascontiguousarray(rho, dtype=np.float64)
+    return np.ascontiguousarray(u, dtype=np.float64), readonly(rho)
 
 
 # ----------------------------------------------------------------------------- fitted models
