@@ -121,6 +121,14 @@ def quartercar(
         float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A].")
     ] = None,
     rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
+    i_range: Annotated[
+        str | None,
+        typer.Option(
+            "--i-range",
+            help="Input limits LO,HI [A] (default: the model's identified range within the "
+            "rated range of the damper its records came from).",
+        ),
+    ] = None,
     force: Annotated[
         bool, typer.Option("--force", help="Overwrite existing output files.")
     ] = False,
@@ -206,6 +214,7 @@ def quartercar(
             bump_length=bump_length,
             reg=reg,
             rate=rate,
+            i_range=_pair("--i-range", i_range),
             **extra,
         )
     except TypeError as exc:
@@ -252,8 +261,29 @@ def quartercar(
                 f"warning: {ctrl}, {road}: {oscillation_note(share, peak, qc, fs_m)}: the metrics "
                 "are the model's loop, not the damper's"
             )
+    from mrdamper.control._loop import limits_note
+
+    if i_range is None and limits_note(m):
+        typer.echo(f"note: {limits_note(m)}", err=True)
+    for (road, ctrl), why in cmp.refused.items():
+        typer.echo(f"warning: {ctrl}, {road}: not run: {why}", err=True)
+    if cmp.step_note():
+        typer.echo(f"{m.kind} damper through its per-sample step: {cmp.step_note()}")
     how = f" (inverse: {c_inverse.name})" if c_inverse is not None else ""
     typer.echo(f"{m.kind}{how}: wrote {', '.join(files)} in {out}")
+
+
+def _pair(flag: str, text: str | None) -> tuple[float, float] | None:
+    """``LO,HI`` as two floats with ``LO <= HI`` (None for None)."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        raise DataValidationError(flag, f"expected LO,HI (two numbers), got {text!r}") from None
+    if not lo <= hi:
+        raise DataValidationError(flag, f"expected LO <= HI, got {text!r}")
+    return lo, hi
 
 
 def _car(car: list[str] | None) -> Any:

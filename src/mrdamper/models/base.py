@@ -526,6 +526,9 @@ class Estimator(abc.ABC):
             warnings.warn(note, UserWarning, stacklevel=2)
         # the records' sampling intervals [s] (the default step of the model's exports)
         provenance["record_dt"] = sorted({float(e.dt) for e in prepared.records})
+        damper = {str(e.metadata.get("reference_damper", "")) for e in prepared.records}
+        if len(damper) == 1 and "" not in damper:  # the rig's damper behind every record
+            provenance["training_damper"] = damper.pop()
         provenance["elapsed_s"] = time.perf_counter() - t0
         provenance["cpu_s"] = time.process_time() - c0
         model = self.model_class(
