@@ -81,7 +81,7 @@ def _png_writer(fig: Any) -> Callable[[Path], object]:
 
 
 def quartercar(
-    model_file: Annotated[Path, typer.Argument(help="Damper model file (lpv, sp1..sp4, bingham).")],
+    model_file: Annotated[Path, typer.Argument(help="Damper model file (any kind).")],
     out: Annotated[
         Path, typer.Option("--out", "-o", help="Output folder for the table and figures.")
     ],

@@ -128,7 +128,7 @@ def export(
 def inverse(
     model_file: Annotated[
         Path,
-        typer.Argument(help="Model file (lpv, sp1..sp4, bingham, tanh, boucwen, dahl, lugre)."),
+        typer.Argument(help="Model file (any kind; without an inverse form: through its step)."),
     ],
     data: Annotated[
         Path, typer.Argument(help="One record file; its force column F is the desired force.")
