@@ -146,12 +146,9 @@ def _doc_block(text: str) -> str:
 @pytest.mark.slow
 def test_every_kind_through_the_control_tools(doe_models: dict[str, Any]) -> None:
     outcomes = kind_outcomes(doe_models)
-    failed = {k: c for k, c in outcomes.items() if c["quarter car"] != "ok"}
-    assert not failed, failed  # the quarter car runs for every kind
-    for kind, cells in outcomes.items():
-        for tool in ("--plant rig", "plant of sp1"):
-            assert cells[tool] == "ok", (kind, tool, cells[tool])
     table = matrix_markdown(outcomes)
+    failed = {(k, t): c for k, cells in outcomes.items() for t, c in cells.items() if c != "ok"}
+    assert not failed, failed  # every kind through every tool
     text = DOC.read_text(encoding="utf-8")
     if os.environ.get("MRDAMPER_WRITE_MATRIX") == "1":
         DOC.write_text(text.replace(_doc_block(text), table), encoding="utf-8")

@@ -194,6 +194,10 @@ def quartercar(
         from mrdamper.control.c_inverse import load_c_inverse
 
         extra["c_inverse"] = load_c_inverse(m, c_inverse)
+        if i_range is None:  # the limits the C inverse was exported with: the identified range
+            from mrdamper.control.inverse import model_input_limits
+
+            i_range = ",".join(repr(b) for b in model_input_limits(m))
     ctrls = [
         Controller(c.strip(), c_sky=c_sky, c_ground=c_ground, alpha=alpha)
         for c in controllers.split(",")

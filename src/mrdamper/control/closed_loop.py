@@ -249,11 +249,7 @@ def invert_through_step(
     vpk = float(np.max(np.abs(v))) if v.size else 0.0
     sc = step_control(model, dt, vpk if vpk > 0 else 0.3)
     if sc.sample is not None and not np.isclose(sc.sample, dt, rtol=1e-9, atol=0.0):
-        raise DataValidationError(
-            "t",
-            f"the {model.kind} model runs at {1.0 / sc.sample:g} Hz; its inverse through the "
-            f"step needs records at that rate, got {1.0 / dt:g} Hz",
-        )
+        return _at_model_rate(model, x, v, F_desired, dt, sc.sample, limits, reg, rate, n_grid)
     if reg is None:
         reg = default_reg(model, vpk, dt, authority=sc.authority) if vpk > 0 else 0.0
     lam, step_rate = reg_settings(model, v, reg, rate, lo, hi, dt)
@@ -283,6 +279,44 @@ def invert_through_step(
     if bad >= 0:
         raise SimulationDivergedError(model.kind, int(bad), "its step failed along the record")
     return e, err > 0.05 * np.abs(F_desired) + 1.0
+
+
+def _at_model_rate(
+    model: Any,
+    x: np.ndarray,
+    v: np.ndarray,
+    F_desired: np.ndarray,
+    dt: float,
+    sample: float,
+    limits: tuple[float, float],
+    reg: float | None,
+    rate: float | None,
+    n_grid: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`invert_through_step` of a record at another rate than the discrete-time model's
+    ``1 / sample`` [Hz]: solved at the model rate (the record resampled as the model's prediction
+    resamples it) and the input interpolated back, with a note."""
+    from mrdamper._warn import warn_user
+    from mrdamper.errors import Note
+    from mrdamper.models.rates import to_model_rate
+
+    fs, fs_m = 1.0 / dt, 1.0 / sample
+    x_m, v_m, F_m = (to_model_rate(a, fs, fs_m) for a in (x, v, F_desired))
+    if v_m.size < 2:
+        raise DataValidationError(
+            "t", f"record too short: {x.size} samples at {fs:g} Hz give {v_m.size} at {fs_m:g} Hz"
+        )
+    e_m, sat_m = invert_through_step(
+        model, x_m, v_m, F_m, sample, limits, reg=reg, rate=rate, n_grid=n_grid
+    )
+    warn_user(
+        f"{model.kind}: record sampled at {fs:g} Hz, model at {fs_m:g} Hz; the inverse is solved "
+        "at the model rate and its input interpolated back onto the record's samples",
+        Note,
+    )
+    t, t_m = np.arange(x.size) * dt, np.arange(v_m.size) * sample
+    nearest = np.clip(np.rint(t * fs_m).astype(np.int64), 0, v_m.size - 1)
+    return np.interp(t, t_m, e_m), sat_m[nearest]
 
 
 def _controller(controller: Controller | str) -> Controller:
