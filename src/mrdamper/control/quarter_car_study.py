@@ -256,6 +256,19 @@ def compare_controllers(
     **sim_kw
         Passed to :func:`~mrdamper.control.quarter_car.simulate_quarter_car` (``reg``, ``rate``,
         ...).
+
+    Returns
+    -------
+    ControllerComparison
+        Every run that ran; a run whose damper goes through its per-sample step is checked by
+        halving its plant step (and sub-stepped where it diverges at the road's step, see
+        :func:`_run`); a run that cannot be made (diverged at every plant step, not converged, or
+        a controller the model cannot drive) is a row of ``refused`` with its reason.
+
+    Raises
+    ------
+    SimulationDivergedError, NotConvergedError, DataValidationError
+        When no run could be made (the first reason), or for bad settings.
     """
     from mrdamper.control.fidelity import NotConvergedError  # fidelity imports this module
 
