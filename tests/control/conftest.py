@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -51,31 +52,40 @@ def dyke_models(dyke_record: Any) -> dict[str, Any]:
     return {"lpv": lpv, "sp1": SP1Estimator(input="voltage", eta=250.0).fit(train)}
 
 
-class _LazyFits(dict):  # type: ignore[type-arg]
-    """Each kind fitted on first use with the conformance suite's short settings and records."""
+def _conformance_records() -> list[Any]:
+    """The conformance suite's synthetic records: sines at three current levels."""
+    from tests.models.test_conformance import LEVELS, _record
 
-    def __init__(self) -> None:
+    return [
+        _record(a, f, (lev,), f"{name}{lev}", c)
+        for lev in LEVELS
+        for a, f, name, c in ((0.01, 1.0, "slow", 2.0), (0.004, 4.0, "fast", 4.0))
+    ]
+
+
+class LazyFits(dict):  # type: ignore[type-arg]
+    """Each kind fitted on first use with the conformance suite's short settings, on the records
+    ``training()`` gives (made once, on the first fit; kept as ``records``)."""
+
+    def __init__(self, training: Callable[[], list[Any]] = _conformance_records) -> None:
         super().__init__()
-        self._training: list[Any] | None = None
+        self._make = training
+        self.records: list[Any] = []
 
     def __missing__(self, kind: str) -> Any:
-        from tests.models.test_conformance import LEVELS, _fit, _record
+        from tests.models.test_conformance import _fit
 
-        if self._training is None:
-            self._training = [
-                _record(a, f, (lev,), f"{name}{lev}", c)
-                for lev in LEVELS
-                for a, f, name, c in ((0.01, 1.0, "slow", 2.0), (0.004, 4.0, "fast", 4.0))
-            ]
-        model = _fit(kind, self._training)
+        if not self.records:
+            self.records = self._make()
+        model = _fit(kind, self.records)
         self[kind] = model
         return model
 
 
 @pytest.fixture(scope="session")
 def kind_models() -> dict[str, Any]:
-    """Every kind fitted lazily on synthetic records (see :class:`_LazyFits`)."""
-    return _LazyFits()
+    """Every kind fitted lazily on synthetic records (see :class:`LazyFits`)."""
+    return LazyFits()
 
 
 @pytest.fixture(scope="session")

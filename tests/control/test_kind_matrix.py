@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import os
 import re
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +29,7 @@ from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.quarter_car import iso_road
 from mrdamper.kinds import KINDS
 from tests.conftest import REPO_ROOT
+from tests.control.conftest import LazyFits
 
 #: The tools of the matrix, in table order: column title and what it runs.
 TOOLS = ("quarter car", "inverse", "--plant rig", "plant of sp1")
@@ -40,31 +40,16 @@ END = "<!-- /kind-matrix -->"
 RATED = (0.0, 1.0)
 
 
-class _Fits(dict):  # type: ignore[type-arg]
-    """Each kind fitted on first use on the tiny DoE."""
+def _tiny_doe() -> list[Any]:
+    from mrdamper.rig.doe import table_ii
 
-    def __init__(self) -> None:
-        super().__init__()
-        self._doe: list[Any] | None = None
-
-    def __missing__(self, kind: str) -> Any:
-        from mrdamper import get_estimator
-        from mrdamper.rig.doe import table_ii
-        from tests.models.test_conformance import FAST
-
-        if self._doe is None:
-            self._doe = list(table_ii(seed=0, scale=0.07, fs=200.0, experiments=[1, 6]))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            model = get_estimator(kind, **FAST.get(kind, {})).fit(self._doe)
-        self[kind] = model
-        return model
+    return list(table_ii(seed=0, scale=0.07, fs=200.0, experiments=[1, 6]))
 
 
 @pytest.fixture(scope="session")
-def doe_models() -> dict[str, Any]:
+def doe_models() -> LazyFits:
     """Every kind fitted lazily on the tiny default DoE (see the module docstring)."""
-    return _Fits()
+    return LazyFits(_tiny_doe)
 
 
 def _road() -> Any:
@@ -113,12 +98,12 @@ def _plant_of(controller: Any, plant: Any) -> None:
     assert np.all(np.isfinite(r.F))
 
 
-def kind_outcomes(models: dict[str, Any]) -> dict[str, dict[str, str]]:
+def kind_outcomes(models: LazyFits) -> dict[str, dict[str, str]]:
     """Outcome of every tool for every kind of the table."""
     out: dict[str, dict[str, str]] = {}
     for row in KINDS:
         m = models[row.kind]
-        record = models._doe[0].slice(0, 200)
+        record = models.records[0].slice(0, 200)
         out[row.kind] = {
             "quarter car": _outcome(lambda m=m: _quarter_car(m)),
             "inverse": _outcome(lambda m=m, r=record: _inverse(m, r)),
@@ -144,7 +129,7 @@ def _doc_block(text: str) -> str:
 
 
 @pytest.mark.slow
-def test_every_kind_through_the_control_tools(doe_models: dict[str, Any]) -> None:
+def test_every_kind_through_the_control_tools(doe_models: LazyFits) -> None:
     outcomes = kind_outcomes(doe_models)
     table = matrix_markdown(outcomes)
     failed = {(k, t): c for k, cells in outcomes.items() for t, c in cells.items() if c != "ok"}
