@@ -260,10 +260,11 @@ def compare_controllers(
     Returns
     -------
     ControllerComparison
-        Every run that ran; a run whose damper goes through its per-sample step is checked by
+        Every run that ran; a run whose damper goes through a continuous-time step is checked by
         halving its plant step (and sub-stepped where it diverges at the road's step, see
-        :func:`_run`); a run that cannot be made (diverged at every plant step, not converged, or
-        a controller the model cannot drive) is a row of ``refused`` with its reason.
+        :func:`_checked`); a run that cannot be made (diverged at every plant step, not
+        converged, or a controller the model cannot drive) is a row of ``refused`` with its
+        reason.
 
     Raises
     ------
@@ -300,6 +301,7 @@ def compare_controllers(
         raise DataValidationError(
             "road_classes", "no road to drive: give road classes or bump=True"
         )
+    check = _checked(model, sim_kw)
     results: dict[tuple[str, str], QuarterCarResult] = {}
     steps: dict[tuple[str, str], tuple[int, float]] = {}
     refused: dict[tuple[str, str], str] = {}
@@ -308,7 +310,7 @@ def compare_controllers(
         for c in ctrls:
             key = (road.name, c.kind)
             try:
-                results[key], *step = _run(model, road, c, car, sim_kw)
+                results[key], *step = _run(model, road, c, car, sim_kw, check)
             except (SimulationDivergedError, NotConvergedError, DataValidationError) as exc:
                 # a run the model cannot make is a row; bad settings (any other field) stop here
                 if isinstance(exc, DataValidationError) and exc.field != "MODEL":
@@ -329,21 +331,37 @@ def compare_controllers(
 
 
 def _run(
-    model: Any, road: Road, c: Controller, car: QuarterCar | None, sim_kw: dict[str, Any]
+    model: Any,
+    road: Road,
+    c: Controller,
+    car: QuarterCar | None,
+    sim_kw: dict[str, Any],
+    check: bool,
 ) -> tuple[QuarterCarResult, int, float]:
-    """One run, with its plant steps per road sample and the halving change of its metrics.
-
-    A damper run through its per-sample step (a model without an inverse form, or another
-    plant) takes the halving check (:func:`~mrdamper.control.fidelity.checked_run`), which also
-    sub-steps a loop that diverges at the road's step; a model run as its own damper in the fused
-    kernel, or a run at the caller's ``substeps``, runs once (change NaN).
-    """
+    """One run, with its plant steps per road sample and the halving change of its metrics: with
+    ``check`` the halving check (:func:`~mrdamper.control.fidelity.checked_run`, which also
+    sub-steps a loop that diverges at the road's step), else one run (change NaN)."""
     from mrdamper.control.fidelity import checked_run
 
-    if "substeps" in sim_kw or not stepped(model, sim_kw.get("plant")):
+    if not check:
         return simulate_closed_loop(model, road, c, car, **sim_kw), sim_kw.get("substeps", 1), NAN
 
     def run(n: int) -> QuarterCarResult:
         return simulate_closed_loop(model, road, c, car, substeps=n, **sim_kw)
 
     return checked_run(run)
+
+
+def _checked(model: Any, sim_kw: dict[str, Any]) -> bool:
+    """Whether the runs take the halving check: a damper run through a continuous-time step (a
+    model without an inverse form, or another plant), whose plant step is the damper's
+    integration step. A discrete-time damper (LPV, LTI, NARX) runs at its own sample time
+    whatever the plant step, and a model that is its own damper in the fused kernel at the road's
+    step; the caller's ``substeps`` are taken as given."""
+    from mrdamper.control.closed_loop import plant_step, resolve_plant
+
+    plant = sim_kw.get("plant")
+    if "substeps" in sim_kw or not stepped(model, plant):
+        return False
+    damper = model if plant is None else resolve_plant(plant)
+    return plant_step(damper, 1e-3).dt is None
