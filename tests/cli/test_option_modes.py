@@ -49,6 +49,7 @@ VALUES: dict[str, str | None] = {
     "--workers": "1",
     "--loop-model": "sp3.json",
     "--format": "parquet",
+    "--i-range": "0,1",
     "--pattern": "rec_.*",
     "--fs": "200",
     "--resample-fs": "200",

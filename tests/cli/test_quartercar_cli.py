@@ -63,6 +63,8 @@ def test_quartercar_writes_table_and_figures(
         (["--car", "mass=3"], "--car"),
         (["--controllers", "fuzzy"], "controller"),
         (["--roads", "Z"], "road_classes"),
+        (["--i-range", "1,0"], "--i-range"),
+        (["--i-range", "0"], "--i-range"),
     ],
 )
 def test_quartercar_bad_options(

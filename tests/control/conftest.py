@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -51,28 +52,37 @@ def dyke_models(dyke_record: Any) -> dict[str, Any]:
     return {"lpv": lpv, "sp1": SP1Estimator(input="voltage", eta=250.0).fit(train)}
 
 
-class _LazyFits(dict):  # type: ignore[type-arg]
-    """Each kind fitted on first use with the conformance suite's short settings and records."""
+def _conformance_records() -> list[Any]:
+    """The conformance suite's synthetic records: sines at three current levels."""
+    from mrdamper.conformance import training_records
 
-    def __init__(self) -> None:
+    return training_records()
+
+
+class LazyFits(dict):  # type: ignore[type-arg]
+    """Each kind fitted on first use with the conformance suite's short settings, on the records
+    ``training()`` gives (made once, on the first fit; kept as ``records``)."""
+
+    def __init__(self, training: Callable[[], list[Any]] = _conformance_records) -> None:
         super().__init__()
-        self._training: list[Any] | None = None
+        self._make = training
+        self.records: list[Any] = []
 
     def __missing__(self, kind: str) -> Any:
-        from mrdamper.conformance import fit_quietly, training_records
+        from mrdamper.conformance import fit_quietly
         from tests.models.test_conformance import _estimator
 
-        if self._training is None:
-            self._training = training_records()
-        model = fit_quietly(_estimator(kind), self._training)
+        if not self.records:
+            self.records = self._make()
+        model = fit_quietly(_estimator(kind), self.records)
         self[kind] = model
         return model
 
 
 @pytest.fixture(scope="session")
 def kind_models() -> dict[str, Any]:
-    """Every kind fitted lazily on synthetic records (see :class:`_LazyFits`)."""
-    return _LazyFits()
+    """Every kind fitted lazily on synthetic records (see :class:`LazyFits`)."""
+    return LazyFits()
 
 
 @pytest.fixture(scope="session")

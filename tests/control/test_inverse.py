@@ -200,13 +200,12 @@ def test_arrays_input_and_bad_inputs() -> None:
     lti = LTIModel(
         alpha=ALPHA[:, :1], beta=BETA[:, :1], fs=FS, input_signal="v", input_range=(0.0, 2.0)
     )
-    with pytest.raises(TypeError, match="'lti'"):
+    with pytest.raises(DataValidationError, match="through its step: 'regularised' only"):
         inverse_current(lti, e, F, method="exact")
 
 
-def test_unsupported_kind_names_supported_ones() -> None:
-    from mrdamper.rig import reference_damper
-
+def test_an_object_without_inverse_form_or_step_is_refused() -> None:
     e, _ = _motion(n=200)
-    with pytest.raises(TypeError, match="supported kinds are 'lpv'"):
-        inverse_current(reference_damper(), e, np.zeros(e.n), method="exact")
+    bare = type("Bare", (), {"kind": "bare", "input_range": (0.0, 1.0), "input": "i"})()
+    with pytest.raises(TypeError, match="'bare': neither an inverse form nor a per-sample step"):
+        inverse_current(bare, e, np.zeros(e.n))

@@ -148,3 +148,20 @@ def test_compare_controllers_table_and_figures() -> None:
     assert default_rate(m) == 1000.0
     lpv_like = type("M", (), {"kind": "lpv", "fs": 300.0})()
     assert default_rate(lpv_like) == 1200.0  # smallest multiple of 300 Hz with a step <= 1 ms
+
+
+def test_the_controllers_stay_within_the_rated_range() -> None:
+    # identified up to 1.0086 A on a DoE of the rig's quiroz2022 damper (rated 0-1 A): the
+    # controllers' limits are the rated ones unless given
+    from mrdamper.control._loop import input_limits, limits_note
+    from mrdamper.control.quarter_car_study import compare_controllers
+
+    S = (800.0, 200.0, 60.0, 0.0, 900.0, 0.0)
+    rig = SP3Model(S=S, input_range=(0.0, 1.0086), provenance={"training_damper": "quiroz2022"})
+    other = SP3Model(S=S, input_range=(0.0, 1.0086))
+    assert input_limits(rig) == (0.0, 1.0) and input_limits(other) == (0.0, 1.0086)
+    assert "rated range of the quiroz2022 damper" in limits_note(rig) and not limits_note(other)
+    kw = {"road_classes": ("C",), "bump": False, "controllers": ("hard",), "duration": 1.0}
+    hard = compare_controllers(rig, **kw).table()["mean_input"].iloc[0]
+    wide = compare_controllers(rig, i_range=(0.0, 1.0086), **kw).table()["mean_input"].iloc[0]
+    np.testing.assert_allclose([hard, wide], [1.0, 1.0086], rtol=1e-12)

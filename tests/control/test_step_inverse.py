@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from mrdamper.control import inverse_current
+from mrdamper.errors import DataValidationError
 from mrdamper.models import model_class
 from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel
 from tests.models.hysteresis_cases import record
@@ -98,8 +99,8 @@ def test_refusals() -> None:
     rec = record(7, duration=0.2)
     from mrdamper.models.spencer import spencer1997
 
-    with pytest.raises(TypeError, match="'tanh', 'boucwen', 'dahl', 'lugre'"):
-        inverse_current(spencer1997(), rec, np.zeros(rec.n))
+    with pytest.raises(DataValidationError, match="through its step: 'regularised' only"):
+        inverse_current(spencer1997(), rec, np.zeros(rec.n), method="exact")
 
 
 def test_quarter_car_with_a_hysteresis_model_as_controller() -> None:

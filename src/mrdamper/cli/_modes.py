@@ -66,8 +66,23 @@ MODES: dict[str, tuple[Mode, ...]] = {
             "for the bump)",
         ),
         Mode(
+            "--plant",
+            ("--i-range",),
+            "model and plant run within the damper's rated range (the identified range within the "
+            "rig damper's, a note says which)",
+        ),
+        Mode(
             "--tune",
-            (*_BUMP, "--controllers", "--c-sky", "--c-ground", "--alpha", "--reg", "--rate"),
+            (
+                *_BUMP,
+                "--controllers",
+                "--c-sky",
+                "--c-ground",
+                "--alpha",
+                "--reg",
+                "--rate",
+                "--i-range",
+            ),
             "the sweep covers every controller over its own grid of gains on the ISO roads, with "
             "the inverse's default settings",
         ),

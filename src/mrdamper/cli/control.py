@@ -136,6 +136,14 @@ def quartercar(
         float | None, typer.Option("--reg", help="Inverse regularisation weight [N/A].")
     ] = None,
     rate: Annotated[float | None, typer.Option("--rate", help="Input rate bound [A/s].")] = None,
+    i_range: Annotated[
+        str | None,
+        typer.Option(
+            "--i-range",
+            help="Input limits LO,HI [A] (default: the model's identified range within the "
+            "rated range of the damper its records came from).",
+        ),
+    ] = None,
     force: Annotated[
         bool, typer.Option("--force", help="Overwrite existing output files.")
     ] = False,
@@ -198,6 +206,10 @@ def quartercar(
         from mrdamper.control.c_inverse import load_c_inverse
 
         extra["c_inverse"] = load_c_inverse(m, c_inverse)
+        if i_range is None:  # the limits the C inverse was exported with: the identified range
+            from mrdamper.control.inverse import model_input_limits
+
+            i_range = ",".join(repr(b) for b in model_input_limits(m))
     classes = [r.strip().upper() for r in roads.split(",") if r.strip()]
     try:
         cmp = compare_controllers(
@@ -213,6 +225,7 @@ def quartercar(
             bump_length=bump_length,
             reg=reg,
             rate=rate,
+            i_range=_pair("--i-range", i_range),
             **extra,
         )
     except TypeError as exc:
@@ -272,8 +285,29 @@ def quartercar(
             f"{oscillation_note(share, peak, qc, discrete_rate(m))}",
             err=True,
         )
+    from mrdamper.control._loop import limits_note
+
+    if i_range is None and limits_note(m):
+        typer.echo(f"note: {limits_note(m)}", err=True)
+    for (road, ctrl), why in cmp.refused.items():
+        typer.echo(f"warning: {ctrl}, {road}: not run: {why}", err=True)
+    if cmp.step_note():
+        typer.echo(f"{m.kind} damper through its per-sample step: {cmp.step_note()}")
     how = f" (inverse: {c_inverse.name})" if c_inverse is not None else ""
     typer.echo(f"{m.kind}{how}: wrote {', '.join(files)} in {out}")
+
+
+def _pair(flag: str, text: str | None) -> tuple[float, float] | None:
+    """``LO,HI`` as two floats with ``LO <= HI`` (None for None)."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        raise DataValidationError(flag, f"expected LO,HI (two numbers), got {text!r}") from None
+    if not lo <= hi:
+        raise DataValidationError(flag, f"expected LO <= HI, got {text!r}")
+    return lo, hi
 
 
 def _car(car: list[str] | None) -> Any:

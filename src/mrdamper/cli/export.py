@@ -141,10 +141,7 @@ def inverse(
     ctx: typer.Context,
     model_file: Annotated[
         Path,
-        typer.Argument(
-            help="Model file written by 'mrdamper fit' (a kind with an inverse; another kind is "
-            "refused with the list of those that have one)."
-        ),
+        typer.Argument(help="Model file (any kind; without an inverse form: through its step)."),
     ],
     data: Annotated[
         Path, typer.Argument(help="One record file; its force column F is the desired force.")

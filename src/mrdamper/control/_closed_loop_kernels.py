@@ -36,7 +36,7 @@ from mrdamper.control._quarter_car_kernels import (
 )
 from mrdamper.models.step_dispatch import family_advance, family_force
 
-__all__ = ["compile_loop", "run_loop", "run_loop_packed"]
+__all__ = ["compile_loop", "invert_record_packed", "run_loop", "run_loop_packed"]
 
 # Bound by compile_loop in each compiled variant (placeholders for the Python source).
 C_FORCE: Any = None
@@ -45,6 +45,17 @@ P_FORCE: Any = None
 P_ADVANCE: Any = None
 LEAD_FORCE: Any = None
 STEP_INVERSE: Any = None
+
+
+@njit(cache=True)
+def _rate_window(lo: float, hi: float, prev: float, change: float) -> tuple[float, float]:
+    """The inputs within ``[lo, hi]`` and ``change`` of the previous input ``prev`` (the nearest
+    point of ``[lo, hi]`` to the rate window when they do not meet)."""
+    a = max(lo, prev - change)
+    b = min(hi, prev + change)
+    if b < a:
+        a = b = min(max(prev, a), b)
+    return a, b
 
 
 def _lead_force(  # type: ignore[no-untyped-def]
@@ -193,12 +204,7 @@ def _loop(  # type: ignore[no-untyped-def]
         if c_step:
             if k >= 1 and C_ADVANCE(c_form, c_state, xc, vc, e, x_d, v_d, e, dt_c) != 0:
                 return X, F, Fd, E, sat, k * n_sub, -2
-            a, b = lo, hi
-            if k >= 1:
-                a = max(a, prev - rate_step)
-                b = min(b, prev + rate_step)
-                if b < a:
-                    a = b = min(max(prev, a), b)
+            a, b = (lo, hi) if k == 0 else _rate_window(lo, hi, prev, rate_step)
             if ctrl == CTRL_PASSIVE:
                 target = np.nan
                 r = min(max(i_const, a), b)
@@ -290,6 +296,44 @@ def _loop(  # type: ignore[no-untyped-def]
     return X, F, Fd, E, sat, -1, 0
 
 
+def _invert_record(  # type: ignore[no-untyped-def]
+    form, state, x, v, Fd, dt, n_lead, offset, lo, hi, lam2, step_change, n_pts
+):  # pragma: no cover - numba
+    """Input of a model through its step along a record (:func:`_step_inverse` per sample).
+
+    At sample ``k`` the model's state is that of the record so far under the inputs chosen;
+    the input is chosen for the mean desired force (rest force removed) over the ``n_lead``
+    samples ahead, within ``[lo, hi]`` and ``step_change`` of the previous input, and the state
+    is advanced to the next sample with it.
+
+    Returns
+    -------
+    E : float64[:]
+        Input per sample.
+    err : float64[:]
+        ``|G(e) - target|`` of the interpolated lead force [N] per sample.
+    bad : int
+        First sample whose step failed (-1 when none).
+    """
+    n = x.size
+    E = np.zeros(n)
+    err = np.zeros(n)
+    scratch = state.copy()
+    prev = lo
+    for k in range(n):
+        a, b = (lo, hi) if k == 0 else _rate_window(lo, hi, prev, step_change)
+        j1 = min(n, k + 1 + n_lead)
+        target = np.mean(Fd[k + 1 : j1]) if j1 > k + 1 else Fd[k]
+        e, err[k] = STEP_INVERSE(
+            form, state, scratch, x[k], v[k], dt, n_lead, offset, target, a, b, prev, lam2, n_pts
+        )
+        E[k] = e
+        prev = e
+        if k + 1 < n and C_ADVANCE(form, state, x[k], v[k], e, x[k + 1], v[k + 1], e, dt) != 0:
+            return E, err, k + 1
+    return E, err, -1
+
+
 def compile_loop(
     c_force: Callable[..., float],
     c_advance: Callable[..., int],
@@ -298,12 +342,14 @@ def compile_loop(
     *,
     cache: bool,
     control: Any = None,
+    inverse: bool = False,
 ) -> Any:
     """:func:`_loop` compiled with the controller model's and the plant's step functions bound
     (see the module docstring); ``cache`` caches it on disk (only for functions that are the same
     in every process); ``control`` replaces
     :func:`~mrdamper.control._quarter_car_kernels.control_sample` (a variant with another inverse:
-    :mod:`mrdamper.control.c_inverse`)."""
+    :mod:`mrdamper.control.c_inverse`); ``inverse`` compiles :func:`_invert_record` instead (the
+    controller model's functions bound)."""
     names = dict(globals())
     names.update(C_FORCE=c_force, C_ADVANCE=c_advance, P_FORCE=p_force, P_ADVANCE=p_advance)
     if control is not None:
@@ -316,6 +362,8 @@ def compile_loop(
 
     names["LEAD_FORCE"] = bind(_lead_force, False)
     names["STEP_INVERSE"] = bind(_step_inverse, False)
+    if inverse:
+        return bind(_invert_record, cache)
     return bind(_loop, cache)
 
 
@@ -323,6 +371,11 @@ def compile_loop(
 #: (:func:`mrdamper.models.step_dispatch.pack`); compiled once, cached on disk.
 run_loop_packed = compile_loop(
     family_force, family_advance, family_force, family_advance, cache=True
+)
+
+#: :func:`_invert_record` for the built-in families' packed forms (cached on disk).
+invert_record_packed = compile_loop(
+    family_force, family_advance, family_force, family_advance, cache=True, inverse=True
 )
 
 _RUNTIME: dict[tuple[Any, ...], Any] = {}

@@ -35,10 +35,13 @@ __all__ = [
     "controller_form",
     "damper_arrays",
     "divergence_hint",
+    "input_limits",
     "input_unit",
+    "limits_note",
     "loop_result",
     "loop_setup",
     "positive",
+    "rated_range",
 ]
 
 #: Controller name -> kernel code.
@@ -134,34 +137,30 @@ def loop_setup(
     substeps: int,
     arrays: dict[str, Any] | None = None,
     authority: float | None = None,
+    sample: float | None = None,
 ) -> LoopSetup:
     """Prepare one run (``model`` is the controller's model; see :func:`simulate_quarter_car`).
 
     ``arrays`` overrides :func:`damper_arrays` (a model without inverse arrays); ``authority``
-    [N per input unit] then sets the default regularisation weight (:func:`default_reg`).
+    [N per input unit] then sets the default regularisation weight (:func:`default_reg`);
+    ``sample`` [s] is the control sample of a controller that steps a discrete-time model (its
+    sample time, an integer number of road samples).
     """
     own = arrays is None  # the model's own inverse arrays (not a model stepped instead)
     arrays = damper_arrays(model) if arrays is None else arrays
-    lo, hi = (
-        model_input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
-    )
+    lo, hi = input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
     if not hi >= lo:
         raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
     if arrays["is_lpv"]:
-        ratio = road.fs / model.fs
-        n_sub = round(ratio)
-        if n_sub < 1 or abs(ratio - n_sub) > 1e-9 * ratio:
-            raise DataValidationError(
-                "road",
-                f"road sampled at {road.fs:g} Hz; an LPV damper at {model.fs:g} Hz needs an "
-                "integer multiple",
-            )
+        n_sub = _samples_per_sample(road.fs, model.fs, "an LPV damper")
         if model.eta is not None:
             arrays["lag"] = float(np.exp(-model.eta / model.fs))
         n_h = horizon_samples(model.eta, 1.0 / model.fs)
     else:
         n_h = 1
         n_sub = 1
+        if sample is not None:  # a stepped discrete-time model: control at its own rate
+            n_sub = _samples_per_sample(road.fs, 1.0 / sample, f"the {model.kind} model")
         # a static map with a drive lag, at the road rate (a stepped model's lag is in its step)
         if own and getattr(model, "eta", None) is not None:
             arrays["lag"] = float(np.exp(-model.eta / road.fs))
@@ -222,6 +221,19 @@ def loop_setup(
     )
 
 
+def _samples_per_sample(road_fs: float, model_fs: float, what: str) -> int:
+    """Road samples per model sample (refused when the road's rate [Hz] is not an integer
+    multiple of the model's)."""
+    ratio = road_fs / model_fs
+    n = round(ratio)
+    if n < 1 or abs(ratio - n) > 1e-9 * ratio:
+        raise DataValidationError(
+            "road",
+            f"road sampled at {road_fs:g} Hz; {what} at {model_fs:g} Hz needs an integer multiple",
+        )
+    return n
+
+
 def controller_form(s: LoopSetup, n_grid: int) -> ControllerForm:
     """The controller of the run ``s`` as the compiled loops read it, with the damper model's
     inverse (``n_grid`` intervals of its search grid)."""
@@ -262,6 +274,46 @@ def loop_result(
         i=rep(cmd, s.n_sub),
         saturated=rep(sat, s.n_sub),
         car=s.car,
+    )
+
+
+def rated_range(model: Any) -> tuple[float, float] | None:
+    """The rated input range of the damper behind ``model``'s training records [A] or [V]: the
+    input range of the shipped reference damper the virtual rig made them with (provenance
+    ``training_damper``), else None (not known)."""
+    from mrdamper.rig.reference import REFERENCE_DAMPERS, reference_damper
+
+    name = dict(getattr(model, "provenance", None) or {}).get("training_damper")
+    if name not in REFERENCE_DAMPERS:
+        return None
+    lo, hi = reference_damper(str(name)).input_range
+    return float(lo), float(hi)
+
+
+def input_limits(model: Any) -> tuple[float, float]:
+    """A controller's default input limits: the model's
+    (:func:`~mrdamper.control.inverse.model_input_limits`) within the rated range of its
+    damper when known (:func:`rated_range`; the identified range of a measured current can pass
+    it: 1.0086 A for a rated 0-1 A driver)."""
+    lo, hi = model_input_limits(model)
+    rated = rated_range(model)
+    if rated is not None and max(lo, rated[0]) <= min(hi, rated[1]):
+        lo, hi = max(lo, rated[0]), min(hi, rated[1])
+    return lo, hi
+
+
+def limits_note(model: Any) -> str:
+    """One line on the controllers' input limits when the rated range narrows the identified
+    one (``""`` otherwise)."""
+    lo, hi = input_limits(model)
+    mlo, mhi = model_input_limits(model)
+    if (lo, hi) == (mlo, mhi):
+        return ""
+    u = input_unit(model)
+    name = dict(getattr(model, "provenance", None) or {}).get("training_damper")
+    return (
+        f"inputs within [{lo:g}, {hi:g}] {u}, the rated range of the {name} damper the training "
+        f"records were made with (identified on [{mlo:.5g}, {mhi:.5g}] {u}); --i-range widens it"
     )
 
 

@@ -216,6 +216,10 @@ def checked_run(
     """Run with 1, 2, 4, ... plant steps per road sample until halving the step moves no metric
     by more than ``tol`` (relative).
 
+    A run that diverges at a step is repeated at half that step (a stiff damper coupled to the car
+    over too long a step is how a loop that is stable diverges); the check then starts from the
+    first step that ran.
+
     Returns
     -------
     result : QuarterCarResult
@@ -229,9 +233,24 @@ def checked_run(
     ------
     NotConvergedError
         Not converged at ``max_substeps`` (the message gives the figure and the metric).
+    SimulationDivergedError
+        Diverged at every step down to ``max_substeps / 2`` plant steps per road sample.
     """
     s = 1
-    a = run(s)
+    while True:
+        try:
+            a = run(s)
+            break
+        except SimulationDivergedError as exc:
+            if 2 * s >= max_substeps:
+                what = str(exc).split(": ", 2)[-1]
+                raise SimulationDivergedError(
+                    exc.model,
+                    exc.sample,
+                    f"{what}, at every plant step down to 1/{s} of the road's: the loop itself "
+                    "diverges, not its integration",
+                ) from exc
+            s *= 2
     ma = loop_metrics(a)
     while True:
         b = run(2 * s)

@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control._loop import input_limits
 from mrdamper.control.closed_loop import check_pair, resolve_plant, simulate_closed_loop
 from mrdamper.control.fidelity import MAX_SUBSTEPS, checked_run, loop_metrics
-from mrdamper.control.inverse import model_input_limits
 from mrdamper.control.quarter_car import Controller, QuarterCar, QuarterCarResult, iso_road
 from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.errors import DataValidationError, MrDamperError
@@ -424,7 +424,7 @@ def gain_fronts(
     for f in levels:
         if not (0.0 <= float(f) <= 1.0):
             raise DataValidationError("levels", f"expected fractions in [0, 1], got {f!r}")
-    lo, hi = model_input_limits(model)
+    lo, hi = input_limits(model)  # within the rated range of the damper, when known
     points = _points(GAIN_GRIDS if grids is None else grids, alphas, levels)
     fs = default_rate(model)
     rows: list[dict[str, Any]] = []

@@ -334,10 +334,13 @@ def inverse_current(
     Parameters
     ----------
     model : FittedModel
-        An LPV model (kind ``"lpv"``), a static map (``"sp1"``..``"sp4"``, ``"bingham"``) or a
+        An LPV model (kind ``"lpv"``), a static map (``"sp1"``..``"sp4"``, ``"bingham"``), a
         model solved through its own step (``"tanh"``, ``"boucwen"``, ``"dahl"``, ``"lugre"``:
         closed form per sample, their ``invert_record``; with a drive lag for the lagged input,
-        then the command through :func:`driver_command`).
+        then the command through :func:`driver_command`), or any other model with a per-sample
+        step (``"spencer"``, ``"p15"``, ``"lti"``, ``"narx"``: the quarter car's inverse through
+        the step along the record, :func:`~mrdamper.control.closed_loop.invert_through_step`;
+        regularised only).
     experiment_or_arrays : Experiment or mapping
         The motion: a record (its force and electrical channels are not used) or a mapping with
         arrays ``t`` [s], ``x`` [m], ``v`` [m/s].
@@ -376,24 +379,18 @@ def inverse_current(
     Raises
     ------
     TypeError
-        For model kinds without an inverse here (Spencer, P-15, NARX, LTI).
+        For an object with neither an inverse form nor a per-sample step.
     DataValidationError
         Bad lengths or values. (An LPV record at another rate than the model is solved at the
         model rate and interpolated back, with a note.)
     OutOfRangeError
         ``i_range`` outside the model's identified input range.
     """
-    if not isinstance(model, (InvertibleModel, StepInvertibleModel)):
-        kind = getattr(model, "kind", type(model).__name__)
+    stepped = not isinstance(model, (InvertibleModel, StepInvertibleModel))
+    if stepped and not callable(getattr(model, "step", None)):
         raise TypeError(
-            f"model: no inverse for kind {kind!r}; supported kinds are 'lpv' (dynamic, causal "
-            f"per-sample solution), the static maps 'sp1', 'sp2', 'sp3', 'sp4', 'bingham' and "
-            f"'tanh', 'boucwen', 'dahl', 'lugre'"
-            + (
-                " (an LTI model's force does not depend on the present current)"
-                if kind == "lti"
-                else ""
-            )
+            f"model: no inverse for {getattr(model, 'kind', type(model).__name__)!r}: neither an "
+            "inverse form nor a per-sample step"
         )
     sched = scheduled_form(model)
     if horizon is not None and (sched is None or sched.eta is None or method != "regularised"):
@@ -425,7 +422,17 @@ def inverse_current(
         raise DataValidationError("tol", f"expected a force tolerance >= 0 [N], got {tol!r}")
     if method not in ("regularised", "exact"):
         raise DataValidationError("method", f"expected 'regularised' or 'exact', got {method!r}")
-    if isinstance(model, StepInvertibleModel):  # closed form per sample through its step
+    if stepped:  # no inverse form: solved per sample on its step, the quarter car's inverse
+        if method == "exact":
+            raise DataValidationError(
+                "method", f"the {model.kind} model is inverted through its step: 'regularised' only"
+            )
+        from mrdamper.control.closed_loop import invert_through_step  # it imports this module
+
+        dt = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
+        w, sat = invert_through_step(model, x, v, Fd, dt, (lo, hi), reg=reg, rate=rate)
+        rho = w
+    elif isinstance(model, StepInvertibleModel):  # closed form per sample through its step
         dt = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
         lam, step_rate = (
             (0.0, np.inf) if method == "exact" else reg_settings(model, v, reg, rate, lo, hi, dt)

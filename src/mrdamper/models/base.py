@@ -596,6 +596,9 @@ class Estimator(abc.ABC):
             warn_user(note, UserWarning)
         # the records' sampling intervals [s] (the default step of the model's exports)
         provenance["record_dt"] = sorted({float(e.dt) for e in prepared.records})
+        damper = {str(e.metadata.get("reference_damper", "")) for e in prepared.records}
+        if len(damper) == 1 and "" not in damper:  # the rig's damper behind every record
+            provenance["training_damper"] = damper.pop()
         provenance["elapsed_s"] = time.perf_counter() - t0
         provenance["cpu_s"] = time.process_time() - c0
         fs = result.parameters.get("fs")  # a discrete model's own rate [Hz]
