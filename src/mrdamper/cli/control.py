@@ -285,7 +285,7 @@ def quartercar(
             f"{oscillation_note(share, peak, qc, discrete_rate(m))}",
             err=True,
         )
-    from mrdamper.control._loop import limits_note
+    from mrdamper.control.quarter_car_study import limits_note
 
     if i_range is None and limits_note(m):
         typer.echo(f"note: {limits_note(m)}", err=True)

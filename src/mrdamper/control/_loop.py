@@ -12,6 +12,7 @@ car scaled by the motion ratio and the road at the plant rate. :func:`loop_resul
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,6 +34,7 @@ __all__ = [
     "CONTROL_CODES",
     "LoopSetup",
     "controller_form",
+    "default_rate",
     "damper_arrays",
     "divergence_hint",
     "input_limits",
@@ -337,3 +339,12 @@ def divergence_hint(damper: Any) -> str:
         f"at {at:.4g} {input_unit(damper)}): fit it again with the setting monotone "
         "(the default since 0.2)"
     )
+
+
+def default_rate(model: Any, plant_step: float = 1e-3) -> float:
+    """Plant rate [Hz]: ``1 / plant_step`` for a static damper; for an LPV damper the smallest
+    integer multiple of its model rate whose step is at most ``plant_step``."""
+    fs_model = getattr(model, "fs", None)
+    if getattr(model, "kind", "") == "lpv" and fs_model:
+        return float(fs_model) * max(1, math.ceil(1.0 / (plant_step * float(fs_model)) - 1e-9))
+    return 1.0 / plant_step

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mrdamper.control._loop import input_unit
+from mrdamper.control._loop import default_rate, input_unit
 from mrdamper.control.closed_loop import check_pair, resolve_plant, simulate_closed_loop
 from mrdamper.control.quarter_car import (
     CONTROLLERS,
@@ -33,7 +33,6 @@ from mrdamper.control.quarter_car import (
     QuarterCarResult,
     iso_road,
 )
-from mrdamper.control.quarter_car_study import default_rate
 from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
 from mrdamper.models.envelope import ENVELOPE_TOLERANCE, envelope_of, excursions
 from mrdamper.models.levels import check_levels

@@ -339,7 +339,7 @@ def inverse_current(
         closed form per sample, their ``invert_record``; with a drive lag for the lagged input,
         then the command through :func:`driver_command`), or any other model with a per-sample
         step (``"spencer"``, ``"p15"``, ``"lti"``, ``"narx"``: the quarter car's inverse through
-        the step along the record, :func:`~mrdamper.control.closed_loop.invert_through_step`;
+        the step along the record, :func:`~mrdamper.control.step_inverse.invert_through_step`;
         regularised only).
     experiment_or_arrays : Experiment or mapping
         The motion: a record (its force and electrical channels are not used) or a mapping with
@@ -427,7 +427,7 @@ def inverse_current(
             raise DataValidationError(
                 "method", f"the {model.kind} model is inverted through its step: 'regularised' only"
             )
-        from mrdamper.control.closed_loop import invert_through_step  # it imports this module
+        from mrdamper.control.step_inverse import invert_through_step
 
         dt = float(t[1] - t[0]) if t.size > 1 else DEFAULT_REG_TIME
         w, sat = invert_through_step(model, x, v, Fd, dt, (lo, hi), reg=reg, rate=rate)

@@ -9,7 +9,6 @@ the road-to-body-acceleration transmissibility estimated as ``|P_{r a}| / P_{r r
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -17,6 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control._loop import default_rate, limits_note
 from mrdamper.control.closed_loop import simulate_closed_loop, stepped
 from mrdamper.control.quarter_car import (
     CONTROLLERS,
@@ -29,19 +29,10 @@ from mrdamper.control.quarter_car import (
 )
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 
-__all__ = ["ControllerComparison", "compare_controllers", "default_rate"]
+__all__ = ["ControllerComparison", "compare_controllers", "default_rate", "limits_note"]
 
 _ISO = ("A", "B", "C", "D", "E", "F", "G", "H")
 NAN = float("nan")
-
-
-def default_rate(model: Any, plant_step: float = 1e-3) -> float:
-    """Plant rate [Hz]: ``1 / plant_step`` for a static damper; for an LPV damper the smallest
-    integer multiple of its model rate whose step is at most ``plant_step``."""
-    fs_model = getattr(model, "fs", None)
-    if getattr(model, "kind", "") == "lpv" and fs_model:
-        return float(fs_model) * max(1, math.ceil(1.0 / (plant_step * float(fs_model)) - 1e-9))
-    return 1.0 / plant_step
 
 
 @dataclass(frozen=True, eq=False)
