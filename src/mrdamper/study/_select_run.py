@@ -426,9 +426,10 @@ class _Runner:
             )
         short = [k for k, why in out.stopped.items() if why.startswith("not compared")]
         if short:
-            out.notes.append(
-                f"time budget of {self.budget:g} s ran out: not compared: {', '.join(short)}"
+            spent = (
+                f"time budget of {self.budget:g} s" if self.budget is not None else "time budget"
             )
+            out.notes.append(f"the {spent} ran out: not compared: {', '.join(short)}")
         return out
 
 
