@@ -87,24 +87,26 @@ def finished(text: str, done: int | None = None, total: int | None = None) -> No
 
 
 @contextlib.contextmanager
-def listening(callback: Listener, *, finished: Listener | None = None) -> Iterator[None]:
+def listening(callback: Listener | None, *, finished: Listener | None = None) -> Iterator[None]:
     """Send the reports of the block to ``callback`` (the listeners before it are restored after).
 
     Parameters
     ----------
-    callback : callable
+    callback : callable or None
         Called as ``callback(stage, done, total)`` for every :func:`report` of the block. It
-        should be quick; an exception it raises propagates into the reporting code.
+        should be quick; an exception it raises propagates into the reporting code. None: the
+        listener outside the block, if any, stays in place.
     finished : callable, optional
         Called as ``finished(text, done, total)`` for every :func:`finished` of the block (None:
         the listener for finished steps outside the block, if any, stays in place).
     """
-    token = _LISTENER.set(callback)
+    token = _LISTENER.set(callback) if callback is not None else None
     done_token = _FINISHED.set(finished) if finished is not None else None
     try:
         yield
     finally:
-        _LISTENER.reset(token)
+        if token is not None:
+            _LISTENER.reset(token)
         if done_token is not None:
             _FINISHED.reset(done_token)
 
