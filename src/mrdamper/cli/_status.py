@@ -22,7 +22,7 @@ import typer
 if TYPE_CHECKING:  # pragma: no cover
     from rich.console import Console
 
-__all__ = ["SHOWN", "NoProgress", "Status", "time_left", "working"]
+__all__ = ["SHOWN", "NoProgress", "Status", "finished_lines", "time_left", "working"]
 
 #: The ``--no-progress`` option of the commands that show :func:`working`'s line.
 NoProgress = Annotated[
@@ -121,7 +121,7 @@ def working(message: str, *, show: bool = True) -> Iterator[Status]:
         def print_line(text: str, done: int | None, total: int | None) -> None:
             print(_plain(status.message, text, done, total), file=sys.stderr, flush=True)
 
-        with listening(None, finished=print_line):
+        with listening(None, finished=print_line):  # not finished_lines: the message may change
             yield status
         print(f"{status.message}: done in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
         return
@@ -150,10 +150,36 @@ def working(message: str, *, show: bool = True) -> Iterator[Status]:
     def show_finished(text: str, done: int | None, total: int | None) -> None:
         bar.console.print(_plain(status.message, text, done, total), highlight=False, markup=False)
         bar.update(task, left=time_left(time.perf_counter() - t0, done, total))
+        bar.refresh()
 
     with bar, listening(show_stage, finished=show_finished):
         yield status
     console.print(f"{status.message}: done in {time.perf_counter() - t0:.1f} s")
+
+
+@contextlib.contextmanager
+def finished_lines(message: str, *, show: bool = True) -> Iterator[None]:
+    """Off a terminal, print every finished step of the block as one plain line on standard
+    error (``<message>: <step> (k of N)``); on a terminal nothing (the command draws its own bars).
+
+    Parameters
+    ----------
+    message : str
+        What the command does.
+    show : bool
+        False for ``--no-progress``.
+    """
+    from mrdamper.progress import listening
+
+    if not show or sys.stderr.isatty():
+        yield
+        return
+
+    def print_line(text: str, done: int | None, total: int | None) -> None:
+        print(_plain(message, text, done, total), file=sys.stderr, flush=True)
+
+    with listening(None, finished=print_line):
+        yield
 
 
 #: Text of every warning and note printed by this process: each is printed once, however often
