@@ -16,8 +16,8 @@ halving acts), ``mrdamper select DATA -m KIND`` runs in a fresh process with thi
 ``src`` on ``PYTHONPATH`` and, with ``--previous``, the same command with that checkout's ``src``,
 one after the other, ``--repeat`` times. It prints the median wall time of each side, their ratio
 (previous / this) and the CPU time of the process and its workers, and for ``all`` the
-recommendation of each side. Both sides find their compiled kernels cached (``--warm``, default:
-one untimed run of each side first when ``all`` is asked for). ``--reduce`` takes every third
+recommendation of each side. Both sides find their compiled kernels cached: every kind's kernels
+are compiled first, untimed (``--no-warm`` skips that). ``--reduce`` takes every third
 record of a folder and the first 7 s of the Dyke record (written to a temporary folder), so that
 a run takes minutes on a shared machine. The data folder is ``--data`` (default
 ``../shared/data`` beside the checkout).
@@ -57,6 +57,18 @@ def _reduced(path: Path, tmp: Path) -> Path:
     return out
 
 
+_WARM = (
+    "import tempfile; from mrdamper import compiled; from mrdamper.models import available_models; "
+    "compiled.compile_claimed(available_models(), tempfile.mkdtemp())"
+)
+
+
+def _warm(src: Path) -> None:
+    """Compile and cache every kind's kernels for the checkout ``src`` (untimed)."""
+    env = {**os.environ, "PYTHONPATH": str(src)}
+    subprocess.run([sys.executable, "-c", _WARM], check=True, env=env)
+
+
 def _run(src: Path, data: Path, kind: str, workdir: Path) -> tuple[float, float, str]:
     """Wall time [s], CPU time [s] (process and workers) and recommendation of one select."""
     env = {**os.environ, "PYTHONPATH": str(src), "OPENBLAS_NUM_THREADS": "1"}
@@ -83,22 +95,22 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--reduce", action="store_true", help="every third record, 7 s of Dyke")
-    ap.add_argument("--no-warm", action="store_true", help="no untimed first run")
+    ap.add_argument("--no-warm", action="store_true", help="no untimed compilation first")
     args = ap.parse_args(argv)
     sides = {"this": REPO / "src"}
     if args.previous is not None:
         sides = {"previous": args.previous.resolve() / "src", **sides}
     print(f"{'set':<11} {'kind':<8} " + " ".join(f"{s + ' [s]':>14}" for s in sides), end="")
     print(f" {'ratio':>6} " + " ".join(f"{s + ' cpu':>12}" for s in sides) + "  recommended")
+    if not args.no_warm:
+        for src in sides.values():
+            _warm(src)
     with tempfile.TemporaryDirectory(prefix="mrdamper-bench-select-") as tmp:
         for name in args.sets:
             data = args.data / SETS[name]
             if args.reduce:
                 data = _reduced(data, Path(tmp))
             for kind in args.kinds:
-                if not args.no_warm:  # kernels compiled and cached by each side first
-                    for src in sides.values():
-                        _run(src, data, "bingham" if kind == "all" else kind, Path(tmp))
                 walls: dict[str, list[float]] = {s: [] for s in sides}
                 cpus: dict[str, list[float]] = {s: [] for s in sides}
                 recs: dict[str, str] = {}

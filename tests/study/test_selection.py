@@ -216,3 +216,25 @@ def test_time_budget_starts_no_fit_once_spent(records, monkeypatch) -> None:
         cross_validate(records, models=["bingham"], time_budget=0)
     with pytest.raises(DataValidationError, match=r"^workers: expected a positive integer"):
         cross_validate(records, models=["bingham"], workers=0)
+
+
+def test_cli_time_budget_spent_before_any_fold(records, tmp_path: Path, capsys) -> None:
+    d = tmp_path / "data"
+    d.mkdir()
+    for r in records[:3]:
+        write_csv(r, d / f"{r.name}.csv")
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "-m", "bingham", "--time-budget", "1e-9", "--workers", "1"])
+    assert exc.value.code == 1
+    out, err = capsys.readouterr()
+    assert "not compared: the time budget ran out (0 of " in out
+    assert "note: the time budget of 1e-09 s ran out: not compared: bingham" in out
+    assert "error: the time budget ran out before any fold (see above); nothing written" in err
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "--time-budget", "-1"])
+    assert exc.value.code == 2
+    assert "--time-budget: expected a number of seconds above 0, got -1" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "--workers", "0"])
+    assert exc.value.code == 2
+    assert "--workers: expected a positive integer, got 0" in capsys.readouterr().err

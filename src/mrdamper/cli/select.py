@@ -124,6 +124,12 @@ def select(
     from mrdamper.cli.models import _choose_input, read_records
     from mrdamper.study.selection import HALVING, cross_validate
 
+    if time_budget is not None and not time_budget > 0:
+        raise DataValidationError(
+            "--time-budget", f"expected a number of seconds above 0, got {time_budget:g}"
+        )
+    if workers is not None and workers < 1:
+        raise DataValidationError("--workers", f"expected a positive integer, got {workers}")
     if csv is not None:
         check_writable(csv, force=force, inputs=list(data), kind=SELECTION_CSV, option="--csv")
     with working("cross-validating", show=not no_progress):
@@ -172,10 +178,10 @@ def select(
         typer.echo(f"note: {note}")
     typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")
     if not (tab["folds_ok"] > 0).any():
-        typer.echo(
-            "error: every fit failed in every fold (see the errors above); nothing written",
-            err=True,
-        )
+        why = "every fit failed in every fold"
+        if tab["status"].str.contains("time budget ran out").all():
+            why = "the time budget ran out before any fold"
+        typer.echo(f"error: {why} (see above); nothing written", err=True)
         raise typer.Exit(1)
     if csv is not None:
         atomic_write_text(csv, tab.to_csv(index=False), force=force, kind=SELECTION_CSV)
