@@ -238,3 +238,20 @@ def test_cli_time_budget_spent_before_any_fold(records, tmp_path: Path, capsys) 
         main(["select", str(d), "--workers", "0"])
     assert exc.value.code == 2
     assert "--workers: expected a positive integer, got 0" in capsys.readouterr().err
+
+
+def test_a_worker_that_fails_is_a_row_not_a_crash(records, monkeypatch) -> None:
+    from mrdamper.study import _select_run
+
+    real = _select_run.fold_task
+
+    def task(kind, *args):
+        if kind == "tanh":
+            raise MemoryError("worker ran out of memory")
+        return real(kind, *args)
+
+    monkeypatch.setattr(_select_run, "fold_task", task)
+    res = cross_validate(records, models=["bingham", "tanh"], workers=1, stress=False)
+    assert res.recommended == "bingham"
+    assert res.table.loc["tanh", "error"] == "worker error: MemoryError: worker ran out of memory"
+    assert res.table.loc["tanh", "status"] == "not recommended: failed 1 fold(s)"

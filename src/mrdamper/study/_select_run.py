@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.errors import interrupt_in_chain
 from mrdamper.progress import finished, report, section
 from mrdamper.study._threads import single_threaded_blas
 from mrdamper.study.executor import StudyExecutor, make_executor, resolve_record
@@ -327,12 +328,30 @@ class _Runner:
         done, _ = self.ex.wait_first(list(self.pending))
         for fut in sorted(done, key=lambda f: self._order(self.pending[f])):
             key = self.pending.pop(fut)
-            self.results[key] = fut.result()
+            self.results[key] = self._result(fut, *key)
             self.counted += 1
             report("cross-validation: fits", self.counted, self.n_tasks)
         self._halve()
         for kind in self.plan.kinds:
             self._announce(kind)
+
+    def _result(self, fut: Any, kind: str, j: int) -> Any:
+        """The task's result, or a failure of the kind when the worker itself failed (a worker
+        that ended, a record it could not read): a row of the table, not a crash."""
+        try:
+            return fut.result()
+        except Exception as exc:
+            if interrupt_in_chain(exc):  # Ctrl-C inside a compiled kernel
+                raise KeyboardInterrupt from exc
+            why = f"worker error: {type(exc).__name__}: {exc}"
+        if j == self.stress_index:
+            import pandas as pd
+
+            from mrdamper.study.stress import StressResult
+
+            return StressResult(pd.DataFrame(), False, why)
+        label, _, test, out = self.plan.folds[j]
+        return [score_row(kind, label, e.name, np.nan, False, why, out) for e in test], None
 
     def _order(self, key: tuple[str, int]) -> tuple[int, int]:
         return list(self.plan.kinds).index(key[0]), key[1]
