@@ -8,19 +8,20 @@ Usage::
     # reduced inputs (a few minutes on a shared machine):
     python benchmarks/bench_select.py --previous /tmp/mrdamper-prev --reduce --kinds bingham sp1
     python benchmarks/bench_select.py --sets dyke --kinds all      # every kind at once only
+    python benchmarks/bench_select.py --previous /tmp/mrdamper-prev --reduce --kinds sp1,tanh
 
 For every set (``labcontrol``: ``labcontrol2021_utfpr/train``, 23 records; ``quiroz``:
 ``quiroz2022_utfsm/sine_unfiltered``, 30 records; ``dyke``: ``dyke1996_nees/ranran_50.csv``) and
-every kind of ``--kinds`` (``all``: the command's default, every kind at once, where successive
-halving acts), ``mrdamper select DATA -m KIND`` runs in a fresh process with this checkout's
-``src`` on ``PYTHONPATH`` and, with ``--previous``, the same command with that checkout's ``src``,
-one after the other, ``--repeat`` times. It prints the median wall time of each side, their ratio
-(previous / this) and the CPU time of the process and its workers, and for ``all`` the
-recommendation of each side. Both sides find their compiled kernels cached: every kind's kernels
-are compiled first, untimed (``--no-warm`` skips that). ``--reduce`` takes every third
-record of a folder and the first 7 s of the Dyke record (written to a temporary folder), so that
-a run takes minutes on a shared machine. The data folder is ``--data`` (default
-``../shared/data`` beside the checkout).
+every entry of ``--kinds`` (a kind; several joined by commas, compared in one command, where
+successive halving acts between them; ``all``: the command's default, every kind at once),
+``mrdamper select DATA -m KIND`` runs in a fresh process with this checkout's ``src`` on
+``PYTHONPATH`` and, with ``--previous``, the same command with that checkout's ``src``, one after
+the other, ``--repeat`` times. It prints the median wall time of each side, their ratio
+(previous / this), the CPU time of the process and its workers, and the recommendation of each
+side. Both sides find their compiled kernels cached: every kind's kernels are compiled first,
+untimed (``--no-warm`` skips that). ``--reduce`` takes every third record of a folder and the
+first 7 s of the Dyke record (written to a temporary folder), so that a run takes minutes on a
+shared machine. The data folder is ``--data`` (default ``../shared/data`` beside the checkout).
 """
 
 from __future__ import annotations
@@ -74,7 +75,7 @@ def _run(src: Path, data: Path, kind: str, workdir: Path) -> tuple[float, float,
     env = {**os.environ, "PYTHONPATH": str(src), "OPENBLAS_NUM_THREADS": "1"}
     cmd = [sys.executable, "-m", "mrdamper", "select", str(data), "--no-progress"]
     if kind != "all":
-        cmd += ["-m", kind]
+        cmd += [arg for k in kind.split(",") for arg in ("-m", k)]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, check=False, env=env, cwd=workdir, capture_output=True, text=True)
@@ -100,7 +101,8 @@ def main(argv: list[str] | None = None) -> None:
     sides = {"this": REPO / "src"}
     if args.previous is not None:
         sides = {"previous": args.previous.resolve() / "src", **sides}
-    print(f"{'set':<11} {'kind':<8} " + " ".join(f"{s + ' [s]':>14}" for s in sides), end="")
+    width = max(8, *(len(k) for k in args.kinds))
+    print(f"{'set':<11} {'kind':<{width}} " + " ".join(f"{s + ' [s]':>14}" for s in sides), end="")
     print(f" {'ratio':>6} " + " ".join(f"{s + ' cpu':>12}" for s in sides) + "  recommended")
     if not args.no_warm:
         for src in sides.values():
@@ -123,7 +125,7 @@ def main(argv: list[str] | None = None) -> None:
                 med = {s: statistics.median(v) for s, v in walls.items()}
                 ratio = med["previous"] / med["this"] if "previous" in med else float("nan")
                 print(
-                    f"{name:<11} {kind:<8} "
+                    f"{name:<11} {kind:<{width}} "
                     + " ".join(f"{med[s]:>14.1f}" for s in sides)
                     + f" {ratio:>6.2f} "
                     + " ".join(f"{statistics.median(cpus[s]):>12.1f}" for s in sides)
