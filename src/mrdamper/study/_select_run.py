@@ -268,7 +268,6 @@ class _Runner:
         self.dropped: dict[str, str] = {}
         self.early: set[str] = set()
         self.decided = halving is None
-        self.skipped: dict[str, int] = {}
         self.kinds_done: set[str] = set()
         handles: dict[int, Any] = {}
 
@@ -307,7 +306,7 @@ class _Runner:
 
     def _next(self) -> tuple[str, int] | None:
         """The next task to start, or None (nothing left that may start now)."""
-        while self.queue1:
+        if self.queue1:
             return self.queue1.pop(0)
         for i, (kind, j) in enumerate(self.queue2):
             if kind not in self.early:

@@ -34,6 +34,11 @@ left-out record (``worst_esr``) is recommended when that record is more than 5 %
 first-ranked kind's (the one that fails least badly on a condition it was not trained on),
 otherwise the first-ranked kind. The ``status`` column says
 why a kind is not recommended; the reason states the envelope the recommendation was validated in.
+
+The fits run on worker processes, with successive halving (a kind far above the leader after its
+first two fits runs no further fit) and an optional time budget
+(:mod:`mrdamper.study._select_run`); a kind stopped early is not recommended, and its status says
+why.
 """
 
 from __future__ import annotations
