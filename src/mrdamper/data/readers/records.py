@@ -35,7 +35,7 @@ from mrdamper.data.readers.directory import (
 from mrdamper.data.readers.manifest import is_doe_folder, manifest_rows
 from mrdamper.errors import DataValidationError, interrupt_in_chain
 from mrdamper.metrics import MIN_SCORED_SAMPLES
-from mrdamper.progress import finished, report
+from mrdamper.progress import report
 
 __all__ = [
     "ANY_RECORD_FILE",
@@ -234,15 +234,14 @@ def read_records(
     Notes
     -----
     Reports the stage ``"reading records"`` to :mod:`mrdamper.progress` before each file, with
-    the number of files read so far and the number of files, and the reading as a finished step.
+    the number of files read so far and the number of files.
     """
     return ExperimentSet(read_files(record_files(paths, pattern, **read_kw)), name=_set_name(paths))
 
 
 def read_files(files: Sequence[RecordFile]) -> list[Experiment]:
     """Read ``files`` in order, reporting the stage ``"reading records"`` to
-    :mod:`mrdamper.progress` before each (files read so far, of all) and, at the end, the finished
-    step ``"read N record(s), M samples"``.
+    :mod:`mrdamper.progress` before each (files read so far, of all).
 
     Parameters
     ----------
@@ -257,7 +256,6 @@ def read_files(files: Sequence[RecordFile]) -> list[Experiment]:
     for k, f in enumerate(files):
         report("reading records", k, len(files))
         records.append(f.read())
-    finished(f"read {len(records)} record(s), {sum(e.n for e in records)} samples")
     return records
 
 
