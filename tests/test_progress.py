@@ -204,8 +204,8 @@ def test_cross_validate_reports_folds_and_kinds(records: list[Experiment]) -> No
     assert [(d, t) for _, d, t in done] == [(1, 2), (2, 2)]
     lines = dict(s.split(": ", 1) for s, _, _ in done)
     assert set(lines) == {"bingham", "sp1"}
-    assert re.fullmatch(r"3 folds, mean ESR inside [0-9.e-]+ \(\d+ s\)", lines["bingham"])
-    assert re.fullmatch(r"3 folds, 3 left-out record\(s\) failed \(\d+ s\)", lines["sp1"])
+    assert re.fullmatch(r"3 folds, mean ESR inside [0-9.e-]+; at \d+ s", lines["bingham"])
+    assert re.fullmatch(r"3 folds, 3 left-out record\(s\) failed; at \d+ s", lines["sp1"])
 
 
 def test_time_left() -> None:

@@ -462,7 +462,7 @@ def _summary(run: _Runner, kind: str) -> str:
         text += f", {failed} left-out record(s) failed"
     if run.plan.stress:
         text += f", stress test {run.results[(kind, run.stress_index)].reason}"[:120]
-    return text + f" ({time.perf_counter() - run.t0:.0f} s)"
+    return text + f"; at {time.perf_counter() - run.t0:.0f} s"
 
 
 def run_plan(
