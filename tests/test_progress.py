@@ -258,9 +258,7 @@ def test_fit_cli_prints_plain_lines_off_a_terminal(
     n = sum(e.n for e in records)
     assert "\r" not in err and "\x1b" not in err
     assert re.fullmatch(
-        rf"fitting bingham: read 3 record\(s\), {n} samples\n"
-        rf"fitting bingham on 3 record\(s\), {n} samples: done in \d+\.\d s\n",
-        err,
+        rf"fitting bingham on 3 record\(s\), {n} samples: done in \d+\.\d s\n", err
     ), err
     main(
         ["fit", "bingham", str(data), "--out", str(tmp_path / "m.json"), "--force", "--no-progress"]
