@@ -3,7 +3,7 @@ previous release, in the same run.
 
 Usage::
 
-    git worktree add /tmp/mrdamper-prev abf5e8f      # the previous release, once
+    mkdir -p /tmp/mrdamper-prev && git archive abf5e8f src | tar -x -C /tmp/mrdamper-prev
     python benchmarks/bench_select.py --previous /tmp/mrdamper-prev
     # reduced inputs (a few minutes on a shared machine):
     python benchmarks/bench_select.py --previous /tmp/mrdamper-prev --reduce --kinds bingham sp1
