@@ -90,9 +90,11 @@ def _plain(message: str, text: str, done: int | None, total: int | None) -> str:
 def working(message: str, *, show: bool = True) -> Iterator[Status]:
     """Show ``message``, the reported stage and the elapsed time on standard error during the block.
 
-    Nothing is printed when ``show`` is false or standard error is not a terminal (pipes, files,
-    tests), so output that is captured stays the same. The stage comes from the reports of
-    :mod:`mrdamper.progress` made in the block.
+    The stage comes from the reports of :mod:`mrdamper.progress` made in the block, and the
+    finished steps (:func:`mrdamper.progress.finished`) are printed above the line. When standard
+    error is not a terminal (pipes, files, tests) only the finished steps and, when the block ends
+    without an error, ``<message>: done in X s`` are printed, each as one plain line. Nothing is
+    printed when ``show`` is false.
 
     Parameters
     ----------
