@@ -242,7 +242,9 @@ def run_study(
     seed : int
         Passed as ``seed`` to every estimator that takes one (unless its settings set it).
     progress : bool
-        Show a progress bar (on standard error).
+        Show progress bars on standard error when it is a terminal. Each model whose fits and
+        simulations are all done is reported as a finished step
+        (:func:`mrdamper.progress.finished`) either way.
     control : ControlSettings or None
         The control-relevance step after the fits
         (:func:`~mrdamper.study.control_step.control_relevance`: the first fold's models in the
