@@ -167,11 +167,18 @@ def test_read_records_reports_each_file(tmp_path: Path, records: list[Experiment
     assert events == [("reading records", k, 3) for k in range(3)]
 
 
-def test_cross_validate_reports_folds(records: list[Experiment]) -> None:
+def test_cross_validate_reports_folds_and_kinds(records: list[Experiment]) -> None:
     from mrdamper.study.selection import cross_validate
 
     events: list[Event] = []
-    with warnings.catch_warnings(), progress.listening(lambda s, d, t: events.append((s, d, t))):
+    done: list[Event] = []
+    with (
+        warnings.catch_warnings(),
+        progress.listening(
+            lambda s, d, t: events.append((s, d, t)),
+            finished=lambda s, d, t: done.append((s, d, t)),
+        ),
+    ):
         warnings.simplefilter("ignore")
         res = cross_validate(
             records,
@@ -180,17 +187,34 @@ def test_cross_validate_reports_folds(records: list[Experiment]) -> None:
             settings={"bingham": {"degree": 1}},
             beyond=False,  # the in-envelope folds only: their count is checked below
             stress=False,
+            workers=1,  # in this process: each fit's own stages are heard
+            halving=None,
         )
     n = 2 * res.n_folds
     fits = [(d, t) for s, d, t in events if s == "cross-validation: fits"]
-    assert fits == [(k, n) for k in range(n + 1)]
+    assert fits == [(k, n) for k in range(n + 1)] + [(n, n)]
     stages = [s for s, _, _ in events]
-    assert any(re.fullmatch(r"bingham, fold .+ \(1 of \d+\): identifying", s) for s in stages)
-    assert any(re.fullmatch(r"bingham, fold .+ \(1 of \d+\): done", s) for s in stages)
+    assert any(re.fullmatch(r"bingham, fold .+ \(\d of \d+\): identifying", s) for s in stages)
+    assert any(re.fullmatch(r"bingham, fold .+ \(\d of \d+\): done", s) for s in stages)
     assert any(re.fullmatch(r"bingham, fold .+: scoring the left-out data", s) for s in stages)
     # sp1 cannot be fitted at two current levels: its stages up to the failure are reported
-    assert any(re.fullmatch(rf"sp1, fold .+ \({n} of {n}\): identifying", s) for s in stages)
+    assert any(re.fullmatch(r"sp1, fold .+ \(\d of \d+\): identifying", s) for s in stages)
     _check_counts(events)
+    # one finished step per kind, counted, each saying what came of it
+    assert [(d, t) for _, d, t in done] == [(1, 2), (2, 2)]
+    lines = dict(s.split(": ", 1) for s, _, _ in done)
+    assert set(lines) == {"bingham", "sp1"}
+    assert re.fullmatch(r"3 folds, mean ESR inside [0-9.e-]+; at \d+ s", lines["bingham"])
+    assert re.fullmatch(r"3 folds, 3 left-out record\(s\) failed; at \d+ s", lines["sp1"])
+
+
+def test_time_left() -> None:
+    from mrdamper.cli._status import time_left
+
+    assert time_left(10.0, 0, 4) == "" and time_left(10.0, 2, None) == ""
+    assert time_left(10.0, 4, 4) == ""
+    assert time_left(10.0, 1, 4) == "about 30 s left"
+    assert time_left(100.0, 1, 3) == "about 3 min left"
 
 
 # ----------------------------------------------------------------------------- command line
@@ -222,7 +246,7 @@ def terminal(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[[], str]]:
     yield lambda: _ANSI.sub("", buf.getvalue()).replace("\r", "\n")
 
 
-def test_fit_cli_prints_nothing_extra_off_a_terminal(
+def test_fit_cli_prints_plain_lines_off_a_terminal(
     tmp_path: Path, records: list[Experiment], capsys: pytest.CaptureFixture[str]
 ) -> None:
     from mrdamper.cli.main import main
@@ -231,7 +255,43 @@ def test_fit_cli_prints_nothing_extra_off_a_terminal(
     main(["fit", "bingham", str(data), "--out", str(tmp_path / "m.json")])
     out, err = capsys.readouterr()
     assert out == f"bingham: identified on 3 record(s); wrote {tmp_path / 'm.json'}\n"
-    assert err == ""
+    n = sum(e.n for e in records)
+    assert "\r" not in err and "\x1b" not in err
+    assert re.fullmatch(
+        rf"fitting bingham on 3 record\(s\), {n} samples: done in \d+\.\d s\n", err
+    ), err
+    main(
+        ["fit", "bingham", str(data), "--out", str(tmp_path / "m.json"), "--force", "--no-progress"]
+    )
+    assert capsys.readouterr().err == ""
+
+
+def test_select_cli_prints_a_line_per_kind_off_a_terminal(
+    tmp_path: Path, records: list[Experiment], capsys: pytest.CaptureFixture[str]
+) -> None:
+    from mrdamper.cli.main import main
+
+    data = _data_dir(tmp_path, records)
+    main(["select", str(data), "-m", "bingham", "-m", "tanh", "--inside-only", "--workers", "2"])
+    err = capsys.readouterr().err
+    assert "\r" not in err and "\x1b" not in err
+    lines = err.splitlines()
+    found = [re.fullmatch(r"cross-validating: (\w+): .+ \(([12]) of 2\)", x) for x in lines[:2]]
+    assert sorted(m[1] for m in found if m) == ["bingham", "tanh"], err
+    assert [m[2] for m in found if m] == ["1", "2"]
+    assert re.fullmatch(r"cross-validating: done in \d+\.\d s", lines[2]) and len(lines) == 3
+
+
+def test_finished_steps_on_a_terminal(terminal: Callable[[], str]) -> None:
+    from mrdamper.cli._status import working
+
+    with working("busy"):
+        progress.report("stage", 1, 4)
+        progress.finished("first part", 1, 4)
+    shown = terminal()
+    assert re.search(r"^busy: first part \(1 of 4\)$", shown, re.MULTILINE), shown
+    assert re.search(r"busy: stage 1/4 .*about \d+ s left", shown), shown
+    assert re.search(r"^busy: done in \d+\.\d s$", shown, re.MULTILINE), shown
 
 
 @pytest.mark.slow
@@ -286,9 +346,10 @@ def test_terminal_detection(monkeypatch: pytest.MonkeyPatch) -> None:
 
     monkeypatch.setattr(sys, "stderr", io.StringIO())
     assert _status._terminal_console() is None
-    with _status.working("quiet") as status:
-        status.message = "still quiet"
-    assert sys.stderr.getvalue() == ""
+    with _status.working("plain") as status:
+        progress.report("a stage: never printed off a terminal", 1, 2)
+        status.message = "plain lines"
+    assert re.fullmatch(r"plain lines: done in \d+\.\d s\n", sys.stderr.getvalue())
     monkeypatch.setattr(sys, "stderr", Tty())
     assert _status._terminal_console() is not None
     with _status.working("busy"):

@@ -7,9 +7,16 @@ does, on a terminal) installs a listener for a block with :func:`listening`. Wit
 installed, :func:`report` costs one :class:`~contextvars.ContextVar` lookup, and reporting never
 changes a result.
 
-The listener lives in a :class:`~contextvars.ContextVar`, so it follows the code that installed it
-(threads and asynchronous tasks started elsewhere do not report into it; worker processes never
-do).
+A step that is over (one model kind of a selection, one stage of a study) is announced with
+:func:`finished`: one line of text and, when it counts, how many such steps of how many are over.
+The command line prints each as one plain line off a terminal (a log, CI, a notebook) and above
+its live line on a terminal, where the counts give the estimate of the time left. A listener for
+them is installed with ``listening(callback, finished=...)``; :func:`section` leaves them as they
+are (a finished step says in full what it was).
+
+The listeners live in :class:`~contextvars.ContextVar` objects, so they follow the code that
+installed them (threads and asynchronous tasks started elsewhere do not report into them; worker
+processes never do: the process that collects the workers' results reports for them).
 
 Examples
 --------
@@ -20,6 +27,11 @@ Examples
 ...         progress.report("step", k + 1, 2)
 >>> events
 [('step', 1, 2), ('step', 2, 2)]
+>>> lines = []
+>>> with progress.listening(lambda *_: None, finished=lambda text, d, t: lines.append(text)):
+...     progress.finished("kind a: fitted", 1, 2)
+>>> lines
+['kind a: fitted']
 """
 
 from __future__ import annotations
@@ -29,7 +41,7 @@ from collections.abc import Callable, Iterator
 from contextvars import ContextVar
 from typing import Any, TypeVar
 
-__all__ = ["Listener", "counted", "listening", "report", "section"]
+__all__ = ["Listener", "counted", "finished", "listening", "report", "section"]
 
 #: A listener: called with the stage, the steps done (or None) and the steps in all (or None).
 Listener = Callable[[str, int | None, int | None], None]
@@ -37,6 +49,7 @@ Listener = Callable[[str, int | None, int | None], None]
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 _LISTENER: ContextVar[Listener | None] = ContextVar("mrdamper_progress_listener", default=None)
+_FINISHED: ContextVar[Listener | None] = ContextVar("mrdamper_progress_finished", default=None)
 
 
 def report(stage: str, done: int | None = None, total: int | None = None) -> None:
@@ -56,21 +69,46 @@ def report(stage: str, done: int | None = None, total: int | None = None) -> Non
         listener(stage, done, total)
 
 
-@contextlib.contextmanager
-def listening(callback: Listener) -> Iterator[None]:
-    """Send the reports of the block to ``callback`` (the listener before it is restored after).
+def finished(text: str, done: int | None = None, total: int | None = None) -> None:
+    """Tell the current listener for finished steps, if any, that a step is over.
 
     Parameters
     ----------
-    callback : callable
-        Called as ``callback(stage, done, total)`` for every :func:`report` of the block. It
-        should be quick; an exception it raises propagates into the reporting code.
+    text : str
+        What was done and its outcome, in one line, e.g. ``"sp1: 9 fits, mean ESR 0.0123"``.
+    done : int, optional
+        Such steps over so far, this one included (never above ``total``).
+    total : int, optional
+        Such steps in all, when known.
     """
-    token = _LISTENER.set(callback)
+    listener = _FINISHED.get()
+    if listener is not None:
+        listener(text, done, total)
+
+
+@contextlib.contextmanager
+def listening(callback: Listener | None, *, finished: Listener | None = None) -> Iterator[None]:
+    """Send the reports of the block to ``callback`` (the listeners before it are restored after).
+
+    Parameters
+    ----------
+    callback : callable or None
+        Called as ``callback(stage, done, total)`` for every :func:`report` of the block. It
+        should be quick; an exception it raises propagates into the reporting code. None: the
+        listener outside the block, if any, stays in place.
+    finished : callable, optional
+        Called as ``finished(text, done, total)`` for every :func:`finished` of the block (None:
+        the listener for finished steps outside the block, if any, stays in place).
+    """
+    token = _LISTENER.set(callback) if callback is not None else None
+    done_token = _FINISHED.set(finished) if finished is not None else None
     try:
         yield
     finally:
-        _LISTENER.reset(token)
+        if token is not None:
+            _LISTENER.reset(token)
+        if done_token is not None:
+            _FINISHED.reset(done_token)
 
 
 @contextlib.contextmanager

@@ -4,6 +4,7 @@ readers)."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -129,7 +130,17 @@ def test_study_with_a_protocol_file(tmp_path, capsys) -> None:
         ["study", str(data), "--out", str(out), "--protocol", str(proto), "--workers", "1"], capsys
     )
     assert code == 0, stderr
-    assert "fitting" in stderr and "simulating" in stderr  # progress bars on standard error
+    # off a terminal: one plain line per finished model and for the control step, no bars
+    assert "\r" not in stderr and "\x1b" not in stderr and "fitting" not in stderr
+    assert re.search(
+        r"^study: SP-2: fitted on 1 of 1 fold\(s\), mean ESR [0-9.e-]+ over 3 record\(s\) "
+        r"\(1 of 1\)$",
+        stderr,
+        re.MULTILINE,
+    ), stderr
+    assert re.search(
+        r"^study: control relevance: the quarter-car loop in \d+ s$", stderr, re.MULTILINE
+    )
     res = pd.read_csv(out / "results.csv")
     assert list(res["model"].unique()) == ["SP-2"] and len(res) == 3
     assert res["record"].str.startswith("sine_5mm").all()

@@ -77,7 +77,11 @@ def test_recommends_the_true_family(records) -> None:
     assert "lowest mean free-run ESR" in res.reason and "2 condition folds" in res.reason
     assert res.table.loc["bingham", "mean_esr"] < 1e-3 < res.table.loc["lti", "mean_esr"]
     inside = res.scores[~res.scores["beyond"]]
-    assert len(inside) == len(KINDS) * len(records)
+    for kind in KINDS:  # every left-out record of every fold, or of the first fold when dropped
+        dropped = res.table.loc[kind, "status"].startswith("not recommended: dropped after 2 fits")
+        n = (inside["model"] == kind).sum()
+        assert n == (len(records) // 2 if dropped else len(records)), (kind, n)
+    assert not res.table.loc["bingham", "status"].startswith("not recommended")
 
 
 def test_failing_kind_is_a_row_not_a_recommendation(records, monkeypatch) -> None:
@@ -88,10 +92,23 @@ def test_failing_kind_is_a_row_not_a_recommendation(records, monkeypatch) -> Non
         raise IdentificationError("no start converged")
 
     monkeypatch.setattr(SP2Estimator, "_identify", fails)
-    res = cross_validate(records, models=["bingham", "sp2"])
+    every = cross_validate(records, models=["bingham", "sp2"], halving=None, workers=1)
+    assert every.recommended == "bingham"
+    sp2 = every.table.loc["sp2"]
+    assert sp2["folds_failed"] == 2 and np.isnan(sp2["mean_esr"])
+    assert "no start converged" in sp2["error"]
+    # with halving, a kind that failed in its first round runs no further fit
+    res = cross_validate(records, models=["bingham", "sp2"], workers=2)
     assert res.recommended == "bingham"
-    assert res.table.loc["sp2", "folds_failed"] == 2 and np.isnan(res.table.loc["sp2", "mean_esr"])
-    assert "no start converged" in res.table.loc["sp2", "error"]
+    assert res.table.loc["sp2", "folds_failed"] == 1  # condition fold 1; the beyond fold failed too
+    assert res.table.loc["sp2", "status"] == "not recommended: failed 1 fold(s)"
+    assert res.table.loc["sp2", "stress"] == "not run"
+    assert any("successive halving: sp2 ran only the first 2 fits of" in n for n in res.notes)
+    # bingham ran every fold, and its rows are those of the run without halving, to the byte
+    b = res.scores[res.scores["model"] == "bingham"].reset_index(drop=True)
+    pd.testing.assert_frame_equal(
+        b, every.scores[every.scores["model"] == "bingham"].reset_index(drop=True)
+    )
 
 
 def test_a_setting_that_cannot_work_is_refused_before_any_fold(records) -> None:
@@ -159,3 +176,86 @@ def test_the_model_rate_note_names_each_discrete_kinds_rate() -> None:
     assert slow is not None and "lti at 500 Hz" in slow and "lti at least 500 Hz" in slow
     assert _model_rate_note(["lpv", "sp1"], [1000.0], {}) is None
     assert _model_rate_note(["lpv"], [100.0], {"lpv": {"model_fs": 100.0}}) is None
+
+
+def test_halving_drops_a_kind_far_above_the_leader_whatever_the_workers(records) -> None:
+    one = cross_validate(records, models=["bingham", "tanh"], workers=1)
+    two = cross_validate(records, models=["bingham", "tanh"], workers=2)
+    status = one.table.loc["tanh", "status"]
+    assert status.startswith("not recommended: dropped after 2 fits: estimate ")
+    assert "x the leader's (bingham, " in status and one.recommended == "bingham"
+    # round one: the first condition fold and the first beyond-envelope fold
+    assert one.table.loc["tanh", "folds_ok"] == 1 and one.table.loc["bingham", "folds_ok"] == 2
+    # the same table and scores, to the byte, with one worker or two (fit times aside)
+    assert one.scores.to_csv() == two.scores.to_csv()
+    cols = [c for c in one.table.columns if c != "fit_s"]
+    assert one.table[cols].to_csv() == two.table[cols].to_csv()
+    assert one.reason == two.reason and one.notes == two.notes
+
+
+def test_time_budget_starts_no_fit_once_spent(records, monkeypatch) -> None:
+    from mrdamper.study import _select_run
+
+    started: list[int] = []
+    real = _select_run._Runner._submit
+
+    def submit(self, kind, j):  # count the fits started
+        started.append(j)
+        real(self, kind, j)
+
+    monkeypatch.setattr(_select_run._Runner, "_submit", submit)
+    # the budget runs out after three fits have started (one worker: one at a time)
+    monkeypatch.setattr(_select_run._Runner, "_out_of_time", lambda self: len(started) >= 3)
+    res = cross_validate(records, models=["bingham", "tanh"], workers=1, halving=None)
+    assert len(started) == 3
+    assert res.recommended is None
+    # five fits a kind (two condition folds, two beyond the envelope, the stress test); bingham's
+    # come first (the kind table ranks both alike: the order given)
+    assert res.table.loc["tanh", "status"] == (
+        "not recommended: not compared: the time budget ran out (0 of 5 fits run)"
+    )
+    assert res.table.loc["bingham", "status"].endswith("(3 of 5 fits run)")
+    assert any("not compared: bingham, tanh" in n for n in res.notes)
+    with pytest.raises(DataValidationError, match=r"^time_budget: expected a number above 0"):
+        cross_validate(records, models=["bingham"], time_budget=0)
+    with pytest.raises(DataValidationError, match=r"^workers: expected a positive integer"):
+        cross_validate(records, models=["bingham"], workers=0)
+
+
+def test_cli_time_budget_spent_before_any_fold(records, tmp_path: Path, capsys) -> None:
+    d = tmp_path / "data"
+    d.mkdir()
+    for r in records[:3]:
+        write_csv(r, d / f"{r.name}.csv")
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "-m", "bingham", "--time-budget", "1e-9", "--workers", "1"])
+    assert exc.value.code == 1
+    out, err = capsys.readouterr()
+    assert "not compared: the time budget ran out (0 of " in out
+    assert "note: the time budget of 1e-09 s ran out: not compared: bingham" in out
+    assert "error: the time budget ran out before any fold (see above); nothing written" in err
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "--time-budget", "-1"])
+    assert exc.value.code == 2
+    assert "--time-budget: expected a number of seconds above 0, got -1" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["select", str(d), "--workers", "0"])
+    assert exc.value.code == 2
+    assert "--workers: expected a positive integer, got 0" in capsys.readouterr().err
+
+
+def test_a_worker_that_fails_is_a_row_not_a_crash(records, monkeypatch) -> None:
+    from mrdamper.study import _select_run
+
+    real = _select_run.fold_task
+
+    def task(kind, *args):
+        if kind == "tanh":
+            raise MemoryError("worker ran out of memory")
+        return real(kind, *args)
+
+    monkeypatch.setattr(_select_run, "fold_task", task)
+    res = cross_validate(records, models=["bingham", "tanh"], workers=1, stress=False)
+    assert res.recommended == "bingham"
+    assert res.table.loc["tanh", "error"] == "worker error: MemoryError: worker ran out of memory"
+    assert res.table.loc["tanh", "status"] == "not recommended: failed 1 fold(s)"

@@ -1,8 +1,13 @@
-"""A live status line for long commands, shown only on a terminal.
+"""What a long command shows on standard error while it works.
 
-The line shows the command's message, the stage the library reports through
-:mod:`mrdamper.progress` (with ``k/N`` when the stage counts), a spinner and the elapsed time;
-when the block ends it is replaced by one line ``<message>: done in X s``.
+On a terminal, a live line: the command's message, the stage the library reports through
+:mod:`mrdamper.progress` (with ``k/N`` when the stage counts), a spinner, the elapsed time and,
+once steps are counted, an estimate of the time left; every finished step
+(:func:`mrdamper.progress.finished`) is printed above it, and when the block ends the line is
+replaced by one line ``<message>: done in X s``.
+
+Off a terminal (a log, CI, a notebook), the same finished steps and the final line, each as one
+plain line (no carriage returns, no bars), printed when it happens.
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ import typer
 if TYPE_CHECKING:  # pragma: no cover
     from rich.console import Console
 
-__all__ = ["SHOWN", "NoProgress", "Status", "working"]
+__all__ = ["SHOWN", "NoProgress", "Status", "finished_lines", "time_left", "working"]
 
 #: The ``--no-progress`` option of the commands that show :func:`working`'s line.
 NoProgress = Annotated[
@@ -57,13 +62,39 @@ def _count(done: int | None, total: int | None) -> str:
     return f"{done}/{total}" if total is not None else str(done)
 
 
+def time_left(elapsed: float, done: int | None, total: int | None) -> str:
+    """Estimate of the time left, ``"about 3 min left"``, from ``done`` of ``total`` steps in
+    ``elapsed`` seconds (steps taken as alike); empty before the first step or without a total.
+
+    Parameters
+    ----------
+    elapsed : float
+        Time since the first step started [s].
+    done, total : int or None
+        Steps over and steps in all.
+    """
+    if not done or total is None or done >= total:
+        return ""
+    left = elapsed / done * (total - done)
+    if left < 90:
+        return f"about {max(left, 1.0):.0f} s left"
+    return f"about {left / 60:.0f} min left"
+
+
+def _plain(message: str, text: str, done: int | None, total: int | None) -> str:
+    count = f" ({done} of {total})" if done is not None and total is not None else ""
+    return f"{message}: {text}{count}"
+
+
 @contextlib.contextmanager
 def working(message: str, *, show: bool = True) -> Iterator[Status]:
     """Show ``message``, the reported stage and the elapsed time on standard error during the block.
 
-    Nothing is printed when ``show`` is false or standard error is not a terminal (pipes, files,
-    tests), so output that is captured stays the same. The stage comes from the reports of
-    :mod:`mrdamper.progress` made in the block.
+    The stage comes from the reports of :mod:`mrdamper.progress` made in the block, and the
+    finished steps (:func:`mrdamper.progress.finished`) are printed above the line. When standard
+    error is not a terminal (pipes, files, tests) only the finished steps and, when the block ends
+    without an error, ``<message>: done in X s`` are printed, each as one plain line. Nothing is
+    printed when ``show`` is false.
 
     Parameters
     ----------
@@ -77,29 +108,39 @@ def working(message: str, *, show: bool = True) -> Iterator[Status]:
     Status
         Set its ``message`` when more is known (e.g. the number of records read).
     """
-    status = Status(message)
-    console = _terminal_console() if show else None
-    if console is None:
-        yield status
-        return
     import time
-
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-    from rich.table import Column
 
     from mrdamper.progress import listening
 
+    status = Status(message)
     t0 = time.perf_counter()
+    console = _terminal_console() if show else None
+    if console is None:
+        if not show:
+            yield status
+            return
+
+        def print_line(text: str, done: int | None, total: int | None) -> None:
+            print(_plain(status.message, text, done, total), file=sys.stderr, flush=True)
+
+        with listening(None, finished=print_line):  # not finished_lines: the message may change
+            yield status
+        print(f"{status.message}: done in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+        return
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+    from rich.table import Column
+
     bar = Progress(
         SpinnerColumn(),
         # a long stage wraps onto a second line instead of being cut off
         TextColumn("{task.description}", markup=False, table_column=Column(overflow="fold")),
         TextColumn("{task.fields[count]}", markup=False),
         TimeElapsedColumn(),
+        TextColumn("{task.fields[left]}", markup=False),
         console=console,
         transient=True,
     )
-    task = bar.add_task(message, count="")
+    task = bar.add_task(message, count="", left="")
     last = [""]
 
     def show_stage(stage: str, done: int | None, total: int | None) -> None:
@@ -108,9 +149,39 @@ def working(message: str, *, show: bool = True) -> Iterator[Status]:
             last[0] = stage
             bar.refresh()
 
-    with bar, listening(show_stage):
+    def show_finished(text: str, done: int | None, total: int | None) -> None:
+        bar.console.print(_plain(status.message, text, done, total), highlight=False, markup=False)
+        bar.update(task, left=time_left(time.perf_counter() - t0, done, total))
+        bar.refresh()
+
+    with bar, listening(show_stage, finished=show_finished):
         yield status
     console.print(f"{status.message}: done in {time.perf_counter() - t0:.1f} s")
+
+
+@contextlib.contextmanager
+def finished_lines(message: str, *, show: bool = True) -> Iterator[None]:
+    """Off a terminal, print every finished step of the block as one plain line on standard
+    error (``<message>: <step> (k of N)``); on a terminal nothing (the command draws its own bars).
+
+    Parameters
+    ----------
+    message : str
+        What the command does.
+    show : bool
+        False for ``--no-progress``.
+    """
+    from mrdamper.progress import listening
+
+    if not show or sys.stderr.isatty():
+        yield
+        return
+
+    def print_line(text: str, done: int | None, total: int | None) -> None:
+        print(_plain(message, text, done, total), file=sys.stderr, flush=True)
+
+    with listening(None, finished=print_line):
+        yield
 
 
 #: Text of every warning and note printed by this process: each is printed once, however often

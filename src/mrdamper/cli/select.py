@@ -6,9 +6,13 @@ record; folds that leave the training envelope; a stress test of every kind fitt
 records), prints the table of left-out free-run ESR and recommends one kind with the reason and
 the envelope it was validated in. ``--inside-only`` skips the beyond-envelope folds and the
 stress test (faster; the recommendation then rewards interpolation only).
-``--csv`` also writes the table (atomically; never overwriting without ``--force``). On a terminal
-a live line on standard error shows which kind and fold is being fitted, the fit's stage and the
-elapsed time (``--no-progress`` turns it off).
+The fits run on ``--workers`` processes (default: the cores), the same table whatever their
+number; a kind far above the leader after its first two fits is dropped (successive halving, its
+status says so; ``--no-halving`` fits every kind on every fold); ``--time-budget SECONDS`` starts
+no fit once the budget has run out and lists the kinds it could not compare.
+``--csv`` also writes the table (atomically; never overwriting without ``--force``). On standard
+error a line per finished kind; on a terminal also a live line with the fits done, the elapsed
+time and an estimate of the time left (``--no-progress`` turns both off).
 """
 
 from __future__ import annotations
@@ -91,6 +95,24 @@ def select(
             help="Skip the folds beyond the training envelope and the stress test (faster).",
         ),
     ] = False,
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", help="Worker processes (default: the cores; 1: in-process)."),
+    ] = None,
+    no_halving: Annotated[
+        bool,
+        typer.Option(
+            "--no-halving",
+            help="Fit every kind on every fold (default: drop a kind far above the leader after "
+            "its first two fits).",
+        ),
+    ] = False,
+    time_budget: Annotated[
+        float | None,
+        typer.Option(
+            "--time-budget", help="Start no fit after this many seconds; report what was compared."
+        ),
+    ] = None,
     csv: Annotated[
         Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")
     ] = None,
@@ -105,8 +127,14 @@ def select(
     from mrdamper._io import atomic_write_text, check_writable
     from mrdamper.cli._status import working
     from mrdamper.cli.models import _choose_input, read_records
-    from mrdamper.study.selection import cross_validate
+    from mrdamper.study.selection import HALVING, cross_validate
 
+    if time_budget is not None and not time_budget > 0:
+        raise DataValidationError(
+            "--time-budget", f"expected a number of seconds above 0, got {time_budget:g}"
+        )
+    if workers is not None and workers < 1:
+        raise DataValidationError("--workers", f"expected a positive integer, got {workers}")
     if csv is not None:
         check_writable(csv, force=force, inputs=list(data), kind=SELECTION_CSV, option="--csv")
     with working("cross-validating", show=not no_progress):
@@ -125,6 +153,9 @@ def select(
             settings=_kind_settings(settings),
             beyond=not inside_only,
             stress=not inside_only,
+            workers=workers,
+            halving=None if no_halving else HALVING,
+            time_budget=time_budget,
         )
     tab = res.table.reset_index()
     beyond = f" + {res.n_beyond} beyond the training envelope" if res.n_beyond else ""
@@ -152,10 +183,10 @@ def select(
         typer.echo(f"note: {note}", err=True)
     typer.echo(f"\nrecommended: {res.recommended or 'none'}: {res.reason}")
     if not (tab["folds_ok"] > 0).any():
-        typer.echo(
-            "error: every fit failed in every fold (see the errors above); nothing written",
-            err=True,
-        )
+        why = "every fit failed in every fold"
+        if tab["status"].str.contains("time budget ran out").all():
+            why = "the time budget ran out before any fold"
+        typer.echo(f"error: {why} (see above); nothing written", err=True)
         raise typer.Exit(1)
     if csv is not None:
         atomic_write_text(csv, tab.to_csv(index=False), force=force, kind=SELECTION_CSV)

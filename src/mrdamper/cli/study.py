@@ -15,6 +15,7 @@ import typer
 
 from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import reader_options
+from mrdamper.cli._status import finished_lines
 from mrdamper.errors import DataValidationError, SchemaError
 from mrdamper.kinds import kind_list
 
@@ -231,16 +232,17 @@ def study(
             )
     proto, why = choose_protocol(records, protocol)
     typer.echo(f"{len(records)} records from {data}; {why}", err=True)
-    res = run_study(
-        records,
-        proto,
-        kinds,
-        workers=workers,
-        scheduler=scheduler,
-        seed=seed,
-        progress=not no_progress,
-        control=control,
-    )
+    with finished_lines("study", show=not no_progress):
+        res = run_study(
+            records,
+            proto,
+            kinds,
+            workers=workers,
+            scheduler=scheduler,
+            seed=seed,
+            progress=not no_progress,
+            control=control,
+        )
     write_or_fail(res, out, force, show=not no_progress)
 
 
@@ -373,15 +375,16 @@ def demo(
         highlight=False,
     )
     try:
-        res = run_study(
-            data,
-            doe_protocol(),
-            kinds,
-            workers=workers,
-            seed=seed,
-            progress=not no_progress,
-            control=control_settings(no_control, control_roads, control_duration, quick),
-        )
+        with finished_lines("demo", show=not no_progress):
+            res = run_study(
+                data,
+                doe_protocol(),
+                kinds,
+                workers=workers,
+                seed=seed,
+                progress=not no_progress,
+                control=control_settings(no_control, control_roads, control_duration, quick),
+            )
     finally:
         compiled.finish_ahead(cancel=True)  # no-op: the study waited for it
     write_or_fail(res, out, force, show=not no_progress)

@@ -29,6 +29,7 @@ from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, MrDamperError, SchemaError, interrupt_in_chain
 from mrdamper.models import Estimator, FittedModel
 from mrdamper.models.base import RangePolicy
+from mrdamper.progress import finished
 from mrdamper.study._tasks import FitOutcome, SimOutcome, fit_task, simulate_task
 from mrdamper.study.analysis_step import AnalysisOutcome, run_analysis
 from mrdamper.study.control_step import (
@@ -193,19 +194,29 @@ def _predict_all(
 
 
 def progress_bars(enabled: bool) -> Any:
-    """The study's progress display on standard error (rich; ``enabled=False``: nothing shown):
-    one bar per stage (fitting, simulating, the quarter-car loop), and the writing of a report
-    by the command line."""
+    """The study's progress bars on standard error: one per stage (fitting, simulating, the
+    quarter-car loop), and the writing of a report by the command line; drawn only when it is a
+    terminal and ``enabled`` (off a terminal the finished models are announced through
+    :func:`mrdamper.progress.finished` instead)."""
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
 
+    console = Console(stderr=True)
     return Progress(
         TextColumn("{task.description:<12}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
-        console=Console(stderr=True),
-        disable=not enabled,
+        TimeRemainingColumn(),
+        console=console,
+        disable=not (enabled and console.is_terminal),
         transient=False,
     )
 
@@ -240,7 +251,9 @@ def run_study(
     seed : int
         Passed as ``seed`` to every estimator that takes one (unless its settings set it).
     progress : bool
-        Show a progress bar (on standard error).
+        Show progress bars on standard error when it is a terminal. Each model whose fits and
+        simulations are all done is reported as a finished step
+        (:func:`mrdamper.progress.finished`) either way.
     control : ControlSettings or None
         The control-relevance step after the fits
         (:func:`~mrdamper.study.control_step.control_relevance`: the first fold's models in the
@@ -299,6 +312,8 @@ def run_study(
                     executor, folds, specs, fit_out, records, control, lambda: bar.advance(task)
                 )
         t_control = time.perf_counter() - t_control
+        if control_res is not None:
+            finished(f"control relevance: the quarter-car loop in {t_control:.0f} s")
     except BaseException:
         executor.close(cancel=True)
         raise
@@ -422,6 +437,18 @@ def _execute(
     _compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
         fits[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
+    left = {si: len(folds) + sum(len(f.score) for f in folds) for si in range(len(specs))}
+    models_done = 0
+
+    def step(si: int, n: int = 1) -> None:
+        nonlocal models_done
+        left[si] -= n
+        if left[si] == 0:
+            models_done += 1
+            finished(
+                _model_line(specs[si].label, si, folds, fit_out, sim_out), models_done, len(specs)
+            )
+
     with progress_bars(show) as bar:
         t_fit = bar.add_task("fitting", total=len(folds) * len(specs))
         t_sim = bar.add_task("simulating", total=n_sims)
@@ -440,9 +467,30 @@ def _execute(
                             ] = (fi, si, ri)
                     else:
                         bar.advance(t_sim, len(folds[fi].score))
+                        step(si, len(folds[fi].score))
+                    step(si)
                 else:
-                    sim_out[sims.pop(fut)] = _outcome(fut, SimOutcome)
+                    key = sims.pop(fut)
+                    sim_out[key] = _outcome(fut, SimOutcome)
                     bar.advance(t_sim)
+                    step(key[1])
+
+
+def _model_line(
+    label: str,
+    si: int,
+    folds: list[Fold],
+    fit_out: Mapping[tuple[int, int], FitOutcome],
+    sim_out: Mapping[tuple[int, int, int], SimOutcome],
+) -> str:
+    """One line on a model whose fits and simulations are all done."""
+    fitted = sum(fit_out[(fi, si)].ok for fi in range(len(folds)))
+    esr = [o.esr for (_, s, _), o in sim_out.items() if s == si and o.status == "ok"]
+    failed = sum(1 for (_, s, _), o in sim_out.items() if s == si and o.status != "ok")
+    text = f"{label}: fitted on {fitted} of {len(folds)} fold(s)"
+    if esr:
+        text += f", mean ESR {float(np.mean(esr)):.3g} over {len(esr)} record(s)"
+    return text + (f", {failed} simulation(s) failed" if failed else "")
 
 
 def _outcome(fut: Any, kind: type[_O]) -> _O:

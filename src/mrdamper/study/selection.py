@@ -34,12 +34,15 @@ left-out record (``worst_esr``) is recommended when that record is more than 5 %
 first-ranked kind's (the one that fails least badly on a condition it was not trained on),
 otherwise the first-ranked kind. The ``status`` column says
 why a kind is not recommended; the reason states the envelope the recommendation was validated in.
+
+The fits run on worker processes, with successive halving (a kind far above the leader after its
+first two fits runs no further fit) and an optional time budget
+(:mod:`mrdamper.study._select_run`); a kind stopped early is not recommended, and its status says
+why.
 """
 
 from __future__ import annotations
 
-import time
-import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -48,11 +51,11 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
-from mrdamper.errors import DataValidationError, OutOfRangeError
+from mrdamper.errors import DataValidationError
 from mrdamper.metrics import MIN_SCORED_SAMPLES
-from mrdamper.progress import report, section
 
 __all__ = [
+    "HALVING",
     "SCORE_COLUMNS",
     "SelectionResult",
     "cross_validate",
@@ -66,6 +69,9 @@ SCORE_COLUMNS: tuple[str, ...] = ("model", "fold", "record", "esr", "clipped", "
 _REQUIRED: tuple[str, ...] = SCORE_COLUMNS[:-1]
 #: Kinds within this fraction of the lowest ``rank_esr`` tie; the lowest ``worst_esr`` decides [-].
 TIE = 0.05
+#: Successive-halving factor of :func:`cross_validate` [-]: a kind whose first fits estimate a
+#: ``rank_esr`` more than this many times the leader's runs no further fit.
+HALVING = 3.0
 
 #: Why an interpolation-only kind (:attr:`mrdamper.kinds.KindSpec.interpolation_only`) is not
 #: recommended when the selection validates beyond the training envelope.
@@ -256,6 +262,20 @@ def _check_settings(kind: str, settings: Mapping[str, Any]) -> None:
         raise DataValidationError(f"{kind}.{exc.field}", str(exc).split(": ", 1)[-1]) from None
 
 
+def _check_run(workers: Any, halving: Any, time_budget: Any) -> None:
+    """Refuse run settings that cannot work, in one line naming the setting."""
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
+        raise DataValidationError("workers", f"expected a positive integer, got {workers!r}")
+    for name, value, low in (("halving", halving, 1.0), ("time_budget", time_budget, 0.0)):
+        if value is None:
+            continue
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not ok or not np.isfinite(value) or value <= low:
+            raise DataValidationError(name, f"expected a number above {low:g}, got {value!r}")
+
+
 def cross_validate(
     data: Experiment | Iterable[Experiment],
     *,
@@ -267,6 +287,9 @@ def cross_validate(
     beyond: bool = True,
     stress: bool = True,
     seed: int = 0,
+    workers: int | None = None,
+    halving: float | None = HALVING,
+    time_budget: float | None = None,
 ) -> SelectionResult:
     """Cross-validate every model kind on ``data`` and recommend one.
 
@@ -290,19 +313,39 @@ def cross_validate(
         Also fit every kind on all the records and stress-test it.
     seed : int
         Seed of the stress test's random motion.
+    workers : int, optional
+        Worker processes the fits run on (default: the cores this process may use); 1 runs them
+        in this process. The result does not depend on it.
+    halving : float or None
+        Successive halving (:mod:`mrdamper.study._select_run`): a kind whose first two fits
+        estimate a ``rank_esr`` more than ``halving`` times the leader's runs no further fit
+        (default :data:`HALVING`); None fits every kind on every fold.
+    time_budget : float, optional
+        No fit starts after this many seconds [s]; the kinds left with fits not run are listed
+        as not compared. None (default): no limit.
 
     Returns
     -------
     SelectionResult
 
+    Raises
+    ------
+    DataValidationError
+        An unknown kind or setting, ``workers`` not a positive integer, ``halving`` not a number
+        above 1 or ``time_budget`` not a positive number.
+
     Notes
     -----
     Reports the stage ``"cross-validation: fits"`` (fits done of the kinds times the folds, plus
-    one fit on all the records per kind when ``stress``) to :mod:`mrdamper.progress`; each fit's
-    own stages come prefixed with the kind and fold.
+    one fit on all the records per kind when ``stress``) to :mod:`mrdamper.progress`, and each
+    kind, when its last fit is in, as a finished step (:func:`mrdamper.progress.finished`). With
+    one worker each fit's own stages come prefixed with the kind and fold.
     """
+    _check_run(workers, halving, time_budget)
+    from mrdamper.kinds import spec
     from mrdamper.models.envelope_folds import envelope_folds
     from mrdamper.models.registry import available_models
+    from mrdamper.study._select_run import Plan, run_plan
 
     kinds = list(models) if models is not None else available_models()
     extra = {k: dict(v) for k, v in (settings or {}).items()}
@@ -325,100 +368,32 @@ def cross_validate(
             "no fold leaves the training envelope (the records share one range, or the later "
             "part of the record stays within the earlier one's): validated inside it only"
         )
-    plan = [(p, False) for p in parts] + [(p, True) for p in extra_parts]
-    rows: list[dict[str, Any]] = []
-    fit_times: dict[str, list[float]] = {k: [] for k in kinds}
-    stressed: dict[str, Any] = {}
-    n_fits, done = len(kinds) * (len(plan) + int(stress)), 0
-    for kind in kinds:
-        options = {"input": input, **extra.get(kind, {})}
-        for (label, train, test), out in plan:
-            report("cross-validation: fits", done, n_fits)
-            done += 1
-            where = f"{kind}, fold {label} ({done} of {n_fits})"
-            model, elapsed, err = _fit(kind, options, train, where)
-            if model is None:
-                rows += [_row(kind, label, e.name, np.nan, False, f"fit: {err}", out) for e in test]
-                continue
-            if not out:
-                fit_times[kind].append(elapsed)
-            report(f"{where}: scoring the left-out data")
-            rows += [_score(model, kind, label, e, out) for e in test]
-        if stress:
-            report("cross-validation: fits", done, n_fits)
-            done += 1
-            where = f"{kind}, all records ({done} of {n_fits})"
-            stressed[kind] = _stress(kind, options, exps, where, seed)
-    report("cross-validation: fits", n_fits, n_fits)
-    scores = pd.DataFrame(rows, columns=list(SCORE_COLUMNS))
+    validates_beyond = bool(extra_parts) or stress
+    plan = Plan(
+        kinds=kinds,
+        options={k: {"input": input, **extra.get(k, {})} for k in kinds},
+        folds=[(*p, False) for p in parts] + [(*p, True) for p in extra_parts],
+        records=exps,
+        stress=stress,
+        seed=seed,
+        recommendable={
+            k: not (validates_beyond and getattr(spec(k), "interpolation_only", False))
+            for k in kinds
+        },
+    )
+    run = run_plan(plan, workers=workers, halving=halving, time_budget=time_budget)
+    scores = pd.DataFrame(run.rows, columns=list(SCORE_COLUMNS))
     return selection_from_scores(
         scores,
         kinds,
-        fit_times,
+        run.fit_times,
         split,
         len(parts),
-        notes,
-        stress=stressed,
+        [*notes, *run.notes],
+        stress=run.stress,
         envelope=_envelope_text(exps, input),
+        stopped=run.stopped,
     )
-
-
-def _row(
-    kind: str, fold: str, record: str, esr: float, clipped: bool, error: str, out: bool
-) -> dict[str, Any]:
-    return {
-        "model": kind,
-        "fold": fold,
-        "record": record,
-        "esr": esr,
-        "clipped": clipped,
-        "error": error,
-        "beyond": out,
-    }
-
-
-def _fit(
-    kind: str, options: Mapping[str, Any], train: ExperimentSet, where: str
-) -> tuple[Any, float, str]:
-    """``(model or None, fit time [s], error text)``: warnings silenced, failures caught."""
-    from mrdamper.models.registry import get_estimator
-
-    t0 = time.perf_counter()
-    try:
-        with warnings.catch_warnings(), section(where):
-            warnings.simplefilter("ignore")
-            model = get_estimator(kind, **options).fit(train)
-    except Exception as exc:  # noqa: BLE001 - a failing kind is a row of the table
-        return None, time.perf_counter() - t0, f"{type(exc).__name__}: {exc}"
-    return model, time.perf_counter() - t0, ""
-
-
-def _score(model: Any, kind: str, label: str, e: Experiment, out: bool) -> dict[str, Any]:
-    clipped = _outside(model, e)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            esr = float(model.with_range_policy("clip").score(e).esr)
-    except Exception as exc:  # noqa: BLE001 - reported
-        return _row(
-            kind, label, e.name, np.nan, clipped, f"simulate: {type(exc).__name__}: {exc}", out
-        )
-    return _row(kind, label, e.name, esr, clipped, "", out)
-
-
-def _stress(
-    kind: str, options: Mapping[str, Any], exps: ExperimentSet, where: str, seed: int
-) -> Any:
-    from mrdamper.study.stress import StressResult, stress_test
-
-    model, _, err = _fit(kind, options, exps, where)
-    if model is None:
-        return StressResult(pd.DataFrame(), False, f"fit on all the records failed: {err}")
-    report(f"{where}: stress test")
-    try:
-        return stress_test(model, exps, seed=seed)
-    except Exception as exc:  # noqa: BLE001 - reported
-        return StressResult(pd.DataFrame(), False, f"{type(exc).__name__}: {exc}")
 
 
 def _envelope_text(exps: ExperimentSet, source: str) -> str:
@@ -449,6 +424,7 @@ def selection_from_scores(
     *,
     stress: Mapping[str, Any] | None = None,
     envelope: str = "",
+    stopped: Mapping[str, str] | None = None,
 ) -> SelectionResult:
     """The selection table and recommendation from held-out scores, by the rule of
     :func:`cross_validate` (module docstring).
@@ -477,6 +453,9 @@ def selection_from_scores(
         Model -> :class:`~mrdamper.study.stress.StressResult` (models without one: ``"-"``).
     envelope : str
         The records' envelope in words, for the reason.
+    stopped : mapping, optional
+        Model -> why it ran only some of its fits (successive halving, a time budget): such a
+        model is not recommended, and its status says why.
 
     Returns
     -------
@@ -492,7 +471,9 @@ def selection_from_scores(
     times = {k: list(fit_times.get(k, ())) for k in kinds}
     stress = dict(stress or {})
     n_beyond = int(scores.loc[scores["beyond"], "fold"].nunique())
-    table = _summarise(scores, list(kinds), times, stress, beyond=bool(n_beyond or stress))
+    table = _summarise(
+        scores, list(kinds), times, stress, dict(stopped or {}), beyond=bool(n_beyond or stress)
+    )
     recommended, reason = _recommend(table, split, n_folds, n_beyond, envelope)
     if recommended is not None:
         table.loc[recommended, "status"] = "recommended"
@@ -510,21 +491,12 @@ def selection_from_scores(
     )
 
 
-def _outside(model: Any, e: Experiment) -> bool:
-    try:
-        model.with_range_policy("error").electrical_input(e)
-    except OutOfRangeError:
-        return True
-    except Exception:  # noqa: BLE001 - a missing channel shows up when scoring
-        return False
-    return False
-
-
 def _summarise(
     scores: pd.DataFrame,
     kinds: list[str],
     fit_times: Mapping[str, Sequence[float]],
     stress: Mapping[str, Any],
+    stopped: Mapping[str, str],
     *,
     beyond: bool,
 ) -> pd.DataFrame:
@@ -544,8 +516,12 @@ def _summarise(
         rank = mean if b.empty else (0.5 * (mean + b_esr) if np.isfinite(b_esr) else np.nan)
         st = stress.get(k)
         st_text = "-" if st is None else str(st.reason)
+        if st is None and k in stopped:
+            st_text = "not run"
         status = "eligible"
-        if failed_folds:
+        if k in stopped and not (failed_folds or b_failed):
+            status = f"not recommended: {stopped[k]}"
+        elif failed_folds:
             status = f"not recommended: failed {failed_folds} fold(s)"
         elif b_failed:
             status = "not recommended: failed beyond the training envelope"
