@@ -232,7 +232,7 @@ def test_cli_time_budget_spent_before_any_fold(records, tmp_path: Path, capsys) 
     assert exc.value.code == 1
     out, err = capsys.readouterr()
     assert "not compared: the time budget ran out (0 of " in out
-    assert "note: the time budget of 1e-09 s ran out: not compared: bingham" in out
+    assert "note: the time budget of 1e-09 s ran out: not compared: bingham" in err
     assert "error: the time budget ran out before any fold (see above); nothing written" in err
     with pytest.raises(SystemExit) as exc:
         main(["select", str(d), "--time-budget", "-1"])

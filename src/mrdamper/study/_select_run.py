@@ -37,7 +37,12 @@ from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import interrupt_in_chain
 from mrdamper.progress import finished, report, section
 from mrdamper.study._threads import single_threaded_blas
-from mrdamper.study.executor import StudyExecutor, make_executor, resolve_record
+from mrdamper.study.executor import (
+    StudyExecutor,
+    compile_kernels,
+    make_executor,
+    resolve_record,
+)
 
 __all__ = ["Plan", "RunOutcome", "default_select_workers", "run_plan"]
 
@@ -497,9 +502,7 @@ def run_plan(
     run = _Runner(plan, ex, n, halving, time_budget)
     report("cross-validation: fits", 0, run.n_tasks)
     try:
-        from mrdamper.study.runner import _compile_kernels
-
-        _compile_kernels(ex, list(plan.kinds))
+        compile_kernels(ex, list(plan.kinds))
         run.fill()
         while run.pending and run.busy():
             run.collect()

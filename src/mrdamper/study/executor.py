@@ -28,7 +28,7 @@ import multiprocessing
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -50,6 +50,7 @@ __all__ = [
     "SerialExecutor",
     "StudyExecutor",
     "check_scheduler_address",
+    "compile_kernels",
     "default_workers",
     "make_executor",
     "resolve_record",
@@ -382,3 +383,33 @@ def make_executor(workers: int | None = None, scheduler: Any = None) -> StudyExe
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise DataValidationError("workers", f"expected a positive integer, got {workers!r}")
     return SerialExecutor() if n == 1 else ProcessExecutor(n)
+
+
+def compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
+    """Compile the kernels the models need before the first fit, each once on the machine, in
+    parallel: every local worker (and a background compilation the command started, see
+    :func:`mrdamper.compiled.compile_ahead`) takes whole kernel modules not cached yet. The fits
+    then load them from numba's cache. Nothing to do with one worker and no background
+    compilation, or when every kernel is cached."""
+    from mrdamper import compiled
+
+    claim_dir = compiled.claim_folder()
+    workers = ex.workers if isinstance(ex, ProcessExecutor) else 1
+    parallel = workers > 1
+    if claim_dir is None and not parallel:
+        return
+    own = claim_dir is None
+    claim_dir = claim_dir or tempfile.mkdtemp(prefix="mrdamper-kernels-")
+    try:
+        if parallel:
+            futures = [
+                ex.submit(compiled.compile_claimed, list(kinds), claim_dir) for _ in range(workers)
+            ]
+            for fut in futures:
+                fut.exception()  # wait; a kernel that failed here compiles at first use
+        else:
+            compiled.compile_claimed(list(kinds), claim_dir)
+    finally:
+        compiled.finish_ahead()
+        if own:
+            shutil.rmtree(claim_dir, ignore_errors=True)

@@ -13,8 +13,6 @@ import dataclasses
 import fnmatch
 import inspect
 import platform
-import shutil
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeVar, cast
@@ -38,7 +36,11 @@ from mrdamper.study.control_step import (
     control_relevance,
     truth_damper,
 )
-from mrdamper.study.executor import ProcessExecutor, StudyExecutor, make_executor
+from mrdamper.study.executor import (
+    StudyExecutor,
+    compile_kernels,
+    make_executor,
+)
 from mrdamper.study.presets import doe_protocol
 from mrdamper.study.protocol import ModelSpec, Protocol, _as_spec
 from mrdamper.study.provenance import provenance
@@ -378,36 +380,6 @@ def _control(
     )
 
 
-def _compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
-    """Compile the kernels the models need before the first fit, each once on the machine, in
-    parallel: every local worker (and a background compilation the command started, see
-    :func:`mrdamper.compiled.compile_ahead`) takes whole kernel modules not cached yet. The fits
-    then load them from numba's cache. Nothing to do with one worker and no background
-    compilation, or when every kernel is cached."""
-    from mrdamper import compiled
-
-    claim_dir = compiled.claim_folder()
-    workers = ex.workers if isinstance(ex, ProcessExecutor) else 1
-    parallel = workers > 1
-    if claim_dir is None and not parallel:
-        return
-    own = claim_dir is None
-    claim_dir = claim_dir or tempfile.mkdtemp(prefix="mrdamper-kernels-")
-    try:
-        if parallel:
-            futures = [
-                ex.submit(compiled.compile_claimed, list(kinds), claim_dir) for _ in range(workers)
-            ]
-            for fut in futures:
-                fut.exception()  # wait; a kernel that failed here compiles at first use
-        else:
-            compiled.compile_claimed(list(kinds), claim_dir)
-    finally:
-        compiled.finish_ahead()
-        if own:
-            shutil.rmtree(claim_dir, ignore_errors=True)
-
-
 def _execute(
     ex: StudyExecutor,
     folds: list[Fold],
@@ -434,7 +406,7 @@ def _execute(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
         key=lambda k: (_cost_rank(specs[k[1]].kind), k),
     )
-    _compile_kernels(ex, [spec.kind for spec in specs])
+    compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
         fits[ex.submit(fit_task, specs[si].kind, settings[(fi, si)], trains[fi])] = (fi, si)
     left = {si: len(folds) + sum(len(f.score) for f in folds) for si in range(len(specs))}
