@@ -30,7 +30,7 @@ import pandas as pd
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
-from mrdamper.rig.virtual_rig import VirtualRig, _command
+from mrdamper.rig.virtual_rig import VirtualRig, commands
 from mrdamper.signals.common import SeedLike
 
 __all__ = ["PLAN_NAME", "PLAN_SOURCE", "PlanRig", "RigLimits", "plan_limits", "write_plan"]
@@ -82,12 +82,7 @@ class PlanRig(VirtualRig):
             ``x`` the command [m], ``v`` its central difference [m/s], the electrical command,
             ``F`` the damper estimate's force for the command [N].
         """
-        x = _command("x_command", x_command)
-        e = _command("i_command", i_command)
-        if e.size != x.size:
-            raise DataValidationError(
-                "i_command", f"has {e.size} samples but x_command has {x.size}"
-            )
+        x, e = commands(x_command, i_command)
         t = np.arange(x.size) / self.fs
         v = np.gradient(x) * self.fs
         elec: dict[str, Any] = {self.electrical_channel: e}

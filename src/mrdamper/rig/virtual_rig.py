@@ -50,6 +50,18 @@ def _command(name: str, values: Any) -> np.ndarray:
     return arr
 
 
+def commands(x_command: Any, i_command: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The displacement [m] and electrical [A or V] commands of a run, checked: 1-D, finite, at
+    least 2 samples, the same length (one-line errors naming the command)."""
+    x_cmd = _command("x_command", x_command)
+    i_cmd = _command("i_command", i_command)
+    if i_cmd.size != x_cmd.size:
+        raise DataValidationError(
+            "i_command", f"has {i_cmd.size} samples but x_command has {x_cmd.size}"
+        )
+    return x_cmd, i_cmd
+
+
 #: Order of one pass of the velocity low-pass (applied forward and backward).
 VELOCITY_FILTER_ORDER = 4
 
@@ -198,12 +210,7 @@ class VirtualRig:
             If the current leaves the damper's identified range and its ``range_policy`` is
             ``"error"``.
         """
-        x_cmd = _command("x_command", x_command)
-        i_cmd = _command("i_command", i_command)
-        if i_cmd.size != x_cmd.size:
-            raise DataValidationError(
-                "i_command", f"has {i_cmd.size} samples but x_command has {x_cmd.size}"
-            )
+        x_cmd, i_cmd = commands(x_command, i_command)
         as_seed_sequence(seed)
         s_var, s_x, s_f, s_i = child_seeds(seed, 4)
         fs = self.fs
