@@ -249,7 +249,7 @@ def _rig(damper: str | None, fs: float, stroke: float | None, plan: bool, first)
     from mrdamper.rig.plan import PlanRig
     from mrdamper.rig.virtual_rig import VirtualRig
 
-    model = _damper(damper) if damper or not (plan and first is not None) else first
+    model = first if plan and first is not None and not damper else _damper(damper)
     actuator = ServoActuator() if stroke is None else ServoActuator(stroke=stroke)
     cls = PlanRig if plan else VirtualRig
     return cls(damper=model, fs=fs, actuator=actuator)

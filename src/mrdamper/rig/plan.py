@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment
-from mrdamper.data.experiment import ElectricalSource
+from mrdamper.data.experiment import CHANNELS, ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.rig.virtual_rig import VirtualRig, commands
 from mrdamper.signals.common import SeedLike
@@ -186,7 +186,7 @@ def plan_limits(records: Iterable[Experiment], limits: RigLimits) -> pd.DataFram
                 "velocity limit [m/s]": limits.velocity,
                 "input min": float(np.min(e)),
                 "input max": float(np.max(e)),
-                "input unit": "A" if channel == "i" else "V",
+                "input unit": CHANNELS[channel],
                 "peak force [N]": force,
                 "load cell [N]": limits.load_cell,
                 "exceeds": ", ".join(exceeds),
@@ -235,7 +235,7 @@ def write_plan(
     def build(tmp: Path) -> None:
         for rec in planned:
             channel = _channel(rec)
-            unit = "A" if channel == "i" else "V"
+            unit = CHANNELS[channel]
             frame = pd.DataFrame(
                 {"t [s]": rec.t, "x [m]": rec.x, f"{channel} [{unit}]": rec.electrical(channel)}
             )
