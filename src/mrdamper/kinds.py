@@ -37,6 +37,7 @@ __all__ = [
     "Variant",
     "add",
     "added",
+    "cost_rank",
     "default_kinds",
     "input_text",
     "kind_list",
@@ -423,6 +424,14 @@ def spec(kind: str) -> KindSpec | None:
 def kind_list() -> str:
     """Every kind, comma-separated in display order (for help texts)."""
     return ", ".join(row.kind for row in rows())
+
+
+def cost_rank(kind: str) -> int:
+    """Identification cost rank of ``kind`` (0 the most expensive; 9 for a kind without a row).
+    Fits are submitted in this order so the longest task starts first and the others fill the
+    remaining workers; results do not depend on it."""
+    row = spec(kind)
+    return row.cost_rank if row is not None else 9
 
 
 def default_kinds() -> tuple[str, ...]:

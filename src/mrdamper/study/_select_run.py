@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper import kinds
 from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.errors import interrupt_in_chain
 from mrdamper.progress import finished, report, section
@@ -237,13 +238,6 @@ def _estimate(rows: Sequence[dict[str, Any]]) -> float:
     return float(np.mean([np.mean(v) for v in by_fold.values()]))
 
 
-def _cost(kind: str) -> int:
-    from mrdamper import kinds
-
-    row = kinds.spec(kind)
-    return row.cost_rank if row is not None else 9
-
-
 class _Runner:
     """The scheduling state of one :func:`run_plan` call."""
 
@@ -263,7 +257,7 @@ class _Runner:
         per_kind = n + int(plan.stress)
         self.round_one = _first_round(plan.folds) if halving is not None else list(range(n))
         rest = [j for j in range(per_kind) if j not in self.round_one]
-        order = sorted(plan.kinds, key=lambda k: (_cost(k), list(plan.kinds).index(k)))
+        order = sorted(plan.kinds, key=lambda k: (kinds.cost_rank(k), list(plan.kinds).index(k)))
         self.queue1 = [(k, j) for k in order for j in self.round_one]
         self.queue2 = [(k, j) for k in order for j in rest]
         self.results: dict[tuple[str, int], Any] = {}

@@ -77,14 +77,6 @@ _LAW_SETTINGS = ("laws", "zone_laws")
 _O = TypeVar("_O", FitOutcome, SimOutcome)
 
 
-def _cost_rank(kind: str) -> int:
-    """Identification cost rank of ``kind`` (the kind table's; most expensive first). Fits are
-    submitted in this order so the longest task starts first and the others fill the remaining
-    workers; results do not depend on it."""
-    row = kinds.spec(kind)
-    return row.cost_rank if row is not None else 9
-
-
 def _estimator_fields(est: Estimator) -> set[str]:
     if dataclasses.is_dataclass(est):
         return {f.name for f in dataclasses.fields(est)}
@@ -366,7 +358,7 @@ def _control(
     truth is the rig's damper when every record comes from it); ``advance()`` after each
     model."""
     done = {s.label: fit_out[(0, si)] for si, s in enumerate(specs)}
-    order = sorted(specs, key=lambda s: _cost_rank(s.kind))  # the longest task starts first
+    order = sorted(specs, key=lambda s: kinds.cost_rank(s.kind))  # the longest task starts first
     return control_relevance(
         {s.label: done[s.label].model for s in order if done[s.label].ok},
         [s.label for s in specs],
@@ -404,7 +396,7 @@ def _execute(
     trains = [[handle(e) for e in fold.train] for fold in folds]
     order = sorted(
         ((fi, si) for fi in range(len(folds)) for si in range(len(specs))),
-        key=lambda k: (_cost_rank(specs[k[1]].kind), k),
+        key=lambda k: (kinds.cost_rank(specs[k[1]].kind), k),
     )
     compile_kernels(ex, [spec.kind for spec in specs])
     for fi, si in order:
