@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from mrdamper import kinds
+from mrdamper.kinds import cost_rank
 from mrdamper.models import get_estimator, known_kinds, model_class, register
 from mrdamper.plotting._common import model_color
-from mrdamper.study.runner import _cost_rank
 from tests.study.conftest import ToyEstimator, ToyModel
 
 
@@ -19,7 +19,7 @@ def test_registered_family_has_a_row() -> None:
     assert model_class("toy") is ToyModel
     assert isinstance(get_estimator("toy"), ToyEstimator)
     assert model_color("toy") == row.color
-    assert _cost_rank("toy") == row.cost_rank
+    assert cost_rank("toy") == row.cost_rank
 
 
 def test_builtin_kind_cannot_be_replaced() -> None:
