@@ -168,7 +168,7 @@ def test_quartercar_plant_honours_and_checks_car_and_gains(tmp_path, capsys) -> 
 
 
 def test_every_export_warns_about_an_unstable_model(tmp_path, capsys) -> None:
-    from mrdamper.control.export import warn_if_unstable
+    from mrdamper.control.export.matrices import warn_if_unstable
     from mrdamper.models.phenomenological import P15Model
 
     with pytest.warns(RuntimeWarning, match="p15: model is not stable by construction"):
@@ -203,7 +203,7 @@ def test_a_model_trained_at_one_current_is_refused_with_plant_and_as_loop_model(
 
 
 def test_a_loop_model_that_fails_is_named_as_loop_model(tmp_path, capsys, monkeypatch) -> None:
-    import mrdamper.control.doe_extension as ext
+    import mrdamper.control.loop.doe_extension as ext
     from mrdamper.data import ExperimentSet
     from mrdamper.errors import SimulationDivergedError
     from mrdamper.rig import doe

@@ -60,7 +60,7 @@ def test_the_summary_names_the_worst_other_cell() -> None:
 
 def test_the_stiffened_car_adds_to_the_spring_only() -> None:
     bench = load_benchmark("skyhook_current")
-    from mrdamper.control.car import QuarterCar
+    from mrdamper.control.loop.car import QuarterCar
 
     car = QuarterCar()
     stiff = bench.stiffened(car, 693.0)

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from mrdamper.control import inverse_current
-from mrdamper.control.c_export import C_KINDS, c_source, export_c
-from mrdamper.control.inverse import default_reg
+from mrdamper.control.export.c_export import C_KINDS, c_source, export_c
+from mrdamper.control.inverse.current import default_reg
 from mrdamper.errors import DataValidationError, OutputExistsError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel
@@ -281,7 +281,7 @@ def test_c_step_of_every_kind_matches_run_step(
 def test_lpv_and_static_renderings_read_their_step_forms(kind_models: dict[str, Any]) -> None:
     """The step forms hold the arrays the model's law and map methods give (so the C constants,
     now read from the forms, are those the renderers formerly rebuilt from the model)."""
-    from mrdamper.control.inverse import lpv_hysteresis, lpv_law_arrays, static_map_arrays
+    from mrdamper.control.inverse.current import lpv_hysteresis, lpv_law_arrays, static_map_arrays
 
     lpv = kind_models["lpv"]
     form = lpv.step().form

@@ -13,12 +13,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mrdamper.control.c_export import export_c
-from mrdamper.control.c_inverse import CInverse
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.fidelity import loop_metrics
-from mrdamper.control.inverse import default_reg
-from mrdamper.control.quarter_car import QuarterCarResult, iso_road
+from mrdamper.control.export.c_export import export_c
+from mrdamper.control.export.c_inverse import CInverse
+from mrdamper.control.inverse.current import default_reg
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.fidelity import loop_metrics
+from mrdamper.control.loop.quarter_car import QuarterCarResult, iso_road
 from mrdamper.errors import DataValidationError
 from tests.control.conftest import toy_lti
 from tests.control.test_c_export import GCC, needs_gcc
@@ -147,7 +147,7 @@ def test_exported_controller_on_the_exported_plant(
 ) -> None:
     """The C inverse drives the model's FMU as the plant (a family added at run time: the loop
     compiled with the FMU's step functions) and gives the Python inverse's metrics there too."""
-    from mrdamper.control.fmu import export_fmu
+    from mrdamper.control.export.fmu import export_fmu
 
     sp1 = kind_models["sp1"]
     fmu = export_fmu(sp1, tmp_path / "sp1.fmu")

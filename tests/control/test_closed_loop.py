@@ -13,9 +13,9 @@ import pytest
 from numba import njit
 
 from mrdamper.cli.main import main
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.fidelity import checked_run, closed_loop_fidelity, loop_metrics
-from mrdamper.control.quarter_car import QuarterCar, iso_road, simulate_quarter_car
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.fidelity import checked_run, closed_loop_fidelity, loop_metrics
+from mrdamper.control.loop.quarter_car import QuarterCar, iso_road, simulate_quarter_car
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.models import _sp_kernels as SK
 from mrdamper.models.lpv import LTIModel
@@ -213,7 +213,7 @@ def test_a_refused_run_keeps_its_rows_and_names_the_metric() -> None:
 def test_a_diverged_run_keeps_its_rows_and_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
     # a loop that diverges with the model as the damper is a finding about the model, not the end
     # of the comparison: that run's rows are NaN with a "diverged" note, the other runs are kept
-    from mrdamper.control import fidelity
+    from mrdamper.control.loop import fidelity
     from mrdamper.errors import SimulationDivergedError
 
     real = fidelity.simulate_closed_loop
@@ -243,7 +243,7 @@ def test_a_diverged_run_keeps_its_rows_and_says_so(monkeypatch: pytest.MonkeyPat
 def test_a_sampled_loop_oscillation_is_detected_with_its_frequency() -> None:
     # a run whose body acceleration carries an 83 Hz limit cycle (as an LPV model at 1 kHz in
     # passive hard on a smooth road) against the same run without it
-    from mrdamper.control.fidelity import HF_SHARE, oscillation
+    from mrdamper.control.loop.fidelity import HF_SHARE, oscillation
 
     r = simulate_closed_loop(_sp3(), _road(2.0), "soft")
     clean, _ = oscillation(r)
@@ -256,7 +256,7 @@ def test_a_sampled_loop_oscillation_is_detected_with_its_frequency() -> None:
 def test_the_oscillation_note_tells_a_sampled_loop_from_the_model_s_own_mode() -> None:
     # a peak near a discrete model's Nyquist frequency asks for a higher rate; below it the note
     # weighs the one-sample delay at the peak (360 f / fs degrees)
-    from mrdamper.control.fidelity import oscillation_note
+    from mrdamper.control.loop.fidelity import oscillation_note
 
     car = QuarterCar()
     near = oscillation_note(0.5, 480.0, car, 1000.0)
@@ -298,7 +298,7 @@ def test_a_fitted_lpv_filter_does_not_ring_in_the_loop() -> None:
     # a pole at -0.997, near the model's Nyquist frequency), driven by the velocity: with its
     # force held over each sample (a zero-order hold, half a sample more delay) this loop diverged
     # after 3.3 s on this road; linear between the samples it stays bounded and smooth
-    from mrdamper.control.fidelity import HF_SHARE, oscillation
+    from mrdamper.control.loop.fidelity import HF_SHARE, oscillation
 
     lti = LTIModel(
         alpha=np.array([[-0.51], [-0.95], [0.55]]),
@@ -315,7 +315,7 @@ def test_a_fitted_lpv_filter_does_not_ring_in_the_loop() -> None:
 
 
 def test_the_envelope_note_names_only_the_dimensions_the_loop_leaves() -> None:
-    from mrdamper.control.fidelity import _excursion_text
+    from mrdamper.control.loop.fidelity import _excursion_text
 
     exc = {"velocity": 0.71, "stroke": 1.3, "switching": 2.5}
     assert _excursion_text(exc) == "switching-while-moving velocity x2.5, stroke x1.3"
@@ -396,7 +396,7 @@ def test_a_run_that_diverges_is_repeated_at_half_the_step() -> None:
 def test_a_comparison_keeps_the_runs_that_ran(monkeypatch: pytest.MonkeyPatch) -> None:
     # a run that cannot be made is a row with its reason; the others are kept, and the runs of a
     # damper through its step state their plant step and its check
-    from mrdamper.control import quarter_car_study as QS
+    from mrdamper.control.loop import quarter_car_study as QS
     from mrdamper.errors import SimulationDivergedError
 
     real = QS.simulate_closed_loop

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from mrdamper import Experiment
-from mrdamper.control.fmu import FMU_KINDS, export_fmu, fmu_sources, run_fmu
+from mrdamper.control.export.fmu import FMU_KINDS, export_fmu, fmu_sources, run_fmu
 from tests.conftest import package_kinds
 from tests.control.test_c_export import STRICT
 
@@ -93,7 +93,7 @@ def test_c_and_fmu_equal_predict(
         # fmpy's validation, and the step's feedthrough recorded in the FMU
         from fmpy.validation import validate_fmu
 
-        from mrdamper.control.fmu_plant import FMUPlant
+        from mrdamper.control.export.fmu_plant import FMUPlant
 
         assert validate_fmu(str(fmu)) == []
         assert FMUPlant(fmu).step().feedthrough == model.step(dt=rec.dt).feedthrough
@@ -157,7 +157,7 @@ def test_every_c_export_compiles_clean(
 def test_export_step_defaults_to_the_fitted_sample_time() -> None:
     """The model's ``sample_time``; for a model file without it (version 1), the training
     records' interval when they had one, else a one-line refusal naming their rates."""
-    from mrdamper.control.c_export import c_source
+    from mrdamper.control.export.c_export import c_source
     from mrdamper.errors import DataValidationError
     from mrdamper.models.bingham import BinghamModel
     from mrdamper.models.spencer import spencer1997

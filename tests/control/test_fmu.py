@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mrdamper.control.fmu import export_fmu, fmu_sources, run_fmu
+from mrdamper.control.export.fmu import export_fmu, fmu_sources, run_fmu
 from mrdamper.errors import DataValidationError, MrDamperError, OutputExistsError
 from mrdamper.models.spencer import spencer1997
 from mrdamper.models.step import run_step
@@ -186,8 +186,8 @@ def test_quarter_car_with_the_fmu_as_plant(
     the same loop with the model itself as the damper, to 1e-9 (continuous-time plants, one of
     them a hysteresis family, and a discrete-time plant; each family's loop compiles once, some
     20 s)."""
-    from mrdamper.control.closed_loop import simulate_closed_loop
-    from mrdamper.control.quarter_car import iso_road
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
+    from mrdamper.control.loop.quarter_car import iso_road
 
     plant = kind_models[kind]
     fmu = export_fmu(plant, tmp_path / "d.fmu", name="d", dt=None if kind == "narx" else 1e-3)
@@ -202,8 +202,8 @@ def test_quarter_car_with_the_fmu_as_plant(
 
 
 def test_fmu_plant_refusals(tmp_path: Path, kind_models: dict[str, Any]) -> None:
-    from mrdamper.control.closed_loop import resolve_plant
-    from mrdamper.control.fmu_plant import FMUPlant
+    from mrdamper.control.export.fmu_plant import FMUPlant
+    from mrdamper.control.loop.closed_loop import resolve_plant
 
     sp1 = kind_models["sp1"]
     inv = export_fmu(sp1, tmp_path / "inv.fmu", name="inv", dt=1e-3, inverse=True)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mrdamper.control._forms import ControllerForm, InverseForm, inverse_form
-from mrdamper.control._loop import controller_form, loop_setup
-from mrdamper.control.car import Controller, LinearDamper, QuarterCar, bump_road
+from mrdamper.control.inverse._forms import ControllerForm, InverseForm, inverse_form
+from mrdamper.control.loop._loop import controller_form, loop_setup
+from mrdamper.control.loop.car import Controller, LinearDamper, QuarterCar, bump_road
 
 
 def test_inverse_form_has_the_kernels_types() -> None:

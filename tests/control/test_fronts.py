@@ -10,10 +10,10 @@ import pandas as pd
 import pytest
 
 from mrdamper.cli.main import main
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.fidelity import checked_run, loop_metrics
-from mrdamper.control.fronts import FrontsResult, gain_fronts
-from mrdamper.control.quarter_car import QuarterCarResult, iso_road
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.fidelity import checked_run, loop_metrics
+from mrdamper.control.loop.fronts import FrontsResult, gain_fronts
+from mrdamper.control.loop.quarter_car import QuarterCarResult, iso_road
 from mrdamper.errors import DataValidationError
 from mrdamper.models.semiphenomenological import SP3Model
 

@@ -21,7 +21,6 @@ import pytest
 
 from mrdamper import Experiment
 from mrdamper.analysis.hysteretic import dahl_state, hysteretic_input
-from mrdamper.control import _inverse_kernels as K
 from mrdamper.control import (
     export_c,
     force_authority,
@@ -29,8 +28,9 @@ from mrdamper.control import (
     lpv_export_data,
     simulate_quarter_car,
 )
-from mrdamper.control.inverse import lpv_law_arrays
-from mrdamper.control.quarter_car import iso_road
+from mrdamper.control.inverse import _inverse_kernels as K
+from mrdamper.control.inverse.current import lpv_law_arrays
+from mrdamper.control.loop.quarter_car import iso_road
 from mrdamper.models.lpv import LPVEstimator, LPVModel
 from mrdamper.rig import VirtualRig, reference_damper
 
@@ -239,7 +239,7 @@ def test_fused_kernel_and_generic_loop_agree_for_the_lpv_plant(rig, ctrl: str) -
     # its step): the same force at every plant step, linear between the model's samples
     import copy
 
-    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
 
     m, _ = rig
     road = iso_road("C", speed=20.0, duration=1.0, fs=FS, seed=2)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mrdamper.control import inverse_current
-from mrdamper.control.inverse_check import check_inverse, check_inverse_frame
+from mrdamper.control.inverse.inverse_check import check_inverse, check_inverse_frame
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError
 from mrdamper.models.lpv import LPVModel
@@ -96,7 +96,7 @@ def test_dyke_targets(
 
 
 def test_lead_horizon_setting() -> None:
-    from mrdamper.control.inverse import horizon_samples
+    from mrdamper.control.inverse.current import horizon_samples
 
     assert horizon_samples(None, 1e-3) == 1
     assert horizon_samples(250.0, 1.0 / 3004.8) == 12  # one lag time constant

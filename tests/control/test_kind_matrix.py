@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 
 from mrdamper.control import compare_controllers, inverse_current
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.quarter_car import iso_road
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.quarter_car import iso_road
 from mrdamper.kinds import KINDS
 from tests.conftest import REPO_ROOT
 from tests.control.conftest import LazyFits

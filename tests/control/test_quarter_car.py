@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mrdamper.control.comfort import weighted_rms, wk_response
-from mrdamper.control.quarter_car import (
+from mrdamper.control.loop.comfort import weighted_rms, wk_response
+from mrdamper.control.loop.quarter_car import (
     CONTROLLERS,
     Controller,
     LinearDamper,
@@ -131,7 +131,7 @@ def test_bump_and_bad_input() -> None:
 
 def test_compare_controllers_table_and_figures() -> None:
     from mrdamper.control import compare_controllers
-    from mrdamper.control.quarter_car_study import default_rate
+    from mrdamper.control.loop.quarter_car_study import default_rate
 
     m = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), input_range=(0.0, 2.0))
     cmp = compare_controllers(
@@ -153,8 +153,8 @@ def test_compare_controllers_table_and_figures() -> None:
 def test_the_controllers_stay_within_the_rated_range() -> None:
     # identified up to 1.0086 A on a DoE of the rig's quiroz2022 damper (rated 0-1 A): the
     # controllers' limits are the rated ones unless given
-    from mrdamper.control._loop import input_limits, limits_note
-    from mrdamper.control.quarter_car_study import compare_controllers
+    from mrdamper.control.loop._loop import input_limits, limits_note
+    from mrdamper.control.loop.quarter_car_study import compare_controllers
 
     S = (800.0, 200.0, 60.0, 0.0, 900.0, 0.0)
     rig = SP3Model(S=S, input_range=(0.0, 1.0086), provenance={"training_damper": "quiroz2022"})

@@ -79,7 +79,7 @@ def test_bad_input() -> None:
 
 def test_control_grid_on_a_fitted_quiroz_model(quiroz_models: dict[str, Any]) -> None:
     control = pytest.importorskip("control")
-    from mrdamper.control.statespace import control_grid
+    from mrdamper.control.export.statespace import control_grid
 
     m = quiroz_models["lpv"]
     g = control_grid(m, n_grid=5)

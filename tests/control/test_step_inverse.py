@@ -107,8 +107,8 @@ def test_quarter_car_with_a_hysteresis_model_as_controller() -> None:
     """A model without a drive lag (``eta = 0``) drives the quarter car with the passive and the
     semi-active controllers (its step stands in for the controller's model; the passive input is
     the constant one, not passed through a lag that the model does not have)."""
-    from mrdamper.control.closed_loop import simulate_closed_loop
-    from mrdamper.control.quarter_car import iso_road
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
+    from mrdamper.control.loop.quarter_car import iso_road
 
     model = _truth("dahl")
     road = iso_road("C", duration=1.5)

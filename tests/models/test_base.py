@@ -140,7 +140,7 @@ def test_fit_records_its_sample_time() -> None:
     import warnings
 
     from mrdamper import get_estimator
-    from mrdamper.control.fmu import fmu_sources
+    from mrdamper.control.export.fmu import fmu_sources
 
     fast = _record()
     slow = fast.replace(

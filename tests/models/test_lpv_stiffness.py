@@ -11,8 +11,8 @@ import pytest
 
 from mrdamper import DataValidationError, Experiment, load_model
 from mrdamper.control import inverse_current
-from mrdamper.control.export import lpv_export_data
-from mrdamper.control.statespace import simulate_state_space
+from mrdamper.control.export.matrices import lpv_export_data
+from mrdamper.control.export.statespace import simulate_state_space
 from mrdamper.models.lpv import LPVEstimator, LPVModel
 from mrdamper.models.lpv import kernels as K
 from mrdamper.models.step import run_step
@@ -154,7 +154,7 @@ def test_table_ii_and_the_extension_give_the_damper_its_gas_spring() -> None:
     """End to end on the virtual rig: Table II and the control extension (with its stroke test)
     as training records, a second extension as the given records; the default keeps the
     stiffness and finds the reference damper's accumulator (693 N/m) to within a fifth."""
-    from mrdamper.control.doe_extension import control_extension
+    from mrdamper.control.loop.doe_extension import control_extension
     from mrdamper.rig import reference_damper
     from mrdamper.rig.doe import table_ii
 

@@ -171,7 +171,7 @@ def test_plugin_c_and_fmu_equal_its_step(plugin: None, tmp_path: Path) -> None:
     pytest.importorskip("fmpy")
     from fmpy.validation import validate_fmu
 
-    from mrdamper.control.fmu import export_fmu, run_fmu
+    from mrdamper.control.export.fmu import export_fmu, run_fmu
 
     fmu = export_fmu(model, tmp_path / "visc.fmu", name="visc_fmu", dt=rec.dt)
     assert validate_fmu(str(fmu)) == []

@@ -27,7 +27,7 @@ def test_lpv_and_static_maps_are_invertible_lti_and_spencer_are_not() -> None:
 
 @pytest.mark.parametrize("v_eps", [0.0, 0.01])
 def test_bingham_static_form_reproduces_its_force(v_eps: float) -> None:
-    from mrdamper.control._inverse_kernels import sp_force1
+    from mrdamper.control.inverse._inverse_kernels import sp_force1
 
     m = BinghamModel(fc=(100.0, 500.0), c0=(1000.0, 300.0), f0=5.0, v_eps=v_eps)
     f = m.inverse_form()

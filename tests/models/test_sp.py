@@ -385,8 +385,8 @@ def test_a_loop_diverging_on_a_falling_map_says_why() -> None:
     """A saved map that falls with velocity (a free fit, or one made before ``monotone``) drives
     the passive-hard quarter car away, as its own plant and as another model's plant; the error
     names the slope and the remedy."""
-    from mrdamper.control.car import iso_road
-    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.control.loop.car import iso_road
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
     from mrdamper.errors import SimulationDivergedError
     from mrdamper.rig.reference import reference_damper
 
@@ -405,8 +405,8 @@ def test_monotone_sp1_keeps_the_quarter_car_bounded() -> None:
     """SP-1 fitted freely on the virtual rig's Table II of the Spencer (1997) damper falls with
     velocity at the top voltage (its viscous slope near -2200 N s/m): with it as the damper the
     passive-hard quarter car diverges. The default fit keeps the loop bounded."""
-    from mrdamper.control.car import iso_road
-    from mrdamper.control.closed_loop import simulate_closed_loop
+    from mrdamper.control.loop.car import iso_road
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
     from mrdamper.errors import SimulationDivergedError
     from mrdamper.rig.doe import table_ii
     from mrdamper.rig.reference import reference_damper

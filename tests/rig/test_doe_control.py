@@ -12,7 +12,7 @@ import pytest
 
 import mrdamper.cli.rig as cli_rig
 from mrdamper.cli.main import main
-from mrdamper.control.doe_extension import control_extension
+from mrdamper.control.loop.doe_extension import control_extension
 from mrdamper.data import ExperimentSet, read_records
 from mrdamper.errors import DataValidationError
 from mrdamper.models.bingham import BinghamModel

@@ -68,7 +68,7 @@ def test_a_voltage_driven_rig_design_is_studied_on_its_voltage() -> None:
 
 
 def test_a_refused_loop_run_says_why_in_its_rows(monkeypatch: pytest.MonkeyPatch) -> None:
-    from mrdamper.control import fidelity
+    from mrdamper.control.loop import fidelity
     from mrdamper.models.semiphenomenological import SP1Estimator
     from mrdamper.rig.doe import table_ii
     from mrdamper.study.control_step import ControlSettings, model_in_loop

@@ -78,7 +78,7 @@ def png_kind(what: str = "PNG figure") -> FileKind:
 
 def c_code_kind(what: str = "C code exported by mrdamper") -> FileKind:
     """C files whose first comment starts with their own name (``/* NAME.h: ...``), as
-    :func:`mrdamper.control.c_export.c_source` writes them."""
+    :func:`mrdamper.control.export.c_export.c_source` writes them."""
     return FileKind(what, lambda path: _head(path, 256).startswith(f"/* {path.name}: ".encode()))
 
 

@@ -1,6 +1,7 @@
 """``mrdamper quartercar``: semi-active controllers on a quarter car with the identified damper.
 
-``quartercar MODEL.json --out DIR`` drives the quarter car (:mod:`mrdamper.control.quarter_car`)
+``quartercar MODEL.json --out DIR`` drives the quarter car
+(:mod:`mrdamper.control.loop.quarter_car`)
 over ISO 8608 roads and a bump with every controller and writes, atomically and never over an
 existing file without ``--force``:
 
@@ -10,12 +11,12 @@ existing file without ``--force``:
 
 The table is also printed. With ``--c-inverse LIB.so`` (a shared library compiled from MODEL's
 C export, ``mrdamper export --format c``) the library's inverse drives the car in place of the
-Python one (:mod:`mrdamper.control.c_inverse`).
+Python one (:mod:`mrdamper.control.export.c_inverse`).
 
 With ``--plant PLANT`` (a model file, ``rig`` for the virtual rig's reference damper or
 ``rig:NAME``) the controller is still built from MODEL but the car is also driven with PLANT as its
 damper: ``DIR/closed_loop.csv`` gets the metrics predicted (MODEL as damper) against those achieved
-(PLANT as damper) per controller, road and speed (:mod:`mrdamper.control.fidelity`) and
+(PLANT as damper) per controller, road and speed (:mod:`mrdamper.control.loop.fidelity`) and
 ``DIR/closed_loop_runs.csv`` the numerics of every run (plant sub-steps, halving change,
 high-frequency share, training-envelope excursions); warnings go to standard error, one line
 per finding over every run.
@@ -27,7 +28,7 @@ line and writes nothing; when some fail, the tables are written and the exit sta
 Which option each mode refuses is one table, :mod:`mrdamper.cli._modes`.
 
 With ``--tune`` the passive inputs and the semi-active gains are swept on each ISO road
-(:mod:`mrdamper.control.fronts`), with MODEL as the damper and, with ``--plant``, with PLANT:
+(:mod:`mrdamper.control.loop.fronts`), with MODEL as the damper and, with ``--plant``, with PLANT:
 ``DIR/fronts.csv`` (every point), ``DIR/fronts.png`` (predicted and achieved fronts) and the gains
 chosen on the model, printed.
 """
@@ -175,8 +176,8 @@ def quartercar(
 ) -> None:
     """Compare passive and semi-active controllers on a quarter car whose damper is the model."""
     from mrdamper._io import check_output, check_writable, write_files
-    from mrdamper.control.quarter_car import Controller
-    from mrdamper.control.quarter_car_study import compare_controllers
+    from mrdamper.control.loop.quarter_car import Controller
+    from mrdamper.control.loop.quarter_car_study import compare_controllers
     from mrdamper.models.registry import load_model
 
     if out.exists() and not out.is_dir():
@@ -203,11 +204,11 @@ def quartercar(
     m = load_model(model_file)
     extra: dict[str, Any] = {}
     if c_inverse is not None:
-        from mrdamper.control.c_inverse import load_c_inverse
+        from mrdamper.control.export.c_inverse import load_c_inverse
 
         extra["c_inverse"] = load_c_inverse(m, c_inverse)
         if i_range is None:  # the limits the C inverse was exported with: the identified range
-            from mrdamper.control.inverse import model_input_limits
+            from mrdamper.control.inverse.current import model_input_limits
 
             i_range = ",".join(repr(b) for b in model_input_limits(m))
     classes = [r.strip().upper() for r in roads.split(",") if r.strip()]
@@ -250,7 +251,7 @@ def quartercar(
         import matplotlib.pyplot as plt
 
         plt.close("all")
-    from mrdamper.control.fidelity import HF_SHARE, discrete_rate, input_unit, oscillation
+    from mrdamper.control.loop.fidelity import HF_SHARE, discrete_rate, input_unit, oscillation
 
     shown = {  # the printed table: every column with its unit
         "road": "road",
@@ -275,7 +276,7 @@ def quartercar(
     ]
     osc = [o for o in osc if o[2] > HF_SHARE]
     if osc:
-        from mrdamper.control.fidelity import oscillation_note
+        from mrdamper.control.loop.fidelity import oscillation_note
 
         road, ctrl, share, peak = max(osc, key=lambda o: o[2])
         runs = ", ".join(f"{c} {r}" for r, c, _s, _p in osc)
@@ -285,7 +286,7 @@ def quartercar(
             f"{oscillation_note(share, peak, qc, discrete_rate(m))}",
             err=True,
         )
-    from mrdamper.control.quarter_car_study import limits_note
+    from mrdamper.control.loop.quarter_car_study import limits_note
 
     if i_range is None and limits_note(m):
         typer.echo(f"note: {limits_note(m)}", err=True)
@@ -313,7 +314,7 @@ def _pair(flag: str, text: str | None) -> tuple[float, float] | None:
 def _car(car: list[str] | None) -> Any:
     """The :class:`QuarterCar` of the ``--car KEY=VALUE`` settings."""
     from mrdamper.cli.models import parse_settings
-    from mrdamper.control.quarter_car import QuarterCar
+    from mrdamper.control.loop.quarter_car import QuarterCar
 
     car_kw = parse_settings(car)
     fields = ("m_s", "m_u", "k_s", "k_t", "c_t", "travel_limit", "motion_ratio")
@@ -345,8 +346,8 @@ def _tune(
     car: Any,
 ) -> None:
     from mrdamper._io import check_output, check_writable, write_files
-    from mrdamper.control.fidelity import check_sides, input_unit
-    from mrdamper.control.fronts import gain_fronts
+    from mrdamper.control.loop.fidelity import check_sides, input_unit
+    from mrdamper.control.loop.fronts import gain_fronts
     from mrdamper.models.registry import load_model
 
     inputs = _inputs(model_file, plant)
@@ -397,7 +398,7 @@ def _tune(
 def _gap_text(row: Any, unit: str) -> str:
     """``a_w +29.0 % (hybrid, c_sky 8000, c_ground 8000, alpha 0.5, ISO C)``, or for the mean
     input its difference ``mean_current +0.012 A (...)``: one point of the sweep."""
-    from mrdamper.control.fronts import gap_size
+    from mrdamper.control.loop.fronts import gap_size
 
     if row["controller"] == "passive":
         where = f"passive at {row['level']:.0%} of the input range"
@@ -426,8 +427,8 @@ def _fidelity(
     rate: float | None,
 ) -> None:
     from mrdamper._io import check_output, check_writable, write_files
-    from mrdamper.control.closed_loop import resolve_plant
-    from mrdamper.control.fidelity import closed_loop_fidelity, failed_runs
+    from mrdamper.control.loop.closed_loop import resolve_plant
+    from mrdamper.control.loop.fidelity import closed_loop_fidelity, failed_runs
     from mrdamper.models.registry import load_model
 
     inputs = _inputs(model_file, plant)

@@ -1,11 +1,12 @@
 """``mrdamper export`` and ``mrdamper inverse``: hand an identified model to control design.
 
 * ``export MODEL.json --out FILE [--format mat|json] [--force]`` writes the LPV / LTI model's
-  matrices (see :mod:`mrdamper.control.export`); other model kinds are refused with one line.
+  matrices (see :mod:`mrdamper.control.export.matrices`); other model kinds are refused with one
+  line.
 * ``export MODEL.json --format c --out DIR`` writes C99 code of the model and its inverse
-  (:mod:`mrdamper.control.c_export`).
+  (:mod:`mrdamper.control.export.c_export`).
 * ``export MODEL.json --format fmu --out damper.fmu [--inverse] [--dt S]`` writes an FMI 2.0
-  co-simulation FMU of the model or of its inverse (:mod:`mrdamper.control.fmu`).
+  co-simulation FMU of the model or of its inverse (:mod:`mrdamper.control.export.fmu`).
 * ``inverse MODEL.json DATA --out FILE`` answers "which current would have produced this
   force": the record's measured force ``F`` is the desired force, its motion the motion. Writes
   ``t, F_desired, <input>, F_achieved, saturated`` [s, N, A|V, N, 0/1] as CSV, atomically.
@@ -95,7 +96,7 @@ def export(
     for control design, (--format c) C99 code of the model and its inverse, or (--format fmu) an
     FMI 2.0 co-simulation FMU of the model or its inverse."""
     from mrdamper._io import check_output, check_writable
-    from mrdamper.control.export import EXPORT_FILE, export_lpv
+    from mrdamper.control.export.matrices import EXPORT_FILE, export_lpv
     from mrdamper.models.registry import load_model
 
     if fmt is None:
@@ -105,7 +106,7 @@ def export(
     forward_fmu = fmt == "fmu" and not inverse  # the mode "--format fmu": no inverse in it
     refuse_unused(ctx, "export", {f"--format {fmt}"} if fmt != "fmu" or forward_fmu else set())
     if fmt == "fmu":
-        from mrdamper.control.fmu import FMU_FILE, export_fmu
+        from mrdamper.control.export.fmu import FMU_FILE, export_fmu
 
         check_writable(out, force, inputs=[model_file], kind=FMU_FILE)
         m = load_model(model_file)
@@ -116,8 +117,8 @@ def export(
         )
         return
     if fmt == "c":
-        from mrdamper.control.c_export import export_c, needs_dt
-        from mrdamper.control.fmu import training_dt
+        from mrdamper.control.export.c_export import export_c, needs_dt
+        from mrdamper.control.export.fmu import training_dt
 
         check_output(out, force=force, folder=True, mode="add", inputs=[model_file])
         m = load_model(model_file)
@@ -173,7 +174,7 @@ def inverse(
     recovered input."""
     from mrdamper._io import atomic_write_text, check_writable
     from mrdamper.cli.models import read_records
-    from mrdamper.control.inverse import inverse_current
+    from mrdamper.control.inverse.current import inverse_current
     from mrdamper.models.registry import load_model
 
     refuse_unused(ctx, "inverse", {f"--method {method}"})
@@ -199,7 +200,7 @@ def inverse(
         f"{100 * res.saturated_fraction:.1f} % of samples saturated; wrote {path}"
     )
     if m.input in exp.channel_names:
-        from mrdamper.control.inverse_check import check_inverse
+        from mrdamper.control.inverse.inverse_check import check_inverse
 
         chk = check_inverse(m, exp, **kw)  # type: ignore[arg-type]
         unit = "A" if m.input == "i" else "V"

@@ -4,7 +4,7 @@
 [--format csv|parquet] [--extension none|control] [--loop-model FILE|KIND|rig] [--plan-only]
 [--stroke M] [--max-velocity M/S] [--no-progress] [--force]`` generates the paper's Table II
 design of experiments (with ``--extension control`` also the control-oriented extension,
-:mod:`mrdamper.control.doe_extension`: the quarter-car loop's damper motions and currents
+:mod:`mrdamper.control.loop.doe_extension`: the quarter-car loop's damper motions and currents
 replayed on the rig, the loop run with a first model: by default SP-1 fitted on the Table II
 records just generated) and writes one file per record (CSV or Parquet) plus ``manifest.csv``;
 with ``--plan-only`` it writes the commands of every record for a physical rig and their check
@@ -140,7 +140,7 @@ def doe(
     check_output(
         out, force=force, folder=True, inputs=[*inputs, *([loop_file] if loop_file else [])]
     )
-    from mrdamper.control.doe_extension import FIRST_KIND, control_extension, first_model
+    from mrdamper.control.loop.doe_extension import FIRST_KIND, control_extension, first_model
     from mrdamper.data import ExperimentSet
     from mrdamper.rig.doe_control import CONTROL_EXTENSION, STROKE_TEST
 

@@ -3,12 +3,26 @@ systems (python-control), frozen-pole stability over the scheduling range, the i
 (current-for-force) model and its check on records, a quarter-car evaluation of semi-active
 controllers, the export of the matrices to .mat / JSON and of the model and its inverse to C99."""
 
-from mrdamper.control.c_export import C_KINDS, c_source, export_c
-from mrdamper.control.comfort import weighted_rms, wk_response
-from mrdamper.control.export import EXPORT_SCHEMA, export_lpv, lpv_export_data
-from mrdamper.control.inverse import InverseResult, driver_command, force_authority, inverse_current
-from mrdamper.control.inverse_check import InverseCheck, check_inverse, check_inverse_frame
-from mrdamper.control.quarter_car import (
+from mrdamper.control.export.c_export import C_KINDS, c_source, export_c
+from mrdamper.control.export.matrices import EXPORT_SCHEMA, export_lpv, lpv_export_data
+from mrdamper.control.export.statespace import (
+    ControlGrid,
+    StateSpaceMatrices,
+    control_grid,
+    frozen_stability,
+    simulate_state_space,
+    state_space,
+    to_control,
+)
+from mrdamper.control.inverse.current import (
+    InverseResult,
+    driver_command,
+    force_authority,
+    inverse_current,
+)
+from mrdamper.control.inverse.inverse_check import InverseCheck, check_inverse, check_inverse_frame
+from mrdamper.control.loop.comfort import weighted_rms, wk_response
+from mrdamper.control.loop.quarter_car import (
     CONTROLLERS,
     Controller,
     LinearDamper,
@@ -19,16 +33,7 @@ from mrdamper.control.quarter_car import (
     iso_road,
     simulate_quarter_car,
 )
-from mrdamper.control.quarter_car_study import ControllerComparison, compare_controllers
-from mrdamper.control.statespace import (
-    ControlGrid,
-    StateSpaceMatrices,
-    control_grid,
-    frozen_stability,
-    simulate_state_space,
-    state_space,
-    to_control,
-)
+from mrdamper.control.loop.quarter_car_study import ControllerComparison, compare_controllers
 
 __all__ = [
     "CONTROLLERS",

@@ -343,7 +343,7 @@ def inverse_run(
     ``u[k] = c u[k-1] + (1 - c) w[k-1]``, ``c = exp(-eta dt)``: from the third sample on ``u[k]``
     is confined to ``[c u[k-1] + (1 - c) lo, c u[k-1] + (1 - c) hi]``, and the lag starts at rest,
     ``u[1] = u[0]`` (the command is the lead filter of ``u``,
-    :func:`mrdamper.control.inverse.driver_command`).
+    :func:`mrdamper.control.inverse.current.driver_command`).
 
     The input at sample ``k`` is confined to ``[lo, hi]`` and, from the second sample on, to
     ``max_change`` of the previous input; the regularisation pulls towards the previous input

@@ -205,7 +205,7 @@ class HysteresisModel(FittedModel):
         state), then the state is advanced with the motion. Without a drive lag ``u`` is the input
         itself, in ``[lo, hi]``. With one it is the lagged input, confined to what a command in
         ``[lo, hi]`` held over the interval reaches (:func:`~._hysteresis_kernels.inverse_run`);
-        the command is then :func:`mrdamper.control.inverse.driver_command` of it, which
+        the command is then :func:`mrdamper.control.inverse.current.driver_command` of it, which
         :func:`mrdamper.control.inverse_current` applies. The step has the RK4 sub-steps
         :meth:`predict` takes on the record, so without a lag the model's free run with the
         inputs found gives ``F_desired`` wherever it is in reach (``reg = 0``); with a lag the
@@ -267,7 +267,7 @@ class HysteresisModel(FittedModel):
         The free run at the constant velocity ``v_ref`` with the input held at each end of
         ``input_range``, long enough for the state to settle (ten time constants of the fastest
         rate, at least 0.3 s, 3000 samples), compared at its last sample. It scales the default
-        regularisation weight of the inverse (:func:`mrdamper.control.inverse.default_reg`).
+        regularisation weight of the inverse (:func:`mrdamper.control.inverse.current.default_reg`).
         """
         lo, hi = (float(b) for b in self.input_range)
         if not hi > lo:

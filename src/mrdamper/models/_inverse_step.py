@@ -1,9 +1,10 @@
 """The inverse step of the LPV and static-map families: the input that gives a desired force at one
-sample (numba, plain values only; a record's inverse in :mod:`mrdamper.control.inverse` runs it
+sample (numba, plain values only; a record's inverse in :mod:`mrdamper.control.inverse.current`
+runs it
 sample by sample, and the C export renders the same choice).
 
 * :func:`solve_interval`: the exact inverse's choice at one sample (see
-  :mod:`mrdamper.control.inverse`): the previous input when its force is within ``tol``
+  :mod:`mrdamper.control.inverse.current`): the previous input when its force is within ``tol``
   of the target, else the exact solution nearest it, else the nearest edge of the tolerance
   band, else the minimum of ``|F - target|``; solutions by bisection of the sign changes on a
   uniform grid;

@@ -4,7 +4,8 @@ control-oriented extension of the design of experiments.
 Table II moves the damper at up to about 0.15 m/s; a quarter car on ISO 8608 roads moves it at
 up to about 1.2 m/s and a semi-active controller switches the current while it moves fast. A
 model identified on Table II alone is extrapolated there. The extension
-(:func:`mrdamper.control.doe_extension.control_extension`) runs the quarter car in the loop with a
+(:func:`mrdamper.control.loop.doe_extension.control_extension`) runs the quarter car in the loop
+with a
 first model of the damper, one run per row of :data:`CONTROL_EXTENSION` (an ISO 8608 road at a
 speed, one controller), and this module replays each run's damper travel on the rig
 (:func:`replay_loop_motion`):
@@ -70,7 +71,8 @@ FILL = 0.9
 LOAD_SHARE = 0.9
 #: Raised-cosine fade at each end of a record [s].
 FADE = 0.5
-#: The controllers of the loop runs (names of :class:`mrdamper.control.quarter_car.Controller`).
+#: The controllers of the loop runs (names of
+#: :class:`mrdamper.control.loop.quarter_car.Controller`).
 CONTROLLERS = ("soft", "hard", "skyhook", "groundhook", "hybrid")
 
 

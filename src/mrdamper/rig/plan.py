@@ -5,7 +5,8 @@ The virtual rig turns a displacement command and a current command into a measur
 on its own damper needs the commands, not the virtual measurement: :class:`PlanRig` is a rig that
 records the commands it is given instead of running them, so the generators of Table II
 (:func:`~mrdamper.rig.doe.table_ii`) and of the control-oriented extension
-(:func:`~mrdamper.control.doe_extension.control_extension`) produce the plan with the same code,
+(:func:`~mrdamper.control.loop.doe_extension.control_extension`) produce the plan with the same
+code,
 seeds and scaling rules as the virtual records.
 
 Each planned record carries the displacement command ``x`` [m], its velocity (central difference

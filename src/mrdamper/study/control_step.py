@@ -5,9 +5,9 @@ each model of the first fold as the controller's model:
 
 * **truth known** (every record from the virtual rig, one named reference damper): each
   controller runs with the model as the damper (*predicted*) and with the rig's reference damper
-  (*achieved*), :func:`~mrdamper.control.fidelity.closed_loop_fidelity`; with ``fronts`` the
+  (*achieved*), :func:`~mrdamper.control.loop.fidelity.closed_loop_fidelity`; with ``fronts`` the
   gain fronts of each invertible model are also swept on a coarse grid
-  (:func:`~mrdamper.control.fronts.gain_fronts`; single runs at the road's step, not checked by
+  (:func:`~mrdamper.control.loop.fronts.gain_fronts`; single runs at the road's step, not checked by
   halving, and only for the models with a closed-form inverse, static maps and LPV, to keep the
   step short);
 * **measured data** (no truth in the loop): each model runs predicted only, every run checked by
@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mrdamper.control.car import CONTROLLERS, Controller, QuarterCar
-from mrdamper.control.fidelity import (
+from mrdamper.control.loop.car import CONTROLLERS, Controller, QuarterCar
+from mrdamper.control.loop.fidelity import (
     METRICS,
     checked_run,
     closed_loop_fidelity,
@@ -39,7 +39,7 @@ from mrdamper.control.fidelity import (
     input_unit,
     loop_metrics,
 )
-from mrdamper.control.fronts import FrontsResult, gain_fronts
+from mrdamper.control.loop.fronts import FrontsResult, gain_fronts
 from mrdamper.errors import DataValidationError, interrupt_in_chain
 from mrdamper.models.protocols import InvertibleModel
 
@@ -145,7 +145,7 @@ class ControlRelevance:
         :data:`CONTROL_COLUMNS`, one row per model x controller x road x speed x metric, or one
         row per model x controller with the reason when it could not run.
     fronts : dict
-        Model label -> :class:`~mrdamper.control.fronts.FrontsResult` or the reason (str).
+        Model label -> :class:`~mrdamper.control.loop.fronts.FrontsResult` or the reason (str).
     notes : list of str
         One-line warnings of the runs (envelope left, oscillation).
     """
@@ -163,7 +163,8 @@ def truth_damper(records: Iterable[Any], plant: str | None = None) -> str | None
 
     Every record must come from the virtual rig (metadata ``source``) with one damper kind
     (metadata ``damper``). The truth is then ``plant`` when given (``"rig:NAME"`` or a model
-    file, :func:`~mrdamper.control.closed_loop.resolve_plant`); else the shipped reference damper
+    file, :func:`~mrdamper.control.loop.closed_loop.resolve_plant`); else the shipped reference
+    damper
     the records name (metadata ``reference_damper``, written by the rig and kept in the manifest
     of ``mrdamper rig doe``): ``"rig"`` for the default one, ``"rig:NAME"`` for another; None when
     they name another damper (``"custom"``) or disagree. Records that name none (written before
@@ -203,9 +204,9 @@ def _failed_row(label: str, kind: str, ctrl: str, reason: str) -> dict[str, Any]
 def _predicted_rows(
     label: str, model: Any, ctrl: str, s: ControlSettings, car: QuarterCar
 ) -> list[dict[str, Any]]:
-    from mrdamper.control.closed_loop import simulate_closed_loop
-    from mrdamper.control.quarter_car import iso_road
-    from mrdamper.control.quarter_car_study import default_rate
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
+    from mrdamper.control.loop.quarter_car import iso_road
+    from mrdamper.control.loop.quarter_car_study import default_rate
 
     unit = input_unit(model)
     rows = []
@@ -258,7 +259,7 @@ def model_in_loop(
 ) -> tuple[list[dict[str, Any]], FrontsResult | str | None, list[str]]:
     """One model in the loop: its rows, its gain fronts (or why not; None when not asked) and
     its warnings. A task of the study's executor (``model`` may be a saved model's dict)."""
-    from mrdamper.control.closed_loop import resolve_plant
+    from mrdamper.control.loop.closed_loop import resolve_plant
     from mrdamper.models import model_from_dict
 
     s = settings

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mrdamper.control.fronts import gap_size
+from mrdamper.control.loop.fronts import gap_size
 from mrdamper.study.control_step import STUDY_LEVELS, ControlRelevance
 from mrdamper.study.result import StudyResult
 
@@ -189,7 +189,8 @@ def _chosen(cr: ControlRelevance) -> pd.DataFrame:
 
 def _gaps(cr: ControlRelevance, unit: str) -> pd.DataFrame:
     """Per model with a sweep and metric, the point of the widest model-plant gap
-    (:meth:`~mrdamper.control.fronts.FrontsResult.widest_gaps`): one row each, so the table stays
+    (:meth:`~mrdamper.control.loop.fronts.FrontsResult.widest_gaps`): one row each, so the table
+    stays
     narrow."""
     rows = []
     for label, fr in cr.fronts.items():

@@ -8,7 +8,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numba import njit
 
-from mrdamper.control.c_render import Context, Rendered
+from mrdamper.control.export.c_render import Context, Rendered
 from mrdamper.models import Estimator, FittedModel, Identified, RangePolicy, TrainingData
 from mrdamper.models.step import STATUS_OK, Step
 
