@@ -35,10 +35,10 @@ from mrdamper.control import _inverse_kernels as IK
 from mrdamper.control._forms import inverse_form
 from mrdamper.control.c_export import export_c
 from mrdamper.control.inverse import lpv_inverse_fields, static_map_arrays
-from mrdamper.models._sp_kernels import sp_force
 from mrdamper.models.lpv import LPVModel
 from mrdamper.models.lpv import kernels as LK
 from mrdamper.models.semiphenomenological import SP1Model
+from mrdamper.models.sp.kernels import sp_force
 
 _P = ctypes.POINTER(ctypes.c_double)
 ALPHA = np.array([[-1.5, 0.10, 0.01], [0.70, -0.05, 0.0], [-0.10, 0.0, 0.0]])

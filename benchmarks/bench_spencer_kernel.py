@@ -24,9 +24,9 @@ from _timing import best_time
 from scipy.integrate import solve_ivp
 
 from mrdamper.data import Experiment
-from mrdamper.models import _spencer_kernels as K
 from mrdamper.models import load_model
 from mrdamper.models.spencer import SpencerModel, spencer1997
+from mrdamper.models.spencer import kernels as K
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared" / "data"

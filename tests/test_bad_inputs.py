@@ -533,7 +533,7 @@ def _interrupting_fit(*_: Any, **__: Any) -> Any:
 def test_ctrl_c_inside_a_kernel_ends_the_study_with_130(
     workers, tmp_path, capsys, monkeypatch
 ) -> None:
-    from mrdamper.models.semiphenomenological import _SPEstimator as SPEstimator
+    from mrdamper.models.sp.model import _SPEstimator as SPEstimator
 
     data = _folder(tmp_path / "d")
     monkeypatch.setattr(SPEstimator, "fit", _interrupting_fit)

@@ -390,7 +390,7 @@ def test_c_export_onto_a_full_disk_leaves_nothing(tmp_path, capsys, monkeypatch)
 @pytest.mark.slow
 def test_each_exit_status(tmp_path, capsys, monkeypatch) -> None:
     import mrdamper.cli.models as cli_models
-    from mrdamper.models.semiphenomenological import _SPEstimator as SPEstimator
+    from mrdamper.models.sp.model import _SPEstimator as SPEstimator
 
     data = _folder(tmp_path / "d")
     handler = signal.getsignal(signal.SIGTERM)
@@ -475,7 +475,7 @@ def test_a_stopped_pool_leaves_no_worker_and_no_management_thread() -> None:
 
 SLOW_STUDY = """
 import sys, time
-from mrdamper.models.semiphenomenological import _SPEstimator
+from mrdamper.models.sp.model import _SPEstimator
 def slow(self, *args, **kw):
     with open(sys.argv[1], "a") as fh:
         fh.write("fit\\n")

@@ -9,8 +9,9 @@ import pytest
 from numba import typeof
 
 from mrdamper import compiled
-from mrdamper.models import _narx_kernels, _sp_kernels
 from mrdamper.models._arrays import readonly
+from mrdamper.models.narx import kernels as _narx_kernels
+from mrdamper.models.sp import kernels as _sp_kernels
 
 
 def test_readonly_is_a_view_and_read_only() -> None:
@@ -72,7 +73,7 @@ def test_kernels_named_last_come_after_the_others_of_their_module(
     plain = compiled._todo(kinds)
     late = compiled._todo(kinds, last=compiled.RIG_KERNELS)
     assert [m[0][0] for m in plain] == [m[0][0] for m in late]  # modules: costliest first
-    assert plain[0][0][0] == "mrdamper.models._spencer_kernels"
+    assert plain[0][0][0] == "mrdamper.models.spencer.kernels"
     assert [it[1] for it in late[0]] == ["simulate_sens", "simulate"]  # the rig's kernel last
     assert [sorted(m) for m in plain] == [sorted(m) for m in late]
 

@@ -52,7 +52,7 @@ __all__ = [
     "wait_rig",
 ]
 
-_SPENCER = "mrdamper.models._spencer_kernels"
+_SPENCER = "mrdamper.models.spencer.kernels"
 
 #: Model kernels (module, name) that generating records on the virtual rig compiles: its damper is
 #: a Spencer model.

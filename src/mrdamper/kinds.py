@@ -95,12 +95,12 @@ class KindSpec:
 
 
 _LPV = "mrdamper.models.lpv.kernels"
-_SPENCER = "mrdamper.models._spencer_kernels"
-_SP = "mrdamper.models._sp_kernels"
-_NARX = "mrdamper.models._narx_kernels"
-_P15 = "mrdamper.models._p15_kernels"
+_SPENCER = "mrdamper.models.spencer.kernels"
+_SP = "mrdamper.models.sp.kernels"
+_NARX = "mrdamper.models.narx.kernels"
+_P15 = "mrdamper.models.p15.kernels"
 _LPV_MOD = "mrdamper.models.lpv"
-_SP_MOD = "mrdamper.models.semiphenomenological"
+_SP_MOD = "mrdamper.models.sp.model"
 
 _LPV_ITEMS: tuple[Item, ...] = (
     (_LPV, "oe_normal_equations", "f1 f1r f2 f2 f1r f1r F F F F B B", 1.2),
@@ -127,7 +127,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "p15",
-        "mrdamper.models.phenomenological",
+        "mrdamper.models.p15.model",
         "P15Estimator",
         "P15Model",
         "phenomenological model P-15 (the paper's)",
@@ -185,7 +185,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "spencer",
-        "mrdamper.models.spencer",
+        "mrdamper.models.spencer.model",
         "SpencerEstimator",
         "SpencerModel",
         "Spencer et al. (1997) modified Bouc-Wen model",
@@ -198,7 +198,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "bingham",
-        "mrdamper.models.bingham",
+        "mrdamper.models.bingham.model",
         "BinghamEstimator",
         "BinghamModel",
         "Bingham plastic model (Stanway et al. 1987)",
@@ -206,7 +206,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "narx",
-        "mrdamper.models.narx",
+        "mrdamper.models.narx.model",
         "NARXEstimator",
         "NARXModel",
         "polynomial NARX black-box peer",
@@ -220,7 +220,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "tanh",
-        "mrdamper.models.tanh",
+        "mrdamper.models.hysteresis.tanh",
         "TanhEstimator",
         "TanhModel",
         "hyperbolic-tangent model (Kwok et al. 2006)",
@@ -229,7 +229,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "boucwen",
-        "mrdamper.models.boucwen",
+        "mrdamper.models.hysteresis.boucwen",
         "BoucWenEstimator",
         "BoucWenModel",
         "classic Bouc-Wen model (current-dependent alpha and c0)",
@@ -239,7 +239,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "dahl",
-        "mrdamper.models.dahl",
+        "mrdamper.models.hysteresis.dahl",
         "DahlEstimator",
         "DahlModel",
         "modified Dahl model (Zhou et al.)",
@@ -248,7 +248,7 @@ KINDS: tuple[KindSpec, ...] = (
     ),
     KindSpec(
         "lugre",
-        "mrdamper.models.lugre",
+        "mrdamper.models.hysteresis.lugre",
         "LuGreEstimator",
         "LuGreModel",
         "LuGre model of an MR damper (Jimenez and Alvarez-Icaza 2005)",

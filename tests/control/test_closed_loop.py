@@ -17,9 +17,9 @@ from mrdamper.control.loop.closed_loop import simulate_closed_loop
 from mrdamper.control.loop.fidelity import checked_run, closed_loop_fidelity, loop_metrics
 from mrdamper.control.loop.quarter_car import QuarterCar, iso_road, simulate_quarter_car
 from mrdamper.errors import DataValidationError, MrDamperError
-from mrdamper.models import _sp_kernels as SK
 from mrdamper.models.lpv import LTIModel
 from mrdamper.models.semiphenomenological import SP3Model
+from mrdamper.models.sp import kernels as SK
 from mrdamper.models.step import Step
 from mrdamper.models.step_dispatch import pack
 from mrdamper.rig.reference import reference_damper

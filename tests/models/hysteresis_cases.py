@@ -139,7 +139,7 @@ def check_kernel_against_reference(kind: str, params: dict[str, float], eta: flo
     interpolated inputs: below 1e-3 of the force's standard deviation (NRMSE)."""
     from scipy.integrate import solve_ivp
 
-    from mrdamper.models import _hysteresis_kernels as K
+    from mrdamper.models.hysteresis import kernels as K
 
     model = truth(kind, params, eta=eta)
     e = record(4, duration=1.0)

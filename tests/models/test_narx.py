@@ -265,7 +265,7 @@ def test_term_selection_matches_least_squares_on_the_selected_columns() -> None:
     """Each error reduction ratio is what adding that column explains, by plain least squares;
     the first pick is the column best correlated with the output; a collinear copy and a zero
     column are never picked."""
-    from mrdamper.models._narx_fit import gram_select
+    from mrdamper.models.narx.fit import gram_select
 
     rng = np.random.default_rng(3)
     X = rng.standard_normal((400, 8))

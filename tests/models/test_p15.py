@@ -205,7 +205,7 @@ def test_free_run_starts_from_rest_and_ignores_the_measured_force() -> None:
 
 def test_sensitivities_match_finite_differences() -> None:
     """The kernel's discrete sensitivities against central differences of the same kernel."""
-    from mrdamper.models._p15_kernels import p15i_run
+    from mrdamper.models.p15.kernels import p15i_run
 
     e = _record(n=2000, seed=8)
     one = np.zeros(1, dtype=np.int64)
@@ -265,7 +265,7 @@ def test_divergence_is_detected_with_the_sample() -> None:
 def test_w3_crossing_zero_is_reported(block: int | None, monkeypatch: pytest.MonkeyPatch) -> None:
     """The check runs block by block on long records (``BLOCK``) and names the same sample."""
     if block is not None:
-        from mrdamper.models import phenomenological
+        from mrdamper.models.p15 import model as phenomenological
 
         monkeypatch.setattr(phenomenological, "BLOCK", block)
     W = W_TRUE.copy()

@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mrdamper.models import _narx_kernels as NK
 from mrdamper.models import _scale, get_estimator
 from mrdamper.models.narx import candidate_structure
+from mrdamper.models.narx import kernels as NK
 
 
 @pytest.fixture(scope="module")

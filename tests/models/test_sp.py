@@ -18,7 +18,6 @@ from hypothesis import strategies as st
 
 from mrdamper import DataValidationError, Experiment, IdentificationError, OutOfRangeError
 from mrdamper.models import get_estimator, load_model, model_class
-from mrdamper.models._sp_kernels import sp_force_jacobian
 from mrdamper.models.semiphenomenological import (
     SP1Estimator,
     SP1Model,
@@ -29,6 +28,7 @@ from mrdamper.models.semiphenomenological import (
     SP4Estimator,
     SP4Model,
 )
+from mrdamper.models.sp.kernels import sp_force_jacobian
 
 #: Plausible coefficients (SI, current in A) for a ~1.5 kN damper.
 TRUE = {

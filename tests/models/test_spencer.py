@@ -24,7 +24,6 @@ from mrdamper.errors import (
     SchemaError,
     SimulationDivergedError,
 )
-from mrdamper.models import _spencer_kernels as K
 from mrdamper.models import get_estimator, load_model, model_class
 from mrdamper.models.spencer import (
     PARAMETER_NAMES,
@@ -32,6 +31,7 @@ from mrdamper.models.spencer import (
     SpencerModel,
     spencer1997,
 )
+from mrdamper.models.spencer import kernels as K
 
 PARAM_DIR = Path(__file__).resolve().parents[2] / "src" / "mrdamper" / "rig" / "parameters"
 

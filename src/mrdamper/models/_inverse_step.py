@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mrdamper.models._sp_kernels import sp_dforce1, sp_force1
 from mrdamper.models.lpv.step import dpoly as _dpoly
 from mrdamper.models.lpv.step import poly as _poly
+from mrdamper.models.sp.kernels import sp_dforce1, sp_force1
 
 __all__ = ["reg_solve_poly", "reg_solve_static", "solve_interval"]
 

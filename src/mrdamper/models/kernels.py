@@ -10,11 +10,11 @@ car and the exports of :mod:`mrdamper.control` import them from here instead of 
   :data:`MODE_LITERAL`);
 * every family's drive lag (:mod:`mrdamper.models._lag`): :func:`lag_step`;
 * hysteretic input (:mod:`mrdamper.analysis.hysteretic`): :func:`dahl_step`;
-* static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models._sp_kernels`): :func:`sp_force1`
+* static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models.sp.kernels`): :func:`sp_force1`
   (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
-* Spencer (:mod:`mrdamper.models._spencer_kernels`): its form :class:`SpencerForm`, parameter
+* Spencer (:mod:`mrdamper.models.spencer.kernels`): its form :class:`SpencerForm`, parameter
   order and divergence bounds, for the C rendering of its step;
-* tanh, Bouc-Wen, Dahl and LuGre (:mod:`mrdamper.models._hysteresis_kernels`): their form
+* tanh, Bouc-Wen, Dahl and LuGre (:mod:`mrdamper.models.hysteresis.kernels`): their form
   :class:`HysteresisForm`, family codes :data:`HYSTERESIS_FAMILIES`, parameter orders
   :data:`HYSTERESIS_PARAM_NAMES` and divergence bound :data:`HYSTERESIS_Z_LIMIT`, for the C
   rendering of their step;
@@ -28,22 +28,13 @@ when the function changes; delete the caller's ``__pycache__/*.nb*`` files after
 from __future__ import annotations
 
 from mrdamper.analysis.hysteretic import dahl_step
-from mrdamper.models._hysteresis_kernels import FAMILIES as HYSTERESIS_FAMILIES
-from mrdamper.models._hysteresis_kernels import PARAM_NAMES as HYSTERESIS_PARAM_NAMES
-from mrdamper.models._hysteresis_kernels import Z_LIMIT as HYSTERESIS_Z_LIMIT
-from mrdamper.models._hysteresis_kernels import HysteresisForm
 from mrdamper.models._inverse_step import _N_BISECT as INVERSE_N_BISECT
 from mrdamper.models._inverse_step import reg_solve_poly, reg_solve_static, solve_interval
 from mrdamper.models._lag import lag_step
-from mrdamper.models._narx_kernels import NARXForm
-from mrdamper.models._p15_kernels import GAMMA as P15_GAMMA
-from mrdamper.models._p15_kernels import MAX_SUBSTEPS as P15_MAX_SUBSTEPS
-from mrdamper.models._p15_kernels import P15Form
-from mrdamper.models._sp_kernels import sp_dforce1, sp_force1
-from mrdamper.models._spencer_kernels import PARAM_NAMES as SPENCER_PARAM_NAMES
-from mrdamper.models._spencer_kernels import Y_LIMIT as SPENCER_Y_LIMIT
-from mrdamper.models._spencer_kernels import Z_LIMIT as SPENCER_Z_LIMIT
-from mrdamper.models._spencer_kernels import SpencerForm
+from mrdamper.models.hysteresis.kernels import FAMILIES as HYSTERESIS_FAMILIES
+from mrdamper.models.hysteresis.kernels import PARAM_NAMES as HYSTERESIS_PARAM_NAMES
+from mrdamper.models.hysteresis.kernels import Z_LIMIT as HYSTERESIS_Z_LIMIT
+from mrdamper.models.hysteresis.kernels import HysteresisForm
 from mrdamper.models.lpv.step import (
     MODE_CONTINUOUS,
     MODE_LITERAL,
@@ -54,6 +45,15 @@ from mrdamper.models.lpv.step import (
     zone_input,
 )
 from mrdamper.models.lpv.step import N_HEAD as LPV_N_HEAD
+from mrdamper.models.narx.kernels import NARXForm
+from mrdamper.models.p15.kernels import GAMMA as P15_GAMMA
+from mrdamper.models.p15.kernels import MAX_SUBSTEPS as P15_MAX_SUBSTEPS
+from mrdamper.models.p15.kernels import P15Form
+from mrdamper.models.sp.kernels import sp_dforce1, sp_force1
+from mrdamper.models.spencer.kernels import PARAM_NAMES as SPENCER_PARAM_NAMES
+from mrdamper.models.spencer.kernels import Y_LIMIT as SPENCER_Y_LIMIT
+from mrdamper.models.spencer.kernels import Z_LIMIT as SPENCER_Z_LIMIT
+from mrdamper.models.spencer.kernels import SpencerForm
 
 __all__ = [
     "HYSTERESIS_FAMILIES",

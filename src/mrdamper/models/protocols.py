@@ -53,7 +53,7 @@ class StaticMapForm:
     comp, power : ndarray of int64
         Component index (0..4) and input exponent of each coefficient.
     theta : ndarray
-        Coefficients (SI; units per component, see :mod:`mrdamper.models.semiphenomenological`).
+        Coefficients (SI; units per component, see :mod:`mrdamper.models.sp.model`).
     f0 : float
         Force offset [N].
     eta : float or None
@@ -150,7 +150,7 @@ class StepInvertibleModel(Protocol):
     """A fitted model inverted sample by sample through its own step (see the module docstring).
 
     Implemented by the ``tanh``, ``boucwen``, ``dahl`` and ``lugre`` models
-    (:class:`~mrdamper.models._hysteresis_model.HysteresisModel`). ``eta`` is the drive-lag rate
+    (:class:`~mrdamper.models.hysteresis.model.HysteresisModel`). ``eta`` is the drive-lag rate
     [1/s] (0: none); with a lag :meth:`invert_record` returns the lagged input.
     """
 

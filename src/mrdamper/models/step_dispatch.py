@@ -20,12 +20,12 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from mrdamper.models import _hysteresis_kernels as H
-from mrdamper.models import _narx_kernels as N
-from mrdamper.models import _p15_kernels as P
-from mrdamper.models import _sp_kernels as S
-from mrdamper.models import _spencer_kernels as SP
+from mrdamper.models.hysteresis import kernels as H
 from mrdamper.models.lpv import step as L
+from mrdamper.models.narx import kernels as N
+from mrdamper.models.p15 import kernels as P
+from mrdamper.models.sp import kernels as S
+from mrdamper.models.spencer import kernels as SP
 from mrdamper.models.step import Step
 
 __all__ = ["FAMILIES", "family_advance", "family_force", "pack", "placeholder"]

@@ -5,7 +5,7 @@ The form (:class:`mrdamper.models.kernels.HysteresisForm`: the family code, the
 parameter vector in the family's ``PARAM_NAMES`` order and the largest RK4 sub-step ``max_h``) and
 the fixed sample time ``dt`` given at export are all the C code needs. Only the chosen family's
 state derivative and force are rendered; the interval is the shared one of
-:func:`~mrdamper.models._hysteresis_kernels.step_advance`: ``ceil(dt / max_h)`` classical RK4
+:func:`~mrdamper.models.hysteresis.kernels.step_advance`: ``ceil(dt / max_h)`` classical RK4
 sub-steps on ``z`` with the velocity linear in between, then (with a drive lag ``eta > 0``) as
 many on ``u`` with the input linear in between, or ``u = e1`` without a lag, the same operations
 in the same order. ``<name>_step_force`` reads ``u = s[1]`` with a lag and the present input
@@ -14,7 +14,7 @@ without one. The rest state is ``(z, u) = (0, e0)``. After a failed interval (no
 input is not clipped (the Python step does not clip either).
 
 The rendering also has the inverse (``<name>_inverse_step``), the closed form of
-:func:`~mrdamper.models._hysteresis_kernels.inverse_run` one sample a call: the state is advanced
+:func:`~mrdamper.models.hysteresis.kernels.inverse_run` one sample a call: the state is advanced
 from the previous call's motion to this one's with the previous input held, the input ``u`` the
 laws read, in its admissible interval (the identified range, or with a drive lag what a command in
 it reaches from the previous ``u``; within the rate bound of the previous one), minimising

@@ -1,6 +1,6 @@
 """C rendering of the polynomial NARX model's per-sample step, from its form alone.
 
-The form (:class:`mrdamper.models._narx_kernels.NARXForm`: base variables, monomials,
+The form (:class:`mrdamper.models.narx.kernels.NARXForm`: base variables, monomials,
 coefficients, signal scales, the ``tanh`` velocity, the divergence bound, the largest lag and the
 initial force) is all the C code needs. The state is the Python step's: the samples seen so far
 (capped at the largest lag ``p``) and the last ``p`` scaled values of every signal row; the first

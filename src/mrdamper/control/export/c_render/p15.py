@@ -1,13 +1,13 @@
 """C rendering of the P-15 model's per-sample step, from its form alone.
 
-The form (:class:`mrdamper.models._p15_kernels.P15Form`: the coefficient matrix of ``w_1 .. w_5``
+The form (:class:`mrdamper.models.p15.kernels.P15Form`: the coefficient matrix of ``w_1 .. w_5``
 in its basis, the offset, the largest integration step, the force bound and the drive lag) is all
 the C code needs. ``<name>_step_advance`` integrates an interval as ``step_advance`` does:
 ``ceil(dt / max_step)`` steps of the two-stage L-stable SDIRK scheme, each implicit stage solved
 by the same safeguarded Newton iteration, the same operations in the same order.
 ``<name>_step_init`` sets the rest state ``(F_rest, 0, e0)``: ``F_rest`` is the real root of
 ``F - f0 - w1 v0 - w4 F^3 - w5 F^5`` with ``g'(F) > 0`` closest to zero (else the real root
-closest to zero), as :func:`mrdamper.models._p15_fit.rest_state`; C finds it by bisection on each
+closest to zero), as :func:`mrdamper.models.p15.fit.rest_state`; C finds it by bisection on each
 interval where the polynomial is monotone (between its critical points, a quadratic in ``F^2``).
 The input is not clipped; no inverse (the force is a state: it does not depend on the present
 input).

@@ -1,6 +1,6 @@
 """C rendering of the Spencer model's per-sample step, from its form alone.
 
-The form (:class:`mrdamper.models._spencer_kernels.SpencerForm`: the parameter vector and the
+The form (:class:`mrdamper.models.spencer.kernels.SpencerForm`: the parameter vector and the
 largest RK4 sub-step ``max_h``) and the fixed sample time ``dt`` given at export are all the C code
 needs. ``<name>_step`` does what :func:`mrdamper.models.step.run` does for one sample: the first
 call sets the rest state ``(y, z, u) = (x, 0, e)``, every later call integrates the interval from
@@ -128,7 +128,7 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
     Parameters
     ----------
     form : SpencerForm
-        Parameter vector (:data:`~mrdamper.models._spencer_kernels.PARAM_NAMES` order, SI) and
+        Parameter vector (:data:`~mrdamper.models.spencer.kernels.PARAM_NAMES` order, SI) and
         the largest RK4 sub-step [s].
     dt : float
         Sample time [s] of the C step.

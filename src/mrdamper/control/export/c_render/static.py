@@ -75,7 +75,7 @@ double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, doub
 }}
 """
 
-#: The map's per-sample step (:mod:`mrdamper.models._sp_kernels`): the state is the map's input.
+#: The map's per-sample step (:mod:`mrdamper.models.sp.kernels`): the state is the map's input.
 STATIC_STEP = r"""
 void {p}_step_init(double *s, double x0, double v0, double e0)
 {{

@@ -20,9 +20,7 @@ import numpy as np
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
-from mrdamper.models import _hysteresis_kernels as _k
 from mrdamper.models import _scale
-from mrdamper.models._oe_fit import FitSettings, FitSpec, check_mappings, identify
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import (
     STEP_VMAX,
@@ -34,6 +32,8 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.hysteresis import kernels as _k
+from mrdamper.models.hysteresis.fit import FitSettings, FitSpec, check_mappings, identify
 from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.step import Step
 from mrdamper.progress import report

@@ -1,7 +1,7 @@
 """Identification of P-15: the equation-error fit on filtered derivatives (the paper's literal
 fit, also the start of the output-error fit) and the output-error fit, stable by construction.
 
-Private machinery of :class:`~mrdamper.models.phenomenological.P15Estimator`.
+Private machinery of :class:`~mrdamper.models.p15.P15Estimator`.
 
 Equation error
 --------------
@@ -58,7 +58,7 @@ from mrdamper._warn import warn_user
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
-from mrdamper.models._p15_kernels import p15i_run
+from mrdamper.models.p15.kernels import p15i_run
 from mrdamper.progress import counted
 
 __all__ = [

@@ -19,8 +19,6 @@ import numpy as np
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
-from mrdamper.models._bingham_fit import identify
-from mrdamper.models._sp_kernels import make_static_step
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -30,7 +28,9 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.bingham.fit import identify
 from mrdamper.models.protocols import StaticMapForm
+from mrdamper.models.sp.kernels import make_static_step
 from mrdamper.models.step import Step
 
 __all__ = ["BinghamEstimator", "BinghamModel"]

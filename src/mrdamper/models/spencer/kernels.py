@@ -1,7 +1,7 @@
 """Compiled kernels of the Spencer et al. (1997) modified Bouc-Wen model (private).
 
 Everything here works on plain float64 arrays. The parameter vector ``p`` has the order of
-:data:`PARAM_NAMES` (SI units, see :mod:`mrdamper.models.spencer`). The state is
+:data:`PARAM_NAMES` (SI units, see :mod:`mrdamper.models.spencer.model`). The state is
 ``s = (y, z, u)``: internal displacement y [m], evolutionary variable z, filtered electrical
 input u [A] or [V]. Inputs are sampled records of displacement x [m], velocity v [m/s] and the
 electrical input e; within one sampling interval they are interpolated linearly, and every

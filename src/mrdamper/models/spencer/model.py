@@ -38,13 +38,6 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models import _scale
-from mrdamper.models import _spencer_kernels as _k
-from mrdamper.models._spencer_fit import DEFAULT_BOUNDS, FitSettings, check_settings, identify
-from mrdamper.models._spencer_kernels import (
-    MAX_AUTO_SUBSTEPS,
-    SUBSTEP_RATE_PRODUCT,
-    auto_substeps,
-)
 from mrdamper.models._step_check import step_halving_check
 from mrdamper.models.base import (
     Estimator,
@@ -54,6 +47,13 @@ from mrdamper.models.base import (
     TrainingData,
     check_int,
     check_number,
+)
+from mrdamper.models.spencer import kernels as _k
+from mrdamper.models.spencer.fit import DEFAULT_BOUNDS, FitSettings, check_settings, identify
+from mrdamper.models.spencer.kernels import (
+    MAX_AUTO_SUBSTEPS,
+    SUBSTEP_RATE_PRODUCT,
+    auto_substeps,
 )
 from mrdamper.models.step import Step
 from mrdamper.progress import report

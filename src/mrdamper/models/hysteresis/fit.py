@@ -31,8 +31,8 @@ from mrdamper._warn import warn_user
 from mrdamper.data import ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
-from mrdamper.models import _hysteresis_kernels as _k
-from mrdamper.models._spencer_fit import _regression, _strictly_inside
+from mrdamper.models.hysteresis import kernels as _k
+from mrdamper.models.spencer.fit import _regression, _strictly_inside
 from mrdamper.progress import counted, report
 
 __all__ = ["FitSettings", "FitSpec", "Scales", "check_mappings", "identify", "unit_floors"]

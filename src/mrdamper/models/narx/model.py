@@ -46,9 +46,7 @@ import numpy as np
 from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
-from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
-from mrdamper.models._narx_fit import free_run_cost, least_squares_terms, refine, select_terms
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
@@ -58,6 +56,8 @@ from mrdamper.models.base import (
     check_int,
     check_number,
 )
+from mrdamper.models.narx import kernels as K
+from mrdamper.models.narx.fit import free_run_cost, least_squares_terms, refine, select_terms
 from mrdamper.models.rates import (
     MODEL_FS_REASON,
     model_rate,

@@ -24,11 +24,11 @@ from mrdamper._warn import warn_user
 from mrdamper.data import ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, IdentificationError
-from mrdamper.models import _spencer_kernels as _k
-from mrdamper.models._spencer_kernels import PARAM_NAMES as PARAMETER_NAMES
-from mrdamper.models._spencer_kernels import auto_substeps
 from mrdamper.models.envelope import SWITCH_FRACTION
 from mrdamper.models.levels import held_within_records
+from mrdamper.models.spencer import kernels as _k
+from mrdamper.models.spencer.kernels import PARAM_NAMES as PARAMETER_NAMES
+from mrdamper.models.spencer.kernels import auto_substeps
 from mrdamper.progress import counted, report
 
 __all__ = ["COND_WARNING", "DEFAULT_BOUNDS", "FitSettings", "check_settings", "identify"]

@@ -1,6 +1,6 @@
 """Identification of the SP-1 ... SP-4 maps: multi-start nonlinear least squares on plain arrays.
 
-Private machinery of the estimators of :mod:`mrdamper.models.semiphenomenological` (see its
+Private machinery of the estimators of :mod:`mrdamper.models.sp.model` (see its
 docstring for the method: scaling, linear starts, multi-start, bounds, identifiability).
 """
 
@@ -18,7 +18,7 @@ from mrdamper.data import Experiment
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import IdentificationError
 from mrdamper.models._lag import first_order_lag
-from mrdamper.models._sp_kernels import COMPONENTS, N_COMPONENTS, sp_force, sp_force_jacobian
+from mrdamper.models.sp.kernels import COMPONENTS, N_COMPONENTS, sp_force, sp_force_jacobian
 from mrdamper.progress import counted
 
 __all__ = ["component_values", "identify", "single_level_terms", "stack", "velocity_slope_floor"]
@@ -331,8 +331,8 @@ def component_values(
     -------
     ndarray
         Shape ``(5,) + shape(i)``, in the order of
-        :data:`~mrdamper.models._sp_kernels.COMPONENTS` (units in
-        :meth:`~mrdamper.models.semiphenomenological.SPModel.components`).
+        :data:`~mrdamper.models.sp.kernels.COMPONENTS` (units in
+        :meth:`~mrdamper.models.sp.model.SPModel.components`).
     """
     ii = np.asarray(i, dtype=float)
     out = np.zeros((N_COMPONENTS, *ii.shape))

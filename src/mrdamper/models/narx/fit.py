@@ -15,8 +15,8 @@ import numpy as np
 from scipy import optimize
 
 from mrdamper.errors import IdentificationError
-from mrdamper.models import _narx_kernels as K
 from mrdamper.models import _scale
+from mrdamper.models.narx import kernels as K
 from mrdamper.progress import counted, report
 
 __all__ = [
