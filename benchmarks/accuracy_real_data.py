@@ -232,6 +232,12 @@ def main(argv: list[str] | None = None) -> None:
         "--csv", type=Path, default=None, help="also write the per-record rows to this CSV"
     )
     ap.add_argument(
+        "--result",
+        default=None,
+        metavar="NAME",
+        help="also store the per-record rows as results/NAME.json (benchmarks/_results.py)",
+    )
+    ap.add_argument(
         "--set",
         dest="extra",
         action="append",
@@ -286,6 +292,24 @@ def main(argv: list[str] | None = None) -> None:
         from mrdamper._io import atomic_write_text
 
         atomic_write_text(args.csv, pd.concat(frames).to_csv(index=False), force=True)
+    if args.result is not None:
+        from _results import write_result
+
+        argv_used = sys.argv[1:] if argv is None else argv
+        rows = pd.concat(frames, ignore_index=True)
+        level = rows["record"].str.extract(r"_([0-9.]+)V$", expand=False)
+        rows["level"] = level.where(rows["protocol"] == "labcontrol")
+        write_result(
+            args.result,
+            rows,
+            command=" ".join(["python benchmarks/accuracy_real_data.py", *argv_used]),
+            measures=(
+                "free-run test ESR (eq. 24) and SSSE (eq. 23, N) of every model kind on each "
+                "test record of the measured data sets (Quiroz leave-one-condition-out, Dyke "
+                "70/30, Labcontrol train/ -> test/); fit_s: wall time of the fit [s]; eta: the "
+                "drive-lag rate chosen [1/s]"
+            ),
+        )
 
 
 if __name__ == "__main__":
