@@ -217,4 +217,3 @@ def stamp(doc: Mapping[str, Any]) -> str:
         f"Data: `results/{doc['name']}.json` ({how}measured {when} at `{doc['commit']}`"
         f"{loadtxt}); command: `{doc['command']}`."
     )
-
