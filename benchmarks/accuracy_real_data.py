@@ -128,10 +128,13 @@ def fit_and_score(
     return rows
 
 
-def quiroz(models: list[str]) -> pd.DataFrame:
+def quiroz(models: list[str], folds: list[str] | None = None) -> pd.DataFrame:
+    """Leave one condition out; ``folds``: only the folds holding out these conditions."""
     data = read_directory(DATA / "quiroz2022_utfsm" / "sine_unfiltered")
     rows = []
     for cond, train, test in data.leave_one_group_out("condition"):
+        if folds is not None and cond not in folds:
+            continue
         for kind in models:
             for r in fit_and_score(kind, settings_for(kind, "quiroz"), train, test):
                 rows.append({"fold": cond, **r})
@@ -232,6 +235,13 @@ def main(argv: list[str] | None = None) -> None:
         "--csv", type=Path, default=None, help="also write the per-record rows to this CSV"
     )
     ap.add_argument(
+        "--folds",
+        nargs="*",
+        default=None,
+        metavar="CONDITION",
+        help="Quiroz: only the folds holding out these conditions (e.g. 10mm_2Hz)",
+    )
+    ap.add_argument(
         "--result",
         default=None,
         metavar="NAME",
@@ -261,7 +271,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"models: {models}\n")
     frames = []
     if args.protocol in ("quiroz", "both", "all"):
-        q = quiroz(models)
+        q = quiroz(models, args.folds)
         frames.append(q.assign(protocol="quiroz"))
         print("## Quiroz leave-one-condition-out: mean test ESR per fold")
         print(
