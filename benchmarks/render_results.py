@@ -108,6 +108,13 @@ def fmt(x: float | None, digits: int = 3) -> str:
     return f"{x:.{digits}g}"
 
 
+def seconds(x: float | None) -> str:
+    """A time in s: two significant digits below 10 s, whole seconds above."""
+    if x is None:
+        return "-"
+    return f"{x:.2g}" if x < 10 else f"{x:.0f}"
+
+
 def table(head: list[str], rows: Iterable[list[str]]) -> str:
     """A Markdown table."""
     lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
@@ -209,7 +216,7 @@ def render_fit_time(folder: Path = RESULTS) -> str:
     rows = [
         [label(k)]
         + [
-            fmt(s[p][k]["fit_cpu_s"], 2) if k in s.get(p, {}) and s[p][k]["n"] else "-"
+            seconds(s[p][k]["fit_cpu_s"]) if k in s.get(p, {}) and s[p][k]["n"] else "-"
             for p in protos
         ]
         for k in kinds
