@@ -163,7 +163,7 @@ def real_data_summary(folder: Path = RESULTS) -> dict[str, dict[str, dict[str, A
 
 def _recommended(folder: Path) -> dict[str, str]:
     """The kind ``select`` recommends on each held-out table's training set, by protocol."""
-    sel = read_result("select", folder)
+    sel = read_result("extrapolation-select", folder)
     by_scenario = {r["scenario"]: r["select"] for r in sel["rows"]}
     return {proto: by_scenario[sc] for proto, _, sc in DAMPERS if sc in by_scenario}
 
@@ -204,7 +204,7 @@ def render_held_out(folder: Path = RESULTS) -> str:
             "",
         ]
         + [stamp(d) for d in real_data_docs(folder)]
-        + [stamp(read_result("select", folder))]
+        + [stamp(read_result("extrapolation-select", folder))]
     )
 
 
@@ -240,7 +240,8 @@ def render_fit_time(folder: Path = RESULTS) -> str:
 def render_extrapolation(folder: Path = RESULTS) -> str:
     """Test ESR of every kind on excitations it was not trained on."""
     docs = [read_result(n, folder) for n in ("extrapolation", "extrapolation-standard-kinds")]
-    sel = {(r["scenario"], r["test"]): r for r in read_result("select", folder)["rows"]}
+    picks = read_result("extrapolation-select", folder)["rows"]
+    sel = {(r["scenario"], r["test"]): r for r in picks}
     cells: dict[tuple[str, str], dict[str, float]] = {}
     for d in docs:
         for r in d["rows"]:
@@ -249,7 +250,7 @@ def render_extrapolation(folder: Path = RESULTS) -> str:
     kinds = _sorted_kinds(k for c in cells.values() for k in c if k not in ("lpv-aug", "lpv-u"))
     rows = []
     for (sc, test), c in cells.items():
-        best = min(c[k] for k in kinds if k in c)
+        best = min((c[k] for k in kinds if c.get(k) is not None), default=None)
         row = [sc, test]
         for k in kinds:
             v = c.get(k)
@@ -273,7 +274,7 @@ def render_extrapolation(folder: Path = RESULTS) -> str:
 
 def render_select(folder: Path = RESULTS) -> str:
     """What ``select`` recommends on each scenario, against the best kind."""
-    doc = read_result("select", folder)
+    doc = read_result("extrapolation-select", folder)
     rows = [
         [
             r["scenario"],
