@@ -260,6 +260,9 @@ def main(argv: list[str] | None = None) -> None:
         help="extra estimator setting, e.g. p15.method=equation-error (repeatable)",
     )
     args = ap.parse_args(argv)
+    from _results import current_commit
+
+    commit = current_commit()  # the code the run starts with (HEAD may move while it runs)
     for item in args.extra:
         key, sep, raw = item.partition("=")
         kind, dot, name = key.partition(".")
@@ -317,6 +320,7 @@ def main(argv: list[str] | None = None) -> None:
             args.result,
             rows,
             command=" ".join(["python benchmarks/accuracy_real_data.py", *argv_used]),
+            commit=commit,
             measures=(
                 "free-run test ESR (eq. 24) and SSSE (eq. 23, N) of every model kind on each "
                 "test record of the measured data sets (Quiroz leave-one-condition-out, Dyke "

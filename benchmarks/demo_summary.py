@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 import pandas as pd
-from _results import write_result
+from _results import current_commit, write_result
 
 
 def run_demo(quick: bool, out: Path, workers: int = 1) -> tuple[pd.DataFrame, float]:
@@ -44,6 +44,7 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="every duration x 0.1")
     args = ap.parse_args(argv)
+    commit = current_commit()  # the code the run starts with (HEAD may move while it runs)
     with tempfile.TemporaryDirectory(prefix="mrdamper-demo-summary-") as tmp:
         summary, wall = run_demo(args.quick, Path(tmp) / "demo")
     print(summary.to_string(index=False))
@@ -60,6 +61,7 @@ def main(argv: list[str] | None = None) -> None:
             "records, fit and simulation wall times [s]"
         ),
         extra={"demo_wall_s": round(wall, 1)},
+        commit=commit,
     )
     print(f"wrote {path}")
 

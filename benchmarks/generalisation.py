@@ -526,6 +526,9 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         "with --select, the recommendations as results/NAME-select.json",
     )
     args = ap.parse_args(argv)
+    from _results import current_commit
+
+    commit = current_commit()  # the code the run starts with (HEAD may move while it runs)
     lpv_extra = parse_settings(args.lpv_set)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
@@ -570,12 +573,16 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
 
         atomic_write_text(args.csv, pd.DataFrame(rows).to_csv(index=False), force=True)
     if args.result is not None:
-        _store(args.result, rows, tab if args.select else None, argv)
+        _store(args.result, rows, tab if args.select else None, argv, commit)
     return tab
 
 
 def _store(
-    name: str, rows: list[dict[str, Any]], tab: pd.DataFrame | None, argv: list[str] | None
+    name: str,
+    rows: list[dict[str, Any]],
+    tab: pd.DataFrame | None,
+    argv: list[str] | None,
+    commit: str,
 ) -> None:
     """Write the per-test rows (and ``select``'s picks) as result files."""
     from _results import write_result
@@ -586,6 +593,7 @@ def _store(
         name,
         pd.DataFrame(rows),
         command=command,
+        commit=commit,
         measures=(
             "mean free-run test ESR of every model kind trained on one excitation and scored on "
             "another (the scenarios of benchmarks/generalisation.py); fit_s: wall time of the fit"
@@ -598,6 +606,7 @@ def _store(
             f"{name}-select",
             picks,
             command=command,
+            commit=commit,
             measures=(
                 "the kind mrdamper select recommends from each scenario's training records, its "
                 "test ESR and that ESR over the best kind's"
