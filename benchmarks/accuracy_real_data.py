@@ -74,7 +74,7 @@ def fit_and_score(
 
     ``range_policy`` (e.g. ``"clip"``) is applied to the fitted model before scoring.
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -89,11 +89,13 @@ def fit_and_score(
                 "esr": np.nan,
                 "ssse": np.nan,
                 "fit_s": time.perf_counter() - t0,
+                "fit_cpu_s": time.process_time() - c0,
                 "eta": "-",
                 "error": f"{type(exc).__name__}: {exc}",
             }
         ]
     fit_s = time.perf_counter() - t0
+    fit_cpu_s = time.process_time() - c0
     lag = getattr(model, "eta", None)
     eta = "-" if lag is None else f"{lag:g}"
     rows = []
@@ -109,6 +111,7 @@ def fit_and_score(
                     "esr": sc.esr,
                     "ssse": sc.ssse,
                     "fit_s": fit_s,
+                    "fit_cpu_s": fit_cpu_s,
                     "eta": eta,
                     "error": "",
                 }
@@ -121,6 +124,7 @@ def fit_and_score(
                     "esr": np.nan,
                     "ssse": np.nan,
                     "fit_s": fit_s,
+                    "fit_cpu_s": fit_cpu_s,
                     "eta": eta,
                     "error": f"{type(exc).__name__}: {exc}",
                 }
@@ -128,10 +132,13 @@ def fit_and_score(
     return rows
 
 
-def quiroz(models: list[str]) -> pd.DataFrame:
+def quiroz(models: list[str], folds: list[str] | None = None) -> pd.DataFrame:
+    """Leave one condition out; ``folds``: only the folds holding out these conditions."""
     data = read_directory(DATA / "quiroz2022_utfsm" / "sine_unfiltered")
     rows = []
     for cond, train, test in data.leave_one_group_out("condition"):
+        if folds is not None and cond not in folds:
+            continue
         for kind in models:
             for r in fit_and_score(kind, settings_for(kind, "quiroz"), train, test):
                 rows.append({"fold": cond, **r})
@@ -232,6 +239,19 @@ def main(argv: list[str] | None = None) -> None:
         "--csv", type=Path, default=None, help="also write the per-record rows to this CSV"
     )
     ap.add_argument(
+        "--folds",
+        nargs="*",
+        default=None,
+        metavar="CONDITION",
+        help="Quiroz: only the folds holding out these conditions (e.g. 10mm_2Hz)",
+    )
+    ap.add_argument(
+        "--result",
+        default=None,
+        metavar="NAME",
+        help="also store the per-record rows as results/NAME.json (benchmarks/_results.py)",
+    )
+    ap.add_argument(
         "--set",
         dest="extra",
         action="append",
@@ -240,6 +260,9 @@ def main(argv: list[str] | None = None) -> None:
         help="extra estimator setting, e.g. p15.method=equation-error (repeatable)",
     )
     args = ap.parse_args(argv)
+    from _results import current_commit
+
+    commit = current_commit()  # the code the run starts with (HEAD may move while it runs)
     for item in args.extra:
         key, sep, raw = item.partition("=")
         kind, dot, name = key.partition(".")
@@ -255,7 +278,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"models: {models}\n")
     frames = []
     if args.protocol in ("quiroz", "both", "all"):
-        q = quiroz(models)
+        q = quiroz(models, args.folds)
         frames.append(q.assign(protocol="quiroz"))
         print("## Quiroz leave-one-condition-out: mean test ESR per fold")
         print(
@@ -286,6 +309,25 @@ def main(argv: list[str] | None = None) -> None:
         from mrdamper._io import atomic_write_text
 
         atomic_write_text(args.csv, pd.concat(frames).to_csv(index=False), force=True)
+    if args.result is not None:
+        from _results import write_result
+
+        argv_used = sys.argv[1:] if argv is None else argv
+        rows = pd.concat(frames, ignore_index=True)
+        level = rows["record"].str.extract(r"_([0-9.]+)V$", expand=False)
+        rows["level"] = level.where(rows["protocol"] == "labcontrol")
+        write_result(
+            args.result,
+            rows,
+            command=" ".join(["python benchmarks/accuracy_real_data.py", *argv_used]),
+            commit=commit,
+            measures=(
+                "free-run test ESR (eq. 24) and SSSE (eq. 23, N) of every model kind on each "
+                "test record of the measured data sets (Quiroz leave-one-condition-out, Dyke "
+                "70/30, Labcontrol train/ -> test/); fit_s, fit_cpu_s: wall and CPU time of "
+                "the fit [s]; eta: the drive-lag rate chosen [1/s]"
+            ),
+        )
 
 
 if __name__ == "__main__":

@@ -518,7 +518,17 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         metavar="KEY=VALUE",
         help="any other LPV setting, e.g. n_m=5 (repeatable; values read as JSON)",
     )
+    ap.add_argument(
+        "--result",
+        default=None,
+        metavar="NAME",
+        help="also store the per-test rows as results/NAME.json (benchmarks/_results.py) and, "
+        "with --select, the recommendations as results/NAME-select.json",
+    )
     args = ap.parse_args(argv)
+    from _results import current_commit
+
+    commit = current_commit()  # the code the run starts with (HEAD may move while it runs)
     lpv_extra = parse_settings(args.lpv_set)
     models = args.models or available_models()
     rows: list[dict[str, Any]] = []
@@ -562,7 +572,46 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         from mrdamper._io import atomic_write_text
 
         atomic_write_text(args.csv, pd.DataFrame(rows).to_csv(index=False), force=True)
+    if args.result is not None:
+        _store(args.result, rows, tab if args.select else None, argv, commit)
     return tab
+
+
+def _store(
+    name: str,
+    rows: list[dict[str, Any]],
+    tab: pd.DataFrame | None,
+    argv: list[str] | None,
+    commit: str,
+) -> None:
+    """Write the per-test rows (and ``select``'s picks) as result files."""
+    from _results import write_result
+
+    used = sys.argv[1:] if argv is None else argv
+    command = " ".join(["OPENBLAS_NUM_THREADS=1 python benchmarks/generalisation.py", *used])
+    write_result(
+        name,
+        pd.DataFrame(rows),
+        command=command,
+        commit=commit,
+        measures=(
+            "mean free-run test ESR of every model kind trained on one excitation and scored on "
+            "another (the scenarios of benchmarks/generalisation.py); fit_s: wall time of the fit"
+        ),
+    )
+    if tab is not None:
+        picks = tab.reset_index()[["scenario", "test", "best", "select", "select_esr"]]
+        picks["select_over_best"] = tab["select/best"].to_numpy()
+        write_result(
+            f"{name}-select",
+            picks,
+            command=command,
+            commit=commit,
+            measures=(
+                "the kind mrdamper select recommends from each scenario's training records, its "
+                "test ESR and that ESR over the best kind's"
+            ),
+        )
 
 
 if __name__ == "__main__":
