@@ -17,11 +17,10 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
-from mrdamper.models import _scale
-from mrdamper.models._step_check import step_halving_check
+from mrdamper.models import _output_error as oe
 from mrdamper.models.base import (
     STEP_VMAX,
     Estimator,
@@ -29,14 +28,12 @@ from mrdamper.models.base import (
     Identified,
     RangePolicy,
     TrainingData,
-    check_int,
     check_number,
 )
 from mrdamper.models.hysteresis import kernels as _k
 from mrdamper.models.hysteresis.fit import FitSettings, FitSpec, check_mappings, identify
 from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.step import Step
-from mrdamper.progress import report
 
 __all__ = ["STEP_VMAX", "HysteresisEstimator", "HysteresisModel"]
 
@@ -63,31 +60,11 @@ class HysteresisModel(FittedModel):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in _k.PARAM_NAMES[self.family]:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(
-                value, (int, float, np.integer, np.floating)
-            ):
-                raise DataValidationError(name, f"expected a real number, got {value!r}")
-            if not math.isfinite(float(value)):
-                raise DataValidationError(name, f"expected a finite number, got {value!r}")
-            object.__setattr__(self, name, float(value))
+        oe.check_real_fields(self, _k.PARAM_NAMES[self.family])
         if self.eta < 0.0:
             raise DataValidationError(
                 "eta", f"expected a drive-lag rate >= 0 [1/s] (0: no lag), got {self.eta!r}"
             )
-        if (
-            isinstance(self.substeps, bool)
-            or not isinstance(self.substeps, (int, np.integer))
-            or self.substeps < 0
-        ):
-            raise DataValidationError(
-                "substeps",
-                f"expected a non-negative integer (0 = automatic), got {self.substeps!r}",
-            )
-        object.__setattr__(self, "substeps", int(self.substeps))
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
         self._check()
 
     def _check(self) -> None:
@@ -351,14 +328,9 @@ class HysteresisEstimator(Estimator):
 
     def _validate(self) -> None:
         super()._validate()
-        for name in ("n_starts", "max_nfev", "screen_nfev"):
-            check_int(name, getattr(self, name), 1)
-        check_int("substeps", self.substeps, 0)
+        oe.check_settings(self)
         for name in ("ftol", "xtol", "gtol"):
             check_number(name, getattr(self, name), what="a positive finite tolerance")
-        check_number(
-            "step_tolerance", self.step_tolerance, what="a positive finite number (ESR units)"
-        )
         check_lag(self.eta)
         check_mappings(self.spec, self._fit_settings())
 
@@ -375,21 +347,15 @@ class HysteresisEstimator(Estimator):
         IdentificationError
             Every start diverged, or the optimiser returned a non-finite result.
         """
-        exps, windows = _scale.window_set(data.records, budget=_scale.WINDOW_BUDGET_SPENCER)
         settings = dataclasses.replace(self._fit_settings(), eta=resolved(self.eta))
-        params, provenance = identify(self.spec, settings, exps, single=data.single, kind=self.kind)
-        parameters: dict[str, Any] = {**params, "substeps": int(self.substeps)}
-        model = self.model_class(**parameters, input=self.input, input_range=data.input_range)
-        assert isinstance(model, HysteresisModel)
-        report("step-size check")
-        provenance["step_check"] = step_halving_check(
-            self.kind,
-            exps,
-            lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
-            self.step_tolerance,
-        )
-        if windows is not None:
-            provenance["windows"] = windows
-            report("full-data check")
-            provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
-        return Identified(parameters=parameters, provenance=provenance)
+
+        def fit(exps: ExperimentSet) -> tuple[dict[str, Any], HysteresisModel, dict[str, Any]]:
+            params, provenance = identify(
+                self.spec, settings, exps, single=data.single, kind=self.kind
+            )
+            parameters: dict[str, Any] = {**params, "substeps": int(self.substeps)}
+            model = self.model_class(**parameters, input=self.input, input_range=data.input_range)
+            assert isinstance(model, HysteresisModel)
+            return parameters, model, provenance
+
+        return oe.fit_and_check(self.kind, data, fit, self.step_tolerance)
