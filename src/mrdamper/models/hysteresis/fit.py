@@ -95,7 +95,7 @@ class FitSpec:
     Attributes
     ----------
     family : str
-        Family name (a key of :data:`~._hysteresis_kernels.PARAM_NAMES`).
+        Family name (a key of :data:`~mrdamper.models.hysteresis.kernels.PARAM_NAMES`).
     unknowns : tuple of str
         Names of the identified parameters (every parameter but ``eta``).
     bounds : mapping

@@ -2,7 +2,7 @@
 
 ``tanh``, ``boucwen``, ``dahl`` and ``lugre`` are each a small module declaring its parameters
 (the fields of a :class:`HysteresisModel` subclass) and its identification spec
-(:class:`~._oe_fit.FitSpec`); everything else is here, written once: parameter checks, the free
+(:class:`~.fit.FitSpec`); everything else is here, written once: parameter checks, the free
 run, the per-sample step, the estimator settings, the output-error fit and its step-halving
 check.
 """
@@ -76,7 +76,7 @@ class HysteresisModel(FittedModel):
 
     def substeps_for(self, experiment: Experiment) -> int:
         """RK4 sub-steps per sampling interval used for ``experiment`` (``substeps``, or the
-        automatic choice of :func:`~._hysteresis_kernels.auto_substeps` for its interval and the
+        automatic choice of :func:`~.kernels.auto_substeps` for its interval and the
         velocity bound :meth:`~mrdamper.models.base.FittedModel.step_vmax`): those of the step
         built for its interval, one rule for both."""
         return self._substeps(experiment.dt, self.step_vmax(experiment.v))
@@ -178,10 +178,10 @@ class HysteresisModel(FittedModel):
         At every sample the input ``u`` the laws read, in its admissible interval (within
         ``max_change`` of the previous one), minimising
         ``(F(u) - F_desired)^2 + reg^2 (u - u_prev)^2`` is taken in closed form
-        (:func:`~._hysteresis_kernels.inverse_step`: the force is affine in ``u`` at the present
+        (:func:`~.kernels.inverse_step`: the force is affine in ``u`` at the present
         state), then the state is advanced with the motion. Without a drive lag ``u`` is the input
         itself, in ``[lo, hi]``. With one it is the lagged input, confined to what a command in
-        ``[lo, hi]`` held over the interval reaches (:func:`~._hysteresis_kernels.inverse_run`);
+        ``[lo, hi]`` held over the interval reaches (:func:`~.kernels.inverse_run`);
         the command is then :func:`mrdamper.control.inverse.driver_command` of it, which
         :func:`mrdamper.control.inverse_current` applies. The step has the RK4 sub-steps
         :meth:`predict` takes on the record, so without a lag the model's free run with the
@@ -268,7 +268,7 @@ class HysteresisModel(FittedModel):
 
 @dataclass
 class HysteresisEstimator(Estimator):
-    """Output-error estimator of the four families (settings only; see :mod:`._oe_fit`).
+    """Output-error estimator of the four families (settings only; see :mod:`.fit`).
 
     Parameters
     ----------
@@ -340,7 +340,7 @@ class HysteresisEstimator(Estimator):
         return FitSettings(**{n: getattr(self, n) for n in names})
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
-        """Output-error fit (:func:`._oe_fit.identify`), then the step-halving check.
+        """Output-error fit (:func:`.fit.identify`), then the step-halving check.
 
         Raises
         ------

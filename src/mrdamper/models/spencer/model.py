@@ -15,7 +15,7 @@ e the electrical input of the record (coil current ``i`` [A] or command ``voltag
 ``input``) and u its first-order filtered version (drive and fluid lag). The initial state is the
 rest state: y = x(0), z = 0, u = e(0).
 
-The model is integrated by a compiled fixed-step RK4 kernel (:mod:`._spencer_kernels`); the number
+The model is integrated by a compiled fixed-step RK4 kernel (:mod:`.kernels`); the number
 of sub-steps per sampling interval is chosen from the parameters and the record so that the step
 resolves the stiffest time constant (see :meth:`SpencerModel.substeps_for`).
 
@@ -413,7 +413,7 @@ class SpencerEstimator(Estimator):
         return FitSettings(**{n: getattr(self, n) for n in names})
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
-        """Bounded nonlinear least squares on the free-run error (:mod:`._spencer_fit`), then the
+        """Bounded nonlinear least squares on the free-run error (:mod:`.fit`), then the
         step-halving check of the result.
 
         Raises
