@@ -22,6 +22,7 @@ import typer
 from mrdamper._io import csv_kind
 from mrdamper.cli._help import kinds_text
 from mrdamper.cli._modes import refuse_unused
+from mrdamper.cli._options import ForceOut
 from mrdamper.cli._records import reader_options
 from mrdamper.errors import DataValidationError
 
@@ -90,7 +91,7 @@ def export(
     inverse: Annotated[
         bool, typer.Option("--inverse", help="FMU of the model's inverse (--format fmu).")
     ] = False,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
+    force: ForceOut = False,
 ) -> None:
     """Write the LPV model's matrices A(rho), B, C(rho), D, grid poles and zone laws
     for control design, (--format c) C99 code of the model and its inverse, or (--format fmu) an
@@ -148,7 +149,7 @@ def inverse(
         Path, typer.Argument(help="One record file; its force column F is the desired force.")
     ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV.")],
-    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
+    force: ForceOut = False,
     method: Annotated[str, typer.Option("--method", help="regularised | exact.")] = "regularised",
     reg: Annotated[
         float | None,

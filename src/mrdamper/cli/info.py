@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -18,6 +18,9 @@ from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.data.experiment import Experiment
 from mrdamper.data.inspection import record_summary
 from mrdamper.errors import DataValidationError, MrDamperError
+
+if TYPE_CHECKING:
+    from rich.console import JustifyMethod
 
 __all__ = ["register"]
 
@@ -50,7 +53,7 @@ def _print_table(rows: list[dict[str, Any]], title: str) -> None:
     from rich.table import Table
 
     table = Table(title=escape(title), show_lines=False)
-    for col, justify in (
+    columns: tuple[tuple[str, JustifyMethod], ...] = (
         ("name", "left"),
         ("samples", "right"),
         ("rate [Hz]", "right"),
@@ -60,8 +63,9 @@ def _print_table(rows: list[dict[str, Any]], title: str) -> None:
         ("F [N]", "right"),
         ("input levels", "left"),
         ("problems", "left"),
-    ):
-        table.add_column(escape(col), justify=justify, overflow="fold")  # type: ignore[arg-type]
+    )
+    for col, justify in columns:
+        table.add_column(escape(col), justify=justify, overflow="fold")
     for r in rows:
         unit = "A" if r["input"] == "i" else "V"
         if r["levels"] is not None:

@@ -27,6 +27,7 @@ from typing import Annotated, Any, cast
 import typer
 
 from mrdamper._io import csv_kind
+from mrdamper.cli._options import ForceOut, InputChannel, Pattern
 from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.data import Experiment
@@ -107,13 +108,8 @@ def fit(
     model: Annotated[str, typer.Argument(help=f"Model kind: {', '.join(known_kinds())}.")],
     data: Annotated[list[Path], typer.Argument(help="Training data files or folders.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output model file (JSON).")],
-    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
-    input_: Annotated[
-        str | None,
-        typer.Option(
-            "--input", help="Electrical input: i | voltage (default: the channel every record has)."
-        ),
-    ] = None,
+    force: ForceOut = False,
+    input_: InputChannel = None,
     n_m: Annotated[
         int | None, typer.Option("--n-m", help="Model order of the LPV / LTI model (n_m).")
     ] = None,
@@ -138,9 +134,7 @@ def fit(
             "--set", help="Any other estimator setting, KEY=VALUE (JSON value), repeatable."
         ),
     ] = None,
-    pattern: Annotated[
-        str | None, typer.Option("--pattern", help="File-name regex for folders.")
-    ] = None,
+    pattern: Pattern = None,
     choice_records: Annotated[
         list[Path] | None,
         typer.Option(
@@ -211,7 +205,7 @@ def simulate(
     model_file: Annotated[Path, typer.Argument(help="Model file written by 'mrdamper fit'.")],
     data: Annotated[Path, typer.Argument(help="One data file.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output CSV: t, F, F_pred.")],
-    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
+    force: ForceOut = False,
     range_policy: Annotated[
         str | None,
         typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's)."),
@@ -245,9 +239,7 @@ def score(
         str | None,
         typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's)."),
     ] = None,
-    pattern: Annotated[
-        str | None, typer.Option("--pattern", help="File-name regex for folders.")
-    ] = None,
+    pattern: Pattern = None,
     no_progress: NoProgress = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:

@@ -16,12 +16,19 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 
 from mrdamper.cli._modes import refuse_unused
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from rich.progress import Progress, TaskID
+
+    from mrdamper.models.base import FittedModel
+    from mrdamper.rig.virtual_rig import VirtualRig
 
 __all__ = ["register", "rig_app"]
 
@@ -30,7 +37,7 @@ rig_app = typer.Typer(
 )
 
 
-def _damper(spec: str | None):  # type: ignore[no-untyped-def]
+def _damper(spec: str | None) -> FittedModel | None:
     from mrdamper.rig.reference import resolve_damper
 
     return resolve_damper(spec)
@@ -217,7 +224,7 @@ def doe(
         typer.echo(f"manifest: {manifest}")
 
 
-def _exceeding(table) -> dict[str, list[str]]:  # type: ignore[no-untyped-def]
+def _exceeding(table: pd.DataFrame) -> dict[str, list[str]]:
     """``{limit: [record, ...]}`` of a plan table's ``exceeds`` column."""
     out: dict[str, list[str]] = {}
     for record, exceeds in zip(table["record"], table["exceeds"], strict=True):
@@ -242,7 +249,9 @@ def _loop_model_file(spec: str | None) -> Path | None:
     return path
 
 
-def _rig(damper: str | None, fs: float, stroke: float | None, plan: bool, first):  # type: ignore[no-untyped-def]
+def _rig(
+    damper: str | None, fs: float, stroke: float | None, plan: bool, first: FittedModel | None
+) -> VirtualRig:
     """The rig of ``rig doe``: the virtual rig, or with ``plan`` the plan rig whose damper
     estimate is ``--damper`` or else the loop model file's model."""
     from mrdamper.rig.actuator import ServoActuator
@@ -255,7 +264,7 @@ def _rig(damper: str | None, fs: float, stroke: float | None, plan: bool, first)
     return cls(damper=model, fs=fs, actuator=actuator)
 
 
-def _loop_model(path: Path):  # type: ignore[no-untyped-def]
+def _loop_model(path: Path) -> FittedModel:
     """The ``--loop-model``, refused at once when trained at one level (its loop never switches
     the current)."""
     from mrdamper.models.levels import check_levels
@@ -286,14 +295,14 @@ class _NoBar:
     def __exit__(self, *exc: object) -> None:
         return None
 
-    def add_task(self, description: str, total: int) -> int:
-        return 0
+    def add_task(self, description: str, total: int) -> TaskID:
+        return cast("TaskID", 0)
 
-    def advance(self, task: int) -> None:
+    def advance(self, task: TaskID) -> None:
         return None
 
 
-def _bar(enabled: bool):  # type: ignore[no-untyped-def]
+def _bar(enabled: bool) -> Progress | _NoBar:
     """A rich progress bar on standard error when it is a terminal (else a silent stand-in)."""
     import sys
 

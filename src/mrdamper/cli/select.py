@@ -23,6 +23,7 @@ from typing import Annotated, Any
 import typer
 
 from mrdamper._io import csv_kind
+from mrdamper.cli._options import InputChannel, Pattern
 from mrdamper.cli._records import reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.errors import DataValidationError
@@ -76,12 +77,7 @@ def select(
     n_folds: Annotated[
         int, typer.Option("--n-folds", help="Folds for 'record' (at most) and 'time'.")
     ] = 5,
-    input_: Annotated[
-        str | None,
-        typer.Option(
-            "--input", help="Electrical input: i | voltage (default: the channel every record has)."
-        ),
-    ] = None,
+    input_: InputChannel = None,
     settings: Annotated[
         list[str] | None,
         typer.Option(
@@ -117,9 +113,7 @@ def select(
         Path | None, typer.Option("--csv", help="Also write the table to this CSV file.")
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --csv if it exists.")] = False,
-    pattern: Annotated[
-        str | None, typer.Option("--pattern", help="File-name regex for folders.")
-    ] = None,
+    pattern: Pattern = None,
     no_progress: NoProgress = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:

@@ -9,7 +9,7 @@ before any computation starts.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 
@@ -18,6 +18,9 @@ from mrdamper.cli._records import reader_options
 from mrdamper.cli._status import finished_lines
 from mrdamper.errors import DataValidationError, SchemaError
 from mrdamper.kinds import kind_list
+
+if TYPE_CHECKING:
+    from rich.console import JustifyMethod
 
 __all__ = [
     "DEMO_OUT",
@@ -97,7 +100,7 @@ def print_summary(res: Any, out: Path | None = None) -> None:
     console = Console()
     s = res.summary
     table = Table(title=f"Model comparison ({res.protocol.name}): scored records per model")
-    for col, just in (
+    columns: tuple[tuple[str, JustifyMethod], ...] = (
         ("model", "left"),
         ("ok", "right"),
         ("failed", "right"),
@@ -105,8 +108,9 @@ def print_summary(res: Any, out: Path | None = None) -> None:
         ("ESR median", "right"),
         ("SSSE mean [N]", "right"),
         ("fit time [s]", "right"),
-    ):
-        table.add_column(col, justify=just)  # type: ignore[arg-type]
+    )
+    for col, just in columns:
+        table.add_column(col, justify=just)
 
     def f(x: float, fmt: str = "{:.4g}") -> str:
         return "-" if not math.isfinite(x) else fmt.format(x)

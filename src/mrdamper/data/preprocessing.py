@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from mrdamper.data.experiment import Experiment
+from mrdamper.data.experiment import ElectricalSource, Experiment
 from mrdamper.errors import DataValidationError
 
 __all__ = [
@@ -357,7 +357,9 @@ def trim(exp: Experiment, t_start: float | None = None, t_stop: float | None = N
     return out.replace(metadata=_log(exp, f"trimmed to [{lo:g}, {hi:g}] s"))
 
 
-def apply_drive_lag(exp: Experiment, eta: float, source: str = "voltage") -> Experiment:
+def apply_drive_lag(
+    exp: Experiment, eta: float, source: ElectricalSource = "voltage"
+) -> Experiment:
     """Pass the command through the first-order lag ``du/dt = -eta (u - command)``.
 
     The lag (drive electronics and fluid response, as in Spencer et al. 1997) is discretised
@@ -403,7 +405,7 @@ def apply_drive_lag(exp: Experiment, eta: float, source: str = "voltage") -> Exp
             f"record {exp.name!r} already has a drive lag (eta={exp.metadata['drive_lag_eta']!r}); "
             "apply it to the original command only once",
         )
-    w = exp.electrical(source)  # type: ignore[arg-type]
+    w = exp.electrical(source)
     from scipy.signal import lfilter
 
     a = math.exp(-eta * exp.dt)

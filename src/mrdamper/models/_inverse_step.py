@@ -18,6 +18,7 @@ The force itself comes from the families' steps (one definition each).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models.lpv.step import dpoly as _dpoly
@@ -28,9 +29,14 @@ __all__ = ["reg_solve_poly", "reg_solve_static", "solve_interval"]
 
 _N_BISECT = 200
 
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
 
 @njit(cache=True)
-def _bisect(c, target, deriv, a, b):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _bisect(
+    c: FloatArray, target: float, deriv: bool, a: float, b: float
+) -> float:  # pragma: no cover - numba
     """Root of ``poly(c) - target`` (or of the derivative) in ``[a, b]`` given a sign change."""
     fa = _dpoly(c, a) if deriv else _poly(c, a) - target
     for _ in range(_N_BISECT):
@@ -48,7 +54,9 @@ def _bisect(c, target, deriv, a, b):  # type: ignore[no-untyped-def]  # pragma: 
 
 
 @njit(cache=True)
-def _nearest_root(c, target, lo, hi, prev, n_grid):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _nearest_root(
+    c: FloatArray, target: float, lo: float, hi: float, prev: float, n_grid: int
+) -> float:  # pragma: no cover - numba
     """Root of ``poly(c) - target`` in ``[lo, hi]`` nearest ``prev`` (NaN when no sign change)."""
     h = (hi - lo) / n_grid
     best = np.nan
@@ -75,7 +83,9 @@ def _nearest_root(c, target, lo, hi, prev, n_grid):  # type: ignore[no-untyped-d
 
 
 @njit(cache=True)
-def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def solve_interval(
+    c: FloatArray, target: float, lo: float, hi: float, prev: float, n_grid: int, tol: float
+) -> tuple[float, bool]:  # pragma: no cover - numba
     """Admissible ``r`` in ``[lo, hi]`` with ``|poly(c)(r) - target| <= tol`` nearest ``prev``.
 
     ``prev`` itself is kept when it meets the band; otherwise the exact solution (root of
@@ -130,22 +140,47 @@ def solve_interval(c, target, lo, hi, prev, n_grid, tol):  # type: ignore[no-unt
 
 
 @njit(cache=True)
-def _slope_poly(cf, target, r, prev, lam2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _slope_poly(
+    cf: FloatArray, target: float, r: float, prev: float, lam2: float
+) -> float:  # pragma: no cover - numba
     """Half the derivative of the regularised objective, ``(F - target) F' + lam2 (r - prev)``."""
     return (_poly(cf, r) - target) * _dpoly(cf, r) + lam2 * (r - prev)
 
 
 @njit(cache=True)
-def _slope_static(x, v, comp, power, theta, f0, target, r, prev, lam2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _slope_static(
+    x: float,
+    v: float,
+    comp: IntArray,
+    power: IntArray,
+    theta: FloatArray,
+    f0: float,
+    target: float,
+    r: float,
+    prev: float,
+    lam2: float,
+) -> float:  # pragma: no cover - numba
     return (sp_force1(x, v, r, comp, power, theta, f0) - target) * sp_dforce1(
         x, v, r, comp, power, theta
     ) + lam2 * (r - prev)
 
 
 @njit(cache=True)
-def _bisect_slope(  # type: ignore[no-untyped-def]
-    is_poly, cf, x, v, comp, power, theta, f0, target, prev, lam2, a, b
-):  # pragma: no cover
+def _bisect_slope(
+    is_poly: bool,
+    cf: FloatArray,
+    x: float,
+    v: float,
+    comp: IntArray,
+    power: IntArray,
+    theta: FloatArray,
+    f0: float,
+    target: float,
+    prev: float,
+    lam2: float,
+    a: float,
+    b: float,
+) -> float:  # pragma: no cover
     """Zero of the objective's slope in ``[a, b]``, to machine precision.
 
     The slope is < 0 at ``a`` and > 0 at ``b``.
@@ -168,9 +203,22 @@ def _bisect_slope(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _reg_solve(  # type: ignore[no-untyped-def]
-    is_poly, cf, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
-):  # pragma: no cover
+def _reg_solve(
+    is_poly: bool,
+    cf: FloatArray,
+    x: float,
+    v: float,
+    comp: IntArray,
+    power: IntArray,
+    theta: FloatArray,
+    f0: float,
+    target: float,
+    a: float,
+    b: float,
+    prev: float,
+    lam2: float,
+    n_grid: int,
+) -> tuple[float, bool]:  # pragma: no cover
     """Minimiser of ``(F(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
 
     See :func:`reg_solve_poly`.
@@ -226,7 +274,9 @@ def _reg_solve(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def reg_solve_poly(
+    cf: FloatArray, target: float, a: float, b: float, prev: float, lam2: float, n_grid: int
+) -> tuple[float, bool]:  # pragma: no cover - numba
     """Minimiser of ``(poly(cf)(r) - target)^2 + lam2 (r - prev)^2`` over ``[a, b]``.
 
     Grid scan of ``n_grid`` intervals (``prev`` included); then the zero of the objective's slope
@@ -239,8 +289,19 @@ def reg_solve_poly(cf, target, a, b, prev, lam2, n_grid):  # type: ignore[no-unt
 
 
 @njit(cache=True)
-def reg_solve_static(  # type: ignore[no-untyped-def]
-    x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid
-):  # pragma: no cover
+def reg_solve_static(
+    x: float,
+    v: float,
+    comp: IntArray,
+    power: IntArray,
+    theta: FloatArray,
+    f0: float,
+    target: float,
+    a: float,
+    b: float,
+    prev: float,
+    lam2: float,
+    n_grid: int,
+) -> tuple[float, bool]:  # pragma: no cover
     """As :func:`reg_solve_poly` for one sample of a static map (see :func:`sp_force1`)."""
     return _reg_solve(False, theta, x, v, comp, power, theta, f0, target, a, b, prev, lam2, n_grid)

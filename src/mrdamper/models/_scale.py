@@ -427,7 +427,7 @@ def fold_qr(blocks: Iterable[np.ndarray]) -> np.ndarray:
     return np.vstack((R, np.zeros((max(0, P1 - R.shape[0]), P1))))[:P1]
 
 
-class RecordList(list):  # type: ignore[type-arg]
+class RecordList(list[Any]):
     """Per-record arrays that the LPV least squares takes record by record (no concatenation)."""
 
 

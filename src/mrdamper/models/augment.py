@@ -28,6 +28,7 @@ import numpy as np
 import scipy.signal as sps
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel
 from mrdamper.signals import aprbs
@@ -41,7 +42,7 @@ def reference_records(
     reference: FittedModel | None = None,
     reference_kind: str = "spencer",
     reference_settings: Mapping[str, Any] | None = None,
-    input: str = "i",
+    input: ElectricalSource = "i",
     n_records: int = 4,
     duration: float = 20.0,
     fs: float | None = None,
@@ -113,8 +114,8 @@ def reference_records(
             ).fit(exps)
     reference = reference.with_range_policy("clip")
     v_max = max(float(np.max(np.abs(e.v))) for e in exps)
-    lo = min(float(np.min(e.electrical(input))) for e in exps)  # type: ignore[arg-type]
-    hi = max(float(np.max(e.electrical(input))) for e in exps)  # type: ignore[arg-type]
+    lo = min(float(np.min(e.electrical(input))) for e in exps)
+    hi = max(float(np.max(e.electrical(input))) for e in exps)
     n = round(duration * rate)
     t = np.arange(n) / rate
     sos = sps.butter(4, [min_frequency, max_frequency], btype="bandpass", fs=rate, output="sos")

@@ -26,7 +26,7 @@ import typing
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Literal, NamedTuple, cast
+from typing import Any, ClassVar, NamedTuple, cast
 
 import numpy as np
 
@@ -34,7 +34,7 @@ from mrdamper._io import atomic_write_text, json_kind
 from mrdamper._warn import warn_user
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import DataValidationError, Note, OutOfRangeError, SchemaError
+from mrdamper.errors import DataValidationError, Note, SchemaError
 from mrdamper.metrics import Scores, score_arrays
 from mrdamper.models import _scale, lag
 from mrdamper.models._schema import (
@@ -47,6 +47,7 @@ from mrdamper.models._schema import (
 )
 from mrdamper.models._values import Identified, SimulationResult, TrainingData
 from mrdamper.models.envelope import envelope_note, envelope_of, training_envelope
+from mrdamper.models.input_range import RangePolicy, check_input_range, single_level_note
 from mrdamper.models.levels import single_level
 from mrdamper.models.settings import (
     check_bool,
@@ -93,8 +94,6 @@ TIMING_PROVENANCE: frozenset[str] = frozenset(
     {"elapsed_s", "cpu_s", "fit_seconds", "fit_time_s", "lag_selection_s"}
 )
 
-RangePolicy = Literal["error", "warn", "clip", "ignore"]
-
 #: Largest damper velocity [m/s] a continuous-time family's per-sample step resolves when no
 #: other bound is given (beyond the velocities of a car suspension).
 STEP_VMAX = 1.5
@@ -102,78 +101,6 @@ STEP_VMAX = 1.5
 #: Smallest peak velocity of a training record [m/s]: below it the record has no motion (a rig at
 #: rest records velocity noise only) and the fit is refused.
 MIN_PEAK_VELOCITY = 1e-6
-
-
-def check_input_range(
-    values: np.ndarray,
-    bounds: tuple[float, float],
-    policy: RangePolicy,
-    *,
-    field_name: str = "i",
-    model: str = "model",
-    tolerance: float = 1e-9,
-) -> np.ndarray:
-    """Apply an out-of-range policy to a scheduling / electrical input signal.
-
-    Parameters
-    ----------
-    values : ndarray
-        The signal (e.g. coil current [A]).
-    bounds : (float, float)
-        Range the model was identified on.
-    policy : {"error", "warn", "clip", "ignore"}
-        What to do when values leave ``bounds`` by more than ``tolerance`` times the range width.
-    field_name, model : str
-        Used in the message.
-    tolerance : float
-        Relative slack on the bounds, as a fraction of the range width (at least 1) [-].
-
-    Returns
-    -------
-    ndarray
-        ``values`` (clipped under ``"clip"``).
-    """
-    lo, hi = float(bounds[0]), float(bounds[1])
-    slack = tolerance * max(hi - lo, 1.0)
-    vmin, vmax = float(np.min(values)), float(np.max(values))
-    if vmin >= lo - slack and vmax <= hi + slack:
-        return values
-    msg = (
-        f"{field_name}: {model} was identified on [{lo:g}, {hi:g}] but the record spans "
-        f"[{vmin:g}, {vmax:g}]"
-    )
-    if policy == "error":
-        raise OutOfRangeError(msg + "; pass range_policy='clip', 'warn' or 'ignore' to proceed")
-    if policy == "warn":
-        warn_user(msg + " (extrapolating)", RuntimeWarning)
-        return values
-    if policy == "clip":
-        return np.asarray(np.clip(values, lo, hi))
-    if policy == "ignore":
-        return values
-    raise OutOfRangeError(f"range_policy: expected error/warn/clip/ignore, got {policy!r}")
-
-
-def single_level_note(kind: str, source: str, level: float) -> str:
-    """One-line note for a model identified at a single electrical level.
-
-    The note is also emitted as a warning.
-
-    Parameters
-    ----------
-    kind : str
-        Model kind.
-    source : {"i", "voltage"}
-        Electrical input channel.
-    level : float
-        The level [A] or [V].
-    """
-    unit = "A" if source == "i" else "V"
-    return (
-        f"{kind}: trained at one {source} level ({level:g} {unit}): its {source}-dependent laws "
-        f"are constants and its identified range is [{level:g}, {level:g}] {unit}; other levels "
-        "follow range_policy"
-    )
 
 
 # ----------------------------------------------------------------------------- envelope check

@@ -5,6 +5,4 @@ It lives in :mod:`mrdamper.models.hysteresis.boucwen`.
 
 from __future__ import annotations
 
-from mrdamper.models.hysteresis.boucwen import IDENTIFIED, BoucWenEstimator, BoucWenModel
-
-__all__ = ["IDENTIFIED", "BoucWenEstimator", "BoucWenModel"]
+from mrdamper.models.hysteresis.boucwen import *

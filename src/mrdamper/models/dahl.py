@@ -5,6 +5,4 @@ It lives in :mod:`mrdamper.models.hysteresis.dahl`.
 
 from __future__ import annotations
 
-from mrdamper.models.hysteresis.dahl import IDENTIFIED, DahlEstimator, DahlModel
-
-__all__ = ["IDENTIFIED", "DahlEstimator", "DahlModel"]
+from mrdamper.models.hysteresis.dahl import *

@@ -5,6 +5,4 @@ It lives in :mod:`mrdamper.models.hysteresis.lugre`.
 
 from __future__ import annotations
 
-from mrdamper.models.hysteresis.lugre import IDENTIFIED, LuGreEstimator, LuGreModel
-
-__all__ = ["IDENTIFIED", "LuGreEstimator", "LuGreModel"]
+from mrdamper.models.hysteresis.lugre import *

@@ -2,6 +2,4 @@
 
 from __future__ import annotations
 
-from mrdamper.models.p15.model import P15Estimator, P15Model
-
-__all__ = ["P15Estimator", "P15Model"]
+from mrdamper.models.p15 import *

@@ -2,26 +2,4 @@
 
 from __future__ import annotations
 
-from mrdamper.models.sp.model import (
-    SP1Estimator,
-    SP1Model,
-    SP2Estimator,
-    SP2Model,
-    SP3Estimator,
-    SP3Model,
-    SP4Estimator,
-    SP4Model,
-    SPModel,
-)
-
-__all__ = [
-    "SP1Estimator",
-    "SP1Model",
-    "SP2Estimator",
-    "SP2Model",
-    "SP3Estimator",
-    "SP3Model",
-    "SP4Estimator",
-    "SP4Model",
-    "SPModel",
-]
+from mrdamper.models.sp import *

@@ -114,7 +114,16 @@ class Step:
 
 
 @njit(cache=False)
-def run(force, advance, form, state, x, v, e, dt):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def run(
+    force: Callable[..., float],
+    advance: Callable[..., int],
+    form: Any,
+    state: FloatArray,
+    x: FloatArray,
+    v: FloatArray,
+    e: FloatArray,
+    dt: float,
+) -> tuple[FloatArray, int, int]:  # pragma: no cover - numba
     """Free run of a step over sampled signals (compiled once per family and process).
 
     Returns

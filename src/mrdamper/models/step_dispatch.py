@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models.hysteresis import kernels as H
@@ -27,6 +28,8 @@ from mrdamper.models.p15 import kernels as P
 from mrdamper.models.sp import kernels as S
 from mrdamper.models.spencer import kernels as SP
 from mrdamper.models.step import Step
+
+FloatArray = npt.NDArray[np.float64]
 
 __all__ = ["FAMILIES", "family_advance", "family_force", "pack", "placeholder"]
 
@@ -94,7 +97,9 @@ def pack(step: Step) -> tuple[Any, ...] | None:
 
 
 @njit(cache=True)
-def family_force(pk, s, x, v, e):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def family_force(
+    pk: tuple[Any, ...], s: FloatArray, x: float, v: float, e: float
+) -> float:  # pragma: no cover - numba
     """``step_force`` of the family ``pk[0]`` on its form (NaN for code -1)."""
     code = pk[0]
     if code == 0:

@@ -5,6 +5,4 @@ It lives in :mod:`mrdamper.models.hysteresis.tanh`.
 
 from __future__ import annotations
 
-from mrdamper.models.hysteresis.tanh import IDENTIFIED, TanhEstimator, TanhModel
-
-__all__ = ["IDENTIFIED", "TanhEstimator", "TanhModel"]
+from mrdamper.models.hysteresis.tanh import *

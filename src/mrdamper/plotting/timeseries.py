@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 
 __all__ = ["plot_lti_hysteresis", "plot_model_tracking"]
 
@@ -79,7 +80,7 @@ def plot_model_tracking(
     label: str = "LPV",
     axes: Any = None,
     window: Sequence[float] | None = None,
-    source: str = "i",
+    source: ElectricalSource = "i",
 ) -> np.ndarray:
     """Paper Fig. 6: measured and model force (top), velocity (middle), electrical input (bottom).
 
@@ -130,7 +131,7 @@ def plot_model_tracking(
     legend_outside(axes[0])
     axes[1].plot(t, e.v[mask], lw=0.7, color="tab:blue", label="v")
     axes[1].set_ylabel("v [m/s]")
-    el = e.electrical(source)  # type: ignore[arg-type]
+    el = e.electrical(source)
     axes[2].plot(t, el[mask], lw=0.8, color="tab:purple", label=source)
     axes[2].set_ylabel("i [A]" if source == "i" else "voltage [V]")
     axes[2].set_xlabel("t [s]")

@@ -24,7 +24,7 @@ from mrdamper.errors import (
     SimulationDivergedError,
     interrupt_in_chain,
 )
-from mrdamper.models import FittedModel
+from mrdamper.models import FittedModel, RangePolicy
 from mrdamper.study._threads import single_threaded_blas
 from mrdamper.study.executor import RecordHandle, resolve_record
 
@@ -180,7 +180,9 @@ def fit_task(kind: str, settings: Mapping[str, Any], records: Sequence[RecordHan
     return FitOutcome("ok", model, elapsed, "", _notes(caught))
 
 
-def simulate_task(model: Mapping[str, Any], record: RecordHandle, range_policy: str) -> SimOutcome:
+def simulate_task(
+    model: Mapping[str, Any], record: RecordHandle, range_policy: RangePolicy
+) -> SimOutcome:
     """Free-run simulation of one record by one saved model; return status, scores and timing.
 
     Parameters
@@ -206,7 +208,7 @@ def simulate_task(model: Mapping[str, Any], record: RecordHandle, range_policy: 
             exp = resolve_record(record)
             saved = model_from_dict(dict(model))
             outside = _outside_range(saved, exp)
-            fitted = saved.with_range_policy(range_policy)  # type: ignore[arg-type]
+            fitted = saved.with_range_policy(range_policy)
             res = fitted.simulate(exp)
             try:
                 s = res.scores

@@ -13,12 +13,16 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
 from mrdamper.data import ExperimentSet
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import interrupt_in_chain
+
+if TYPE_CHECKING:
+    from mrdamper.analysis.levels import GroupBy
 
 __all__ = ["AnalysisOutcome", "fv_curves", "run_analysis"]
 
@@ -80,16 +84,23 @@ def _thin(v: np.ndarray, F: np.ndarray, n: int = _MAX_POINTS) -> tuple[np.ndarra
     return v[::step], F[::step]
 
 
-def plateau_options(records: ExperimentSet) -> dict[str, float]:
+class PlateauOptions(TypedDict, total=False):
+    """Plateau settings of the level grouping (see :func:`plateau_options`)."""
+
+    min_duration: float
+    settle: float
+
+
+def plateau_options(records: ExperimentSet) -> PlateauOptions:
     """Plateau settings scaled to the records: the analysis defaults (1 s plateaus, 0.2 s settling)
     for records of 12 s or more, proportionally shorter for shortened records (``scale`` < 1)."""
     shortest = min((e.duration for e in records), default=12.0)
     min_duration = min(1.0, shortest / 12.0)
-    return {"min_duration": min_duration, "settle": min(0.2, min_duration / 5.0)}
+    return PlateauOptions(min_duration=min_duration, settle=min(0.2, min_duration / 5.0))
 
 
 def fv_curves(
-    records: ExperimentSet, source: str = "i", by: str | None = None
+    records: ExperimentSet, source: ElectricalSource = "i", by: GroupBy | None = None
 ) -> dict[float, tuple[np.ndarray, np.ndarray]]:
     """Pool (v, F) samples per electrical level, as the analysis groups them.
 
@@ -105,15 +116,17 @@ def fv_curves(
     from mrdamper.analysis import level_grouping, pool_by_level
 
     group = by or level_grouping(records)
-    opts = plateau_options(records) if group == "plateaus" else {}
-    pools = pool_by_level(records, by=group, source=source, **opts)  # type: ignore[arg-type]
+    opts = plateau_options(records) if group == "plateaus" else PlateauOptions()
+    pools = pool_by_level(records, by=group, source=source, **opts)
     return {
         lev: _thin(np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces]))
         for lev, pieces in pools.items()
     }
 
 
-def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> AnalysisOutcome:
+def run_analysis(
+    records: ExperimentSet, source: ElectricalSource = "i", degree: int = 2
+) -> AnalysisOutcome:
     """Zone fits per level and laws across level; failures are reported, never raised.
 
     Parameters
@@ -144,8 +157,8 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
         curves: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         try:
             curves = fv_curves(records, source, by)
-            opts = plateau_options(records) if by == "plateaus" else {}
-            fits = zone_fits_by_level(records, by=by, source=source, **opts)  # type: ignore[arg-type]
+            opts = plateau_options(records) if by == "plateaus" else PlateauOptions()
+            fits = zone_fits_by_level(records, by=by, source=source, **opts)
             laws = fit_zone_laws(fits, degree=degree, strict=False)
 
             def fit_laws(outer: OuterSlopes, strict: bool) -> ZoneLaws:
@@ -154,9 +167,9 @@ def run_analysis(records: ExperimentSet, source: str = "i", degree: int = 2) -> 
                 post = zone_fits_by_level(
                     records,
                     by=by,
-                    source=source,  # type: ignore[arg-type]
+                    source=source,
                     outer_slopes=outer,
-                    **opts,  # type: ignore[arg-type]
+                    **opts,
                 )
                 return fit_zone_laws(post, degree=degree, strict=strict)
 

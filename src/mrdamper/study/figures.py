@@ -175,14 +175,14 @@ def _by_kind(sc: Showcase | None, kind: str) -> tuple[str, Any] | None:
 def _fig4(res: StudyResult) -> Any:
     from mrdamper.plotting import plot_lti_hysteresis
 
-    hit = _by_kind(res.hysteresis, "lti")
-    if hit is None:
+    sc = res.hysteresis
+    hit = _by_kind(sc, "lti")
+    if sc is None or hit is None:
         return "no LTI model in this study"
     label, F = hit
     if isinstance(F, str):
-        return f"the LTI model failed on {res.hysteresis.record.name}: {F}"  # type: ignore[union-attr]
-    sc = res.hysteresis
-    return plot_lti_hysteresis(sc.record, F, label=label, window=time_window(sc))[0].figure  # type: ignore[union-attr, arg-type]
+        return f"the LTI model failed on {sc.record.name}: {F}"
+    return plot_lti_hysteresis(sc.record, F, label=label, window=time_window(sc))[0].figure
 
 
 def _fig6(res: StudyResult) -> Any:

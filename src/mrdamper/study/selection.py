@@ -51,6 +51,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError
 from mrdamper.metrics import MIN_SCORED_SAMPLES
 
@@ -282,7 +283,7 @@ def cross_validate(
     models: Sequence[str] | None = None,
     folds: FoldKind = "auto",
     n_folds: int = 5,
-    input: str = "i",
+    input: ElectricalSource = "i",
     settings: Mapping[str, Mapping[str, Any]] | None = None,
     beyond: bool = True,
     stress: bool = True,
@@ -396,12 +397,12 @@ def cross_validate(
     )
 
 
-def _envelope_text(exps: ExperimentSet, source: str) -> str:
+def _envelope_text(exps: ExperimentSet, source: ElectricalSource) -> str:
     """The records' envelope in words (velocity, displacement, frequency band, input)."""
     from mrdamper.models.envelope import envelope_of
 
     try:
-        elec = [np.asarray(e.electrical(source)) for e in exps]  # type: ignore[arg-type]
+        elec = [np.asarray(e.electrical(source)) for e in exps]
     except Exception:  # noqa: BLE001 - a missing channel fails every fit anyway
         return ""
     env = envelope_of([e.x for e in exps], [e.v for e in exps], elec, dt=[e.dt for e in exps])

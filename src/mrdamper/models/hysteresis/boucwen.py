@@ -13,7 +13,7 @@ the damping linear in the electrical input and an optional first-order drive lag
 The published ``k0 (x - x0)`` is written ``k0 x + f0`` (``f0 = -k0 x0``, plus any load-cell
 offset). x [m], v the record's velocity [m/s], e its electrical input; z starts at 0 (rest).
 
-Identified by output error (:mod:`._oe_fit`) with ``beta`` and ``gamma`` in the unknowns
+Identified by output error (:mod:`.fit`) with ``beta`` and ``gamma`` in the unknowns
 ``z_max > 0`` and ``shape`` in [0, 1]::
 
     beta + gamma = A / z_max**n,   beta - gamma = shape (beta + gamma)

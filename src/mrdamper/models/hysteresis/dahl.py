@@ -12,7 +12,7 @@ optional first-order drive lag::
 x [m] is the damper displacement, v the record's velocity [m/s], e its electrical input; the
 dimensionless Dahl variable z starts at 0 (rest) and, for ``sigma > 0``, stays in [-1, 1] for any
 motion: every model inside the identification bounds is stable. Identified by output error
-(:mod:`._oe_fit`).
+(:mod:`.fit`).
 """
 
 from __future__ import annotations

@@ -27,6 +27,8 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from mrdamper.models._boucwen import boucwen_rate, sign
+
 __all__ = [
     "BOUCWEN",
     "DAHL",
@@ -82,26 +84,16 @@ ETA, F0 = 0, 1
 
 
 @njit(cache=True)
-def _sign(a: float) -> float:
-    if a > 0.0:
-        return 1.0
-    if a < 0.0:
-        return -1.0
-    return 0.0
-
-
-@njit(cache=True)
 def _zdot(fam: int, p: FloatArray, v: float, z: float) -> float:
     """dz/dt of the family's evolutionary variable at velocity ``v`` [m/s]."""
     if fam == BOUCWEN:
-        gamma, beta, A, n = p[7], p[8], p[9], p[10]
-        az = abs(z)
-        zn = az * az if n == 2.0 else (az**n if az > 0.0 else 0.0)
-        return -gamma * abs(v) * _sign(z) * zn - beta * v * zn + A * v  # type: ignore[no-any-return]
+        return boucwen_rate(v, z, p[7], p[8], p[9], p[10])
     if fam == DAHL:
-        return p[7] * (v - abs(v) * z)  # type: ignore[no-any-return]
+        dahl: float = p[7] * (v - abs(v) * z)
+        return dahl
     if fam == LUGRE:
-        return v - p[3] * p[7] * abs(v) * z  # type: ignore[no-any-return]
+        lugre: float = v - p[3] * p[7] * abs(v) * z
+        return lugre
     return 0.0
 
 
@@ -111,14 +103,15 @@ def _force(fam: int, p: FloatArray, x: float, v: float, z: float, u: float) -> f
     if fam == TANH:
         c = p[2] + p[3] * u
         al = p[5] + p[6] * u
-        return c * v + p[4] * x + al * math.tanh(p[7] * v + p[8] * _sign(x)) + p[F0]  # type: ignore[no-any-return]
+        f_tanh: float = c * v + p[4] * x + al * math.tanh(p[7] * v + p[8] * sign(x)) + p[F0]
+        return f_tanh
     if fam == LUGRE:
         zd = _zdot(fam, p, v, z)
-        return (  # type: ignore[no-any-return]
-            (p[2] + p[3] * u) * z + p[4] * zd + (p[5] + p[6] * u) * v + p[F0]
-        )
+        f_lugre: float = (p[2] + p[3] * u) * z + p[4] * zd + (p[5] + p[6] * u) * v + p[F0]
+        return f_lugre
     # Bouc-Wen and Dahl: c0(u) v + k0 x + a(u) z + f0
-    return (p[2] + p[3] * u) * v + p[4] * x + (p[5] + p[6] * u) * z + p[F0]  # type: ignore[no-any-return]
+    f_bw: float = (p[2] + p[3] * u) * v + p[4] * x + (p[5] + p[6] * u) * z + p[F0]
+    return f_bw
 
 
 @njit(cache=True)

@@ -13,7 +13,7 @@ electrical input; the bristle deflection z [m] starts at 0 (rest) and, for ``sig
 stays within ``1 / (sigma_0 a0)`` for any motion. The bristle stiffness ``sigma_a + sigma_0 u``
 and the viscous damping ``sigma_2 + sigma_b u`` grow with the input.
 
-Identified by output error (:mod:`._oe_fit`) with ``a0`` in the unknown ``rate = sigma_0 a0``
+Identified by output error (:mod:`.fit`) with ``a0`` in the unknown ``rate = sigma_0 a0``
 [1/m] (so that the bristle bound ``1 / rate`` has its own scale); every unknown is bounded
 non-negative (``rate`` positive), so every model inside the bounds is stable.
 """

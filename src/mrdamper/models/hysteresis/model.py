@@ -2,7 +2,7 @@
 
 ``tanh``, ``boucwen``, ``dahl`` and ``lugre`` are each a small module declaring its parameters
 (the fields of a :class:`HysteresisModel` subclass) and its identification spec
-(:class:`~._oe_fit.FitSpec`); everything else is here, written once: parameter checks, the free
+(:class:`~.fit.FitSpec`); everything else is here, written once: parameter checks, the free
 run, the per-sample step, the estimator settings, the output-error fit and its step-halving
 check.
 """
@@ -17,11 +17,10 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
-from mrdamper.models import _scale
-from mrdamper.models._step_check import step_halving_check
+from mrdamper.models import _output_error as oe
 from mrdamper.models.base import (
     STEP_VMAX,
     Estimator,
@@ -29,14 +28,12 @@ from mrdamper.models.base import (
     Identified,
     RangePolicy,
     TrainingData,
-    check_int,
     check_number,
 )
 from mrdamper.models.hysteresis import kernels as _k
 from mrdamper.models.hysteresis.fit import FitSettings, FitSpec, check_mappings, identify
 from mrdamper.models.lag import check_lag, resolved
 from mrdamper.models.step import Step
-from mrdamper.progress import report
 
 __all__ = ["STEP_VMAX", "HysteresisEstimator", "HysteresisModel"]
 
@@ -63,31 +60,11 @@ class HysteresisModel(FittedModel):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in _k.PARAM_NAMES[self.family]:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(
-                value, (int, float, np.integer, np.floating)
-            ):
-                raise DataValidationError(name, f"expected a real number, got {value!r}")
-            if not math.isfinite(float(value)):
-                raise DataValidationError(name, f"expected a finite number, got {value!r}")
-            object.__setattr__(self, name, float(value))
+        oe.check_real_fields(self, _k.PARAM_NAMES[self.family])
         if self.eta < 0.0:
             raise DataValidationError(
                 "eta", f"expected a drive-lag rate >= 0 [1/s] (0: no lag), got {self.eta!r}"
             )
-        if (
-            isinstance(self.substeps, bool)
-            or not isinstance(self.substeps, (int, np.integer))
-            or self.substeps < 0
-        ):
-            raise DataValidationError(
-                "substeps",
-                f"expected a non-negative integer (0 = automatic), got {self.substeps!r}",
-            )
-        object.__setattr__(self, "substeps", int(self.substeps))
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
         self._check()
 
     def _check(self) -> None:
@@ -99,7 +76,7 @@ class HysteresisModel(FittedModel):
 
     def substeps_for(self, experiment: Experiment) -> int:
         """RK4 sub-steps per sampling interval used for ``experiment`` (``substeps``, or the
-        automatic choice of :func:`~._hysteresis_kernels.auto_substeps` for its interval and the
+        automatic choice of :func:`~.kernels.auto_substeps` for its interval and the
         velocity bound :meth:`~mrdamper.models.base.FittedModel.step_vmax`): those of the step
         built for its interval, one rule for both."""
         return self._substeps(experiment.dt, self.step_vmax(experiment.v))
@@ -201,10 +178,10 @@ class HysteresisModel(FittedModel):
         At every sample the input ``u`` the laws read, in its admissible interval (within
         ``max_change`` of the previous one), minimising
         ``(F(u) - F_desired)^2 + reg^2 (u - u_prev)^2`` is taken in closed form
-        (:func:`~._hysteresis_kernels.inverse_step`: the force is affine in ``u`` at the present
+        (:func:`~.kernels.inverse_step`: the force is affine in ``u`` at the present
         state), then the state is advanced with the motion. Without a drive lag ``u`` is the input
         itself, in ``[lo, hi]``. With one it is the lagged input, confined to what a command in
-        ``[lo, hi]`` held over the interval reaches (:func:`~._hysteresis_kernels.inverse_run`);
+        ``[lo, hi]`` held over the interval reaches (:func:`~.kernels.inverse_run`);
         the command is then :func:`mrdamper.control.inverse.current.driver_command` of it, which
         :func:`mrdamper.control.inverse_current` applies. The step has the RK4 sub-steps
         :meth:`predict` takes on the record, so without a lag the model's free run with the
@@ -291,7 +268,7 @@ class HysteresisModel(FittedModel):
 
 @dataclass
 class HysteresisEstimator(Estimator):
-    """Output-error estimator of the four families (settings only; see :mod:`._oe_fit`).
+    """Output-error estimator of the four families (settings only; see :mod:`.fit`).
 
     Parameters
     ----------
@@ -351,14 +328,9 @@ class HysteresisEstimator(Estimator):
 
     def _validate(self) -> None:
         super()._validate()
-        for name in ("n_starts", "max_nfev", "screen_nfev"):
-            check_int(name, getattr(self, name), 1)
-        check_int("substeps", self.substeps, 0)
+        oe.check_settings(self)
         for name in ("ftol", "xtol", "gtol"):
             check_number(name, getattr(self, name), what="a positive finite tolerance")
-        check_number(
-            "step_tolerance", self.step_tolerance, what="a positive finite number (ESR units)"
-        )
         check_lag(self.eta)
         check_mappings(self.spec, self._fit_settings())
 
@@ -368,28 +340,22 @@ class HysteresisEstimator(Estimator):
         return FitSettings(**{n: getattr(self, n) for n in names})
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
-        """Output-error fit (:func:`._oe_fit.identify`), then the step-halving check.
+        """Output-error fit (:func:`.fit.identify`), then the step-halving check.
 
         Raises
         ------
         IdentificationError
             Every start diverged, or the optimiser returned a non-finite result.
         """
-        exps, windows = _scale.window_set(data.records, budget=_scale.WINDOW_BUDGET_SPENCER)
         settings = dataclasses.replace(self._fit_settings(), eta=resolved(self.eta))
-        params, provenance = identify(self.spec, settings, exps, single=data.single, kind=self.kind)
-        parameters: dict[str, Any] = {**params, "substeps": int(self.substeps)}
-        model = self.model_class(**parameters, input=self.input, input_range=data.input_range)
-        assert isinstance(model, HysteresisModel)
-        report("step-size check")
-        provenance["step_check"] = step_halving_check(
-            self.kind,
-            exps,
-            lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
-            self.step_tolerance,
-        )
-        if windows is not None:
-            provenance["windows"] = windows
-            report("full-data check")
-            provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
-        return Identified(parameters=parameters, provenance=provenance)
+
+        def fit(exps: ExperimentSet) -> tuple[dict[str, Any], HysteresisModel, dict[str, Any]]:
+            params, provenance = identify(
+                self.spec, settings, exps, single=data.single, kind=self.kind
+            )
+            parameters: dict[str, Any] = {**params, "substeps": int(self.substeps)}
+            model = self.model_class(**parameters, input=self.input, input_range=data.input_range)
+            assert isinstance(model, HysteresisModel)
+            return parameters, model, provenance
+
+        return oe.fit_and_check(self.kind, data, fit, self.step_tolerance)

@@ -10,7 +10,7 @@ A 132(2):441-451, 2006), with the yield force and the damping linear in the elec
 
 x [m] is the damper displacement, v the record's velocity [m/s] and e its electrical input
 (``i`` [A] or ``voltage`` [V]). The model is a static map of (x, v, u); with a drive lag its only
-state is u. Identified by output error (:mod:`._oe_fit`): the damping ``c(u)`` and the yield
+state is u. Identified by output error (:mod:`.fit`): the damping ``c(u)`` and the yield
 force ``alpha(u)`` are non-negative over any non-negative input by their bounds.
 """
 

@@ -60,7 +60,7 @@ FloatArray = npt.NDArray[np.float64]
 
 
 @njit(cache=True)
-def poly(c, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def poly(c: FloatArray, r: float) -> float:  # pragma: no cover - numba
     """``sum_p c[p] r^p`` (Horner)."""
     acc = 0.0
     for p in range(c.size - 1, -1, -1):
@@ -69,7 +69,7 @@ def poly(c, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def dpoly(c, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def dpoly(c: FloatArray, r: float) -> float:  # pragma: no cover - numba
     """Derivative of :func:`poly` with respect to ``r``."""
     acc = 0.0
     for p in range(c.size - 1, 0, -1):
@@ -78,7 +78,15 @@ def dpoly(c, r):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def lpv_coefficients(
+    cf: FloatArray,
+    y: FloatArray,
+    u: FloatArray,
+    k: int,
+    alpha: FloatArray,
+    beta: FloatArray,
+    offset: float,
+) -> None:  # pragma: no cover - numba
     """Coefficients (in ``rho``) of the force at sample ``k`` given the past ``y``, ``u``.
 
     Written into ``cf`` (length ``n_rho + 1``); ``y[q]``, ``u[q]`` for ``q < 0`` count as zero.
@@ -95,7 +103,17 @@ def lpv_coefficients(cf, y, u, k, alpha, beta, offset):  # type: ignore[no-untyp
 
 
 @njit(cache=True)
-def zone_input(v, r, mode, gm, gc, mu_high, mu_low, z, blend):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def zone_input(
+    v: float,
+    r: float,
+    mode: int,
+    gm: FloatArray,
+    gc: FloatArray,
+    mu_high: FloatArray,
+    mu_low: FloatArray,
+    z: float,
+    blend: float,
+) -> float:  # pragma: no cover - numba
     """LPV input ``u`` [m/s] from ``v`` and ``rho`` (zone laws, eqs. 19-22).
 
     With ``blend > 0`` (continuous reading only) the hysteretic input of
@@ -104,8 +122,8 @@ def zone_input(v, r, mode, gm, gc, mu_high, mu_low, z, blend):  # type: ignore[n
     """
     if mode == MODE_V:
         return v
-    hi = mu_high[0] * r + mu_high[1]
-    lo = mu_low[0] * r + mu_low[1]
+    hi: float = mu_high[0] * r + mu_high[1]
+    lo: float = mu_low[0] * r + mu_low[1]
     m1 = poly(gm[0], r)
     m2 = poly(gm[1], r)
     m3 = poly(gm[2], r)
@@ -169,19 +187,23 @@ class LPVForm(NamedTuple):
 
 
 @njit(cache=True)
-def _force(form, s, e):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _force(
+    form: LPVForm, s: FloatArray, e: float
+) -> tuple[float, float]:  # pragma: no cover - numba
     """Force [N] at the state ``s`` for the present input ``e``; also ``rho`` it used."""
     n_m, n_p = form.alpha.shape
     cf = np.empty(n_p)
     lpv_coefficients(
         cf, s[N_HEAD : N_HEAD + n_m], s[N_HEAD + n_m :], n_m, form.alpha, form.beta, form.offset
     )
-    r = s[0] if form.eta >= 0.0 else e
+    r: float = s[0] if form.eta >= 0.0 else e
     return poly(cf, r), r
 
 
 @njit(cache=True)
-def step_force(form, s, x, v, e):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def step_force(
+    form: LPVForm, s: FloatArray, x: float, v: float, e: float
+) -> float:  # pragma: no cover - numba
     """Force [N] at sample ``k`` (see :mod:`mrdamper.models.step`)."""
     F, _ = _force(form, s, e)
     return F + form.stiffness * x

@@ -12,26 +12,4 @@ The family's parts, one module each:
 
 from __future__ import annotations
 
-from mrdamper.models.spencer.model import (
-    DEFAULT_BOUNDS,
-    MAX_AUTO_SUBSTEPS,
-    PARAMETER_NAMES,
-    PARAMETER_UNITS,
-    SUBSTEP_RATE_PRODUCT,
-    SpencerEstimator,
-    SpencerModel,
-    auto_substeps,
-    spencer1997,
-)
-
-__all__ = [
-    "DEFAULT_BOUNDS",
-    "MAX_AUTO_SUBSTEPS",
-    "PARAMETER_NAMES",
-    "PARAMETER_UNITS",
-    "SUBSTEP_RATE_PRODUCT",
-    "SpencerEstimator",
-    "SpencerModel",
-    "auto_substeps",
-    "spencer1997",
-]
+from mrdamper.models.spencer.model import *

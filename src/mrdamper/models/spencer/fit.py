@@ -13,23 +13,20 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.optimize import least_squares
 
-from mrdamper._warn import warn_user
 from mrdamper.data import ExperimentSet
-from mrdamper.data.experiment import ElectricalSource
-from mrdamper.errors import DataValidationError, IdentificationError
+from mrdamper.errors import DataValidationError
+from mrdamper.models import _output_error as oe
+from mrdamper.models._output_error import COND_WARNING, Record
 from mrdamper.models.envelope import SWITCH_FRACTION
 from mrdamper.models.levels import held_within_records
 from mrdamper.models.spencer import kernels as _k
 from mrdamper.models.spencer.kernels import PARAM_NAMES as PARAMETER_NAMES
 from mrdamper.models.spencer.kernels import auto_substeps
-from mrdamper.progress import counted, report
 
 __all__ = ["COND_WARNING", "DEFAULT_BOUNDS", "FitSettings", "check_settings", "identify"]
 
@@ -56,35 +53,18 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
 
 
 @dataclass(frozen=True)
-class FitSettings:
-    """The estimator settings the identification uses (see ``FitSettings``)."""
+class FitSettings(oe.OutputErrorSettings):
+    """The estimator settings the identification uses (see ``SpencerEstimator``)."""
 
-    input: ElectricalSource
-    start: Mapping[str, float] | None
-    fixed: Mapping[str, float] | None
-    bounds: Mapping[str, tuple[float, float]] | None
-    n_starts: int
-    seed: int
-    weighting: str
     jacobian: str
-    max_nfev: int
-    screen_nfev: int
-    ftol: float
-    xtol: float
-    gtol: float
-    substeps: int
     fix_eta: str
 
 
-#: Condition number of J^T J (scaled unknowns) above which the fit is reported ill-conditioned.
-COND_WARNING = 1e10
 #: First-start assumptions: yield displacement as a fraction of the median record amplitude,
 #: ratio c1 / c0 and Bouc-Wen exponent (n = 1 is the smooth, mildly stiff end of the range).
 YIELD_FRACTION = 0.02
 RATIO_START = 20.0
 N_START = 1.0
-#: Residual value per sample returned for parameter sets whose simulation fails.
-_PENALTY = 1e3
 #: Parameters fixed when the estimator's ``fixed`` is None: k1 x0 duplicates f0, and A is
 #: redundant with the scale of z.
 DEFAULT_FIXED = {"x0": 0.0, "A": 1.0}
@@ -95,109 +75,10 @@ SINGLE_LEVEL_FIXED = ("c0b", "c1b", "alpha_b")
 _IDX = {n: k for k, n in enumerate(PARAMETER_NAMES)}
 
 
-@dataclass(frozen=True)
-class _Record:
-    name: str
-    x: np.ndarray
-    v: np.ndarray
-    e: np.ndarray
-    F: np.ndarray
-    dt: float
-    weight: float
-    vmax: float
-    emin: float
-    emax: float
-    sl: slice
-
-
 def check_settings(est: FitSettings) -> None:
     """Check the parameter mappings ``start``, ``fixed`` and ``bounds`` (the other settings are
     checked by the estimator)."""
-    for name in ("start", "fixed", "bounds"):
-        mapping = getattr(est, name)
-        if mapping is None:
-            continue
-        if not isinstance(mapping, Mapping):
-            raise DataValidationError(
-                name, f"expected a mapping of parameter names, got {type(mapping).__name__}"
-            )
-        unknown = sorted(set(mapping) - set(PARAMETER_NAMES))
-        if unknown:
-            raise DataValidationError(
-                name, f"unknown parameter(s) {unknown}; expected names from {list(PARAMETER_NAMES)}"
-            )
-    for name, value in {**(est.start or {}), **(est.fixed or {})}.items():
-        if not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(
-            float(value)
-        ):
-            raise DataValidationError(
-                name, f"start/fixed value must be a finite number, got {value!r}"
-            )
-    for name, b in (est.bounds or {}).items():
-        try:
-            lo, hi = float(b[0]), float(b[1])
-        except (TypeError, ValueError, IndexError):
-            raise DataValidationError(
-                f"bounds[{name!r}]", f"expected (low, high), got {b!r}"
-            ) from None
-        if not lo < hi:
-            raise DataValidationError(f"bounds[{name!r}]", f"expected low < high, got ({lo}, {hi})")
-
-
-def _records(est: FitSettings, exps: ExperimentSet) -> list[_Record]:
-    recs = []
-    offset = 0
-    n_rec = len(exps)
-    total = sum(e.n for e in exps)
-    F_all_std = float(np.std(np.concatenate([e.F for e in exps])))
-    for exp in exps:
-        e = np.ascontiguousarray(exp.electrical(est.input), dtype=np.float64)
-        exp.require_samples(10, "Spencer identification")
-        sd = float(np.std(exp.F))
-        if est.weighting == "record":
-            if sd == 0.0:
-                raise DataValidationError(
-                    "F",
-                    f"record {exp.name!r} has constant force; per-record weighting needs variance",
-                )
-            w = 1.0 / (sd * math.sqrt(exp.n * n_rec))
-        else:
-            if F_all_std == 0.0:
-                raise DataValidationError("F", "the training force has zero variance")
-            w = 1.0 / (F_all_std * math.sqrt(total))
-        recs.append(
-            _Record(
-                exp.name,
-                np.ascontiguousarray(exp.x),
-                np.ascontiguousarray(exp.v),
-                e,
-                np.ascontiguousarray(exp.F),
-                exp.dt,
-                w,
-                float(np.max(np.abs(exp.v))),
-                float(np.min(e)),
-                float(np.max(e)),
-                slice(offset, offset + exp.n),
-            )
-        )
-        offset += exp.n
-    return recs
-
-
-def _regression(recs: list[_Record]) -> np.ndarray:
-    """Weighted least squares of F on [tanh(v/v_eps), e tanh, v, e v, x, 1]."""
-    rows, rhs = [], []
-    for r in recs:
-        veps = 0.05 * max(r.vmax, 1e-9)
-        s = np.tanh(r.v / veps)
-        X = np.column_stack([s, r.e * s, r.v, r.e * r.v, r.x, np.ones_like(r.x)])
-        rows.append(X * r.weight)
-        rhs.append(r.F * r.weight)
-    X = np.vstack(rows)
-    y = np.concatenate(rhs)
-    # the electrical columns are exactly collinear with the others when e is one constant value
-    coef, *_ = np.linalg.lstsq(X, y, rcond=1e-10)
-    return np.asarray(coef)
+    oe.check_mappings(PARAMETER_NAMES, est.start, est.fixed, est.bounds)
 
 
 def _map_start(
@@ -228,52 +109,39 @@ def _map_start(
     }
 
 
-class _Objective:
+class _Objective(oe.FreeRunObjective):
     """Weighted free-run residuals and their sensitivity Jacobian in scaled unknowns."""
 
     def __init__(
         self,
-        recs: list[_Record],
+        recs: list[Record],
         p_fixed: np.ndarray,
         free: np.ndarray,
         scale: np.ndarray,
         substeps: int,
     ) -> None:
-        self.recs = recs
+        super().__init__(recs, self.vector, self.run)
         self.p_fixed = p_fixed
         self.free = free
         self.scale = scale
         self.substeps = substeps
-        self.n = recs[-1].sl.stop
-        self.nfev = 0
         self.njev = 0
-        self.failures = 0
-        self.last_failure = ""
 
-    def params(self, q: np.ndarray) -> np.ndarray:
+    def vector(self, q: np.ndarray) -> np.ndarray:
         p = self.p_fixed.copy()
         p[self.free] = q * self.scale
         return p
 
-    def nsub(self, p: np.ndarray, r: _Record) -> int:
+    def nsub(self, p: np.ndarray, r: Record) -> int:
         if self.substeps > 0:
             return self.substeps
         return auto_substeps(p, r.dt, r.vmax, r.emin, r.emax)
 
-    def residuals(self, q: np.ndarray) -> np.ndarray:
-        self.nfev += 1
-        p = self.params(q)
-        out = np.empty(self.n)
-        for r in self.recs:
-            F, status, sample = _k.simulate(
-                r.x, r.v, r.e, r.dt, p, self.nsub(p, r), r.x[0], 0.0, r.e[0]
-            )
-            if status != _k.STATUS_OK:
-                self.failures += 1
-                self.last_failure = f"record {r.name!r}: status {status} at sample {sample}"
-                return np.full(self.n, _PENALTY)
-            out[r.sl] = r.weight * (F - r.F)
-        return out
+    def run(self, r: Record, p: np.ndarray) -> tuple[np.ndarray, int, int]:
+        F, status, sample = _k.simulate(
+            r.x, r.v, r.e, r.dt, p, self.nsub(p, r), r.x[0], 0.0, r.e[0]
+        )
+        return F, int(status), int(sample)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         self.njev += 1
@@ -290,7 +158,7 @@ class _Objective:
         return J
 
 
-def _constant_input(recs: list[_Record]) -> bool:
+def _constant_input(recs: list[Record]) -> bool:
     """The electrical input never switches within a record (spans of at most
     :data:`~mrdamper.models.envelope.SWITCH_FRACTION` of the training range; noise on a held
     current does not count)."""
@@ -307,7 +175,7 @@ def identify(
     input are constants: ``c0b``, ``c1b`` and ``alpha_b`` are fixed at 0 unless given in
     ``fixed``.
     """
-    recs = _records(est, exps)
+    recs = oe.records(exps, est.input, est.weighting, "Spencer identification")
     notes: list[str] = []
     if est.fixed is None:
         fixed: dict[str, float] = dict(DEFAULT_FIXED)
@@ -329,7 +197,7 @@ def identify(
     bounds.update({k: (float(b[0]), float(b[1])) for k, b in (est.bounds or {}).items()})
 
     force_scale = float(np.mean([np.std(r.F) for r in recs]))
-    reg = _regression(recs)
+    reg = oe.regression(recs)
     A = fixed.get("A", start_user.get("A", 1.0))
     n0 = fixed.get("n", start_user.get("n", N_START))
     amp = float(np.median([np.max(np.abs(r.x - np.mean(r.x))) for r in recs]))
@@ -373,122 +241,41 @@ def identify(
 
     method = est.jacobian
     jac = obj.jacobian if method == "sensitivity" else method
-    kw = {
-        "bounds": (q_lo, q_hi),
-        "method": "trf",
-        "x_scale": X_SCALE,
-        "ftol": est.ftol,
-        "xtol": est.xtol,
-        "gtol": est.gtol,
-    }
-
-    runs: list[dict[str, Any]] = []
-    results = []
-    for k, p0 in enumerate(starts):
-        q0 = _strictly_inside(p0[free] / scale, q_lo, q_hi)
-        r0 = obj.residuals(q0)
-        if obj.last_failure and np.all(r0 == _PENALTY):
-            runs.append(
-                {
-                    "start": k,
-                    "cost": math.inf,
-                    "status": "start diverged",
-                    "detail": obj.last_failure,
-                }
-            )
-            obj.last_failure = ""
-            continue
-        nfev = est.screen_nfev if est.n_starts > 1 else est.max_nfev
-        stage = f"start {k + 1} of {len(starts)}: " if len(starts) > 1 else ""
-        # the evaluation budget counts the calls of the residuals when the Jacobian is analytic
-        residuals = counted(
-            obj.residuals, stage + "least squares: evaluation", nfev if callable(jac) else None
-        )
-        res = least_squares(residuals, q0, jac=jac, max_nfev=nfev, **kw)
-        runs.append(
-            {"start": k, "cost": float(res.cost), "nfev": int(res.nfev), "status": int(res.status)}
-        )
-        results.append(res)
-    finite = [r for r in results if np.isfinite(r.cost) and r.cost < 0.25 * _PENALTY**2 * obj.n]
-    if not finite:
-        raise IdentificationError(
-            f"spencer: every one of {len(starts)} start(s) diverged or failed "
-            f"(last failure: {obj.last_failure or 'n/a'}); give 'start' values or wider 'bounds'"
-        )
-    best = min(finite, key=lambda r: r.cost)
-    final = best
-    if est.n_starts > 1:
-        residuals = counted(
-            obj.residuals,
-            "best start: least squares: evaluation",
-            est.max_nfev if callable(jac) else None,
-        )
-        final = least_squares(residuals, best.x, jac=jac, max_nfev=est.max_nfev, **kw)
-        if not final.cost <= best.cost:
-            final = best
-    if not np.all(np.isfinite(final.x)) or not math.isfinite(final.cost):
-        raise IdentificationError(
-            f"spencer: optimiser returned a non-finite result ({final.message})"
-        )
-    p_hat = obj.params(final.x)
-
-    sv = np.linalg.svd(final.jac, compute_uv=False)
-    cond = float((sv[0] / sv[-1]) ** 2) if sv[-1] > 0 else math.inf
-    ill = not cond < COND_WARNING
-    at_bounds = [free_names[j] for j in np.flatnonzero(final.active_mask)]
-    converged = bool(final.status > 0)
-    if ill:
-        warn_user(
-            f"spencer: identification is ill-conditioned (cond(J^T J) = {cond:.3g} in scaled "
-            "unknowns); some parameters are not determined by these records",
-            RuntimeWarning,
-        )
-    if not converged:
-        warn_user(
-            f"spencer: optimiser stopped before convergence ({final.message}); raise max_nfev",
-            RuntimeWarning,
-        )
-    report("residuals of the fit")
-    resid = obj.residuals(final.x)
-    rec_esr = {}
-    for r in recs:
-        err = resid[r.sl] / r.weight
-        rec_esr[r.name] = float(np.mean(err**2) / np.var(r.F))
+    options = {"x_scale": X_SCALE, "ftol": est.ftol, "xtol": est.xtol, "gtol": est.gtol}
+    q_starts = [p0[free] / scale for p0 in starts]
+    fit = oe.multistart(
+        obj,
+        q_starts,
+        q_lo,
+        q_hi,
+        free_names,
+        kind="spencer",
+        settings=est,
+        jac=jac,
+        options=options,
+    )
+    p_hat = obj.params(fit.final.x)
     provenance: dict[str, Any] = {
         "method": "bounded nonlinear least squares on the free-run simulation error "
         "(scipy.optimize.least_squares, trf); records simulated separately from rest",
         "jacobian": "forward sensitivities (RK4)"
         if method == "sensitivity"
         else f"finite differences ({method})",
-        "records": [r.name for r in recs],
-        "n_samples": int(obj.n),
         "weighting": est.weighting,
         "input": est.input,
         "fixed": fixed,
         "free": free_names,
         "bounds": {nm: list(bounds[nm]) for nm in free_names},
-        "starts": runs,
         "seed": int(est.seed),
-        "cost": float(final.cost),
-        "mean_record_esr": float(np.mean(list(rec_esr.values()))),
-        "record_esr": rec_esr,
-        "nfev_total": int(obj.nfev),
+        **fit.provenance,
         "njev_total": int(obj.njev),
-        "status": int(final.status),
-        "message": str(final.message),
-        "converged": converged,
-        "optimality": float(final.optimality),
-        "cond_JTJ": cond,
-        "ill_conditioned": ill,
-        "at_bounds": at_bounds,
-        "simulation_failures": int(obj.failures),
         "substeps": int(est.substeps) if est.substeps > 0 else "automatic",
         "notes": notes,
     }
     return p_hat, provenance
 
 
-def _scale_floors(recs: list[_Record], force_scale: float) -> dict[str, float]:
+def _scale_floors(recs: list[Record], force_scale: float) -> dict[str, float]:
     vs = max(max(r.vmax for r in recs), 1e-9)
     xs = max(max(float(np.max(np.abs(r.x))) for r in recs), 1e-9)
     es = max(max(abs(r.emin), abs(r.emax)) for r in recs) or 1.0
@@ -511,12 +298,3 @@ def _scale_floors(recs: list[_Record], force_scale: float) -> dict[str, float]:
         "eta": 10.0,
         "f0": 1e-2 * force_scale,
     }
-
-
-def _strictly_inside(q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    q = q.copy()
-    width = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
-    pad = np.minimum(1e-6 * np.maximum(np.abs(q), 1.0), 0.01 * width)
-    q = np.maximum(q, lo + pad)
-    inside: np.ndarray = np.minimum(q, hi - pad)  # annotated: numpy's stubs return Any here
-    return inside

@@ -25,6 +25,8 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from mrdamper.models._boucwen import boucwen_rate, powers, sign
+
 __all__ = [
     "MAX_AUTO_SUBSTEPS",
     "N_PARAMS",
@@ -77,28 +79,6 @@ IntArray = npt.NDArray[np.int64]
 
 
 @njit(cache=True)
-def _powers(z: float, n: float) -> tuple[float, float, float]:
-    """Return (|z|**n, |z|**(n-1), log|z|), with the z == 0 values (0, 0, 0)."""
-    az = abs(z)
-    if az > 0.0:
-        if n == 2.0:  # the common case, without transcendental functions
-            return az * az, az, 0.0
-        lz = np.log(az)
-        zn1 = np.exp((n - 1.0) * lz)
-        return zn1 * az, zn1, lz
-    return 0.0, 0.0, 0.0
-
-
-@njit(cache=True)
-def _sign(a: float) -> float:
-    if a > 0.0:
-        return 1.0
-    if a < 0.0:
-        return -1.0
-    return 0.0
-
-
-@njit(cache=True)
 def _rhs(
     x: float, xd: float, e: float, y: float, z: float, u: float, p: FloatArray
 ) -> tuple[float, float, float, float]:
@@ -109,8 +89,7 @@ def _rhs(
     C = c0 + c1
     yd = (al * z + c0 * xd + p[K0] * (x - y)) / C
     w = xd - yd
-    zn, _, _ = _powers(z, p[NN])
-    zd = -p[GAM] * abs(w) * _sign(z) * zn - p[BET] * w * zn + p[AA] * w
+    zd = boucwen_rate(w, z, p[GAM], p[BET], p[AA], p[NN])
     ud = -p[ETA] * (u - e)
     return yd, zd, ud, C
 
@@ -287,8 +266,8 @@ def _rhs_jac(
     yd = (al * z + c0 * xd + p[K0] * (x - y)) * iC
     w = xd - yd
     nn = p[NN]
-    zn, zn1, lz = _powers(z, nn)
-    sz = _sign(z)
+    zn, zn1, lz = powers(z, nn)
+    sz = sign(z)
     aw = abs(w)
     gam, bet, A = p[GAM], p[BET], p[AA]
     zd = -gam * aw * sz * zn - bet * w * zn + A * w
@@ -300,7 +279,7 @@ def _rhs_jac(
     dy_z = al * iC
     dy_u = (p[ALB] * z + p[C0B] * xd - yd * (p[C0B] + p[C1B])) * iC
     # derivatives of zd with respect to w and z (w held fixed)
-    g_w = -gam * _sign(w) * sz * zn - bet * zn + A
+    g_w = -gam * sign(w) * sz * zn - bet * zn + A
     g_z = -gam * aw * nn * zn1 - bet * w * nn * sz * zn1
     Js[0, 0] = dy_y
     Js[0, 1] = dy_z

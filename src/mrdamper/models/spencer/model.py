@@ -15,7 +15,7 @@ e the electrical input of the record (coil current ``i`` [A] or command ``voltag
 ``input``) and u its first-order filtered version (drive and fluid lag). The initial state is the
 rest state: y = x(0), z = 0, u = e(0).
 
-The model is integrated by a compiled fixed-step RK4 kernel (:mod:`._spencer_kernels`); the number
+The model is integrated by a compiled fixed-step RK4 kernel (:mod:`.kernels`); the number
 of sub-steps per sampling interval is chosen from the parameters and the record so that the step
 resolves the stiffest time constant (see :meth:`SpencerModel.substeps_for`).
 
@@ -27,26 +27,22 @@ with parameter scaling, seeded multi-start and a Jacobian from forward sensitivi
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from mrdamper.data import Experiment
+from mrdamper.data import Experiment, ExperimentSet
 from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
-from mrdamper.models import _scale
-from mrdamper.models._step_check import step_halving_check
+from mrdamper.models import _output_error as oe
 from mrdamper.models.base import (
     Estimator,
     FittedModel,
     Identified,
     RangePolicy,
     TrainingData,
-    check_int,
-    check_number,
 )
 from mrdamper.models.spencer import kernels as _k
 from mrdamper.models.spencer.fit import DEFAULT_BOUNDS, FitSettings, check_settings, identify
@@ -56,7 +52,6 @@ from mrdamper.models.spencer.kernels import (
     auto_substeps,
 )
 from mrdamper.models.step import Step
-from mrdamper.progress import report
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -160,33 +155,13 @@ class SpencerModel(FittedModel):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in PARAMETER_NAMES:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(
-                value, (int, float, np.integer, np.floating)
-            ):
-                raise DataValidationError(name, f"expected a real number, got {value!r}")
-            if not math.isfinite(float(value)):
-                raise DataValidationError(name, f"expected a finite number, got {value!r}")
-            object.__setattr__(self, name, float(value))
+        oe.check_real_fields(self, PARAMETER_NAMES)
         if self.n < 1.0:
             raise DataValidationError("n", f"expected a Bouc-Wen exponent >= 1, got {self.n!r}")
         if self.eta < 0.0:
             raise DataValidationError(
                 "eta", f"expected a non-negative filter rate [1/s], got {self.eta!r}"
             )
-        if (
-            isinstance(self.substeps, bool)
-            or not isinstance(self.substeps, (int, np.integer))
-            or self.substeps < 0
-        ):
-            raise DataValidationError(
-                "substeps",
-                f"expected a non-negative integer (0 = automatic), got {self.substeps!r}",
-            )
-        object.__setattr__(self, "substeps", int(self.substeps))
-        if self.input not in ("i", "voltage"):
-            raise DataValidationError("input", f"expected 'i' or 'voltage', got {self.input!r}")
 
     # ------------------------------------------------------------------ parameter vector
     def parameter_vector(self) -> np.ndarray:
@@ -430,12 +405,7 @@ class SpencerEstimator(Estimator):
 
     def _validate(self) -> None:
         super()._validate()
-        for name in ("n_starts", "max_nfev", "screen_nfev"):
-            check_int(name, getattr(self, name), 1)
-        check_int("substeps", self.substeps, 0)
-        check_number(
-            "step_tolerance", self.step_tolerance, what="a positive finite number (ESR units)"
-        )
+        oe.check_settings(self)
         check_settings(self._fit_settings())
 
     def _fit_settings(self) -> FitSettings:
@@ -443,7 +413,7 @@ class SpencerEstimator(Estimator):
         return FitSettings(**{n: getattr(self, n) for n in names})
 
     def _identify(self, data: TrainingData, **options: Any) -> Identified:
-        """Bounded nonlinear least squares on the free-run error (:mod:`._spencer_fit`), then the
+        """Bounded nonlinear least squares on the free-run error (:mod:`.fit`), then the
         step-halving check of the result.
 
         Raises
@@ -451,23 +421,13 @@ class SpencerEstimator(Estimator):
         IdentificationError
             Every start diverged, or the optimiser returned a non-finite result.
         """
-        exps, windows = _scale.window_set(
-            data.records, budget=_scale.WINDOW_BUDGET_SPENCER
-        )  # long campaigns
-        p, provenance = identify(self._fit_settings(), exps, single=data.single)
-        params: dict[str, Any] = {n: float(v) for n, v in zip(PARAMETER_NAMES, p)}
-        params["substeps"] = max(0, int(self.substeps))
-        model = SpencerModel(**params, input=self.input, input_range=data.input_range)
+
+        def fit(exps: ExperimentSet) -> tuple[dict[str, Any], SpencerModel, dict[str, Any]]:
+            p, provenance = identify(self._fit_settings(), exps, single=data.single)
+            params: dict[str, Any] = {n: float(v) for n, v in zip(PARAMETER_NAMES, p)}
+            params["substeps"] = max(0, int(self.substeps))
+            model = SpencerModel(**params, input=self.input, input_range=data.input_range)
+            return params, model, provenance
+
         # stiff model: halving the RK4 step must not change the free run (else warn, see provenance)
-        report("step-size check")
-        provenance["step_check"] = step_halving_check(
-            "spencer",
-            exps,
-            lambda e, k: dataclasses.replace(model, substeps=k * model.substeps_for(e)).predict(e),
-            self.step_tolerance,
-        )
-        if windows is not None:
-            provenance["windows"] = windows
-            report("full-data check")
-            provenance["full_data_check"] = _scale.full_data_esr(model, data.records)
-        return Identified(parameters=params, provenance=provenance)
+        return oe.fit_and_check("spencer", data, fit, self.step_tolerance)

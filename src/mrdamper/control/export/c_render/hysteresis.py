@@ -62,11 +62,11 @@ static double {p}_sign(double a) {{ return a > 0.0 ? 1.0 : (a < 0.0 ? -1.0 : 0.0
 #: dz/dt of each family with a state (tanh has none), as ``_zdot``.
 _ZDOT = {
     "boucwen": r"""
-/* dz/dt at velocity v (Bouc-Wen); |z|**n by pow unless n == 2, as the Python kernel */
+/* dz/dt at velocity v (Bouc-Wen); |z|**n by exp/log unless n == 2, as the Python kernel */
 static double {p}_zdot(double v, double z)
 {{
     double az = fabs(z);
-    double zn = {P}_N == 2.0 ? az * az : (az > 0.0 ? pow(az, {P}_N) : 0.0);
+    double zn = az > 0.0 ? ({P}_N == 2.0 ? az * az : exp(({P}_N - 1.0) * log(az)) * az) : 0.0;
     return -{P}_GAMMA * fabs(v) * {p}_sign(z) * zn - {P}_BETA * v * zn + {P}_A * v;
 }}
 """,
