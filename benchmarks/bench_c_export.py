@@ -31,10 +31,10 @@ from pathlib import Path
 import numpy as np
 from _timing import best_time
 
-from mrdamper.control import _inverse_kernels as IK
-from mrdamper.control._forms import inverse_form
-from mrdamper.control.c_export import export_c
-from mrdamper.control.inverse import lpv_inverse_fields, static_map_arrays
+from mrdamper.control.export.c_export import export_c
+from mrdamper.control.inverse import _inverse_kernels as IK
+from mrdamper.control.inverse._forms import inverse_form
+from mrdamper.control.inverse._inverse_setup import lpv_inverse_fields, static_map_arrays
 from mrdamper.models.lpv import LPVModel
 from mrdamper.models.lpv import kernels as LK
 from mrdamper.models.semiphenomenological import SP1Model

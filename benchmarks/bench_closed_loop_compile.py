@@ -1,6 +1,6 @@
 """Compile time of the generic closed loop (any damper as the plant) per controller/plant pair.
 
-Each pair runs in a fresh process: the first :func:`~mrdamper.control.closed_loop.
+Each pair runs in a fresh process: the first :func:`~mrdamper.control.loop.closed_loop.
 simulate_closed_loop` call on a 2 s road (kernels compiled or loaded from the on-disk cache) and
 a second identical call (already compiled); the difference is what the process paid to get the
 loop compiled (wall time, and CPU time of the process, which a loaded machine does not
@@ -30,8 +30,8 @@ from pathlib import Path
 _CHILD = r"""
 import sys, time, warnings
 warnings.simplefilter("ignore")
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.quarter_car import iso_road
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.quarter_car import iso_road
 from mrdamper.models.registry import load_model
 from mrdamper.rig.reference import reference_damper
 folder, model_name, plant_name, ctrl = sys.argv[1:5]

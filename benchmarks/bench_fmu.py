@@ -38,7 +38,7 @@ import numpy as np
 from _timing import best_time
 from bench_c_export import S1
 
-from mrdamper.control.fmu import export_fmu
+from mrdamper.control.export.fmu import export_fmu
 from mrdamper.data import Experiment
 from mrdamper.models.narx import NARXModel
 from mrdamper.models.semiphenomenological import SP1Model

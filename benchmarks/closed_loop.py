@@ -2,7 +2,7 @@
 
 For each reference damper of the virtual rig, the Table II design of experiments is generated on
 it, every model kind is identified with defaults on it, and
-:func:`mrdamper.control.fidelity.closed_loop_fidelity` runs the five controllers on ISO 8608
+:func:`mrdamper.control.loop.fidelity.closed_loop_fidelity` runs the five controllers on ISO 8608
 roads at two speeds with the model as the damper (predicted) and with the reference damper as the
 damper (achieved), same controller and inverse. A kind that cannot be fitted, stepped or inverted
 keeps a row with its one-line reason. Writes ``OUT/closed_loop_<damper>.csv`` (all rows),
@@ -30,9 +30,9 @@ from typing import Any
 
 import pandas as pd
 
-from mrdamper.control.doe_extension import control_extension, first_model
-from mrdamper.control.fidelity import MAX_SUBSTEPS, closed_loop_fidelity, input_unit
-from mrdamper.control.fronts import gain_fronts
+from mrdamper.control.loop.doe_extension import control_extension, first_model
+from mrdamper.control.loop.fidelity import MAX_SUBSTEPS, closed_loop_fidelity, input_unit
+from mrdamper.control.loop.fronts import gain_fronts
 from mrdamper.errors import MrDamperError
 from mrdamper.models.lag import lag_setting
 from mrdamper.models.lpv.estimator import outer_slope_choices

@@ -34,8 +34,8 @@ import scipy.signal as sps
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import closed_loop as CL
 
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.quarter_car import iso_road
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.quarter_car import iso_road
 from mrdamper.data import Experiment
 from mrdamper.models.registry import get_estimator
 from mrdamper.rig.doe import table_ii

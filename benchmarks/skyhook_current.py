@@ -9,7 +9,7 @@ mean desired force [N], the share of control samples whose desired force is out 
 the mean current [mA]; and the same for the model in a car whose spring is stiffer by the true
 damper's accumulator stiffness ``k1`` [N/m] (the Spencer model's ``k1 (x - x0)``, a force in
 phase with the travel that the LPV model has no term for). Then each variant of the fit is run
-through :func:`~mrdamper.control.fidelity.closed_loop_fidelity` (five controllers): the skyhook
+through :func:`~mrdamper.control.loop.fidelity.closed_loop_fidelity` (five controllers): the skyhook
 mean current's error and the worst error of every other metric and controller [%].
 
 Variants: ``default``; ``ext-x2`` and ``ext-x20`` (the extension's records weighted 2 and 20
@@ -40,10 +40,10 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import closed_loop as CL
 
-from mrdamper.control.car import QuarterCar
-from mrdamper.control.closed_loop import simulate_closed_loop
-from mrdamper.control.fidelity import closed_loop_fidelity, loop_metrics
-from mrdamper.control.quarter_car import CONTROLLERS, iso_road
+from mrdamper.control.loop.car import QuarterCar
+from mrdamper.control.loop.closed_loop import simulate_closed_loop
+from mrdamper.control.loop.fidelity import closed_loop_fidelity, loop_metrics
+from mrdamper.control.loop.quarter_car import CONTROLLERS, iso_road
 from mrdamper.models.registry import get_estimator
 from mrdamper.rig.reference import reference_damper
 
@@ -100,7 +100,7 @@ def stiffness_table(
     """Every controller's metrics with ``model`` as the damper, in the default car and in a car
     stiffer by ``stiffness`` [N/m], against ``truth`` as the damper in the default car.
 
-    One row per seed, controller and metric (:func:`~mrdamper.control.fidelity.loop_metrics`):
+    One row per seed, controller and metric (:func:`~mrdamper.control.loop.fidelity.loop_metrics`):
     ``achieved``, ``error_pct`` (default car) and ``error_pct_stiffened`` [%]. ISO 8608 class C
     at 20 m/s; ``substeps`` plant steps per road sample (no halving check).
     """
