@@ -36,7 +36,14 @@ from mrdamper.control.inverse._inverse_kernels import (
     reg_solve_poly,
     reg_solve_static,
 )
-from mrdamper.models.kernels import dahl_step, lpv_coefficients, sp_force1
+from mrdamper.models.kernels import (
+    allowed_interval,
+    dahl_step,
+    held_input,
+    lag_command,
+    lpv_coefficients,
+    sp_force1,
+)
 from mrdamper.models.kernels import poly as _poly
 from mrdamper.models.kernels import zone_input as _u_of
 
@@ -137,15 +144,7 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
         z_d = dahl_step(z_d, v_prev, v_d, dt_c, inv.stroke)
     v_prev = v_d
     # --- input for this sample
-    a, b = lo, hi
-    if lag >= 0.0 and k >= 1:
-        a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
-        b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
-    if k >= 1:
-        a = max(a, prev - rate_step)
-        b = min(b, prev + rate_step)
-        if b < a:
-            a = b = min(max(prev, a), b)
+    a, b = allowed_interval(k, lo, hi, lag, rho[k - 1], prev, rate_step)
     if ctrl == CTRL_PASSIVE:
         target = np.nan
     else:
@@ -156,14 +155,11 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
             r = min(max(i_const, a), b)
             ok = True
         else:
-            hold = prev
-            if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
-                hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+            hold = held_input(k, lag, prev, w_prev, a, b)
             r, ok = INVERT(
                 form, k, x_d, v_d, target + offset, a, b, prev, hold, cf, y, u, yb, ub, z_d
             )
-        if lag >= 0.0:
-            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         Fk = _poly(cf, r)
         y[k] = Fk - offset
         u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
@@ -173,12 +169,9 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
             r = min(max(i_const, a), b)
             ok = True
         else:
-            hold = prev
-            if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
-                hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+            hold = held_input(k, lag, prev, w_prev, a, b)
             r, ok = INVERT(form, k, x_d, v_d, target + f0, a, b, prev, hold, cf, y, u, yb, ub, z_d)
-        if lag >= 0.0:
-            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0
     rho[k] = r
     mem[0], mem[1], mem[2], mem[3] = r, w_prev, z_d, v_prev

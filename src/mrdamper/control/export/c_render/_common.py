@@ -26,6 +26,7 @@ __all__ = [
     "BISECT",
     "COMMON",
     "IDENTITY",
+    "INTERVAL_C",
     "INVERSE_RUN",
     "INV_CONST",
     "RUN",
@@ -181,6 +182,36 @@ def arr2(a: Any) -> str:
 COMMON = r"""
 static double {p}_dmax(double a, double b) {{ return a > b ? a : b; }}
 static double {p}_dmin(double a, double b) {{ return a < b ? a : b; }}
+"""
+
+#: The inverse's allowed interval in C99, the same rule as
+#: :func:`mrdamper.models.kernels.allowed_interval` (it reads ``P_LO``, ``P_HI``, ``P_RATE_STEP``
+#: and the ``p_dmin`` / ``p_dmax`` helpers of :data:`COMMON`); every renderer's inverse calls it.
+INTERVAL_C = r"""
+/* the admissible [a, b] of rho[k]: input limits, the drive lag's reach (lag >= 0; rho[1] = rho[0]),
+   the rate bound around prev */
+static void {p}_allowed(long k, double lag, double rho_prev, double prev, double *a, double *b)
+{{
+    *a = {P}_LO;
+    *b = {P}_HI;
+    if (lag >= 0.0 && k >= 1) {{
+        if (k == 1) {{
+            *a = rho_prev;
+            *b = rho_prev;
+        }} else {{
+            *a = {p}_dmax(lag * rho_prev + (1.0 - lag) * {P}_LO, {P}_LO);
+            *b = {p}_dmin(lag * rho_prev + (1.0 - lag) * {P}_HI, {P}_HI);
+        }}
+    }}
+    if (k >= 1) {{
+        *a = {p}_dmax(*a, prev - {P}_RATE_STEP);
+        *b = {p}_dmin(*b, prev + {P}_RATE_STEP);
+        if (*b < *a) {{
+            *a = {p}_dmin({p}_dmax(prev, *a), *b);
+            *b = *a;
+        }}
+    }}
+}}
 """
 
 INV_CONST = r"""

@@ -14,6 +14,7 @@ import numpy as np
 
 from mrdamper.control.export.c_render._common import (
     COMMON,
+    INTERVAL_C,
     INV_CONST,
     Context,
     Rendered,
@@ -323,23 +324,7 @@ LPV_INVERSE = (
     F_desired -= {P}_STIFFNESS * x; /* the stiffness force is not the input's to give */
     {p}_advance(s, v);
     {p}_coefficients(s, cf);
-    if ({P}_LAG >= 0.0 && s->k >= 1) {{
-        if (s->k == 1) {{
-            a = s->rho;
-            b = s->rho;
-        }} else {{
-            a = {p}_dmax({P}_LAG * s->rho + (1.0 - {P}_LAG) * {P}_LO, {P}_LO);
-            b = {p}_dmin({P}_LAG * s->rho + (1.0 - {P}_LAG) * {P}_HI, {P}_HI);
-        }}
-    }}
-    if (s->k >= 1) {{
-        a = {p}_dmax(a, prev - {P}_RATE_STEP);
-        b = {p}_dmin(b, prev + {P}_RATE_STEP);
-        if (b < a) {{
-            a = {p}_dmin({p}_dmax(prev, a), b);
-            b = a;
-        }}
-    }}
+    {p}_allowed(s->k, {P}_LAG, s->rho, prev, &a, &b);
     hold = prev;
     if ({P}_LAG >= 0.0 && s->k >= 2) hold ="""
     r""" {p}_dmin({p}_dmax({P}_LAG * prev + (1.0 - {P}_LAG) * s->w, a), b);
@@ -424,7 +409,7 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
             f"{p}_poly(cf, {P}_N_P, {{r}})",
             f"{p}_dpoly(cf, {P}_N_P, {{r}})",
         )
-        body += LPV_HORIZON.format(**fmt) + LPV_INVERSE.format(**fmt)
+        body += LPV_HORIZON.format(**fmt) + INTERVAL_C.format(**fmt) + LPV_INVERSE.format(**fmt)
     return Rendered(
         state,
         body,

@@ -7,6 +7,7 @@ from typing import Any
 
 from mrdamper.control.export.c_render._common import (
     COMMON,
+    INTERVAL_C,
     INV_CONST,
     Context,
     Rendered,
@@ -63,10 +64,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
 double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
 {{
     double a = {P}_LO, b = {P}_HI, prev = s->prev, best;
-    if (s->k >= 1) {{
-        a = {p}_dmax(a, prev - {P}_RATE_STEP);
-        b = {p}_dmin(b, prev + {P}_RATE_STEP);
-    }}
+    {p}_allowed(s->k, -1.0, prev, prev, &a, &b);
     best = {p}_solve(x, v, F_desired, a, b, prev);
     s->prev = best;
     s->k += 1;
@@ -167,7 +165,7 @@ def render_static(model: Any, ctx: Context) -> Rendered:
     body += solver(
         fmt, "double x, double v", "x, v", f"{p}_force(x, v, {{r}})", f"{p}_dforce(x, v, {{r}})"
     )
-    body += ("double {p}_inverse_step" + inv).format(**fmt)
+    body += INTERVAL_C.format(**fmt) + ("double {p}_inverse_step" + inv).format(**fmt)
     return Rendered(
         state,
         body,
