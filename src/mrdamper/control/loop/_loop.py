@@ -26,12 +26,11 @@ from mrdamper.control.inverse.current import (
     model_input_limits,
     static_map_arrays,
 )
-from mrdamper.control.loop import _quarter_car_kernels as QK
 from mrdamper.control.loop.car import Controller, QuarterCar, QuarterCarResult, Road, positive
+from mrdamper.control.loop.controllers import law_of
 from mrdamper.errors import DataValidationError
 
 __all__ = [
-    "CONTROL_CODES",
     "LoopSetup",
     "controller_form",
     "damper_arrays",
@@ -45,15 +44,6 @@ __all__ = [
     "positive",
     "rated_range",
 ]
-
-#: Controller name -> kernel code.
-CONTROL_CODES = {
-    "soft": QK.CTRL_PASSIVE,
-    "hard": QK.CTRL_PASSIVE,
-    "skyhook": QK.CTRL_SKYHOOK,
-    "groundhook": QK.CTRL_GROUNDHOOK,
-    "hybrid": QK.CTRL_HYBRID,
-}
 
 
 def damper_arrays(model: Any) -> dict[str, Any]:
@@ -171,7 +161,8 @@ def loop_setup(
     dt_c = 1.0 / road.fs * n_sub  # control sample [s]
     n_sub *= int(substeps)
     h = 1.0 / (road.fs * substeps)
-    if getattr(model, "kind", None) == "linear" or ctrl.kind in ("soft", "hard"):
+    law = law_of(ctrl.kind)
+    if getattr(model, "kind", None) == "linear" or law.passive:
         lam = 0.0
     elif reg is None:
         lam = (
@@ -182,7 +173,7 @@ def loop_setup(
     else:
         lam = positive("reg", reg, "N per input unit", allow_zero=True)
     step_rate = np.inf if rate is None else positive("rate", rate, "input unit/s") * dt_c
-    i_const = hi if ctrl.kind == "hard" else lo
+    i_const = law.constant_input(lo, hi)
     mr = car.motion_ratio
     # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the
     # model
@@ -213,7 +204,7 @@ def loop_setup(
         n_h=n_h,
         lam=lam,
         step_rate=step_rate,
-        code=CONTROL_CODES[ctrl.kind],
+        code=law.code,
         gains=gains,
         car_arr=car_arr,
         zr=np.ascontiguousarray(zr[: n_ctrl * n_sub + 1]),

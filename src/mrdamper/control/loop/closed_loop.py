@@ -65,6 +65,7 @@ from mrdamper.control.loop._loop import (
     loop_setup,
 )
 from mrdamper.control.loop.car import positive
+from mrdamper.control.loop.controllers import law_of
 from mrdamper.control.loop.quarter_car import (
     CONTROLLERS,
     Controller,
@@ -221,7 +222,7 @@ def simulate_closed_loop(
             c_inverse=c_inverse,
         )
     check_pair(model, plant)
-    passive = ctrl.kind in ("soft", "hard")
+    passive = law_of(ctrl.kind).passive
     sc: StepControl | None = None
     arrays = None
     if not invertible:
@@ -281,7 +282,7 @@ def _run(
                 f"the {plant.kind} plant runs at {1.0 / pstep.dt:g} Hz; the plant step "
                 f"{s.h:g} s must divide its sample time {pstep.dt:g} s",
             )
-    e0 = float(s.gains[3]) if s.ctrl.kind in ("soft", "hard") else s.lo
+    e0 = float(s.gains[3]) if law_of(s.ctrl.kind).passive else s.lo
     p_state = pstep.initial_state(0.0, 0.0, e0)
     p_offset = float(pstep.force(pstep.form, p_state, 0.0, 0.0, e0))
     if sc is None:  # unused by the kernel: the plant's step stands in for the controller's
