@@ -27,7 +27,9 @@ __all__ = ["allowed_interval", "held_input", "lag_command"]
 
 
 @njit(cache=True)
-def allowed_interval(k, lo, hi, lag, rho_prev, prev, rate_step):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def allowed_interval(  # pragma: no cover - numba
+    k: int, lo: float, hi: float, lag: float, rho_prev: float, prev: float, rate_step: float
+) -> tuple[float, float]:
     """The admissible ``[a, b]`` of ``rho[k]`` (see the module docstring).
 
     Parameters
@@ -66,7 +68,9 @@ def allowed_interval(k, lo, hi, lag, rho_prev, prev, rate_step):  # type: ignore
 
 
 @njit(cache=True)
-def held_input(k, lag, prev, w_prev, a, b):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def held_input(  # pragma: no cover - numba
+    k: int, lag: float, prev: float, w_prev: float, a: float, b: float
+) -> float:
     """The value the regularisation pulls towards at sample ``k``: ``prev``, or with a drive lag
     (from sample 2) ``rho`` with the previous command ``w_prev`` held, within ``[a, b]``."""
     if lag >= 0.0 and k >= 2:
@@ -75,7 +79,9 @@ def held_input(k, lag, prev, w_prev, a, b):  # type: ignore[no-untyped-def]  # p
 
 
 @njit(cache=True)
-def lag_command(k, lag, r, prev, lo, hi, w_prev):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def lag_command(  # pragma: no cover - numba
+    k: int, lag: float, r: float, prev: float, lo: float, hi: float, w_prev: float
+) -> float:
     """The command of the previous sample that makes ``rho[k] = r`` from ``rho[k-1] = prev``
     (within ``[lo, hi]``; ``r`` itself at samples 0 and 1); ``w_prev`` unchanged without a lag."""
     if lag >= 0.0:

@@ -21,6 +21,7 @@ each, shared with the models' per-sample steps; this module only solves for the 
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models.kernels import (
@@ -51,6 +52,9 @@ __all__ = [
 #: Golden-section ratio and iterations of the drive-lag horizon solver (the C export uses the same).
 GOLDEN = 0.5 * (5.0**0.5 - 1.0)
 N_GOLDEN = 50
+
+
+FloatArray = npt.NDArray[np.float64]
 
 
 @njit(cache=True)
@@ -240,7 +244,9 @@ def horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v, target, z):  # typ
 
 
 @njit(cache=True)
-def past_buffers(y, u, k, yb, ub):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def past_buffers(  # pragma: no cover - numba
+    y: FloatArray, u: FloatArray, k: int, yb: FloatArray, ub: FloatArray
+) -> int:
     """``yb[j] = y[k-1-j]``, ``ub[j] = u[k-1-j]`` (zero before the start).
 
     Returns the entries in use.

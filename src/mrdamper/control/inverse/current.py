@@ -73,12 +73,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 
 from mrdamper._warn import warn_user
+from mrdamper.control.damper import StaticMapModel
 from mrdamper.control.inverse import _inverse_kernels as K
 from mrdamper.control.inverse._forms import inverse_form
 from mrdamper.control.inverse._inverse_setup import (
@@ -99,6 +100,7 @@ from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError, MrDamperError, Note, OutOfRangeError
 from mrdamper.models.base import FittedModel
 from mrdamper.models.levels import check_levels
+from mrdamper.models.lpv import TransferFunctionModel
 from mrdamper.models.protocols import InvertibleModel, StepInvertibleModel, scheduled_form
 
 __all__ = [
@@ -456,7 +458,18 @@ def inverse_current(
             )
         if sched is not None:
             n_h = horizon_samples(sched.eta, 1.0 / sched.fs, horizon)
-            rho, w, sat = _lpv_reg(model, t, v, Fd_poly, lo, hi, int(n_grid), lam, step_rate, n_h)
+            rho, w, sat = _lpv_reg(
+                cast(TransferFunctionModel, model),
+                t,
+                v,
+                Fd_poly,
+                lo,
+                hi,
+                int(n_grid),
+                lam,
+                step_rate,
+                n_h,
+            )
         else:
             comp, power, theta, f0 = static_map_arrays(model)
             dt = float(t[1] - t[0]) if t.size > 1 else 1.0
@@ -480,7 +493,9 @@ def inverse_current(
             )
             w = rho if eta is None else driver_command(rho, eta, dt, (lo, hi))
     elif sched is not None:
-        rho, w, sat = _lpv_any_rate(model, t, v, Fd_poly, lo, hi, int(n_grid), float(tol))
+        rho, w, sat = _lpv_any_rate(
+            cast(TransferFunctionModel, model), t, v, Fd_poly, lo, hi, int(n_grid), float(tol)
+        )
     else:
         if getattr(model, "eta", None) is not None:
             raise DataValidationError(
@@ -488,7 +503,7 @@ def inverse_current(
                 f"the exact inverse of a static map with a drive lag (eta) is not implemented; "
                 f"use method='regularised' for this {model.kind} model",
             )
-        rho, sat = _static(model, x, v, Fd, lo, hi, int(n_grid))
+        rho, sat = _static(cast(StaticMapModel, model), x, v, Fd, lo, hi, int(n_grid))
         w = rho
     rec = _record(t, x, v, Fd, model, w)
     F_ach = model.with_range_policy("clip").predict(rec)
@@ -506,7 +521,7 @@ def inverse_current(
 
 
 def _lpv_any_rate(
-    model: Any,
+    model: TransferFunctionModel,
     t: np.ndarray,
     v: np.ndarray,
     Fd: np.ndarray,
@@ -548,7 +563,7 @@ def _lpv_any_rate(
 
 
 def _lpv(
-    model: Any,
+    model: TransferFunctionModel,
     t: np.ndarray,
     v: np.ndarray,
     Fd: np.ndarray,
@@ -598,7 +613,7 @@ def _lpv(
 
 
 def _lpv_reg(
-    model: Any,
+    model: TransferFunctionModel,
     t: np.ndarray,
     v: np.ndarray,
     Fd: np.ndarray,
@@ -640,14 +655,20 @@ def _lpv_reg(
     return np.interp(tr, tm, rho), np.interp(tr, tm, w), sat[back]
 
 
-def _static_force(model: Any, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
+def _static_force(model: StaticMapModel, x: np.ndarray, v: np.ndarray, i: np.ndarray) -> np.ndarray:
     xb, vb, ib = np.broadcast_arrays(x, v, i)
     shape = xb.shape
     return np.asarray(model.force(xb.ravel(), vb.ravel(), ib.ravel())).reshape(shape)
 
 
 def _static(
-    model: Any, x: np.ndarray, v: np.ndarray, Fd: np.ndarray, lo: float, hi: float, n_grid: int
+    model: StaticMapModel,
+    x: np.ndarray,
+    v: np.ndarray,
+    Fd: np.ndarray,
+    lo: float,
+    hi: float,
+    n_grid: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     n = x.size
     grid = np.linspace(lo, hi, n_grid + 1)

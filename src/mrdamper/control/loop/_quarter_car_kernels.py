@@ -28,6 +28,7 @@ on the body is ``-F``): 0 passive (constant input ``i_const``), 1 skyhook
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.control.inverse._inverse_kernels import (
@@ -49,11 +50,27 @@ from mrdamper.models.kernels import zone_input as _u_of
 
 __all__ = ["control_sample", "simulate"]
 
+FloatArray = npt.NDArray[np.float64]
+
 CTRL_PASSIVE, CTRL_SKYHOOK, CTRL_GROUNDHOOK, CTRL_HYBRID = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _deriv(  # pragma: no cover - numba
+    zs: float,
+    vs: float,
+    zu: float,
+    vu: float,
+    zr: float,
+    vr: float,
+    F: float,
+    m_s: float,
+    m_u: float,
+    k_s: float,
+    k_t: float,
+    c_t: float,
+    out: FloatArray,
+) -> None:
     fs = k_s * (zs - zu)
     out[0] = vs
     out[1] = (-fs - F) / m_s
@@ -62,14 +79,16 @@ def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # type: ig
 
 
 @njit(cache=True)
-def _between(f0, f1, s, c, n_sub):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _between(f0: float, f1: float, s: int, c: float, n_sub: int) -> float:  # pragma: no cover
     """Force of a discrete-time damper between its samples ``f0`` and ``f1`` [N]: linear in
     time, at Runge-Kutta node ``c`` of plant step ``s`` of the ``n_sub`` in a sample."""
     return f0 + (f1 - f0) * (s + c) / n_sub
 
 
 @njit(cache=True)
-def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _desired(  # pragma: no cover - numba
+    ctrl: int, vs: float, vu: float, c_sky: float, c_gnd: float, alpha: float
+) -> float:
     vrel = vs - vu
     sky = c_sky * vs if vs * vrel > 0.0 else 0.0
     gnd = -c_gnd * vu if -vu * vrel > 0.0 else 0.0

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.loop._loop import input_limits
 from mrdamper.control.loop.closed_loop import check_pair, resolve_plant, simulate_closed_loop
 from mrdamper.control.loop.controllers import LAWS
@@ -336,7 +337,7 @@ _GAIN = {"a_w": "aw_gain_pct", "rms_tyre_load": "tyre_gain_pct"}
 
 
 def _run_point(
-    model: Any,
+    model: DamperModel,
     plant: Any,
     road: Any,
     ctrl: Controller,
@@ -364,7 +365,7 @@ def _run_point(
 
 
 def gain_fronts(
-    model: Any,
+    model: DamperModel,
     plant: Any = None,
     *,
     road_classes: Sequence[str] = ("C",),

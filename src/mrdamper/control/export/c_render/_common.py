@@ -20,6 +20,7 @@ from mrdamper.control.inverse.current import (
     model_input_limits,
 )
 from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
 from mrdamper.models.kernels import INVERSE_N_BISECT
 
 __all__ = [
@@ -134,7 +135,7 @@ class Rendered:
 
 
 def fmt_base(
-    model: Any, ctx: Context, lam: float = 0.0, rate_step: float = math.inf
+    model: FittedModel, ctx: Context, lam: float = 0.0, rate_step: float = math.inf
 ) -> dict[str, Any]:
     """Format fields every template uses: prefixes, input limits, inverse settings."""
     lo, hi = model_input_limits(model)
@@ -150,7 +151,7 @@ def fmt_base(
     }
 
 
-def input_note(model: Any) -> str:
+def input_note(model: FittedModel) -> str:
     """Header line of a family with an inverse: the forward step takes the input as given (as
     the model's step: no range policy), the inverse is limited."""
     lo, hi = model_input_limits(model)
@@ -349,7 +350,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
 """
 
 
-def require_dt(model: Any, ctx: Context) -> float:
+def require_dt(model: FittedModel, ctx: Context) -> float:
     """The export's sample time ``ctx.dt`` [s], required by a family without its own rate."""
     if ctx.dt is None:
         raise DataValidationError(
@@ -362,7 +363,7 @@ def require_dt(model: Any, ctx: Context) -> float:
     return float(ctx.dt)
 
 
-def rates_hint(model: Any) -> str:
+def rates_hint(model: FittedModel) -> str:
     """`` (training records at 1000, 200 Hz)`` when the model's provenance lists several training
     intervals (``record_dt``), else ``""``."""
     values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
@@ -371,7 +372,7 @@ def rates_hint(model: Any) -> str:
     return " (training records at " + ", ".join(f"{1.0 / float(d):g}" for d in values) + " Hz)"
 
 
-def sampled_step(model: Any, ctx: Context) -> tuple[Any, float]:
+def sampled_step(model: FittedModel, ctx: Context) -> tuple[Any, float]:
     """The model's step at the export's sample time (:func:`require_dt`) and the time [s].
 
     The step's default velocity bound (:meth:`~mrdamper.models.base.FittedModel.step_vmax`):
@@ -409,7 +410,7 @@ def solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str)
 
 
 def inverse_settings(
-    model: Any,
+    model: FittedModel,
     reg: float | None,
     v_ref: float,
     rate: float | None,

@@ -29,7 +29,6 @@ fixed into the code (default :func:`~mrdamper.control.inverse.current.default_re
 from __future__ import annotations
 
 import math
-from typing import Any
 
 from mrdamper.control.export.c_render._common import (
     COMMON,
@@ -44,6 +43,7 @@ from mrdamper.control.export.c_render._common import (
     step_state,
 )
 from mrdamper.models import kernels as HK
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_hysteresis", "render_hysteresis_form"]
 
@@ -329,7 +329,7 @@ def render_hysteresis_form(
     )
 
 
-def render_hysteresis(model: Any, ctx: Context) -> Rendered:
+def render_hysteresis(model: FittedModel, ctx: Context) -> Rendered:
     """C of the model's step at ``ctx.dt`` (:func:`sampled_step`; the sample time is required)
     and of its inverse (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``;
     ``ctx.rate``)."""
@@ -337,12 +337,13 @@ def render_hysteresis(model: Any, ctx: Context) -> Rendered:
     lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt)
     base = fmt_base(model, ctx, lam, rate_step)
     lo, hi = model.input_range
+    eta = float(step.form.p[0])  # the step form's drive-lag rate [1/s] (0: none)
     inverse = {
         "lo": base["lo"],
         "hi": base["hi"],
         "lam2": base["lam2"],
         "rate_step": base["rate_step"],
-        "lag": lit(math.exp(-model.eta * dt) if model.eta > 0.0 else -1.0),
+        "lag": lit(math.exp(-eta * dt) if eta > 0.0 else -1.0),
         "lo_text": repr(float(lo)),
         "hi_text": repr(float(hi)),
         "lam_text": repr(lam),

@@ -8,8 +8,6 @@ input. The arithmetic follows the compiled Python kernels operation by operation
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from mrdamper.control.export.c_render._common import (
@@ -29,6 +27,7 @@ from mrdamper.control.export.c_render._common import (
 from mrdamper.control.inverse import _inverse_kernels as K
 from mrdamper.control.inverse.current import horizon_samples
 from mrdamper.models.kernels import LPV_N_HEAD as N_HEAD
+from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = ["render_lpv"]
 
@@ -344,7 +343,7 @@ LPV_INVERSE = (
 )
 
 
-def render_lpv(model: Any, ctx: Context) -> Rendered:
+def render_lpv(model: TransferFunctionModel, ctx: Context) -> Rendered:
     """C of an LPV or LTI model at its own rate ``fs``, with the inverse where the model has one."""
     from mrdamper.models.protocols import InvertibleModel
 

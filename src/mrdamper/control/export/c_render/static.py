@@ -3,8 +3,6 @@ d(i) x + f0``, each component a polynomial in the input) and their regularised i
 
 from __future__ import annotations
 
-from typing import Any
-
 from mrdamper.control.export.c_render._common import (
     COMMON,
     INTERVAL_C,
@@ -20,6 +18,7 @@ from mrdamper.control.export.c_render._common import (
     solver,
 )
 from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_static"]
 
@@ -125,13 +124,14 @@ static double {p}_dforce(double x, double v, double i)
 """
 
 
-def render_static(model: Any, ctx: Context) -> Rendered:
+def render_static(model: FittedModel, ctx: Context) -> Rendered:
     """C of a static map and its inverse (any sample rate; ``ctx.dt`` sets the rate bound's and
     the default regularisation's interval, by default the quarter car's control sample)."""
-    if getattr(model, "eta", None) is not None:
+    eta = getattr(model, "eta", None)
+    if eta is not None:
         raise DataValidationError(
             "model",
-            f"C export of a static {model.kind} map with a drive lag (eta = {model.eta:g} 1/s) is "
+            f"C export of a static {model.kind} map with a drive lag (eta = {eta:g} 1/s) is "
             "not implemented; export the map without the lag or an LPV model with its drive lag",
         )
     p = ctx.p
