@@ -9,6 +9,9 @@ car and the exports of :mod:`mrdamper.control` import them from here instead of 
   (the zone-law input, static or hysteretic; modes :data:`MODE_V`, :data:`MODE_CONTINUOUS`,
   :data:`MODE_LITERAL`);
 * every family's drive lag (:mod:`mrdamper.models._lag`): :func:`lag_step`;
+* the inverse's allowed interval at one sample, written once (:mod:`mrdamper.models._interval`):
+  :func:`allowed_interval` (input limits, drive-lag reach, rate bound), :func:`held_input` (what
+  the regularisation pulls towards) and :func:`lag_command`;
 * hysteretic input (:mod:`mrdamper.analysis.hysteretic`): :func:`dahl_step`;
 * static maps, SP-1..SP-4 and Bingham (:mod:`mrdamper.models.sp.kernels`): :func:`sp_force1`
   (one sample of the map) and :func:`sp_dforce1` (its derivative in the input);
@@ -28,6 +31,7 @@ when the function changes; delete the caller's ``__pycache__/*.nb*`` files after
 from __future__ import annotations
 
 from mrdamper.analysis.hysteretic import dahl_step
+from mrdamper.models._interval import allowed_interval, held_input, lag_command
 from mrdamper.models._inverse_step import _N_BISECT as INVERSE_N_BISECT
 from mrdamper.models._inverse_step import reg_solve_poly, reg_solve_static, solve_interval
 from mrdamper.models._lag import lag_step
@@ -73,8 +77,11 @@ __all__ = [
     "NARXForm",
     "P15Form",
     "SpencerForm",
+    "allowed_interval",
     "dahl_step",
     "dpoly",
+    "held_input",
+    "lag_command",
     "lag_step",
     "lpv_coefficients",
     "poly",

@@ -65,6 +65,7 @@ from mrdamper.control.export.c_render._common import (
 )
 from mrdamper.control.export.matrices import warn_if_unstable
 from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
 
 if TYPE_CHECKING:  # pragma: no cover
     from mrdamper.models import FittedModel
@@ -84,7 +85,7 @@ def needs_dt(model: FittedModel) -> bool:
 
 
 def render(
-    model: Any,
+    model: FittedModel,
     name: str = "mrd_damper",
     *,
     reg: float | None = None,
@@ -119,7 +120,7 @@ def render(
 
 
 def c_source(
-    model: Any,
+    model: FittedModel,
     name: str = "mrd_damper",
     *,
     reg: float | None = None,
@@ -160,7 +161,7 @@ def c_source(
     )
 
 
-def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
+def assemble(model: FittedModel, name: str, r: Rendered) -> tuple[str, str]:
     """Header and source text of a rendering ``r`` of ``model`` with the prefix ``name``."""
     p = name
     unit = "A" if model.input == "i" else "V"
@@ -216,7 +217,12 @@ def assemble(model: Any, name: str, r: Rendered) -> tuple[str, str]:
 
 
 def export_c(
-    model: Any, out_dir: str | Path, *, name: str = "mrd_damper", force: bool = False, **kwargs: Any
+    model: FittedModel,
+    out_dir: str | Path,
+    *,
+    name: str = "mrd_damper",
+    force: bool = False,
+    **kwargs: Any,
 ) -> tuple[Path, Path]:
     """Write ``<out_dir>/<name>.h`` and ``<name>.c`` atomically (see :func:`c_source` for the
     options).

@@ -34,15 +34,17 @@ from __future__ import annotations
 import ctypes
 import types
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numba import njit
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.inverse._forms import ControllerForm
 from mrdamper.control.loop import _closed_loop_kernels as CK
 from mrdamper.control.loop import _quarter_car_kernels as QK
 from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
 from mrdamper.models.kernels import poly as _poly
 from mrdamper.models.kernels import sp_force1
 from mrdamper.models.step_dispatch import family_advance, family_force
@@ -215,7 +217,7 @@ class CInverse:
         self._init, self._step = fns["init"], fns["inverse_step"]
         self._forward = [fns["step_init"], fns["step_force"], fns["step_advance"]]
 
-    def check(self, model: Any) -> None:
+    def check(self, model: DamperModel) -> None:
         """Refuse (one line) a model of another kind than the export's, or one whose inverse the
         quarter car does not run per sample."""
         mk = getattr(model, "kind", type(model).__name__)
@@ -229,7 +231,7 @@ class CInverse:
                 f"the quarter car inverts a {mk} model through its step, not per sample as the "
                 f"C export does: a C inverse runs in the loop for kinds {list(LOOP_KINDS)}",
             )
-        rel = self._forward_gap(model)
+        rel = self._forward_gap(cast(FittedModel, model))
         if not rel <= 1e-9:
             raise DataValidationError(
                 "c_inverse",
@@ -237,7 +239,7 @@ class CInverse:
                 f"the model's by {rel:.3g} of the force scale on a probe motion)",
             )
 
-    def _forward_gap(self, model: Any) -> float:
+    def _forward_gap(self, model: FittedModel) -> float:
         """Largest difference between the library's per-sample step (``<name>_step_*``) and the
         model's, over 20 samples of a probe motion through the input range, relative to the largest
         force (the export's forward step equals the model's to 1e-9)."""
@@ -274,7 +276,7 @@ class CInverse:
         return f"CInverse({str(self.path)!r}, kind={self.kind!r})"
 
 
-def load_c_inverse(model: Any, spec: Any) -> CInverse:
+def load_c_inverse(model: DamperModel, spec: Any) -> CInverse:
     """The C inverse ``spec`` (a :class:`CInverse` or the path of its library) checked against
     ``model`` (one-line errors: no such file, not a C export with an inverse, another kind, a kind
     the quarter car does not invert per sample)."""
@@ -283,7 +285,7 @@ def load_c_inverse(model: Any, spec: Any) -> CInverse:
     return inv
 
 
-def c_inverse_form(model: Any, spec: Any, base: ControllerForm) -> CControllerForm:
+def c_inverse_form(model: DamperModel, spec: Any, base: ControllerForm) -> CControllerForm:
     """The controller form of a quarter-car run of ``model`` with the C inverse ``spec``
     (:func:`load_c_inverse`), for the kernels of :func:`c_kernels`."""
     return load_c_inverse(model, spec).form(base)

@@ -54,6 +54,7 @@ from mrdamper.control.export.c_export import C_KINDS, assemble, render
 from mrdamper.control.export.c_render import renderer_of
 from mrdamper.control.export.c_render._common import rates_hint
 from mrdamper.errors import DataValidationError, MrDamperError
+from mrdamper.models.base import FittedModel
 from mrdamper.version import __version__
 
 __all__ = [
@@ -86,7 +87,7 @@ FMU_KINDS = C_KINDS
 GCC_FLAGS = ("-shared", "-fPIC", "-std=c99", "-O2")
 
 
-def training_dt(model: Any) -> float | None:
+def training_dt(model: FittedModel) -> float | None:
     """The sampling interval [s] the model was fitted at, or None.
 
     The model's ``sample_time`` (recorded by the fit); for a model file written before it was
@@ -107,7 +108,7 @@ def _check_dt(dt: float | None) -> None:
         raise DataValidationError("dt", f"expected a positive sample time [s], got {dt!r}")
 
 
-def _variables(model: Any, inverse: bool) -> list[dict[str, str]]:
+def _variables(model: FittedModel, inverse: bool) -> list[dict[str, str]]:
     unit = "A" if model.input == "i" else "V"
     electrical = {"name": model.input, "unit": unit, "description": "electrical input"}
     motion = [
@@ -125,7 +126,7 @@ def _variables(model: Any, inverse: bool) -> list[dict[str, str]]:
 
 
 def _model_description(
-    model: Any,
+    model: FittedModel,
     name: str,
     guid: str,
     dt: float,
@@ -227,7 +228,7 @@ def _model_description(
 
 
 def fmu_sources(
-    model: Any,
+    model: FittedModel,
     name: str = "mrd_damper",
     *,
     inverse: bool = False,
@@ -330,7 +331,7 @@ def _compile(files: dict[str, str], name: str, gcc: str) -> bytes:
 
 
 def export_fmu(
-    model: Any,
+    model: FittedModel,
     out: str | Path,
     *,
     name: str = "mrd_damper",

@@ -132,15 +132,19 @@ class FMUForm(NamedTuple):
 
 
 @njit(cache=False)
-def step_force(form, s, x, v, e):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def step_force(form: Any, s: Any, x: float, v: float, e: float) -> float:  # pragma: no cover
     """``<id>_step_force(s, x, v, e)``: force [N] at the state ``s``."""
-    return form.force(s.ctypes, x, v, e)
+    f: float = form.force(s.ctypes, x, v, e)
+    return f
 
 
 @njit(cache=False)
-def step_advance(form, s, x0, v0, e0, x1, v1, e1, dt):  # type: ignore[no-untyped-def]  # pragma: no cover
+def step_advance(  # pragma: no cover - numba
+    form: Any, s: Any, x0: float, v0: float, e0: float, x1: float, v1: float, e1: float, dt: float
+) -> int:
     """``<id>_step_advance(s, ...)``: advance ``s`` in place over ``dt`` [s]; its status."""
-    return form.advance(s.ctypes, x0, v0, e0, x1, v1, e1, dt)
+    status: int = form.advance(s.ctypes, x0, v0, e0, x1, v1, e1, dt)
+    return status
 
 
 class FMUPlant:

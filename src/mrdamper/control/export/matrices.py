@@ -76,7 +76,7 @@ from mrdamper._io.atomic import atomic_write_with
 from mrdamper._warn import warn_user
 from mrdamper.control.export.statespace import state_space
 from mrdamper.errors import DataValidationError
-from mrdamper.models.base import encode_value
+from mrdamper.models.base import FittedModel, encode_value
 
 __all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data", "warn_if_unstable"]
 
@@ -93,7 +93,7 @@ EXPORT_FILE = FileKind(
 )
 
 
-def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
+def lpv_export_data(model: FittedModel, *, rho_grid: Any = None) -> dict[str, Any]:
     """The export content as a dict of plain values and ``float64`` arrays (see the module
     docstring).
 
@@ -183,7 +183,7 @@ def lpv_export_data(model: Any, *, rho_grid: Any = None) -> dict[str, Any]:
     }
 
 
-def warn_if_unstable(model: Any) -> None:
+def warn_if_unstable(model: FittedModel) -> None:
     """Warn (one line) when ``model`` is not frozen-stable over its scheduling range, or (a P-15
     model) fails its sufficient conditions for stability on its input range.
 
@@ -216,7 +216,7 @@ def warn_if_unstable(model: Any) -> None:
 
 
 def export_lpv(
-    model: Any,
+    model: FittedModel,
     path: str | Path,
     *,
     format: Literal["mat", "json"] = "mat",

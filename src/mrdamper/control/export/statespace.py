@@ -24,7 +24,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = [
     "ControlGrid",
@@ -37,7 +39,7 @@ __all__ = [
 ]
 
 
-def _check_model(model: Any) -> None:
+def _check_model(model: DamperModel) -> None:
     if not (hasattr(model, "alpha") and hasattr(model, "beta") and hasattr(model, "fs")):
         raise DataValidationError(
             "model",
@@ -93,7 +95,7 @@ class StateSpaceMatrices:
         )
 
 
-def state_space(model: Any, rho: float) -> StateSpaceMatrices:
+def state_space(model: TransferFunctionModel, rho: float) -> StateSpaceMatrices:
     """Evaluate ``A(rho), B, C(rho), D`` (eqs. 10-15) for one scheduling value.
 
     Parameters
@@ -138,7 +140,7 @@ def state_space(model: Any, rho: float) -> StateSpaceMatrices:
     )
 
 
-def to_control(model: Any, rho: float) -> Any:
+def to_control(model: TransferFunctionModel, rho: float) -> Any:
     """Frozen-``rho`` model as a discrete ``control.StateSpace`` (needs the ``control`` extra).
 
     Parameters
@@ -164,7 +166,9 @@ def to_control(model: Any, rho: float) -> Any:
     return control.ss(ss.A, ss.B, ss.C, ss.D, ss.dt)
 
 
-def frozen_stability(model: Any, n_grid: int = 51, rho: Any = None) -> pd.DataFrame:
+def frozen_stability(
+    model: TransferFunctionModel, n_grid: int = 51, rho: Any = None
+) -> pd.DataFrame:
     """Frozen-pole stability over the scheduling range.
 
     Parameters
@@ -192,7 +196,7 @@ def frozen_stability(model: Any, n_grid: int = 51, rho: Any = None) -> pd.DataFr
 
 
 def simulate_state_space(
-    model: Any, u: Any, rho: Any, *, bound: float | None = None, x: Any = None
+    model: TransferFunctionModel, u: Any, rho: Any, *, bound: float | None = None, x: Any = None
 ) -> np.ndarray:
     """Simulate the state-space LPV system ``z[k+1] = A(rho[k]) z[k] + B u[k]``,
     ``f = C(rho[k]) z + F0 + k_x x[k]``.
@@ -279,7 +283,7 @@ class ControlGrid:
         return len(self.systems)
 
 
-def control_grid(model: Any, rho: Any = None, n_grid: int = 11) -> ControlGrid:
+def control_grid(model: TransferFunctionModel, rho: Any = None, n_grid: int = 11) -> ControlGrid:
     """python-control systems of the LPV model at ``rho`` (default ``n_grid`` points over its
     range).
 

@@ -21,10 +21,14 @@ each, shared with the models' per-sample steps; this module only solves for the 
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models.kernels import (
+    allowed_interval,
     dahl_step,
+    held_input,
+    lag_command,
     lpv_coefficients,
     reg_solve_poly,
     reg_solve_static,
@@ -48,6 +52,9 @@ __all__ = [
 #: Golden-section ratio and iterations of the drive-lag horizon solver (the C export uses the same).
 GOLDEN = 0.5 * (5.0**0.5 - 1.0)
 N_GOLDEN = 50
+
+
+FloatArray = npt.NDArray[np.float64]
 
 
 @njit(cache=True)
@@ -120,15 +127,7 @@ def lpv_inverse(  # type: ignore[no-untyped-def]
     prev = rho0
     for k in range(n):
         lpv_coefficients(c, y, u, k, alpha, beta, offset)
-        a, b = lo, hi
-        if lag >= 0.0 and k >= 1:
-            if k == 1:
-                a = b = rho[0]
-            else:
-                a = lag * rho[k - 1] + (1.0 - lag) * lo
-                b = lag * rho[k - 1] + (1.0 - lag) * hi
-                a = max(a, lo)
-                b = min(b, hi)
+        a, b = allowed_interval(k, lo, hi, lag, rho[k - 1], prev, np.inf)
         r, exact = solve_interval(c, F_desired[k], a, b, min(max(prev, a), b), n_grid, tol)
         rho[k] = r
         F[k] = _poly(c, r)
@@ -245,7 +244,9 @@ def horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v, target, z):  # typ
 
 
 @njit(cache=True)
-def past_buffers(y, u, k, yb, ub):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def past_buffers(  # pragma: no cover - numba
+    y: FloatArray, u: FloatArray, k: int, yb: FloatArray, ub: FloatArray
+) -> int:
     """``yb[j] = y[k-1-j]``, ``ub[j] = u[k-1-j]`` (zero before the start).
 
     Returns the entries in use.
@@ -295,30 +296,14 @@ def lpv_inverse_reg_hys(v, F_desired, inv, lo, hi, rho0, rate_step, z):  # type:
     w_prev = prev
     for k in range(n):
         lpv_coefficients(cf, y, u, k, alpha, beta, offset)
-        a, b = lo, hi
-        if lag >= 0.0 and k >= 1:
-            if k == 1:
-                a = b = rho[0]
-            else:
-                a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
-                b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
-        if k >= 1:
-            a = max(a, prev - rate_step)
-            b = min(b, prev + rate_step)
-            if b < a:
-                a = b = min(max(prev, a), b)
-        hold = prev
-        if (
-            lag >= 0.0 and k >= 2
-        ):  # rho with the previous command held: the lag's own motion is free
-            hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+        a, b = allowed_interval(k, lo, hi, lag, rho[k - 1], prev, rate_step)
+        hold = held_input(k, lag, prev, w_prev, a, b)
         if lag >= 0.0 and k >= 2 and inv.horizon > 1:
             valid = past_buffers(y, u, k, yb, ub)
             r, ok = horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v[k], F_desired[k], z[k])
         else:
             r, ok = reg_solve_poly(cf, F_desired[k], a, b, hold, inv.lam2, inv.n_grid)
-        if lag >= 0.0:
-            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         rho[k] = r
         F[k] = _poly(cf, r)
         y[k] = F[k] - offset
@@ -346,26 +331,12 @@ def static_inverse_reg(  # type: ignore[no-untyped-def]
     w_prev = prev
     lam2 = lam * lam
     for k in range(n):
-        a, b = lo, hi
-        if lag >= 0.0 and k >= 1:
-            if k == 1:
-                a = b = out[0]
-            else:
-                a = max(lag * out[k - 1] + (1.0 - lag) * lo, lo)
-                b = min(lag * out[k - 1] + (1.0 - lag) * hi, hi)
-        if k >= 1:
-            a = max(a, prev - rate_step)
-            b = min(b, prev + rate_step)
-            if b < a:
-                a = b = min(max(prev, a), b)
-        hold = prev
-        if lag >= 0.0 and k >= 2:  # rho with the previous command held
-            hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+        a, b = allowed_interval(k, lo, hi, lag, out[k - 1], prev, rate_step)
+        hold = held_input(k, lag, prev, w_prev, a, b)
         r, ok = reg_solve_static(
             x[k], v[k], comp, power, theta, f0, F_desired[k], a, b, hold, lam2, n_grid
         )
-        if lag >= 0.0:
-            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         out[k] = r
         sat[k] = not ok
         prev = r

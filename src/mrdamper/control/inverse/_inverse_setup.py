@@ -10,12 +10,14 @@ object
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.errors import DataValidationError
 from mrdamper.models.kernels import sp_force1
+from mrdamper.models.lpv import TransferFunctionModel
 from mrdamper.models.protocols import (
     InvertibleModel,
     StaticMapForm,
@@ -39,7 +41,7 @@ __all__ = [
 ]
 
 
-def model_input_limits(model: Any) -> tuple[float, float]:
+def model_input_limits(model: DamperModel) -> tuple[float, float]:
     """Default input limits: the identified ``input_range``.
 
     For an LPV model (or a static map with a drive lag) it is intersected with the scheduling range
@@ -52,7 +54,7 @@ def model_input_limits(model: Any) -> tuple[float, float]:
     return lo, hi
 
 
-def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+def static_map_arrays(model: DamperModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """A static map as the arrays of :func:`~mrdamper.models.kernels.sp_force1`.
 
     SP-1..SP-4 map directly; a Bingham model is ``fc(i) sign(v) + c0(i) v + f0`` with the sign
@@ -72,7 +74,7 @@ def static_map_arrays(model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, f
     )
 
 
-def force_authority(model: Any, v_ref: float) -> float:
+def force_authority(model: DamperModel, v_ref: float) -> float:
     """Steady force range per unit input at velocity ``v_ref`` [N/A] or [N/V].
 
     ``|F(v_ref, hi) - F(v_ref, lo)| / (hi - lo)`` over the model's ``input_range`` at ``x = 0``;
@@ -94,10 +96,11 @@ def force_authority(model: Any, v_ref: float) -> float:
     if isinstance(model, StepInvertibleModel):  # measured on the model's step
         return model.force_authority(float(v_ref))
     if scheduled_form(model) is not None:
-        lpv_input = model.lpv_input
+        lpv = cast(TransferFunctionModel, model)
+        lpv_input = lpv.lpv_input
 
         def steady(r: float) -> float:
-            gain = float(np.sum(model.b(r)) / (1.0 + np.sum(model.a(r))))
+            gain = float(np.sum(lpv.b(r)) / (1.0 + np.sum(lpv.a(r))))
             return gain * float(lpv_input.steady(float(v_ref), r))
 
         return abs(steady(hi) - steady(lo)) / (hi - lo)
@@ -116,7 +119,9 @@ DEFAULT_REG_FRACTION = 0.5
 DEFAULT_REG_TIME = 0.005 / float(np.log(5.0))
 
 
-def default_reg(model: Any, v_ref: float, dt: float, authority: float | None = None) -> float:
+def default_reg(
+    model: DamperModel, v_ref: float, dt: float, authority: float | None = None
+) -> float:
     """Default regularisation weight [N/A] or [N/V] for an inverse running every ``dt`` [s].
 
     Per sample the regularised input is, to first order, ``q i[k-1] + (1 - q) i_exact`` with
@@ -138,7 +143,7 @@ def default_reg(model: Any, v_ref: float, dt: float, authority: float | None = N
 
 
 def reg_settings(
-    model: Any, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float, dt: float
+    model: DamperModel, v: np.ndarray, reg: Any, rate: Any, lo: float, hi: float, dt: float
 ) -> tuple[float, float]:
     """The regularisation weight ``reg`` (default :func:`default_reg` at the peak of ``v``) and
     the input rate bound per second ``rate`` (default none: ``inf``), validated."""
@@ -182,7 +187,9 @@ def horizon_samples(eta: float | None, dt: float, horizon: float | None = None) 
     return max(1, round(T / dt))
 
 
-def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def lpv_law_arrays(
+    model: TransferFunctionModel,
+) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Zone-law arrays of an LPV or LTI model for the kernels: ``(mode, gamma_m, gamma_c,
     mu_high, mu_low)`` of its input (:meth:`~mrdamper.models.lpv.inputs.LPVInput.kernel_arrays`;
     :func:`lpv_hysteresis` gives its other settings)."""
@@ -190,14 +197,14 @@ def lpv_law_arrays(model: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray,
     return a.mode, a.gamma_m, a.gamma_c, a.mu_high, a.mu_low
 
 
-def lpv_hysteresis(model: Any) -> tuple[float, float]:
+def lpv_hysteresis(model: TransferFunctionModel) -> tuple[float, float]:
     """``(blend, stroke)`` of an LPV or LTI model's hysteretic input [-], [m]; ``(0.0, 0.0)`` for
     the static inputs ``"u"`` and ``"v"`` (``blend = 0`` is the static input in every kernel)."""
     a = model.lpv_input.kernel_arrays()
     return a.blend, a.stroke
 
 
-def lpv_inverse_fields(model: Any) -> dict[str, Any]:
+def lpv_inverse_fields(model: TransferFunctionModel) -> dict[str, Any]:
     """The LPV part of an :class:`~mrdamper.control.inverse._forms.InverseForm` for ``model`` (an
     LPV or
     LTI model): ``is_lpv``, the coefficients ``alpha``, ``beta``, ``offset`` [N], ``stiffness``
@@ -225,7 +232,7 @@ def lpv_inverse_fields(model: Any) -> dict[str, Any]:
     }
 
 
-def dahl_along(model: Any, v: np.ndarray, dt: float) -> tuple[float, np.ndarray]:
+def dahl_along(model: TransferFunctionModel, v: np.ndarray, dt: float) -> tuple[float, np.ndarray]:
     """``(blend, z)``: the Dahl state [-] along the velocity ``v`` [m/s] at the model rate, from
     rest, as the model's own prediction computes it (zeros for a static input)."""
     lpv_input = model.lpv_input

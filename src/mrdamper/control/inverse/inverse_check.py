@@ -25,6 +25,7 @@ from mrdamper.control.inverse.current import inverse_current
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError
 from mrdamper.metrics import ssse
+from mrdamper.models.base import FittedModel
 
 __all__ = ["InverseCheck", "check_inverse", "check_inverse_frame"]
 
@@ -67,7 +68,7 @@ class InverseCheck:
 
 
 def check_inverse(
-    model: Any, experiment: Experiment, *, v_fraction: float = 0.2, **inverse_kw: Any
+    model: FittedModel, experiment: Experiment, *, v_fraction: float = 0.2, **inverse_kw: Any
 ) -> InverseCheck:
     """Invert ``model`` on the record's measured force and score the result (see module docstring).
 

@@ -11,10 +11,10 @@ call these; this module sits below both.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.inverse._inverse_setup import model_input_limits
 from mrdamper.control.loop import _closed_loop_kernels as CK
 from mrdamper.control.loop.car import LinearDamper
@@ -25,7 +25,7 @@ from mrdamper.models.step_dispatch import pack
 __all__ = ["StepControl", "invert_through_step", "plant_step", "step_control"]
 
 
-def plant_step(model: Any, h: float) -> Step:
+def plant_step(model: DamperModel, h: float) -> Step:
     """The per-sample step of ``model`` for a plant step ``h`` [s] (one-line error if none)."""
     if isinstance(model, LinearDamper):
         raise DataValidationError("plant", "a LinearDamper has no per-sample step")
@@ -61,7 +61,7 @@ class StepControl:
     sample: float | None = None
 
 
-def step_control(model: Any, dt_c: float, v_ref: float = 0.3) -> StepControl:
+def step_control(model: DamperModel, dt_c: float, v_ref: float = 0.3) -> StepControl:
     """Measure, on the model's step, the lead and authority of its inverse at control sample
     ``dt_c`` [s]: the force at a steady velocity ``v_ref`` [m/s] with the input held at its low
     end, and after a step to its high end; the lead is the 63 % rise time of the difference.
@@ -95,7 +95,7 @@ def step_control(model: Any, dt_c: float, v_ref: float = 0.3) -> StepControl:
 
 
 def invert_through_step(
-    model: Any,
+    model: DamperModel,
     x: np.ndarray,
     v: np.ndarray,
     F_desired: np.ndarray,
@@ -176,7 +176,7 @@ def invert_through_step(
 
 
 def _at_model_rate(
-    model: Any,
+    model: DamperModel,
     x: np.ndarray,
     v: np.ndarray,
     F_desired: np.ndarray,

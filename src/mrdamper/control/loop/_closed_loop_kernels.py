@@ -34,6 +34,7 @@ from mrdamper.control.loop._quarter_car_kernels import (
     _desired,
     control_sample,
 )
+from mrdamper.models.kernels import allowed_interval
 from mrdamper.models.step_dispatch import family_advance, family_force
 
 __all__ = ["compile_loop", "invert_record_packed", "run_loop", "run_loop_packed"]
@@ -45,17 +46,6 @@ P_FORCE: Any = None
 P_ADVANCE: Any = None
 LEAD_FORCE: Any = None
 STEP_INVERSE: Any = None
-
-
-@njit(cache=True)
-def _rate_window(lo: float, hi: float, prev: float, change: float) -> tuple[float, float]:
-    """The inputs within ``[lo, hi]`` and ``change`` of the previous input ``prev`` (the nearest
-    point of ``[lo, hi]`` to the rate window when they do not meet)."""
-    a = max(lo, prev - change)
-    b = min(hi, prev + change)
-    if b < a:
-        a = b = min(max(prev, a), b)
-    return a, b
 
 
 def _lead_force(  # type: ignore[no-untyped-def]
@@ -204,7 +194,7 @@ def _loop(  # type: ignore[no-untyped-def]
         if c_step:
             if k >= 1 and C_ADVANCE(c_form, c_state, xc, vc, e, x_d, v_d, e, dt_c) != 0:
                 return X, F, Fd, E, sat, k * n_sub, -2
-            a, b = (lo, hi) if k == 0 else _rate_window(lo, hi, prev, rate_step)
+            a, b = allowed_interval(k, lo, hi, -1.0, prev, prev, rate_step)
             if ctrl == CTRL_PASSIVE:
                 target = np.nan
                 r = min(max(i_const, a), b)
@@ -321,7 +311,7 @@ def _invert_record(  # type: ignore[no-untyped-def]
     scratch = state.copy()
     prev = lo
     for k in range(n):
-        a, b = (lo, hi) if k == 0 else _rate_window(lo, hi, prev, step_change)
+        a, b = allowed_interval(k, lo, hi, -1.0, prev, prev, step_change)
         j1 = min(n, k + 1 + n_lead)
         target = np.mean(Fd[k + 1 : j1]) if j1 > k + 1 else Fd[k]
         e, err[k] = STEP_INVERSE(

@@ -14,10 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.inverse._forms import ControllerForm, inverse_form
 from mrdamper.control.inverse._inverse_setup import lpv_inverse_fields
 from mrdamper.control.inverse.current import (
@@ -26,12 +27,12 @@ from mrdamper.control.inverse.current import (
     model_input_limits,
     static_map_arrays,
 )
-from mrdamper.control.loop import _quarter_car_kernels as QK
 from mrdamper.control.loop.car import Controller, QuarterCar, QuarterCarResult, Road, positive
+from mrdamper.control.loop.controllers import law_of
 from mrdamper.errors import DataValidationError
+from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = [
-    "CONTROL_CODES",
     "LoopSetup",
     "controller_form",
     "damper_arrays",
@@ -46,17 +47,8 @@ __all__ = [
     "rated_range",
 ]
 
-#: Controller name -> kernel code.
-CONTROL_CODES = {
-    "soft": QK.CTRL_PASSIVE,
-    "hard": QK.CTRL_PASSIVE,
-    "skyhook": QK.CTRL_SKYHOOK,
-    "groundhook": QK.CTRL_GROUNDHOOK,
-    "hybrid": QK.CTRL_HYBRID,
-}
 
-
-def damper_arrays(model: Any) -> dict[str, Any]:
+def damper_arrays(model: DamperModel | None) -> dict[str, Any]:
     """The model as kernel arrays (static map or LPV); unsupported kinds raise TypeError."""
     from mrdamper.models.protocols import scheduled_form
 
@@ -88,7 +80,7 @@ def damper_arrays(model: Any) -> dict[str, Any]:
         )
         return out
     if scheduled_form(model) is not None:
-        out.update(lpv_inverse_fields(model))
+        out.update(lpv_inverse_fields(cast(TransferFunctionModel, model)))
         return out
     comp, power, theta, f0 = static_map_arrays(model)
     out.update(comp=comp, power=power, theta=theta, f0=f0)
@@ -127,7 +119,7 @@ class LoopSetup:
 
 
 def loop_setup(
-    model: Any,
+    model: DamperModel,
     road: Road,
     ctrl: Controller,
     car: QuarterCar,
@@ -153,25 +145,28 @@ def loop_setup(
     lo, hi = input_limits(model) if i_range is None else (float(i_range[0]), float(i_range[1]))
     if not hi >= lo:
         raise DataValidationError("i_range", f"expected low <= high, got {(lo, hi)}")
+    eta = getattr(model, "eta", None)
     if arrays["is_lpv"]:
-        n_sub = _samples_per_sample(road.fs, model.fs, "an LPV damper")
-        if model.eta is not None:
-            arrays["lag"] = float(np.exp(-model.eta / model.fs))
-        n_h = horizon_samples(model.eta, 1.0 / model.fs)
+        fs = cast(TransferFunctionModel, model).fs
+        n_sub = _samples_per_sample(road.fs, fs, "an LPV damper")
+        if eta is not None:
+            arrays["lag"] = float(np.exp(-eta / fs))
+        n_h = horizon_samples(eta, 1.0 / fs)
     else:
         n_h = 1
         n_sub = 1
         if sample is not None:  # a stepped discrete-time model: control at its own rate
             n_sub = _samples_per_sample(road.fs, 1.0 / sample, f"the {model.kind} model")
         # a static map with a drive lag, at the road rate (a stepped model's lag is in its step)
-        if own and getattr(model, "eta", None) is not None:
-            arrays["lag"] = float(np.exp(-model.eta / road.fs))
+        if own and eta is not None:
+            arrays["lag"] = float(np.exp(-eta / road.fs))
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
         raise DataValidationError("substeps", f"expected an int >= 1, got {substeps!r}")
     dt_c = 1.0 / road.fs * n_sub  # control sample [s]
     n_sub *= int(substeps)
     h = 1.0 / (road.fs * substeps)
-    if getattr(model, "kind", None) == "linear" or ctrl.kind in ("soft", "hard"):
+    law = law_of(ctrl.kind)
+    if getattr(model, "kind", None) == "linear" or law.passive:
         lam = 0.0
     elif reg is None:
         lam = (
@@ -182,7 +177,7 @@ def loop_setup(
     else:
         lam = positive("reg", reg, "N per input unit", allow_zero=True)
     step_rate = np.inf if rate is None else positive("rate", rate, "input unit/s") * dt_c
-    i_const = hi if ctrl.kind == "hard" else lo
+    i_const = law.constant_input(lo, hi)
     mr = car.motion_ratio
     # the damper sees mr * (relative motion) and acts with mr * F: scale the plant instead of the
     # model
@@ -213,7 +208,7 @@ def loop_setup(
         n_h=n_h,
         lam=lam,
         step_rate=step_rate,
-        code=CONTROL_CODES[ctrl.kind],
+        code=law.code,
         gains=gains,
         car_arr=car_arr,
         zr=np.ascontiguousarray(zr[: n_ctrl * n_sub + 1]),
@@ -279,7 +274,7 @@ def loop_result(
     )
 
 
-def rated_range(model: Any) -> tuple[float, float] | None:
+def rated_range(model: DamperModel) -> tuple[float, float] | None:
     """The rated input range of the damper behind ``model``'s training records [A] or [V]: the
     input range of the shipped reference damper the virtual rig made them with (provenance
     ``training_damper``), else None (not known)."""
@@ -292,7 +287,7 @@ def rated_range(model: Any) -> tuple[float, float] | None:
     return float(lo), float(hi)
 
 
-def input_limits(model: Any) -> tuple[float, float]:
+def input_limits(model: DamperModel) -> tuple[float, float]:
     """A controller's default input limits: the model's
     (:func:`~mrdamper.control.inverse.current.model_input_limits`) within the rated range of its
     damper when known (:func:`rated_range`; the identified range of a measured current can pass
@@ -304,7 +299,7 @@ def input_limits(model: Any) -> tuple[float, float]:
     return lo, hi
 
 
-def limits_note(model: Any) -> str:
+def limits_note(model: DamperModel) -> str:
     """One line on the controllers' input limits when the rated range narrows the identified
     one (``""`` otherwise)."""
     lo, hi = input_limits(model)
@@ -319,7 +314,7 @@ def limits_note(model: Any) -> str:
     )
 
 
-def input_unit(model: Any) -> str:
+def input_unit(model: DamperModel) -> str:
     """The unit of ``model``'s electrical input: ``"V"`` for a voltage, else ``"A"``."""
     return "V" if getattr(model, "input", "i") == "voltage" else "A"
 
@@ -341,7 +336,7 @@ def divergence_hint(damper: Any) -> str:
     )
 
 
-def default_rate(model: Any, plant_step: float = 1e-3) -> float:
+def default_rate(model: DamperModel, plant_step: float = 1e-3) -> float:
     """Plant rate [Hz]: ``1 / plant_step`` for a static damper; for an LPV damper the smallest
     integer multiple of its model rate whose step is at most ``plant_step``."""
     fs_model = getattr(model, "fs", None)

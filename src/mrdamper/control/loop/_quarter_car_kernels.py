@@ -28,6 +28,7 @@ on the body is ``-F``): 0 passive (constant input ``i_const``), 1 skyhook
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.control.inverse._inverse_kernels import (
@@ -36,17 +37,40 @@ from mrdamper.control.inverse._inverse_kernels import (
     reg_solve_poly,
     reg_solve_static,
 )
-from mrdamper.models.kernels import dahl_step, lpv_coefficients, sp_force1
+from mrdamper.models.kernels import (
+    allowed_interval,
+    dahl_step,
+    held_input,
+    lag_command,
+    lpv_coefficients,
+    sp_force1,
+)
 from mrdamper.models.kernels import poly as _poly
 from mrdamper.models.kernels import zone_input as _u_of
 
 __all__ = ["control_sample", "simulate"]
 
+FloatArray = npt.NDArray[np.float64]
+
 CTRL_PASSIVE, CTRL_SKYHOOK, CTRL_GROUNDHOOK, CTRL_HYBRID = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _deriv(  # pragma: no cover - numba
+    zs: float,
+    vs: float,
+    zu: float,
+    vu: float,
+    zr: float,
+    vr: float,
+    F: float,
+    m_s: float,
+    m_u: float,
+    k_s: float,
+    k_t: float,
+    c_t: float,
+    out: FloatArray,
+) -> None:
     fs = k_s * (zs - zu)
     out[0] = vs
     out[1] = (-fs - F) / m_s
@@ -55,14 +79,16 @@ def _deriv(zs, vs, zu, vu, zr, vr, F, m_s, m_u, k_s, k_t, c_t, out):  # type: ig
 
 
 @njit(cache=True)
-def _between(f0, f1, s, c, n_sub):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _between(f0: float, f1: float, s: int, c: float, n_sub: int) -> float:  # pragma: no cover
     """Force of a discrete-time damper between its samples ``f0`` and ``f1`` [N]: linear in
     time, at Runge-Kutta node ``c`` of plant step ``s`` of the ``n_sub`` in a sample."""
     return f0 + (f1 - f0) * (s + c) / n_sub
 
 
 @njit(cache=True)
-def _desired(ctrl, vs, vu, c_sky, c_gnd, alpha):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _desired(  # pragma: no cover - numba
+    ctrl: int, vs: float, vu: float, c_sky: float, c_gnd: float, alpha: float
+) -> float:
     vrel = vs - vu
     sky = c_sky * vs if vs * vrel > 0.0 else 0.0
     gnd = -c_gnd * vu if -vu * vrel > 0.0 else 0.0
@@ -137,15 +163,7 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
         z_d = dahl_step(z_d, v_prev, v_d, dt_c, inv.stroke)
     v_prev = v_d
     # --- input for this sample
-    a, b = lo, hi
-    if lag >= 0.0 and k >= 1:
-        a = max(lag * rho[k - 1] + (1.0 - lag) * lo, lo)
-        b = min(lag * rho[k - 1] + (1.0 - lag) * hi, hi)
-    if k >= 1:
-        a = max(a, prev - rate_step)
-        b = min(b, prev + rate_step)
-        if b < a:
-            a = b = min(max(prev, a), b)
+    a, b = allowed_interval(k, lo, hi, lag, rho[k - 1], prev, rate_step)
     if ctrl == CTRL_PASSIVE:
         target = np.nan
     else:
@@ -156,14 +174,11 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
             r = min(max(i_const, a), b)
             ok = True
         else:
-            hold = prev
-            if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
-                hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+            hold = held_input(k, lag, prev, w_prev, a, b)
             r, ok = INVERT(
                 form, k, x_d, v_d, target + offset, a, b, prev, hold, cf, y, u, yb, ub, z_d
             )
-        if lag >= 0.0:
-            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         Fk = _poly(cf, r)
         y[k] = Fk - offset
         u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
@@ -173,12 +188,9 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
             r = min(max(i_const, a), b)
             ok = True
         else:
-            hold = prev
-            if lag >= 0.0 and k >= 2:  # previous command held (as in the inverse kernel)
-                hold = min(max(lag * prev + (1.0 - lag) * w_prev, a), b)
+            hold = held_input(k, lag, prev, w_prev, a, b)
             r, ok = INVERT(form, k, x_d, v_d, target + f0, a, b, prev, hold, cf, y, u, yb, ub, z_d)
-        if lag >= 0.0:
-            w_prev = r if k <= 1 else min(max((r - lag * prev) / (1.0 - lag), lo), hi)
+        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0
     rho[k] = r
     mem[0], mem[1], mem[2], mem[3] = r, w_prev, z_d, v_prev

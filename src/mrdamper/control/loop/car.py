@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.control.loop.comfort import weighted_rms
+from mrdamper.control.loop.controllers import LAWS, law_of
 from mrdamper.errors import DataValidationError
 
 __all__ = [
@@ -42,7 +43,8 @@ def positive(name: str, value: Any, unit: str, allow_zero: bool = False) -> floa
     return f
 
 
-CONTROLLERS = ("soft", "hard", "skyhook", "groundhook", "hybrid")
+#: The controllers of the default comparison (the registry :mod:`.controllers`, in its order).
+CONTROLLERS = tuple(LAWS)
 
 
 @dataclass(frozen=True)
@@ -126,10 +128,11 @@ class Controller:
 
     Attributes
     ----------
-    kind : {"soft", "hard", "skyhook", "groundhook", "hybrid"}
-        ``soft`` / ``hard``: constant lowest / highest input. ``skyhook``: desired force
-        ``c_sky z_s'`` when ``z_s' v > 0``, else 0. ``groundhook``: ``-c_ground z_u'`` when
-        ``-z_u' v > 0``, else 0. ``hybrid``: ``alpha`` skyhook + ``(1 - alpha)`` groundhook.
+    kind : str
+        A registered controller (:mod:`mrdamper.control.loop.controllers`; by default ``soft`` /
+        ``hard``: constant lowest / highest input. ``skyhook``: desired force ``c_sky z_s'`` when
+        ``z_s' v > 0``, else 0. ``groundhook``: ``-c_ground z_u'`` when ``-z_u' v > 0``, else 0.
+        ``hybrid``: ``alpha`` skyhook + ``(1 - alpha)`` groundhook).
     c_sky, c_ground : float
         Gains [N s/m] (default 3000 each, about 0.6 of the body's critical damping with the
         defaults).
@@ -143,10 +146,7 @@ class Controller:
     alpha: float = 0.5
 
     def __post_init__(self) -> None:
-        if self.kind not in CONTROLLERS:
-            raise DataValidationError(
-                "controller", f"expected one of {CONTROLLERS}, got {self.kind!r}"
-            )
+        law_of(self.kind)  # one line naming the registered controllers otherwise
         positive("c_sky", self.c_sky, "N s/m", allow_zero=True)
         positive("c_ground", self.c_ground, "N s/m", allow_zero=True)
         if not (0.0 <= float(self.alpha) <= 1.0):

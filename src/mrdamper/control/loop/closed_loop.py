@@ -45,8 +45,9 @@ damper) metrics and checks the numerics.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.export.c_inverse import c_inverse_form, c_kernels, load_c_inverse
 from mrdamper.control.export.fmu_plant import is_fmu
 from mrdamper.control.inverse.step_inverse import (
@@ -65,6 +66,7 @@ from mrdamper.control.loop._loop import (
     loop_setup,
 )
 from mrdamper.control.loop.car import positive
+from mrdamper.control.loop.controllers import law_of
 from mrdamper.control.loop.quarter_car import (
     CONTROLLERS,
     Controller,
@@ -75,6 +77,7 @@ from mrdamper.control.loop.quarter_car import (
     simulate_quarter_car,
 )
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models.base import FittedModel
 from mrdamper.models.protocols import InvertibleModel
 from mrdamper.models.step_dispatch import pack
 
@@ -125,7 +128,7 @@ def resolve_plant(spec: Any) -> Any:
     return load_model(path)
 
 
-def stepped(model: Any, plant: Any = None) -> bool:
+def stepped(model: DamperModel, plant: Any = None) -> bool:
     """True when the loop drives its damper through the damper's per-sample step (another
     ``plant``, or a model without an inverse form); False when ``model`` is its own damper in the
     fused kernel of :func:`~mrdamper.control.loop.quarter_car.simulate_quarter_car`."""
@@ -142,7 +145,7 @@ def _controller(controller: Controller | str) -> Controller:
     return ctrl
 
 
-def check_pair(model: Any, plant: Any) -> None:
+def check_pair(model: DamperModel, plant: Any) -> None:
     """Refuse a plant whose electrical input is another channel than the model's (one line)."""
     mi, pi = getattr(model, "input", None), getattr(plant, "input", None)
     if mi != pi:
@@ -155,7 +158,7 @@ def check_pair(model: Any, plant: Any) -> None:
 
 
 def simulate_closed_loop(
-    model: Any,
+    model: DamperModel,
     road: Road,
     controller: Controller | str = "soft",
     car: QuarterCar | None = None,
@@ -221,7 +224,7 @@ def simulate_closed_loop(
             c_inverse=c_inverse,
         )
     check_pair(model, plant)
-    passive = ctrl.kind in ("soft", "hard")
+    passive = law_of(ctrl.kind).passive
     sc: StepControl | None = None
     arrays = None
     if not invertible:
@@ -229,7 +232,7 @@ def simulate_closed_loop(
             load_c_inverse(model, c_inverse)  # refuses the kind (one line)
         arrays = damper_arrays(None)
         if not passive:
-            sc = _step_control_of(model, 1.0 / road.fs, v_ref)
+            sc = _step_control_of(cast(FittedModel, model), 1.0 / road.fs, v_ref)
     s = loop_setup(
         model,
         road,
@@ -247,7 +250,7 @@ def simulate_closed_loop(
     return _run(model, plant, s, sc, n_grid, bound, c_inverse)
 
 
-def _step_control_of(model: Any, dt_c: float, v_ref: float) -> StepControl:
+def _step_control_of(model: FittedModel, dt_c: float, v_ref: float) -> StepControl:
     try:
         step = model.step()
     except DataValidationError:
@@ -262,7 +265,7 @@ def _step_control_of(model: Any, dt_c: float, v_ref: float) -> StepControl:
 
 
 def _run(
-    model: Any,
+    model: DamperModel,
     plant: Any,
     s: LoopSetup,
     sc: StepControl | None,
@@ -281,7 +284,7 @@ def _run(
                 f"the {plant.kind} plant runs at {1.0 / pstep.dt:g} Hz; the plant step "
                 f"{s.h:g} s must divide its sample time {pstep.dt:g} s",
             )
-    e0 = float(s.gains[3]) if s.ctrl.kind in ("soft", "hard") else s.lo
+    e0 = float(s.gains[3]) if law_of(s.ctrl.kind).passive else s.lo
     p_state = pstep.initial_state(0.0, 0.0, e0)
     p_offset = float(pstep.force(pstep.form, p_state, 0.0, 0.0, e0))
     if sc is None:  # unused by the kernel: the plant's step stands in for the controller's

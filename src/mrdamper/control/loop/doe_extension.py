@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.loop.car import QuarterCar, iso_road
 from mrdamper.control.loop.closed_loop import simulate_closed_loop
 from mrdamper.control.loop.quarter_car_study import default_rate
@@ -81,7 +82,12 @@ def first_model(records: Sequence[Experiment], kind: str = FIRST_KIND, input: st
 
 
 def loop_motion(
-    model: Any, row: ControlRow, duration: float, road_seed: int, rig_fs: float, car: QuarterCar
+    model: DamperModel,
+    row: ControlRow,
+    duration: float,
+    road_seed: int,
+    rig_fs: float,
+    car: QuarterCar,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Damper travel [m] and electrical input [A or V] of one loop run at the rig's rate.
 
@@ -109,7 +115,7 @@ def control_extension(
     damper: FittedModel | None = None,
     *,
     rig: VirtualRig | None = None,
-    model: Any = None,
+    model: DamperModel | None = None,
     rows: tuple[ControlRow, ...] = CONTROL_EXTENSION,
     car: QuarterCar | None = None,
     highpass: float = HIGHPASS,

@@ -19,11 +19,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.damper import DamperModel, SampledModel
 from mrdamper.control.loop._loop import default_rate, input_unit
 from mrdamper.control.loop.closed_loop import check_pair, resolve_plant, simulate_closed_loop
 from mrdamper.control.loop.quarter_car import (
@@ -34,6 +35,7 @@ from mrdamper.control.loop.quarter_car import (
     iso_road,
 )
 from mrdamper.errors import DataValidationError, MrDamperError, SimulationDivergedError
+from mrdamper.models.base import FittedModel
 from mrdamper.models.envelope import ENVELOPE_TOLERANCE, envelope_of, excursions
 from mrdamper.models.levels import check_levels
 
@@ -157,10 +159,11 @@ def _excursion_text(exc: dict[str, float]) -> str:
     return ", ".join(text)
 
 
-def discrete_rate(model: Any) -> float | None:
+def discrete_rate(model: DamperModel) -> float | None:
     """The rate [Hz] of a discrete-time model (an LPV, LTI or NARX step, whose ``dt`` is set), None
     for a continuous-time one: the ``model_fs`` of :func:`oscillation_note`."""
-    return float(model.fs) if getattr(model.step(), "dt", None) is not None else None
+    dt = getattr(cast(FittedModel, model).step(), "dt", None)
+    return None if dt is None else float(cast(SampledModel, model).fs)
 
 
 class NotConvergedError(MrDamperError):
@@ -317,7 +320,7 @@ class FidelityResult:
         return self.input_unit if metric == "mean_current" else METRICS[metric]
 
 
-def _envelope_note(model: Any, r: QuarterCarResult) -> dict[str, float] | None:
+def _envelope_note(model: DamperModel, r: QuarterCarResult) -> dict[str, float] | None:
     trained = dict(getattr(model, "provenance", {}) or {}).get("envelope")
     if not trained:
         return None
@@ -361,7 +364,7 @@ def check_sides(
 
 
 def closed_loop_fidelity(
-    model: Any,
+    model: DamperModel,
     plant: Any,
     *,
     road_classes: Sequence[str] = ("C",),
@@ -496,7 +499,11 @@ def _named(runs: list[dict[str, Any]]) -> str:
 
 
 def grouped_notes(
-    model: Any, runs: list[dict[str, Any]], n_loops: int, car: QuarterCar, model_fs: float | None
+    model: DamperModel,
+    runs: list[dict[str, Any]],
+    n_loops: int,
+    car: QuarterCar,
+    model_fs: float | None,
 ) -> list[str]:
     """One line per finding over every run (refused, diverged, oscillating, beyond the training
     envelope), naming the runs; each run's figures stay in :meth:`FidelityResult.runs_frame`.

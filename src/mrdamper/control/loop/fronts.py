@@ -34,8 +34,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.loop._loop import input_limits
 from mrdamper.control.loop.closed_loop import check_pair, resolve_plant, simulate_closed_loop
+from mrdamper.control.loop.controllers import LAWS
 from mrdamper.control.loop.fidelity import MAX_SUBSTEPS, checked_run, loop_metrics
 from mrdamper.control.loop.quarter_car import Controller, QuarterCar, QuarterCarResult, iso_road
 from mrdamper.control.loop.quarter_car_study import default_rate
@@ -53,19 +55,16 @@ __all__ = [
 
 #: Constant inputs of the passive front, as fractions of the input range [-].
 PASSIVE_LEVELS: tuple[float, ...] = (0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
-#: Gains swept per semi-active controller [N s/m] (hybrid: ``alpha`` [-] x gain).
+#: Gains swept per semi-active controller [N s/m] (hybrid: ``alpha`` [-] x gain): each
+#: registered controller's ``front_gains`` (:mod:`mrdamper.control.loop.controllers`).
 GAIN_GRIDS: dict[str, tuple[float, ...]] = {
-    "skyhook": (500.0, 1000.0, 2000.0, 3000.0, 5000.0, 8000.0, 12000.0, 20000.0),
-    "groundhook": (500.0, 1000.0, 2000.0, 3000.0, 5000.0, 8000.0, 12000.0, 20000.0),
-    "hybrid": (1000.0, 3000.0, 8000.0, 20000.0),
+    name: law.front_gains for name, law in LAWS.items() if law.objectives
 }
 #: Hybrid weights of skyhook swept [-].
 HYBRID_ALPHAS: tuple[float, ...] = (0.25, 0.5, 0.75)
-#: The metric(s) each controller is tuned for.
+#: The metric(s) each controller is tuned for (each controller's ``objectives``).
 OBJECTIVES: dict[str, tuple[str, ...]] = {
-    "skyhook": ("a_w",),
-    "groundhook": ("rms_tyre_load",),
-    "hybrid": ("a_w", "rms_tyre_load"),
+    name: law.objectives for name, law in LAWS.items() if law.objectives
 }
 #: Columns of :meth:`FrontsResult.table`.
 FRONT_COLUMNS: tuple[str, ...] = (
@@ -107,16 +106,18 @@ def _points(
             raise DataValidationError(
                 "grids", f"expected semi-active controllers {tuple(OBJECTIVES)}, got {kind!r}"
             )
+        law = LAWS[kind]
         for g in gains:
-            if kind == "skyhook":
-                out.append((kind, np.nan, Controller(kind, c_sky=g)))
-            elif kind == "groundhook":
-                out.append((kind, np.nan, Controller(kind, c_ground=g)))
-            else:
-                out += [
-                    (kind, np.nan, Controller(kind, c_sky=g, c_ground=g, alpha=a)) for a in alphas
-                ]
+            out += [(kind, np.nan, Controller(kind, **kw)) for kw in law.sweep(g, tuple(alphas))]
     return out
+
+
+def _gains(label: str, ctrl: Controller) -> dict[str, float]:
+    """The gain columns of a row: the gains the point's controller reads, NaN for the others."""
+    reads = () if label == "passive" else LAWS[label].gains
+    return {
+        g: float(getattr(ctrl, g)) if g in reads else np.nan for g in ("c_sky", "c_ground", "alpha")
+    }
 
 
 def _pareto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -285,7 +286,7 @@ class FrontsResult:
         chosen = self.chosen()
         groups = list(df.groupby(["road", "speed_m_s"], sort=False))
         fig, axes = plt.subplots(len(groups), 2, figsize=(7.0, 3.2 * len(groups)), squeeze=False)
-        colours = {"passive": "0.3", "skyhook": "C0", "groundhook": "C2", "hybrid": "C3"}
+        colours = {"passive": "0.3"} | {n: law.colour for n, law in LAWS.items() if law.objectives}
         for k, ((road, sp), g) in enumerate(groups):
             row = axes[k]
             for side, ls, fill in (("predicted", "--", "none"), ("achieved", "-", None)):
@@ -336,7 +337,7 @@ _GAIN = {"a_w": "aw_gain_pct", "rms_tyre_load": "tyre_gain_pct"}
 
 
 def _run_point(
-    model: Any,
+    model: DamperModel,
     plant: Any,
     road: Any,
     ctrl: Controller,
@@ -364,7 +365,7 @@ def _run_point(
 
 
 def gain_fronts(
-    model: Any,
+    model: DamperModel,
     plant: Any = None,
     *,
     road_classes: Sequence[str] = ("C",),
@@ -444,11 +445,7 @@ def gain_fronts(
                             "side": side,
                             "controller": label,
                             "level": level,
-                            "c_sky": ctrl.c_sky if label in ("skyhook", "hybrid") else np.nan,
-                            "c_ground": ctrl.c_ground
-                            if label in ("groundhook", "hybrid")
-                            else np.nan,
-                            "alpha": ctrl.alpha if label == "hybrid" else np.nan,
+                            **_gains(label, ctrl),
                             **out,
                         }
                     )

@@ -34,11 +34,12 @@ the inverse then drives the input to its lowest value as fast as the regularisat
 from __future__ import annotations
 
 from dataclasses import asdict
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.export.c_inverse import c_inverse_form, c_kernels
 from mrdamper.control.inverse.current import driver_command
 from mrdamper.control.loop import _quarter_car_kernels as QK
@@ -60,6 +61,7 @@ from mrdamper.control.loop.car import (
     iso_road,
 )
 from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = [
     "CONTROLLERS",
@@ -76,7 +78,7 @@ __all__ = [
 
 #: Names of the built-in controllers.
 def simulate_quarter_car(
-    model: Any,
+    model: DamperModel,
     road: Road,
     controller: Controller | str = "soft",
     car: QuarterCar | None = None,
@@ -172,12 +174,13 @@ def simulate_quarter_car(
     return loop_result(s, getattr(model, "kind", "damper"), X, F, Fd, cmd, sat)
 
 
-def command_of(model: Any, rho: np.ndarray, s: LoopSetup) -> np.ndarray:
+def command_of(model: DamperModel, rho: np.ndarray, s: LoopSetup) -> np.ndarray:
     """The electrical command that gives the scheduling values ``rho`` (through a drive lag)."""
-    if s.arrays["is_lpv"] and model.eta is not None:
-        return driver_command(rho, model.eta, 1.0 / model.fs, (s.lo, s.hi))
-    if getattr(model, "eta", None) is not None:
-        return driver_command(rho, model.eta, s.dt_c, (s.lo, s.hi))
+    eta = getattr(model, "eta", None)
+    if s.arrays["is_lpv"] and eta is not None:
+        return driver_command(rho, eta, 1.0 / cast(TransferFunctionModel, model).fs, (s.lo, s.hi))
+    if eta is not None:
+        return driver_command(rho, eta, s.dt_c, (s.lo, s.hi))
     return rho
 
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mrdamper.control.damper import DamperModel
 from mrdamper.control.loop._loop import default_rate, limits_note
 from mrdamper.control.loop.closed_loop import simulate_closed_loop, stepped
 from mrdamper.control.loop.quarter_car import (
@@ -184,7 +185,7 @@ class ControllerComparison:
         return fig
 
 
-def _check_authority(model: Any) -> None:
+def _check_authority(model: DamperModel) -> None:
     """Refuse a model identified at one electrical level: its force does not depend on the
     input, so every controller would give the same numbers (no control authority)."""
     from mrdamper.models.levels import check_levels
@@ -193,7 +194,7 @@ def _check_authority(model: Any) -> None:
 
 
 def compare_controllers(
-    model: Any,
+    model: DamperModel,
     *,
     road_classes: Sequence[str] = ("A", "B", "C", "D", "E"),
     bump: bool = True,
@@ -309,7 +310,7 @@ def compare_controllers(
 
 
 def _run(
-    model: Any,
+    model: DamperModel,
     road: Road,
     c: Controller,
     car: QuarterCar | None,
@@ -330,7 +331,7 @@ def _run(
     return checked_run(run)
 
 
-def _checked(model: Any, sim_kw: dict[str, Any]) -> bool:
+def _checked(model: DamperModel, sim_kw: dict[str, Any]) -> bool:
     """Whether the runs take the halving check: a damper run through a continuous-time step (a
     model without an inverse form, or another plant), whose plant step is the damper's
     integration step. A discrete-time damper (LPV, LTI, NARX) runs at its own sample time

@@ -28,6 +28,7 @@ import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models._boucwen import boucwen_rate, sign
+from mrdamper.models._interval import allowed_interval
 
 __all__ = [
     "BOUCWEN",
@@ -358,15 +359,9 @@ def inverse_run(
     prev = lo
     eta = form.p[ETA]
     c = math.exp(-eta * dt)
+    lag = c if eta > 0.0 else -1.0
     for k in range(n):
-        a, b = lo, hi
-        if eta > 0.0 and k == 1:
-            a = b = prev
-        elif eta > 0.0 and k >= 2:
-            a, b = c * prev + (1.0 - c) * lo, c * prev + (1.0 - c) * hi
-        if k >= 1:
-            a = max(a, prev - max_change)
-            b = min(b, prev + max_change)
+        a, b = allowed_interval(k, lo, hi, lag, prev, prev, max_change)
         e[k], sat[k] = inverse_step(form, s, x[k], v[k], F_desired[k], a, b, prev, lam2)
         prev = e[k]
         if k == n - 1:

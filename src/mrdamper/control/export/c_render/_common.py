@@ -20,12 +20,14 @@ from mrdamper.control.inverse.current import (
     model_input_limits,
 )
 from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
 from mrdamper.models.kernels import INVERSE_N_BISECT
 
 __all__ = [
     "BISECT",
     "COMMON",
     "IDENTITY",
+    "INTERVAL_C",
     "INVERSE_RUN",
     "INV_CONST",
     "RUN",
@@ -133,7 +135,7 @@ class Rendered:
 
 
 def fmt_base(
-    model: Any, ctx: Context, lam: float = 0.0, rate_step: float = math.inf
+    model: FittedModel, ctx: Context, lam: float = 0.0, rate_step: float = math.inf
 ) -> dict[str, Any]:
     """Format fields every template uses: prefixes, input limits, inverse settings."""
     lo, hi = model_input_limits(model)
@@ -149,7 +151,7 @@ def fmt_base(
     }
 
 
-def input_note(model: Any) -> str:
+def input_note(model: FittedModel) -> str:
     """Header line of a family with an inverse: the forward step takes the input as given (as
     the model's step: no range policy), the inverse is limited."""
     lo, hi = model_input_limits(model)
@@ -181,6 +183,36 @@ def arr2(a: Any) -> str:
 COMMON = r"""
 static double {p}_dmax(double a, double b) {{ return a > b ? a : b; }}
 static double {p}_dmin(double a, double b) {{ return a < b ? a : b; }}
+"""
+
+#: The inverse's allowed interval in C99, the same rule as
+#: :func:`mrdamper.models.kernels.allowed_interval` (it reads ``P_LO``, ``P_HI``, ``P_RATE_STEP``
+#: and the ``p_dmin`` / ``p_dmax`` helpers of :data:`COMMON`); every renderer's inverse calls it.
+INTERVAL_C = r"""
+/* the admissible [a, b] of rho[k]: input limits, the drive lag's reach (lag >= 0; rho[1] = rho[0]),
+   the rate bound around prev */
+static void {p}_allowed(long k, double lag, double rho_prev, double prev, double *a, double *b)
+{{
+    *a = {P}_LO;
+    *b = {P}_HI;
+    if (lag >= 0.0 && k >= 1) {{
+        if (k == 1) {{
+            *a = rho_prev;
+            *b = rho_prev;
+        }} else {{
+            *a = {p}_dmax(lag * rho_prev + (1.0 - lag) * {P}_LO, {P}_LO);
+            *b = {p}_dmin(lag * rho_prev + (1.0 - lag) * {P}_HI, {P}_HI);
+        }}
+    }}
+    if (k >= 1) {{
+        *a = {p}_dmax(*a, prev - {P}_RATE_STEP);
+        *b = {p}_dmin(*b, prev + {P}_RATE_STEP);
+        if (*b < *a) {{
+            *a = {p}_dmin({p}_dmax(prev, *a), *b);
+            *b = *a;
+        }}
+    }}
+}}
 """
 
 INV_CONST = r"""
@@ -318,7 +350,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
 """
 
 
-def require_dt(model: Any, ctx: Context) -> float:
+def require_dt(model: FittedModel, ctx: Context) -> float:
     """The export's sample time ``ctx.dt`` [s], required by a family without its own rate."""
     if ctx.dt is None:
         raise DataValidationError(
@@ -331,7 +363,7 @@ def require_dt(model: Any, ctx: Context) -> float:
     return float(ctx.dt)
 
 
-def rates_hint(model: Any) -> str:
+def rates_hint(model: FittedModel) -> str:
     """`` (training records at 1000, 200 Hz)`` when the model's provenance lists several training
     intervals (``record_dt``), else ``""``."""
     values = model.provenance.get("record_dt") if hasattr(model, "provenance") else None
@@ -340,7 +372,7 @@ def rates_hint(model: Any) -> str:
     return " (training records at " + ", ".join(f"{1.0 / float(d):g}" for d in values) + " Hz)"
 
 
-def sampled_step(model: Any, ctx: Context) -> tuple[Any, float]:
+def sampled_step(model: FittedModel, ctx: Context) -> tuple[Any, float]:
     """The model's step at the export's sample time (:func:`require_dt`) and the time [s].
 
     The step's default velocity bound (:meth:`~mrdamper.models.base.FittedModel.step_vmax`):
@@ -378,7 +410,7 @@ def solver(fmt: dict[str, Any], args: str, call: str, f_expr: str, df_expr: str)
 
 
 def inverse_settings(
-    model: Any,
+    model: FittedModel,
     reg: float | None,
     v_ref: float,
     rate: float | None,

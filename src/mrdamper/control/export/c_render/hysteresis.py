@@ -29,10 +29,10 @@ fixed into the code (default :func:`~mrdamper.control.inverse.current.default_re
 from __future__ import annotations
 
 import math
-from typing import Any
 
 from mrdamper.control.export.c_render._common import (
     COMMON,
+    INTERVAL_C,
     STEP_WRAPPER,
     Context,
     Rendered,
@@ -43,6 +43,7 @@ from mrdamper.control.export.c_render._common import (
     step_state,
 )
 from mrdamper.models import kernels as HK
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_hysteresis", "render_hysteresis_form"]
 
@@ -226,15 +227,7 @@ double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, doub
     double a = {P}_LO, b = {P}_HI, e;
     if (s->status == 0 && s->k > 0) {{
         s->status = {p}_step_advance(s->s, s->x, s->v, s->e, x, v, s->e, {P}_DT);
-        if ({P}_LAG >= 0.0 && s->k == 1) {{ /* the lag starts at rest */
-            a = s->e;
-            b = s->e;
-        }} else if ({P}_LAG >= 0.0) {{ /* what a command in the range reaches */
-            a = {P}_LAG * s->e + (1.0 - {P}_LAG) * {P}_LO;
-            b = {P}_LAG * s->e + (1.0 - {P}_LAG) * {P}_HI;
-        }}
-        a = {p}_dmax(a, s->e - {P}_RATE_STEP);
-        b = {p}_dmin(b, s->e + {P}_RATE_STEP);
+        {p}_allowed(s->k, {P}_LAG, s->e, s->e, &a, &b);
     }}
     if (s->status != 0) {{
         if (F_out) *F_out = NAN;
@@ -318,7 +311,9 @@ def render_hysteresis_form(
     pieces.append(_STEP.format(z_loop=z_loop, **fmt))
     pieces.append(STEP_WRAPPER.format(p=p, P=P, n=2))
     if inverse is not None:
-        pieces.append(_INVERSE.format(**fmt, **inverse))
+        inv_c = _INVERSE.format(**fmt, **inverse)
+        at = inv_c.index(f"double {p}_inverse_step(")
+        pieces.append(inv_c[:at] + INTERVAL_C.format(**fmt) + inv_c[at:])
     lag = "with a drive lag" if form.p[0] > 0.0 else "no drive lag"  # p[0]: eta
     return Rendered(
         step_state(p, 2, f"evolutionary variable z, lagged input u ({family}, {lag})"),
@@ -334,7 +329,7 @@ def render_hysteresis_form(
     )
 
 
-def render_hysteresis(model: Any, ctx: Context) -> Rendered:
+def render_hysteresis(model: FittedModel, ctx: Context) -> Rendered:
     """C of the model's step at ``ctx.dt`` (:func:`sampled_step`; the sample time is required)
     and of its inverse (``ctx.reg`` or the default weight at ``ctx.v_ref`` and ``dt``;
     ``ctx.rate``)."""
@@ -342,12 +337,13 @@ def render_hysteresis(model: Any, ctx: Context) -> Rendered:
     lam, rate_step = inverse_settings(model, ctx.reg, ctx.v_ref, ctx.rate, dt)
     base = fmt_base(model, ctx, lam, rate_step)
     lo, hi = model.input_range
+    eta = float(step.form.p[0])  # the step form's drive-lag rate [1/s] (0: none)
     inverse = {
         "lo": base["lo"],
         "hi": base["hi"],
         "lam2": base["lam2"],
         "rate_step": base["rate_step"],
-        "lag": lit(math.exp(-model.eta * dt) if model.eta > 0.0 else -1.0),
+        "lag": lit(math.exp(-eta * dt) if eta > 0.0 else -1.0),
         "lo_text": repr(float(lo)),
         "hi_text": repr(float(hi)),
         "lam_text": repr(lam),

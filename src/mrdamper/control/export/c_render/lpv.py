@@ -8,12 +8,11 @@ input. The arithmetic follows the compiled Python kernels operation by operation
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from mrdamper.control.export.c_render._common import (
     COMMON,
+    INTERVAL_C,
     INV_CONST,
     Context,
     Rendered,
@@ -28,6 +27,7 @@ from mrdamper.control.export.c_render._common import (
 from mrdamper.control.inverse import _inverse_kernels as K
 from mrdamper.control.inverse.current import horizon_samples
 from mrdamper.models.kernels import LPV_N_HEAD as N_HEAD
+from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = ["render_lpv"]
 
@@ -323,23 +323,7 @@ LPV_INVERSE = (
     F_desired -= {P}_STIFFNESS * x; /* the stiffness force is not the input's to give */
     {p}_advance(s, v);
     {p}_coefficients(s, cf);
-    if ({P}_LAG >= 0.0 && s->k >= 1) {{
-        if (s->k == 1) {{
-            a = s->rho;
-            b = s->rho;
-        }} else {{
-            a = {p}_dmax({P}_LAG * s->rho + (1.0 - {P}_LAG) * {P}_LO, {P}_LO);
-            b = {p}_dmin({P}_LAG * s->rho + (1.0 - {P}_LAG) * {P}_HI, {P}_HI);
-        }}
-    }}
-    if (s->k >= 1) {{
-        a = {p}_dmax(a, prev - {P}_RATE_STEP);
-        b = {p}_dmin(b, prev + {P}_RATE_STEP);
-        if (b < a) {{
-            a = {p}_dmin({p}_dmax(prev, a), b);
-            b = a;
-        }}
-    }}
+    {p}_allowed(s->k, {P}_LAG, s->rho, prev, &a, &b);
     hold = prev;
     if ({P}_LAG >= 0.0 && s->k >= 2) hold ="""
     r""" {p}_dmin({p}_dmax({P}_LAG * prev + (1.0 - {P}_LAG) * s->w, a), b);
@@ -359,7 +343,7 @@ LPV_INVERSE = (
 )
 
 
-def render_lpv(model: Any, ctx: Context) -> Rendered:
+def render_lpv(model: TransferFunctionModel, ctx: Context) -> Rendered:
     """C of an LPV or LTI model at its own rate ``fs``, with the inverse where the model has one."""
     from mrdamper.models.protocols import InvertibleModel
 
@@ -424,7 +408,7 @@ def render_lpv(model: Any, ctx: Context) -> Rendered:
             f"{p}_poly(cf, {P}_N_P, {{r}})",
             f"{p}_dpoly(cf, {P}_N_P, {{r}})",
         )
-        body += LPV_HORIZON.format(**fmt) + LPV_INVERSE.format(**fmt)
+        body += LPV_HORIZON.format(**fmt) + INTERVAL_C.format(**fmt) + LPV_INVERSE.format(**fmt)
     return Rendered(
         state,
         body,

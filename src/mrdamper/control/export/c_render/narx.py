@@ -24,6 +24,7 @@ from mrdamper.control.export.c_render._common import (
 )
 from mrdamper.errors import DataValidationError
 from mrdamper.models import kernels as NK
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_narx", "render_narx_form"]
 
@@ -156,7 +157,7 @@ def render_narx_form(form: NK.NARXForm, dt: float, ctx: Context) -> Rendered:
     )
 
 
-def render_narx(model: Any, ctx: Context) -> Rendered:
+def render_narx(model: FittedModel, ctx: Context) -> Rendered:
     """C of ``model.step()`` at the model's rate (the first ``p`` forces are 0 N)."""
     step = model.step()
     assert step.dt is not None

@@ -15,8 +15,6 @@ input).
 
 from __future__ import annotations
 
-from typing import Any
-
 from mrdamper.control.export.c_render._common import (
     COMMON,
     STEP_WRAPPER,
@@ -28,6 +26,7 @@ from mrdamper.control.export.c_render._common import (
     step_state,
 )
 from mrdamper.models import kernels as PK
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_p15", "render_p15_form"]
 
@@ -298,7 +297,7 @@ def render_p15_form(form: PK.P15Form, dt: float, ctx: Context) -> Rendered:
     )
 
 
-def render_p15(model: Any, ctx: Context) -> Rendered:
+def render_p15(model: FittedModel, ctx: Context) -> Rendered:
     """C of the model's step at ``ctx.dt`` [s] (:func:`sampled_step`), the sample time of
     ``<name>_step``."""
     step, dt = sampled_step(model, ctx)

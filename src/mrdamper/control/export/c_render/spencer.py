@@ -13,8 +13,6 @@ damping). The input is not clipped (the Python step does not clip either).
 
 from __future__ import annotations
 
-from typing import Any
-
 from mrdamper.control.export.c_render._common import (
     STEP_WRAPPER,
     Context,
@@ -24,6 +22,7 @@ from mrdamper.control.export.c_render._common import (
     step_state,
 )
 from mrdamper.models import kernels as SK
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_spencer", "render_spencer_form"]
 
@@ -168,7 +167,7 @@ def render_spencer_form(form: SK.SpencerForm, dt: float, ctx: Context) -> Render
     )
 
 
-def render_spencer(model: Any, ctx: Context) -> Rendered:
+def render_spencer(model: FittedModel, ctx: Context) -> Rendered:
     """C of the model's step at ``ctx.dt`` (:func:`sampled_step`; the sample time is
     required)."""
     step, dt = sampled_step(model, ctx)

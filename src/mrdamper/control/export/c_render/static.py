@@ -3,10 +3,9 @@ d(i) x + f0``, each component a polynomial in the input) and their regularised i
 
 from __future__ import annotations
 
-from typing import Any
-
 from mrdamper.control.export.c_render._common import (
     COMMON,
+    INTERVAL_C,
     INV_CONST,
     Context,
     Rendered,
@@ -19,6 +18,7 @@ from mrdamper.control.export.c_render._common import (
     solver,
 )
 from mrdamper.errors import DataValidationError
+from mrdamper.models.base import FittedModel
 
 __all__ = ["render_static"]
 
@@ -63,10 +63,7 @@ double {p}_step({p}_state *s, double x, double v, double input)
 double {p}_inverse_step({p}_state *s, double x, double v, double F_desired, double *F_out)
 {{
     double a = {P}_LO, b = {P}_HI, prev = s->prev, best;
-    if (s->k >= 1) {{
-        a = {p}_dmax(a, prev - {P}_RATE_STEP);
-        b = {p}_dmin(b, prev + {P}_RATE_STEP);
-    }}
+    {p}_allowed(s->k, -1.0, prev, prev, &a, &b);
     best = {p}_solve(x, v, F_desired, a, b, prev);
     s->prev = best;
     s->k += 1;
@@ -127,13 +124,14 @@ static double {p}_dforce(double x, double v, double i)
 """
 
 
-def render_static(model: Any, ctx: Context) -> Rendered:
+def render_static(model: FittedModel, ctx: Context) -> Rendered:
     """C of a static map and its inverse (any sample rate; ``ctx.dt`` sets the rate bound's and
     the default regularisation's interval, by default the quarter car's control sample)."""
-    if getattr(model, "eta", None) is not None:
+    eta = getattr(model, "eta", None)
+    if eta is not None:
         raise DataValidationError(
             "model",
-            f"C export of a static {model.kind} map with a drive lag (eta = {model.eta:g} 1/s) is "
+            f"C export of a static {model.kind} map with a drive lag (eta = {eta:g} 1/s) is "
             "not implemented; export the map without the lag or an LPV model with its drive lag",
         )
     p = ctx.p
@@ -167,7 +165,7 @@ def render_static(model: Any, ctx: Context) -> Rendered:
     body += solver(
         fmt, "double x, double v", "x, v", f"{p}_force(x, v, {{r}})", f"{p}_dforce(x, v, {{r}})"
     )
-    body += ("double {p}_inverse_step" + inv).format(**fmt)
+    body += INTERVAL_C.format(**fmt) + ("double {p}_inverse_step" + inv).format(**fmt)
     return Rendered(
         state,
         body,
