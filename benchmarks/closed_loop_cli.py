@@ -1,0 +1,142 @@
+"""Closed-loop fidelity on the documented command-line path, stored as ``results/closed_loop_*.csv``.
+
+Runs, in a temporary folder and each in a fresh process, the recipe of ``docs/control.md``
+("The documented recipe"):
+
+    mrdamper rig doe --out doe-ctrl --scale SCALE --extension control --force
+    mrdamper fit lpv doe-ctrl --out lpv.json --force
+    mrdamper quartercar lpv.json --plant rig --roads B,C,D --speed SPEED --seed SEED \\
+        --out cl-SPEED-SEED --force          # for SPEED in 10, 25 and SEED in 0, 1, 2
+
+and writes every ``closed_loop.csv`` row (with its ``seed`` and the ``outside_stroke`` flag the
+command writes) to ``OUT``, a CSV whose ``#`` header lines give the command, the commit, the UTC
+date, the load average and the recipe. It prints the summary
+(:func:`mrdamper.control.stroke_cells.fidelity_summary`): per metric, the worst |error| over the
+cells the rig's stroke covers and over those outside it, against the targets.
+
+Run (about 5 min of CPU time at ``--scale 0.1``)::
+
+    PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale 0.1 --out results/closed_loop_tenth.csv
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+from mrdamper.control.stroke_cells import fidelity_summary
+
+REPO = Path(__file__).resolve().parents[1]
+SPEEDS = (10, 25)
+SEEDS = (0, 1, 2)
+ROADS = "B,C,D"
+
+
+def recipe(scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS) -> list[list[str]]:
+    """The command lines of the recipe (arguments after ``mrdamper``)."""
+    cmds = [
+        ["rig", "doe", "--out", "doe-ctrl", "--scale", f"{scale:g}", "--extension", "control"],
+        ["fit", "lpv", "doe-ctrl", "--out", "lpv.json"],
+    ]
+    for sp in speeds:
+        for s in seeds:
+            cmds.append(
+                ["quartercar", "lpv.json", "--plant", "rig", "--roads", roads, "--speed", str(sp)]
+                + ["--seed", str(s), "--out", f"cl-{sp}-{s}"]
+            )
+    return [c + ["--force"] for c in cmds]
+
+
+def run_recipe(
+    folder: Path, scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS
+) -> pd.DataFrame:
+    """Run the recipe in ``folder``; every ``closed_loop.csv`` row, with its ``seed``."""
+    env = dict(os.environ, MPLBACKEND="Agg")
+    for cmd in recipe(scale, speeds, seeds, roads):
+        proc = subprocess.run(
+            [sys.executable, "-m", "mrdamper", *cmd],
+            cwd=folder,
+            capture_output=True,
+            text=True,
+            env=env,
+            check=False,
+        )
+        if proc.returncode != 0:
+            raise SystemExit(f"mrdamper {' '.join(cmd)} failed:\n{proc.stderr}")
+    tables = [
+        pd.read_csv(folder / f"cl-{sp}-{s}" / "closed_loop.csv").assign(seed=s)
+        for sp in speeds
+        for s in seeds
+    ]
+    return pd.concat(tables, ignore_index=True)
+
+
+def _commit() -> str:
+    try:
+        head = subprocess.run(
+            ["git", "-C", str(REPO), "rev-parse", "--short=12", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(REPO), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+dirty" if dirty else "")
+
+
+def write_table(table: pd.DataFrame, out: Path, scale: float, command: str) -> None:
+    """``table`` as CSV with a ``#`` header (command, commit, date, load, recipe), atomically."""
+    head = [
+        f"# command: {command}",
+        f"# commit: {_commit()}",
+        f"# date: {dt.datetime.now(dt.UTC).strftime('%Y-%m-%dT%H:%M:%SZ')}",
+        "# load_avg: " + " ".join(f"{x:.2f}" for x in os.getloadavg()),
+        f"# cpus: {os.cpu_count()}",
+        *(f"# recipe: mrdamper {' '.join(c)}" for c in recipe(scale)),
+    ]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    text = "\n".join(head) + "\n" + table.to_csv(index=False, float_format="%.6g")
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_table(path: Path) -> pd.DataFrame:
+    """A table written by :func:`write_table` (the ``#`` lines skipped)."""
+    return pd.read_csv(path, comment="#")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, required=True, help="CSV to write")
+    ap.add_argument("--scale", type=float, default=0.1, help="DoE duration factor [-]")
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="closed-loop-cli-") as tmp:
+        table = run_recipe(Path(tmp), a.scale)
+    command = f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g} --out {a.out}"
+    write_table(table, a.out, a.scale, command)
+    with pd.option_context("display.width", 200, "display.max_columns", 20):
+        print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    print(f"wrote {a.out}")
+
+
+if __name__ == "__main__":
+    main()
