@@ -1,4 +1,4 @@
-"""Closed-loop fidelity on the documented command-line path, stored as ``results/closed_loop_*.csv``.
+"""Closed-loop fidelity on the documented command-line path, stored under ``results/``.
 
 Runs, in a temporary folder and each in a fresh process, the recipe of ``docs/control.md``
 ("The documented recipe"):
@@ -16,7 +16,8 @@ cells the rig's stroke covers and over those outside it, against the targets.
 
 Run (about 5 min of CPU time at ``--scale 0.1``)::
 
-    PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale 0.1 --out results/closed_loop_tenth.csv
+    PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale 0.1 \\
+        --out results/closed_loop_tenth.csv
 """
 
 from __future__ import annotations
@@ -131,7 +132,9 @@ def main() -> None:
     a = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="closed-loop-cli-") as tmp:
         table = run_recipe(Path(tmp), a.scale)
-    command = f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g} --out {a.out}"
+    command = (
+        f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g} --out {a.out}"
+    )
     write_table(table, a.out, a.scale, command)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))

@@ -141,10 +141,10 @@ def fidelity_summary(
             {
                 "metric": metric,
                 "target_pct": target,
-                "covered_cells": int(len(inside)),
+                "covered_cells": len(inside),
                 "worst_covered_pct": w_in,
                 "where_covered": at_in,
-                "outside_cells": int(len(outside)),
+                "outside_cells": len(outside),
                 "worst_outside_pct": w_out,
                 "where_outside": at_out,
                 "holds": "" if np.isnan(target) else ("yes" if w_in <= target else "no"),
