@@ -125,6 +125,37 @@ def read_table(path: Path) -> pd.DataFrame:
     return pd.read_csv(path, comment="#")
 
 
+#: How the metrics read in the documentation's table.
+LABELS = {
+    "a_w": "a_w",
+    "rms_acc": "RMS acceleration",
+    "rms_tyre_load": "RMS tyre load",
+    "rms_travel": "RMS travel",
+    "rms_tracking": "force tracking",
+    "mean_current": "mean current",
+}
+
+
+def summary_markdown(table: pd.DataFrame) -> str:
+    """The summary of ``table`` as the Markdown table ``docs/control.md`` quotes."""
+    summ = fidelity_summary(table)
+    lines = [
+        (
+            "| metric | target | worst, cells within the stroke | where | worst, cells beyond it "
+            "| where | holds |"
+        ),
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in summ.itertuples():
+        target = "-" if pd.isna(r.target_pct) else f"{r.target_pct:g} %"
+        lines.append(
+            f"| {LABELS.get(r.metric, r.metric)} | {target} | {r.worst_covered_pct:.1f} % "
+            f"({r.covered_cells} rows) | {r.where_covered} | {r.worst_outside_pct:.1f} % "
+            f"({r.outside_cells} rows) | {r.where_outside} | {r.holds or '-'} |"
+        )
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True, help="CSV to write")

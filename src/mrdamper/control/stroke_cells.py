@@ -25,7 +25,7 @@ import pandas as pd
 
 from mrdamper.models.envelope import ENVELOPE_TOLERANCE
 
-__all__ = ["CELL", "TARGETS", "fidelity_summary", "flag_cells", "stroke_note"]
+__all__ = ["CELL", "TARGETS", "envelope_left", "fidelity_summary", "flag_cells", "stroke_note"]
 
 #: The columns that name a cell of the closed-loop table.
 CELL = ("controller", "road", "speed_m_s")
@@ -79,6 +79,24 @@ def flag_cells(table: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     out["stroke_ratio"] = ratio
     out["outside_stroke"] = (ratio > 1.0 + ENVELOPE_TOLERANCE).to_numpy()
     return out
+
+
+def envelope_left(run: Mapping[str, object]) -> str:
+    """The training-envelope dimensions a run (a :meth:`~mrdamper.control.fidelity.
+    FidelityResult.runs_frame` row) leaves, largest first (``"stroke x2.3, velocity x1.2"``;
+    beyond ``1 +`` :data:`~mrdamper.models.envelope.ENVELOPE_TOLERANCE`); ``""`` within it or
+    when the model carries no envelope. A switching input the training never had reads
+    ``"switching while moving (new)"``."""
+    out = []
+    for key, value in run.items():
+        if not str(key).startswith("excursion_"):
+            continue
+        v = float(value)  # type: ignore[arg-type]
+        if v == np.inf:
+            out.append((np.inf, f"{str(key).removeprefix('excursion_')} while moving (new)"))
+        elif np.isfinite(v) and v > 1.0 + ENVELOPE_TOLERANCE:
+            out.append((v, f"{str(key).removeprefix('excursion_')} x{v:.2g}"))
+    return ", ".join(text for _, text in sorted(out, key=lambda t: -t[0]))
 
 
 def stroke_note(flagged: pd.DataFrame) -> str | None:
