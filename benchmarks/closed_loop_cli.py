@@ -8,7 +8,8 @@ Runs, in a temporary folder and each in a fresh process, the recipe of ``docs/co
     mrdamper quartercar lpv.json --plant rig --roads B,C,D --speed SPEED --seed SEED \\
         --out cl-SPEED-SEED --force          # for SPEED in 10, 25 and SEED in 0, 1, 2
 
-and writes every ``closed_loop.csv`` row (with its ``seed`` and the ``outside_stroke`` flag the
+(``--extension none``: the same on Table II alone) and writes every ``closed_loop.csv`` row
+(with its ``seed`` and the ``outside_stroke`` flag the
 command writes) to ``OUT``, a CSV whose ``#`` header lines give the command, the commit, the UTC
 date, the load average and the recipe. It prints the summary
 (:func:`mrdamper.control.stroke_cells.fidelity_summary`): per metric, the worst |error| over the
@@ -40,10 +41,13 @@ SEEDS = (0, 1, 2)
 ROADS = "B,C,D"
 
 
-def recipe(scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS) -> list[list[str]]:
-    """The command lines of the recipe (arguments after ``mrdamper``)."""
+def recipe(
+    scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS, extension: str = "control"
+) -> list[list[str]]:
+    """The command lines of the recipe (arguments after ``mrdamper``; ``extension="none"``: the
+    same on Table II alone)."""
     cmds = [
-        ["rig", "doe", "--out", "doe-ctrl", "--scale", f"{scale:g}", "--extension", "control"],
+        ["rig", "doe", "--out", "doe-ctrl", "--scale", f"{scale:g}", "--extension", extension],
         ["fit", "lpv", "doe-ctrl", "--out", "lpv.json"],
     ]
     for sp in speeds:
@@ -56,11 +60,18 @@ def recipe(scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS) -> list
 
 
 def run_recipe(
-    folder: Path, scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS
+    folder: Path,
+    scale: float,
+    speeds=SPEEDS,
+    seeds=SEEDS,
+    roads: str = ROADS,
+    extension: str = "control",
 ) -> pd.DataFrame:
     """Run the recipe in ``folder``; every ``closed_loop.csv`` row, with its ``seed``."""
-    env = dict(os.environ, MPLBACKEND="Agg")
-    for cmd in recipe(scale, speeds, seeds, roads):
+    # this checkout's package, whatever the folder the commands run in
+    path = os.pathsep.join([str(REPO / "src"), os.environ.get("PYTHONPATH", "")])
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path.rstrip(os.pathsep))
+    for cmd in recipe(scale, speeds, seeds, roads, extension):
         proc = subprocess.run(
             [sys.executable, "-m", "mrdamper", *cmd],
             cwd=folder,
@@ -98,7 +109,9 @@ def _commit() -> str:
     return head + ("+dirty" if dirty else "")
 
 
-def write_table(table: pd.DataFrame, out: Path, scale: float, command: str) -> None:
+def write_table(
+    table: pd.DataFrame, out: Path, scale: float, command: str, extension: str = "control"
+) -> None:
     """``table`` as CSV with a ``#`` header (command, commit, date, load, recipe), atomically."""
     head = [
         f"# command: {command}",
@@ -106,7 +119,7 @@ def write_table(table: pd.DataFrame, out: Path, scale: float, command: str) -> N
         f"# date: {dt.datetime.now(dt.UTC).strftime('%Y-%m-%dT%H:%M:%SZ')}",
         "# load_avg: " + " ".join(f"{x:.2f}" for x in os.getloadavg()),
         f"# cpus: {os.cpu_count()}",
-        *(f"# recipe: mrdamper {' '.join(c)}" for c in recipe(scale)),
+        *(f"# recipe: mrdamper {' '.join(c)}" for c in recipe(scale, extension=extension)),
     ]
     out.parent.mkdir(parents=True, exist_ok=True)
     text = "\n".join(head) + "\n" + table.to_csv(index=False, float_format="%.6g")

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -30,6 +31,8 @@ DOC = REPO_ROOT / "docs" / "control.md"
 KINDS = ("sp1", "sp2", "lpv")
 #: The closed-loop check of the ranking test (short: the ranking only needs the order).
 LOOP = {"roads": "B", "speeds": "10", "duration": "4"}
+#: The commands run this checkout's package.
+ENV = dict(os.environ, PYTHONPATH=str(REPO_ROOT / "src"), MPLBACKEND="Agg")
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +95,7 @@ def test_select_for_control_ranks_kinds_by_their_closed_loop_error(recipe) -> No
     args += [a for k in KINDS for a in ("-m", k)]
     args += ["--loop-roads", LOOP["roads"], "--loop-speeds", LOOP["speeds"]]
     args += ["--loop-duration", LOOP["duration"], "--csv", str(csv), "--no-progress"]
-    proc = subprocess.run(args, capture_output=True, text=True, check=False)
+    proc = subprocess.run(args, capture_output=True, text=True, check=False, env=ENV)
     assert proc.returncode == 0, proc.stderr
     ranked = pd.read_csv(csv)
     assert (ranked["error"].fillna("") == "").all()
@@ -103,7 +106,7 @@ def test_select_for_control_ranks_kinds_by_their_closed_loop_error(recipe) -> No
         model = folder / "lpv.json" if kind == "lpv" else folder / f"{kind}.json"
         if kind != "lpv":
             fit = [sys.executable, "-m", "mrdamper", "fit", kind, str(doe), "--out", str(model)]
-            subprocess.run(fit, capture_output=True, text=True, check=True)
+            subprocess.run(fit, capture_output=True, text=True, check=True, env=ENV)
         measured[kind] = _closed_loop_worst(model)
     order = sorted(KINDS, key=measured.__getitem__)
     assert list(ranked["model"]) == order, (ranked[["model", "closed_loop_worst_pct"]], measured)
