@@ -163,10 +163,23 @@ def summary_markdown(table: pd.DataFrame) -> str:
         target = "-" if pd.isna(r.target_pct) else f"{r.target_pct:g} %"
         lines.append(
             f"| {LABELS.get(r.metric, r.metric)} | {target} | {r.worst_covered_pct:.1f} % "
-            f"({r.covered_cells} rows) | {r.where_covered} | {r.worst_outside_pct:.1f} % "
-            f"({r.outside_cells} rows) | {r.where_outside} | {r.holds or '-'} |"
+            f"({r.covered_cells} cells) | {r.where_covered} | {r.worst_outside_pct:.1f} % "
+            f"({r.outside_cells} cells) | {r.where_outside} | {r.holds or '-'} |"
         )
     return "\n".join(lines)
+
+
+def coverage_sentence(table: pd.DataFrame) -> str:
+    """How many cells lie beyond the training stroke, per road, as ``docs/control.md`` says it."""
+    cells = table.drop_duplicates(["controller", "road", "speed_m_s", "seed"])
+    per_road = ", ".join(
+        f"ISO {road} {int(g['outside_stroke'].sum())} of {len(g)}"
+        for road, g in cells.groupby("road")
+    )
+    return (
+        f"{int(cells['outside_stroke'].sum())} of the {len(cells)} cells ({per_road}; at most "
+        f"{cells['stroke_ratio'].max():.2g} times the training span)"
+    )
 
 
 def main() -> None:
@@ -182,6 +195,7 @@ def main() -> None:
     write_table(table, a.out, a.scale, command)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    print(coverage_sentence(table))
     print(f"wrote {a.out}")
 
 

@@ -53,7 +53,9 @@ def test_the_quoted_table_is_rendered_from_the_stored_result(bench) -> None:  # 
     assert set(stored["road"]) == {"B", "C", "D"}
     head = [ln for ln in RESULT.read_text().splitlines() if ln.startswith("# command:")]
     assert head and "benchmarks/closed_loop_cli.py --scale 0.1" in head[0]
+    doc = " ".join(DOC.read_text(encoding="utf-8").split())  # a sentence may wrap
     assert bench.summary_markdown(stored) in DOC.read_text(encoding="utf-8")
+    assert bench.coverage_sentence(stored) in doc
 
 
 def test_the_recipe_reproduces_the_stored_rows(recipe, bench) -> None:  # type: ignore[no-untyped-def]
