@@ -182,6 +182,24 @@ def coverage_sentence(table: pd.DataFrame) -> str:
     )
 
 
+def headline_sentence(table: pd.DataFrame) -> str:
+    """The README's figures: the worst |error| [%] per metric group, within and beyond it."""
+    summ = fidelity_summary(table).set_index("metric")
+
+    def worst(metrics: tuple[str, ...], column: str) -> str:
+        return f"{max(float(summ.loc[m, column]) for m in metrics):.1f} %"
+
+    comfort = ("a_w", "rms_acc", "rms_tyre_load")
+    loop = ("rms_travel", "rms_tracking")
+    return (
+        f"within the stroke, comfort and road holding within {worst(comfort, 'worst_covered_pct')}"
+        f" (a_w {worst(('a_w',), 'worst_covered_pct')}), travel and tracking within "
+        f"{worst(loop, 'worst_covered_pct')}; beyond it, comfort and road holding within "
+        f"{worst(comfort, 'worst_outside_pct')}, travel and tracking within "
+        f"{worst(loop, 'worst_outside_pct')}"
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True, help="CSV to write")
@@ -196,6 +214,7 @@ def main() -> None:
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
     print(coverage_sentence(table))
+    print(headline_sentence(table))
     print(f"wrote {a.out}")
 
 

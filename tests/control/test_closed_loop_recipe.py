@@ -56,6 +56,9 @@ def test_the_quoted_table_is_rendered_from_the_stored_result(bench) -> None:  # 
     doc = " ".join(DOC.read_text(encoding="utf-8").split())  # a sentence may wrap
     assert bench.summary_markdown(stored) in DOC.read_text(encoding="utf-8")
     assert bench.coverage_sentence(stored) in doc
+    readme = " ".join((REPO_ROOT / "README.md").read_text(encoding="utf-8").split())
+    assert bench.headline_sentence(stored) in readme
+    assert bench.coverage_sentence(stored) in readme
 
 
 def test_the_recipe_reproduces_the_stored_rows(recipe, bench) -> None:  # type: ignore[no-untyped-def]
