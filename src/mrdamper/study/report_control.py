@@ -273,8 +273,9 @@ def _ranking_block(res: StudyResult, cr: ControlRelevance, table: Callable[..., 
         head = (
             "<p><b>Which model for a controller?</b> The open-loop ranking (mean free-run ESR on "
             "the left-out records) beside the closed-loop one (worst |error| of a_w, RMS "
-            "acceleration, tyre load, travel and tracking against the rig's damper, over the "
-            "cells whose loop stays within the model's training envelope):</p>"
+            "acceleration, tyre load, travel and tracking against the rig's damper over the "
+            "cells, and apart over those whose loop stays within the model's training "
+            "envelope):</p>"
         )
     else:
         head = (
