@@ -204,13 +204,18 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True, help="CSV to write")
     ap.add_argument("--scale", type=float, default=0.1, help="DoE duration factor [-]")
+    ap.add_argument(
+        "--extension", default="control", choices=("control", "none"), help="rig doe --extension"
+    )
     a = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="closed-loop-cli-") as tmp:
-        table = run_recipe(Path(tmp), a.scale)
+        table = run_recipe(Path(tmp), a.scale, extension=a.extension)
+    ext = "" if a.extension == "control" else f" --extension {a.extension}"
     command = (
-        f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g} --out {a.out}"
+        f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g}{ext} "
+        f"--out {a.out}"
     )
-    write_table(table, a.out, a.scale, command)
+    write_table(table, a.out, a.scale, command, a.extension)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
     print(coverage_sentence(table))
