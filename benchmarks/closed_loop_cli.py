@@ -200,6 +200,21 @@ def headline_sentence(table: pd.DataFrame) -> str:
     )
 
 
+def overall_sentence(table: pd.DataFrame) -> str:
+    """The worst |error| [%] per metric over every cell, with where it lies."""
+    parts = []
+    for metric in ("a_w", "rms_acc", "rms_tyre_load", "rms_travel", "rms_tracking"):
+        rows = table[table["metric"] == metric].reset_index(drop=True)
+        err = rows["error_pct"].abs()
+        r = rows.loc[err.idxmax()]
+        parts.append(
+            f"{LABELS[metric]} {err.max():.1f} % ({r['controller']} {r['road']} @ "
+            f"{r['speed_m_s']:g} m/s)"
+        )
+    n = len(table.drop_duplicates(["controller", "road", "speed_m_s", "seed"]))
+    return f"worst over the {n} cells: " + ", ".join(parts)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True, help="CSV to write")
@@ -220,6 +235,7 @@ def main() -> None:
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
     print(coverage_sentence(table))
     print(headline_sentence(table))
+    print(overall_sentence(table))
     print(f"wrote {a.out}")
 
 
