@@ -56,6 +56,9 @@ def test_the_quoted_table_is_rendered_from_the_stored_result(bench) -> None:  # 
     doc = " ".join(DOC.read_text(encoding="utf-8").split())  # a sentence may wrap
     assert bench.summary_markdown(stored) in DOC.read_text(encoding="utf-8")
     assert bench.coverage_sentence(stored) in doc
+    assert bench.overall_sentence(stored) in doc
+    table2 = bench.read_table(RESULT.with_name("closed_loop_tenth_table2.csv"))
+    assert bench.overall_sentence(table2) in doc  # the same recipe on Table II alone
     readme = " ".join((REPO_ROOT / "README.md").read_text(encoding="utf-8").split())
     assert bench.headline_sentence(stored) in readme
     assert bench.coverage_sentence(stored) in readme
