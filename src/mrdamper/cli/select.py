@@ -134,7 +134,7 @@ def select(
     ] = "fit",
     loop_roads: Annotated[
         str | None,
-        typer.Option("--loop-roads", help="--for control: ISO 8608 classes (default C,D)."),
+        typer.Option("--loop-roads", help="--for control: ISO 8608 classes (default B,C,D)."),
     ] = None,
     loop_speeds: Annotated[
         str | None,

@@ -53,7 +53,7 @@ __all__ = [
 #: replays of a quarter car's damper travel, with the loop's current or an APRBS one).
 LOOP_DISPLACEMENT = "quarter car"
 #: ISO 8608 classes and speeds [m/s] of the closed-loop check, road length [s] and road seed.
-ROADS: tuple[str, ...] = ("C", "D")
+ROADS: tuple[str, ...] = ("B", "C", "D")
 SPEEDS: tuple[float, ...] = (10.0, 25.0)
 DURATION = 10.0
 SEED = 0
