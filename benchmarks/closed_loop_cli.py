@@ -110,12 +110,18 @@ def _commit() -> str:
 
 
 def write_table(
-    table: pd.DataFrame, out: Path, scale: float, command: str, extension: str = "control"
+    table: pd.DataFrame,
+    out: Path,
+    scale: float,
+    command: str,
+    extension: str = "control",
+    commit: str | None = None,
 ) -> None:
-    """``table`` as CSV with a ``#`` header (command, commit, date, load, recipe), atomically."""
+    """``table`` as CSV with a ``#`` header (command, commit, date, load, recipe), atomically
+    (``commit``: the one the run started at; default the present one)."""
     head = [
         f"# command: {command}",
-        f"# commit: {_commit()}",
+        f"# commit: {commit or _commit()}",
         f"# date: {dt.datetime.now(dt.UTC).strftime('%Y-%m-%dT%H:%M:%SZ')}",
         "# load_avg: " + " ".join(f"{x:.2f}" for x in os.getloadavg()),
         f"# cpus: {os.cpu_count()}",
@@ -223,6 +229,7 @@ def main() -> None:
         "--extension", default="control", choices=("control", "none"), help="rig doe --extension"
     )
     a = ap.parse_args()
+    commit = _commit()  # the code the run starts with (HEAD may move during a long run)
     with tempfile.TemporaryDirectory(prefix="closed-loop-cli-") as tmp:
         table = run_recipe(Path(tmp), a.scale, extension=a.extension)
     ext = "" if a.extension == "control" else f" --extension {a.extension}"
@@ -230,7 +237,7 @@ def main() -> None:
         f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g}{ext} "
         f"--out {a.out}"
     )
-    write_table(table, a.out, a.scale, command, a.extension)
+    write_table(table, a.out, a.scale, command, a.extension, commit)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
     print(coverage_sentence(table))
