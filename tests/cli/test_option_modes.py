@@ -24,7 +24,7 @@ from tests.test_bad_inputs import _folder, _lpv_model, _one_line_error, _run
 from tests.test_failure_catalogue import SP3
 
 #: Commands with one mode: every option is honoured (nothing to refuse).
-ONE_MODE = {"fit", "simulate", "score", "select"}
+ONE_MODE = {"fit", "simulate", "score"}
 
 #: A value for each option a mode refuses (None: a flag).
 VALUES: dict[str, str | None] = {
@@ -62,6 +62,14 @@ VALUES: dict[str, str | None] = {
     "--struct": "data",
     "--plausible-max": "stroke=2",
     "--derive-velocity": None,
+    "--folds": "record",
+    "--n-folds": "3",
+    "--inside-only": None,
+    "--no-halving": None,
+    "--time-budget": "10",
+    "--loop-roads": "B",
+    "--loop-speeds": "10",
+    "--loop-duration": "3",
 }
 
 
@@ -105,6 +113,7 @@ def _entering(command: str, mode: str, tmp: Path) -> list[str]:
         "study": ["study", str(data), "--out", out],
         "demo": ["demo", "--out", out],
         "rig doe": ["rig", "doe", "--out", out],
+        "select": ["select", str(data), "--csv", str(tmp / "out")],
     }[command]
     if mode == "--scheduler":
         return [*base, "--scheduler", "tcp://127.0.0.1:1"]

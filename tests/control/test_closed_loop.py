@@ -169,6 +169,8 @@ def test_cli_plant(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
         "predicted",
         "achieved",
         "error_pct",
+        "stroke_ratio",
+        "outside_stroke",
     ]
     assert len(t) == 2 * 6
     assert (tmp_path / "o" / "closed_loop_runs.csv").is_file()

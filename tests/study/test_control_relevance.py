@@ -51,6 +51,9 @@ def test_a_rig_study_gets_predicted_against_achieved(rig_study) -> None:  # type
     sec = sec[: sec.index("<h2>", 10)]
     assert "The truth is known" in sec and "quiroz2022" in sec
     assert "Fit failed" in sec and "Gain fronts" in sec
+    # the two rankings side by side: SP-1 and LTI ran, each with a closed-loop rank
+    assert "Which model for a controller?" in sec and "closed-loop rank" in sec
+    assert "open-loop rank" in sec
     # the widest model-plant gap of SP-1's sweep, as FrontsResult.widest_gaps finds it
     gap = cr.fronts["sp1"].widest_gaps().set_index("metric").loc["a_w", "error_pct"]
     assert "furthest from the reference damper" in sec and f"{gap:+.1f} %" in sec
@@ -144,7 +147,8 @@ def _section_of(truth: str | None):  # type: ignore[no-untyped-def]
          "reason": "DataValidationError: MODEL: kind 'lti' has no inverse; passive soft/hard work"}
     )  # fmt: skip
     cr = ControlRelevance(truth, "all", ControlSettings(), pd.DataFrame(rows))
-    res = types.SimpleNamespace(control=cr, info={"data_origin": "measured"})
+    summary = pd.DataFrame({"model": ["lpv-paper", "lti"], "esr_mean": [0.01, 0.05]})
+    res = types.SimpleNamespace(control=cr, info={"data_origin": "measured"}, summary=summary)
     page = control_section(res, report._table, "A")  # type: ignore[arg-type]
     return cr, page
 
@@ -219,3 +223,33 @@ def test_the_loop_and_the_writing_have_their_own_progress(doe, monkeypatch, tmp_
     write_or_fail(res, tmp_path / "out", False, show=True)
     writing = shown[-1].tasks[0]
     assert writing.description == "writing" and writing.finished and len(written) == 1
+
+
+def test_the_closed_loop_ranking_keeps_cells_outside_the_envelope_apart_and_lists_them() -> None:
+    """The ranking beside the open-loop one: the worst error over every cell ranks, the worst
+    within the training envelope is given apart, the cells outside are listed, and the open-loop
+    order is the summary's ESR."""
+    from mrdamper.study.control_step import ControlRelevance
+    from mrdamper.study.report_control_rank import outside_cells, rankings
+
+    rows = []
+    errors = {("m1", "C"): (2.0, ""), ("m1", "D"): (8.0, "stroke x2.3"), ("m2", "C"): (5.0, "")}
+    errors[("m2", "D")] = (4.0, "")
+    for (model, road), (err, left) in errors.items():
+        for metric in ("a_w", "rms_travel", "mean_current"):
+            e = 40.0 if metric == "mean_current" else err  # not a loop metric of the ranking
+            rows.append(
+                {"model": model, "kind": "sp1", "controller": "skyhook", "road": road,
+                 "speed_m_s": 20.0, "metric": metric, "predicted": 1.0 + e / 100, "achieved": 1.0,
+                 "error_pct": e, "unit": "", "envelope_left": left, "reason": None}
+            )  # fmt: skip
+    cr = ControlRelevance("rig", "all", ControlSettings(), pd.DataFrame(rows))
+    summary = pd.DataFrame({"model": ["m1", "m2"], "esr_mean": [0.03, 0.01]})
+    ranks = rankings(summary, cr).set_index("model")
+    # over every cell m2 (worst 5 %) is ahead of m1 (8 %, outside its envelope)
+    assert ranks.loc["m2", "closed-loop rank"] == 1 and ranks.loc["m1", "closed-loop rank"] == 2
+    assert ranks.loc["m1", "open-loop rank"] == 2 and ranks.loc["m2", "open-loop rank"] == 1
+    assert ranks.loc["m1", "worst loop error [%]"] == pytest.approx(8.0)
+    assert ranks.loc["m1", "worst within the envelope [%]"] == pytest.approx(2.0)
+    assert ranks.loc["m1", "cells outside the envelope"] == "1 of 2"
+    assert outside_cells(cr) == ["m1: skyhook ISO D @ 20 m/s (stroke x2.3)"]

@@ -117,6 +117,18 @@ MODES: dict[str, tuple[Mode, ...]] = {
         Mode("--scheduler", ("--workers",), "the Dask cluster's workers run the study"),
     ),
     "demo": (Mode("--no-control", _CONTROL, "the control step is skipped"),),
+    "select": (
+        Mode(
+            "--for control",
+            ("--folds", "--n-folds", "--inside-only", "--workers", "--no-halving", "--time-budget"),
+            "each kind is fitted once, on the records less the held-out loop-like ones",
+        ),
+        Mode(
+            "--for fit",
+            ("--loop-roads", "--loop-speeds", "--loop-duration"),
+            "the loop's roads are those of the closed-loop check (--for control)",
+        ),
+    ),
     "rig doe": (
         Mode(
             "--extension none",

@@ -429,6 +429,7 @@ def _fidelity(
     from mrdamper._io import check_output, check_writable, write_files
     from mrdamper.control.loop.closed_loop import resolve_plant
     from mrdamper.control.loop.fidelity import closed_loop_fidelity, failed_runs
+    from mrdamper.control.loop.stroke_cells import flag_cells, stroke_note
     from mrdamper.models.registry import load_model
 
     inputs = _inputs(model_file, plant)
@@ -449,7 +450,7 @@ def _fidelity(
         rate=rate,
     )
     failed = failed_runs(res)  # a side whose every loop failed: an error, nothing written
-    table = res.table()
+    table = flag_cells(res.table(), res.runs_frame())
     texts = {
         "closed_loop.csv": table.to_csv(index=False, float_format="%.6g"),
         "closed_loop_runs.csv": res.runs_frame().to_csv(index=False, float_format="%.6g"),
@@ -464,7 +465,8 @@ def _fidelity(
         columns={"speed_m_s": "speed [m/s]", "error_pct": "error [%]"}
     )
     typer.echo(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    for note in res.notes:
+    stroke = stroke_note(table)
+    for note in [*res.notes, *([stroke] if stroke else [])]:
         typer.echo(f"warning: {note}", err=True)
     typer.echo(
         f"{m.kind} controller, {res.plant_kind} plant: wrote {', '.join(_FIDELITY_FILES)} in {out}"

@@ -24,6 +24,7 @@ import typer
 
 from mrdamper._io import csv_kind
 from mrdamper.cli._options import InputChannel, Pattern
+from mrdamper.cli._modes import refuse_unused
 from mrdamper.cli._records import reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.errors import DataValidationError
@@ -59,6 +60,7 @@ def _kind_settings(items: list[str] | None) -> dict[str, dict[str, Any]]:
 
 
 def select(
+    ctx: typer.Context,
     data: Annotated[list[Path], typer.Argument(help="Data files or folders (the user's records).")],
     models: Annotated[
         list[str] | None,
@@ -115,6 +117,27 @@ def select(
     force: Annotated[bool, typer.Option("--force", help="Overwrite --csv if it exists.")] = False,
     pattern: Pattern = None,
     no_progress: NoProgress = False,
+    for_: Annotated[
+        str,
+        typer.Option(
+            "--for",
+            help="fit: rank kinds by free-run error on left-out records; control: by their "
+            "fidelity in the quarter-car loop (held-out loop-like records of the control "
+            "extension; on virtual-rig records against the true damper).",
+        ),
+    ] = "fit",
+    loop_roads: Annotated[
+        str | None,
+        typer.Option("--loop-roads", help="--for control: ISO 8608 classes (default B,C,D)."),
+    ] = None,
+    loop_speeds: Annotated[
+        str | None,
+        typer.Option("--loop-speeds", help="--for control: speeds [m/s] (default 10,25)."),
+    ] = None,
+    loop_duration: Annotated[
+        float | None,
+        typer.Option("--loop-duration", help="--for control: road length [s] (default 10)."),
+    ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Cross-validate every model kind on DATA and recommend one."""
@@ -122,6 +145,26 @@ def select(
     from mrdamper.cli._status import working
     from mrdamper.cli.models import _choose_input, read_records
     from mrdamper.study.selection import HALVING, cross_validate
+
+    if for_ not in ("fit", "control"):
+        raise DataValidationError("--for", f"expected fit or control, got {for_!r}")
+    refuse_unused(ctx, "select", {f"--for {for_}"})
+    if for_ == "control":
+        from mrdamper.cli.select_control import select_for_control
+
+        select_for_control(
+            data,
+            models,
+            input_,
+            _kind_settings(settings),
+            csv,
+            force,
+            pattern,
+            no_progress,
+            read_kw,
+            (loop_roads, loop_speeds, loop_duration),
+        )
+        return
 
     if time_budget is not None and not time_budget > 0:
         raise DataValidationError(

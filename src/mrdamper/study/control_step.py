@@ -40,6 +40,7 @@ from mrdamper.control.loop.fidelity import (
     loop_metrics,
 )
 from mrdamper.control.loop.fronts import FrontsResult, gain_fronts
+from mrdamper.control.loop.stroke_cells import envelope_left
 from mrdamper.errors import DataValidationError, interrupt_in_chain
 from mrdamper.models.protocols import InvertibleModel
 
@@ -67,6 +68,7 @@ CONTROL_COLUMNS: tuple[str, ...] = (
     "achieved",
     "error_pct",
     "vs_median_pct",
+    "envelope_left",
     "reason",
 )
 #: The study's coarse gain grid (a few points per controller; the CLI's ``--tune`` is finer).
@@ -293,8 +295,14 @@ def model_in_loop(
                 key = (run["road"], run["speed_m_s"])
                 why = f"{run['side']} run {run['refused']}"  # "refused: ..." or "diverged: ..."
                 refused[key] = f"{refused[key]}; {why}" if key in refused else why
+        left = {  # the cell's loop (achieved side) beyond the model's training envelope
+            (run["road"], run["speed_m_s"]): envelope_left(run)
+            for run in res.runs
+            if run.get("side") == "achieved"
+        }
         for r in res.table().to_dict("records"):
             row = {"model": label, "kind": kind, "unit": res.unit(r["metric"]), **r}
+            row["envelope_left"] = left.get((r["road"], r["speed_m_s"]), "")
             said = refused.get((r["road"], r["speed_m_s"]))
             if said is not None:  # its NaN cells say why
                 row["reason"] = said

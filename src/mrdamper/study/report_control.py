@@ -18,6 +18,7 @@ import pandas as pd
 
 from mrdamper.control.loop.fronts import gap_size
 from mrdamper.study.control_step import STUDY_LEVELS, ControlRelevance
+from mrdamper.study.report_control_rank import outside_cells, rankings
 from mrdamper.study.result import StudyResult
 
 __all__ = ["IMPLAUSIBLE_FACTOR", "control_section", "in_words", "wide_table"]
@@ -266,6 +267,39 @@ def _flagged(wide: pd.DataFrame) -> int:
     return int(wide["note"].astype(str).str.contains("implausible: ").sum()) if len(wide) else 0
 
 
+def _ranking_block(res: StudyResult, cr: ControlRelevance, table: Callable[..., str]) -> str:
+    """The open-loop ranking beside the closed-loop one, and the cells outside the envelope."""
+    ranks = rankings(res.summary, cr)
+    if cr.truth is not None:
+        head = (
+            "<p><b>Which model for a controller?</b> The open-loop ranking (mean free-run ESR on "
+            "the left-out records) beside the closed-loop one (worst |error| of a_w, RMS "
+            "acceleration, tyre load, travel and tracking against the rig's damper over the "
+            "cells, and apart over those whose loop stays within the model's training "
+            "envelope):</p>"
+        )
+    else:
+        head = (
+            "<p><b>Which model for a controller?</b> Without the damper in the loop only the "
+            "open-loop ranking is known; <code>mrdamper select DATA --for control</code> ranks "
+            "the kinds on held-out records of the loop's motions (the control extension, "
+            "<code>mrdamper rig doe --extension control</code>):</p>"
+        )
+    out = [head, table(ranks, cls="left", digits=3)]
+    cells = outside_cells(cr)
+    if cells:
+        out.append(
+            f"<details><summary>{len(cells)} cell(s) whose loop leaves the model's training "
+            "envelope (their errors extrapolate; records of the loop's motions, <code>mrdamper "
+            "rig doe --extension control</code>, bring them in)</summary><ul>"
+            + "".join(f"<li>{_e(c)}</li>" for c in cells)
+            + "</ul></details>"
+        )
+    elif cr.truth is not None:
+        out.append("<p>Every cell's loop stays within its model's training envelope.</p>")
+    return "\n".join(out)
+
+
 def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> str:
     """HTML of the section; ``table`` renders a DataFrame (the report's table helper)."""
     cr = res.control
@@ -339,6 +373,7 @@ def control_section(res: StudyResult, table: Callable[..., str], unit: str) -> s
         )
         out.append("<p>Largest |deviation from the median| per model:</p>")
         out.append(table(_worst(cr, "vs_median_pct"), digits=3))
+    out.append(_ranking_block(res, cr, table))
     if cr.notes:
         uniq = list(dict.fromkeys(in_words(n, capital=False) for n in cr.notes))
         out.append(
