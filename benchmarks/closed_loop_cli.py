@@ -12,8 +12,8 @@ Runs, in a temporary folder and each in a fresh process, the recipe of ``docs/co
 (with its ``seed`` and the ``outside_stroke`` flag the
 command writes) to ``OUT``, a CSV whose ``#`` header lines give the command, the commit, the UTC
 date, the load average and the recipe. It prints the summary
-(:func:`mrdamper.control.loop.stroke_cells.fidelity_summary`): per metric, the worst |error| over the
-cells the rig's stroke covers and over those outside it, against the targets.
+(:func:`mrdamper.control.loop.stroke_cells.fidelity_summary`): per metric, the worst |error|
+over the cells the rig's stroke covers and over those outside it, against the targets.
 
 Run (about 5 min of CPU time at ``--scale 0.1``)::
 

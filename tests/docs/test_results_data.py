@@ -172,4 +172,3 @@ def test_stored_quiroz_fold_agrees_with_the_pinned_values() -> None:
         assert stored, f"{kind}: not in results/real-data*.json"
         mean = float(np.mean(list(stored.values())))
         assert mean == pytest.approx(value, rel=PINNED_RTOL), kind
-

@@ -23,8 +23,8 @@ from typing import Annotated, Any
 import typer
 
 from mrdamper._io import csv_kind
-from mrdamper.cli._options import InputChannel, Pattern
 from mrdamper.cli._modes import refuse_unused
+from mrdamper.cli._options import InputChannel, Pattern
 from mrdamper.cli._records import reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.errors import DataValidationError
