@@ -81,7 +81,7 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
             k["round_one_cpu_s"] += r["cpu"]
     total = sum(k["cpu_s"] for k in kinds.values())
     span = max(r["end"] for r in rows) - min(r["start"] for r in rows) if rows else 0.0
-    workers = defaultdict(float)
+    workers: dict[int, float] = defaultdict(float)
     for r in rows:
         workers[r["pid"]] += r["end"] - r["start"]
     return {

@@ -35,7 +35,7 @@ def frozen(a: npt.ArrayLike, dtype: type = np.float64) -> npt.NDArray[Any]:
     array are different argument types to numba, so the controller's kernels compile once for
     every kind instead of once per mutability.
     """
-    out = np.ascontiguousarray(a, dtype=dtype)
+    out: npt.NDArray[Any] = np.ascontiguousarray(a, dtype=dtype)
     if out.flags.writeable:
         out = out.view()
         out.flags.writeable = False
