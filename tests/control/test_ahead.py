@@ -3,13 +3,17 @@ controller reaches them with, so the study's workers load them instead of compil
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from mrdamper.control import _closed_loop_kernels as CK
 from mrdamper.control import _quarter_car_kernels as QK
-from mrdamper.control.ahead import compile_loops
+from mrdamper.control.ahead import compile_loops, loops_cached
 from mrdamper.control.car import QuarterCar, bump_road
 from mrdamper.control.closed_loop import simulate_closed_loop
 from mrdamper.control.quarter_car import simulate_quarter_car
@@ -43,3 +47,14 @@ def test_the_loops_compiled_ahead_serve_an_lpv_model_and_a_static_map() -> None:
         simulate_closed_loop(model, road, "skyhook", QuarterCar(), plant=plant)
     # no new signature: the kernels compiled ahead are the ones these runs use
     assert (set(QK.simulate.signatures), set(CK.run_loop_packed.signatures)) == ahead
+
+
+def test_loops_cached_says_whether_there_is_anything_to_compile(tmp_path: Path) -> None:
+    compile_loops()  # compiled or loaded: in the on-disk cache now
+    assert loops_cached()
+    code = "from mrdamper.control.ahead import loops_cached; print(loops_cached())"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # an empty cache
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    assert out.stdout.split() == ["False"]

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from typing import Any
 
-__all__ = ["compile_loops"]
+__all__ = ["compile_loops", "loops_cached"]
 
 
 def compile_loops() -> int:
@@ -51,3 +52,16 @@ def compile_loops() -> int:
             except Exception:  # noqa: BLE001, S112 - see the docstring
                 continue
     return done
+
+
+def loops_cached() -> bool:
+    """True when numba's on-disk cache holds machine code of both quarter-car loops (then there
+    is nothing to compile ahead; False when unsure)."""
+    from mrdamper.control import _closed_loop_kernels as CK
+    from mrdamper.control import _quarter_car_kernels as QK
+
+    kernels: tuple[Any, ...] = (QK.simulate, CK.run_loop_packed)
+    try:
+        return all(bool(d._cache._cache_file._load_index()) for d in kernels)
+    except Exception:  # noqa: BLE001 - numba internals; unsure means "compile them"
+        return False
