@@ -22,11 +22,20 @@ side. Both sides find their compiled kernels cached: every kind's kernels are co
 untimed (``--no-warm`` skips that). ``--reduce`` takes every third record of a folder and the
 first 7 s of the Dyke record (written to a temporary folder), so that a run takes minutes on a
 shared machine. The data folder is ``--data`` (default ``../shared/data`` beside the checkout).
+
+Every row is also written, with the load average (``os.getloadavg``) before and after each run,
+the UTC date, each side's per-kind table (``select --csv``: mean fit time ``fit_s``, ``rank_esr``,
+status) and the command, to a JSON file (``--json``, default ``bench_select.json`` in the working
+folder; written atomically, rewritten after every row), so that the numbers can be rendered
+later without parsing the printout.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import datetime
+import json
 import os
 import resource
 import statistics
@@ -70,12 +79,28 @@ def _warm(src: Path) -> None:
     subprocess.run([sys.executable, "-c", _WARM], check=True, env=env)
 
 
-def _run(src: Path, data: Path, kind: str, workdir: Path) -> tuple[float, float, str]:
-    """Wall time [s], CPU time [s] (process and workers) and recommendation of one select."""
+def _table(path: Path) -> list[dict[str, str]]:
+    """The rows of a ``select --csv`` table (empty when the side wrote none)."""
+    if not path.exists():
+        return []
+    with path.open(newline="") as fh:
+        return [
+            {k: row[k] for k in ("model", "fit_s", "rank_esr", "status") if k in row}
+            for row in csv.DictReader(fh)
+        ]
+
+
+def _run(src: Path, data: Path, kind: str, workdir: Path) -> dict[str, object]:
+    """One select in a fresh process: ``wall`` [s], ``cpu`` [s] (process and workers),
+    ``recommended``, the load averages before and after, and the per-kind ``table``."""
     env = {**os.environ, "PYTHONPATH": str(src), "OPENBLAS_NUM_THREADS": "1"}
+    table = workdir / "bench-select-table.csv"
+    table.unlink(missing_ok=True)
     cmd = [sys.executable, "-m", "mrdamper", "select", str(data), "--no-progress"]
+    cmd += ["--csv", str(table), "--force"]
     if kind != "all":
         cmd += [arg for k in kind.split(",") for arg in ("-m", k)]
+    load_before = os.getloadavg()
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, check=False, env=env, cwd=workdir, capture_output=True, text=True)
@@ -85,7 +110,21 @@ def _run(src: Path, data: Path, kind: str, workdir: Path) -> tuple[float, float,
     rec = [ln for ln in proc.stdout.splitlines() if ln.startswith("recommended:")]
     if proc.returncode not in (0, 1):
         raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
-    return wall, cpu, rec[0].split(":")[1].strip() if rec else "-"
+    return {
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "recommended": rec[0].split(":")[1].strip() if rec else "-",
+        "load_before": list(load_before),
+        "load_after": list(os.getloadavg()),
+        "table": _table(table),
+    }
+
+
+def _write_json(path: Path, doc: dict[str, object]) -> None:
+    """Write ``doc`` to ``path`` atomically (a temporary file beside it, then a rename)."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(doc, indent=1) + "\n")
+    os.replace(tmp, path)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -97,7 +136,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--reduce", action="store_true", help="every third record, 7 s of Dyke")
     ap.add_argument("--no-warm", action="store_true", help="no untimed compilation first")
+    ap.add_argument("--json", type=Path, default=Path("bench_select.json"), help="JSON record")
     args = ap.parse_args(argv)
+    doc: dict[str, object] = {
+        "benchmark": "bench_select",
+        "command": " ".join(["python", "benchmarks/bench_select.py", *(argv or sys.argv[1:])]),
+        "date_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "cpus": os.cpu_count(),
+        "rows": [],
+    }
+    rows: list[dict[str, object]] = doc["rows"]  # type: ignore[assignment]
     sides = {"this": REPO / "src"}
     if args.previous is not None:
         sides = {"previous": args.previous.resolve() / "src", **sides}
@@ -116,12 +164,14 @@ def main(argv: list[str] | None = None) -> None:
                 walls: dict[str, list[float]] = {s: [] for s in sides}
                 cpus: dict[str, list[float]] = {s: [] for s in sides}
                 recs: dict[str, str] = {}
+                runs: dict[str, list[dict[str, object]]] = {s: [] for s in sides}
                 for _ in range(args.repeat):
                     for side, src in sides.items():
-                        wall, cpu, rec = _run(src, data, kind, Path(tmp))
-                        walls[side].append(wall)
-                        cpus[side].append(cpu)
-                        recs[side] = rec
+                        run = _run(src, data, kind, Path(tmp))
+                        walls[side].append(float(run["wall_s"]))  # type: ignore[arg-type]
+                        cpus[side].append(float(run["cpu_s"]))  # type: ignore[arg-type]
+                        recs[side] = str(run["recommended"])
+                        runs[side].append(run)
                 med = {s: statistics.median(v) for s, v in walls.items()}
                 ratio = med["previous"] / med["this"] if "previous" in med else float("nan")
                 print(
@@ -133,6 +183,19 @@ def main(argv: list[str] | None = None) -> None:
                     + " / ".join(recs[s] for s in sides),
                     flush=True,
                 )
+                rows.append(
+                    {
+                        "set": name,
+                        "data": SETS[name] + (" (reduced)" if args.reduce else ""),
+                        "kinds": kind,
+                        "median_wall_s": med,
+                        "median_cpu_s": {s: statistics.median(v) for s, v in cpus.items()},
+                        "ratio": ratio,
+                        "recommended": recs,
+                        "runs": runs,
+                    }
+                )
+                _write_json(args.json, doc)
 
 
 if __name__ == "__main__":

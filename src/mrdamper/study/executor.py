@@ -52,6 +52,7 @@ __all__ = [
     "check_scheduler_address",
     "compile_kernels",
     "default_workers",
+    "loops_ahead",
     "make_executor",
     "resolve_record",
     "unreadable",
@@ -413,3 +414,23 @@ def compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
         compiled.finish_ahead()
         if own:
             shutil.rmtree(claim_dir, ignore_errors=True)
+
+
+def loops_ahead() -> Any | None:
+    """Start compiling the quarter-car loops (:func:`mrdamper.control.loop.ahead.compile_loops`) in a
+    background process (forked where the platform can), now, and return it.
+
+    For a study with the control-relevance step and local workers: the loops compile once on
+    the machine while the fits run, instead of once in every worker that runs the step (they
+    are cached on disk; join the process before the step). None, and nothing started, when they
+    are cached already (:func:`mrdamper.control.loop.ahead.loops_cached`).
+    """
+    from mrdamper.control.loop.ahead import compile_loops, loops_cached
+
+    if loops_cached():
+        return None
+    methods = multiprocessing.get_all_start_methods()
+    ctx: Any = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    proc = ctx.Process(target=compile_loops, daemon=True)
+    proc.start()
+    return proc

@@ -37,8 +37,11 @@ from mrdamper.study.control_step import (
     truth_damper,
 )
 from mrdamper.study.executor import (
+    ProcessExecutor,
+    SerialExecutor,
     StudyExecutor,
     compile_kernels,
+    loops_ahead,
     make_executor,
 )
 from mrdamper.study.presets import doe_protocol
@@ -58,6 +61,9 @@ __all__ = [
     "progress_bars",
     "run_study",
 ]
+
+#: Executors whose workers share this machine's kernel cache (the loops are compiled ahead).
+_LOCAL = (ProcessExecutor, SerialExecutor)
 
 #: The control-relevance step a study runs unless told otherwise (short roads, one class/speed).
 DEFAULT_CONTROL = ControlSettings()
@@ -294,8 +300,12 @@ def run_study(
     fit_out: dict[tuple[int, int], FitOutcome] = {}
     sim_out: dict[tuple[int, int, int], SimOutcome] = {}
     executor = make_executor(workers, scheduler)
+    # the quarter-car loops compile once, beside the fits (local workers load them after)
+    loops = loops_ahead() if control is not None and isinstance(executor, _LOCAL) else None
     try:
         _execute(executor, folds, specs, settings, protocol, fit_out, sim_out, progress)
+        if loops is not None:
+            loops.join()
         t_control = time.perf_counter()
         control_res = None
         if control is not None:  # its own bar: the loop runs after the simulations
@@ -309,6 +319,8 @@ def run_study(
         if control_res is not None:
             finished(f"control relevance: the quarter-car loop in {t_control:.0f} s")
     except BaseException:
+        if loops is not None and loops.is_alive():
+            loops.terminate()
         executor.close(cancel=True)
         raise
     executor.close()

@@ -16,15 +16,31 @@ the kernels' argument lists are written once, here:
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["ControllerForm", "InverseForm", "inverse_form"]
+__all__ = ["ControllerForm", "InverseForm", "frozen", "inverse_form"]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
+
+
+def frozen(a: npt.ArrayLike, dtype: type = np.float64) -> npt.NDArray[Any]:
+    """``a`` as a read-only C-contiguous array of ``dtype`` (a view, no copy, when it already
+    has that type and layout).
+
+    Every array of a form is read-only, whatever the model it comes from (a frozen LPV model's
+    coefficients are; the empty defaults built here would not be): a read-only and a writable
+    array are different argument types to numba, so the controller's kernels compile once for
+    every kind instead of once per mutability.
+    """
+    out: npt.NDArray[Any] = np.ascontiguousarray(a, dtype=dtype)
+    if out.flags.writeable:
+        out = out.view()
+        out.flags.writeable = False
+    return out
 
 
 class InverseForm(NamedTuple):
@@ -141,7 +157,8 @@ def inverse_form(
     stroke: float = 0.0,
     stiffness: float = 0.0,
 ) -> InverseForm:
-    """An :class:`InverseForm` with the kernels' types (the parts not given are empty).
+    """An :class:`InverseForm` with the kernels' types (the parts not given are empty; every
+    array read-only, :func:`frozen`).
 
     Parameters
     ----------
@@ -154,10 +171,10 @@ mu_high, mu_low, blend, stroke, stiffness
     empty2 = np.zeros((1, 1))
 
     def arr(a: npt.ArrayLike | None, default: FloatArray) -> FloatArray:
-        return default if a is None else np.ascontiguousarray(a, dtype=np.float64)
+        return frozen(default if a is None else a)
 
     def ints(a: npt.ArrayLike | None) -> IntArray:
-        return np.zeros(0, np.int64) if a is None else np.ascontiguousarray(a, dtype=np.int64)
+        return frozen(np.zeros(0, np.int64) if a is None else a, np.int64)
 
     return InverseForm(
         bool(is_lpv),

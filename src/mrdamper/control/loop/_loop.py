@@ -19,7 +19,7 @@ from typing import Any, cast
 import numpy as np
 
 from mrdamper.control.damper import DamperModel
-from mrdamper.control.inverse._forms import ControllerForm, inverse_form
+from mrdamper.control.inverse._forms import ControllerForm, frozen, inverse_form
 from mrdamper.control.inverse._inverse_setup import lpv_inverse_fields
 from mrdamper.control.inverse.current import (
     default_reg,
@@ -236,7 +236,13 @@ def controller_form(s: LoopSetup, n_grid: int) -> ControllerForm:
     inverse (``n_grid`` intervals of its search grid)."""
     inv = inverse_form(lam=s.lam, n_grid=int(n_grid), horizon=int(s.n_h), **s.arrays)
     return ControllerForm(
-        int(s.code), s.gains, float(s.lo), float(s.hi), float(s.step_rate), s.n_sub * s.h, inv
+        int(s.code),
+        frozen(s.gains),
+        float(s.lo),
+        float(s.hi),
+        float(s.step_rate),
+        s.n_sub * s.h,
+        inv,
     )
 
 
