@@ -417,8 +417,8 @@ def compile_kernels(ex: StudyExecutor, kinds: Sequence[str]) -> None:
 
 
 def loops_ahead() -> Any | None:
-    """Start compiling the quarter-car loops (:func:`mrdamper.control.loop.ahead.compile_loops`) in a
-    background process (forked where the platform can), now, and return it.
+    """Start compiling the quarter-car loops (:func:`mrdamper.control.loop.ahead.compile_loops`)
+    in a background process (forked where the platform can), now, and return it.
 
     For a study with the control-relevance step and local workers: the loops compile once on
     the machine while the fits run, instead of once in every worker that runs the step (they

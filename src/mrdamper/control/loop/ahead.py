@@ -1,14 +1,14 @@
 """The quarter-car loops compiled ahead of their first use.
 
-The stand-alone quarter-car loop (:func:`~mrdamper.control.loop.quarter_car.simulate_quarter_car`) and
-the closed loop (:func:`~mrdamper.control.loop.closed_loop.simulate_closed_loop`) are compiled kernels
-whose arguments are named tuples (the controller's form, the packed step forms of the models);
-every kind's controller reaches each with one argument type (the forms' arrays are read-only,
-:func:`~mrdamper.control.inverse._forms.frozen`; a model's step form is packed,
-:func:`~mrdamper.models.step_dispatch.pack`). Running each loop once on a short road compiles
-it for those types, or loads it from numba's on-disk cache: a study starts this in a background
-process (:func:`mrdamper.study.executor.loops_ahead`) while its fits run, so that its workers
-load the loops instead of each compiling them.
+The stand-alone quarter-car loop (:func:`~mrdamper.control.loop.quarter_car.simulate_quarter_car`)
+and the closed loop (:func:`~mrdamper.control.loop.closed_loop.simulate_closed_loop`) are compiled
+kernels whose arguments are named tuples (the controller's form, the packed step forms of the
+models); every kind's controller reaches each with one argument type (the forms' arrays are
+read-only, :func:`~mrdamper.control.inverse._forms.frozen`; a model's step form is packed,
+:func:`~mrdamper.models.step_dispatch.pack`). Running each loop once on a short road compiles it for
+those types, or loads it from numba's on-disk cache: a study starts this in a background process
+(:func:`mrdamper.study.executor.loops_ahead`) while its fits run, so that its workers load the loops
+instead of each compiling them.
 """
 
 from __future__ import annotations
