@@ -20,8 +20,8 @@ class Interval(NamedTuple):
     upper: np.ndarray
 
 
-def require_band(model: Any) -> Band:
-    """The band of ``model``, or one line saying that none is stored.
+def require_band(model: Any, field_name: str = "interval") -> Band:
+    """The band of ``model``, or one line (naming ``field_name``) saying that none is stored.
 
     Raises
     ------
@@ -32,7 +32,7 @@ def require_band(model: Any) -> Band:
     band = band_of(model)
     if band is None:
         raise DataValidationError(
-            "interval",
+            field_name,
             f"the {model.kind!r} model has no band stored; fit it with a band "
             "('mrdamper fit ... --band' or mrdamper.uncertainty.fit_with_band)",
         )
