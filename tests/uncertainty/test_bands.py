@@ -24,6 +24,7 @@ from mrdamper.uncertainty import (
     bound_share,
     calibration_folds,
     coverage,
+    error_spectra,
     fit_weight,
     fit_with_band,
     predict_interval,
@@ -155,13 +156,9 @@ def test_the_weight_bounds_the_records_it_was_built_from_and_is_stable(lpv, test
         poles = w.transfer_function().poles()
         assert np.all(poles.real < 0)
     # other records: the held-out condition, predicted by the full model (reported, not required)
-    from mrdamper.uncertainty.spectra import relative_error_spectrum
-
-    m = lpv.with_range_policy("clip")
-    others = [
-        relative_error_spectrum(e.F, m.predict(e), e.dt, e.i, 1.0, e.name) for e in test_set
-    ]
-    share = bound_share(weights, [s for s in others if s is not None])
+    others = error_spectra(lpv.with_range_policy("clip"), test_set)
+    assert len(others) == len(test_set)
+    share = bound_share(weights, others)
     assert 0.0 <= share <= 1.0
 
 

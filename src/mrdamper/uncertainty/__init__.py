@@ -13,6 +13,7 @@
 from mrdamper.uncertainty.band import LEVELS, Band, band_of, check_level
 from mrdamper.uncertainty.calibrate import calibrate, calibration_folds, fit_with_band, with_band
 from mrdamper.uncertainty.interval import Interval, coverage, predict_interval, require_band
+from mrdamper.uncertainty.spectra import error_spectra
 from mrdamper.uncertainty.weight import (
     Weight,
     bound_share,
@@ -32,6 +33,7 @@ __all__ = [
     "calibration_folds",
     "check_level",
     "coverage",
+    "error_spectra",
     "fit_weight",
     "fit_with_band",
     "predict_interval",

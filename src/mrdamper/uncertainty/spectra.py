@@ -4,7 +4,8 @@ For one held-out record with measured force ``F`` and prediction ``F_hat`` [N], 
 error at frequency ``f`` is ``|E(f)| / |F_hat(f)|`` with ``E = F - F_hat``, both Hann-windowed
 Fourier transforms, pooled over logarithmic frequency bins (:data:`BINS_PER_DECADE`): in each
 bin ``sqrt(sum |E|^2 / sum |F_hat|^2)``. Only bins where the prediction carries power (at least
-:data:`POWER_FLOOR` of its strongest bin) are kept: elsewhere the ratio is noise over noise.
+:data:`POWER_FLOOR` of its strongest bin's, 10 % of its amplitude) are kept: elsewhere the ratio
+is noise over noise (a sine record's force has power at its harmonics only).
 
 Each spectrum also records the record's electrical level (its mean input, [A] or [V]) and
 whether that input is frozen (constant within :data:`FROZEN_SHARE` of the model's input range),
@@ -13,16 +14,24 @@ the form the uncertainty weight of :mod:`mrdamper.uncertainty.weight` is fitted 
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 
-__all__ = ["BINS_PER_DECADE", "FROZEN_SHARE", "POWER_FLOOR", "relative_error_spectrum"]
+__all__ = [
+    "BINS_PER_DECADE",
+    "FROZEN_SHARE",
+    "POWER_FLOOR",
+    "error_spectra",
+    "relative_error_spectrum",
+]
 
 #: Logarithmic frequency bins per decade.
 BINS_PER_DECADE = 8
 #: Bins whose prediction power is below this share of the strongest bin's are left out [-].
-POWER_FLOOR = 1e-4
+POWER_FLOOR = 1e-2
 #: An input whose range stays within this share of the model's input range is frozen [-].
 FROZEN_SHARE = 0.05
 
@@ -87,3 +96,31 @@ def relative_error_spectrum(
         "freq": centres[keep].tolist(),
         "rel": np.sqrt(pe[keep] / pp[keep]).tolist(),
     }
+
+
+def error_spectra(model: Any, records: Iterable[Any]) -> list[dict[str, Any]]:
+    """Relative error spectra of ``model``'s free-run predictions of ``records``.
+
+    Parameters
+    ----------
+    model : FittedModel
+        The model (predicting with its own range policy; notes of records beyond its training
+        envelope are silenced).
+    records : iterable of Experiment
+        Records to compare with.
+
+    Returns
+    -------
+    list of dict
+        One :func:`relative_error_spectrum` per record that gives one.
+    """
+    span = float(model.input_range[1] - model.input_range[0])
+    out = []
+    for e in records:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            P = model.predict(e)
+        s = relative_error_spectrum(e.F, P, e.dt, e.electrical(model.input), span, e.name)
+        if s is not None:
+            out.append(s)
+    return out
