@@ -268,7 +268,7 @@ def simulate(
     frame = res.to_frame()[["t", "F", "F_pred"]]
     note = ""
     if band is not None and interval is not None:
-        lower, upper = band.interval(frame["F_pred"].to_numpy(), interval)
+        lower, upper = band.interval(frame["F_pred"].to_numpy(), interval, exp.dt)
         frame = frame.assign(F_lower=lower, F_upper=upper)
         measured = frame["F"].to_numpy()
         inside = float(((measured >= lower) & (measured <= upper)).mean())

@@ -3,8 +3,12 @@
 A :class:`Band` turns a free-run force prediction ``F_hat`` [N] into a lower and an upper force
 at a coverage level::
 
-    s(t)     = a + b |F_hat(t)|                    (scale of the error at the operating point)
+    s(t)     = a + b |F_hat(t)| + c m(t)           (scale of the error at the operating point)
     F_lo,hi  = F_hat(t) -/+ q(level) s(t)
+
+with ``m(t)`` the RMS of ``F_hat`` over a centred window of :data:`WINDOW_S` seconds (the force
+level of the current cycle: the error of a damper model grows with the force amplitude, current
+and speed, more than with the instantaneous force, which crosses zero where the hysteresis turns).
 
 ``q(level)`` is the conformal quantile of the normalised held-out residuals
 ``|F - F_hat| / s`` (:mod:`mrdamper.uncertainty.calibrate`), stored on a grid of levels
@@ -26,12 +30,34 @@ import numpy as np
 
 from mrdamper.errors import DataValidationError, SchemaError
 
-__all__ = ["LEVELS", "PROVENANCE_KEY", "Band", "band_of", "check_level"]
+__all__ = ["LEVELS", "PROVENANCE_KEY", "WINDOW_S", "Band", "band_of", "check_level", "moving_rms"]
 
 #: Coverage levels whose quantiles a band stores [-].
 LEVELS: tuple[float, ...] = tuple(round(0.50 + 0.01 * k, 2) for k in range(50))
 #: Key of the band in a model's provenance.
 PROVENANCE_KEY = "band"
+#: Window of the moving RMS force level ``m(t)`` [s].
+WINDOW_S = 1.0
+
+
+def moving_rms(F: np.ndarray, dt: float, window: float = WINDOW_S) -> np.ndarray:
+    """RMS of ``F`` [N] over a centred window of ``window`` seconds (shortened at the ends).
+
+    Parameters
+    ----------
+    F : ndarray
+        Force [N], uniformly sampled.
+    dt : float
+        Sampling interval [s].
+    window : float
+        Window length [s].
+    """
+    a = np.asarray(F, dtype=np.float64)
+    half = max(0, round(window / dt) // 2)
+    c = np.concatenate([[0.0], np.cumsum(a * a)])
+    k = np.arange(a.size)
+    lo, hi = np.clip(k - half, 0, a.size), np.clip(k + half + 1, 0, a.size)
+    return np.sqrt(np.maximum(c[hi] - c[lo], 0.0) / (hi - lo))
 
 
 def check_level(level: Any, field_name: str = "interval") -> float:
@@ -63,6 +89,8 @@ class Band:
         Constant part of the error scale [N] (> 0).
     b : float
         Part of the error scale proportional to ``|F_hat|`` [-] (>= 0).
+    c : float
+        Part proportional to the moving RMS ``m`` of ``F_hat`` [-] (>= 0).
     quantiles : tuple of float
         Conformal quantile of ``|F - F_hat| / s`` at each level of :data:`LEVELS` [-].
     method : str
@@ -81,6 +109,7 @@ class Band:
     a: float
     b: float
     quantiles: tuple[float, ...]
+    c: float = 0.0
     method: str = "record folds"
     n_samples: int = 0
     folds: tuple[str, ...] = ()
@@ -90,8 +119,10 @@ class Band:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.a) and self.a > 0):
             raise DataValidationError("band.a", f"expected a positive scale [N], got {self.a!r}")
-        if not (math.isfinite(self.b) and self.b >= 0):
-            raise DataValidationError("band.b", f"expected a scale >= 0, got {self.b!r}")
+        for name in ("b", "c"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise DataValidationError(f"band.{name}", f"expected a scale >= 0, got {value!r}")
         q = tuple(float(v) for v in self.quantiles)
         if len(q) != len(LEVELS) or not all(math.isfinite(v) and v >= 0 for v in q):
             raise DataValidationError(
@@ -104,14 +135,19 @@ class Band:
         lv = check_level(level)
         return float(np.interp(lv, LEVELS, self.quantiles))
 
-    def scale(self, F_hat: np.ndarray) -> np.ndarray:
-        """The error scale ``s = a + b |F_hat|`` [N] at each sample."""
-        return self.a + self.b * np.abs(np.asarray(F_hat, dtype=np.float64))
-
-    def interval(self, F_hat: np.ndarray, level: float = 0.9) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper force [N] around the prediction ``F_hat`` [N] at ``level``."""
+    def scale(self, F_hat: np.ndarray, dt: float) -> np.ndarray:
+        """The error scale ``s = a + b |F_hat| + c m`` [N] at each sample (``dt`` [s])."""
         F = np.asarray(F_hat, dtype=np.float64)
-        half = self.quantile(level) * self.scale(F)
+        s = self.a + self.b * np.abs(F)
+        return s + self.c * moving_rms(F, dt) if self.c else s
+
+    def interval(
+        self, F_hat: np.ndarray, level: float = 0.9, dt: float = 1e-3
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper force [N] around the prediction ``F_hat`` [N] (sampled every ``dt``
+        [s]) at ``level``."""
+        F = np.asarray(F_hat, dtype=np.float64)
+        half = self.quantile(level) * self.scale(F, dt)
         return F - half, F + half
 
     def to_dict(self) -> dict[str, Any]:
@@ -119,6 +155,8 @@ class Band:
         return {
             "a": float(self.a),
             "b": float(self.b),
+            "c": float(self.c),
+            "window_s": WINDOW_S,
             "levels": list(LEVELS),
             "quantiles": [float(v) for v in self.quantiles],
             "method": self.method,
@@ -154,6 +192,7 @@ class Band:
             return cls(
                 a=float(data["a"]),
                 b=float(data["b"]),
+                c=float(data.get("c", 0.0)),
                 quantiles=tuple(quantiles),
                 method=str(data.get("method", "")),
                 n_samples=int(data.get("n_samples", 0)),

@@ -12,9 +12,9 @@ data (about one more fit of the whole, not one per fold of a K-fold scheme):
 * otherwise (one record, or records of one condition), or when a fold's fit fails: every record
   is cut in two time blocks, the first halves form one fold and the second halves the other.
 
-Residuals are normalised by the scale ``s = a + b |F_hat|`` (:class:`~.band.Band`), ``a`` and
-``b`` fitted by non-negative least squares to the mean absolute residual in
-:data:`SCALE_BINS` bins of ``|F_hat|``, and the band stores the split-conformal quantile of
+Residuals are normalised by the scale ``s = a + b |F_hat| + c m`` (:class:`~.band.Band`, ``m``
+the moving RMS of ``F_hat``), ``a``, ``b`` and ``c`` fitted by non-negative least squares to the
+absolute residuals (at most :data:`SCALE_SAMPLES` samples, evenly picked), and the band stores the split-conformal quantile of
 ``|F - F_hat| / s`` (the ``ceil((n + 1) level)``-th smallest of the ``n`` held-out scores). The
 fold models see half the data, so their residuals are, if anything, larger than the full model's:
 the band is conservative rather than optimistic on records like the training ones. Held-out
@@ -36,12 +36,12 @@ import numpy as np
 from mrdamper.data import Experiment, ExperimentSet, as_experiment_set
 from mrdamper.errors import DataValidationError, MrDamperError
 from mrdamper.models.envelope import band_frequency
-from mrdamper.uncertainty.band import LEVELS, PROVENANCE_KEY, Band
+from mrdamper.uncertainty.band import LEVELS, PROVENANCE_KEY, Band, moving_rms
 from mrdamper.uncertainty.spectra import relative_error_spectrum
 
 __all__ = [
     "CONDITION_TOLERANCE",
-    "SCALE_BINS",
+    "SCALE_SAMPLES",
     "calibrate",
     "calibration_folds",
     "fit_with_band",
@@ -51,8 +51,8 @@ __all__ = [
 #: Records within this relative distance in displacement range and band frequency share one
 #: excitation condition [-].
 CONDITION_TOLERANCE = 0.10
-#: Bins of ``|F_hat|`` the error scale is fitted on.
-SCALE_BINS = 10
+#: Largest number of held-out samples the error scale is fitted on.
+SCALE_SAMPLES = 200_000
 #: Shortest time block of the block folds [samples].
 MIN_BLOCK = 64
 
@@ -128,9 +128,10 @@ def calibration_folds(data: Experiment | Iterable[Experiment]) -> list[Fold]:
 
 def _held_out(
     estimator: Any, folds: list[Fold], span: float
-) -> tuple[list[np.ndarray], list[np.ndarray], list[dict[str, Any]], list[str]]:
-    """Measured and predicted force of every held-out record, their spectra, fold lines."""
-    F_all, P_all, spectra, lines = [], [], [], []
+) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray], list[dict[str, Any]], list[str]]:
+    """Measured and predicted force and the prediction's moving RMS of every held-out record,
+    their spectra, fold lines."""
+    F_all, P_all, M_all, spectra, lines = [], [], [], [], []
     for label, train, test in folds:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -149,31 +150,27 @@ def _held_out(
                 continue
             F_all.append(np.asarray(e.F, dtype=np.float64))
             P_all.append(P)
+            M_all.append(moving_rms(P, e.dt))
             spec = relative_error_spectrum(e.F, P, e.dt, e.electrical(model.input), span, e.name)
             if spec is not None:
                 spectra.append(spec)
         note = f"; {skipped} record(s) diverged, left out" if skipped else ""
         lines.append(f"{label} ({len(test)} record(s){note})")
-    return F_all, P_all, spectra, lines
+    return F_all, P_all, M_all, spectra, lines
 
 
-def _scale(F: np.ndarray, P: np.ndarray) -> tuple[float, float]:
-    """``a`` [N] and ``b`` [-] of the error scale ``a + b |F_hat|`` (non-negative LSQ on bins)."""
+def _scale(F: np.ndarray, P: np.ndarray, M: np.ndarray) -> tuple[float, float, float]:
+    """``a`` [N], ``b`` and ``c`` [-] of the error scale ``a + b |F_hat| + c m`` (non-negative
+    least squares on the absolute residuals; ``a`` at least 1 % of the RMS force)."""
     from scipy.optimize import nnls
 
-    r, p = np.abs(F - P), np.abs(P)
+    step = max(1, F.size // SCALE_SAMPLES)
+    r, p, m = np.abs(F - P)[::step], np.abs(P)[::step], M[::step]
     floor = 0.01 * float(np.sqrt(np.mean(F**2))) + 1e-12
-    edges = np.unique(np.quantile(p, np.linspace(0.0, 1.0, SCALE_BINS + 1)))
-    if edges.size < 3:
-        return max(float(np.mean(r)), floor), 0.0
-    k = np.clip(np.searchsorted(edges, p, side="right") - 1, 0, edges.size - 2)
-    count = np.bincount(k, minlength=edges.size - 1)
-    used = count > 0
-    mean_r = np.bincount(k, weights=r, minlength=edges.size - 1)[used] / count[used]
-    mean_p = np.bincount(k, weights=p, minlength=edges.size - 1)[used] / count[used]
-    w = np.sqrt(count[used])
-    (a, b), _ = nnls(np.column_stack([w, w * mean_p]), w * mean_r)
-    return max(float(a), floor), float(b)
+    (a, b, c), _ = nnls(np.column_stack([np.ones(r.size), p, m]), r)
+    if a + b + c <= 0:
+        return max(float(np.mean(r)), floor), 0.0, 0.0
+    return max(float(a), floor), float(b), float(c)
 
 
 def _quantiles(scores: np.ndarray) -> tuple[float, ...]:
@@ -216,20 +213,21 @@ def calibrate(estimator: Any, data: Experiment | Iterable[Experiment], model: An
     try:
         if folds is None:
             raise ValueError("one condition")
-        F_all, P_all, spectra, lines = _held_out(estimator, folds, span)
+        F_all, P_all, M_all, spectra, lines = _held_out(estimator, folds, span)
     except (MrDamperError, ValueError):
         folds, method = _block_folds(exps), "time blocks"
-        F_all, P_all, spectra, lines = _held_out(estimator, folds, span)
+        F_all, P_all, M_all, spectra, lines = _held_out(estimator, folds, span)
     if not F_all:
         raise DataValidationError(
             "data", f"{model.kind}: no held-out record could be predicted; no band calibrated"
         )
-    F, P = np.concatenate(F_all), np.concatenate(P_all)
-    a, b = _scale(F, P)
-    scores = np.abs(F - P) / (a + b * np.abs(P))
+    F, P, M = np.concatenate(F_all), np.concatenate(P_all), np.concatenate(M_all)
+    a, b, c = _scale(F, P, M)
+    scores = np.abs(F - P) / (a + b * np.abs(P) + c * M)
     return Band(
         a=a,
         b=b,
+        c=c,
         quantiles=_quantiles(scores),
         method=method,
         n_samples=int(F.size),

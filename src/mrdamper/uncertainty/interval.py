@@ -59,7 +59,7 @@ def predict_interval(model: Any, experiment: Any, level: float = 0.9) -> Interva
     check_level(level)
     band = require_band(model)
     F = np.asarray(model.predict(experiment), dtype=np.float64)
-    lo, hi = band.interval(F, level)
+    lo, hi = band.interval(F, level, experiment.dt)
     return Interval(F, lo, hi)
 
 
