@@ -84,15 +84,17 @@ def splits(protocol: str, full: bool) -> list[Split]:
         test = read_directory(root / "test", pattern)
         return [("train/test", train, test, {"input": "voltage"})]
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    import generalisation as gen  # noqa: PLC0415 - the scenarios of the generalisation benchmark
+    import generalisation as gen
 
     if protocol in ("rig-chirp", "rig-road"):
         sc = gen.scenario_rig(quick=not full)
-        key = next(k for k in sc.tests if k.startswith("chirp" if protocol == "rig-chirp" else "road"))
+        key = next(
+            k for k in sc.tests if k.startswith("chirp" if protocol == "rig-chirp" else "road")
+        )
         return [(key, sc.train, sc.tests[key], {})]
-    sc = (gen.scenario_quiroz_frequency if protocol == "quiroz-freq" else gen.scenario_quiroz_cross)(
-        quick=not full
-    )
+    sc = (
+        gen.scenario_quiroz_frequency if protocol == "quiroz-freq" else gen.scenario_quiroz_cross
+    )(quick=not full)
     test = ExperimentSet([e for t in sc.tests.values() for e in t])
     return [(" + ".join(sc.tests), sc.train, test, {})]
 
@@ -159,7 +161,7 @@ def header(argv: list[str]) -> str:
         commit = "unknown"
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
     cmd = "python benchmarks/bench_bands.py " + " ".join(argv)
-    date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    date = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     return (
         f"# command: {cmd.strip()}\n# commit: {commit}\n# date: {date}\n"
         f"# load average at start (1, 5, 15 min): {load}\n# level: {LEVEL}\n"
@@ -183,9 +185,10 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
             t0 = time.perf_counter()
             row = run_kind(kind, protocol, parts)
             rows.append(row)
+            took = time.perf_counter() - t0
             print(
                 f"{protocol:12s} {kind:8s} coverage {row['coverage']:.3f} width "
-                f"{row['width_rms']:.3f} ESR {row['mean_esr']:.4g} ({time.perf_counter() - t0:.0f} s)"
+                f"{row['width_rms']:.3f} ESR {row['mean_esr']:.4g} ({took:.0f} s)"
                 f"{'  ' + row['error'][:100] if row['error'] else ''}",
                 flush=True,
             )

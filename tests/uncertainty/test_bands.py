@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mrdamper.data import Experiment, ExperimentSet
+from mrdamper.data import ExperimentSet
 from mrdamper.data.writers import write_csv
 from mrdamper.errors import DataValidationError, SchemaError
 from mrdamper.models import get_estimator, load_model
@@ -47,7 +47,9 @@ def _records(conditions: tuple[tuple[float, float], ...], seed: int) -> Experime
             seed += 1
             x = ramped_sine(FS, amplitude=amp, frequency=f, cycles=2)
             out.append(
-                rig.run(x, np.full(x.size, cur), seed=seed, name=f"r{amp * 1e3:g}mm_{f:g}Hz_{cur:g}A")
+                rig.run(
+                    x, np.full(x.size, cur), seed=seed, name=f"r{amp * 1e3:g}mm_{f:g}Hz_{cur:g}A"
+                )
             )
     return ExperimentSet(out)
 

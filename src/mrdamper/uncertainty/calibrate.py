@@ -14,12 +14,13 @@ data (about one more fit of the whole, not one per fold of a K-fold scheme):
 
 Residuals are normalised by the scale ``s = a + b |F_hat| + c m`` (:class:`~.band.Band`, ``m``
 the moving RMS of ``F_hat``), ``a``, ``b`` and ``c`` fitted by non-negative least squares to the
-absolute residuals (at most :data:`SCALE_SAMPLES` samples, evenly picked), and the band stores the split-conformal quantile of
-``|F - F_hat| / s`` (the ``ceil((n + 1) level)``-th smallest of the ``n`` held-out scores). The
-fold models see half the data, so their residuals are, if anything, larger than the full model's:
-the band is conservative rather than optimistic on records like the training ones. Held-out
-samples within one record are correlated, so the finite-sample guarantee of conformal prediction
-holds only approximately; the benchmark (``benchmarks/bench_bands.py``) measures the coverage.
+absolute residuals (at most :data:`SCALE_SAMPLES` samples, evenly picked), and the band stores
+the split-conformal quantile of ``|F - F_hat| / s`` (the ``ceil((n + 1) level)``-th smallest
+of the ``n`` held-out scores). The fold models see half the data, so their residuals are, if
+anything, larger than the full model's: the band is conservative rather than optimistic on
+records like the training ones. Held-out samples within one record are correlated, so the
+finite-sample guarantee of conformal prediction holds only approximately; the benchmark
+(``benchmarks/bench_bands.py``) measures the coverage.
 """
 
 from __future__ import annotations
