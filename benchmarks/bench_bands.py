@@ -22,10 +22,15 @@ Rows are written to ``--out`` (default ``results/bands.csv``) after each kind, a
 a header of ``#`` lines (command, commit, date, load average), so a long run can be read while it
 goes.
 
+``--table FILE...`` prints, instead of running, the markdown table of ``docs/results.md``
+("Prediction bands") from result files: coverage and width per kind and protocol (a cell left
+empty: not measured; a kind measured in several files: the first file's row).
+
 Run::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bands.py                      # everything
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_bands.py --protocols dyke --kinds lpv sp1
+    python benchmarks/bench_bands.py --table results/bands*.csv
 """
 
 from __future__ import annotations
@@ -168,8 +173,41 @@ def header(argv: list[str]) -> str:
     )
 
 
+def read_results(paths: list[Path]) -> pd.DataFrame:
+    """The rows of result files (``#`` header lines skipped), the first file's row winning when
+    a protocol and kind repeat."""
+    frames = [pd.read_csv(p, comment="#") for p in paths]
+    rows = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    return rows.drop_duplicates(["protocol", "kind"], keep="first")
+
+
+def table(rows: pd.DataFrame) -> str:
+    """Markdown table: one row per kind, per protocol ``coverage / width`` (empty: not
+    measured; ``failed``: the fit failed on every split)."""
+    protocols = [p for p in PROTOCOLS if p in set(rows["protocol"])]
+    kinds = [k for k in available_models() if k in set(rows["kind"])]
+    head = "| kind | " + " | ".join(protocols) + " |"
+    out = [head, "|---|" + "---|" * len(protocols)]
+    for kind in kinds:
+        cells = []
+        for protocol in protocols:
+            hit = rows[(rows["kind"] == kind) & (rows["protocol"] == protocol)]
+            if hit.empty:
+                cells.append("")
+                continue
+            r = hit.iloc[0]
+            cov, width = float(r["coverage"]), float(r["width_rms"])
+            cells.append("failed" if np.isnan(cov) else f"{cov:.1%} / {width:.2f}")
+        out.append(f"| {kind} | " + " | ".join(cells) + " |")
+    return "\n".join(out).replace("%", " %")
+
+
 def main(argv: list[str] | None = None) -> pd.DataFrame:
     argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["--table"]:
+        rows = read_results([Path(a) for a in argv[1:]])
+        print(table(rows))
+        return rows
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--kinds", nargs="*", default=None, help="model kinds (default: every kind)")
     p.add_argument("--protocols", nargs="*", default=list(PROTOCOLS), choices=PROTOCOLS)
