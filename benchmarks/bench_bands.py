@@ -183,12 +183,16 @@ def read_results(paths: list[Path]) -> pd.DataFrame:
 
 def table(rows: pd.DataFrame) -> str:
     """Markdown table: one row per kind, per protocol ``coverage / width`` (empty: not
-    measured; ``failed``: the fit failed on every split)."""
+    measured; ``failed``: the fit failed on every split), and the median over the protocols of
+    the band calibration's CPU time over the fit's."""
     protocols = [p for p in PROTOCOLS if p in set(rows["protocol"])]
     kinds = [k for k in available_models() if k in set(rows["kind"])]
-    head = "| kind | " + " | ".join(protocols) + " |"
-    out = [head, "|---|" + "---|" * len(protocols)]
+    head = "| kind | " + " | ".join(protocols) + " | band CPU / fit CPU |"
+    out = [head, "|---|" + "---|" * (len(protocols) + 1)]
     for kind in kinds:
+        mine = rows[rows["kind"] == kind]
+        ok = mine[mine["fit_cpu_s"] > 0]
+        ratio = np.median(ok["band_cpu_s"] / ok["fit_cpu_s"]) if len(ok) else np.nan
         cells = []
         for protocol in protocols:
             hit = rows[(rows["kind"] == kind) & (rows["protocol"] == protocol)]
@@ -198,7 +202,8 @@ def table(rows: pd.DataFrame) -> str:
             r = hit.iloc[0]
             cov, width = float(r["coverage"]), float(r["width_rms"])
             cells.append("failed" if np.isnan(cov) else f"{cov:.1%} / {width:.2f}")
-        out.append(f"| {kind} | " + " | ".join(cells) + " |")
+        cost = "" if np.isnan(ratio) else f"{ratio:.2g}"
+        out.append(f"| {kind} | " + " | ".join(cells) + f" | {cost} |")
     return "\n".join(out).replace("%", " %")
 
 
