@@ -208,6 +208,7 @@ LAYERS: dict[str, int] = {
     "mrdamper.plotting": 3,
     "mrdamper.models": 4,
     "mrdamper.rig": 5,
+    "mrdamper.uncertainty": 5,
     "mrdamper.control": 6,
     "mrdamper.compiled": 6,
     "mrdamper.conformance": 6,

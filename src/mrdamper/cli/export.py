@@ -136,7 +136,14 @@ def export(
             f"models {' and '.join(map(repr, STATE_SPACE))} (--format c and fmu take every kind)",
         )
     path = export_lpv(m, out, format="json" if fmt == "json" else "mat", force=force)
-    typer.echo(f"{m.kind}: wrote {path} ({fmt})")
+    from mrdamper.uncertainty import band_of, uncertainty_weights
+
+    weights = (
+        f"uncertainty weight W(s) at {len(uncertainty_weights(m))} input level(s)"
+        if band_of(m) is not None
+        else "no band stored, so no uncertainty weight W(s) (fit with --band)"
+    )
+    typer.echo(f"{m.kind}: wrote {path} ({fmt}; {weights})")
 
 
 def inverse(

@@ -10,7 +10,8 @@
   error shows the stage (reading records, then the fit's stages with ``k/N`` where they count)
   and the elapsed time, then ``...: done in X s``; ``--no-progress`` turns it off.
 * ``simulate model.json DATA --out predicted.csv`` writes ``t``, measured ``F`` and predicted
-  ``F_pred`` [s, N, N] of one record, atomically.
+  ``F_pred`` [s, N, N] of one record, atomically; ``--interval 0.9`` adds the band's ``F_lower``
+  and ``F_upper`` [N] (a model fitted with ``fit --band``, :mod:`mrdamper.uncertainty`).
 * ``score model.json DATA... [--json]`` prints ESR and SSSE (paper eqs 24 and 23) per record and
   their mean. A record whose simulation diverges is listed as such; the command then exits 1.
   On a terminal it shows the same live line as ``fit`` (``--no-progress`` turns it off).
@@ -152,6 +153,14 @@ def fit(
             "terminal: the stage of the fit, its k/N and the elapsed time).",
         ),
     ] = False,
+    band: Annotated[
+        bool,
+        typer.Option(
+            "--band",
+            help="Also calibrate a prediction band on held-out residuals (two more fits on halves "
+            "of DATA) and store it in the model file (for --interval and the export's W(s)).",
+        ),
+    ] = False,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
     """Identify MODEL on the records in DATA and save it as JSON."""
@@ -194,10 +203,22 @@ def fit(
         status.message = (
             f"fitting {model} on {len(records)} record(s), {sum(r.n for r in records)} samples"
         )
-        fitted = get_estimator(model, **given).fit(records, **options)
+        estimator = get_estimator(model, **given)
+        if band:
+            from mrdamper.uncertainty import fit_with_band
+
+            fitted = fit_with_band(estimator, records, **options)
+        else:
+            fitted = estimator.fit(records, **options)
     path = fitted.save(out, force=force)
     stiffness = getattr(fitted, "stiffness", 0.0)
     extra = f"; stiffness k_x = {stiffness:.4g} N/m" if stiffness else ""
+    if band:
+        from mrdamper.uncertainty import band_of
+
+        b = band_of(fitted)
+        assert b is not None
+        extra += f"; band calibrated on {b.n_samples} held-out samples ({b.method})"
     typer.echo(f"{model}: identified on {len(records)} record(s){extra}; wrote {path}")
 
 
@@ -210,13 +231,28 @@ def simulate(
         str | None,
         typer.Option("--range-policy", help="error | warn | clip | ignore (default: the model's)."),
     ] = None,
+    interval: Annotated[
+        float | None,
+        typer.Option(
+            "--interval",
+            help="Also write the prediction band at this coverage (0.5-0.99, e.g. 0.9): columns "
+            "F_lower, F_upper [N] (the model must have been fitted with --band).",
+        ),
+    ] = None,
     read_kw: dict[str, Any] | None = None,
 ) -> None:
-    """Free-run simulation of one record; writes t [s], measured F [N] and predicted F_pred [N]."""
+    """Free-run simulation of one record; writes t [s], measured F [N] and predicted F_pred [N]
+    (with --interval, the band's F_lower and F_upper [N] too)."""
     from mrdamper._io import atomic_write_text, check_writable
 
     check_writable(out, force, inputs=[model_file, data], kind=SIMULATION_CSV)
     m = load_model(model_file)
+    band = None
+    if interval is not None:
+        from mrdamper.uncertainty import check_level, require_band
+
+        check_level(interval, "--interval")
+        band = require_band(m, "--interval")
     if range_policy is not None:
         m = m.with_range_policy(_check_policy(range_policy))
     if data.is_dir():
@@ -224,11 +260,18 @@ def simulate(
     [exp] = read_records([data], read_kw=read_kw)
     res = m.simulate(exp)
     frame = res.to_frame()[["t", "F", "F_pred"]]
+    note = ""
+    if band is not None and interval is not None:
+        lower, upper = band.interval(frame["F_pred"].to_numpy(), interval, exp.dt)
+        frame = frame.assign(F_lower=lower, F_upper=upper)
+        measured = frame["F"].to_numpy()
+        inside = float(((measured >= lower) & (measured <= upper)).mean())
+        note = f", {inside:.1%} of F inside the {interval:g} band"
     path = atomic_write_text(
         out, frame.to_csv(index=False, float_format="%.10g"), force=force, kind=SIMULATION_CSV
     )
     s = res.scores
-    typer.echo(f"{exp.name}: ESR {s.esr:.4g}, SSSE {s.ssse:.4g} N; wrote {path}")
+    typer.echo(f"{exp.name}: ESR {s.esr:.4g}, SSSE {s.ssse:.4g} N{note}; wrote {path}")
 
 
 def score(

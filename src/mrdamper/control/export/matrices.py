@@ -47,6 +47,15 @@ name               shape                  meaning
 ``schema``,        string, scalar         ``"mrdamper.lpv_export"``, version 1
 ``schema_version``
 ``model_kind``     string                 ``"lpv"`` or ``"lti"``
+``W_level``        (L,)                   frozen input level of each uncertainty weight
+                                          (NaN: records with a varying input); only for a model
+                                          fitted with a band (:mod:`mrdamper.uncertainty`)
+``W_num``,         (L, 2)                 ``W(s) = (W_num[l, 0] s + W_num[l, 1]) /
+``W_den``                                 (W_den[l, 0] s + W_den[l, 1])``, a stable first-order
+                                          bound of the relative model error ``|F - F_hat| /
+                                          |F_hat|`` on held-out records (continuous time)
+``W_k``, ``W_wz``, (L,)                   its gain [-] and zero / pole corners [rad/s]
+``W_wp``
 =================  =====================  ======================================================
 
 With ``input_signal = "v"`` the zone-law arrays are empty. The LPV input is built from velocity
@@ -77,6 +86,7 @@ from mrdamper._warn import warn_user
 from mrdamper.control.export.statespace import state_space
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import FittedModel, encode_value
+from mrdamper.uncertainty.weight import weight_export_data
 
 __all__ = ["EXPORT_SCHEMA", "export_lpv", "lpv_export_data", "warn_if_unstable"]
 
@@ -253,7 +263,7 @@ def export_lpv(
     """
     if format not in ("mat", "json"):
         raise DataValidationError("format", f"expected 'mat' or 'json', got {format!r}")
-    data = lpv_export_data(model, rho_grid=rho_grid)
+    data = {**lpv_export_data(model, rho_grid=rho_grid), **weight_export_data(model)}
     warn_if_unstable(model)
     if format == "json":
         text = json.dumps(encode_value(data), indent=1, allow_nan=False)
