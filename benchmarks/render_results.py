@@ -371,6 +371,30 @@ def render_readme(folder: Path = RESULTS) -> str:
     return "\n".join(lines)
 
 
+def _minutes(s: float) -> str:
+    """A wall time as ``M min S s``."""
+    m, sec = divmod(round(s), 60)
+    return f"{m} min {sec} s" if m else f"{sec} s"
+
+
+def render_suite(folder: Path = RESULTS) -> str:
+    """The README's sentence on the test suite's size and time (``test-suite.json``)."""
+    doc = read_result("test-suite", folder)
+    parts = []
+    for r in doc["rows"]:
+        where = f" ({r['note']})" if r.get("note") else ""
+        what = "the whole suite" if r["scope"] == "full" else 'the quick loop (`-m "not slow"`)'
+        parts.append(
+            f"{what}: {r['tests']} tests, {_minutes(r['wall_s'])} of wall-clock time{where}, "
+            f"at `{r['commit']}` with the 1-minute load average at {r['load_avg_1min']:.1f}"
+        )
+    return (
+        "Measured: "
+        + "; ".join(parts)
+        + f". Data: `results/{doc['name']}.json`; command: `{doc['command']}`."
+    )
+
+
 #: Block renderers by name: each returns the Markdown between the block's markers.
 RENDERERS: dict[str, Callable[[Path], str]] = {
     "held-out": render_held_out,
@@ -380,6 +404,7 @@ RENDERERS: dict[str, Callable[[Path], str]] = {
     "closed-loop": render_closed_loop,
     "table2": render_table2,
     "readme": render_readme,
+    "suite": render_suite,
 }
 
 

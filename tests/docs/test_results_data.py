@@ -63,7 +63,7 @@ def test_the_results_pages_answer_the_questions(render: ModuleType) -> None:
     assert len(page.splitlines()) < MAX_RESULTS_LINES
     assert set(QUESTIONS) <= set(render.blocks_in(page))
     readme = (REPO_ROOT / "README.md").read_text(encoding="utf-8")
-    assert render.blocks_in(readme) == ["readme"]
+    assert "readme" in render.blocks_in(readme)
     block = readme.split("<!-- results:readme -->")[1].split("<!-- /results:readme -->")[0]
     assert len(block.strip().splitlines()) <= MAX_README_LINES
     for name in render.FIGURES:
