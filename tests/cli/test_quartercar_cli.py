@@ -120,9 +120,7 @@ def test_controllers_help_lists_the_registry_without_loading_the_loops() -> None
 
     cmd = typer.main.get_command(app)
     ctx = click.Context(cmd)
-    option = next(
-        p for p in cmd.get_command(ctx, "quartercar").params if p.name == "controllers"
-    )
+    option = next(p for p in cmd.get_command(ctx, "quartercar").params if p.name == "controllers")
     assert option.help == f"Comma-separated: {', '.join(LAWS)}."
     assert option.default.split(",") == list(LAWS)
     # the command line reads the names without importing the compiled loops

@@ -15,8 +15,8 @@ from mrdamper.control.loop.controllers import LAWS, ControllerLaw, law_of, regis
 from mrdamper.control.loop.controllers.law import CTRL_PASSIVE
 from mrdamper.controller_names import BUILTIN_CONTROLLERS
 from mrdamper.errors import DataValidationError
-from mrdamper.rig.doe_control import CONTROLLERS as RIG_CONTROLLERS
 from mrdamper.models.semiphenomenological import SP3Model
+from mrdamper.rig.doe_control import CONTROLLERS as RIG_CONTROLLERS
 
 SP3 = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), f0=10.0, input_range=(0.0, 2.0))
 

@@ -110,9 +110,7 @@ def quartercar(
     ] = True,
     controllers: Annotated[
         str,
-        typer.Option(
-            "--controllers", help=f"Comma-separated: {', '.join(BUILTIN_CONTROLLERS)}."
-        ),
+        typer.Option("--controllers", help=f"Comma-separated: {', '.join(BUILTIN_CONTROLLERS)}."),
     ] = ",".join(BUILTIN_CONTROLLERS),
     speed: Annotated[float, typer.Option("--speed", help="Vehicle speed [m/s].")] = 20.0,
     duration: Annotated[
