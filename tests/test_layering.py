@@ -190,12 +190,13 @@ def _cycle_edges(comp: list[str], edges: dict[str, set[str]]) -> list[str]:
 
 
 #: Layer of every package and top-level module (higher layers import lower ones only). Ground:
-#: the kind table (plain data), errors, progress reporting; output safety, metrics; data and
-#: signals; analysis and figures; the model families; the virtual rig; what runs models in
-#: loops and exports (control); the compile-ahead of every kernel (models' and rig's); the
-#: comparison study; the curated public namespace; the command line.
+#: the kind table and the controllers' names (plain data), errors, progress reporting; output
+#: safety, metrics; data and signals; analysis and figures; the model families; the virtual rig;
+#: what runs models in loops and exports (control); the compile-ahead of every kernel (models'
+#: and rig's); the comparison study; the curated public namespace; the command line.
 LAYERS: dict[str, int] = {
     "mrdamper.kinds": 0,
+    "mrdamper.controller_names": 0,
     "mrdamper.version": 0,
     "mrdamper.errors": 0,
     "mrdamper.progress": 0,

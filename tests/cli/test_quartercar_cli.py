@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
+import click
 import pandas as pd
 import pytest
+import typer
 
 from mrdamper.cli.main import main
 from mrdamper.models.semiphenomenological import SP3Model
@@ -108,3 +111,24 @@ def test_quartercar_with_the_exported_c_inverse(
         assert info.value.code == 2
         err = capsys.readouterr().err
         assert f"{extra[0]}: not with --c-inverse" in err and len(err.strip().splitlines()) == 1
+
+
+def test_controllers_help_lists_the_registry_without_loading_the_loops() -> None:
+    # the option's help and default name exactly the registered controllers, in their order
+    from mrdamper.cli.main import app
+    from mrdamper.control.loop.controllers import LAWS
+
+    cmd = typer.main.get_command(app)
+    ctx = click.Context(cmd)
+    option = next(p for p in cmd.get_command(ctx, "quartercar").params if p.name == "controllers")
+    assert option.help == f"Comma-separated: {', '.join(LAWS)}."
+    assert option.default.split(",") == list(LAWS)
+    # the command line reads the names without importing the compiled loops
+    probe = (
+        "import sys, mrdamper.cli.main; "
+        "print(sorted(m for m in sys.modules if m.split('.')[:2] == ['mrdamper', 'control']))"
+    )
+    loaded = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    assert loaded == "[]"

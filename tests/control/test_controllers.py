@@ -13,14 +13,19 @@ from mrdamper.control import CONTROLLERS, Controller, iso_road, simulate_quarter
 from mrdamper.control.loop import _quarter_car_kernels as QK
 from mrdamper.control.loop.controllers import LAWS, ControllerLaw, law_of, register
 from mrdamper.control.loop.controllers.law import CTRL_PASSIVE
+from mrdamper.controller_names import BUILTIN_CONTROLLERS
 from mrdamper.errors import DataValidationError
 from mrdamper.models.semiphenomenological import SP3Model
+from mrdamper.rig.doe_control import CONTROLLERS as RIG_CONTROLLERS
 
 SP3 = SP3Model(S=(800.0, 200.0, 60.0, 0.0, 900.0, 0.0), f0=10.0, input_range=(0.0, 2.0))
 
 
 def test_the_default_comparison_is_the_registry() -> None:
     assert CONTROLLERS == tuple(LAWS) == ("soft", "hard", "skyhook", "groundhook", "hybrid")
+    # the names read without loading the loops (command line, rig DoE) are the registry's
+    assert BUILTIN_CONTROLLERS == tuple(LAWS)
+    assert RIG_CONTROLLERS == tuple(LAWS)
     assert [n for n, law in LAWS.items() if law.passive] == ["soft", "hard"]
     assert {LAWS["soft"].constant_input(0.1, 0.9), LAWS["hard"].constant_input(0.1, 0.9)} == {
         0.1,

@@ -87,6 +87,11 @@ def test_electrical_source_errors() -> None:
     assert e.electrical("voltage") is e.voltage
     with pytest.raises(DataValidationError, match="no 'i' channel"):
         e.electrical("i")
+    # the channel a record carries: the current when it has one, else the voltage
+    assert e.electrical_channel == "voltage" and "input='voltage'" in repr(e)
+    both = Experiment(t=t, x=t, v=t, F=t, i=2 * t, voltage=t)
+    assert both.electrical_channel == "i" and "input='i'" in repr(both)
+    assert both.electrical(both.electrical_channel) is both.i
 
 
 def test_set_filter_groups_split_logo() -> None:

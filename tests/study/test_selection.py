@@ -3,6 +3,7 @@ every kind asked for, the data's true model family is recommended, bad input is 
 
 from __future__ import annotations
 
+import typing
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ from mrdamper.data import Experiment, ExperimentSet, write_csv
 from mrdamper.errors import DataValidationError
 from mrdamper.models.bingham import BinghamModel
 from mrdamper.study import cross_validate
-from mrdamper.study.selection import selection_folds
+from mrdamper.study.selection import FOLD_KINDS, FoldKind, selection_folds
 
 TRUTH = BinghamModel(
     fc=(100.0, 400.0, -50.0), c0=(800.0, 1500.0, 0.0), f0=5.0, v_eps=0.0, input_range=(0.0, 1.0)
@@ -242,6 +243,24 @@ def test_cli_time_budget_spent_before_any_fold(records, tmp_path: Path, capsys) 
         main(["select", str(d), "--workers", "0"])
     assert exc.value.code == 2
     assert "--workers: expected a positive integer, got 0" in capsys.readouterr().err
+
+
+def test_cli_select_refuses_an_unknown_input_or_fold_scheme(
+    records, tmp_path: Path, capsys
+) -> None:
+    assert FOLD_KINDS == typing.get_args(FoldKind)  # the names the command line checks against
+    d = tmp_path / "data"
+    d.mkdir()
+    write_csv(records[0], d / f"{records[0].name}.csv")
+    for args, line in (
+        (["--input", "current"], "--input: expected one of ['i', 'voltage'], got 'current'"),
+        (["--folds", "random"], "--folds: expected auto, condition, record or time, got 'random'"),
+    ):
+        with pytest.raises(SystemExit) as exc:
+            main(["select", str(d), "-m", "bingham", *args])
+        assert exc.value.code == 2
+        err = capsys.readouterr().err.strip()
+        assert line in err and err.count("\n") == 0
 
 
 def test_a_worker_that_fails_is_a_row_not_a_crash(records, monkeypatch) -> None:

@@ -46,6 +46,7 @@ import typer
 from mrdamper._io import FileKind, csv_kind, png_kind
 from mrdamper.cli._help import kinds_text
 from mrdamper.cli._modes import refuse_unused
+from mrdamper.controller_names import BUILTIN_CONTROLLERS
 from mrdamper.errors import DataValidationError
 
 __all__ = ["QUARTERCAR_CSV", "register"]
@@ -109,10 +110,8 @@ def quartercar(
     ] = True,
     controllers: Annotated[
         str,
-        typer.Option(
-            "--controllers", help="Comma-separated: soft, hard, skyhook, groundhook, hybrid."
-        ),
-    ] = "soft,hard,skyhook,groundhook,hybrid",
+        typer.Option("--controllers", help=f"Comma-separated: {', '.join(BUILTIN_CONTROLLERS)}."),
+    ] = ",".join(BUILTIN_CONTROLLERS),
     speed: Annotated[float, typer.Option("--speed", help="Vehicle speed [m/s].")] = 20.0,
     duration: Annotated[
         float, typer.Option("--duration", help="Length of each ISO road [s].")

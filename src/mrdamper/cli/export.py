@@ -191,9 +191,8 @@ def inverse(
     if data.is_dir():
         raise DataValidationError("DATA", f"{data} is a folder; inverse takes one record file")
     [exp] = read_records([data], read_kw=read_kw)
-    kw = {"method": method, "reg": reg, "rate": rate, "horizon": horizon}
     try:
-        res = inverse_current(m, exp, exp.F, **kw)  # type: ignore[arg-type]
+        res = inverse_current(m, exp, exp.F, method=method, reg=reg, rate=rate, horizon=horizon)
     except TypeError as exc:
         raise DataValidationError("MODEL", str(exc)) from exc
     frame = res.to_frame()[["t", "F_desired", res.input, "F_achieved", "saturated"]].copy()
@@ -210,7 +209,7 @@ def inverse(
     if m.input in exp.channel_names:
         from mrdamper.control.inverse.inverse_check import check_inverse
 
-        chk = check_inverse(m, exp, **kw)  # type: ignore[arg-type]
+        chk = check_inverse(m, exp, method=method, reg=reg, rate=rate, horizon=horizon)
         unit = "A" if m.input == "i" else "V"
         typer.echo(
             f"  median |{m.input} error| over |v| > 20 % of peak: {chk.median_input_error:.4g} "

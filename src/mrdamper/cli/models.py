@@ -32,6 +32,7 @@ from mrdamper.cli._options import ForceOut, InputChannel, Pattern
 from mrdamper.cli._records import read_paths, reader_options
 from mrdamper.cli._status import NoProgress
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import ElectricalSource
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models.base import MODEL_FILE, RangePolicy
 from mrdamper.models.registry import get_estimator, known_kinds, load_model
@@ -39,6 +40,7 @@ from mrdamper.models.registry import get_estimator, known_kinds, load_model
 __all__ = ["estimator_settings", "parse_settings", "read_records", "register"]
 
 _RANGE_POLICIES: tuple[str, ...] = typing.get_args(RangePolicy)
+_INPUTS: tuple[str, ...] = typing.get_args(ElectricalSource)
 #: The kind of file ``simulate`` writes (``--force`` replaces only such a file).
 SIMULATION_CSV = csv_kind(
     "table written by 'mrdamper simulate' (t, F, F_pred)", ("t", "F", "F_pred")
@@ -84,7 +86,7 @@ def parse_settings(items: list[str] | None) -> dict[str, Any]:
     return out
 
 
-def _choose_input(records: list[Experiment]) -> str:
+def _choose_input(records: list[Experiment]) -> ElectricalSource:
     from mrdamper.data.inspection import common_input
 
     source = common_input(records)
@@ -94,6 +96,16 @@ def _choose_input(records: list[Experiment]) -> str:
         "--input",
         "the records do not all share one electrical channel ('i' or 'voltage'); choose --input",
     )
+
+
+def _input_of(input_: str | None, records: list[Experiment]) -> ElectricalSource:
+    """The electrical input the models read: ``--input`` when given (checked), else the channel
+    every record has."""
+    if input_ is None:
+        return _choose_input(records)
+    if input_ not in _INPUTS:
+        raise DataValidationError("--input", f"expected one of {list(_INPUTS)}, got {input_!r}")
+    return cast(ElectricalSource, input_)
 
 
 def _check_policy(policy: str) -> RangePolicy:

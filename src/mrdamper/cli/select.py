@@ -143,8 +143,8 @@ def select(
     """Cross-validate every model kind on DATA and recommend one."""
     from mrdamper._io import atomic_write_text, check_writable
     from mrdamper.cli._status import working
-    from mrdamper.cli.models import _choose_input, read_records
-    from mrdamper.study.selection import HALVING, cross_validate
+    from mrdamper.cli.models import _input_of, read_records
+    from mrdamper.study.selection import FOLD_KINDS, HALVING, cross_validate
 
     if for_ not in ("fit", "control"):
         raise DataValidationError("--for", f"expected fit or control, got {for_!r}")
@@ -176,17 +176,18 @@ def select(
         check_writable(csv, force=force, inputs=list(data), kind=SELECTION_CSV, option="--csv")
     with working("cross-validating", show=not no_progress):
         records = read_records(data, pattern, read_kw)
-        source = input_ or _choose_input(records)
-        if folds not in ("auto", "condition", "record", "time"):
+        source = _input_of(input_, records)
+        fold_kind = next((f for f in FOLD_KINDS if f == folds), None)
+        if fold_kind is None:
             raise DataValidationError(
                 "--folds", f"expected auto, condition, record or time, got {folds!r}"
             )
         res = cross_validate(
             records,
             models=models,
-            folds=folds,  # type: ignore[arg-type]
+            folds=fold_kind,
             n_folds=n_folds,
-            input=source,  # type: ignore[arg-type]
+            input=source,
             settings=_kind_settings(settings),
             beyond=not inside_only,
             stress=not inside_only,

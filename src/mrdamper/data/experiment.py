@@ -233,6 +233,12 @@ class Experiment:
         return tuple(c for c in CHANNELS if getattr(self, c) is not None)
 
     @property
+    def electrical_channel(self) -> ElectricalSource:
+        """The electrical channel the record carries: ``"i"`` (coil current) when present, else
+        ``"voltage"`` (command voltage); the default input of :meth:`electrical` for it."""
+        return "i" if self.i is not None else "voltage"
+
+    @property
     def n(self) -> int:
         """Number of samples."""
         return int(self.t.size)
@@ -316,10 +322,9 @@ class Experiment:
         return axes
 
     def __repr__(self) -> str:
-        el = "i" if self.i is not None else "voltage"
         return (
             f"Experiment(name={self.name!r}, n={self.n}, fs={self.fs:g} Hz, "
-            f"duration={self.duration:g} s, input={el!r})"
+            f"duration={self.duration:g} s, input={self.electrical_channel!r})"
         )
 
 

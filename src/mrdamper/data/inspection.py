@@ -108,7 +108,7 @@ def record_summary(exp: Experiment) -> dict[str, Any]:
     -------
     dict
     """
-    source: ElectricalSource = "i" if exp.i is not None else "voltage"
+    source = exp.electrical_channel
     el = exp.electrical(source)
     return {
         "name": exp.name,

@@ -118,7 +118,17 @@ def family_force(
 
 
 @njit(cache=True)
-def family_advance(pk, s, x0, v0, e0, x1, v1, e1, dt):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def family_advance(  # pragma: no cover - numba
+    pk: tuple[Any, ...],
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+) -> int:
     """``step_advance`` of the family ``pk[0]`` on its form (status 2, invalid, for code -1)."""
     code = pk[0]
     if code == 0:

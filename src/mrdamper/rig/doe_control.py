@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
+from mrdamper.controller_names import BUILTIN_CONTROLLERS
 from mrdamper.data import Experiment
 from mrdamper.errors import DataValidationError
 from mrdamper.rig.virtual_rig import VirtualRig
@@ -71,9 +72,9 @@ FILL = 0.9
 LOAD_SHARE = 0.9
 #: Raised-cosine fade at each end of a record [s].
 FADE = 0.5
-#: The controllers of the loop runs (names of
-#: :class:`mrdamper.control.loop.quarter_car.Controller`).
-CONTROLLERS = ("soft", "hard", "skyhook", "groundhook", "hybrid")
+#: The controllers of the loop runs (the built-in controllers' names, read without loading the
+#: loops: :mod:`mrdamper.controller_names`).
+CONTROLLERS = BUILTIN_CONTROLLERS
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from mrdamper.data import Experiment
-from mrdamper.data.experiment import CHANNELS, ElectricalSource
+from mrdamper.data.experiment import CHANNELS
 from mrdamper.errors import DataValidationError
 from mrdamper.rig.virtual_rig import VirtualRig, commands
 from mrdamper.signals.common import SeedLike
@@ -132,11 +132,6 @@ class RigLimits:
         )
 
 
-def _channel(record: Experiment) -> ElectricalSource:
-    """The electrical channel a planned record carries."""
-    return "i" if record.i is not None else "voltage"
-
-
 def plan_limits(records: Iterable[Experiment], limits: RigLimits) -> pd.DataFrame:
     """Check every planned record against the rig's limits.
 
@@ -161,7 +156,7 @@ def plan_limits(records: Iterable[Experiment], limits: RigLimits) -> pd.DataFram
     rows = []
     lo, hi = limits.electrical
     for rec in records:
-        channel = _channel(rec)
+        channel = rec.electrical_channel
         e = rec.electrical(channel)
         travel = float(np.max(np.abs(rec.x)))
         speed = float(np.max(np.abs(rec.v)))
@@ -235,7 +230,7 @@ def write_plan(
 
     def build(tmp: Path) -> None:
         for rec in planned:
-            channel = _channel(rec)
+            channel = rec.electrical_channel
             unit = CHANNELS[channel]
             frame = pd.DataFrame(
                 {"t [s]": rec.t, "x [m]": rec.x, f"{channel} [{unit}]": rec.electrical(channel)}

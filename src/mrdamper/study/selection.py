@@ -82,6 +82,8 @@ INTERPOLATION_ONLY = (
 )
 
 FoldKind = Literal["auto", "condition", "record", "time"]
+#: The fold schemes, typed (for the callers that check a name against them).
+FOLD_KINDS: tuple[FoldKind, ...] = ("auto", "condition", "record", "time")
 
 
 @dataclass(frozen=True)

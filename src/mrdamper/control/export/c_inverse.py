@@ -37,10 +37,11 @@ from pathlib import Path
 from typing import Any, NamedTuple, cast
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from mrdamper.control.damper import DamperModel
-from mrdamper.control.inverse._forms import ControllerForm
+from mrdamper.control.inverse._forms import ControllerForm, InverseForm
 from mrdamper.control.loop import _closed_loop_kernels as CK
 from mrdamper.control.loop import _quarter_car_kernels as QK
 from mrdamper.errors import DataValidationError
@@ -61,25 +62,42 @@ __all__ = [
 #: Kinds whose inverse the quarter car runs per sample (the ones a C inverse can replace).
 LOOP_KINDS = ("sp1", "sp2", "sp3", "sp4", "bingham", "lpv")
 
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
 
 class CControllerForm(NamedTuple):
     """:class:`~mrdamper.control.inverse._forms.ControllerForm` with the C inverse: its function
     (a ``ctypes`` function object, typed by signature), its state and the force it returns."""
 
     ctrl: int
-    gains: Any
+    gains: FloatArray
     lo: float
     hi: float
     rate_step: float
     dt_c: float
-    inverse: Any
+    inverse: InverseForm
     c_step: Any
-    c_state: Any
-    c_out: Any
+    c_state: FloatArray
+    c_out: FloatArray
 
 
 @njit(cache=True)
-def grid_reach(is_lpv, cf, x, v, comp, power, theta, f0, target, a, b, hold, n_grid):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def grid_reach(  # pragma: no cover - numba
+    is_lpv: bool,
+    cf: FloatArray,
+    x: float,
+    v: float,
+    comp: IntArray,
+    power: IntArray,
+    theta: FloatArray,
+    f0: float,
+    target: float,
+    a: float,
+    b: float,
+    hold: float,
+    n_grid: int,
+) -> bool:
     """Whether ``target`` [N] lies between the least and largest model forces at the inputs the
     inverse's grid visits on ``[a, b]`` (the ``reachable`` flag of
     :func:`~mrdamper.control.inverse._inverse_kernels.reg_solve_poly`,
@@ -100,7 +118,23 @@ def grid_reach(is_lpv, cf, x, v, comp, power, theta, f0, target, a, b, hold, n_g
 
 
 @njit(cache=False)
-def c_invert(form, k, x_d, v_d, target, a, b, prev, hold, cf, y, u, yb, ub, z_d):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def c_invert(  # pragma: no cover - numba
+    form: CControllerForm,
+    k: int,
+    x_d: float,
+    v_d: float,
+    target: float,
+    a: float,
+    b: float,
+    prev: float,
+    hold: float,
+    cf: FloatArray,
+    y: FloatArray,
+    u: FloatArray,
+    yb: FloatArray,
+    ub: FloatArray,
+    z_d: float,
+) -> tuple[float, bool]:
     """``<name>_inverse_step`` at this control sample (the arguments of
     :func:`~mrdamper.control.loop._quarter_car_kernels.invert_model`); ``(r, reachable)``."""
     r = form.c_step(form.c_state.ctypes, x_d, v_d, target, form.c_out.ctypes)

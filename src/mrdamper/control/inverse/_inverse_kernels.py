@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from mrdamper.control.inverse._forms import InverseForm
 from mrdamper.models.kernels import (
     allowed_interval,
     dahl_step,
@@ -55,29 +56,31 @@ N_GOLDEN = 50
 
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
 
 
 @njit(cache=True)
-def lpv_inverse(  # type: ignore[no-untyped-def]
-    v,
-    F_desired,
-    alpha,
-    beta,
-    offset,
-    lo,
-    hi,
-    lag,
-    mode,
-    gm,
-    gc,
-    mu_high,
-    mu_low,
-    rho0,
-    n_grid,
-    tol,
-    z,
-    blend,
-):  # pragma: no cover - numba
+def lpv_inverse(  # pragma: no cover - numba
+    v: FloatArray,
+    F_desired: FloatArray,
+    alpha: FloatArray,
+    beta: FloatArray,
+    offset: float,
+    lo: float,
+    hi: float,
+    lag: float,
+    mode: int,
+    gm: FloatArray,
+    gc: FloatArray,
+    mu_high: FloatArray,
+    mu_low: FloatArray,
+    rho0: float,
+    n_grid: int,
+    tol: float,
+    z: FloatArray,
+    blend: float,
+) -> tuple[FloatArray, FloatArray, BoolArray]:
     """Causal, one-pass inverse of the LPV input-output model.
 
     Parameters
@@ -139,7 +142,21 @@ def lpv_inverse(  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def horizon_cost(inv, cf, yb, ub, valid, r, w, v, target, z, ys, us, c2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def horizon_cost(  # pragma: no cover - numba
+    inv: InverseForm,
+    cf: FloatArray,
+    yb: FloatArray,
+    ub: FloatArray,
+    valid: int,
+    r: float,
+    w: float,
+    v: float,
+    target: float,
+    z: float,
+    ys: FloatArray,
+    us: FloatArray,
+    c2: FloatArray,
+) -> float:
     """Mean squared force error over ``horizon`` samples with the command ``w`` held.
 
     ``inv`` is the model's :class:`~mrdamper.control.inverse._forms.InverseForm`. Sample 0 has the
@@ -181,14 +198,42 @@ def horizon_cost(inv, cf, yb, ub, valid, r, w, v, target, z, ys, us, c2):  # typ
 
 
 @njit(cache=True)
-def _horizon_j(inv, cf, yb, ub, valid, r, prev, hold, v, target, z, ys, us, c2):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def _horizon_j(  # pragma: no cover - numba
+    inv: InverseForm,
+    cf: FloatArray,
+    yb: FloatArray,
+    ub: FloatArray,
+    valid: int,
+    r: float,
+    prev: float,
+    hold: float,
+    v: float,
+    target: float,
+    z: float,
+    ys: FloatArray,
+    us: FloatArray,
+    c2: FloatArray,
+) -> float:
     w = (r - inv.lag * prev) / (1.0 - inv.lag)
     d = r - hold
     return horizon_cost(inv, cf, yb, ub, valid, r, w, v, target, z, ys, us, c2) + inv.lam2 * d * d
 
 
 @njit(cache=True)
-def horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v, target, z):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def horizon_step(  # pragma: no cover - numba
+    inv: InverseForm,
+    cf: FloatArray,
+    yb: FloatArray,
+    ub: FloatArray,
+    valid: int,
+    a: float,
+    b: float,
+    prev: float,
+    hold: float,
+    v: float,
+    target: float,
+    z: float,
+) -> tuple[float, bool]:
     """``rho[k]`` in ``[a, b]`` minimising the horizon cost (:func:`horizon_cost`) of the command it
     implies, ``w = (rho - lag prev) / (1 - lag)``, plus ``lam2 (rho - hold)^2`` (``inv``: the
     model's :class:`~mrdamper.control.inverse._forms.InverseForm`, with ``lag``, ``horizon``,
@@ -207,7 +252,7 @@ def horizon_step(inv, cf, yb, ub, valid, a, b, prev, hold, v, target, z):  # typ
     c2 = np.zeros(n_p)
 
     def cost(r: float) -> float:  # the horizon cost at rho = r (inlined by numba)
-        return _horizon_j(inv, cf, yb, ub, valid, r, prev, hold, v, target, z, ys, us, c2)  # type: ignore[no-any-return]  # numba kernel, untyped
+        return _horizon_j(inv, cf, yb, ub, valid, r, prev, hold, v, target, z, ys, us, c2)
 
     best = min(max(hold, a), b)
     best_j = cost(best)
@@ -260,7 +305,16 @@ def past_buffers(  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def lpv_inverse_reg_hys(v, F_desired, inv, lo, hi, rho0, rate_step, z):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def lpv_inverse_reg_hys(  # pragma: no cover - numba
+    v: FloatArray,
+    F_desired: FloatArray,
+    inv: InverseForm,
+    lo: float,
+    hi: float,
+    rho0: float,
+    rate_step: float,
+    z: FloatArray,
+) -> tuple[FloatArray, FloatArray, BoolArray]:
     """Regularised causal inverse of the LPV model (see :mod:`mrdamper.control.inverse.current`).
 
     Per sample: ``rho[k]`` minimises ``(F_k(rho) - F_desired[k])^2 + lam^2 (rho - hold)^2`` over
@@ -314,9 +368,22 @@ def lpv_inverse_reg_hys(v, F_desired, inv, lo, hi, rho0, rate_step, z):  # type:
 
 
 @njit(cache=True)
-def static_inverse_reg(  # type: ignore[no-untyped-def]
-    x, v, F_desired, comp, power, theta, f0, lo, hi, i0, n_grid, lam, rate_step, lag
-):  # pragma: no cover
+def static_inverse_reg(  # pragma: no cover - numba
+    x: FloatArray,
+    v: FloatArray,
+    F_desired: FloatArray,
+    comp: IntArray,
+    power: IntArray,
+    theta: FloatArray,
+    f0: float,
+    lo: float,
+    hi: float,
+    i0: float,
+    n_grid: int,
+    lam: float,
+    rate_step: float,
+    lag: float,
+) -> tuple[FloatArray, BoolArray]:
     """Regularised causal inverse of a static map, sample by sample (see :func:`reg_solve_static`).
 
     With a drive lag (``lag = exp(-eta dt) >= 0``; -1 for none) the map sees ``rho``, the lagged

@@ -25,8 +25,10 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
+from mrdamper.control.inverse._forms import ControllerForm
 from mrdamper.control.loop._quarter_car_kernels import (
     CTRL_PASSIVE,
     _between,
@@ -39,6 +41,12 @@ from mrdamper.models.step_dispatch import family_advance, family_force
 
 __all__ = ["compile_loop", "invert_record_packed", "run_loop", "run_loop_packed"]
 
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+#: A model's form as its step functions take it: a family's NamedTuple (a family added at run
+#: time) or a built-in family's packed form (:func:`~mrdamper.models.step_dispatch.pack`).
+StepForm = tuple[Any, ...]
+
 # Bound by compile_loop in each compiled variant (placeholders for the Python source).
 C_FORCE: Any = None
 C_ADVANCE: Any = None
@@ -48,9 +56,17 @@ LEAD_FORCE: Any = None
 STEP_INVERSE: Any = None
 
 
-def _lead_force(  # type: ignore[no-untyped-def]
-    form, state, scratch, x, v, e, dt, n_lead, offset
-):  # pragma: no cover - numba
+def _lead_force(  # pragma: no cover - numba
+    form: StepForm,
+    state: FloatArray,
+    scratch: FloatArray,
+    x: float,
+    v: float,
+    e: float,
+    dt: float,
+    n_lead: int,
+    offset: float,
+) -> float:
     """Mean model force (rest force removed) over ``n_lead`` samples of ``dt`` ahead, with the
     input ``e`` and the damper velocity ``v`` held (NaN when the step fails)."""
     scratch[:] = state
@@ -65,9 +81,22 @@ def _lead_force(  # type: ignore[no-untyped-def]
     return acc / n_lead
 
 
-def _step_inverse(  # type: ignore[no-untyped-def]
-    form, state, scratch, x, v, dt, n_lead, offset, target, a, b, prev, lam2, n_pts
-):  # pragma: no cover - numba
+def _step_inverse(  # pragma: no cover - numba
+    form: StepForm,
+    state: FloatArray,
+    scratch: FloatArray,
+    x: float,
+    v: float,
+    dt: float,
+    n_lead: int,
+    offset: float,
+    target: float,
+    a: float,
+    b: float,
+    prev: float,
+    lam2: float,
+    n_pts: int,
+) -> tuple[float, float]:
     """Regularised inverse of a model through its step, one control sample.
 
     The lead force ``G(e)``, the mean model force over ``n_lead`` samples of ``dt`` ahead of the
@@ -103,23 +132,23 @@ def _step_inverse(  # type: ignore[no-untyped-def]
     return best, abs(gbest - target)
 
 
-def _loop(  # type: ignore[no-untyped-def]
-    zr,
-    h,
-    n_sub,
-    car,
-    form,
-    bound,
-    c_step,
-    c_form,
-    c_state,
-    c_offset,
-    n_lead,
-    p_form,
-    p_state,
-    p_offset,
-    p_every,
-):  # pragma: no cover - numba
+def _loop(  # pragma: no cover - numba
+    zr: FloatArray,
+    h: float,
+    n_sub: int,
+    car: FloatArray,
+    form: ControllerForm,
+    bound: float,
+    c_step: bool,
+    c_form: StepForm,
+    c_state: FloatArray,
+    c_offset: float,
+    n_lead: int,
+    p_form: StepForm,
+    p_state: FloatArray,
+    p_offset: float,
+    p_every: int,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, BoolArray, int, int]:
     """Run the quarter car with a plant stepped through ``P_FORCE`` / ``P_ADVANCE``.
 
     Parameters
@@ -286,9 +315,21 @@ def _loop(  # type: ignore[no-untyped-def]
     return X, F, Fd, E, sat, -1, 0
 
 
-def _invert_record(  # type: ignore[no-untyped-def]
-    form, state, x, v, Fd, dt, n_lead, offset, lo, hi, lam2, step_change, n_pts
-):  # pragma: no cover - numba
+def _invert_record(  # pragma: no cover - numba
+    form: StepForm,
+    state: FloatArray,
+    x: FloatArray,
+    v: FloatArray,
+    Fd: FloatArray,
+    dt: float,
+    n_lead: int,
+    offset: float,
+    lo: float,
+    hi: float,
+    lam2: float,
+    step_change: float,
+    n_pts: int,
+) -> tuple[FloatArray, FloatArray, int]:
     """Input of a model through its step along a record (:func:`_step_inverse` per sample).
 
     At sample ``k`` the model's state is that of the record so far under the inputs chosen;

@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from mrdamper.control.inverse._forms import ControllerForm
 from mrdamper.control.inverse._inverse_kernels import (
     horizon_step,
     past_buffers,
@@ -51,6 +52,7 @@ from mrdamper.models.kernels import zone_input as _u_of
 __all__ = ["control_sample", "simulate"]
 
 FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
 
 CTRL_PASSIVE, CTRL_SKYHOOK, CTRL_GROUNDHOOK, CTRL_HYBRID = 0, 1, 2, 3
 
@@ -100,7 +102,23 @@ def _desired(  # pragma: no cover - numba
 
 
 @njit(cache=True)
-def invert_model(form, k, x_d, v_d, target, a, b, prev, hold, cf, y, u, yb, ub, z_d):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def invert_model(  # pragma: no cover - numba
+    form: ControllerForm,
+    k: int,
+    x_d: float,
+    v_d: float,
+    target: float,
+    a: float,
+    b: float,
+    prev: float,
+    hold: float,
+    cf: FloatArray,
+    y: FloatArray,
+    u: FloatArray,
+    yb: FloatArray,
+    ub: FloatArray,
+    z_d: float,
+) -> tuple[float, bool]:
     """The damper model's regularised inverse at control sample ``k`` (the quarter car's own).
 
     ``target`` is the desired force with the model's rest force (LPV offset, static map ``f0``)
@@ -128,7 +146,21 @@ INVERT = invert_model
 
 
 @njit(cache=True)
-def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def control_sample(  # pragma: no cover - numba
+    k: int,
+    zs: float,
+    vs: float,
+    zu: float,
+    vu: float,
+    form: ControllerForm,
+    y: FloatArray,
+    u: FloatArray,
+    cf: FloatArray,
+    yb: FloatArray,
+    ub: FloatArray,
+    rho: FloatArray,
+    mem: FloatArray,
+) -> tuple[float, bool, float, float]:
     """The controller and the damper model's inverse at control sample ``k``.
 
     ``form`` is the controller (:class:`~mrdamper.control.inverse._forms.ControllerForm`, with the
@@ -201,7 +233,9 @@ def control_sample(k, zs, vs, zu, vu, form, y, u, cf, yb, ub, rho, mem):  # type
 # function it calls in another module (the inverse kernels) changes; after editing those, delete
 # this module's cache files (__pycache__/_quarter_car_kernels*.nb*), or a stale copy shadows them.
 @njit(cache=True)
-def simulate(zr, h, n_sub, car, form, bound):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def simulate(  # pragma: no cover - numba
+    zr: FloatArray, h: float, n_sub: int, car: FloatArray, form: ControllerForm, bound: float
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, BoolArray, int]:
     """Run the quarter car over a road.
 
     Parameters

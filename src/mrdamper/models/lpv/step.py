@@ -210,7 +210,17 @@ def step_force(
 
 
 @njit(cache=True)
-def step_advance(form, s, x0, v0, e0, x1, v1, e1, dt):  # type: ignore[no-untyped-def]  # pragma: no cover - numba
+def step_advance(  # pragma: no cover - numba
+    form: LPVForm,
+    s: FloatArray,
+    x0: float,
+    v0: float,
+    e0: float,
+    x1: float,
+    v1: float,
+    e1: float,
+    dt: float,
+) -> int:
     """Advance ``s`` from sample ``k`` to ``k + 1`` (``dt`` is the model's sample time)."""
     n_m = form.alpha.shape[0]
     F, r = _force(form, s, e0)
