@@ -42,18 +42,24 @@ ROADS = "B,C,D"
 
 
 def recipe(
-    scale: float, speeds=SPEEDS, seeds=SEEDS, roads: str = ROADS, extension: str = "control"
+    scale: float,
+    speeds=SPEEDS,
+    seeds=SEEDS,
+    roads: str = ROADS,
+    extension: str = "control",
+    kind: str = "lpv",
 ) -> list[list[str]]:
     """The command lines of the recipe (arguments after ``mrdamper``; ``extension="none"``: the
-    same on Table II alone)."""
+    same on Table II alone; ``kind``: the model kind fitted with its defaults)."""
+    model = f"{kind}.json"
     cmds = [
         ["rig", "doe", "--out", "doe-ctrl", "--scale", f"{scale:g}", "--extension", extension],
-        ["fit", "lpv", "doe-ctrl", "--out", "lpv.json"],
+        ["fit", kind, "doe-ctrl", "--out", model],
     ]
     for sp in speeds:
         for s in seeds:
             cmds.append(
-                ["quartercar", "lpv.json", "--plant", "rig", "--roads", roads, "--speed", str(sp)]
+                ["quartercar", model, "--plant", "rig", "--roads", roads, "--speed", str(sp)]
                 + ["--seed", str(s), "--out", f"cl-{sp}-{s}"]
             )
     return [c + ["--force"] for c in cmds]
@@ -66,12 +72,13 @@ def run_recipe(
     seeds=SEEDS,
     roads: str = ROADS,
     extension: str = "control",
+    kind: str = "lpv",
 ) -> pd.DataFrame:
     """Run the recipe in ``folder``; every ``closed_loop.csv`` row, with its ``seed``."""
     # this checkout's package, whatever the folder the commands run in
     path = os.pathsep.join([str(REPO / "src"), os.environ.get("PYTHONPATH", "")])
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path.rstrip(os.pathsep))
-    for cmd in recipe(scale, speeds, seeds, roads, extension):
+    for cmd in recipe(scale, speeds, seeds, roads, extension, kind):
         proc = subprocess.run(
             [sys.executable, "-m", "mrdamper", *cmd],
             cwd=folder,
@@ -116,6 +123,7 @@ def write_table(
     command: str,
     extension: str = "control",
     commit: str | None = None,
+    kind: str = "lpv",
 ) -> None:
     """``table`` as CSV with a ``#`` header (command, commit, date, load, recipe), atomically
     (``commit``: the one the run started at; default the present one)."""
@@ -125,7 +133,10 @@ def write_table(
         f"# date: {dt.datetime.now(dt.UTC).strftime('%Y-%m-%dT%H:%M:%SZ')}",
         "# load_avg: " + " ".join(f"{x:.2f}" for x in os.getloadavg()),
         f"# cpus: {os.cpu_count()}",
-        *(f"# recipe: mrdamper {' '.join(c)}" for c in recipe(scale, extension=extension)),
+        *(
+            f"# recipe: mrdamper {' '.join(c)}"
+            for c in recipe(scale, extension=extension, kind=kind)
+        ),
     ]
     out.parent.mkdir(parents=True, exist_ok=True)
     text = "\n".join(head) + "\n" + table.to_csv(index=False, float_format="%.6g")
@@ -228,16 +239,18 @@ def main() -> None:
     ap.add_argument(
         "--extension", default="control", choices=("control", "none"), help="rig doe --extension"
     )
+    ap.add_argument("--kind", default="lpv", help="the model kind fitted (default lpv)")
     a = ap.parse_args()
     commit = _commit()  # the code the run starts with (HEAD may move during a long run)
     with tempfile.TemporaryDirectory(prefix="closed-loop-cli-") as tmp:
-        table = run_recipe(Path(tmp), a.scale, extension=a.extension)
+        table = run_recipe(Path(tmp), a.scale, extension=a.extension, kind=a.kind)
     ext = "" if a.extension == "control" else f" --extension {a.extension}"
+    ext += "" if a.kind == "lpv" else f" --kind {a.kind}"
     command = (
         f"PYTHONPATH=src python3 benchmarks/closed_loop_cli.py --scale {a.scale:g}{ext} "
         f"--out {a.out}"
     )
-    write_table(table, a.out, a.scale, command, a.extension, commit)
+    write_table(table, a.out, a.scale, command, a.extension, commit, kind=a.kind)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(fidelity_summary(table).to_string(index=False, float_format=lambda v: f"{v:.2f}"))
     print(coverage_sentence(table))
