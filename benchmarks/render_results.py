@@ -80,9 +80,13 @@ EXTRAPOLATION_NOTE = (
     "tried and dropped: `docs/notes/results-history.md`."
 )
 LOOP_NOTE = (
-    "Worst |100 (predicted − achieved) / achieved| [%] over ISO 8608 classes B, C, D at 10 "
-    "and 25 m/s (the LPV rows also over three road seeds); `-`: the controller has no such "
-    "metric."
+    "Worst |100 (predicted − achieved) / achieved| [%] over the cells (controller, ISO 8608 "
+    "class B, C or D, 10 or 25 m/s, road seed 0, 1 or 2) whose damper stroke lies within the "
+    "stroke of the model's training records, and in brackets over the cells beyond it "
+    "(`outside_stroke` of `closed_loop.csv`; no rig record covers them); `-`: no such cell or "
+    "no such metric. The documented recipe at a tenth of the DoE's length: `mrdamper rig doe "
+    "--scale 0.1 --extension control`, `mrdamper fit KIND` with defaults, `mrdamper quartercar "
+    "KIND.json --plant rig`."
 )
 #: The scenarios of the extrapolation table: the others, (d) Dyke and (e) Labcontrol, are the
 #: held-out table's protocols (shown there, from the real-data files).
@@ -294,21 +298,86 @@ def render_select(folder: Path = RESULTS) -> str:
     )
 
 
+#: The closed-loop files of the documented command-line recipe (``closed_loop_cli.py``):
+#: the default LPV's, then one per further kind (``--kind``).
+LOOP_FILES = ("closed_loop_tenth.csv", "closed_loop_tenth_{kind}.csv")
+LOOP_KIND_ORDER = ("lpv", "sp1", "p15", "spencer")
+
+
+def _csv_header(path: Path) -> dict[str, str]:
+    """The ``# key: value`` lines heading a CSV written by ``closed_loop_cli.py``."""
+    head: dict[str, str] = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if not line.startswith("#"):
+            break
+        key, _, value = line[1:].partition(":")
+        head.setdefault(key.strip(), value.strip())
+    return head
+
+
+def loop_files(folder: Path = RESULTS) -> list[tuple[str, Path]]:
+    """(kind, file) of every stored run of the command-line recipe, LPV first."""
+    found = [("lpv", folder / LOOP_FILES[0])] if (folder / LOOP_FILES[0]).is_file() else []
+    for path in sorted(folder.glob(LOOP_FILES[1].format(kind="*"))):
+        kind = path.stem.removeprefix("closed_loop_tenth_")
+        if kind != "table2":
+            found.append((kind, path))
+    order = {k: i for i, k in enumerate(LOOP_KIND_ORDER)}
+    return sorted(found, key=lambda kp: (order.get(kp[0], len(order)), kp[0]))
+
+
+def loop_worst(folder: Path = RESULTS) -> list[dict[str, Any]]:
+    """Per kind and controller, the worst |error| [%] of every metric over the cells within the
+    training stroke (``within``) and over those beyond it (``beyond``; None: no such cell)."""
+    import pandas as pd
+
+    rows = []
+    for kind, path in loop_files(folder):
+        t = pd.read_csv(path, comment="#")
+        for ctrl in dict.fromkeys(t["controller"]):
+            row: dict[str, Any] = {"model": kind, "controller": ctrl}
+            for m, _ in LOOP_METRICS:
+                sel = t[(t["controller"] == ctrl) & (t["metric"] == m)]
+                for side, mask in (
+                    ("within", ~sel["outside_stroke"]),
+                    ("beyond", sel["outside_stroke"]),
+                ):
+                    err = sel.loc[mask, "error_pct"].abs().dropna()
+                    row[f"{m}:{side}"] = float(err.max()) if len(err) else None
+            rows.append(row)
+    return rows
+
+
 def render_closed_loop(folder: Path = RESULTS) -> str:
-    """Closed-loop fidelity per kind and controller."""
-    doc = read_result("closed-loop", folder)
+    """Closed-loop fidelity per kind and controller, from the command-line recipe's files."""
+
+    def cell(r: dict[str, Any], m: str) -> str:
+        a, b = r[f"{m}:within"], r[f"{m}:beyond"]
+        if a is None and b is None:
+            return "-"
+        return f"{'-' if a is None else f'{a:.1f}'} ({'-' if b is None else f'{b:.1f}'})"
+
     rows = [
-        [label(r["model"]), r["controller"]]
-        + ["-" if r[m] is None else f"{r[m]:.1f}" for m, _ in LOOP_METRICS]
-        for r in doc["rows"]
+        [label(r["model"]), r["controller"]] + [cell(r, m) for m, _ in LOOP_METRICS]
+        for r in loop_worst(folder)
     ]
+    stamps = []
+    for kind, path in loop_files(folder):
+        h = _csv_header(path)
+        stamps.append(
+            f"`results/{path.name}` ({label(kind)}: measured {h.get('date', '?')[:10]} at "
+            f"`{h.get('commit', '?')}`, load average {h.get('load_avg', '?').split()[0]})"
+        )
+    command = _csv_header(loop_files(folder)[0][1]).get("command", "")
     return "\n".join(
         [
             table(["kind", "controller"] + [t for _, t in LOOP_METRICS], rows),
             "",
             LOOP_NOTE,
             "",
-            stamp(doc),
+            "Data: "
+            + "; ".join(stamps)
+            + f". Command: `{command}` (`--kind KIND` for the others).",
         ]
     )
 
@@ -471,13 +540,15 @@ def draw_closed_loop(path: Path, folder: Path = RESULTS) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    doc = read_result("closed-loop", folder)
-    kinds = list(dict.fromkeys(r["model"] for r in doc["rows"]))
-    controllers = list(dict.fromkeys(r["controller"] for r in doc["rows"]))
+    rows = loop_worst(folder)
+    kinds = list(dict.fromkeys(r["model"] for r in rows))
+    controllers = list(dict.fromkeys(r["controller"] for r in rows))
     metrics = ("a_w", "rms_acc", "rms_tyre_load", "rms_travel")
     worst = {
-        (r["model"], r["controller"]): max(r[m] for m in metrics if r[m] is not None)
-        for r in doc["rows"]
+        (r["model"], r["controller"]): max(
+            [r[f"{m}:within"] for m in metrics if r[f"{m}:within"] is not None] or [0.0]
+        )
+        for r in rows
     }
     fig, ax = plt.subplots(figsize=(9, 3.8))
     width = 0.8 / len(kinds)
@@ -490,7 +561,10 @@ def draw_closed_loop(path: Path, folder: Path = RESULTS) -> None:
     ax.set_xticks(range(len(controllers)), controllers)
     ax.set_ylim(bottom=FLOOR_PCT)
     ax.set_ylabel(f"worst |error| [%] (log; below {FLOOR_PCT} at {FLOOR_PCT})")
-    ax.set_title("Closed loop: model-predicted against achieved, worst of a_w, acc., tyre, travel")
+    ax.set_title(
+        "Closed loop, cells within the training stroke: predicted against achieved, "
+        "worst of a_w, acc., tyre, travel"
+    )
     ax.legend(fontsize=8, ncol=len(kinds) + 1)
     ax.grid(axis="y", which="both", alpha=0.3)
     _save(fig, path)

@@ -20,6 +20,7 @@ from types import ModuleType
 from typing import Any
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from tests.conftest import REPO_ROOT, SHARED_DATA, load_benchmark
@@ -89,9 +90,13 @@ def test_a_changed_number_shows(render: ModuleType, tmp_path: Path) -> None:
     shutil.copytree(REPO_ROOT / "results", folder)
     page = (REPO_ROOT / "docs" / "results.md").read_text(encoding="utf-8")
     assert render.render_text(page, folder) == render.render_text(page)
-    doc = json.loads((folder / "closed-loop.json").read_text(encoding="utf-8"))
-    doc["rows"][0]["a_w"] = 123.4
-    (folder / "closed-loop.json").write_text(json.dumps(doc), encoding="utf-8")
+    loop = folder / "closed_loop_tenth.csv"
+    lines = loop.read_text(encoding="utf-8").splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    table = pd.read_csv(loop, comment="#")
+    first = table.index[(table["metric"] == "a_w") & ~table["outside_stroke"]][0]
+    table.loc[first, "error_pct"] = 123.4
+    loop.write_text("\n".join(head) + "\n" + table.to_csv(index=False), encoding="utf-8")
     changed = render.render_text(page, folder)
     assert changed != page and "123.4" in changed
     with pytest.raises(KeyError, match="no renderer"):
