@@ -231,27 +231,20 @@ def control_sample(  # pragma: no cover - numba
         target = _desired(ctrl, vs, vu, c_sky, c_gnd, alpha_h)
     if inv.is_lpv:
         lpv_coefficients(cf, y, u, k, alpha, beta, offset)
-        if ctrl == CTRL_PASSIVE:
-            r = min(max(i_const, a), b)
-            ok = True
-        else:
-            hold = held_input(k, lag, prev, w_prev, a, b)
-            r, ok = INVERT(
-                form, k, x_d, v_d, target + offset, a, b, prev, hold, cf, y, u, yb, ub, z_d
-            )
-        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
+    if ctrl == CTRL_PASSIVE:
+        r = min(max(i_const, a), b)
+        ok = True
+    else:
+        hold = held_input(k, lag, prev, w_prev, a, b)
+        rest = offset if inv.is_lpv else f0  # the model's force at rest, added to the target
+        r, ok = INVERT(form, k, x_d, v_d, target + rest, a, b, prev, hold, cf, y, u, yb, ub, z_d)
+    w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
+    if inv.is_lpv:
         Fk = _poly(cf, r)
         y[k] = Fk - offset
         u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
         F_model = Fk - offset + inv.stiffness * x_d
     else:
-        if ctrl == CTRL_PASSIVE:
-            r = min(max(i_const, a), b)
-            ok = True
-        else:
-            hold = held_input(k, lag, prev, w_prev, a, b)
-            r, ok = INVERT(form, k, x_d, v_d, target + f0, a, b, prev, hold, cf, y, u, yb, ub, z_d)
-        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0
     rho[k] = r
     mem[0], mem[1], mem[2], mem[3] = r, w_prev, z_d, v_prev
