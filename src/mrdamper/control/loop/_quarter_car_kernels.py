@@ -34,6 +34,7 @@ from numba import njit
 from mrdamper.control.inverse._forms import ControllerForm, InverseForm
 from mrdamper.control.inverse._inverse_kernels import (
     horizon_step,
+    inverse_input,
     past_buffers,
     reg_solve_poly,
     reg_solve_static,
@@ -47,7 +48,6 @@ from mrdamper.models.kernels import (
     sp_force1,
 )
 from mrdamper.models.kernels import poly as _poly
-from mrdamper.models.kernels import zone_input as _u_of
 
 __all__ = ["control_sample", "simulate"]
 
@@ -242,7 +242,7 @@ def control_sample(  # pragma: no cover - numba
     if inv.is_lpv:
         Fk = _poly(cf, r)
         y[k] = Fk - offset
-        u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
+        u[k] = inverse_input(inv, v_d, r, z_d)
         F_model = Fk - offset + inv.stiffness * x_d
     else:
         F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0
