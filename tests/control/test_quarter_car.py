@@ -129,6 +129,19 @@ def test_bump_and_bad_input() -> None:
         iso_road("Z")
 
 
+@pytest.mark.parametrize("entry", ["quarter_car", "closed_loop"])
+def test_both_loops_refuse_a_bad_controller_or_road_naming_the_field(entry: str) -> None:
+    from mrdamper.control.loop.closed_loop import simulate_closed_loop
+
+    run = simulate_quarter_car if entry == "quarter_car" else simulate_closed_loop
+    road = bump_road(height=0.05, length=2.0, speed=10.0, duration=0.5)
+    damper = LinearDamper(2000.0)
+    with pytest.raises(DataValidationError, match=r"^controller: expected a Controller .*got 3"):
+        run(damper, road, 3)  # type: ignore[arg-type]
+    with pytest.raises(DataValidationError, match=r"^road: expected a Road, got ndarray"):
+        run(damper, road.z, "soft")  # type: ignore[arg-type]
+
+
 def test_compare_controllers_table_and_figures() -> None:
     from mrdamper.control import compare_controllers
     from mrdamper.control.loop.quarter_car_study import default_rate

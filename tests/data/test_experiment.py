@@ -149,3 +149,15 @@ def test_read_only_channels_are_shared_writable_ones_copied() -> None:
     assert not np.shares_memory(e2.x, base)
     base[0] = 99.0
     assert e2.x[0] == 0.0
+
+
+def test_require_experiment_passes_a_record_and_names_the_field_otherwise() -> None:
+    from mrdamper.data.experiment import require_experiment
+
+    t = np.arange(4) / 100.0
+    e = Experiment(t=t, x=0 * t, v=0 * t, F=0 * t, i=0 * t, name="r")
+    assert require_experiment(e) is e
+    with pytest.raises(DataValidationError, match=r"^experiment: expected an Experiment, got dict"):
+        require_experiment({"t": t})
+    with pytest.raises(DataValidationError, match=r"^record: expected an Experiment, got list"):
+        require_experiment([e], "record")

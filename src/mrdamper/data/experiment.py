@@ -18,7 +18,7 @@ import pandas as pd
 
 from mrdamper.errors import DataValidationError
 
-__all__ = ["CHANNELS", "ElectricalSource", "Experiment", "NanPolicy"]
+__all__ = ["CHANNELS", "ElectricalSource", "Experiment", "NanPolicy", "require_experiment"]
 
 #: Channel names and their SI units, in the order they are stored and written.
 CHANNELS: dict[str, str] = {"t": "s", "x": "m", "v": "m/s", "i": "A", "voltage": "V", "F": "N"}
@@ -326,6 +326,19 @@ class Experiment:
             f"Experiment(name={self.name!r}, n={self.n}, fs={self.fs:g} Hz, "
             f"duration={self.duration:g} s, input={self.electrical_channel!r})"
         )
+
+
+def require_experiment(value: object, field_name: str = "experiment") -> Experiment:
+    """``value`` itself when it is an :class:`Experiment`.
+
+    Raises
+    ------
+    DataValidationError
+        Otherwise, naming ``field_name`` and the type given.
+    """
+    if not isinstance(value, Experiment):
+        raise DataValidationError(field_name, f"expected an Experiment, got {type(value).__name__}")
+    return value
 
 
 def _rebuild_experiment(state: dict[str, Any]) -> Experiment:

@@ -42,6 +42,7 @@ from mrdamper.models.kernels import zone_input as _u_of
 __all__ = [
     "dahl_step",
     "horizon_step",
+    "inverse_input",
     "lpv_inverse",
     "lpv_inverse_reg_hys",
     "reg_solve_poly",
@@ -58,6 +59,14 @@ N_GOLDEN = 50
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
+
+
+@njit(cache=True)
+def inverse_input(inv: InverseForm, v: float, r: float, z: float) -> float:  # pragma: no cover
+    """The LPV model's input ``u`` at velocity ``v`` [m/s], scheduling value ``r`` and Dahl state
+    ``z`` [-], by the input law of ``inv`` (its mode, zone laws and hysteretic share)."""
+    u: float = _u_of(v, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z, inv.blend)
+    return u
 
 
 @njit(cache=True)
@@ -181,7 +190,7 @@ def horizon_cost(  # pragma: no cover - numba
             ys[j] = ys[j - 1]
             us[j] = us[j - 1]
         ys[0] = F - offset
-        us[0] = _u_of(v, rr, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z, inv.blend)
+        us[0] = inverse_input(inv, v, rr, z)
         if nv < n_m:
             nv += 1
         rr = lag * rr + (1.0 - lag) * w
@@ -362,7 +371,7 @@ def lpv_inverse_reg_hys(  # pragma: no cover - numba
         F[k] = _poly(cf, r)
         y[k] = F[k] - offset
         sat[k] = not ok
-        u[k] = _u_of(v[k], r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z[k], inv.blend)
+        u[k] = inverse_input(inv, v[k], r, z[k])
         prev = r
     return rho, F, sat
 

@@ -23,6 +23,7 @@ import pandas as pd
 
 from mrdamper.control.inverse.current import inverse_current
 from mrdamper.data import Experiment
+from mrdamper.data.experiment import require_experiment
 from mrdamper.errors import DataValidationError
 from mrdamper.metrics import ssse
 from mrdamper.models.base import FittedModel
@@ -83,10 +84,7 @@ def check_inverse(
     **inverse_kw
         Passed to :func:`~mrdamper.control.inverse_current`.
     """
-    if not isinstance(experiment, Experiment):
-        raise DataValidationError(
-            "experiment", f"expected an Experiment, got {type(experiment).__name__}"
-        )
+    require_experiment(experiment)
     if not (0.0 <= v_fraction < 1.0):
         raise DataValidationError("v_fraction", f"expected 0 <= v_fraction < 1, got {v_fraction!r}")
     measured = np.asarray(experiment.electrical(model.input), dtype=float)

@@ -31,9 +31,10 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
-from mrdamper.control.inverse._forms import ControllerForm
+from mrdamper.control.inverse._forms import ControllerForm, InverseForm
 from mrdamper.control.inverse._inverse_kernels import (
     horizon_step,
+    inverse_input,
     past_buffers,
     reg_solve_poly,
     reg_solve_static,
@@ -47,7 +48,6 @@ from mrdamper.models.kernels import (
     sp_force1,
 )
 from mrdamper.models.kernels import poly as _poly
-from mrdamper.models.kernels import zone_input as _u_of
 
 __all__ = ["control_sample", "simulate"]
 
@@ -85,6 +85,35 @@ def _between(f0: float, f1: float, s: int, c: float, n_sub: int) -> float:  # pr
     """Force of a discrete-time damper between its samples ``f0`` and ``f1`` [N]: linear in
     time, at Runge-Kutta node ``c`` of plant step ``s`` of the ``n_sub`` in a sample."""
     return f0 + (f1 - f0) * (s + c) / n_sub
+
+
+@njit(cache=True)
+def _stage(  # pragma: no cover - numba
+    q: FloatArray,
+    zr: float,
+    vr: float,
+    c: float,
+    s: int,
+    n_sub: int,
+    F0: float,
+    F1: float,
+    r: float,
+    inv: InverseForm,
+    car: FloatArray,
+    out: FloatArray,
+) -> float:
+    """One Runge-Kutta stage of the plant at the state ``q`` and node ``c`` of plant step ``s``.
+
+    The damper force (rest force removed) [N] is the LPV force between its samples ``F0`` and
+    ``F1`` (:func:`_between`) or the static map at the input ``r`` and the motion of ``q``;
+    ``out`` receives the state derivative (road at ``zr`` [m], ``vr`` [m/s]). Returns the force.
+    """
+    if inv.is_lpv:
+        Fh = _between(F0, F1, s, c, n_sub)
+    else:
+        Fh = sp_force1(q[0] - q[2], q[1] - q[3], r, inv.comp, inv.power, inv.theta, inv.f0) - inv.f0
+    _deriv(q[0], q[1], q[2], q[3], zr, vr, Fh, car[0], car[1], car[2], car[3], car[4], out)
+    return Fh
 
 
 @njit(cache=True)
@@ -202,27 +231,20 @@ def control_sample(  # pragma: no cover - numba
         target = _desired(ctrl, vs, vu, c_sky, c_gnd, alpha_h)
     if inv.is_lpv:
         lpv_coefficients(cf, y, u, k, alpha, beta, offset)
-        if ctrl == CTRL_PASSIVE:
-            r = min(max(i_const, a), b)
-            ok = True
-        else:
-            hold = held_input(k, lag, prev, w_prev, a, b)
-            r, ok = INVERT(
-                form, k, x_d, v_d, target + offset, a, b, prev, hold, cf, y, u, yb, ub, z_d
-            )
-        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
+    if ctrl == CTRL_PASSIVE:
+        r = min(max(i_const, a), b)
+        ok = True
+    else:
+        hold = held_input(k, lag, prev, w_prev, a, b)
+        rest = offset if inv.is_lpv else f0  # the model's force at rest, added to the target
+        r, ok = INVERT(form, k, x_d, v_d, target + rest, a, b, prev, hold, cf, y, u, yb, ub, z_d)
+    w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
+    if inv.is_lpv:
         Fk = _poly(cf, r)
         y[k] = Fk - offset
-        u[k] = _u_of(v_d, r, inv.mode, inv.gm, inv.gc, inv.mu_high, inv.mu_low, z_d, inv.blend)
+        u[k] = inverse_input(inv, v_d, r, z_d)
         F_model = Fk - offset + inv.stiffness * x_d
     else:
-        if ctrl == CTRL_PASSIVE:
-            r = min(max(i_const, a), b)
-            ok = True
-        else:
-            hold = held_input(k, lag, prev, w_prev, a, b)
-            r, ok = INVERT(form, k, x_d, v_d, target + f0, a, b, prev, hold, cf, y, u, yb, ub, z_d)
-        w_prev = lag_command(k, lag, r, prev, lo, hi, w_prev)
         F_model = sp_force1(x_d, v_d, r, inv.comp, inv.power, inv.theta, f0) - f0
     rho[k] = r
     mem[0], mem[1], mem[2], mem[3] = r, w_prev, z_d, v_prev
@@ -270,9 +292,8 @@ def simulate(  # pragma: no cover - numba
     bad : int
         First diverged plant step or -1.
     """
-    m_s, m_u, k_s, k_t, c_t = car[0], car[1], car[2], car[3], car[4]
     inv = form.inverse
-    is_lpv, comp, power, theta, f0 = inv.is_lpv, inv.comp, inv.power, inv.theta, inv.f0
+    is_lpv = inv.is_lpv
     i_const = form.gains[3]
     n_ctrl = (zr.size - 1) // n_sub
     X = np.zeros((n_ctrl * n_sub, 5))
@@ -315,12 +336,7 @@ def simulate(  # pragma: no cover - numba
             z0, z1 = zr[j], zr[j + 1]
             vr = (z1 - z0) / h
             zm = 0.5 * (z0 + z1)
-            if is_lpv:
-                Fh = _between(F[k], F_next, s, 0.0, n_sub)
-            else:
-                Fh = sp_force1(st[0] - st[2], st[1] - st[3], r, comp, power, theta, f0) - f0
-            _deriv(st[0], st[1], st[2], st[3], z0, vr, Fh, m_s, m_u, k_s, k_t, c_t, k1)
-            Fp[j] = Fh
+            Fp[j] = _stage(st, z0, vr, 0.0, s, n_sub, F[k], F_next, r, inv, car, k1)
             X[j, 0] = st[0]
             X[j, 1] = st[1]
             X[j, 2] = st[2]
@@ -328,23 +344,13 @@ def simulate(  # pragma: no cover - numba
             X[j, 4] = k1[1]
             for q in range(4):
                 tmp[q] = st[q] + 0.5 * h * k1[q]
-            if is_lpv:
-                Fh = _between(F[k], F_next, s, 0.5, n_sub)
-            else:
-                Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
-            _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zm, vr, Fh, m_s, m_u, k_s, k_t, c_t, k2)
+            _stage(tmp, zm, vr, 0.5, s, n_sub, F[k], F_next, r, inv, car, k2)
             for q in range(4):
                 tmp[q] = st[q] + 0.5 * h * k2[q]
-            if not is_lpv:
-                Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
-            _deriv(tmp[0], tmp[1], tmp[2], tmp[3], zm, vr, Fh, m_s, m_u, k_s, k_t, c_t, k3)
+            _stage(tmp, zm, vr, 0.5, s, n_sub, F[k], F_next, r, inv, car, k3)
             for q in range(4):
                 tmp[q] = st[q] + h * k3[q]
-            if is_lpv:
-                Fh = _between(F[k], F_next, s, 1.0, n_sub)
-            else:
-                Fh = sp_force1(tmp[0] - tmp[2], tmp[1] - tmp[3], r, comp, power, theta, f0) - f0
-            _deriv(tmp[0], tmp[1], tmp[2], tmp[3], z1, vr, Fh, m_s, m_u, k_s, k_t, c_t, k4)
+            _stage(tmp, z1, vr, 1.0, s, n_sub, F[k], F_next, r, inv, car, k4)
             for q in range(4):
                 st[q] += h / 6.0 * (k1[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
                 if not (abs(st[q]) <= bound):

@@ -25,6 +25,7 @@ __all__ = [
     "Road",
     "bump_road",
     "iso_road",
+    "loop_inputs",
     "positive",
 ]
 
@@ -174,6 +175,28 @@ class Road:
     def t(self) -> np.ndarray:
         """Time [s]."""
         return np.arange(self.z.size) / self.fs
+
+
+def loop_inputs(
+    road: Any, controller: Controller | str, car: QuarterCar | None
+) -> tuple[QuarterCar, Controller]:
+    """The car (the default :class:`QuarterCar` for None) and the controller (a name in
+    :data:`CONTROLLERS` or a :class:`Controller`) of a loop run over ``road``, checked.
+
+    Raises
+    ------
+    DataValidationError
+        For a controller that is neither, or a road that is not a :class:`Road`.
+    """
+    car = QuarterCar() if car is None else car
+    ctrl = Controller(controller) if isinstance(controller, str) else controller
+    if not isinstance(ctrl, Controller):
+        raise DataValidationError(
+            "controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}"
+        )
+    if not isinstance(road, Road):
+        raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
+    return car, ctrl
 
 
 def iso_road(

@@ -65,10 +65,9 @@ from mrdamper.control.loop._loop import (
     loop_result,
     loop_setup,
 )
-from mrdamper.control.loop.car import positive
+from mrdamper.control.loop.car import loop_inputs, positive
 from mrdamper.control.loop.controllers import law_of
 from mrdamper.control.loop.quarter_car import (
-    CONTROLLERS,
     Controller,
     LinearDamper,
     QuarterCar,
@@ -136,15 +135,6 @@ def stepped(model: DamperModel, plant: Any = None) -> bool:
     return not (own and isinstance(model, (InvertibleModel, LinearDamper)))
 
 
-def _controller(controller: Controller | str) -> Controller:
-    ctrl = Controller(controller) if isinstance(controller, str) else controller
-    if not isinstance(ctrl, Controller):
-        raise DataValidationError(
-            "controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}"
-        )
-    return ctrl
-
-
 def check_pair(model: DamperModel, plant: Any) -> None:
     """Refuse a plant whose electrical input is another channel than the model's (one line)."""
     mi, pi = getattr(model, "input", None), getattr(plant, "input", None)
@@ -202,10 +192,7 @@ def simulate_closed_loop(
         ``F`` is the plant's force (rest force removed) at every plant step, ``i`` the applied
         input.
     """
-    car = QuarterCar() if car is None else car
-    ctrl = _controller(controller)
-    if not isinstance(road, Road):
-        raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
+    car, ctrl = loop_inputs(road, controller, car)
     plant = model if plant is None else resolve_plant(plant)
     invertible = isinstance(model, (InvertibleModel, LinearDamper))
     if not stepped(model, plant):

@@ -59,8 +59,9 @@ from mrdamper.control.loop.car import (
     Road,
     bump_road,
     iso_road,
+    loop_inputs,
 )
-from mrdamper.errors import DataValidationError, SimulationDivergedError
+from mrdamper.errors import SimulationDivergedError
 from mrdamper.models.lpv import TransferFunctionModel
 
 __all__ = [
@@ -140,14 +141,7 @@ def simulate_quarter_car(
         A state left ``bound``.
     """
 
-    car = QuarterCar() if car is None else car
-    ctrl = Controller(controller) if isinstance(controller, str) else controller
-    if not isinstance(ctrl, Controller):
-        raise DataValidationError(
-            "controller", f"expected a Controller or a name in {CONTROLLERS}, got {controller!r}"
-        )
-    if not isinstance(road, Road):
-        raise DataValidationError("road", f"expected a Road, got {type(road).__name__}")
+    car, ctrl = loop_inputs(road, controller, car)
     s = loop_setup(
         model,
         road,

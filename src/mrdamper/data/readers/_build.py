@@ -295,8 +295,9 @@ def build_experiment(
     if notes:
         meta["repairs"] = tuple(meta.get("repairs", ())) + tuple(notes)
     rec_name = name if name is not None else os.path.splitext(os.path.basename(src))[0]
-    try:
-        exp = Experiment.from_arrays(
+
+    def assemble() -> Experiment:
+        return Experiment.from_arrays(
             **arrays,
             name=rec_name,
             metadata=meta,
@@ -305,6 +306,9 @@ def build_experiment(
             resample_fs=resample_fs,
             time_tolerance=time_tolerance,
         )
+
+    try:
+        exp = assemble()
     except DataValidationError as exc:
         if not (
             exc.field == "t" and "not uniform" in str(exc) and fs is None and resample_fs is None
@@ -327,15 +331,7 @@ def build_experiment(
         )
         warn_user(note, Note)
         meta["repairs"] = tuple(meta.get("repairs", ())) + (note,)
-        exp = Experiment.from_arrays(
-            **arrays,
-            name=rec_name,
-            metadata=meta,
-            nan_policy=nan_policy,
-            max_gap=max_gap,
-            resample_fs=resample_fs,
-            time_tolerance=time_tolerance,
-        )
+        exp = assemble()
     if derive is not None:
         from mrdamper.data.preprocessing import velocity_from_displacement
 

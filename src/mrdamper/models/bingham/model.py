@@ -17,7 +17,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from mrdamper.data import Experiment
-from mrdamper.data.experiment import ElectricalSource
+from mrdamper.data.experiment import ElectricalSource, require_experiment
 from mrdamper.errors import DataValidationError
 from mrdamper.models.base import (
     Estimator,
@@ -163,10 +163,7 @@ class BinghamModel(FittedModel):
         OutOfRangeError
             If the input leaves ``input_range`` and ``range_policy == "error"``.
         """
-        if not isinstance(experiment, Experiment):
-            raise DataValidationError(
-                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
-            )
+        require_experiment(experiment)
         return self.force(experiment.x, experiment.v, self.electrical_input(experiment))
 
 

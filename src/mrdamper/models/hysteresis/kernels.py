@@ -29,6 +29,12 @@ from numba import njit
 
 from mrdamper.models._boucwen import boucwen_rate, sign
 from mrdamper.models._interval import allowed_interval
+from mrdamper.models._substeps import (
+    MAX_AUTO_SUBSTEPS,
+    SUBSTEP_RATE_PRODUCT,
+    interval_substeps,
+    substeps_for_rate,
+)
 
 __all__ = [
     "BOUCWEN",
@@ -251,7 +257,7 @@ def step_advance(
     dt: float,
 ) -> int:
     """Advance ``s`` over one interval of ``dt`` [s] (RK4, inputs linear in between)."""
-    nsub = max(1, math.ceil(dt / form.max_h * (1.0 - 1e-12)))
+    nsub = interval_substeps(dt, form.max_h)
     return _interval(form.family, s, x0, v0, e0, x1, v1, e1, dt, form.p, nsub)
 
 
@@ -374,12 +380,6 @@ def inverse_run(
 
 
 # ----------------------------------------------------------------------------- step size
-#: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-] (RK4 is
-#: stable up to about 2.8 for real eigenvalues; the step-halving check of every fit measures the
-#: remaining error).
-SUBSTEP_RATE_PRODUCT = 2.0
-#: Upper limit of automatic sub-steps per sampling interval.
-MAX_AUTO_SUBSTEPS = 2000
 
 
 def fastest_rate(family: str, p: np.ndarray, vmax: float) -> float:
@@ -412,6 +412,4 @@ def auto_substeps(family: str, p: np.ndarray, dt: float, vmax: float) -> int:
     :func:`fastest_rate` stays at most :data:`SUBSTEP_RATE_PRODUCT` (at most
     :data:`MAX_AUTO_SUBSTEPS`)."""
     rate = fastest_rate(family, p, vmax)
-    if not math.isfinite(rate):
-        return MAX_AUTO_SUBSTEPS
-    return int(min(MAX_AUTO_SUBSTEPS, max(1, math.ceil(dt * rate / SUBSTEP_RATE_PRODUCT))))
+    return substeps_for_rate(dt, rate)

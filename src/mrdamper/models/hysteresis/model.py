@@ -18,7 +18,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from mrdamper.data import Experiment, ExperimentSet
-from mrdamper.data.experiment import ElectricalSource
+from mrdamper.data.experiment import ElectricalSource, require_experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models import _output_error as oe
 from mrdamper.models.base import (
@@ -100,10 +100,7 @@ class HysteresisModel(FittedModel):
         SimulationDivergedError
             If the state becomes non-finite or leaves its bound (names the first failing sample).
         """
-        if not isinstance(experiment, Experiment):
-            raise DataValidationError(
-                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
-            )
+        require_experiment(experiment)
         e = np.ascontiguousarray(self.electrical_input(experiment), dtype=np.float64)
         nsub = self.substeps_for(experiment)
         F, status, sample = _k.simulate(

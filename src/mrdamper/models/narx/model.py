@@ -44,7 +44,7 @@ from typing import Any, ClassVar, Literal, cast
 import numpy as np
 
 from mrdamper.data import Experiment
-from mrdamper.data.experiment import ElectricalSource
+from mrdamper.data.experiment import ElectricalSource, require_experiment
 from mrdamper.errors import DataValidationError, IdentificationError, SimulationDivergedError
 from mrdamper.models import _scale
 from mrdamper.models.base import (
@@ -297,10 +297,7 @@ class NARXModel(FittedModel):
     # --- signals -------------------------------------------------------------------------
     def scaled_signals(self, experiment: Experiment) -> np.ndarray:
         """Scaled signal rows ``(F, x, v, e, tanh_v)`` at the model rate, shape (5, N)."""
-        if not isinstance(experiment, Experiment):
-            raise DataValidationError(
-                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
-            )
+        require_experiment(experiment)
         e = self.electrical_input(experiment)
         rows = [
             to_model_rate(np.asarray(a, dtype=np.float64), experiment.fs, self.fs)

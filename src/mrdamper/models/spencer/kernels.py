@@ -18,7 +18,6 @@ Status codes returned by the kernels: 0 ok, 1 the state became non-finite or lef
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -26,6 +25,12 @@ import numpy.typing as npt
 from numba import njit
 
 from mrdamper.models._boucwen import boucwen_rate, powers, sign
+from mrdamper.models._substeps import (
+    MAX_AUTO_SUBSTEPS,
+    SUBSTEP_RATE_PRODUCT,
+    interval_substeps,
+    substeps_for_rate,
+)
 
 __all__ = [
     "MAX_AUTO_SUBSTEPS",
@@ -240,7 +245,7 @@ def step_advance(
     dt: float,
 ) -> int:
     """Advance ``s`` over one interval of ``dt`` [s] (RK4, inputs linear in between)."""
-    nsub = max(1, math.ceil(dt / form.max_h * (1.0 - 1e-12)))
+    nsub = interval_substeps(dt, form.max_h)
     return _interval(s, x0, v0, e0, x1, v1, e1, dt, form.p, nsub)
 
 
@@ -467,12 +472,6 @@ def simulate_sens(
 
 
 # ----------------------------------------------------------------------------- step size
-#: Largest product of the RK4 sub-step and the estimated fastest rate of the model [-].
-#: The rate is an upper estimate, and RK4 is stable up to about 2.8 for real eigenvalues; the
-#: resulting error against a tight reference is checked in tests/models/test_spencer.py.
-SUBSTEP_RATE_PRODUCT = 2.0
-#: Upper limit of automatic sub-steps per sampling interval.
-MAX_AUTO_SUBSTEPS = 2000
 
 
 def auto_substeps(p: np.ndarray, dt: float, vmax: float, emin: float, emax: float) -> int:
@@ -507,6 +506,4 @@ def auto_substeps(p: np.ndarray, dt: float, vmax: float, emin: float, emax: floa
         + abs(A) * al_over_c
         + n * (abs(bet) + abs(gam)) * zmax ** (n - 1.0) * 1.5 * vmax
     )
-    if not math.isfinite(rate):
-        return MAX_AUTO_SUBSTEPS
-    return int(min(MAX_AUTO_SUBSTEPS, max(1, math.ceil(dt * rate / SUBSTEP_RATE_PRODUCT))))
+    return substeps_for_rate(dt, rate)

@@ -34,7 +34,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 
 from mrdamper.data import Experiment, ExperimentSet
-from mrdamper.data.experiment import ElectricalSource
+from mrdamper.data.experiment import ElectricalSource, require_experiment
 from mrdamper.errors import DataValidationError, SimulationDivergedError
 from mrdamper.models import _output_error as oe
 from mrdamper.models.base import (
@@ -216,10 +216,7 @@ class SpencerModel(FittedModel):
             If the state becomes non-finite, leaves its bound or the damping ``c0 + c1`` becomes
             non-positive; the error names the first failing sample.
         """
-        if not isinstance(experiment, Experiment):
-            raise DataValidationError(
-                "experiment", f"expected an Experiment, got {type(experiment).__name__}"
-            )
+        require_experiment(experiment)
         e = np.ascontiguousarray(self.electrical_input(experiment), dtype=np.float64)
         nsub = self.substeps_for(experiment, e)
         F, status, sample = _k.simulate(
