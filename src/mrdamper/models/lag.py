@@ -203,9 +203,9 @@ def _validation_esr(
     parts: tuple[list[Experiment], list[Experiment]],
     options: Mapping[str, Any],
     weights: Sequence[float] | None,
-) -> float:
+) -> tuple[float, Any]:
     """Mean validation ESR of the family fitted with ``eta`` (None: no lag) on the fit parts
-    (inf on failure)."""
+    (inf on failure), and the fitted model (None on failure)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -213,9 +213,17 @@ def _validation_esr(
             model = model.with_range_policy("clip")
             esr = [model.score(e).esr for e in parts[1]]
     except (ValueError, RuntimeError, ArithmeticError):
-        return math.inf
+        return math.inf, None
     value = float(np.average(esr, weights=weights))
-    return value if math.isfinite(value) else math.inf
+    return (value, model) if math.isfinite(value) else (math.inf, None)
+
+
+def _nearest(fitted: Mapping[float, Any], eta: float) -> Any:
+    """The fitted candidate whose finite rate is nearest ``eta`` in log scale (None if none)."""
+    finite = [c for c in fitted if math.isfinite(c)]
+    if not finite or math.isinf(eta):
+        return None
+    return fitted[min(finite, key=lambda c: abs(math.log(c / eta)))]
 
 
 def fit_with_lag(
@@ -250,9 +258,18 @@ def fit_with_lag(
     scores: dict[float, float] = {}
     no_lag = settings_chosen_without_lag(est)
 
+    # a family that can start a candidate's fit from a neighbour's (``lag_screening``) fits the
+    # first finite rate from its own starts and every further one from the nearest fitted rate
+    screening = getattr(est, "lag_screening", None)
+    fitted: dict[float, Any] = {}
+
     def trial(eta: float) -> None:
         report("identifying the lag: candidate", len(scores) + 1, len(ETA_GRID) + 2 + no_lag)
-        scores[eta] = _validation_esr(est, _setting(eta), parts, options, weights)
+        neighbour = _nearest(fitted, eta) if screening is not None else None
+        candidate = est if neighbour is None else screening(neighbour)
+        scores[eta], model = _validation_esr(candidate, _setting(eta), parts, options, weights)
+        if model is not None:
+            fitted[eta] = model
 
     if no_lag:
         trial(math.inf)
