@@ -223,7 +223,8 @@ def test_screened_search_chooses_the_lag_of_the_cold_search_for_less_work(
     """A Bouc-Wen model whose stepped voltage reaches the laws through a lag of 60 1/s: the
     search whose candidates start from their nearest fitted neighbour (``lag_screening``)
     chooses the rate the search fitting every candidate from the family's own starts chooses,
-    scores the same candidates about as well, and simulates the records fewer times."""
+    scores the same candidates about as well, fits the records as well, and simulates them fewer
+    times."""
     from mrdamper.models import _output_error as oe
     from mrdamper.models.hysteresis.model import HysteresisEstimator
     from tests.models.test_boucwen import TRUE as BOUCWEN
@@ -253,4 +254,7 @@ def test_screened_search_chooses_the_lag_of_the_cold_search_for_less_work(
     s_lag, c_lag = screened.provenance["drive_lag"], cold.provenance["drive_lag"]
     assert s_lag["candidates"] == c_lag["candidates"]
     assert min(s_lag["validation_esr"]) <= 1.1 * min(c_lag["validation_esr"])
-    assert screened_calls < 0.8 * cold_calls
+    # the final fit, started at the chosen candidate's optimum, fits the records as well
+    fit_esr = screened.provenance["mean_record_esr"]
+    assert fit_esr <= 1.05 * cold.provenance["mean_record_esr"]
+    assert screened_calls < 0.6 * cold_calls

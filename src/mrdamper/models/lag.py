@@ -16,7 +16,15 @@ SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) take ``eta="auto"`` by default, and
   search starts at 200 1/s and its two neighbours, walks along the grid while the validation
   error falls, then tries the geometric midpoints on either side of the best grid point (5-8
   fits on the inner split); the candidate with the lowest validation ESR is fitted on the whole
-  training records.
+  training records. A family that can start a fit from given parameters (the one-state
+  hysteresis families: ``lag_screening``) fits the first candidate from its own starts and every
+  further one from the optimum of the nearest rate already fitted, with one start (neighbouring
+  rates differ by little more than the timing of the input), and the final fit on the whole
+  training records from the chosen candidate's optimum (a fit on part of the same training
+  records: no left-out data is seen). The search then chooses the rate the search fitting
+  every candidate from scratch chooses, for about a third of its simulations
+  (``tests/models/test_lag.py``; ``docs/performance.md``, "The drive-lag search of the
+  hysteresis families").
 
 ``eta="identify"`` identifies the lag the same way whenever the electrical input switches within
 a record, **measured current included**: the damper's force follows the coil current through the
@@ -294,7 +302,8 @@ def fit_with_lag(
             "eta", f"{est.kind}: no drive-lag candidate could be fitted on the inner split"
         )
     selection_s = time.perf_counter() - t0
-    model = dataclasses.replace(est, eta=_setting(chosen)).fit(records, **options)
+    final = est if screening is None or chosen not in fitted else screening(fitted[chosen])
+    model = dataclasses.replace(final, eta=_setting(chosen)).fit(records, **options)
     prov = dict(model.provenance)
     prov["drive_lag"] = {
         "eta": _setting(chosen),

@@ -341,9 +341,9 @@ class HysteresisEstimator(Estimator):
 
         A lag candidate differs from its neighbour (a factor 2 or sqrt(2) in the rate) by little
         more than the timing of the input, so the neighbour's optimum is a better start than the
-        data-driven guesses, and the screening of ``n_starts`` starts is skipped. Only the
-        search's candidates start this way, all fitted on the same inner split; the final fit on
-        the whole training records keeps the estimator's own starts.
+        data-driven guesses, and the screening of ``n_starts`` starts is skipped. The search's
+        candidates start this way (all fitted on the same inner split of the training records),
+        and so does its final fit on the whole training records, from the chosen candidate.
 
         Parameters
         ----------
