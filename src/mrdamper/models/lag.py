@@ -273,8 +273,8 @@ def fit_with_lag(
 
     def trial(eta: float) -> None:
         report("identifying the lag: candidate", len(scores) + 1, len(ETA_GRID) + 2 + no_lag)
-        neighbour = _nearest(fitted, eta) if screening is not None else None
-        candidate = est if neighbour is None else screening(neighbour)
+        neighbour = _nearest(fitted, eta)
+        candidate = est if screening is None or neighbour is None else screening(neighbour)
         scores[eta], model = _validation_esr(candidate, _setting(eta), parts, options, weights)
         if model is not None:
             fitted[eta] = model
