@@ -21,10 +21,10 @@ SP-1..SP-4, tanh, Bouc-Wen, Dahl, LuGre) take ``eta="auto"`` by default, and
   further one from the optimum of the nearest rate already fitted, with one start (neighbouring
   rates differ by little more than the timing of the input), and the final fit on the whole
   training records from the chosen candidate's optimum (a fit on part of the same training
-  records: no left-out data is seen). The search then chooses the rate the search fitting
-  every candidate from scratch chooses, for about a third of its simulations
-  (``tests/models/test_lag.py``; ``docs/performance.md``, "The drive-lag search of the
-  hysteresis families").
+  records: no left-out data is seen). On a synthetic Bouc-Wen record and on the Dyke record
+  (four families) it chose the rate that fitting every candidate from scratch chooses, for about
+  a quarter of the evaluations (``tests/models/test_lag.py``; ``docs/performance.md``, "The
+  drive-lag search of the hysteresis families").
 
 ``eta="identify"`` identifies the lag the same way whenever the electrical input switches within
 a record, **measured current included**: the damper's force follows the coil current through the
