@@ -331,6 +331,28 @@ class HysteresisEstimator(Estimator):
         check_lag(self.eta)
         check_mappings(self.spec, self._fit_settings())
 
+    def lag_screening(self, neighbour: FittedModel) -> HysteresisEstimator:
+        """The estimator of a drive-lag candidate fitted next to ``neighbour``, a candidate of
+        the same search (:func:`mrdamper.models.lag.fit_with_lag`): one start, at the
+        neighbour's identified parameters.
+
+        A lag candidate differs from its neighbour (a factor 2 or sqrt(2) in the rate) by little
+        more than the timing of the input, so the neighbour's optimum is a better start than the
+        data-driven guesses, and the screening of ``n_starts`` starts is skipped. The search's
+        candidates start this way (all fitted on the same inner split of the training records),
+        and so does its final fit on the whole training records, from the chosen candidate.
+
+        Parameters
+        ----------
+        neighbour : FittedModel
+            A candidate fitted by this estimator with another lag.
+        """
+        identified = dict(neighbour.provenance).get("identified")
+        if not identified:
+            return self
+        start = {nm: float(v) for nm, v in identified.items() if nm in self.spec.unknowns}
+        return dataclasses.replace(self, start=start, n_starts=1)
+
     def _fit_settings(self) -> FitSettings:
         """The settings the fit reads (``eta`` as given: :meth:`_identify` resolves it)."""
         names = [f.name for f in dataclasses.fields(FitSettings)]
