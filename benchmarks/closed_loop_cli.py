@@ -32,6 +32,7 @@ import tempfile
 from pathlib import Path
 
 import pandas as pd
+from _results import current_commit
 
 from mrdamper.control.loop.stroke_cells import fidelity_summary
 
@@ -97,25 +98,6 @@ def run_recipe(
     return pd.concat(tables, ignore_index=True)
 
 
-def _commit() -> str:
-    try:
-        head = subprocess.run(
-            ["git", "-C", str(REPO), "rev-parse", "--short=12", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(REPO), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + ("+dirty" if dirty else "")
-
-
 def write_table(
     table: pd.DataFrame,
     out: Path,
@@ -129,7 +111,7 @@ def write_table(
     (``commit``: the one the run started at; default the present one)."""
     head = [
         f"# command: {command}",
-        f"# commit: {commit or _commit()}",
+        f"# commit: {commit or current_commit()}",
         f"# date: {dt.datetime.now(dt.UTC).strftime('%Y-%m-%dT%H:%M:%SZ')}",
         "# load_avg: " + " ".join(f"{x:.2f}" for x in os.getloadavg()),
         f"# cpus: {os.cpu_count()}",
@@ -241,7 +223,7 @@ def main() -> None:
     )
     ap.add_argument("--kind", default="lpv", help="the model kind fitted (default lpv)")
     a = ap.parse_args()
-    commit = _commit()  # the code the run starts with (HEAD may move during a long run)
+    commit = current_commit()  # the code the run starts with (HEAD may move during a long run)
     with tempfile.TemporaryDirectory(prefix="closed-loop-cli-") as tmp:
         table = run_recipe(Path(tmp), a.scale, extension=a.extension, kind=a.kind)
     ext = "" if a.extension == "control" else f" --extension {a.extension}"
